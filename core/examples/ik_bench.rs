@@ -1,0 +1,112 @@
+//! IK benchmark on every shipped robot, following TRAC-IK's protocol.
+//!
+//! `cargo run --release -p armgate-core --example ik_bench [-- SAMPLES]`
+//!
+//! * global: random reachable configurations (fixed seed) → FK → target; the solver is seeded
+//!   at the middle of the joint ranges.
+//! * tracking: seeded at the target configuration + uniform ±0.1 rad (m for prismatic joints).
+//!
+//! Success: position error < 1e-5 m, orientation error < 1e-5 rad and all joints within limits.
+#![allow(missing_docs, clippy::indexing_slicing, clippy::unwrap_used)]
+
+use std::time::Instant;
+
+use armgate_core::config::load_file;
+use armgate_core::kinematics::{Chain, IkResult};
+use armgate_core::math::Frame;
+use armgate_core::rng::SplitMix64;
+
+const SEED: u64 = 0x1C0FFEE;
+
+struct Stats {
+    successes: usize,
+    micros: Vec<f64>,
+    iterations: u64,
+}
+
+impl Stats {
+    fn row(&mut self, robot: &str, mode: &str) {
+        self.micros.sort_by(f64::total_cmp);
+        let n = self.micros.len();
+        let mean = self.micros.iter().sum::<f64>() / n as f64;
+        let pct = |p: f64| self.micros[((n as f64 * p) as usize).min(n - 1)];
+        println!(
+            "| {robot:<18} | {mode:<8} | {:>8.3} | {:>9.2} | {:>9.2} | {:>9.2} | {:>6.1} |",
+            100.0 * self.successes as f64 / n as f64,
+            mean,
+            pct(0.5),
+            pct(0.99),
+            self.iterations as f64 / n as f64
+        );
+    }
+}
+
+fn success(chain: &Chain, target: &Frame, result: &IkResult) -> bool {
+    let s = result.solution();
+    let reached = chain.forward(&s.q).unwrap();
+    let d = reached.diff(target);
+    d.linear.norm() < 1e-5 && d.angular.norm() < 1e-5 && chain.within_limits(&s.q)
+}
+
+fn main() {
+    let samples: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000);
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    println!("{samples} samples per robot and mode, seed {SEED:#x}");
+    println!(
+        "| robot              | mode     | success% | mean µs   | median µs | p99 µs    | iters  |"
+    );
+    println!(
+        "|--------------------|----------|----------|-----------|-----------|-----------|--------|"
+    );
+    for path in files {
+        let config = load_file(&path).unwrap();
+        let chain = Chain::new(&config);
+        let ik = config.ik;
+        let mut rng = SplitMix64::new(SEED);
+        let mut global = Stats {
+            successes: 0,
+            micros: Vec::new(),
+            iterations: 0,
+        };
+        let mut tracking = Stats {
+            successes: 0,
+            micros: Vec::new(),
+            iterations: 0,
+        };
+        let mid = chain.mid_range();
+        for k in 0..samples {
+            let q: Vec<f64> = chain
+                .min()
+                .iter()
+                .zip(chain.max())
+                .map(|(lo, hi)| rng.uniform(*lo, *hi))
+                .collect();
+            let target = chain.forward(&q).unwrap();
+
+            let t0 = Instant::now();
+            let r = chain.solve_global(&target, &mid, &ik, k as u64).unwrap();
+            global.micros.push(t0.elapsed().as_secs_f64() * 1e6);
+            global.iterations += u64::from(r.solution().iterations);
+            global.successes += usize::from(success(&chain, &target, &r));
+
+            let seed: Vec<f64> = q.iter().map(|v| v + rng.uniform(-0.1, 0.1)).collect();
+            let t0 = Instant::now();
+            let r = chain.solve_tracking(&target, &seed, &ik).unwrap();
+            tracking.micros.push(t0.elapsed().as_secs_f64() * 1e6);
+            tracking.iterations += u64::from(r.solution().iterations);
+            tracking.successes += usize::from(success(&chain, &target, &r));
+        }
+        let name = config.name.as_str();
+        global.row(name, "global");
+        tracking.row(name, "tracking");
+    }
+}

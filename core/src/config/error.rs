@@ -1,0 +1,85 @@
+//! Why a robot description was refused, naming the field.
+
+use core::fmt;
+
+/// A refused robot description: which field, and why.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The joint the field belongs to (0-based), if it is a per-joint field.
+    pub joint: Option<u8>,
+    /// The field's path in the robot file, e.g. `max_velocity` or `workspace.bounds`.
+    pub field: &'static str,
+    /// What is wrong with it.
+    pub reason: ConfigReason,
+}
+
+/// What is wrong with a field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConfigReason {
+    /// The text is empty.
+    Empty,
+    /// There are no joints.
+    NoJoints,
+    /// A number is NaN or infinite.
+    NotFinite,
+    /// A number must be greater than zero.
+    NotPositive,
+    /// A lower limit exceeds its upper limit.
+    MinAboveMax,
+    /// A CANopen node id must be 0 (no drive) or 1..=127.
+    NodeIdOutOfRange,
+    /// Two joints use the same CANopen node id.
+    DuplicateNodeId,
+    /// A joint with a drive needs nonzero encoder counts per revolution.
+    ZeroCounts,
+    /// The CAN bit rate is not one of 125, 250, 500 or 1000 kbit/s.
+    UnsupportedBitRate,
+    /// The unit mode is not 1 (torque), 2 (speed) or 5 (position).
+    UnsupportedUnitMode,
+}
+
+impl ConfigError {
+    pub(super) fn top(field: &'static str, reason: ConfigReason) -> Self {
+        Self {
+            joint: None,
+            field,
+            reason,
+        }
+    }
+
+    pub(super) fn joint(index: usize, field: &'static str, reason: ConfigReason) -> Self {
+        Self {
+            joint: u8::try_from(index).ok(),
+            field,
+            reason,
+        }
+    }
+}
+
+impl fmt::Display for ConfigReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Empty => "must not be empty",
+            Self::NoJoints => "a robot needs at least one joint",
+            Self::NotFinite => "must be a finite number (not NaN or infinite)",
+            Self::NotPositive => "must be greater than zero",
+            Self::MinAboveMax => "minimum is greater than maximum",
+            Self::NodeIdOutOfRange => "node id must be 0 (no drive) or 1..=127",
+            Self::DuplicateNodeId => "node id is used by an earlier joint",
+            Self::ZeroCounts => "counts per revolution must be nonzero for a joint with a drive",
+            Self::UnsupportedBitRate => "bit rate must be 125000, 250000, 500000 or 1000000",
+            Self::UnsupportedUnitMode => "unit mode must be 1 (torque), 2 (speed) or 5 (position)",
+        })
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.joint {
+            Some(j) => write!(f, "joints[{j}].{}: {}", self.field, self.reason),
+            None => write!(f, "{}: {}", self.field, self.reason),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}

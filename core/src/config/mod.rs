@@ -1,0 +1,19 @@
+//! Robot description: one [`RobotConfig`] describes one arm completely.
+//!
+//! On the host the description is read from a TOML file (`robots/*.toml`, feature `std`); the
+//! firmware embeds the same structure serialised with postcard. The field names of the TOML file
+//! are the field names of these structures; `docs/robot-file.md` documents them.
+
+mod bounded;
+mod error;
+mod robot;
+#[cfg(feature = "std")]
+mod toml_file;
+
+pub use error::{ConfigError, ConfigReason};
+pub use robot::{
+    CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType, MAX_BOXES,
+    MAX_NAME_LEN, RobotConfig, ToolConfig, WorkspaceConfig,
+};
+#[cfg(feature = "std")]
+pub use toml_file::{LoadError, load_file, parse_toml};

@@ -1,0 +1,329 @@
+//! The robot description structures and their validation.
+
+use heapless::{String, Vec};
+use serde::{Deserialize, Serialize};
+
+use super::error::{ConfigError, ConfigReason};
+use crate::MAX_JOINTS;
+
+/// Longest robot name, in bytes.
+pub const MAX_NAME_LEN: usize = 32;
+/// Most workspace exclusion boxes a description may hold.
+pub const MAX_BOXES: usize = 16;
+
+/// A complete robot description: geometry, limits, drives, workspace and control period.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotConfig {
+    /// Short name of the arm, e.g. `ranger-mk1`.
+    pub name: String<MAX_NAME_LEN>,
+    /// Kinematic control period in seconds (the seed: 0.01944 s = 54 × 360 µs).
+    pub control_period: f64,
+    /// The joints from the base outwards (1..=8).
+    #[serde(deserialize_with = "super::bounded::deserialize")]
+    pub joints: Vec<JointConfig, MAX_JOINTS>,
+    /// The fixed transform from the last link frame to the tool frame.
+    #[serde(default)]
+    pub tool: ToolConfig,
+    /// Bus-wide drive settings.
+    pub drives: DrivesConfig,
+    /// Cartesian generator limits (the seed's `trajgen.cpf`).
+    pub cartesian: CartesianLimits,
+    /// Workspace bounds and exclusion boxes (the seed's `wslimits.cpf`).
+    pub workspace: WorkspaceConfig,
+    /// Inverse-kinematics tuning; defaults suit every shipped arm.
+    #[serde(default)]
+    pub ik: IkConfig,
+}
+
+/// Whether a joint turns (revolute) or slides (prismatic).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointType {
+    /// The joint variable is the angle θ_i (rad).
+    Revolute,
+    /// The joint variable is the offset d_i (m).
+    Prismatic,
+}
+
+/// One joint: Craig's *modified* DH parameters, limits and its drive.
+///
+/// The link transform is `RotX(alpha) · TransX(a) · RotZ(θ) · TransZ(d)` with, for a revolute
+/// joint, `θ = q + theta` and `d` constant, and for a prismatic joint `d = q + d` and `θ = theta`.
+/// So `theta` (revolute) or `d` (prismatic) is a constant offset added to the joint variable.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointConfig {
+    /// Revolute or prismatic.
+    #[serde(rename = "type")]
+    pub kind: JointType,
+    /// α_{i-1}: twist about the previous x axis (rad).
+    pub alpha: f64,
+    /// a_{i-1}: length along the previous x axis (m).
+    pub a: f64,
+    /// d_i: offset along this z axis (m); added to q for a prismatic joint.
+    pub d: f64,
+    /// θ_i: angle about this z axis (rad); added to q for a revolute joint.
+    pub theta: f64,
+    /// Lower joint limit (rad or m).
+    pub min: f64,
+    /// Upper joint limit (rad or m).
+    pub max: f64,
+    /// Joint generator velocity limit (rad/s or m/s; the seed's `naxestrajgen.cpf`).
+    pub max_velocity: f64,
+    /// Joint generator acceleration limit (rad/s² or m/s²).
+    pub max_acceleration: f64,
+    /// Joint limiter rate limit on set-points (rad/s or m/s; the seed's `MaxRates`).
+    pub max_rate: f64,
+    /// The servo drive of this joint.
+    pub drive: JointDrive,
+}
+
+/// The drive of one joint.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointDrive {
+    /// CANopen node id, 1..=127; 0 means no drive (the measurement mirrors the command).
+    pub node_id: u8,
+    /// Encoder counts per joint revolution (per metre for a prismatic joint); the sign sets the
+    /// direction.
+    pub counts_per_rev: i32,
+    /// Joint position at zero encoder counts (rad or m).
+    pub home: f64,
+}
+
+/// Settings shared by all drives on the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrivesConfig {
+    /// CAN bit rate in bit/s: 125 000, 250 000, 500 000 or 1 000 000.
+    pub can_bitrate: u32,
+    /// Elmo unit mode: 5 = position (the only mode the seed used), 2 = speed, 1 = torque.
+    pub unit_mode: u8,
+}
+
+/// The tool frame relative to the last link frame:
+/// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)`.
+///
+/// The four DH values are the seed's `EndEffDH`; `xyz`/`rpy` give a general transform. Every
+/// field defaults to zero, so an absent `[tool]` is the identity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ToolConfig {
+    /// a_n (m).
+    pub a: f64,
+    /// α_n (rad).
+    pub alpha: f64,
+    /// d_T (m).
+    pub d: f64,
+    /// θ_T (rad).
+    pub theta: f64,
+    /// Extra translation after the DH part (m).
+    pub xyz: [f64; 3],
+    /// Extra rotation after the translation: roll, pitch, yaw (rad), `Rz·Ry·Rx`.
+    pub rpy: [f64; 3],
+}
+
+/// Per-axis Cartesian generator limits for (x, y, z, rx, ry, rz).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CartesianLimits {
+    /// m/s for x, y, z; rad/s for rx, ry, rz.
+    pub max_velocity: [f64; 6],
+    /// m/s² for x, y, z; rad/s² for rx, ry, rz.
+    pub max_acceleration: [f64; 6],
+}
+
+/// Allowed region of the tool position, in the base frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorkspaceConfig {
+    /// `[x_min, x_max, y_min, y_max, z_min, z_max]` (m).
+    pub bounds: [f64; 6],
+    /// Axis-aligned exclusion boxes, each `[x_min, x_max, y_min, y_max, z_min, z_max]` (m).
+    #[serde(default, deserialize_with = "super::bounded::deserialize")]
+    pub boxes: Vec<[f64; 6], MAX_BOXES>,
+}
+
+/// Inverse-kinematics tuning.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IkConfig {
+    /// Convergence tolerance on position (m) and on orientation (rad).
+    pub tolerance: f64,
+    /// Iteration limit of one tracking solve.
+    pub tracking_iterations: u16,
+    /// Total iteration budget of one global solve, over all restarts.
+    pub global_iterations: u16,
+    /// Divergence guard margin (m + rad): a solution worse than the current pose by more than
+    /// this is rejected (the seed: 1e-4).
+    pub divergence_margin: f64,
+}
+
+impl Default for IkConfig {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-9,
+            tracking_iterations: 20,
+            global_iterations: 2000,
+            divergence_margin: 1e-4,
+        }
+    }
+}
+
+impl RobotConfig {
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Checks every value, so that nothing downstream has to: finite numbers, positive limits,
+    /// `min ≤ max`, valid node ids, bit rate and unit mode, well-formed boxes.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let top = |field, reason| ConfigError::top(field, reason);
+        if self.name.is_empty() {
+            return Err(top("name", ConfigReason::Empty));
+        }
+        positive(self.control_period).map_err(|r| top("control_period", r))?;
+        if self.joints.is_empty() {
+            return Err(top("joints", ConfigReason::NoJoints));
+        }
+        for (index, joint) in self.joints.iter().enumerate() {
+            joint
+                .validate()
+                .map_err(|(field, reason)| ConfigError::joint(index, field, reason))?;
+            let node = joint.drive.node_id;
+            let duplicate = node != 0
+                && self
+                    .joints
+                    .iter()
+                    .take(index)
+                    .any(|other| other.drive.node_id == node);
+            if duplicate {
+                return Err(ConfigError::joint(
+                    index,
+                    "drive.node_id",
+                    ConfigReason::DuplicateNodeId,
+                ));
+            }
+        }
+        self.tool.validate().map_err(|(f, r)| top(f, r))?;
+        self.drives.validate().map_err(|(f, r)| top(f, r))?;
+        for (v, a) in self
+            .cartesian
+            .max_velocity
+            .iter()
+            .zip(&self.cartesian.max_acceleration)
+        {
+            positive(*v).map_err(|r| top("cartesian.max_velocity", r))?;
+            positive(*a).map_err(|r| top("cartesian.max_acceleration", r))?;
+        }
+        check_box(&self.workspace.bounds).map_err(|r| top("workspace.bounds", r))?;
+        for b in &self.workspace.boxes {
+            check_box(b).map_err(|r| top("workspace.boxes", r))?;
+        }
+        self.ik.validate().map_err(|(f, r)| top(f, r))
+    }
+}
+
+impl JointConfig {
+    fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
+        let geometry = [
+            ("alpha", self.alpha),
+            ("a", self.a),
+            ("d", self.d),
+            ("theta", self.theta),
+        ];
+        for (field, value) in geometry {
+            finite(value).map_err(|r| (field, r))?;
+        }
+        finite(self.min).map_err(|r| ("min", r))?;
+        finite(self.max).map_err(|r| ("max", r))?;
+        if self.min > self.max {
+            return Err(("min", ConfigReason::MinAboveMax));
+        }
+        positive(self.max_velocity).map_err(|r| ("max_velocity", r))?;
+        positive(self.max_acceleration).map_err(|r| ("max_acceleration", r))?;
+        positive(self.max_rate).map_err(|r| ("max_rate", r))?;
+        finite(self.drive.home).map_err(|r| ("drive.home", r))?;
+        if self.drive.node_id > 127 {
+            return Err(("drive.node_id", ConfigReason::NodeIdOutOfRange));
+        }
+        if self.drive.node_id != 0 && self.drive.counts_per_rev == 0 {
+            return Err(("drive.counts_per_rev", ConfigReason::ZeroCounts));
+        }
+        Ok(())
+    }
+}
+
+impl ToolConfig {
+    fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
+        let dh = [self.a, self.alpha, self.d, self.theta];
+        if dh.iter().any(|v| !v.is_finite()) {
+            return Err(("tool", ConfigReason::NotFinite));
+        }
+        if self.xyz.iter().any(|v| !v.is_finite()) {
+            return Err(("tool.xyz", ConfigReason::NotFinite));
+        }
+        if self.rpy.iter().any(|v| !v.is_finite()) {
+            return Err(("tool.rpy", ConfigReason::NotFinite));
+        }
+        Ok(())
+    }
+}
+
+impl DrivesConfig {
+    fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
+        if !matches!(self.can_bitrate, 125_000 | 250_000 | 500_000 | 1_000_000) {
+            return Err(("drives.can_bitrate", ConfigReason::UnsupportedBitRate));
+        }
+        if !matches!(self.unit_mode, 1 | 2 | 5) {
+            return Err(("drives.unit_mode", ConfigReason::UnsupportedUnitMode));
+        }
+        Ok(())
+    }
+}
+
+impl IkConfig {
+    fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
+        positive(self.tolerance).map_err(|r| ("ik.tolerance", r))?;
+        if self.tracking_iterations == 0 {
+            return Err(("ik.tracking_iterations", ConfigReason::NotPositive));
+        }
+        if self.global_iterations == 0 {
+            return Err(("ik.global_iterations", ConfigReason::NotPositive));
+        }
+        finite(self.divergence_margin).map_err(|r| ("ik.divergence_margin", r))
+    }
+}
+
+fn finite(v: f64) -> Result<(), ConfigReason> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(ConfigReason::NotFinite)
+    }
+}
+
+fn positive(v: f64) -> Result<(), ConfigReason> {
+    finite(v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigReason::NotPositive)
+    }
+}
+
+/// A box `[x_min, x_max, y_min, y_max, z_min, z_max]` must be finite with min ≤ max per axis.
+fn check_box(b: &[f64; 6]) -> Result<(), ConfigReason> {
+    for pair in b.chunks_exact(2) {
+        if let [lo, hi] = pair {
+            finite(*lo)?;
+            finite(*hi)?;
+            if lo > hi {
+                return Err(ConfigReason::MinAboveMax);
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,234 @@
+//! The kinematic chain: forward kinematics, link frames, Jacobian, manipulability.
+
+use super::jacobian::Jacobian;
+use super::joints::Joints;
+use super::linalg;
+use crate::MAX_JOINTS;
+use crate::config::{JointType, RobotConfig};
+use crate::math::{Frame, Rotation, Vec3};
+
+/// Why a kinematics call was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KinematicsError {
+    /// The joint vector's length differs from the chain's number of joints.
+    WrongJointCount,
+    /// A joint value is NaN or infinite.
+    NonFiniteJoints,
+}
+
+impl core::fmt::Display for KinematicsError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::WrongJointCount => "joint vector length differs from the number of joints",
+            Self::NonFiniteJoints => "joint value is NaN or infinite",
+        })
+    }
+}
+
+/// One link: the constant part of its modified-DH transform, with the sines and cosines of
+/// the twist precomputed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Link {
+    prismatic: bool,
+    cos_alpha: f64,
+    sin_alpha: f64,
+    a: f64,
+    d: f64,
+    theta: f64,
+}
+
+/// A serial chain of up to [`MAX_JOINTS`] revolute or prismatic joints with a tool frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    links: [Link; MAX_JOINTS],
+    n: usize,
+    tool: Frame,
+    min: [f64; MAX_JOINTS],
+    max: [f64; MAX_JOINTS],
+}
+
+/// Frames of one evaluation: every joint frame {1}..{n} and the tool frame, base coordinates.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pose {
+    pub(super) links: [Frame; MAX_JOINTS],
+    pub(super) tool: Frame,
+}
+
+impl Chain {
+    /// Builds the chain of a (validated) robot description.
+    pub fn new(config: &RobotConfig) -> Self {
+        let mut chain = Self {
+            links: [Link::default(); MAX_JOINTS],
+            n: config.joints.len().min(MAX_JOINTS),
+            tool: tool_frame(config),
+            min: [0.0; MAX_JOINTS],
+            max: [0.0; MAX_JOINTS],
+        };
+        let slots = chain
+            .links
+            .iter_mut()
+            .zip(chain.min.iter_mut().zip(chain.max.iter_mut()));
+        for (joint, (link, (min, max))) in config.joints.iter().zip(slots) {
+            let (sin_alpha, cos_alpha) = libm::sincos(joint.alpha);
+            *link = Link {
+                prismatic: joint.kind == JointType::Prismatic,
+                cos_alpha,
+                sin_alpha,
+                a: joint.a,
+                d: joint.d,
+                theta: joint.theta,
+            };
+            *min = joint.min;
+            *max = joint.max;
+        }
+        chain
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+
+    /// Lower joint limits (one per joint).
+    pub fn min(&self) -> &[f64] {
+        self.min.get(..self.n).unwrap_or(&[])
+    }
+
+    /// Upper joint limits (one per joint).
+    pub fn max(&self) -> &[f64] {
+        self.max.get(..self.n).unwrap_or(&[])
+    }
+
+    /// True if joint `i` is prismatic.
+    pub fn is_prismatic(&self, i: usize) -> bool {
+        self.links.get(i).is_some_and(|l| l.prismatic)
+    }
+
+    /// The middle of every joint range.
+    pub fn mid_range(&self) -> Joints {
+        let mut q = Joints::zeros(self.n);
+        for (v, (lo, hi)) in q.iter_mut().zip(self.min.iter().zip(&self.max)) {
+            *v = 0.5 * (lo + hi);
+        }
+        q
+    }
+
+    /// True if every joint lies within its limits.
+    pub fn within_limits(&self, q: &[f64]) -> bool {
+        q.len() == self.n
+            && q.iter()
+                .zip(self.min.iter().zip(&self.max))
+                .all(|(v, (lo, hi))| *lo <= *v && *v <= *hi)
+    }
+
+    /// Checks a joint vector's length and values.
+    pub fn check(&self, q: &[f64]) -> Result<Joints, KinematicsError> {
+        if q.len() != self.n {
+            return Err(KinematicsError::WrongJointCount);
+        }
+        let joints = Joints::from_slice(q).ok_or(KinematicsError::WrongJointCount)?;
+        if !joints.is_finite() {
+            return Err(KinematicsError::NonFiniteJoints);
+        }
+        Ok(joints)
+    }
+
+    /// The tool frame in the base frame.
+    pub fn forward(&self, q: &[f64]) -> Result<Frame, KinematicsError> {
+        let q = self.check(q)?;
+        Ok(self.pose(q.as_array()).tool)
+    }
+
+    /// The frames {1}..{n} of every joint (written to `links[..n]`) and the tool frame.
+    pub fn link_frames(
+        &self,
+        q: &[f64],
+        links: &mut [Frame; MAX_JOINTS],
+    ) -> Result<Frame, KinematicsError> {
+        let q = self.check(q)?;
+        let pose = self.pose(q.as_array());
+        *links = pose.links;
+        Ok(pose.tool)
+    }
+
+    /// The geometric Jacobian at the tool origin, base coordinates.
+    pub fn jacobian(&self, q: &[f64]) -> Result<Jacobian, KinematicsError> {
+        let q = self.check(q)?;
+        Ok(self.jacobian_of(&self.pose(q.as_array())))
+    }
+
+    /// Yoshikawa's manipulability `√det(J Jᵀ)` (`√det(Jᵀ J)` for fewer than six joints); zero at
+    /// a singularity.
+    pub fn manipulability(&self, q: &[f64]) -> Result<f64, KinematicsError> {
+        let j = self.jacobian(q)?;
+        let det = if self.n >= 6 {
+            linalg::determinant6(&j.outer_gram())
+        } else {
+            linalg::determinant(&j.gram(), self.n)
+        };
+        Ok(libm::sqrt(det.max(0.0)))
+    }
+
+    /// Forward kinematics of every frame; `q` must hold valid values in its first `n` entries.
+    pub(super) fn pose(&self, q: &[f64; MAX_JOINTS]) -> Pose {
+        let mut links = [Frame::IDENTITY; MAX_JOINTS];
+        let mut rot = Rotation::IDENTITY;
+        let mut pos = Vec3::ZERO;
+        for ((link, &qi), out) in self.links.iter().zip(q).zip(&mut links).take(self.n) {
+            let (theta, d) = if link.prismatic {
+                (link.theta, link.d + qi)
+            } else {
+                (link.theta + qi, link.d)
+            };
+            let (st, ct) = libm::sincos(theta);
+            let [x, y, z] = rot.cols;
+            // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
+            pos += x * link.a;
+            let y1 = y * link.cos_alpha + z * link.sin_alpha;
+            let z1 = z * link.cos_alpha - y * link.sin_alpha;
+            // RotZ(θ) · TransZ(d)
+            rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
+            pos += z1 * d;
+            *out = Frame::new(rot, pos);
+        }
+        let tool = Frame::new(rot, pos) * self.tool;
+        Pose { links, tool }
+    }
+
+    /// The Jacobian of an evaluated pose.
+    pub(super) fn jacobian_of(&self, pose: &Pose) -> Jacobian {
+        let mut cols = [[0.0; 6]; MAX_JOINTS];
+        let tip = pose.tool.pos;
+        for ((col, frame), link) in cols
+            .iter_mut()
+            .zip(&pose.links)
+            .zip(&self.links)
+            .take(self.n)
+        {
+            let axis = frame.rot.cols[2];
+            *col = if link.prismatic {
+                [axis.x, axis.y, axis.z, 0.0, 0.0, 0.0]
+            } else {
+                let v = axis.cross(tip - frame.pos);
+                [v.x, v.y, v.z, axis.x, axis.y, axis.z]
+            };
+        }
+        Jacobian { cols, n: self.n }
+    }
+
+    /// Joint limits as fixed arrays, for the solvers.
+    pub(super) fn limits(&self) -> (&[f64; MAX_JOINTS], &[f64; MAX_JOINTS]) {
+        (&self.min, &self.max)
+    }
+}
+
+/// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)` of the robot's tool.
+fn tool_frame(config: &RobotConfig) -> Frame {
+    let t = &config.tool;
+    let [roll, pitch, yaw] = t.rpy;
+    Frame::dh(t.a, t.alpha, t.d, t.theta)
+        * Frame::new(
+            Rotation::from_rpy(roll, pitch, yaw),
+            Vec3::from_array(t.xyz),
+        )
+}

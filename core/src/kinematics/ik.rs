@@ -1,0 +1,349 @@
+//! Inverse position kinematics: damped least squares with joint limits as an active set.
+//!
+//! Each iteration solves `(JᵀJ + λI) Δq = Jᵀe` for the pose error `e` (position error and
+//! rotation vector, base frame). The damping `λ = ½|e|² + λ_min` (Sugihara's error-damped
+//! Levenberg–Marquardt) takes cautious steps far from the goal or near a singularity and
+//! becomes a Newton step close to the solution, so convergence to 1e-9 is quadratic there.
+//!
+//! Joint limits: KDL's `ChainIkSolverPos_NR_JL`, which the seed configured, clamps after every
+//! Newton step. A joint pinned at its limit then keeps absorbing its share of the step and the
+//! solver stalls. Here a joint that sits at a limit and whose step points outwards is *locked*
+//! for that iteration (its column is removed and the step re-solved), so the other joints take
+//! over; a joint that crosses a limit is stopped at it. The global solver also wraps revolute
+//! joints by 2π where the range allows, and restarts from deterministic random seeds.
+
+use super::chain::Chain;
+use super::jacobian::Jacobian;
+use super::joints::Joints;
+use super::linalg;
+use crate::MAX_JOINTS;
+use crate::config::IkConfig;
+use crate::math::Frame;
+use crate::rng::SplitMix64;
+
+/// Damping floor: keeps every system positive definite, small enough that steps near the
+/// solution are Newton steps.
+const LAMBDA_MIN: f64 = 1e-9;
+/// A joint within this distance of a limit counts as sitting on it.
+const AT_LIMIT: f64 = 1e-12;
+/// Iterations of one global attempt before it restarts from a new random seed.
+const ATTEMPT_ITERATIONS: u16 = 30;
+/// Steps smaller than this (∞-norm) without convergence mean a local minimum.
+const STALL_STEP: f64 = 1e-10;
+
+/// An IK answer: joint values, how many iterations it took and how far from the target it is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IkSolution {
+    /// Joint values, always within the joint limits.
+    pub q: Joints,
+    /// Newton iterations used (over all restarts for the global solver).
+    pub iterations: u32,
+    /// Distance from the target position (m).
+    pub position_error: f64,
+    /// Rotation angle from the target orientation (rad).
+    pub orientation_error: f64,
+}
+
+/// The outcome of an IK solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IkResult {
+    /// Within the tolerance on both position and orientation.
+    Converged(IkSolution),
+    /// The iteration budget ran out; this is the best pose found.
+    NotConverged(IkSolution),
+}
+
+impl IkResult {
+    /// The solution, converged or best effort.
+    pub fn solution(&self) -> &IkSolution {
+        match self {
+            Self::Converged(s) | Self::NotConverged(s) => s,
+        }
+    }
+
+    /// True if the solve converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, Self::Converged(_))
+    }
+}
+
+/// Why an IK request was refused before solving.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IkError {
+    /// The seed's length differs from the chain's number of joints.
+    WrongJointCount,
+    /// The seed holds NaN or infinite values.
+    NonFiniteSeed,
+    /// The target frame holds NaN or infinite values.
+    NonFiniteTarget,
+}
+
+impl core::fmt::Display for IkError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::WrongJointCount => "seed length differs from the number of joints",
+            Self::NonFiniteSeed => "seed holds NaN or infinite values",
+            Self::NonFiniteTarget => "target holds NaN or infinite values",
+        })
+    }
+}
+
+/// The seed's divergence guard (spec §3.5): true if the solved pose is farther from the target
+/// than the current pose by more than `margin` (metric: metres + radians). A diverging solution
+/// must not be commanded; the arm holds instead.
+pub fn diverges(target: &Frame, solved: &Frame, current: &Frame, margin: f64) -> bool {
+    target.dist(solved) - target.dist(current) > margin
+}
+
+/// The result of one descent from one starting point.
+struct Descent {
+    best: IkSolution,
+    converged: bool,
+}
+
+impl Chain {
+    /// Tracking IK: a few damped Newton steps from a nearby `seed`, typically the previous
+    /// tick's solution. Never wraps joints by 2π, so the result stays on the seed's branch and
+    /// a commanded trajectory cannot jump a whole turn.
+    pub fn solve_tracking(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+    ) -> Result<IkResult, IkError> {
+        let q = self.prepare(target, seed)?;
+        let descent = self.descend(
+            target,
+            q,
+            config.tracking_iterations,
+            config.tolerance,
+            false,
+        );
+        Ok(descent.into_result())
+    }
+
+    /// Global IK: descends from `seed`, then from deterministic random configurations drawn
+    /// with `rng_seed`, until one converges within the limits or `config.global_iterations`
+    /// iterations are spent. The same inputs always give the same answer.
+    pub fn solve_global(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+        rng_seed: u64,
+    ) -> Result<IkResult, IkError> {
+        let start = self.prepare(target, seed)?;
+        let mut q = start;
+        let mut rng = SplitMix64::new(rng_seed);
+        let mut budget = config.global_iterations;
+        let mut best: Option<IkSolution> = None;
+        let mut used = 0u32;
+        // Each attempt spends at least one iteration, so this bound is never the binding one.
+        for _ in 0..config.global_iterations {
+            let limit = budget.min(ATTEMPT_ITERATIONS);
+            let descent = self.descend(target, q, limit, config.tolerance, true);
+            used += descent.best.iterations;
+            budget = budget.saturating_sub(descent.best.iterations.max(1) as u16);
+            let mut found = descent.best;
+            found.iterations = used;
+            if descent.converged {
+                return Ok(IkResult::Converged(found));
+            }
+            if best.is_none_or(|b| score(&found) < score(&b)) {
+                best = Some(found);
+            }
+            if budget == 0 {
+                break;
+            }
+            q = self.random_configuration(&mut rng);
+        }
+        // Only a zero budget leaves no attempt: then the answer is the (clamped) seed itself.
+        let mut best =
+            best.unwrap_or_else(|| self.descend(target, start, 0, config.tolerance, true).best);
+        best.iterations = used;
+        Ok(IkResult::NotConverged(best))
+    }
+
+    /// Validates the inputs and returns the seed clamped into the limits.
+    fn prepare(&self, target: &Frame, seed: &[f64]) -> Result<[f64; MAX_JOINTS], IkError> {
+        if !target.is_finite() {
+            return Err(IkError::NonFiniteTarget);
+        }
+        if seed.len() != self.dof() {
+            return Err(IkError::WrongJointCount);
+        }
+        let mut q = [0.0; MAX_JOINTS];
+        let (min, max) = self.limits();
+        for ((v, s), (lo, hi)) in q.iter_mut().zip(seed).zip(min.iter().zip(max)) {
+            if !s.is_finite() {
+                return Err(IkError::NonFiniteSeed);
+            }
+            *v = s.clamp(*lo, *hi);
+        }
+        Ok(q)
+    }
+
+    /// A configuration drawn uniformly within the limits (revolute ranges capped at ±π about
+    /// their centre: a wider range only repeats the same poses).
+    fn random_configuration(&self, rng: &mut SplitMix64) -> [f64; MAX_JOINTS] {
+        let mut q = [0.0; MAX_JOINTS];
+        let (min, max) = self.limits();
+        for (i, (v, (lo, hi))) in q.iter_mut().zip(min.iter().zip(max)).enumerate() {
+            let (lo, hi) = if self.is_prismatic(i) {
+                (*lo, *hi)
+            } else {
+                let mid = 0.5 * (lo + hi);
+                (
+                    lo.max(mid - core::f64::consts::PI),
+                    hi.min(mid + core::f64::consts::PI),
+                )
+            };
+            *v = rng.uniform(lo, hi);
+        }
+        q
+    }
+
+    /// Damped Newton iterations from `q`; returns the best pose visited.
+    fn descend(
+        &self,
+        target: &Frame,
+        mut q: [f64; MAX_JOINTS],
+        iterations: u16,
+        tolerance: f64,
+        wrap: bool,
+    ) -> Descent {
+        let n = self.dof();
+        let mut best = IkSolution {
+            q: Joints::zeros(n),
+            iterations: 0,
+            position_error: f64::INFINITY,
+            orientation_error: f64::INFINITY,
+        };
+        for it in 0..=u32::from(iterations) {
+            let pose = self.pose(&q);
+            let e = pose.tool.diff(target);
+            let solution = IkSolution {
+                q: joints_of(&q, n),
+                iterations: it,
+                position_error: e.linear.norm(),
+                orientation_error: e.angular.norm(),
+            };
+            // The first evaluation always counts: with a huge target every score is infinite.
+            if it == 0 || score(&solution) < score(&best) {
+                best = solution;
+            }
+            if solution.position_error < tolerance && solution.orientation_error < tolerance {
+                return Descent {
+                    best: solution,
+                    converged: true,
+                };
+            }
+            if it == u32::from(iterations) {
+                break;
+            }
+            let e = e.to_array();
+            let energy = 0.5 * e.iter().map(|v| v * v).sum::<f64>();
+            let step = self.step(&self.jacobian_of(&pose), &e, energy + LAMBDA_MIN, &q);
+            let largest = step.iter().fold(0.0f64, |m, v| m.max(libm::fabs(*v)));
+            self.apply(&mut q, &step, wrap);
+            if largest < STALL_STEP {
+                best.iterations = it + 1;
+                break;
+            }
+        }
+        Descent {
+            best,
+            converged: false,
+        }
+    }
+
+    /// One damped least-squares step, with joints that sit on a limit and push outwards locked.
+    fn step(
+        &self,
+        j: &Jacobian,
+        e: &[f64; 6],
+        lambda: f64,
+        q: &[f64; MAX_JOINTS],
+    ) -> [f64; MAX_JOINTS] {
+        let n = self.dof();
+        let gram = j.gram();
+        let gradient = j.transpose_mul(e);
+        let (min, max) = self.limits();
+        let mut locked = [false; MAX_JOINTS];
+        let mut dq = [0.0; MAX_JOINTS];
+        // Each pass locks at least one more joint or stops, so n + 1 passes suffice.
+        for _ in 0..=n {
+            let mut a = gram;
+            let mut b = gradient;
+            for (i, (row, bi)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+                let row_locked = locked.get(i).copied().unwrap_or(true);
+                for (x, col_locked) in row.iter_mut().zip(&locked) {
+                    if row_locked || *col_locked {
+                        *x = 0.0;
+                    }
+                }
+                if row_locked {
+                    *bi = 0.0;
+                }
+                if let Some(d) = row.get_mut(i) {
+                    *d += lambda;
+                }
+            }
+            dq = linalg::cholesky_solve(&a, &b, n).unwrap_or([0.0; MAX_JOINTS]);
+            let mut changed = false;
+            let joints = q.iter().zip(&dq).zip(min.iter().zip(max)).take(n);
+            for (((qi, di), (lo, hi)), lock) in joints.zip(locked.iter_mut()) {
+                let target = qi + di;
+                let pushes_out = (target > *hi && *qi >= hi - AT_LIMIT)
+                    || (target < *lo && *qi <= lo + AT_LIMIT);
+                if !*lock && pushes_out {
+                    *lock = true;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        dq
+    }
+
+    /// `q += dq`, wrapping revolute joints by 2π into range when allowed, then clamping.
+    fn apply(&self, q: &mut [f64; MAX_JOINTS], dq: &[f64; MAX_JOINTS], wrap: bool) {
+        const TAU: f64 = core::f64::consts::TAU;
+        let (min, max) = self.limits();
+        let joints = q.iter_mut().zip(dq).zip(min.iter().zip(max)).enumerate();
+        for (i, ((qi, di), (lo, hi))) in joints.take(self.dof()) {
+            let mut v = *qi + di;
+            if wrap && !self.is_prismatic(i) && (v < *lo || v > *hi) {
+                let turns = libm::round((0.5 * (lo + hi) - v) / TAU);
+                let wrapped = v + turns * TAU;
+                if *lo <= wrapped && wrapped <= *hi {
+                    v = wrapped;
+                }
+            }
+            *qi = v.clamp(*lo, *hi);
+        }
+    }
+}
+
+impl Descent {
+    fn into_result(self) -> IkResult {
+        if self.converged {
+            IkResult::Converged(self.best)
+        } else {
+            IkResult::NotConverged(self.best)
+        }
+    }
+}
+
+/// The seed's mixed metric: metres plus radians.
+fn score(s: &IkSolution) -> f64 {
+    s.position_error + s.orientation_error
+}
+
+fn joints_of(q: &[f64; MAX_JOINTS], n: usize) -> Joints {
+    let mut joints = Joints::zeros(n);
+    joints.copy_from_slice(q.get(..n).unwrap_or(&[]));
+    joints
+}

@@ -1,0 +1,20 @@
+//! armgate's core: everything that decides anything about the arm.
+//!
+//! The core is `no_std`, never allocates, never panics on any input (fallible operations return
+//! typed errors) and bounds every loop by a count, so that the host simulation and the
+//! microcontroller compute identical results. It does no I/O: the shells (`firmware`, `host-sim`)
+//! only move bytes and time.
+//!
+//! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
+//! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
+//! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
+//! * [`rng`]: the small deterministic random generator used by global IK and by tests.
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
+
+pub mod config;
+pub mod kinematics;
+pub mod math;
+pub mod rng;
+
+/// The largest number of joints a robot may have (the seed's Ranger Mark II has 8).
+pub const MAX_JOINTS: usize = 8;

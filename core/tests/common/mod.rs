@@ -1,0 +1,43 @@
+//! Shared helpers of the core's integration tests.
+#![allow(dead_code, clippy::unwrap_used, clippy::panic)]
+
+use std::path::PathBuf;
+
+use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::kinematics::Chain;
+use armgate_core::rng::SplitMix64;
+
+/// The workspace's `robots/` folder.
+pub fn robots_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots")
+}
+
+/// Loads `robots/<name>.toml`.
+pub fn robot(name: &str) -> RobotConfig {
+    let path = robots_dir().join(format!("{name}.toml"));
+    load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Every shipped robot file, by name.
+pub fn all_robots() -> Vec<(String, RobotConfig)> {
+    let mut names: Vec<_> = std::fs::read_dir(robots_dir())
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.unwrap().path();
+            (p.extension()? == "toml")
+                .then(|| p.file_stem().unwrap().to_string_lossy().into_owned())
+        })
+        .collect();
+    names.sort();
+    names.into_iter().map(|n| (n.clone(), robot(&n))).collect()
+}
+
+/// A configuration drawn uniformly within the joint limits.
+pub fn random_q(chain: &Chain, rng: &mut SplitMix64) -> Vec<f64> {
+    chain
+        .min()
+        .iter()
+        .zip(chain.max())
+        .map(|(lo, hi)| rng.uniform(*lo, *hi))
+        .collect()
+}

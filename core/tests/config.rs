@@ -1,0 +1,138 @@
+//! Robot files: every shipped file loads, round-trips through postcard, and bad files are
+//! refused with an error that names the field.
+#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+mod common;
+
+use armgate_core::config::{ConfigReason, LoadError, RobotConfig, parse_toml};
+
+fn mk1_text() -> String {
+    std::fs::read_to_string(common::robots_dir().join("ranger-mk1.toml")).unwrap()
+}
+
+fn refusal(text: &str) -> String {
+    match parse_toml(text) {
+        Ok(_) => panic!("accepted a bad robot file"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn every_shipped_robot_loads_and_round_trips_through_postcard() {
+    let robots = common::all_robots();
+    assert!(
+        robots.len() >= 7,
+        "robots/: {:?}",
+        robots.iter().map(|r| &r.0).collect::<Vec<_>>()
+    );
+    for (name, config) in robots {
+        assert_eq!(config.name.as_str(), name, "file name and `name` differ");
+        let mut buf = [0u8; 4096];
+        let bytes = postcard::to_slice(&config, &mut buf).unwrap();
+        let back: RobotConfig = postcard::from_bytes(bytes).unwrap();
+        assert_eq!(back, config, "{name}");
+        back.validate().unwrap();
+    }
+}
+
+#[test]
+fn min_above_max_names_the_joint_and_field() {
+    let text = mk1_text().replacen("min = -0.785", "min = 4.0", 1);
+    assert_eq!(
+        refusal(&text),
+        "robot file: joints[1].min: minimum is greater than maximum"
+    );
+}
+
+#[test]
+fn nan_names_the_field() {
+    let text = mk1_text().replacen("d = 0.538", "d = nan", 1);
+    assert_eq!(
+        refusal(&text),
+        "robot file: joints[3].d: must be a finite number (not NaN or infinite)"
+    );
+    let text = mk1_text().replacen("control_period = 0.01944", "control_period = inf", 1);
+    assert!(refusal(&text).contains("control_period: must be a finite number"));
+}
+
+#[test]
+fn unknown_joint_type_is_refused() {
+    let text = mk1_text().replacen("type = \"revolute\"", "type = \"helical\"", 1);
+    let e = refusal(&text);
+    assert!(
+        e.contains("unknown variant `helical`") && e.contains("revolute"),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_joint_counts_are_refused() {
+    let text = mk1_text();
+    let first_joint = text.find("[[joints]]").unwrap();
+    let header = &text[..first_joint];
+    assert!(refusal(header).contains("joints"), "no joints");
+
+    let joint = text[first_joint..].split("[[joints]]").nth(1).unwrap();
+    let mut nine = header.to_string();
+    for id in 0..9 {
+        nine.push_str("[[joints]]");
+        nine.push_str(&joint.replace("node_id = 101", &format!("node_id = {}", 101 + id)));
+    }
+    let e = refusal(&nine);
+    assert!(
+        e.contains("invalid length 9, expected at most 8 entries"),
+        "{e}"
+    );
+}
+
+#[test]
+fn empty_joint_list_is_refused_by_validation() {
+    let mut config = common::robot("ranger-mk1");
+    config.joints.clear();
+    let e = config.validate().unwrap_err();
+    assert_eq!((e.field, e.reason), ("joints", ConfigReason::NoJoints));
+}
+
+#[test]
+fn unknown_and_missing_fields_are_refused() {
+    let e = refusal(&mk1_text().replacen("max_rate = 0.2", "max_rate = 0.2\nmax_jerk = 1.0", 1));
+    assert!(e.contains("max_jerk"), "{e}");
+    let e = refusal(&mk1_text().replacen("control_period = 0.01944", "", 1));
+    assert!(e.contains("control_period"), "{e}");
+}
+
+#[test]
+fn drive_errors_name_the_field() {
+    let e = refusal(&mk1_text().replacen("node_id = 102", "node_id = 101", 1));
+    assert_eq!(
+        e,
+        "robot file: joints[1].drive.node_id: node id is used by an earlier joint"
+    );
+    let e = refusal(&mk1_text().replacen("counts_per_rev = 817741", "counts_per_rev = 0", 1));
+    assert!(
+        e.starts_with("robot file: joints[0].drive.counts_per_rev"),
+        "{e}"
+    );
+    let e = refusal(&mk1_text().replacen("can_bitrate = 500000", "can_bitrate = 400000", 1));
+    assert!(e.starts_with("robot file: drives.can_bitrate"), "{e}");
+    let e = refusal(&mk1_text().replacen("node_id = 101", "node_id = 200", 1));
+    assert!(e.starts_with("robot file: joints[0].drive.node_id"), "{e}");
+}
+
+#[test]
+fn workspace_boxes_must_be_ordered() {
+    let text = mk1_text().replacen(
+        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]",
+        "[0.2, -0.2, -0.2, 0.2, -0.1, 0.4]",
+        1,
+    );
+    assert_eq!(
+        refusal(&text),
+        "robot file: workspace.boxes: minimum is greater than maximum"
+    );
+}
+
+#[test]
+fn syntax_errors_are_load_errors() {
+    assert!(matches!(parse_toml("name = "), Err(LoadError::Syntax(_))));
+}
