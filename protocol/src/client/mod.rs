@@ -1,0 +1,42 @@
+//! The 31-byte client messages (spec §2).
+//!
+//! A controller answering one datagram:
+//!
+//! ```
+//! use armgate_protocol::client::{Message, MESSAGE_LEN, Notice, Reply, Request};
+//!
+//! fn answer(datagram: &[u8]) -> [u8; MESSAGE_LEN] {
+//!     match Message::new_checked(datagram).and_then(|m| Request::parse(&m)) {
+//!         Ok(request) => Reply::null(request.command).to_bytes(),
+//!         Err(error) => Notice::from(error).text().to_bytes(),
+//!     }
+//! }
+//!
+//! assert_eq!(&answer(b"BG")[..24], b"ER01 Msg BG undersized.\0");
+//! assert_eq!(&answer(&[b'X'; 31])[..27], b"ER00 Cmd XX not understood\0");
+//! let mut begin = [0; MESSAGE_LEN];
+//! begin[..2].copy_from_slice(b"BG");
+//! assert_eq!(answer(&begin)[..], [&b"GB"[..], &[0; 29]].concat());
+//! ```
+//!
+//! * [`Message`]: the length-checked view of a datagram, with field accessors.
+//! * [`Command`]: the request command pairs.
+//! * [`Request`] and [`Reply`]: command, seven floats and the index.
+//! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts.
+//! * [`Error`]: why a datagram is not a request (or reply).
+
+mod command;
+mod error;
+mod message;
+mod notice;
+mod reply;
+mod request;
+mod text;
+
+pub use command::Command;
+pub use error::Error;
+pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
+pub use notice::Notice;
+pub use reply::Reply;
+pub use request::Request;
+pub use text::{Severity, TEXT_CAPACITY, Text};
