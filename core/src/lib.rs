@@ -8,12 +8,14 @@
 //! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
+//! * [`motion`]: generators, sequences, limiters, the mode switch and the control step.
 //! * [`rng`]: the small deterministic random generator used by global IK and by tests.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
 pub mod config;
 pub mod kinematics;
 pub mod math;
+pub mod motion;
 pub mod rng;
 
 /// The largest number of joints a robot may have (the seed's Ranger Mark II has 8).

@@ -1,0 +1,454 @@
+//! The control step: one deterministic tick of the whole motion pipeline (spec §1.4).
+
+use super::cartesian_generator::CartesianGenerator;
+use super::joint_generator::JointGenerator;
+use super::joint_limiter::JointLimiter;
+use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
+use super::shape::Shape;
+use super::workspace::Workspace;
+use super::{Events, Refusal};
+use crate::config::{IkConfig, RobotConfig};
+use crate::kinematics::{Chain, Joints, KinematicsError, diverges};
+use crate::math::Frame;
+
+/// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
+/// reached; above it the tick raises [`Events::ik_divergence`].
+const REACH_TOLERANCE: f64 = 1e-6;
+/// The seed's via-point tolerances (spec §4.4).
+const CARTESIAN_TOLERANCES: Tolerances = Tolerances {
+    fine: 0.002,
+    coarse: 0.1,
+};
+const JOINT_TOLERANCES: Tolerances = Tolerances {
+    fine: 0.001,
+    coarse: 0.05,
+};
+
+/// The control mode (the seed's switch: off / joint / Cartesian).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mode {
+    /// No command: the drives hold their last set-point.
+    #[default]
+    Off,
+    /// The joint generator and joint sequences drive the arm.
+    Joint,
+    /// The Cartesian generator, shapes and Cartesian sequences drive the arm through the IK.
+    Cartesian,
+}
+
+/// What one tick produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepOutput {
+    /// The joint command for the drives; `None` means hold the last one (mode off).
+    pub command: Option<Joints>,
+    /// What happened this tick.
+    pub events: Events,
+    /// FK of the measured joints.
+    pub measured_pose: Frame,
+    /// The Cartesian set-point given to the IK this tick (Cartesian mode only).
+    pub setpoint: Option<Frame>,
+}
+
+/// The whole motion pipeline of one arm: generators, via-point sequences, workspace check, IK,
+/// mode switch and joint limiter.
+///
+/// [`step`](Self::step) runs one tick; the motion requests are methods that either start
+/// something or say why not. Nothing here reads a clock: time is an argument.
+///
+/// Mode transitions never emit a stale or jumping set-point, by construction: on every
+/// transition the newly active generator is made to hold exactly the last joint command (the
+/// measured joints if the arm was off), the Cartesian one at its FK, and the IK is a pure
+/// function seeded from the last command, with no output of its own that could go stale. The
+/// first command after a transition therefore equals the last one before it. (The seed needed
+/// a two-cycle hold for this and missed a stale IK output on entering Cartesian mode, spec §9
+/// item 28.)
+#[derive(Clone, Debug)]
+pub struct Controller {
+    chain: Chain,
+    ik: IkConfig,
+    limiter: JointLimiter,
+    workspace: Workspace,
+    mode: Mode,
+    joint_generator: JointGenerator,
+    cartesian_generator: CartesianGenerator,
+    joint_sequence: Sequence<Joints>,
+    cartesian_sequence: Sequence<Frame>,
+    /// The last joint command sent (none while off).
+    command: Option<Joints>,
+    /// The last measurement and its FK.
+    measured: Option<(Joints, Frame)>,
+    /// Time of the last step (s).
+    now: f64,
+}
+
+impl Controller {
+    /// A controller for a validated robot description, in mode off.
+    pub fn new(config: &RobotConfig) -> Self {
+        let n = config.dof();
+        let mut v_max = Joints::zeros(n);
+        let mut a_max = Joints::zeros(n);
+        for (j, (v, a)) in config
+            .joints
+            .iter()
+            .zip(v_max.iter_mut().zip(a_max.iter_mut()))
+        {
+            *v = j.max_velocity;
+            *a = j.max_acceleration;
+        }
+        let cartesian = &config.cartesian;
+        Self {
+            chain: Chain::new(config),
+            ik: config.ik,
+            limiter: JointLimiter::new(config),
+            workspace: Workspace::new(&config.workspace),
+            mode: Mode::Off,
+            joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max),
+            cartesian_generator: CartesianGenerator::new(
+                Frame::IDENTITY,
+                cartesian.max_velocity,
+                cartesian.max_acceleration,
+            ),
+            joint_sequence: Sequence::new(JOINT_TOLERANCES),
+            cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES),
+            command: None,
+            measured: None,
+            now: 0.0,
+        }
+    }
+
+    /// One control tick at time `now` (s) with the measured joints: FK, via-point sequence,
+    /// generator, workspace check, IK, mode switch, joint limiter — in that order.
+    pub fn step(&mut self, now: f64, measured: &[f64]) -> Result<StepOutput, KinematicsError> {
+        let q_m = self.chain.check(measured)?;
+        let f_m = self.chain.forward(&q_m)?;
+        self.now = now;
+        self.measured = Some((q_m, f_m));
+        let mut events = Events {
+            workspace_limit: !self.workspace.allows(f_m.pos),
+            ..Events::default()
+        };
+        let (request, setpoint) = match self.mode {
+            Mode::Off => (None, None),
+            Mode::Joint => (Some(self.joint_tick(&q_m, &mut events)), None),
+            Mode::Cartesian => {
+                let (q, sp) = self.cartesian_tick(&q_m, &f_m, &mut events);
+                (Some(q), Some(sp))
+            }
+        };
+        let command = request.map(|r| {
+            let limited = self
+                .limiter
+                .limit(&r, Some(self.command.as_ref().unwrap_or(&q_m)));
+            events.joint_limit = limited.position_clamped;
+            events.rate_limit = limited.rate_clamped;
+            limited.q
+        });
+        if command.is_some() {
+            self.command = command;
+        }
+        Ok(StepOutput {
+            command,
+            events,
+            measured_pose: f_m,
+            setpoint,
+        })
+    }
+
+    /// Joint mode: sequence, then generator.
+    fn joint_tick(&mut self, q_m: &Joints, events: &mut Events) -> Joints {
+        let leg_done = !self.joint_generator.is_moving();
+        let step = self
+            .joint_sequence
+            .poll(leg_done, |p| joint_distance(p, q_m));
+        if let SequenceStep::MoveTo(via) = step {
+            // The generator is idle, so the move cannot be refused.
+            let _ = self
+                .joint_generator
+                .move_to(via.point, via.min_duration, self.now);
+        }
+        note_sequence(step, events);
+        let (setpoint, finished) = self.joint_generator.update(self.now);
+        events.motion_finished |= finished && !self.joint_sequence.is_running();
+        setpoint
+    }
+
+    /// Cartesian mode: sequence, generator, workspace check, IK with the divergence guard.
+    fn cartesian_tick(
+        &mut self,
+        q_m: &Joints,
+        f_m: &Frame,
+        events: &mut Events,
+    ) -> (Joints, Frame) {
+        let leg_done = !self.cartesian_generator.is_moving();
+        let step = self.cartesian_sequence.poll(leg_done, |p| p.dist(f_m));
+        if let SequenceStep::MoveTo(via) = step {
+            let _ = self
+                .cartesian_generator
+                .move_to(via.point, via.min_duration, self.now);
+        }
+        note_sequence(step, events);
+        let (mut setpoint, finished) = self.cartesian_generator.update(self.now);
+        events.motion_finished |= finished && !self.cartesian_sequence.is_running();
+
+        let seed = self.command.unwrap_or(*q_m);
+        if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
+            // An illegal set-point never reaches the IK: abort and hold the commanded pose.
+            events.workspace_limit = true;
+            events.sequence_aborted |= self.cartesian_sequence.is_running();
+            self.cartesian_sequence.halt();
+            setpoint = self.chain.forward(&seed).unwrap_or(*f_m);
+            self.cartesian_generator.hold(setpoint);
+        }
+        let q = match self.chain.solve_tracking(&setpoint, &seed, &self.ik) {
+            Ok(result) => {
+                let s = result.solution();
+                if s.position_error <= REACH_TOLERANCE && s.orientation_error <= REACH_TOLERANCE {
+                    s.q
+                } else {
+                    events.ik_divergence = true;
+                    let solved = self.chain.forward(&s.q);
+                    let current = self.chain.forward(&seed);
+                    match (solved, current) {
+                        (Ok(solved), Ok(current))
+                            if !diverges(
+                                &setpoint,
+                                &solved,
+                                &current,
+                                self.ik.divergence_margin,
+                            ) =>
+                        {
+                            s.q
+                        }
+                        _ => seed,
+                    }
+                }
+            }
+            Err(_) => {
+                events.ik_divergence = true;
+                seed
+            }
+        };
+        (q, setpoint)
+    }
+
+    /// Switches the control mode. The newly active generator holds the last command (or the
+    /// measured joints when coming from off), so the switch itself never moves the arm.
+    /// Selecting the current mode again stops any motion.
+    pub fn set_mode(&mut self, mode: Mode) -> Result<(), Refusal> {
+        let (q_m, _) = self.measured.ok_or(Refusal::NotReady)?;
+        self.mode = mode;
+        self.hold(q_m);
+        if mode == Mode::Off {
+            self.command = None;
+        }
+        Ok(())
+    }
+
+    /// Stops every motion and sequence; the arm holds its commanded position.
+    pub fn stop(&mut self) {
+        if let Some((q_m, _)) = self.measured {
+            self.hold(q_m);
+        }
+    }
+
+    fn hold(&mut self, q_m: Joints) {
+        let q = self.command.unwrap_or(q_m);
+        self.joint_generator.hold(q);
+        if let Ok(pose) = self.chain.forward(&q) {
+            self.cartesian_generator.hold(pose);
+        }
+        self.joint_sequence.halt();
+        self.cartesian_sequence.halt();
+    }
+
+    /// Moves the tool to `goal` (base frame) in at least `min_duration` seconds (negative: as
+    /// fast as the limits allow). Cartesian mode only.
+    pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
+        self.ready_for_cartesian_motion(&goal, min_duration)?;
+        self.cartesian_generator
+            .move_to(goal, min_duration.max(0.0), self.now)
+    }
+
+    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
+    pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
+        let goal = self.ready_for_joint_motion(goal, min_duration)?;
+        self.joint_generator
+            .move_to(goal, min_duration.max(0.0), self.now)
+    }
+
+    /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
+    pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
+        self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        self.cartesian_generator.start_shape(shape, self.now)
+    }
+
+    /// Asks a running shape to end where it started (end of revolution / centre crossing).
+    pub fn finish_shape(&mut self) -> Result<(), Refusal> {
+        if self.cartesian_generator.finish_shape(self.now) {
+            Ok(())
+        } else {
+            Err(Refusal::NoGoal)
+        }
+    }
+
+    /// Stores Cartesian via point `index` (0..20) with the minimum duration of its leg.
+    pub fn set_cartesian_via(
+        &mut self,
+        index: usize,
+        pose: Frame,
+        min_duration: f64,
+    ) -> Result<(), Refusal> {
+        if !pose.is_finite() || !min_duration.is_finite() {
+            return Err(Refusal::InvalidNumber);
+        }
+        if !self.workspace.allows(pose.pos) {
+            return Err(Refusal::OutsideWorkspace);
+        }
+        let via = ViaPoint {
+            point: pose,
+            min_duration: min_duration.max(0.0),
+        };
+        self.cartesian_sequence.set(index, via)
+    }
+
+    /// Stores joint via point `index` (0..20) with the minimum duration of its leg.
+    pub fn set_joint_via(
+        &mut self,
+        index: usize,
+        q: &[f64],
+        min_duration: f64,
+    ) -> Result<(), Refusal> {
+        let q = self.valid_joint_goal(q, min_duration)?;
+        let via = ViaPoint {
+            point: q,
+            min_duration: min_duration.max(0.0),
+        };
+        self.joint_sequence.set(index, via)
+    }
+
+    /// Empties the Cartesian via-point slots.
+    pub fn clear_cartesian_via(&mut self) {
+        self.cartesian_sequence.clear();
+    }
+
+    /// Empties the joint via-point slots.
+    pub fn clear_joint_via(&mut self) {
+        self.joint_sequence.clear();
+    }
+
+    /// Runs the Cartesian via points 0, 1, … up to the first empty slot. Cartesian mode only.
+    pub fn start_cartesian_sequence(&mut self) -> Result<(), Refusal> {
+        self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        let first = self.cartesian_sequence.start()?;
+        self.cartesian_generator
+            .move_to(first.point, first.min_duration, self.now)
+            .map(|_| ())
+    }
+
+    /// Runs the joint via points 0, 1, … up to the first empty slot. Joint mode only.
+    pub fn start_joint_sequence(&mut self) -> Result<(), Refusal> {
+        if self.mode != Mode::Joint {
+            return Err(Refusal::WrongMode);
+        }
+        if self.is_moving() {
+            return Err(Refusal::Busy);
+        }
+        let first = self.joint_sequence.start()?;
+        self.joint_generator
+            .move_to(first.point, first.min_duration, self.now)
+            .map(|_| ())
+    }
+
+    fn ready_for_cartesian_motion(&self, goal: &Frame, min_duration: f64) -> Result<(), Refusal> {
+        if self.mode != Mode::Cartesian {
+            return Err(Refusal::WrongMode);
+        }
+        if !goal.is_finite() || !min_duration.is_finite() {
+            return Err(Refusal::InvalidNumber);
+        }
+        if self.is_moving() {
+            return Err(Refusal::Busy);
+        }
+        let arm_inside = self
+            .measured
+            .is_some_and(|(_, pose)| self.workspace.allows(pose.pos));
+        if !arm_inside || !self.workspace.allows(goal.pos) {
+            return Err(Refusal::OutsideWorkspace);
+        }
+        Ok(())
+    }
+
+    fn ready_for_joint_motion(&self, goal: &[f64], min_duration: f64) -> Result<Joints, Refusal> {
+        if self.mode != Mode::Joint {
+            return Err(Refusal::WrongMode);
+        }
+        let goal = self.valid_joint_goal(goal, min_duration)?;
+        if self.is_moving() {
+            return Err(Refusal::Busy);
+        }
+        Ok(goal)
+    }
+
+    fn valid_joint_goal(&self, goal: &[f64], min_duration: f64) -> Result<Joints, Refusal> {
+        let goal = self.chain.check(goal).map_err(|e| match e {
+            KinematicsError::WrongJointCount => Refusal::WrongJointCount,
+            KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
+        })?;
+        if !min_duration.is_finite() {
+            return Err(Refusal::InvalidNumber);
+        }
+        if !self.chain.within_limits(&goal) {
+            return Err(Refusal::OutsideJointLimits);
+        }
+        Ok(goal)
+    }
+
+    /// The control mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// True while a move, shape or sequence of the active mode runs.
+    pub fn is_moving(&self) -> bool {
+        match self.mode {
+            Mode::Off => false,
+            Mode::Joint => self.joint_generator.is_moving() || self.joint_sequence.is_running(),
+            Mode::Cartesian => {
+                self.cartesian_generator.is_moving() || self.cartesian_sequence.is_running()
+            }
+        }
+    }
+
+    /// The last joint command (none while off).
+    pub fn command(&self) -> Option<Joints> {
+        self.command
+    }
+
+    /// The last measured joints and their FK.
+    pub fn measured(&self) -> Option<(Joints, Frame)> {
+        self.measured
+    }
+
+    /// The Cartesian generator's set-point.
+    pub fn cartesian_setpoint(&self) -> Frame {
+        self.cartesian_generator.setpoint()
+    }
+
+    /// The kinematic chain.
+    pub fn chain(&self) -> &Chain {
+        &self.chain
+    }
+}
+
+fn note_sequence<P>(step: SequenceStep<P>, events: &mut Events) {
+    match step {
+        SequenceStep::Finished => events.sequence_finished = true,
+        SequenceStep::Aborted => events.sequence_aborted = true,
+        SequenceStep::Wait | SequenceStep::MoveTo(_) => {}
+    }
+}
+
+/// Euclidean distance between joint vectors (the joint sequence's reach metric).
+fn joint_distance(a: &Joints, b: &Joints) -> f64 {
+    libm::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
+}

@@ -1,0 +1,21 @@
+//! What happened during one control tick.
+
+/// Conditions and happenings of one tick. Conditions (limits, divergence) are raised on every
+/// tick while they hold; the message relay decides how often to tell the client.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Events {
+    /// The Cartesian set-point or the measured pose is outside the workspace (`ER21`).
+    pub workspace_limit: bool,
+    /// A joint set-point was clamped to its range (`WN12`).
+    pub joint_limit: bool,
+    /// A joint set-point step was clamped to the joint's rate limit.
+    pub rate_limit: bool,
+    /// Tracking IK could not reach the Cartesian set-point (`WN22`).
+    pub ik_divergence: bool,
+    /// A motion (single move, or the last leg of a sequence) reached its goal.
+    pub motion_finished: bool,
+    /// A via-point sequence ran to its end.
+    pub sequence_finished: bool,
+    /// A via-point sequence stopped because a via point was not reached.
+    pub sequence_aborted: bool,
+}

@@ -1,0 +1,85 @@
+//! The joint-space trajectory generator (spec §4.3).
+
+use super::Refusal;
+use super::straight_line::StraightLine;
+use crate::kinematics::Joints;
+
+/// Rest-to-rest joint moves along a straight line in joint space, synchronised so that all
+/// joints finish together. Starts from its own set-point (the commanded state), so starting a
+/// move never jumps.
+#[derive(Clone, Debug)]
+pub struct JointGenerator {
+    setpoint: Joints,
+    v_max: Joints,
+    a_max: Joints,
+    motion: Option<Motion>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Motion {
+    line: StraightLine,
+    goal: Joints,
+    start_time: f64,
+    /// Can exceed the line's duration: a zero-length move still lasts `min_duration`.
+    duration: f64,
+}
+
+impl JointGenerator {
+    /// A generator holding `hold`, with per-joint velocity and acceleration limits.
+    pub fn new(hold: Joints, v_max: Joints, a_max: Joints) -> Self {
+        Self {
+            setpoint: hold,
+            v_max,
+            a_max,
+            motion: None,
+        }
+    }
+
+    /// Aborts any motion and holds `q` ("hold here").
+    pub fn hold(&mut self, q: Joints) {
+        self.setpoint = q;
+        self.motion = None;
+    }
+
+    /// Starts a move to `goal` lasting at least `min_duration` seconds, from the current
+    /// set-point at time `now`; returns the planned duration. Refused while moving.
+    pub fn move_to(&mut self, goal: Joints, min_duration: f64, now: f64) -> Result<f64, Refusal> {
+        if self.motion.is_some() {
+            return Err(Refusal::Busy);
+        }
+        let line = StraightLine::plan(&self.setpoint, &goal, &self.v_max, &self.a_max);
+        let duration = line.duration().max(min_duration);
+        self.motion = Some(Motion {
+            line: line.stretched(duration),
+            goal,
+            start_time: now,
+            duration,
+        });
+        Ok(duration)
+    }
+
+    /// Advances to time `now` and returns the set-point. At the end of a move the set-point is
+    /// exactly the goal and the generator holds it; the returned flag is true on that tick.
+    pub fn update(&mut self, now: f64) -> (Joints, bool) {
+        let Some(m) = self.motion else {
+            return (self.setpoint, false);
+        };
+        let t = now - m.start_time;
+        if t >= m.duration {
+            self.hold(m.goal);
+            return (self.setpoint, true);
+        }
+        m.line.point(t, &mut self.setpoint);
+        (self.setpoint, false)
+    }
+
+    /// True while a move is in progress.
+    pub fn is_moving(&self) -> bool {
+        self.motion.is_some()
+    }
+
+    /// The current set-point.
+    pub fn setpoint(&self) -> Joints {
+        self.setpoint
+    }
+}

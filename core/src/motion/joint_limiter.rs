@@ -1,0 +1,72 @@
+//! The joint limiter (spec §5.1): the last guard before a set-point reaches the drives.
+
+use crate::config::RobotConfig;
+use crate::kinematics::Joints;
+
+/// Clamps each joint set-point to its range and its step to `max_rate · period`.
+#[derive(Clone, Debug)]
+pub struct JointLimiter {
+    min: Joints,
+    max: Joints,
+    max_step: Joints,
+}
+
+/// A limited set-point and what was clamped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limited {
+    /// The set-point to command.
+    pub q: Joints,
+    /// A joint was requested outside its range (the seed's `JointLimitEvent`).
+    pub position_clamped: bool,
+    /// A joint's step exceeded its rate limit.
+    pub rate_clamped: bool,
+}
+
+impl JointLimiter {
+    /// The limiter of a robot.
+    pub fn new(config: &RobotConfig) -> Self {
+        let n = config.dof();
+        let (mut min, mut max, mut max_step) =
+            (Joints::zeros(n), Joints::zeros(n), Joints::zeros(n));
+        for (j, ((lo, hi), step)) in config
+            .joints
+            .iter()
+            .zip(min.iter_mut().zip(max.iter_mut()).zip(max_step.iter_mut()))
+        {
+            *lo = j.min;
+            *hi = j.max;
+            *step = j.max_rate * config.control_period;
+        }
+        Self { min, max, max_step }
+    }
+
+    /// Limits `request` given the previous command. A request exactly at a limit is not a
+    /// violation (the seed raised its event there on every tick, spec §9 item 26); the seed
+    /// ignored the rate in position mode (§9 item 27), here it is enforced.
+    pub fn limit(&self, request: &Joints, previous: Option<&Joints>) -> Limited {
+        let mut out = Limited {
+            q: *request,
+            position_clamped: false,
+            rate_clamped: false,
+        };
+        let bounds = self
+            .min
+            .iter()
+            .zip(self.max.iter())
+            .zip(self.max_step.iter());
+        for (i, (v, ((lo, hi), step))) in out.q.iter_mut().zip(bounds).enumerate() {
+            if *v < *lo || *v > *hi {
+                out.position_clamped = true;
+                *v = v.clamp(*lo, *hi);
+            }
+            if let Some(prev) = previous.and_then(|p| p.get(i)) {
+                let limited = v.clamp(prev - step, prev + step);
+                if limited != *v {
+                    out.rate_clamped = true;
+                    *v = limited;
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,35 @@
+//! Motion: trajectory generation, via-point sequences, limiters, the mode switch and the
+//! control step that runs them in a fixed order.
+//!
+//! * [`Trapezoid`], [`StraightLine`]: profiles (spec §4.1).
+//! * [`JointGenerator`], [`CartesianGenerator`], [`Shape`]: set-point sources (§4.2, §4.3, §4.5).
+//! * [`Sequence`]: via points (§4.4).
+//! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
+//! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
+//! * [`IdealArm`], [`RateLimitedArm`]: simulated arms.
+
+mod cartesian_generator;
+mod controller;
+mod events;
+mod joint_generator;
+mod joint_limiter;
+mod refusal;
+mod sequence;
+mod shape;
+mod sim_arm;
+mod straight_line;
+mod trapezoid;
+mod workspace;
+
+pub use cartesian_generator::CartesianGenerator;
+pub use controller::{Controller, Mode, StepOutput};
+pub use events::Events;
+pub use joint_generator::JointGenerator;
+pub use joint_limiter::{JointLimiter, Limited};
+pub use refusal::Refusal;
+pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
+pub use shape::Shape;
+pub use sim_arm::{IdealArm, RateLimitedArm};
+pub use straight_line::StraightLine;
+pub use trapezoid::Trapezoid;
+pub use workspace::Workspace;

@@ -1,0 +1,162 @@
+//! Via-point sequences (spec §4.4), for Cartesian frames and for joint vectors.
+
+use super::Refusal;
+
+/// Number of via-point slots (indices 0..=19).
+pub const VIA_SLOTS: usize = 20;
+/// Failed reach checks after which a via point counts as missed (the seed's `8 < count++`).
+const SETTLE_CHECKS: u32 = 10;
+
+/// One stored via point and the minimum duration of the leg that ends at it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViaPoint<P> {
+    /// The point (a frame or a joint vector).
+    pub point: P,
+    /// Minimum duration of the leg to this point (s, ≥ 0).
+    pub min_duration: f64,
+}
+
+/// What the controller must do for a running sequence this tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SequenceStep<P> {
+    /// Nothing: no sequence, a leg still running, or waiting for the arm to settle.
+    Wait,
+    /// Start the leg to this via point.
+    MoveTo(ViaPoint<P>),
+    /// The last via point was reached.
+    Finished,
+    /// A via point was not reached within the coarse tolerance: the sequence stops.
+    Aborted,
+}
+
+/// Reach tolerances of a sequence (the seed: 0.002/0.1 for frames in m + rad, 0.001/0.05 for
+/// joints).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tolerances {
+    /// Below this the next leg starts at once.
+    pub fine: f64,
+    /// After [`SETTLE_CHECKS`] failed checks, below this the sequence moves on anyway.
+    pub coarse: f64,
+}
+
+/// Twenty via-point slots and the state of a running sequence.
+///
+/// A sequence runs the contiguous ready slots from 0 up to the first empty one. Starting it
+/// copies those points, so slots may be rewritten while it runs without affecting it.
+#[derive(Clone, Debug)]
+pub struct Sequence<P> {
+    slots: [Option<ViaPoint<P>>; VIA_SLOTS],
+    tolerances: Tolerances,
+    run: Option<Run<P>>,
+}
+
+#[derive(Clone, Debug)]
+struct Run<P> {
+    points: [Option<ViaPoint<P>>; VIA_SLOTS],
+    /// Index of the leg's target that is running or just completed.
+    current: usize,
+    failed_checks: u32,
+}
+
+impl<P: Copy> Sequence<P> {
+    /// Empty slots.
+    pub fn new(tolerances: Tolerances) -> Self {
+        Self {
+            slots: [None; VIA_SLOTS],
+            tolerances,
+            run: None,
+        }
+    }
+
+    /// Stores via point `index` (the seed wrote out of bounds for indices ≥ 128, spec §9 item
+    /// 19; every index ≥ 20 is refused here).
+    pub fn set(&mut self, index: usize, via: ViaPoint<P>) -> Result<(), Refusal> {
+        let slot = self.slots.get_mut(index).ok_or(Refusal::IndexOutOfRange)?;
+        *slot = Some(via);
+        Ok(())
+    }
+
+    /// Empties every slot.
+    pub fn clear(&mut self) {
+        self.slots = [None; VIA_SLOTS];
+    }
+
+    /// Starts the sequence; returns the first leg to command.
+    pub fn start(&mut self) -> Result<ViaPoint<P>, Refusal> {
+        if self.run.is_some() {
+            return Err(Refusal::Busy);
+        }
+        let first = self
+            .slots
+            .first()
+            .copied()
+            .flatten()
+            .ok_or(Refusal::NoGoal)?;
+        let mut points = [None; VIA_SLOTS];
+        // The contiguous prefix of ready slots (all 20 if every slot is ready, spec §9 item 21).
+        for (dst, src) in points
+            .iter_mut()
+            .zip(&self.slots)
+            .take_while(|(_, s)| s.is_some())
+        {
+            *dst = *src;
+        }
+        self.run = Some(Run {
+            points,
+            current: 0,
+            failed_checks: 0,
+        });
+        Ok(first)
+    }
+
+    /// Stops the sequence at once (the generator is stopped separately).
+    pub fn halt(&mut self) {
+        self.run = None;
+    }
+
+    /// True while a sequence runs.
+    pub fn is_running(&self) -> bool {
+        self.run.is_some()
+    }
+
+    /// Steps the sequence once the leg's generator is idle: checks how far the arm is from the
+    /// via point just completed (`error_of`) and says what to do next.
+    pub fn poll(&mut self, leg_done: bool, error_of: impl FnOnce(&P) -> f64) -> SequenceStep<P> {
+        let Some(run) = &mut self.run else {
+            return SequenceStep::Wait;
+        };
+        if !leg_done {
+            return SequenceStep::Wait;
+        }
+        let Some(Some(done)) = run.points.get(run.current) else {
+            self.run = None;
+            return SequenceStep::Finished;
+        };
+        let error = error_of(&done.point);
+        let next = run.points.get(run.current + 1).copied().flatten();
+        let reached = error < self.tolerances.fine;
+        if !reached {
+            run.failed_checks += 1;
+            if run.failed_checks < SETTLE_CHECKS {
+                return SequenceStep::Wait;
+            }
+            if error.is_nan() || error >= self.tolerances.coarse {
+                self.run = None;
+                return SequenceStep::Aborted;
+            }
+        }
+        // Reached, or close enough after settling: move on. The seed's coarse branch advanced
+        // the index without commanding the next leg, skipping it (spec §9 item 21).
+        match next {
+            Some(via) => {
+                run.current += 1;
+                run.failed_checks = 0;
+                SequenceStep::MoveTo(via)
+            }
+            None => {
+                self.run = None;
+                SequenceStep::Finished
+            }
+        }
+    }
+}

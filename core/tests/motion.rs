@@ -1,0 +1,370 @@
+//! Generators, sequences, limiters, the mode switch and the control step (spec §4, §5).
+#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+mod common;
+
+use armgate_core::config::RobotConfig;
+use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::motion::{
+    CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode,
+    RateLimitedArm, Refusal, Shape, StepOutput, Trapezoid,
+};
+use armgate_core::rng::SplitMix64;
+
+/// A controller and an ideal arm, stepped together at the robot's period.
+struct Rig {
+    ctrl: Controller,
+    arm: IdealArm,
+    period: f64,
+    now: f64,
+}
+
+impl Rig {
+    fn new(config: &RobotConfig, q0: &[f64]) -> Self {
+        let mut rig = Self {
+            ctrl: Controller::new(config),
+            arm: IdealArm::new(Joints::from_slice(q0).unwrap()),
+            period: config.control_period,
+            now: 0.0,
+        };
+        rig.tick();
+        rig
+    }
+
+    fn tick(&mut self) -> StepOutput {
+        self.now += self.period;
+        let out = self.ctrl.step(self.now, &self.arm.measured()).unwrap();
+        self.arm.step(out.command.as_ref());
+        out
+    }
+
+    /// Ticks until nothing moves (bounded), returning every output.
+    fn settle(&mut self, max_ticks: usize) -> Vec<StepOutput> {
+        let mut outs = Vec::new();
+        for _ in 0..max_ticks {
+            outs.push(self.tick());
+            if !self.ctrl.is_moving() {
+                break;
+            }
+        }
+        assert!(!self.ctrl.is_moving(), "still moving after {max_ticks} ticks");
+        outs
+    }
+
+    fn pose(&self) -> Frame {
+        self.ctrl.chain().forward(&self.arm.measured()).unwrap()
+    }
+}
+
+const MK1_HOME: [f64; 6] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0];
+/// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
+const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+
+fn mk1_fast() -> RobotConfig {
+    let mut config = common::robot("ranger-mk1");
+    config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+    config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+    for j in config.joints.iter_mut() {
+        j.max_rate = 2.0;
+    }
+    config
+}
+
+#[test]
+fn joint_generator_is_synchronised_within_limits_and_exact_at_the_end() {
+    let v = Joints::from_slice(&[0.5, 0.2, 1.0]).unwrap();
+    let a = Joints::from_slice(&[1.0, 0.5, 2.0]).unwrap();
+    let mut generator = JointGenerator::new(Joints::zeros(3), v, a);
+    let goal = Joints::from_slice(&[0.3, -0.7, 0.1]).unwrap();
+    let duration = generator.move_to(goal, 0.0, 0.0).unwrap();
+    assert_eq!(generator.move_to(goal, 0.0, 0.0), Err(Refusal::Busy));
+    let dt = 0.001;
+    let (mut prev, mut prev_v) = (Joints::zeros(3), [0.0; 3]);
+    let mut t = 0.0;
+    let mut finished_at = None;
+    while finished_at.is_none() {
+        t += dt;
+        let (q, finished) = generator.update(t);
+        for i in 0..3 {
+            let vel = (q[i] - prev[i]) / dt;
+            assert!(vel.abs() <= v[i] * (1.0 + 1e-9), "joint {i} speed {vel}");
+            if t > 2.0 * dt && t < duration - 2.0 * dt {
+                assert!(((vel - prev_v[i]) / dt).abs() <= a[i] * 1.01, "joint {i} acceleration");
+            }
+            prev_v[i] = vel;
+            // All joints progress by the same fraction: synchronised, straight in joint space.
+            let fraction = q[i] / goal[i];
+            assert!((fraction - q[0] / goal[0]).abs() < 1e-12);
+        }
+        prev = q;
+        if finished {
+            finished_at = Some(t);
+        }
+    }
+    assert!((finished_at.unwrap() - duration).abs() <= dt);
+    assert_eq!(generator.setpoint(), goal, "not exactly at the goal");
+    // The minimum duration is honoured.
+    let d = generator.move_to(Joints::zeros(3), 30.0, t).unwrap();
+    assert_eq!(d, 30.0);
+    assert_eq!(generator.update(t + 29.9).1, false);
+    assert_eq!(generator.update(t + 30.0), (Joints::zeros(3), true));
+}
+
+#[test]
+fn trapezoid_never_exceeds_its_limits_on_random_moves() {
+    let mut rng = SplitMix64::new(21);
+    for _ in 0..1000 {
+        let (s0, s1) = (rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0));
+        let (v, a) = (rng.uniform(0.01, 2.0), rng.uniform(0.01, 5.0));
+        let min = rng.uniform(0.0, 10.0);
+        let p = Trapezoid::plan(s0, s1, v, a).stretched(min);
+        assert!(p.peak_velocity() <= v * (1.0 + 1e-12) && p.peak_acceleration() <= a * (1.0 + 1e-12));
+        assert!(p.duration() >= min.min(Trapezoid::plan(s0, s1, v, a).duration()) - 1e-12);
+        assert_eq!(p.position(p.duration()), s1);
+        assert_eq!(p.position(0.0), s0);
+    }
+}
+
+#[test]
+fn cartesian_path_is_straight_and_orientation_turns_monotonically_about_a_fixed_axis() {
+    let v = [0.1, 0.05, 0.2, 0.3, 0.2, 0.1];
+    let a = [0.2, 0.1, 0.3, 0.5, 0.4, 0.3];
+    let start = Frame::new(Rotation::from_rpy(0.1, -0.2, 0.3), Vec3::new(0.4, 0.1, 0.5));
+    let goal = Frame::new(Rotation::from_rpy(-0.5, 0.4, 1.2), Vec3::new(0.1, 0.3, 0.2));
+    let mut generator = CartesianGenerator::new(start, v, a);
+    let duration = generator.move_to(goal, 0.0, 0.0).unwrap();
+    let axis = start.diff(&goal).angular;
+    let axis = axis * (1.0 / axis.norm());
+    let line = goal.pos - start.pos;
+    let mut prev_angle = f64::INFINITY;
+    let mut prev_pos = start.pos;
+    let dt = 0.002;
+    for k in 1..=((duration / dt) as usize + 2) {
+        let (sp, finished) = generator.update(k as f64 * dt);
+        // On the line through start and goal.
+        let off = (sp.pos - start.pos).cross(line).norm() / line.norm();
+        assert!(off < 1e-12, "{off} m off the line");
+        for (i, d) in (sp.pos - prev_pos).to_array().iter().enumerate() {
+            assert!((d / dt).abs() <= v[i] * (1.0 + 1e-9), "axis {i} too fast");
+        }
+        prev_pos = sp.pos;
+        // Turning about the fixed axis, monotonically towards the goal.
+        let turned = start.diff(&sp).angular;
+        assert!(turned.cross(axis).norm() < 1e-9, "axis drifted");
+        let angle = sp.diff(&goal).angular.norm();
+        assert!(angle <= prev_angle + 1e-12, "orientation went back");
+        prev_angle = angle;
+        if finished {
+            assert_eq!(sp, goal);
+            return;
+        }
+    }
+    panic!("never finished");
+}
+
+#[test]
+fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let start = rig.pose();
+    let goal = Frame::new(
+        Rotation::rot_z(0.2) * start.rot,
+        start.pos + Vec3::new(0.05, -0.08, 0.1),
+    );
+    rig.ctrl.move_cartesian(goal, 2.0).unwrap();
+    let outs = rig.settle(2000);
+    assert!(outs.iter().any(|o| o.events.motion_finished));
+    assert!(outs.iter().all(|o| !o.events.ik_divergence && !o.events.rate_limit));
+    let reached = rig.pose().diff(&goal);
+    assert!(reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9, "{reached:?}");
+}
+
+#[test]
+fn refusals_say_why() {
+    let config = mk1_fast();
+    let mut ctrl = Controller::new(&config);
+    assert_eq!(ctrl.set_mode(Mode::Joint), Err(Refusal::NotReady));
+    let mut rig = Rig::new(&config, &MK1_READY);
+    let pose = rig.pose();
+    assert_eq!(rig.ctrl.move_cartesian(pose, 0.0), Err(Refusal::WrongMode));
+    assert_eq!(rig.ctrl.move_joints(&MK1_READY, 0.0), Err(Refusal::WrongMode));
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    assert_eq!(rig.ctrl.move_cartesian(pose, 0.0), Err(Refusal::WrongMode));
+    assert_eq!(rig.ctrl.move_joints(&MK1_READY[..5], 0.0), Err(Refusal::WrongJointCount));
+    let mut nan = MK1_READY;
+    nan[3] = f64::NAN;
+    assert_eq!(rig.ctrl.move_joints(&nan, 0.0), Err(Refusal::InvalidNumber));
+    assert_eq!(rig.ctrl.move_joints(&MK1_READY, f64::INFINITY), Err(Refusal::InvalidNumber));
+    let mut beyond = MK1_READY;
+    beyond[4] = 0.0; // joint 5 range is [0.785, 3.926]
+    assert_eq!(rig.ctrl.move_joints(&beyond, 0.0), Err(Refusal::OutsideJointLimits));
+    assert_eq!(rig.ctrl.start_joint_sequence(), Err(Refusal::NoGoal));
+    let mut target = MK1_READY;
+    target[0] += 0.2;
+    rig.ctrl.move_joints(&target, 0.0).unwrap();
+    assert_eq!(rig.ctrl.move_joints(&MK1_READY, 0.0), Err(Refusal::Busy));
+    assert_eq!(rig.ctrl.set_joint_via(20, &MK1_READY, 0.0), Err(Refusal::IndexOutOfRange));
+    rig.ctrl.stop();
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let mut bad = pose;
+    bad.pos.x = f64::NAN;
+    assert_eq!(rig.ctrl.move_cartesian(bad, 0.0), Err(Refusal::InvalidNumber));
+    // Inside the column around the base.
+    let inside = Frame::new(pose.rot, Vec3::new(0.0, 0.0, 0.2));
+    assert_eq!(rig.ctrl.move_cartesian(inside, 0.0), Err(Refusal::OutsideWorkspace));
+    assert_eq!(rig.ctrl.set_cartesian_via(0, inside, 0.0), Err(Refusal::OutsideWorkspace));
+    assert_eq!(rig.ctrl.start_cartesian_sequence(), Err(Refusal::NoGoal));
+    let circle = Shape::Circle { radius: 0.1, period: 5.0, axis_i: 0, axis_j: 0 };
+    assert_eq!(rig.ctrl.start_shape(circle), Err(Refusal::InvalidNumber));
+}
+
+#[test]
+fn joint_sequence_runs_all_points_in_order_and_stops_at_the_first_gap() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    let points: Vec<[f64; 6]> = (0..4)
+        .map(|k| {
+            let mut q = MK1_READY;
+            q[0] += 0.05 * (k + 1) as f64;
+            q[2] -= 0.03 * (k + 1) as f64;
+            q
+        })
+        .collect();
+    for (k, q) in points.iter().enumerate() {
+        rig.ctrl.set_joint_via(k, q, 0.5).unwrap();
+    }
+    // Slot 5 after a gap at 4 must never be visited.
+    let mut far = MK1_READY;
+    far[0] -= 1.0;
+    rig.ctrl.set_joint_via(5, &far, 0.0).unwrap();
+    rig.ctrl.start_joint_sequence().unwrap();
+    assert_eq!(rig.ctrl.start_joint_sequence(), Err(Refusal::Busy));
+    let mut visited = Vec::new();
+    let mut finished = false;
+    for _ in 0..5000 {
+        let out = rig.tick();
+        let q = rig.arm.measured();
+        if let Some(k) = points.iter().position(|p| p.iter().zip(q.iter()).all(|(a, b)| a == b)) {
+            if visited.last() != Some(&k) {
+                visited.push(k);
+            }
+        }
+        assert!(q[0] > MK1_READY[0] - 1e-12, "moved towards the point after the gap");
+        if out.events.sequence_finished {
+            finished = true;
+            break;
+        }
+    }
+    assert!(finished);
+    assert_eq!(visited, vec![0, 1, 2, 3]);
+    assert!(!rig.ctrl.is_moving());
+}
+
+#[test]
+fn cartesian_sequence_visits_every_point() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let start = rig.pose();
+    let corners = [
+        Vec3::new(0.05, 0.0, 0.0),
+        Vec3::new(0.05, 0.0, 0.05),
+        Vec3::new(0.0, 0.0, 0.05),
+        Vec3::ZERO,
+    ];
+    for (k, c) in corners.iter().enumerate() {
+        rig.ctrl.set_cartesian_via(k, Frame::new(start.rot, start.pos + *c), 0.0).unwrap();
+    }
+    rig.ctrl.start_cartesian_sequence().unwrap();
+    let mut hits = 0;
+    for _ in 0..20_000 {
+        let out = rig.tick();
+        let p = rig.pose().pos - start.pos;
+        if corners.get(hits).is_some_and(|c| (p - *c).norm() < 1e-9) {
+            hits += 1;
+        }
+        if out.events.sequence_finished {
+            break;
+        }
+    }
+    assert_eq!(hits, 4);
+    assert!(!rig.ctrl.is_moving());
+}
+
+#[test]
+fn joint_limiter_clamps_range_and_rate_and_reports() {
+    let config = common::robot("ranger-mk1");
+    let limiter = JointLimiter::new(&config);
+    let prev = Joints::from_slice(&MK1_HOME).unwrap();
+    // At a limit exactly: no event (the seed raised one every tick).
+    let mut at = MK1_HOME;
+    at[1] = -0.785;
+    let mut prev_at = prev;
+    prev_at[1] = -0.785;
+    let l = limiter.limit(&Joints::from_slice(&at).unwrap(), Some(&prev_at));
+    assert!(!l.position_clamped && !l.rate_clamped);
+    let mut beyond = at;
+    beyond[1] = -0.9;
+    let l = limiter.limit(&Joints::from_slice(&beyond).unwrap(), Some(&prev_at));
+    assert!(l.position_clamped && l.q[1] == -0.785);
+    // Rate: 0.2 rad/s × 0.01944 s per tick.
+    let mut jump = MK1_HOME;
+    jump[0] += 0.5;
+    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), Some(&prev));
+    assert!(l.rate_clamped && !l.position_clamped);
+    assert!((l.q[0] - (MK1_HOME[0] + 0.2 * 0.01944)).abs() < 1e-12);
+}
+
+#[test]
+fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
+    // Two poses on an arc about the base axis; a box around the chord's midpoint blocks the
+    // straight Cartesian path and contains the arc's midpoint.
+    let mut config = mk1_fast();
+    let chain = Chain::new(&config);
+    let q_a = MK1_READY;
+    let mut q_b = MK1_READY;
+    q_b[0] += 0.5;
+    let mut q_mid = MK1_READY;
+    q_mid[0] += 0.25;
+    let (pa, pb) = (chain.forward(&q_a).unwrap(), chain.forward(&q_b).unwrap());
+    let m = (pa.pos + pb.pos) * 0.5;
+    let half = 0.05;
+    config.workspace.boxes.clear();
+    config
+        .workspace
+        .boxes
+        .push([m.x - half, m.x + half, m.y - half, m.y + half, m.z - half, m.z + half])
+        .unwrap();
+    let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
+    assert!(in_box(chain.forward(&q_mid).unwrap().pos));
+
+    // Cartesian: the move is aborted at the wall; no set-point inside ever reaches the IK.
+    let mut rig = Rig::new(&config, &q_a);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    rig.ctrl.move_cartesian(pb, 0.0).unwrap();
+    let outs = rig.settle(20_000);
+    assert!(outs.iter().any(|o| o.events.workspace_limit));
+    assert!(outs.iter().all(|o| !in_box(o.setpoint.unwrap().pos)));
+    assert!(!in_box(rig.pose().pos) && (rig.pose().pos - pb.pos).norm() > 0.05);
+    // A goal inside the box is refused outright.
+    let inside = Frame::new(pa.rot, m);
+    assert_eq!(rig.ctrl.move_cartesian(inside, 0.0), Err(Refusal::OutsideWorkspace));
+
+    // Joint mode: driving into the box is reported but allowed, and so is driving out.
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl.move_joints(&q_mid, 0.0).unwrap();
+    let outs = rig.settle(20_000);
+    assert!(outs.iter().any(|o| o.events.workspace_limit));
+    assert_eq!(&rig.arm.measured()[..], &q_mid[..]);
+    // Cartesian motion is refused while the arm is inside.
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    assert_eq!(rig.ctrl.move_cartesian(pa, 0.0), Err(Refusal::OutsideWorkspace));
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl.move_joints(&q_a, 0.0).unwrap();
+    let outs = rig.settle(20_000);
+    assert_eq!(&rig.arm.measured()[..], &q_a[..]);
+    assert!(!outs.last().unwrap().events.workspace_limit);
+}
