@@ -1,6 +1,11 @@
 //! Robot files: every shipped file loads, round-trips through postcard, and bad files are
 //! refused with an error that names the field.
-#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 
 mod common;
 

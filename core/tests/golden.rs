@@ -1,5 +1,10 @@
 //! The seed's golden vector (spec §2.4, thesis Fig. 3.3) on ranger-mk1.
-#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 // The seed deployed rounded angles such as 1.5708; tests use them as the seed did.
 #![allow(clippy::approx_constant)]
 

@@ -1,5 +1,10 @@
 //! FK, Jacobian, IK and velocity IK on every shipped robot.
-#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 // The seed deployed rounded angles such as 1.5708; tests use them as the seed did.
 #![allow(clippy::approx_constant)]
 

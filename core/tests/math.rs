@@ -1,5 +1,10 @@
 //! Orientation conventions and the geometry primitives (spec §2.4, §3.5, §9 item 4).
-#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
