@@ -1,5 +1,11 @@
 //! Generators, sequences, limiters, the mode switch and the control step (spec §4, §5).
-#![allow(missing_docs, clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+#![allow(
+    clippy::approx_constant,
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 
 mod common;
 
@@ -7,8 +13,8 @@ use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{
-    CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode,
-    RateLimitedArm, Refusal, Shape, StepOutput, Trapezoid,
+    CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode, RateLimitedArm,
+    Refusal, Shape, StepOutput, Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
 
@@ -48,7 +54,10 @@ impl Rig {
                 break;
             }
         }
-        assert!(!self.ctrl.is_moving(), "still moving after {max_ticks} ticks");
+        assert!(
+            !self.ctrl.is_moving(),
+            "still moving after {max_ticks} ticks"
+        );
         outs
     }
 
@@ -90,7 +99,10 @@ fn joint_generator_is_synchronised_within_limits_and_exact_at_the_end() {
             let vel = (q[i] - prev[i]) / dt;
             assert!(vel.abs() <= v[i] * (1.0 + 1e-9), "joint {i} speed {vel}");
             if t > 2.0 * dt && t < duration - 2.0 * dt {
-                assert!(((vel - prev_v[i]) / dt).abs() <= a[i] * 1.01, "joint {i} acceleration");
+                assert!(
+                    ((vel - prev_v[i]) / dt).abs() <= a[i] * 1.01,
+                    "joint {i} acceleration"
+                );
             }
             prev_v[i] = vel;
             // All joints progress by the same fraction: synchronised, straight in joint space.
@@ -107,7 +119,7 @@ fn joint_generator_is_synchronised_within_limits_and_exact_at_the_end() {
     // The minimum duration is honoured.
     let d = generator.move_to(Joints::zeros(3), 30.0, t).unwrap();
     assert_eq!(d, 30.0);
-    assert_eq!(generator.update(t + 29.9).1, false);
+    assert!(!generator.update(t + 29.9).1);
     assert_eq!(generator.update(t + 30.0), (Joints::zeros(3), true));
 }
 
@@ -119,7 +131,9 @@ fn trapezoid_never_exceeds_its_limits_on_random_moves() {
         let (v, a) = (rng.uniform(0.01, 2.0), rng.uniform(0.01, 5.0));
         let min = rng.uniform(0.0, 10.0);
         let p = Trapezoid::plan(s0, s1, v, a).stretched(min);
-        assert!(p.peak_velocity() <= v * (1.0 + 1e-12) && p.peak_acceleration() <= a * (1.0 + 1e-12));
+        assert!(
+            p.peak_velocity() <= v * (1.0 + 1e-12) && p.peak_acceleration() <= a * (1.0 + 1e-12)
+        );
         assert!(p.duration() >= min.min(Trapezoid::plan(s0, s1, v, a).duration()) - 1e-12);
         assert_eq!(p.position(p.duration()), s1);
         assert_eq!(p.position(0.0), s0);
@@ -176,9 +190,15 @@ fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
     rig.ctrl.move_cartesian(goal, 2.0).unwrap();
     let outs = rig.settle(2000);
     assert!(outs.iter().any(|o| o.events.motion_finished));
-    assert!(outs.iter().all(|o| !o.events.ik_divergence && !o.events.rate_limit));
+    assert!(
+        outs.iter()
+            .all(|o| !o.events.ik_divergence && !o.events.rate_limit)
+    );
     let reached = rig.pose().diff(&goal);
-    assert!(reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9, "{reached:?}");
+    assert!(
+        reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9,
+        "{reached:?}"
+    );
 }
 
 #[test]
@@ -189,34 +209,63 @@ fn refusals_say_why() {
     let mut rig = Rig::new(&config, &MK1_READY);
     let pose = rig.pose();
     assert_eq!(rig.ctrl.move_cartesian(pose, 0.0), Err(Refusal::WrongMode));
-    assert_eq!(rig.ctrl.move_joints(&MK1_READY, 0.0), Err(Refusal::WrongMode));
+    assert_eq!(
+        rig.ctrl.move_joints(&MK1_READY, 0.0),
+        Err(Refusal::WrongMode)
+    );
     rig.ctrl.set_mode(Mode::Joint).unwrap();
     assert_eq!(rig.ctrl.move_cartesian(pose, 0.0), Err(Refusal::WrongMode));
-    assert_eq!(rig.ctrl.move_joints(&MK1_READY[..5], 0.0), Err(Refusal::WrongJointCount));
+    assert_eq!(
+        rig.ctrl.move_joints(&MK1_READY[..5], 0.0),
+        Err(Refusal::WrongJointCount)
+    );
     let mut nan = MK1_READY;
     nan[3] = f64::NAN;
     assert_eq!(rig.ctrl.move_joints(&nan, 0.0), Err(Refusal::InvalidNumber));
-    assert_eq!(rig.ctrl.move_joints(&MK1_READY, f64::INFINITY), Err(Refusal::InvalidNumber));
+    assert_eq!(
+        rig.ctrl.move_joints(&MK1_READY, f64::INFINITY),
+        Err(Refusal::InvalidNumber)
+    );
     let mut beyond = MK1_READY;
     beyond[4] = 0.0; // joint 5 range is [0.785, 3.926]
-    assert_eq!(rig.ctrl.move_joints(&beyond, 0.0), Err(Refusal::OutsideJointLimits));
+    assert_eq!(
+        rig.ctrl.move_joints(&beyond, 0.0),
+        Err(Refusal::OutsideJointLimits)
+    );
     assert_eq!(rig.ctrl.start_joint_sequence(), Err(Refusal::NoGoal));
     let mut target = MK1_READY;
     target[0] += 0.2;
     rig.ctrl.move_joints(&target, 0.0).unwrap();
     assert_eq!(rig.ctrl.move_joints(&MK1_READY, 0.0), Err(Refusal::Busy));
-    assert_eq!(rig.ctrl.set_joint_via(20, &MK1_READY, 0.0), Err(Refusal::IndexOutOfRange));
+    assert_eq!(
+        rig.ctrl.set_joint_via(20, &MK1_READY, 0.0),
+        Err(Refusal::IndexOutOfRange)
+    );
     rig.ctrl.stop();
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let mut bad = pose;
     bad.pos.x = f64::NAN;
-    assert_eq!(rig.ctrl.move_cartesian(bad, 0.0), Err(Refusal::InvalidNumber));
+    assert_eq!(
+        rig.ctrl.move_cartesian(bad, 0.0),
+        Err(Refusal::InvalidNumber)
+    );
     // Inside the column around the base.
     let inside = Frame::new(pose.rot, Vec3::new(0.0, 0.0, 0.2));
-    assert_eq!(rig.ctrl.move_cartesian(inside, 0.0), Err(Refusal::OutsideWorkspace));
-    assert_eq!(rig.ctrl.set_cartesian_via(0, inside, 0.0), Err(Refusal::OutsideWorkspace));
+    assert_eq!(
+        rig.ctrl.move_cartesian(inside, 0.0),
+        Err(Refusal::OutsideWorkspace)
+    );
+    assert_eq!(
+        rig.ctrl.set_cartesian_via(0, inside, 0.0),
+        Err(Refusal::OutsideWorkspace)
+    );
     assert_eq!(rig.ctrl.start_cartesian_sequence(), Err(Refusal::NoGoal));
-    let circle = Shape::Circle { radius: 0.1, period: 5.0, axis_i: 0, axis_j: 0 };
+    let circle = Shape::Circle {
+        radius: 0.1,
+        period: 5.0,
+        axis_i: 0,
+        axis_j: 0,
+    };
     assert_eq!(rig.ctrl.start_shape(circle), Err(Refusal::InvalidNumber));
 }
 
@@ -247,12 +296,18 @@ fn joint_sequence_runs_all_points_in_order_and_stops_at_the_first_gap() {
     for _ in 0..5000 {
         let out = rig.tick();
         let q = rig.arm.measured();
-        if let Some(k) = points.iter().position(|p| p.iter().zip(q.iter()).all(|(a, b)| a == b)) {
-            if visited.last() != Some(&k) {
-                visited.push(k);
-            }
+        let at = points
+            .iter()
+            .position(|p| p.iter().zip(q.iter()).all(|(a, b)| a == b));
+        if let Some(k) = at
+            && visited.last() != Some(&k)
+        {
+            visited.push(k);
         }
-        assert!(q[0] > MK1_READY[0] - 1e-12, "moved towards the point after the gap");
+        assert!(
+            q[0] > MK1_READY[0] - 1e-12,
+            "moved towards the point after the gap"
+        );
         if out.events.sequence_finished {
             finished = true;
             break;
@@ -276,7 +331,9 @@ fn cartesian_sequence_visits_every_point() {
         Vec3::ZERO,
     ];
     for (k, c) in corners.iter().enumerate() {
-        rig.ctrl.set_cartesian_via(k, Frame::new(start.rot, start.pos + *c), 0.0).unwrap();
+        rig.ctrl
+            .set_cartesian_via(k, Frame::new(start.rot, start.pos + *c), 0.0)
+            .unwrap();
     }
     rig.ctrl.start_cartesian_sequence().unwrap();
     let mut hits = 0;
@@ -336,7 +393,14 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     config
         .workspace
         .boxes
-        .push([m.x - half, m.x + half, m.y - half, m.y + half, m.z - half, m.z + half])
+        .push([
+            m.x - half,
+            m.x + half,
+            m.y - half,
+            m.y + half,
+            m.z - half,
+            m.z + half,
+        ])
         .unwrap();
     let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
     assert!(in_box(chain.forward(&q_mid).unwrap().pos));
@@ -351,7 +415,10 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     assert!(!in_box(rig.pose().pos) && (rig.pose().pos - pb.pos).norm() > 0.05);
     // A goal inside the box is refused outright.
     let inside = Frame::new(pa.rot, m);
-    assert_eq!(rig.ctrl.move_cartesian(inside, 0.0), Err(Refusal::OutsideWorkspace));
+    assert_eq!(
+        rig.ctrl.move_cartesian(inside, 0.0),
+        Err(Refusal::OutsideWorkspace)
+    );
 
     // Joint mode: driving into the box is reported but allowed, and so is driving out.
     rig.ctrl.set_mode(Mode::Joint).unwrap();
@@ -361,10 +428,185 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     assert_eq!(&rig.arm.measured()[..], &q_mid[..]);
     // Cartesian motion is refused while the arm is inside.
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
-    assert_eq!(rig.ctrl.move_cartesian(pa, 0.0), Err(Refusal::OutsideWorkspace));
+    assert_eq!(
+        rig.ctrl.move_cartesian(pa, 0.0),
+        Err(Refusal::OutsideWorkspace)
+    );
     rig.ctrl.set_mode(Mode::Joint).unwrap();
     rig.ctrl.move_joints(&q_a, 0.0).unwrap();
     let outs = rig.settle(20_000);
     assert_eq!(&rig.arm.measured()[..], &q_a[..]);
     assert!(!outs.last().unwrap().events.workspace_limit);
+}
+
+#[test]
+fn mode_transitions_never_jump() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    let dt = config.control_period;
+    let max_step: Vec<f64> = config
+        .joints
+        .iter()
+        .map(|j| j.max_velocity * dt + 1e-12)
+        .collect();
+    let mut last: Option<Joints> = None;
+    let mut check = |out: &StepOutput| {
+        assert!(!out.events.rate_limit, "the pipeline itself jumped");
+        if let (Some(prev), Some(cmd)) = (last, out.command) {
+            for i in 0..6 {
+                assert!(
+                    (cmd[i] - prev[i]).abs() <= max_step[i].max(0.02),
+                    "joint {i} jumped"
+                );
+            }
+        }
+        last = out.command.or(last);
+    };
+    // Off → joint: the first command is the measured position.
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    let out = rig.tick();
+    assert_eq!(out.command.unwrap(), rig.arm.measured());
+    check(&out);
+    let mut goal = MK1_READY;
+    goal[0] += 0.3;
+    goal[2] -= 0.2;
+    rig.ctrl.move_joints(&goal, 0.0).unwrap();
+    for _ in 0..60 {
+        check(&rig.tick());
+    }
+    // Joint → Cartesian in mid-motion: holds the last command exactly.
+    let before = rig.ctrl.command().unwrap();
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let out = rig.tick();
+    let after = out.command.unwrap();
+    assert!(
+        before
+            .iter()
+            .zip(after.iter())
+            .all(|(a, b)| (a - b).abs() < 1e-9)
+    );
+    check(&out);
+    let pose = rig.pose();
+    let goal_pose = Frame::new(pose.rot, pose.pos + Vec3::new(0.0, -0.1, -0.05));
+    rig.ctrl.move_cartesian(goal_pose, 0.0).unwrap();
+    for _ in 0..60 {
+        check(&rig.tick());
+    }
+    // Cartesian → joint in mid-motion, then off, then off → Cartesian.
+    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    for _ in 0..5 {
+        check(&rig.tick());
+    }
+    rig.ctrl.set_mode(Mode::Off).unwrap();
+    assert_eq!(rig.tick().command, None);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let out = rig.tick();
+    let held = out.command.unwrap();
+    assert!(
+        held.iter()
+            .zip(rig.arm.measured().iter())
+            .all(|(a, b)| (a - b).abs() < 1e-9)
+    );
+    check(&out);
+}
+
+#[test]
+fn shapes_trace_their_path_and_end_where_they_started() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let start = rig.pose();
+    let (radius, period) = (0.05, 4.0);
+    rig.ctrl
+        .start_shape(Shape::Circle {
+            radius,
+            period,
+            axis_i: 0,
+            axis_j: 2,
+        })
+        .unwrap();
+    let centre = start.pos - Vec3::X * radius;
+    let mut finish_requested = false;
+    let mut ended = false;
+    for k in 0..2000 {
+        let out = rig.tick();
+        let sp = out.setpoint.unwrap();
+        assert!(((sp.pos - centre).norm() - radius).abs() < 1e-12);
+        assert!((sp.pos.y - start.pos.y).abs() < 1e-12, "left the x-z plane");
+        assert!(!out.events.ik_divergence);
+        let reached = (rig.pose().pos - sp.pos).norm();
+        assert!(reached < 1e-9, "commanded path error {reached}");
+        if k == 100 {
+            rig.ctrl.finish_shape().unwrap();
+            finish_requested = true;
+        }
+        if out.events.motion_finished {
+            ended = true;
+            break;
+        }
+    }
+    assert!(finish_requested && ended);
+    assert!(
+        (rig.pose().pos - start.pos).norm() < 1e-9,
+        "did not end at the start"
+    );
+    // A sinusoid along z, stopped at its next centre crossing.
+    rig.ctrl
+        .start_shape(Shape::Sinusoid {
+            amplitude: 0.04,
+            period: 3.0,
+            axis: 2,
+        })
+        .unwrap();
+    let mut peak: f64 = 0.0;
+    for k in 0..2000 {
+        let out = rig.tick();
+        let off = out.setpoint.unwrap().pos - start.pos;
+        assert!(off.x.abs() < 1e-12 && off.y.abs() < 1e-12);
+        peak = peak.max(off.z.abs());
+        if k == 120 {
+            rig.ctrl.finish_shape().unwrap();
+        }
+        if out.events.motion_finished {
+            break;
+        }
+    }
+    assert!((peak - 0.04).abs() < 1e-4);
+    assert!((rig.pose().pos - start.pos).norm() < 1e-9);
+}
+
+#[test]
+fn rate_limited_arm_follows_a_stream_without_restarting_from_rest() {
+    let v_max = Joints::from_slice(&[1.0]).unwrap();
+    let a_max = Joints::from_slice(&[2.0]).unwrap();
+    let mut arm = RateLimitedArm::new(Joints::zeros(1), v_max, a_max);
+    let dt = 0.01;
+    let speed = 0.5;
+    let (mut prev_q, mut prev_v) = (0.0, 0.0);
+    for k in 1..=400 {
+        let cmd = Joints::from_slice(&[speed * k as f64 * dt]).unwrap();
+        arm.step(Some(&cmd), dt);
+        let q = arm.measured()[0];
+        let v = (q - prev_q) / dt;
+        assert!(v <= 1.0 + 1e-9 && ((v - prev_v) / dt).abs() <= 2.0 + 1e-6);
+        (prev_q, prev_v) = (q, v);
+        if k > 200 {
+            // Steady state: moving with the stream at its speed, a bounded lag behind.
+            assert!((v - speed).abs() < 0.05, "speed {v} at tick {k}");
+            assert!(cmd[0] - q < 0.2);
+        }
+    }
+    // Then it stops on a fixed command without overshooting.
+    let target = Joints::from_slice(&[prev_q + 0.3]).unwrap();
+    let mut max_q: f64 = 0.0;
+    for _ in 0..300 {
+        arm.step(Some(&target), dt);
+        max_q = max_q.max(arm.measured()[0]);
+    }
+    assert_eq!(arm.measured()[0], target[0]);
+    assert!(
+        max_q <= target[0] + 1e-12,
+        "overshoot {}",
+        max_q - target[0]
+    );
 }

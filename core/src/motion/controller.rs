@@ -8,11 +8,14 @@ use super::shape::Shape;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, RobotConfig};
-use crate::kinematics::{Chain, Joints, KinematicsError, diverges};
+use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::Frame;
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
-/// reached; above it the tick raises [`Events::ik_divergence`].
+/// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command, as it
+/// does when the solution needs a joint step beyond the rate limit. This is stricter than the
+/// seed's guard (spec §3.5), which still commanded a non-converged solution unless it was worse
+/// than the current pose by 1e-4.
 const REACH_TOLERANCE: f64 = 1e-6;
 /// The seed's via-point tolerances (spec §4.4).
 const CARTESIAN_TOLERANCES: Tolerances = Tolerances {
@@ -199,32 +202,31 @@ impl Controller {
             setpoint = self.chain.forward(&seed).unwrap_or(*f_m);
             self.cartesian_generator.hold(setpoint);
         }
-        let q = match self.chain.solve_tracking(&setpoint, &seed, &self.ik) {
-            Ok(result) => {
-                let s = result.solution();
-                if s.position_error <= REACH_TOLERANCE && s.orientation_error <= REACH_TOLERANCE {
-                    s.q
-                } else {
-                    events.ik_divergence = true;
-                    let solved = self.chain.forward(&s.q);
-                    let current = self.chain.forward(&seed);
-                    match (solved, current) {
-                        (Ok(solved), Ok(current))
-                            if !diverges(
-                                &setpoint,
-                                &solved,
-                                &current,
-                                self.ik.divergence_margin,
-                            ) =>
-                        {
-                            s.q
-                        }
-                        _ => seed,
-                    }
-                }
-            }
-            Err(_) => {
+        let reached = self
+            .chain
+            .solve_tracking(&setpoint, &seed, &self.ik)
+            .ok()
+            .map(|result| *result.solution())
+            .filter(|s| {
+                s.position_error <= REACH_TOLERANCE && s.orientation_error <= REACH_TOLERANCE
+            })
+            // A solution the joints cannot reach within one tick's rate limit would be cut by the
+            // limiter, and the arm would leave the Cartesian path (near a singularity, or at the
+            // edge of the workspace): that set-point is not trackable either.
+            .filter(|s| self.limiter.within_rate(&s.q, &seed));
+        let q = match reached {
+            Some(solution) => solution.q,
+            None => {
+                // Divergence: hold the last good command instead of chasing a best-effort pose,
+                // which trades position for orientation and can wander away from an unreachable
+                // goal, or a rate-limited one off the path. Once the generator has stopped, re-anchor it where the arm is so that
+                // the condition clears.
                 events.ik_divergence = true;
+                if !self.cartesian_generator.is_moving()
+                    && let Ok(pose) = self.chain.forward(&seed)
+                {
+                    self.cartesian_generator.hold(pose);
+                }
                 seed
             }
         };

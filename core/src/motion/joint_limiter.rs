@@ -40,6 +40,14 @@ impl JointLimiter {
         Self { min, max, max_step }
     }
 
+    /// True if moving from `previous` to `q` in one tick respects every joint's rate limit.
+    pub fn within_rate(&self, q: &Joints, previous: &Joints) -> bool {
+        q.iter()
+            .zip(previous.iter())
+            .zip(self.max_step.iter())
+            .all(|((a, b), step)| libm::fabs(a - b) <= *step)
+    }
+
     /// Limits `request` given the previous command. A request exactly at a limit is not a
     /// violation (the seed raised its event there on every tick, spec §9 item 26); the seed
     /// ignored the rate in position mode (§9 item 27), here it is enforced.

@@ -67,13 +67,10 @@ impl RateLimitedArm {
         for (((q, v), target), (v_max, a_max)) in state.zip(limits) {
             let error = target - *q;
             let dv = a_max * dt;
-            if libm::fabs(error) <= libm::fabs(*v) * dt + 0.5 * dv * dt && libm::fabs(*v) <= dv {
-                *q = *target;
-                *v = 0.0;
-                continue;
-            }
-            // The fastest speed from which the joint can still stop at the target.
-            let brake = libm::sqrt(2.0 * a_max * libm::fabs(error));
+            // The fastest speed v that, after moving v·dt this step, still lets the joint stop on
+            // the target in whole steps of deceleration a: v² + 3·dv·v ≤ 2·a·|error|.
+            let brake =
+                0.5 * (libm::sqrt(9.0 * dv * dv + 8.0 * a_max * libm::fabs(error)) - 3.0 * dv);
             let wanted = libm::copysign(brake.min(*v_max), error);
             *v += (wanted - *v).clamp(-dv, dv);
             *q += *v * dt;

@@ -1,6 +1,8 @@
 //! Shared helpers of the core's integration tests.
 #![allow(dead_code, clippy::unwrap_used, clippy::panic)]
 
+pub mod experiments;
+
 use std::path::PathBuf;
 
 use armgate_core::config::{RobotConfig, load_file};
