@@ -5,6 +5,8 @@
 //! microcontroller compute identical results. It does no I/O: the shells (`firmware`, `host-sim`)
 //! only move bytes and time.
 //!
+//! * [`command`]: the client protocol's commands mapped onto the controller, and the relay of
+//!   unsolicited warnings.
 //! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
@@ -12,6 +14,7 @@
 //! * [`rng`]: the small deterministic random generator used by global IK and by tests.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
+pub mod command;
 pub mod config;
 pub mod kinematics;
 pub mod math;

@@ -300,12 +300,10 @@ impl Controller {
         pose: Frame,
         min_duration: f64,
     ) -> Result<(), Refusal> {
-        if !pose.is_finite() || !min_duration.is_finite() {
+        if !min_duration.is_finite() {
             return Err(Refusal::InvalidNumber);
         }
-        if !self.workspace.allows(pose.pos) {
-            return Err(Refusal::OutsideWorkspace);
-        }
+        self.check_cartesian_goal(&pose)?;
         let via = ViaPoint {
             point: pose,
             min_duration: min_duration.max(0.0),
@@ -365,16 +363,17 @@ impl Controller {
         if self.mode != Mode::Cartesian {
             return Err(Refusal::WrongMode);
         }
-        if !goal.is_finite() || !min_duration.is_finite() {
+        if !min_duration.is_finite() {
             return Err(Refusal::InvalidNumber);
         }
+        self.check_cartesian_goal(goal)?;
         if self.is_moving() {
             return Err(Refusal::Busy);
         }
         let arm_inside = self
             .measured
             .is_some_and(|(_, pose)| self.workspace.allows(pose.pos));
-        if !arm_inside || !self.workspace.allows(goal.pos) {
+        if !arm_inside {
             return Err(Refusal::OutsideWorkspace);
         }
         Ok(())
@@ -392,17 +391,33 @@ impl Controller {
     }
 
     fn valid_joint_goal(&self, goal: &[f64], min_duration: f64) -> Result<Joints, Refusal> {
+        if !min_duration.is_finite() {
+            return Err(Refusal::InvalidNumber);
+        }
+        self.check_joint_goal(goal)
+    }
+
+    /// Checks a joint goal without moving: one finite value per joint, within the limits.
+    pub fn check_joint_goal(&self, goal: &[f64]) -> Result<Joints, Refusal> {
         let goal = self.chain.check(goal).map_err(|e| match e {
             KinematicsError::WrongJointCount => Refusal::WrongJointCount,
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
-        if !min_duration.is_finite() {
-            return Err(Refusal::InvalidNumber);
-        }
         if !self.chain.within_limits(&goal) {
             return Err(Refusal::OutsideJointLimits);
         }
         Ok(goal)
+    }
+
+    /// Checks a Cartesian goal without moving: finite, and its position inside the workspace.
+    pub fn check_cartesian_goal(&self, goal: &Frame) -> Result<(), Refusal> {
+        if !goal.is_finite() {
+            return Err(Refusal::InvalidNumber);
+        }
+        if !self.workspace.allows(goal.pos) {
+            return Err(Refusal::OutsideWorkspace);
+        }
+        Ok(())
     }
 
     /// The control mode.

@@ -25,13 +25,23 @@ pub enum Notice {
     JointLimit,
     /// `WN22 Inv Kin Divergence.`
     IkDivergence,
+    /// `ER23 Cmd XX bad number`: NaN/Inf, a zero quaternion, an invalid mode.
+    BadNumber(Command),
+    /// `ER24 Cmd XX bad index`: a via slot ≥ 20, or a joint bank the arm does not have.
+    BadIndex(Command),
+    /// `ER25 Cmd XX outside workspace`: a goal outside the bounds or inside an exclusion box.
+    OutsideWorkspace(Command),
+    /// `ER26 Cmd XX beyond joint limit`: a joint goal outside the joint limits.
+    BeyondJointLimit(Command),
+    /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
+    ViaPointMissed,
 }
 
 impl Notice {
     /// Error or warning.
     pub const fn severity(self) -> Severity {
         match self {
-            Self::JointLimit | Self::IkDivergence => Severity::Warning,
+            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed => Severity::Warning,
             _ => Severity::Error,
         }
     }
@@ -47,6 +57,11 @@ impl Notice {
             Self::WorkspaceLimit => 21,
             Self::JointLimit => 12,
             Self::IkDivergence => 22,
+            Self::BadNumber(_) => 23,
+            Self::BadIndex(_) => 24,
+            Self::OutsideWorkspace(_) => 25,
+            Self::BeyondJointLimit(_) => 26,
+            Self::ViaPointMissed => 27,
         }
     }
 
@@ -85,6 +100,11 @@ impl fmt::Display for Body {
             Notice::WorkspaceLimit => f.write_str("Work space limit."),
             Notice::JointLimit => f.write_str("Joint limit."),
             Notice::IkDivergence => f.write_str("Inv Kin Divergence."),
+            Notice::BadNumber(c) => write!(f, "Cmd {} bad number", Pair(c.chars())),
+            Notice::BadIndex(c) => write!(f, "Cmd {} bad index", Pair(c.chars())),
+            Notice::OutsideWorkspace(c) => write!(f, "Cmd {} outside workspace", Pair(c.chars())),
+            Notice::BeyondJointLimit(c) => write!(f, "Cmd {} beyond joint limit", Pair(c.chars())),
+            Notice::ViaPointMissed => f.write_str("Via point missed."),
         }
     }
 }
@@ -113,6 +133,20 @@ mod tests {
             (Notice::WorkspaceLimit, "ER21 Work space limit."),
             (Notice::JointLimit, "WN12 Joint limit."),
             (Notice::IkDivergence, "WN22 Inv Kin Divergence."),
+            (
+                Notice::BadNumber(Command::GoalQuaternion),
+                "ER23 Cmd GL bad number",
+            ),
+            (Notice::BadIndex(Command::ViaPoint), "ER24 Cmd VP bad index"),
+            (
+                Notice::OutsideWorkspace(Command::GoalRpy),
+                "ER25 Cmd GT outside workspace",
+            ),
+            (
+                Notice::BeyondJointLimit(Command::JointGoal),
+                "ER26 Cmd jG beyond joint limit",
+            ),
+            (Notice::ViaPointMissed, "WN27 Via point missed."),
         ];
         for (notice, expected) in cases {
             assert_eq!(notice.text().as_str(), expected);

@@ -1,0 +1,340 @@
+//! The command handler: one client datagram in, one reply out.
+
+use armgate_protocol::client::{
+    Command, MESSAGE_LEN, Message, Notice, Reply, Request, Text, VALUES,
+};
+
+use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
+use super::drives::Drives;
+use super::relay::NoticeRelay;
+use crate::config::RobotConfig;
+use crate::kinematics::{Joints, KinematicsError};
+use crate::math::{Frame, Quaternion, Rotation, Vec3};
+use crate::motion::{Controller, Mode, Refusal, StepOutput};
+
+/// Joint values a normal reply carries (f0..f6).
+const REPLY_JOINTS: usize = VALUES;
+/// Padding of unused temperature slots in a TM reply (spec §2.5).
+const NO_TEMPERATURE: f32 = -1000.0;
+
+/// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
+/// staged joint banks and the warning relay.
+///
+/// Semantics are the ones the seed intended (spec §2.8): BG/jB/VE/jE are refused with `ER20`
+/// when there is no goal, in the wrong mode, while something moves or while the drives are not
+/// operational. Its defects are fixed (spec §9): VC answers `CV` and RC `CR`; NaN/Inf values and
+/// zero quaternions are refused (`ER23`) instead of poisoning state; via indices ≥ 20 are
+/// refused (`ER24`); jB needs a prior jG; VP no longer overwrites the BG goal; negative
+/// durations are clamped to 0.
+#[derive(Clone, Debug)]
+pub struct CommandHandler {
+    controller: Controller,
+    /// The BG goal and its minimum duration (GL/GT).
+    goal: Option<(Frame, f64)>,
+    /// The jB goal (jG).
+    joint_goal: Option<Joints>,
+    banks: Banks,
+    relay: NoticeRelay,
+}
+
+impl CommandHandler {
+    /// A handler for a validated robot description.
+    pub fn new(config: &RobotConfig) -> Self {
+        Self {
+            controller: Controller::new(config),
+            goal: None,
+            joint_goal: None,
+            banks: Banks::default(),
+            relay: NoticeRelay::default(),
+        }
+    }
+
+    /// The controller.
+    pub fn controller(&self) -> &Controller {
+        &self.controller
+    }
+
+    /// One control tick (see [`Controller::step`]); its events feed the warning relay.
+    pub fn tick(
+        &mut self,
+        now: f64,
+        measured: &[f64],
+        drives: &impl Drives,
+    ) -> Result<StepOutput, KinematicsError> {
+        let out = self.controller.step(now, measured)?;
+        self.relay.observe(now, &out.events, drives.fault());
+        Ok(out)
+    }
+
+    /// The next unsolicited warning for the client, if any.
+    pub fn next_notice(&mut self) -> Option<Text> {
+        self.relay.pop()
+    }
+
+    /// Warnings dropped because too many were waiting.
+    pub fn dropped_notices(&self) -> u32 {
+        self.relay.dropped()
+    }
+
+    /// Handles one datagram of any length and returns the reply datagram.
+    pub fn handle(&mut self, datagram: &[u8], drives: &mut impl Drives) -> [u8; MESSAGE_LEN] {
+        let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
+        let reply = match request {
+            Ok(request) => self.execute(&request, drives),
+            Err(e) => Err(Notice::from(e)),
+        };
+        match reply {
+            Ok(reply) => reply.to_bytes(),
+            Err(notice) => notice.text().to_bytes(),
+        }
+    }
+
+    fn execute(&mut self, req: &Request, drives: &mut impl Drives) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        let v = req.values.map(f64::from);
+        let slot = usize::from(req.index & !BANK_2);
+        let bank_2 = req.index & BANK_2 != 0;
+        let refused = |r: Refusal| refusal_notice(cmd, r);
+        let null = Reply::null(cmd);
+        let n = self.controller.chain().dof();
+        match cmd {
+            Command::Begin => {
+                let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd))?;
+                operational(drives, cmd)?;
+                self.controller
+                    .move_cartesian(goal, duration)
+                    .map_err(refused)?;
+                Ok(null)
+            }
+            Command::ChangeMode => {
+                let mode = match libm::floor(v[0] + 0.5) {
+                    0.0 => Mode::Off,
+                    1.0 => Mode::Joint,
+                    2.0 => Mode::Cartesian,
+                    // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
+                    _ => return Err(Notice::BadNumber(cmd)),
+                };
+                self.controller.set_mode(mode).map_err(refused)?;
+                Ok(values_reply(cmd, &[mode as u8 as f64], 0))
+            }
+            Command::GoalQuaternion => {
+                let [x, y, z, qx, qy, qz, qw] = v;
+                let q = Quaternion::new(qx, qy, qz, qw)
+                    .normalized()
+                    .ok_or(Notice::BadNumber(cmd))?;
+                let goal = Frame::new(q.to_rotation(), Vec3::new(x, y, z));
+                self.controller
+                    .check_cartesian_goal(&goal)
+                    .map_err(refused)?;
+                self.goal = Some((goal, 0.0));
+                let [a, b, c, d] = q.to_array();
+                Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
+            }
+            Command::GoalRpy => {
+                let [x, y, z, roll, pitch, yaw, t] = v;
+                let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
+                let goal = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+                self.controller
+                    .check_cartesian_goal(&goal)
+                    .map_err(refused)?;
+                self.goal = Some((goal, duration));
+                Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
+            }
+            Command::JointBegin => {
+                let goal = self.joint_goal.ok_or(Notice::Rejected(cmd))?;
+                operational(drives, cmd)?;
+                self.controller.move_joints(&goal, 0.0).map_err(refused)?;
+                Ok(null)
+            }
+            Command::JointClear => {
+                self.controller.clear_joint_via();
+                Ok(null)
+            }
+            Command::JointExecute => {
+                operational(drives, cmd)?;
+                self.controller.start_joint_sequence().map_err(refused)?;
+                Ok(null)
+            }
+            Command::JointGoal => {
+                let joints = bank_values(&v, cmd)?;
+                if bank_2 {
+                    self.stage(BankKey::Goal, joints, cmd)?;
+                } else {
+                    let q = self.complete(BankKey::Goal, joints, cmd)?;
+                    self.joint_goal = Some(self.controller.check_joint_goal(&q).map_err(refused)?);
+                }
+                // The seed's f6 was stale (spec §9 item 9).
+                Ok(values_reply(cmd, joints, req.index & BANK_2))
+            }
+            Command::JointPosition => {
+                let (q, _) = self.controller.measured().ok_or(Notice::Rejected(cmd))?;
+                Ok(joint_reply(cmd, &q, bank_2, n, 0.0))
+            }
+            Command::JointReset | Command::Stop => {
+                self.controller.stop();
+                Ok(null)
+            }
+            Command::JointVia => {
+                let joints = bank_values(&v, cmd)?;
+                let duration = non_negative(v[6]).ok_or(Notice::BadNumber(cmd))?;
+                if bank_2 {
+                    self.stage(BankKey::Via(slot), joints, cmd)?;
+                } else {
+                    let q = self.complete(BankKey::Via(slot), joints, cmd)?;
+                    self.controller
+                        .set_joint_via(slot, &q, duration)
+                        .map_err(refused)?;
+                }
+                let mut values = [0.0; VALUES];
+                values[..BANK_LEN].copy_from_slice(joints);
+                values[BANK_LEN] = duration;
+                Ok(values_reply(cmd, &values, req.index))
+            }
+            Command::On => {
+                if !drives.start() {
+                    return Err(Notice::ArmDidNotStart);
+                }
+                self.controller.stop();
+                Ok(null)
+            }
+            Command::Off => {
+                if !drives.stop() {
+                    return Err(Notice::ArmDidNotStop);
+                }
+                self.controller.stop();
+                Ok(null)
+            }
+            Command::Pose => {
+                let (_, pose) = self.controller.measured().ok_or(Notice::Rejected(cmd))?;
+                let [x, y, z] = pose.pos.to_array();
+                let [a, b, c, d] = Quaternion::from_rotation(&pose.rot).to_array();
+                Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
+            }
+            Command::Recalibrate => {
+                let joints = bank_values(&v, cmd)?;
+                if bank_2 {
+                    self.stage(BankKey::Recalibrate, joints, cmd)?;
+                    return Ok(values_reply(cmd, joints, BANK_2));
+                }
+                // Only with the arm off: the measured angles jump (spec §6.8).
+                if self.controller.mode() != Mode::Off {
+                    return Err(Notice::Rejected(cmd));
+                }
+                let q = self.complete(BankKey::Recalibrate, joints, cmd)?;
+                if !drives.recalibrate(&q) {
+                    return Err(Notice::Rejected(cmd));
+                }
+                Ok(null)
+            }
+            Command::Temperature => {
+                let t = drives.temperatures();
+                Ok(joint_reply(cmd, &t, bank_2, n, NO_TEMPERATURE))
+            }
+            Command::ViaClear => {
+                self.controller.clear_cartesian_via();
+                Ok(null)
+            }
+            Command::ViaExecute => {
+                operational(drives, cmd)?;
+                self.controller
+                    .start_cartesian_sequence()
+                    .map_err(refused)?;
+                Ok(null)
+            }
+            Command::ViaPoint => {
+                if bank_2 {
+                    return Err(Notice::BadIndex(cmd));
+                }
+                let [x, y, z, roll, pitch, yaw, t] = v;
+                let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
+                let pose = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+                self.controller
+                    .set_cartesian_via(slot, pose, duration)
+                    .map_err(refused)?;
+                let [r, p, w] = pose.rot.to_rpy();
+                Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
+            }
+        }
+    }
+
+    fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {
+        let n = self.controller.chain().dof();
+        self.banks
+            .stage(key, values, n)
+            .map_err(|_| Notice::BadIndex(cmd))
+    }
+
+    fn complete(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<Joints, Notice> {
+        let n = self.controller.chain().dof();
+        self.banks
+            .complete(key, values, n)
+            .map_err(|_| Notice::BadIndex(cmd))
+    }
+}
+
+/// The client text for a refused request.
+fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
+    match refusal {
+        Refusal::InvalidNumber | Refusal::WrongJointCount => Notice::BadNumber(cmd),
+        Refusal::IndexOutOfRange => Notice::BadIndex(cmd),
+        Refusal::OutsideWorkspace => Notice::OutsideWorkspace(cmd),
+        Refusal::OutsideJointLimits => Notice::BeyondJointLimit(cmd),
+        Refusal::NoGoal | Refusal::WrongMode | Refusal::Busy | Refusal::NotReady => {
+            Notice::Rejected(cmd)
+        }
+    }
+}
+
+fn operational(drives: &impl Drives, cmd: Command) -> Result<(), Notice> {
+    if drives.is_operational() {
+        Ok(())
+    } else {
+        Err(Notice::Rejected(cmd))
+    }
+}
+
+/// The six joint values of a joint request, all finite.
+fn bank_values(v: &[f64; VALUES], cmd: Command) -> Result<&[f64], Notice> {
+    let joints = v.get(..BANK_LEN).unwrap_or(&[]);
+    if joints.iter().all(|x| x.is_finite()) {
+        Ok(joints)
+    } else {
+        Err(Notice::BadNumber(cmd))
+    }
+}
+
+/// A duration: finite, negative ones clamped to 0 (the seed left jV/VP unclamped, §9 item 12).
+fn non_negative(t: f64) -> Option<f64> {
+    t.is_finite().then_some(t.max(0.0))
+}
+
+/// A reply carrying `values` in f0.. (the rest zero).
+fn values_reply(cmd: Command, values: &[f64], index: u8) -> Reply {
+    let mut out = [0.0f32; VALUES];
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = *v as f32;
+    }
+    Reply {
+        command: cmd,
+        values: out,
+        index,
+    }
+}
+
+/// jP/TM: joints 1–7 in f0..f6, or joints 7.. for bank 2; unused slots hold `pad`.
+fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Reply {
+    let skip = if bank_2 { BANK_LEN } else { 0 };
+    let mut values = [pad; VALUES];
+    for (o, v) in values
+        .iter_mut()
+        .zip(q.iter().take(n).skip(skip))
+        .take(REPLY_JOINTS)
+    {
+        *o = *v as f32;
+    }
+    Reply {
+        command: cmd,
+        values,
+        index: if bank_2 { BANK_2 } else { 0 },
+    }
+}

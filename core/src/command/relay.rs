@@ -1,0 +1,155 @@
+//! Unsolicited warnings to the client (spec §2.6), with a rate limit that cannot skip.
+
+use armgate_protocol::client::{Notice, Text};
+use heapless::Deque;
+
+use crate::motion::Events;
+
+/// While a condition lasts, its warning is repeated at most this often (s).
+pub const NOTICE_INTERVAL: f64 = 0.2;
+/// Warnings waiting to be sent; more are dropped and counted.
+const OUTBOX: usize = 8;
+
+/// Turns per-tick conditions into client warnings: on the first occurrence, then at most once
+/// per [`NOTICE_INTERVAL`] while the condition lasts. (The seed's mod-11 counters could skip a
+/// message when two events fell between handler cycles, spec §9 item 15.) A drive fault is sent
+/// once, when it appears.
+#[derive(Clone, Debug)]
+pub struct NoticeRelay {
+    channels: [Channel; 4],
+    fault_reported: bool,
+    outbox: Deque<Text, OUTBOX>,
+    dropped: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Channel {
+    notice: Notice,
+    active: bool,
+    last_sent: f64,
+}
+
+impl Default for NoticeRelay {
+    fn default() -> Self {
+        let channel = |notice| Channel {
+            notice,
+            active: false,
+            last_sent: f64::NEG_INFINITY,
+        };
+        Self {
+            channels: [
+                channel(Notice::WorkspaceLimit),
+                channel(Notice::JointLimit),
+                channel(Notice::IkDivergence),
+                channel(Notice::ViaPointMissed),
+            ],
+            fault_reported: false,
+            outbox: Deque::new(),
+            dropped: 0,
+        }
+    }
+}
+
+impl NoticeRelay {
+    /// Takes note of one tick's events and the drive fault at time `now` (s).
+    pub fn observe(&mut self, now: f64, events: &Events, fault: Option<Text>) {
+        let raised = [
+            events.workspace_limit,
+            events.joint_limit,
+            events.ik_divergence,
+            events.sequence_aborted,
+        ];
+        for (channel, raised) in self.channels.iter_mut().zip(raised) {
+            if raised && (!channel.active || now - channel.last_sent >= NOTICE_INTERVAL) {
+                channel.last_sent = now;
+                if self.outbox.push_back(channel.notice.text()).is_err() {
+                    self.dropped = self.dropped.saturating_add(1);
+                }
+            }
+            channel.active = raised;
+        }
+        match fault {
+            Some(text) if !self.fault_reported => {
+                self.fault_reported = true;
+                if self.outbox.push_back(text).is_err() {
+                    self.dropped = self.dropped.saturating_add(1);
+                }
+            }
+            Some(_) => {}
+            None => self.fault_reported = false,
+        }
+    }
+
+    /// The next warning to send, oldest first.
+    pub fn pop(&mut self) -> Option<Text> {
+        self.outbox.pop_front()
+    }
+
+    /// Warnings dropped because the outbox was full.
+    pub fn dropped(&self) -> u32 {
+        self.dropped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drain(relay: &mut NoticeRelay) -> Vec<String> {
+        core::iter::from_fn(|| relay.pop())
+            .map(|t| t.as_str().to_string())
+            .collect()
+    }
+
+    #[test]
+    fn first_occurrence_then_at_most_every_interval() {
+        let mut relay = NoticeRelay::default();
+        let limit = Events {
+            joint_limit: true,
+            ..Events::default()
+        };
+        let mut sent = Vec::new();
+        // A condition raised every 19.44 ms for one second.
+        for k in 0..52 {
+            relay.observe(k as f64 * 0.01944, &limit, None);
+            sent.extend(drain(&mut relay).into_iter().map(|t| (k, t)));
+        }
+        let ticks: Vec<_> = sent.iter().map(|(k, _)| *k).collect();
+        assert_eq!(ticks, vec![0, 11, 22, 33, 44]);
+        assert!(sent.iter().all(|(_, t)| t == "WN12 Joint limit."));
+        // The condition ends and comes back: reported at once.
+        relay.observe(1.02, &Events::default(), None);
+        relay.observe(1.04, &limit, None);
+        assert_eq!(drain(&mut relay), vec!["WN12 Joint limit."]);
+    }
+
+    #[test]
+    fn a_fault_is_reported_once_per_appearance() {
+        let mut relay = NoticeRelay::default();
+        let fault = Notice::ArmDidNotStart.text();
+        for k in 0..10 {
+            relay.observe(k as f64, &Events::default(), Some(fault));
+        }
+        assert_eq!(drain(&mut relay).len(), 1);
+        relay.observe(11.0, &Events::default(), None);
+        relay.observe(12.0, &Events::default(), Some(fault));
+        assert_eq!(drain(&mut relay).len(), 1);
+    }
+
+    #[test]
+    fn a_full_outbox_drops_and_counts() {
+        let mut relay = NoticeRelay::default();
+        let all = Events {
+            workspace_limit: true,
+            joint_limit: true,
+            ik_divergence: true,
+            sequence_aborted: true,
+            ..Events::default()
+        };
+        for k in 0..3 {
+            relay.observe(k as f64, &all, None);
+        }
+        assert_eq!(relay.dropped(), 4);
+        assert_eq!(drain(&mut relay).len(), 8);
+    }
+}

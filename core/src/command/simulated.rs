@@ -1,0 +1,109 @@
+//! Drives without a bus: a simulated arm behind the [`Drives`] interface.
+
+use armgate_protocol::client::Text;
+
+use super::Drives;
+use crate::kinematics::Joints;
+use crate::motion::{IdealArm, RateLimitedArm};
+
+/// Temperature the simulated drives report (°C).
+const SIMULATED_TEMPERATURE: f64 = 30.0;
+
+/// The arm model behind [`SimulatedDrives`].
+// Unboxed on purpose: no heap, and there is one model per arm.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+pub enum ArmModel {
+    /// Every command is reached at once (the seed's `SimArm`).
+    Ideal(IdealArm),
+    /// Joints follow with bounded velocity and acceleration.
+    RateLimited(RateLimitedArm),
+}
+
+/// A simulated arm with the drives' start/stop state and recalibration, for running the whole
+/// controller without CAN hardware. Running at construction, as the seed's robot auto-started.
+#[derive(Clone, Debug)]
+pub struct SimulatedDrives {
+    model: ArmModel,
+    running: bool,
+    /// Reported position minus the model's position (changed by recalibration).
+    offset: Joints,
+}
+
+impl SimulatedDrives {
+    /// Simulated drives over an arm model.
+    pub fn new(model: ArmModel) -> Self {
+        let n = match &model {
+            ArmModel::Ideal(arm) => arm.measured().len(),
+            ArmModel::RateLimited(arm) => arm.measured().len(),
+        };
+        Self {
+            model,
+            running: true,
+            offset: Joints::zeros(n),
+        }
+    }
+
+    /// The measured joints, in the (possibly recalibrated) reported frame.
+    pub fn measured(&self) -> Joints {
+        let mut q = match &self.model {
+            ArmModel::Ideal(arm) => arm.measured(),
+            ArmModel::RateLimited(arm) => arm.measured(),
+        };
+        for (v, o) in q.iter_mut().zip(self.offset.iter()) {
+            *v += o;
+        }
+        q
+    }
+
+    /// Applies one tick's command (`None`: hold) and advances the model by `dt` seconds. A
+    /// stopped drive ignores commands.
+    pub fn apply(&mut self, command: Option<&Joints>, dt: f64) {
+        let raw = command.filter(|_| self.running).map(|c| {
+            let mut raw = *c;
+            for (v, o) in raw.iter_mut().zip(self.offset.iter()) {
+                *v -= o;
+            }
+            raw
+        });
+        match &mut self.model {
+            ArmModel::Ideal(arm) => arm.step(raw.as_ref()),
+            ArmModel::RateLimited(arm) => arm.step(raw.as_ref(), dt),
+        }
+    }
+}
+
+impl Drives for SimulatedDrives {
+    fn start(&mut self) -> bool {
+        !core::mem::replace(&mut self.running, true)
+    }
+
+    fn stop(&mut self) -> bool {
+        core::mem::replace(&mut self.running, false)
+    }
+
+    fn recalibrate(&mut self, q: &[f64]) -> bool {
+        let current = self.measured();
+        if q.len() != current.len() || !q.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        for ((o, target), now) in self.offset.iter_mut().zip(q).zip(current.iter()) {
+            *o += target - now;
+        }
+        true
+    }
+
+    fn temperatures(&self) -> Joints {
+        let mut t = Joints::zeros(self.offset.len());
+        t.iter_mut().for_each(|v| *v = SIMULATED_TEMPERATURE);
+        t
+    }
+
+    fn is_operational(&self) -> bool {
+        self.running
+    }
+
+    fn fault(&self) -> Option<Text> {
+        None
+    }
+}

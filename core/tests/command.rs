@@ -1,0 +1,380 @@
+//! The command handler: literal datagrams in, literal replies out (spec §2, docs/protocol.md).
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+// The seed deployed rounded angles such as 1.5708.
+#![allow(clippy::approx_constant)]
+
+mod common;
+
+use armgate_core::command::{ArmModel, CommandHandler, Drives, SimulatedDrives};
+use armgate_core::config::RobotConfig;
+use armgate_core::kinematics::Joints;
+use armgate_core::motion::IdealArm;
+use armgate_core::rng::SplitMix64;
+
+struct Rig {
+    handler: CommandHandler,
+    drives: SimulatedDrives,
+    period: f64,
+    now: f64,
+}
+
+impl Rig {
+    fn new(config: &RobotConfig, q0: &[f64]) -> Self {
+        let arm = IdealArm::new(Joints::from_slice(q0).unwrap());
+        let mut rig = Self {
+            handler: CommandHandler::new(config),
+            drives: SimulatedDrives::new(ArmModel::Ideal(arm)),
+            period: config.control_period,
+            now: 0.0,
+        };
+        rig.tick();
+        rig
+    }
+
+    fn tick(&mut self) {
+        self.now += self.period;
+        let out = self
+            .handler
+            .tick(self.now, &self.drives.measured(), &self.drives)
+            .unwrap();
+        self.drives.apply(out.command.as_ref(), self.period);
+    }
+
+    fn send(&mut self, datagram: &[u8]) -> [u8; 31] {
+        self.handler.handle(datagram, &mut self.drives)
+    }
+
+    fn request(&mut self, cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
+        self.send(&datagram(cmd, values, index))
+    }
+
+    /// The text of an ER/WN reply, or panics.
+    fn text(&mut self, cmd: &str, values: [f32; 7], index: u8) -> String {
+        text_of(&self.request(cmd, values, index))
+    }
+}
+
+fn datagram(cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
+    let mut d = [0u8; 31];
+    d[..2].copy_from_slice(cmd.as_bytes());
+    for (k, v) in values.iter().enumerate() {
+        d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+    }
+    d[30] = index;
+    d
+}
+
+fn text_of(reply: &[u8; 31]) -> String {
+    let end = reply.iter().position(|b| *b == 0).unwrap();
+    assert!(
+        reply[end..].iter().all(|b| *b == 0),
+        "not zero-filled: {reply:?}"
+    );
+    String::from_utf8(reply[..end].to_vec()).unwrap()
+}
+
+fn floats(reply: &[u8; 31]) -> [f32; 7] {
+    core::array::from_fn(|k| f32::from_le_bytes(reply[2 + 4 * k..6 + 4 * k].try_into().unwrap()))
+}
+
+const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+
+fn mk1() -> Rig {
+    Rig::new(&common::robot("ranger-mk1"), &MK1_READY)
+}
+
+#[test]
+fn worked_example_gt_and_its_reply() {
+    let mut rig = mk1();
+    // spec §2.9: GT to (0.5, 0.2, 0.1), RPY 0, T = 5 s.
+    let gt: [u8; 31] = [
+        0x47, 0x54, 0x00, 0x00, 0x00, 0x3F, 0xCD, 0xCC, 0x4C, 0x3E, 0xCD, 0xCC, 0xCC, 0x3D, 0, 0,
+        0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x00, 0x00, 0xA0, 0x40, 0x00,
+    ];
+    let mut expected = gt;
+    expected[..2].copy_from_slice(b"TG");
+    assert_eq!(rig.send(&gt), expected);
+}
+
+#[test]
+fn worked_examples_cm_bg_and_vp() {
+    let mut rig = mk1();
+    let cm2: [u8; 31] =
+        core::array::from_fn(|k| [0x43, 0x4D, 0, 0, 0, 0x40].get(k).copied().unwrap_or(0));
+    let mut mc2 = cm2;
+    mc2[..2].copy_from_slice(b"MC");
+    assert_eq!(rig.send(&cm2), mc2);
+    rig.tick();
+    // BG before any goal is rejected, zero-filled.
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    // A reachable goal 5 cm from the current pose, then BG → `47 42` + 29 zeros.
+    let ps = floats(&rig.request("PS", [0.0; 7], 0));
+    let reply = rig.request(
+        "GL",
+        [ps[0] + 0.05, ps[1], ps[2], ps[3], ps[4], ps[5], ps[6]],
+        0,
+    );
+    assert_eq!(&reply[..2], b"LG");
+    let bg = rig.request("BG", [0.0; 7], 0);
+    let mut gb = [0u8; 31];
+    gb[..2].copy_from_slice(&[0x47, 0x42]);
+    assert_eq!(bg, gb);
+    // While moving, BG is rejected.
+    rig.tick();
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    // VP via point 3 = (0.5, −0.2, 0.4), yaw −1.5708, T = 2 (spec §2.9).
+    let vp: [u8; 31] = [
+        0x56, 0x50, 0x00, 0x00, 0x00, 0x3F, 0xCD, 0xCC, 0x4C, 0xBE, 0xCD, 0xCC, 0xCC, 0x3E, 0, 0,
+        0, 0, 0, 0, 0, 0, 0xF9, 0x0F, 0xC9, 0xBF, 0x00, 0x00, 0x00, 0x40, 0x03,
+    ];
+    let pv = rig.send(&vp);
+    assert_eq!(&pv[..2], b"PV");
+    assert_eq!(pv[30], 3);
+    let values = floats(&pv);
+    assert_eq!(&values[..3], &[0.5, -0.2, 0.4]);
+    assert!((values[5] + 1.5708).abs() < 1e-6 && values[3].abs() < 1e-6);
+    assert_eq!(values[6], 2.0);
+}
+
+#[test]
+fn fixed_seed_defects_vc_rc_and_stale_bytes() {
+    let mut rig = mk1();
+    let cv = rig.request("VC", [0.0; 7], 0);
+    assert_eq!(&cv[..2], b"CV");
+    assert!(cv[2..].iter().all(|b| *b == 0));
+    // RC answers CR (the seed sent nothing) and takes effect.
+    let target = [1.0f32, 0.5, -0.3, 0.1, 1.7, 0.2];
+    let mut values = [0.0; 7];
+    values[..6].copy_from_slice(&target);
+    assert_eq!(&rig.request("RC", values, 0)[..2], b"CR");
+    rig.tick();
+    let jp = floats(&rig.request("jP", [0.0; 7], 0));
+    for (a, b) in jp.iter().zip(target) {
+        assert!((a - b).abs() < 1e-6);
+    }
+    // RC outside mode 0 is refused.
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(rig.text("RC", values, 0), "ER20 Cmd RC rejected");
+    // jG's f6 is zero, not stale.
+    let mut jg = [0.0f32; 7];
+    jg[..6].copy_from_slice(&[1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]);
+    jg[6] = 9.0;
+    assert_eq!(floats(&rig.request("jG", jg, 0))[6], 0.0);
+}
+
+#[test]
+fn short_long_and_unknown_datagrams() {
+    let mut rig = mk1();
+    assert_eq!(text_of(&rig.send(&[])), "ER01 Msg ?? undersized.");
+    assert_eq!(text_of(&rig.send(b"P")), "ER01 Msg P? undersized.");
+    assert_eq!(text_of(&rig.send(b"PS")), "ER01 Msg PS undersized.");
+    assert_eq!(text_of(&rig.send(&[b'P'; 29])), "ER01 Msg PP undersized.");
+    // 30 bytes: accepted with index 0.
+    assert_eq!(&rig.send(&datagram("PS", [0.0; 7], 0)[..30])[..2], b"SP");
+    // 32 and 100 bytes: truncated to 31.
+    let mut long = datagram("TM", [0.0; 7], 0).to_vec();
+    long.resize(100, 0xAA);
+    assert_eq!(&rig.send(&long[..32])[..2], b"MT");
+    assert_eq!(&rig.send(&long)[..2], b"MT");
+    assert_eq!(rig.text("XY", [0.0; 7], 0), "ER00 Cmd XY not understood");
+    assert_eq!(rig.text("bg", [0.0; 7], 0), "ER00 Cmd bg not understood");
+}
+
+#[test]
+fn bad_numbers_indices_and_goals_get_their_texts() {
+    let mut rig = mk1();
+    for field in 0..7 {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut v = [0.0f32, 0.6, 1.0, 0.0, 0.0, 0.0, 1.0];
+            v[field] = bad;
+            assert_eq!(
+                rig.text("GL", v, 0),
+                "ER23 Cmd GL bad number",
+                "GL f{field}"
+            );
+            let mut v = [0.0f32, 0.6, 1.0, 0.0, 0.0, 0.0, 1.0];
+            v[field] = bad;
+            assert_eq!(
+                rig.text("GT", v, 0),
+                "ER23 Cmd GT bad number",
+                "GT f{field}"
+            );
+            assert_eq!(
+                rig.text("VP", v, 2),
+                "ER23 Cmd VP bad number",
+                "VP f{field}"
+            );
+            assert_eq!(
+                rig.text("jV", v, 2),
+                "ER23 Cmd jV bad number",
+                "jV f{field}"
+            );
+        }
+    }
+    assert_eq!(
+        rig.text("CM", [f32::NAN, 0., 0., 0., 0., 0., 0.], 0),
+        "ER23 Cmd CM bad number"
+    );
+    assert_eq!(
+        rig.text("CM", [3.0, 0., 0., 0., 0., 0., 0.], 0),
+        "ER23 Cmd CM bad number"
+    );
+    assert_eq!(
+        rig.text("GL", [0.0, 0.6, 1.0, 0.0, 0.0, 0.0, 0.0], 0),
+        "ER23 Cmd GL bad number"
+    );
+    let via = [0.0f32, 0.6, 1.0, 0.0, 0.0, 0.0, 1.0];
+    assert_eq!(rig.text("VP", via, 20), "ER24 Cmd VP bad index");
+    assert_eq!(rig.text("VP", via, 255), "ER24 Cmd VP bad index");
+    let q = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1, 1.0];
+    assert_eq!(rig.text("jV", q, 20), "ER24 Cmd jV bad index");
+    assert_eq!(rig.text("jV", q, 255), "ER24 Cmd jV bad index");
+    assert_eq!(&rig.request("jV", q, 19)[..2], b"Vj");
+    // Inside the column around the base, and outside the bounds.
+    assert_eq!(
+        rig.text("GT", [0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0], 0),
+        "ER25 Cmd GT outside workspace"
+    );
+    assert_eq!(
+        rig.text("GT", [9.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0], 0),
+        "ER25 Cmd GT outside workspace"
+    );
+    // Joint 5 below its 0.785 limit.
+    assert_eq!(
+        rig.text("jG", [1.5708, 0.6, -0.4, 0.2, 0.0, 0.1, 0.0], 0),
+        "ER26 Cmd jG beyond joint limit"
+    );
+    // A negative duration is clamped.
+    assert_eq!(
+        floats(&rig.request("GT", [0.5, 0.6, 1.0, 0.0, 0.0, 0.0, -3.0], 0))[6],
+        0.0
+    );
+}
+
+#[test]
+fn commands_in_the_wrong_mode_are_rejected() {
+    let mut rig = mk1();
+    let q = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1, 0.0];
+    assert_eq!(&rig.request("jG", q, 0)[..2], b"Gj");
+    rig.request("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(rig.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    assert_eq!(rig.text("jE", [0.0; 7], 0), "ER20 Cmd jE rejected");
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(rig.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+    rig.request("GT", [0.5, 0.6, 1.0, 0.0, 0.0, 0.0, 0.0], 0);
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    // jB needs a jG first (the seed drove every joint to 0, spec §9 item 8).
+    let mut fresh = mk1();
+    fresh.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    // Motion is refused while the drives are off, and ON/OF report their state.
+    assert_eq!(&fresh.request("OF", [0.0; 7], 0)[..2], b"FO");
+    assert_eq!(fresh.text("OF", [0.0; 7], 0), "ER10 Arm did not stop");
+    fresh.request("jG", q, 0);
+    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    assert_eq!(&fresh.request("ON", [0.0; 7], 0)[..2], b"NO");
+    assert_eq!(fresh.text("ON", [0.0; 7], 0), "ER11 Arm did not start");
+    assert_eq!(&fresh.request("jB", [0.0; 7], 0)[..2], b"Bj");
+}
+
+#[test]
+fn eight_joint_arm_is_commanded_in_two_banks() {
+    let start = [0.1, 0.4, -0.2, 0.8, 0.1, 0.5, 0.2, 0.1];
+    let mut rig = Rig::new(&common::robot("ranger-mk2"), &start);
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    let goal = [0.2f32, 0.5, -0.1, 0.7, 0.2, 0.4, 0.3, 0.0];
+    // Bank 1 alone is refused on an 8-joint arm.
+    let mut bank1 = [0.0f32; 7];
+    bank1[..6].copy_from_slice(&goal[..6]);
+    assert_eq!(rig.text("jG", bank1, 0), "ER24 Cmd jG bad index");
+    let mut bank2 = [0.0f32; 7];
+    bank2[..2].copy_from_slice(&goal[6..8]);
+    let echo = rig.request("jG", bank2, 0x80);
+    assert_eq!((&echo[..2], echo[30]), (&b"Gj"[..], 0x80));
+    assert_eq!(&rig.request("jG", bank1, 0)[..2], b"Gj");
+    assert_eq!(&rig.request("jB", [0.0; 7], 0)[..2], b"Bj");
+    for _ in 0..2000 {
+        rig.tick();
+    }
+    let low = floats(&rig.request("jP", [0.0; 7], 0));
+    let high = rig.request("jP", [0.0; 7], 0x80);
+    assert_eq!(high[30], 0x80);
+    let high = floats(&high);
+    for (got, want) in low.iter().take(6).chain(high.iter().take(2)).zip(goal) {
+        assert!((got - want).abs() < 1e-6, "{low:?} {high:?}");
+    }
+    assert_eq!(low[6], goal[6]);
+    assert_eq!(&high[2..], &[0.0; 5]);
+    // Temperatures: bank 2 carries joints 7 and 8, then −1000 padding.
+    let t = floats(&rig.request("TM", [0.0; 7], 0x80));
+    assert_eq!(&t[..3], &[30.0, 30.0, -1000.0]);
+    // Bank 2 on a six-joint arm is refused.
+    assert_eq!(mk1().text("jG", bank2, 0x80), "ER24 Cmd jG bad index");
+}
+
+#[test]
+fn unsolicited_warnings_are_relayed_and_rate_limited() {
+    // Bounds that end at x = 0.3 m: turning the base to q1 = 0.5 takes the tool out.
+    let mut config = common::robot("ranger-mk1");
+    config.workspace.bounds[1] = 0.3;
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    // Joint mode may leave the workspace: reported (ER21), not stopped.
+    let mut v = [0.0f32; 7];
+    for (d, q) in v.iter_mut().zip(MK1_READY) {
+        *d = q as f32;
+    }
+    v[0] = 0.5;
+    assert_eq!(&rig.request("jG", v, 0)[..2], b"Gj");
+    assert_eq!(&rig.request("jB", [0.0; 7], 0)[..2], b"Bj");
+    let mut texts = Vec::new();
+    for _ in 0..3000 {
+        rig.tick();
+        while let Some(t) = rig.handler.next_notice() {
+            texts.push((rig.now, t.as_str().to_string()));
+        }
+    }
+    let er21: Vec<f64> = texts
+        .iter()
+        .filter(|(_, t)| t == "ER21 Work space limit.")
+        .map(|(n, _)| *n)
+        .collect();
+    assert!(!er21.is_empty(), "{texts:?}");
+    assert!(er21.len() > 10, "{texts:?}");
+    assert!(er21.windows(2).all(|w| w[1] - w[0] >= 0.2 - 1e-9));
+    // The arm got there all the same.
+    let jp = floats(&rig.request("jP", [0.0; 7], 0));
+    assert!((jp[0] - 0.5).abs() < 1e-6);
+}
+
+#[test]
+fn random_datagrams_never_panic_and_ps_still_answers() {
+    let mut rig = mk1();
+    let mut rng = SplitMix64::new(99);
+    let commands = [
+        "BG", "CM", "GL", "GT", "jB", "jC", "jE", "jG", "jP", "jR", "jV", "ON", "OF", "PS", "RC",
+        "ST", "TM", "VC", "VE", "VP",
+    ];
+    for k in 0..20_000 {
+        let len = (rng.next_u64() % 40) as usize;
+        let mut d: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
+        if len >= 2 && k % 2 == 0 {
+            let c = commands[(rng.next_u64() % commands.len() as u64) as usize];
+            d[..2].copy_from_slice(c.as_bytes());
+        }
+        let reply = rig.send(&d);
+        assert_eq!(reply.len(), 31);
+        if k % 50 == 0 {
+            rig.tick();
+        }
+    }
+    rig.request("ON", [0.0; 7], 0);
+    rig.tick();
+    assert_eq!(&rig.request("PS", [0.0; 7], 0)[..2], b"SP");
+    assert!(rig.drives.temperatures().len() == 6);
+}
