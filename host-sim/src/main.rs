@@ -1,38 +1,289 @@
-//! `armgate-sim`: the armgate core on the host.
+//! `armgate-sim`: the armgate controller core on this computer, with a simulated arm.
 //!
-//! For now it loads a robot description, checks it, and prints the arm's kinematics at its home
-//! pose (the drives' zero-count position). The UDP server, the control loop and the simulated
-//! drives arrive with the protocol and CAN work.
+//! It runs the same core as the firmware: the control tick at the robot's period, and the
+//! 31-byte UDP command protocol. Only bytes and time are handled here.
 
+mod allow;
+mod log;
+
+use std::io::IsTerminal;
+use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
+use allow::Network;
+use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
 use armgate_core::config::{RobotConfig, load_file};
-use armgate_core::kinematics::Chain;
+use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
-use clap::Parser;
+use armgate_core::motion::{IdealArm, Mode, RateLimitedArm};
+use clap::{Parser, ValueEnum};
+use log::{Logger, Record};
 
-/// Run the armgate controller core on this computer.
+/// Run the armgate arm controller on this computer, with a simulated arm.
+///
+/// Clients command it with 31-byte UDP datagrams (docs/protocol.md), for example with the
+/// `armgate` client: `armgate mode cart`, `armgate move 0.1 0.6 0.9 0 1.57 0`, `armgate pose`.
+/// Only addresses on the allow-list may command the arm: anyone else on the network could move
+/// it. Stop with Ctrl-C.
 #[derive(Parser, Debug)]
-#[command(version, about)]
+#[command(version, about, long_about)]
 struct Args {
-    /// Robot description file (TOML), e.g. robots/ranger-mk2.toml.
+    /// Robot description file (TOML); see docs/robot-file.md.
     #[arg(long, default_value = "robots/ranger-mk1.toml")]
     robot: PathBuf,
+    /// UDP address to listen on for client commands.
+    #[arg(long, default_value = "127.0.0.1:7031")]
+    listen: SocketAddr,
+    /// Networks allowed to send commands, e.g. 192.168.1.0/24 (repeatable). Default: loopback
+    /// only (127.0.0.0/8 and ::1). Datagrams from elsewhere are dropped and counted.
+    #[arg(long = "allow", value_name = "NETWORK")]
+    allow: Vec<Network>,
+    /// How the simulated joints follow the commands.
+    #[arg(long, value_enum, default_value_t = ArmKind::Ideal)]
+    arm: ArmKind,
+    /// Starting joint positions, comma-separated (default: the drives' home positions).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "Q1,Q2,.."
+    )]
+    start: Option<Vec<f64>>,
+    /// Write CSV logs (commands, replies, warnings, state) into this directory.
+    #[arg(long, value_name = "DIR")]
+    log_dir: Option<PathBuf>,
+    /// Exit after this many seconds (default: run until Ctrl-C).
+    #[arg(long, value_name = "SECONDS")]
+    duration: Option<f64>,
+    /// No status line on the terminal.
+    #[arg(long)]
+    quiet: bool,
+    /// Print the arm's pose at its home position and exit.
+    #[arg(long)]
+    print_home: bool,
+}
+
+/// The simulated arm's dynamics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ArmKind {
+    /// Joints reach every command at once.
+    Ideal,
+    /// Joints follow with the robot file's joint velocity and acceleration limits.
+    RateLimited,
 }
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    match load_file(&args.robot) {
-        Ok(config) => {
-            print_home(&config);
-            ExitCode::SUCCESS
-        }
+    let config = match load_file(&args.robot) {
+        Ok(config) => config,
         Err(e) => {
             eprintln!("armgate-sim: {}: {e}", args.robot.display());
+            return ExitCode::FAILURE;
+        }
+    };
+    if args.print_home {
+        print_home(&config);
+        return ExitCode::SUCCESS;
+    }
+    match run(&args, &config) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("armgate-sim: {e}");
             ExitCode::FAILURE
         }
     }
+}
+
+/// Counters shown in the status line and at exit.
+#[derive(Debug, Default)]
+struct Stats {
+    received: u64,
+    refused_sources: u64,
+    notices: u64,
+    overruns: u64,
+}
+
+fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
+    let n = config.dof();
+    let home: Vec<f64> = config.joints.iter().map(|j| j.drive.home).collect();
+    let start = args.start.clone().unwrap_or(home);
+    let start = Chain::new(config)
+        .check(&start)
+        .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
+    let mut drives = SimulatedDrives::new(arm_model(args.arm, config, start));
+    let mut handler = CommandHandler::new(config);
+    let allow = if args.allow.is_empty() {
+        vec!["127.0.0.0/8".parse()?, "::1".parse()?]
+    } else {
+        args.allow.clone()
+    };
+    let logger = match &args.log_dir {
+        Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
+        None => Logger::disabled(),
+    };
+    let socket = UdpSocket::bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    let running = Arc::new(AtomicBool::new(true));
+    let stop = running.clone();
+    ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
+        .map_err(|e| format!("Ctrl-C handler: {e}"))?;
+    let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
+    eprintln!(
+        "armgate-sim: {} ({n} joints, {:.2} ms period) on udp://{}, allowing {}",
+        config.name,
+        config.control_period * 1e3,
+        socket.local_addr().map_err(|e| e.to_string())?,
+        allowed.join(", ")
+    );
+
+    let status = !args.quiet && std::io::stderr().is_terminal();
+    let period = Duration::from_secs_f64(config.control_period);
+    let epoch = Instant::now();
+    let mut next_tick = epoch;
+    let mut next_status = epoch;
+    let mut last_sender: Option<SocketAddr> = None;
+    let mut stats = Stats::default();
+    let mut buf = [0u8; 64];
+    while running.load(Ordering::SeqCst) {
+        let now = Instant::now();
+        if args
+            .duration
+            .is_some_and(|d| (now - epoch).as_secs_f64() >= d)
+        {
+            break;
+        }
+        if now >= next_tick {
+            // Time inside the core is the scheduled tick time: deterministic, not wall-clock.
+            let t = (next_tick - epoch).as_secs_f64();
+            let out = handler
+                .tick(t, &drives.measured(), &drives)
+                .map_err(|e| format!("control tick: {e}"))?;
+            drives.apply(out.command.as_ref(), config.control_period);
+            while let Some(text) = handler.next_notice() {
+                stats.notices += 1;
+                logger.log(Record::Warning {
+                    t,
+                    text: text.as_str().to_string(),
+                });
+                if let Some(to) = last_sender {
+                    // A lost warning is no reason to stop the arm; UDP gives no guarantee anyway.
+                    let _ = socket.send_to(&text.to_bytes(), to);
+                }
+            }
+            if logger.enabled() {
+                logger.log(Record::Tick {
+                    t,
+                    mode: mode_name(handler.controller().mode()),
+                    pose: out.measured_pose,
+                    joints: drives.measured(),
+                    command: out.command,
+                    setpoint: out.setpoint,
+                });
+            }
+            next_tick += period;
+            if next_tick < now {
+                stats.overruns += 1;
+                next_tick = now + period;
+            }
+            if status && now >= next_status {
+                next_status = now + Duration::from_millis(250);
+                eprint!("\r{}\x1b[K", status_line(&handler, &stats, &logger));
+            }
+            continue;
+        }
+        socket
+            .set_read_timeout(Some(next_tick - now))
+            .map_err(|e| e.to_string())?;
+        let (len, from) = match socket.recv_from(&mut buf) {
+            Ok(received) => received,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                continue;
+            }
+            Err(e) => return Err(format!("udp receive: {e}")),
+        };
+        if !allow.iter().any(|net| net.contains(from.ip())) {
+            stats.refused_sources += 1;
+            continue;
+        }
+        stats.received += 1;
+        last_sender = Some(from);
+        let datagram = buf.get(..len).unwrap_or(&[]);
+        let t = (Instant::now() - epoch).as_secs_f64();
+        logger.log(Record::Command {
+            t,
+            datagram: datagram.to_vec(),
+        });
+        let reply = handler.handle(datagram, &mut drives);
+        logger.log(Record::Reply { t, datagram: reply });
+        socket
+            .send_to(&reply, from)
+            .map_err(|e| format!("udp send to {from}: {e}"))?;
+    }
+    if status {
+        eprintln!();
+    }
+    let dropped = logger.dropped();
+    logger.finish().map_err(|e| format!("log: {e}"))?;
+    eprintln!(
+        "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns, {} log records dropped",
+        stats.received, stats.refused_sources, stats.notices, stats.overruns, dropped
+    );
+    Ok(())
+}
+
+fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
+    match kind {
+        ArmKind::Ideal => ArmModel::Ideal(IdealArm::new(start)),
+        ArmKind::RateLimited => {
+            let mut v = Joints::zeros(start.len());
+            let mut a = Joints::zeros(start.len());
+            for (j, (v, a)) in config.joints.iter().zip(v.iter_mut().zip(a.iter_mut())) {
+                *v = j.max_rate;
+                *a = j.max_acceleration;
+            }
+            ArmModel::RateLimited(RateLimitedArm::new(start, v, a))
+        }
+    }
+}
+
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Off => "off",
+        Mode::Joint => "joint",
+        Mode::Cartesian => "cartesian",
+    }
+}
+
+fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> String {
+    let ctrl = handler.controller();
+    let pose = ctrl
+        .measured()
+        .map(|(_, p)| {
+            let [x, y, z] = p.pos.to_array();
+            format!("x {x:+.4} y {y:+.4} z {z:+.4}")
+        })
+        .unwrap_or_default();
+    let state = if ctrl.is_moving() {
+        "moving"
+    } else {
+        "holding"
+    };
+    format!(
+        "mode {:<9} {state:<7} {pose} | rx {} refused {} warnings {} log dropped {}",
+        mode_name(ctrl.mode()),
+        stats.received,
+        stats.refused_sources,
+        stats.notices,
+        logger.dropped()
+    )
 }
 
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
