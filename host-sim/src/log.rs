@@ -26,15 +26,25 @@ pub enum Record {
     Reply { t: f64, datagram: [u8; 31] },
     /// An unsolicited warning sent.
     Warning { t: f64, text: String },
-    /// One control tick: mode, measured pose and joints, the command and the set-point.
-    Tick {
-        t: f64,
-        mode: &'static str,
-        pose: Frame,
-        joints: Joints,
-        command: Option<Joints>,
-        setpoint: Option<Frame>,
-    },
+    /// One control tick (boxed: it is much larger than the other records).
+    Tick(Box<Tick>),
+}
+
+/// The state of one control tick.
+#[derive(Debug)]
+pub struct Tick {
+    /// Time (s).
+    pub t: f64,
+    /// Control mode.
+    pub mode: &'static str,
+    /// Measured tool pose.
+    pub pose: Frame,
+    /// Measured joints.
+    pub joints: Joints,
+    /// Joint command sent (none while off).
+    pub command: Option<Joints>,
+    /// Cartesian set-point (Cartesian mode).
+    pub setpoint: Option<Frame>,
 }
 
 /// The sending side; cheap to use from the control loop.
@@ -147,14 +157,15 @@ impl Files {
                 writeln!(self.replies, "{t:.6},{}", message_fields(&datagram))
             }
             Record::Warning { t, text } => writeln!(self.warnings, "{t:.6},{text}"),
-            Record::Tick {
-                t,
-                mode,
-                pose,
-                joints,
-                command,
-                setpoint,
-            } => {
+            Record::Tick(tick) => {
+                let Tick {
+                    t,
+                    mode,
+                    pose,
+                    joints,
+                    command,
+                    setpoint,
+                } = *tick;
                 let f = &mut self.state;
                 write!(f, "{t:.6},{mode}")?;
                 write_pose(f, Some(&pose))?;

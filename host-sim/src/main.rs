@@ -21,7 +21,7 @@ use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
 use armgate_core::motion::{IdealArm, Mode, RateLimitedArm};
 use clap::{Parser, ValueEnum};
-use log::{Logger, Record};
+use log::{Logger, Record, Tick};
 
 /// Run the armgate arm controller on this computer, with a simulated arm.
 ///
@@ -174,14 +174,14 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
                 }
             }
             if logger.enabled() {
-                logger.log(Record::Tick {
+                logger.log(Record::Tick(Box::new(Tick {
                     t,
                     mode: mode_name(handler.controller().mode()),
                     pose: out.measured_pose,
                     joints: drives.measured(),
                     command: out.command,
                     setpoint: out.setpoint,
-                });
+                })));
             }
             next_tick += period;
             if next_tick < now {
