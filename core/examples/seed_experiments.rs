@@ -41,12 +41,8 @@ fn main() {
     ] {
         let r = run_rectangle(&rectangle_config(common::robot(robot)));
         println!(
-            "| {exp}  | {robot:<10} | {seed_mean:<9} | {seed_max:<15} | {:>7.4} µm | {:>7.4} µm | {:>6.2} | {:>19.5} | {:>12.2} |",
-            r.mean_error * 1e6,
-            r.max_error * 1e6,
-            r.max_error_time,
-            r.max_joint_step,
-            r.duration
+            "| {exp}  | {robot:<10} | {seed_mean:<9} | {seed_max:<15} | {:>8.2e} m | {:>8.2e} m | {:>6.2} | {:>19.5} | {:>12.2} |",
+            r.mean_error, r.max_error, r.max_error_time, r.max_joint_step, r.duration
         );
         println!(
             "|     | tool rpy {:?}; joints start {:.4?} end {:.4?}; WN22 ticks {} |",

@@ -86,15 +86,15 @@ fn joint_generator_is_synchronised_within_limits_and_exact_at_the_end() {
     let a = Joints::from_slice(&[1.0, 0.5, 2.0]).unwrap();
     let mut generator = JointGenerator::new(Joints::zeros(3), v, a);
     let goal = Joints::from_slice(&[0.3, -0.7, 0.1]).unwrap();
-    let duration = generator.move_to(goal, 0.0, 0.0).unwrap();
-    assert_eq!(generator.move_to(goal, 0.0, 0.0), Err(Refusal::Busy));
+    let duration = generator.move_to(goal, 0.0).unwrap();
+    assert_eq!(generator.move_to(goal, 0.0), Err(Refusal::Busy));
     let dt = 0.001;
     let (mut prev, mut prev_v) = (Joints::zeros(3), [0.0; 3]);
     let mut t = 0.0;
     let mut finished_at = None;
     while finished_at.is_none() {
         t += dt;
-        let (q, finished) = generator.update(t);
+        let (q, finished) = generator.advance(dt);
         for i in 0..3 {
             let vel = (q[i] - prev[i]) / dt;
             assert!(vel.abs() <= v[i] * (1.0 + 1e-9), "joint {i} speed {vel}");
@@ -117,10 +117,10 @@ fn joint_generator_is_synchronised_within_limits_and_exact_at_the_end() {
     assert!((finished_at.unwrap() - duration).abs() <= dt);
     assert_eq!(generator.setpoint(), goal, "not exactly at the goal");
     // The minimum duration is honoured.
-    let d = generator.move_to(Joints::zeros(3), 30.0, t).unwrap();
+    let d = generator.move_to(Joints::zeros(3), 30.0).unwrap();
     assert_eq!(d, 30.0);
-    assert!(!generator.update(t + 29.9).1);
-    assert_eq!(generator.update(t + 30.0), (Joints::zeros(3), true));
+    assert!(!generator.advance(29.9).1);
+    assert_eq!(generator.advance(0.1), (Joints::zeros(3), true));
 }
 
 #[test]
@@ -147,7 +147,7 @@ fn cartesian_path_is_straight_and_orientation_turns_monotonically_about_a_fixed_
     let start = Frame::new(Rotation::from_rpy(0.1, -0.2, 0.3), Vec3::new(0.4, 0.1, 0.5));
     let goal = Frame::new(Rotation::from_rpy(-0.5, 0.4, 1.2), Vec3::new(0.1, 0.3, 0.2));
     let mut generator = CartesianGenerator::new(start, v, a);
-    let duration = generator.move_to(goal, 0.0, 0.0).unwrap();
+    let duration = generator.move_to(goal, 0.0).unwrap();
     let axis = start.diff(&goal).angular;
     let axis = axis * (1.0 / axis.norm());
     let line = goal.pos - start.pos;
@@ -155,7 +155,7 @@ fn cartesian_path_is_straight_and_orientation_turns_monotonically_about_a_fixed_
     let mut prev_pos = start.pos;
     let dt = 0.002;
     for k in 1..=((duration / dt) as usize + 2) {
-        let (sp, finished) = generator.update(k as f64 * dt);
+        let (sp, finished) = generator.advance_to(k as f64 * dt);
         // On the line through start and goal.
         let off = (sp.pos - start.pos).cross(line).norm() / line.norm();
         assert!(off < 1e-12, "{off} m off the line");

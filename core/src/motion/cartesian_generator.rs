@@ -28,16 +28,59 @@ enum Motion {
         translation: StraightLine,
         /// A path from the zero rotation vector to the relative rotation's vector.
         rotation: StraightLine,
-        start_time: f64,
+        elapsed: f64,
         duration: f64,
     },
     Shape {
         shape: Shape,
         start: Frame,
-        start_time: f64,
+        elapsed: f64,
         /// Set by [`CartesianGenerator::finish_shape`].
         end_time: Option<f64>,
     },
+}
+
+impl Motion {
+    fn elapsed(&self) -> f64 {
+        match self {
+            Self::Move { elapsed, .. } | Self::Shape { elapsed, .. } => *elapsed,
+        }
+    }
+
+    /// The set-point at motion time `t`, and whether the motion has ended by then.
+    fn sample(&self, t: f64) -> (Frame, bool) {
+        match *self {
+            Self::Move {
+                start,
+                goal,
+                translation,
+                rotation,
+                duration,
+                ..
+            } => {
+                if t >= duration {
+                    return (goal, true);
+                }
+                let mut p = [0.0; 3];
+                let mut r = [0.0; 3];
+                translation.point(t, &mut p);
+                rotation.point(t, &mut r);
+                let turn = Rotation::from_rotation_vector(Vec3::from_array(r));
+                (Frame::new(turn * start.rot, Vec3::from_array(p)), false)
+            }
+            Self::Shape {
+                shape,
+                start,
+                end_time,
+                ..
+            } => {
+                if end_time.is_some_and(|end| t >= end) {
+                    return (start, true);
+                }
+                (Frame::new(start.rot, start.pos + shape.offset(t)), false)
+            }
+        }
+    }
 }
 
 impl CartesianGenerator {
@@ -57,9 +100,9 @@ impl CartesianGenerator {
         self.motion = None;
     }
 
-    /// Starts a move to `goal` lasting at least `min_duration` s from the current set-point at
-    /// time `now`; returns the planned duration. Refused while moving.
-    pub fn move_to(&mut self, goal: Frame, min_duration: f64, now: f64) -> Result<f64, Refusal> {
+    /// Starts a move to `goal` lasting at least `min_duration` s from the current set-point;
+    /// returns the planned duration. Refused while moving.
+    pub fn move_to(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
@@ -80,14 +123,14 @@ impl CartesianGenerator {
             goal,
             translation: translation.stretched(duration),
             rotation: rotation.stretched(duration),
-            start_time: now,
+            elapsed: 0.0,
             duration,
         });
         Ok(duration)
     }
 
-    /// Starts `shape` at the current set-point at time `now`. Refused while moving.
-    pub fn start_shape(&mut self, shape: Shape, now: f64) -> Result<(), Refusal> {
+    /// Starts `shape` at the current set-point. Refused while moving.
+    pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
         shape.validate()?;
         if self.motion.is_some() {
             return Err(Refusal::Busy);
@@ -95,7 +138,7 @@ impl CartesianGenerator {
         self.motion = Some(Motion::Shape {
             shape,
             start: self.setpoint,
-            start_time: now,
+            elapsed: 0.0,
             end_time: None,
         });
         Ok(())
@@ -103,60 +146,50 @@ impl CartesianGenerator {
 
     /// Asks a running shape to stop where it started, at the end of the current revolution
     /// (circle) or the next centre crossing (sinusoid). Returns false if no shape runs.
-    pub fn finish_shape(&mut self, now: f64) -> bool {
+    pub fn finish_shape(&mut self) -> bool {
         match &mut self.motion {
             Some(Motion::Shape {
                 shape,
-                start_time,
+                elapsed,
                 end_time,
                 ..
             }) => {
-                *end_time = Some(*start_time + shape.end_time(now - *start_time));
+                *end_time = Some(shape.end_time(*elapsed));
                 true
             }
             _ => false,
         }
     }
 
-    /// Advances to time `now` and returns the set-point and whether a motion ended this tick
-    /// (then the set-point is exactly its goal, or the shape's start point).
-    pub fn update(&mut self, now: f64) -> (Frame, bool) {
-        match self.motion {
-            None => return (self.setpoint, false),
-            Some(Motion::Move {
-                start,
-                goal,
-                translation,
-                rotation,
-                start_time,
-                duration,
-            }) => {
-                let t = now - start_time;
-                if t >= duration {
-                    self.hold(goal);
-                    return (goal, true);
-                }
-                let mut p = [0.0; 3];
-                let mut r = [0.0; 3];
-                translation.point(t, &mut p);
-                rotation.point(t, &mut r);
-                let turn = Rotation::from_rotation_vector(Vec3::from_array(r));
-                self.setpoint = Frame::new(turn * start.rot, Vec3::from_array(p));
-            }
-            Some(Motion::Shape {
-                shape,
-                start,
-                start_time,
-                end_time,
-            }) => {
-                if end_time.is_some_and(|end| now >= end) {
-                    self.hold(start);
-                    return (start, true);
-                }
-                self.setpoint = Frame::new(start.rot, start.pos + shape.offset(now - start_time));
-            }
+    /// Motion time reached so far (s); 0 when idle.
+    pub fn elapsed(&self) -> f64 {
+        self.motion.as_ref().map_or(0.0, Motion::elapsed)
+    }
+
+    /// The set-point the motion would have at motion time `t`, without advancing; the held
+    /// set-point when idle.
+    pub fn sample(&self, t: f64) -> Frame {
+        self.motion
+            .as_ref()
+            .map_or(self.setpoint, |m| m.sample(t).0)
+    }
+
+    /// Advances the motion to motion time `t` and returns the set-point and whether the motion
+    /// ended (then the set-point is exactly its goal, or the shape's start point, and held).
+    pub fn advance_to(&mut self, t: f64) -> (Frame, bool) {
+        let Some(motion) = &mut self.motion else {
+            return (self.setpoint, false);
+        };
+        let (setpoint, ended) = motion.sample(t);
+        match motion {
+            Motion::Move { elapsed, .. } | Motion::Shape { elapsed, .. } => *elapsed = t,
         }
-        (self.setpoint, false)
+        if ended {
+            self.hold(setpoint);
+        } else {
+            self.setpoint = setpoint;
+        }
+        (setpoint, ended)
     }
 
     /// True while a move or shape is in progress.

@@ -12,10 +12,10 @@ use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::Frame;
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
-/// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command, as it
-/// does when the solution needs a joint step beyond the rate limit. This is stricter than the
-/// seed's guard (spec §3.5), which still commanded a non-converged solution unless it was worse
-/// than the current pose by 1e-4.
+/// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
+/// is stricter than the seed's guard (spec §3.5), which still commanded a non-converged solution
+/// unless it was worse than the current pose by 1e-4: such best-effort poses trade position for
+/// orientation and wander away from an unreachable goal.
 const REACH_TOLERANCE: f64 = 1e-6;
 /// The seed's via-point tolerances (spec §4.4).
 const CARTESIAN_TOLERANCES: Tolerances = Tolerances {
@@ -26,6 +26,22 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
     fine: 0.001,
     coarse: 0.05,
 };
+/// Attempts per tick at a smaller step when the full one is too fast for the joints.
+const SLOWDOWN_ATTEMPTS: usize = 4;
+/// Below this fraction of real time a motion counts as stalled rather than slowed down.
+const MIN_TIME_SCALE: f64 = 0.01;
+/// A Cartesian motion that cannot advance for this long (s) is aborted.
+pub const STALL_TIME: f64 = 0.5;
+
+/// How a Cartesian set-point can be tracked this tick.
+enum Tracking {
+    /// Reached within the tolerance and the rate limits.
+    Reached(Joints),
+    /// Reached, but some joint would exceed its rate limit by this factor.
+    TooFast(f64),
+    /// Not reached within the tolerance.
+    Unreachable,
+}
 
 /// The control mode (the seed's switch: off / joint / Cartesian).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -42,6 +58,8 @@ pub enum Mode {
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepOutput {
+    /// The tick's time, as given to [`Controller::step`] (s).
+    pub time: f64,
     /// The joint command for the drives; `None` means hold the last one (mode off).
     pub command: Option<Joints>,
     /// What happened this tick.
@@ -80,8 +98,10 @@ pub struct Controller {
     command: Option<Joints>,
     /// The last measurement and its FK.
     measured: Option<(Joints, Frame)>,
-    /// Time of the last step (s).
-    now: f64,
+    /// Control period (s): each tick advances the motion by at most this much motion time.
+    period: f64,
+    /// Consecutive ticks in which a Cartesian motion could not advance.
+    stalled_ticks: u32,
 }
 
 impl Controller {
@@ -115,16 +135,20 @@ impl Controller {
             cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES),
             command: None,
             measured: None,
-            now: 0.0,
+            period: config.control_period,
+            stalled_ticks: 0,
         }
     }
 
     /// One control tick at time `now` (s) with the measured joints: FK, via-point sequence,
     /// generator, workspace check, IK, mode switch, joint limiter — in that order.
+    ///
+    /// Every command becomes a set-point that the drives execute over exactly one control
+    /// period, so each step advances motion time by one period, whatever `now` says: a late
+    /// tick never makes the arm jump to catch up. `now` only stamps the output.
     pub fn step(&mut self, now: f64, measured: &[f64]) -> Result<StepOutput, KinematicsError> {
         let q_m = self.chain.check(measured)?;
         let f_m = self.chain.forward(&q_m)?;
-        self.now = now;
         self.measured = Some((q_m, f_m));
         let mut events = Events {
             workspace_limit: !self.workspace.allows(f_m.pos),
@@ -150,6 +174,7 @@ impl Controller {
             self.command = command;
         }
         Ok(StepOutput {
+            time: now,
             command,
             events,
             measured_pose: f_m,
@@ -165,17 +190,22 @@ impl Controller {
             .poll(leg_done, |p| joint_distance(p, q_m));
         if let SequenceStep::MoveTo(via) = step {
             // The generator is idle, so the move cannot be refused.
-            let _ = self
-                .joint_generator
-                .move_to(via.point, via.min_duration, self.now);
+            let _ = self.joint_generator.move_to(via.point, via.min_duration);
         }
         note_sequence(step, events);
-        let (setpoint, finished) = self.joint_generator.update(self.now);
+        let (setpoint, finished) = self.joint_generator.advance(self.period);
         events.motion_finished |= finished && !self.joint_sequence.is_running();
         setpoint
     }
 
-    /// Cartesian mode: sequence, generator, workspace check, IK with the divergence guard.
+    /// Cartesian mode: sequence, generator, workspace check, IK.
+    ///
+    /// The generator advances by one period of motion time, or by less when the IK solution of
+    /// the full step would need a joint to move faster than its rate limit: the path stays exact
+    /// and the motion slows down (the seed enforced no rate in position mode, spec §9 item 27).
+    /// A set-point that cannot be tracked even at a much smaller step (out of reach, or at a
+    /// singularity) holds the arm and raises [`Events::ik_divergence`]; a motion stalled like
+    /// this for [`STALL_TIME`] is aborted.
     fn cartesian_tick(
         &mut self,
         q_m: &Joints,
@@ -187,50 +217,68 @@ impl Controller {
         if let SequenceStep::MoveTo(via) = step {
             let _ = self
                 .cartesian_generator
-                .move_to(via.point, via.min_duration, self.now);
+                .move_to(via.point, via.min_duration);
         }
         note_sequence(step, events);
-        let (mut setpoint, finished) = self.cartesian_generator.update(self.now);
-        events.motion_finished |= finished && !self.cartesian_sequence.is_running();
 
         let seed = self.command.unwrap_or(*q_m);
-        if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
-            // An illegal set-point never reaches the IK: abort and hold the commanded pose.
-            events.workspace_limit = true;
-            events.sequence_aborted |= self.cartesian_sequence.is_running();
-            self.cartesian_sequence.halt();
-            setpoint = self.chain.forward(&seed).unwrap_or(*f_m);
-            self.cartesian_generator.hold(setpoint);
-        }
-        let reached = self
-            .chain
-            .solve_tracking(&setpoint, &seed, &self.ik)
-            .ok()
-            .map(|result| *result.solution())
-            .filter(|s| {
-                s.position_error <= REACH_TOLERANCE && s.orientation_error <= REACH_TOLERANCE
-            })
-            // A solution the joints cannot reach within one tick's rate limit would be cut by the
-            // limiter, and the arm would leave the Cartesian path (near a singularity, or at the
-            // edge of the workspace): that set-point is not trackable either.
-            .filter(|s| self.limiter.within_rate(&s.q, &seed));
-        let q = match reached {
-            Some(solution) => solution.q,
-            None => {
-                // Divergence: hold the last good command instead of chasing a best-effort pose,
-                // which trades position for orientation and can wander away from an unreachable
-                // goal, or a rate-limited one off the path. Once the generator has stopped, re-anchor it where the arm is so that
-                // the condition clears.
-                events.ik_divergence = true;
-                if !self.cartesian_generator.is_moving()
-                    && let Ok(pose) = self.chain.forward(&seed)
-                {
-                    self.cartesian_generator.hold(pose);
-                }
-                seed
+        let t0 = self.cartesian_generator.elapsed();
+        let mut scale = 1.0;
+        for _ in 0..SLOWDOWN_ATTEMPTS {
+            let t = t0 + self.period * scale;
+            let setpoint = self.cartesian_generator.sample(t);
+            if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
+                // An illegal set-point never reaches the IK: abort and hold the commanded pose.
+                events.workspace_limit = true;
+                return (seed, self.abort_cartesian_motion(&seed, f_m, events));
             }
+            match self.track(&setpoint, &seed) {
+                Tracking::Reached(q) => {
+                    self.stalled_ticks = 0;
+                    let (setpoint, finished) = self.cartesian_generator.advance_to(t);
+                    events.motion_finished |= finished && !self.cartesian_sequence.is_running();
+                    return (q, setpoint);
+                }
+                Tracking::TooFast(ratio) if scale / ratio >= MIN_TIME_SCALE => {
+                    // Joint steps grow about linearly with the step along the path.
+                    scale /= ratio * 1.05;
+                }
+                Tracking::TooFast(_) | Tracking::Unreachable => break,
+            }
+        }
+        events.ik_divergence = true;
+        self.stalled_ticks = self.stalled_ticks.saturating_add(1);
+        let stalled = f64::from(self.stalled_ticks) * self.period >= STALL_TIME;
+        if !self.cartesian_generator.is_moving() || stalled {
+            return (seed, self.abort_cartesian_motion(&seed, f_m, events));
+        }
+        (seed, self.cartesian_generator.setpoint())
+    }
+
+    /// Tracking IK from `seed` to `setpoint`, checked against the reach tolerance and the
+    /// joints' rate limits.
+    fn track(&self, setpoint: &Frame, seed: &Joints) -> Tracking {
+        let Ok(result) = self.chain.solve_tracking(setpoint, seed, &self.ik) else {
+            return Tracking::Unreachable;
         };
-        (q, setpoint)
+        let s = result.solution();
+        if s.position_error > REACH_TOLERANCE || s.orientation_error > REACH_TOLERANCE {
+            return Tracking::Unreachable;
+        }
+        match self.limiter.rate_ratio(&s.q, seed) {
+            ratio if ratio <= 1.0 => Tracking::Reached(s.q),
+            ratio => Tracking::TooFast(ratio),
+        }
+    }
+
+    /// Stops the Cartesian motion (and its sequence) and holds the commanded pose.
+    fn abort_cartesian_motion(&mut self, seed: &Joints, f_m: &Frame, events: &mut Events) -> Frame {
+        self.stalled_ticks = 0;
+        events.sequence_aborted |= self.cartesian_sequence.is_running();
+        self.cartesian_sequence.halt();
+        let hold = self.chain.forward(seed).unwrap_or(*f_m);
+        self.cartesian_generator.hold(hold);
+        hold
     }
 
     /// Switches the control mode. The newly active generator holds the last command (or the
@@ -268,25 +316,24 @@ impl Controller {
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
         self.cartesian_generator
-            .move_to(goal, min_duration.max(0.0), self.now)
+            .move_to(goal, min_duration.max(0.0))
     }
 
     /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
     pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
-        self.joint_generator
-            .move_to(goal, min_duration.max(0.0), self.now)
+        self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
 
     /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
     pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
-        self.cartesian_generator.start_shape(shape, self.now)
+        self.cartesian_generator.start_shape(shape)
     }
 
     /// Asks a running shape to end where it started (end of revolution / centre crossing).
     pub fn finish_shape(&mut self) -> Result<(), Refusal> {
-        if self.cartesian_generator.finish_shape(self.now) {
+        if self.cartesian_generator.finish_shape() {
             Ok(())
         } else {
             Err(Refusal::NoGoal)
@@ -341,7 +388,7 @@ impl Controller {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
         let first = self.cartesian_sequence.start()?;
         self.cartesian_generator
-            .move_to(first.point, first.min_duration, self.now)
+            .move_to(first.point, first.min_duration)
             .map(|_| ())
     }
 
@@ -355,7 +402,7 @@ impl Controller {
         }
         let first = self.joint_sequence.start()?;
         self.joint_generator
-            .move_to(first.point, first.min_duration, self.now)
+            .move_to(first.point, first.min_duration)
             .map(|_| ())
     }
 

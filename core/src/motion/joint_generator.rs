@@ -19,7 +19,8 @@ pub struct JointGenerator {
 struct Motion {
     line: StraightLine,
     goal: Joints,
-    start_time: f64,
+    /// Motion time reached so far (s).
+    elapsed: f64,
     /// Can exceed the line's duration: a zero-length move still lasts `min_duration`.
     duration: f64,
 }
@@ -41,9 +42,9 @@ impl JointGenerator {
         self.motion = None;
     }
 
-    /// Starts a move to `goal` lasting at least `min_duration` seconds, from the current
-    /// set-point at time `now`; returns the planned duration. Refused while moving.
-    pub fn move_to(&mut self, goal: Joints, min_duration: f64, now: f64) -> Result<f64, Refusal> {
+    /// Starts a move to `goal` lasting at least `min_duration` seconds from the current
+    /// set-point; returns the planned duration. Refused while moving.
+    pub fn move_to(&mut self, goal: Joints, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
@@ -52,24 +53,25 @@ impl JointGenerator {
         self.motion = Some(Motion {
             line: line.stretched(duration),
             goal,
-            start_time: now,
+            elapsed: 0.0,
             duration,
         });
         Ok(duration)
     }
 
-    /// Advances to time `now` and returns the set-point. At the end of a move the set-point is
-    /// exactly the goal and the generator holds it; the returned flag is true on that tick.
-    pub fn update(&mut self, now: f64) -> (Joints, bool) {
-        let Some(m) = self.motion else {
+    /// Advances the motion by `dt` seconds and returns the set-point. At the end of a move the
+    /// set-point is exactly the goal and the generator holds it; the flag is true on that tick.
+    pub fn advance(&mut self, dt: f64) -> (Joints, bool) {
+        let Some(m) = &mut self.motion else {
             return (self.setpoint, false);
         };
-        let t = now - m.start_time;
-        if t >= m.duration {
-            self.hold(m.goal);
+        m.elapsed += dt;
+        if m.elapsed >= m.duration {
+            let goal = m.goal;
+            self.hold(goal);
             return (self.setpoint, true);
         }
-        m.line.point(t, &mut self.setpoint);
+        m.line.point(m.elapsed, &mut self.setpoint);
         (self.setpoint, false)
     }
 

@@ -40,12 +40,14 @@ impl JointLimiter {
         Self { min, max, max_step }
     }
 
-    /// True if moving from `previous` to `q` in one tick respects every joint's rate limit.
-    pub fn within_rate(&self, q: &Joints, previous: &Joints) -> bool {
+    /// How far moving from `previous` to `q` in one tick exceeds the rate limits: the largest
+    /// ratio of a joint's step to its allowed step (≤ 1 means within every limit).
+    pub fn rate_ratio(&self, q: &Joints, previous: &Joints) -> f64 {
         q.iter()
             .zip(previous.iter())
             .zip(self.max_step.iter())
-            .all(|((a, b), step)| libm::fabs(a - b) <= *step)
+            .map(|((a, b), step)| libm::fabs(a - b) / step)
+            .fold(0.0, f64::max)
     }
 
     /// Limits `request` given the previous command. A request exactly at a limit is not a

@@ -1,0 +1,37 @@
+//! The CAN controller as the drive manager sees it: non-blocking send and receive.
+
+use armgate_protocol::can::CanFrame;
+
+/// A CAN controller endpoint (embassy style, but without `async`): every call returns at once,
+/// so the drive manager can run inside the control loop without ever waiting on the bus.
+pub trait CanBus {
+    /// Queues `frame` for transmission; frames with lower identifiers go first, equal
+    /// identifiers in the order queued.
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError>;
+
+    /// The oldest received frame not yet taken, if any.
+    fn try_receive(&mut self) -> Option<CanFrame>;
+
+    /// The controller's fault-confinement state.
+    fn state(&self) -> BusState;
+}
+
+/// The CAN fault-confinement state of the controller (ISO 11898-1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BusState {
+    /// Normal operation.
+    ErrorActive,
+    /// Many errors seen; still sending and receiving.
+    ErrorPassive,
+    /// Disconnected from the bus after too many transmit errors: nothing is sent or received.
+    BusOff,
+}
+
+/// Why a frame was not queued.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TxError {
+    /// The transmit queue is full (the bus is saturated, or nobody acknowledges).
+    QueueFull,
+    /// The controller is bus-off.
+    BusOff,
+}

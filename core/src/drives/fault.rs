@@ -1,0 +1,137 @@
+//! Why the drives were stopped, and what the client is told.
+
+use armgate_protocol::can::Emcy;
+use armgate_protocol::can::interpreter::Mnemonic;
+use armgate_protocol::client::{Severity, Text};
+
+/// A drive or bus fault. Every fault stops the arm (the drives hold the last commanded
+/// position where they still can) and refuses motion until the next start (ON).
+///
+/// `joint` is the 0-based joint index; the client texts number joints from 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DriveFault {
+    /// `ER30`: a drive did not answer within the reply timeout (the seed only warned, §9 item 34).
+    NotAnswering {
+        /// The joint.
+        joint: usize,
+    },
+    /// `ER31`: a drive answered a command with the error bit set (§6.7).
+    ErrorReply {
+        /// The joint.
+        joint: usize,
+        /// The command refused.
+        command: Mnemonic,
+        /// The drive's error code (see `EC` in the SimplIQ command reference).
+        code: u8,
+    },
+    /// `ER32`: an emergency message other than those with their own fault.
+    Emergency {
+        /// The joint.
+        joint: usize,
+        /// The message.
+        emcy: Emcy,
+    },
+    /// `ER33`: a drive ran out of PT points.
+    Underflow {
+        /// The joint.
+        joint: usize,
+    },
+    /// `ER34`: a drive stopped taking PT points, or a point overwrote one not yet executed.
+    Overrun {
+        /// The joint.
+        joint: usize,
+    },
+    /// `ER35`: the controller cannot send.
+    Bus(BusFault),
+    /// `ER36`: a drive missed the controller's heartbeat and stopped by itself.
+    HeartbeatLost {
+        /// The joint.
+        joint: usize,
+    },
+    /// `ER37`: a drive is not in the configured unit mode, even after it was asked to change.
+    WrongUnitMode {
+        /// The joint.
+        joint: usize,
+        /// The unit mode the drive reports.
+        found: i32,
+    },
+    /// `ER38`: a drive answered `BG` with a value other than 0.
+    BeginRefused {
+        /// The joint.
+        joint: usize,
+        /// The value answered.
+        value: i32,
+    },
+    /// `ER39`: a drive refused the heartbeat configuration (SDO abort).
+    SdoAbort {
+        /// The joint.
+        joint: usize,
+        /// The CiA 301 abort code.
+        code: u32,
+    },
+}
+
+/// Why the controller cannot send.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BusFault {
+    /// The CAN controller went bus-off.
+    BusOff,
+    /// The transmit queue stayed full.
+    QueueFull,
+}
+
+impl DriveFault {
+    /// The two-digit `ER` code.
+    pub const fn code(&self) -> u8 {
+        match self {
+            Self::NotAnswering { .. } => 30,
+            Self::ErrorReply { .. } => 31,
+            Self::Emergency { .. } => 32,
+            Self::Underflow { .. } => 33,
+            Self::Overrun { .. } => 34,
+            Self::Bus(_) => 35,
+            Self::HeartbeatLost { .. } => 36,
+            Self::WrongUnitMode { .. } => 37,
+            Self::BeginRefused { .. } => 38,
+            Self::SdoAbort { .. } => 39,
+        }
+    }
+
+    /// The text for the client, e.g. `ER30 J3 drive not answering`.
+    pub fn text(&self) -> Text {
+        let code = self.code();
+        let text = |body: core::fmt::Arguments<'_>| Text::new(Severity::Error, code, body);
+        match *self {
+            Self::NotAnswering { joint } => text(format_args!("J{} drive not answering", joint + 1)),
+            Self::ErrorReply {
+                joint,
+                command,
+                code,
+            } => {
+                let [c0, c1] = command.chars();
+                let (c0, c1) = (char::from(c0), char::from(c1));
+                text(format_args!("J{} {c0}{c1} error code {code}", joint + 1))
+            }
+            Self::Emergency { joint, emcy } => {
+                let [elmo, ..] = emcy.manufacturer;
+                text(format_args!("J{} EMCY {:04X} {elmo:02X}", joint + 1, emcy.code))
+            }
+            Self::Underflow { joint } => text(format_args!("J{} PT buffer underflow", joint + 1)),
+            Self::Overrun { joint } => text(format_args!("J{} PT buffer overrun", joint + 1)),
+            Self::Bus(BusFault::BusOff) => text(format_args!("CAN bus off")),
+            Self::Bus(BusFault::QueueFull) => text(format_args!("CAN send queue full")),
+            Self::HeartbeatLost { joint } => {
+                text(format_args!("J{} lost ctrl heartbeat", joint + 1))
+            }
+            Self::WrongUnitMode { joint, found } => {
+                text(format_args!("J{} unit mode {found} not 5", joint + 1))
+            }
+            Self::BeginRefused { joint, value } => {
+                text(format_args!("J{} did not begin ({value})", joint + 1))
+            }
+            Self::SdoAbort { joint, code } => {
+                text(format_args!("J{} SDO abort {code:08X}", joint + 1))
+            }
+        }
+    }
+}

@@ -1,0 +1,155 @@
+//! Settings of the drive manager that the robot description does not hold, and the cycle
+//! counts derived from them.
+
+use armgate_protocol::can::NodeId;
+
+use super::streaming::Schedule;
+use crate::config::RobotConfig;
+
+/// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
+/// number of these (MP[4]).
+pub const SAMPLE_TIME: f64 = 360e-6;
+
+/// The only unit mode the manager streams to: position (PT motion).
+pub const POSITION_MODE: i32 = 5;
+
+/// Settings of the drive manager; [`Default`] gives the documented values (docs/drives.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DriveSettings {
+    /// The controller's own CANopen node id, 1..=127: its heartbeat goes out as `0x700 + id`.
+    pub controller_node: u8,
+    /// Seconds between the controller's heartbeats.
+    pub heartbeat_period: f64,
+    /// The drives' consumer heartbeat time (object 0x1016), in seconds: a drive that hears no
+    /// heartbeat for this long stops by itself. Longer than `heartbeat_period`.
+    pub heartbeat_timeout: f64,
+    /// A drive that leaves a request unanswered this long (seconds) is faulted.
+    pub reply_timeout: f64,
+    /// Pause after the NMT start before talking to the drives (the seed waited 12 ms).
+    pub nmt_settle: f64,
+    /// Pause after changing a drive's unit mode (the seed waited 100 ms).
+    pub unit_mode_settle: f64,
+    /// Entries of the drives' PT ring, QP[1..=ring_len] (the seed used 6).
+    pub ring_len: u16,
+    /// Which query each drive sends in each streaming cycle.
+    pub schedule: Schedule,
+}
+
+impl Default for DriveSettings {
+    fn default() -> Self {
+        Self {
+            // The highest node id: the drives use 101 and up (spec §6.1).
+            controller_node: 127,
+            heartbeat_period: 0.1,
+            heartbeat_timeout: 0.3,
+            reply_timeout: 0.05,
+            nmt_settle: 0.012,
+            unit_mode_settle: 0.1,
+            ring_len: 6,
+            schedule: Schedule::default(),
+        }
+    }
+}
+
+/// Why the drive manager cannot run a robot with these settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetupError {
+    /// Only position mode (unit mode 5) is streamed; the robot asks for another.
+    UnsupportedUnitMode(u8),
+    /// The control period is not a whole number of 360 µs drive samples (the PT segment time
+    /// MP[4] × 360 µs must equal it), or is out of range.
+    PeriodNotWholeSamples,
+    /// The PT ring must have 6 to 64 entries: the drive holds three points and the flow
+    /// control keeps up to five ahead.
+    RingSize,
+    /// The heartbeat times must be positive, the timeout longer than the period, and the
+    /// timeout at most 65.535 s (a 16-bit number of milliseconds).
+    Heartbeat,
+    /// The controller's node id is not in 1..=127, or is also a drive's.
+    ControllerNode,
+    /// A timeout or settle time is negative or not finite, or a schedule interval is zero.
+    BadTiming,
+}
+
+impl core::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::UnsupportedUnitMode(mode) => {
+                write!(f, "unit mode {mode}: only position mode (5) is supported")
+            }
+            Self::PeriodNotWholeSamples => {
+                f.write_str("control period is not a whole number of 360 µs drive samples")
+            }
+            Self::RingSize => f.write_str("PT ring length must be 6..=64"),
+            Self::Heartbeat => f.write_str("bad heartbeat period or timeout"),
+            Self::ControllerNode => f.write_str("controller node id invalid or a drive's"),
+            Self::BadTiming => f.write_str("bad timeout, settle time or schedule"),
+        }
+    }
+}
+
+/// The settings turned into cycle counts for one control period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Timing {
+    /// The control period (s).
+    pub period: f64,
+    /// Drive samples per PT point (MP[4]).
+    pub samples_per_point: u16,
+    /// Cycles a request may stay unanswered.
+    pub reply_timeout: u32,
+    /// Cycles to wait after the NMT start.
+    pub nmt_settle: u32,
+    /// Cycles to wait after a unit-mode change.
+    pub unit_mode_settle: u32,
+    /// The consumer heartbeat time for object 0x1016 (ms).
+    pub heartbeat_timeout_ms: u16,
+    /// The controller's node id.
+    pub controller: NodeId,
+}
+
+impl Timing {
+    /// Checks `settings` against `config` and derives the counts.
+    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Result<Self, SetupError> {
+        if config.drives.unit_mode != POSITION_MODE as u8 {
+            return Err(SetupError::UnsupportedUnitMode(config.drives.unit_mode));
+        }
+        let period = config.control_period;
+        let samples = libm::round(period / SAMPLE_TIME);
+        let whole = libm::fabs(period / SAMPLE_TIME - samples) < 1e-3;
+        if !whole || !(1.0..=f64::from(u16::MAX)).contains(&samples) {
+            return Err(SetupError::PeriodNotWholeSamples);
+        }
+        if !(6..=64).contains(&settings.ring_len) {
+            return Err(SetupError::RingSize);
+        }
+        let (beat, timeout) = (settings.heartbeat_period, settings.heartbeat_timeout);
+        let timeout_ms = libm::round(timeout * 1000.0);
+        if !(beat > 0.0 && timeout > beat && (1.0..=65535.0).contains(&timeout_ms)) {
+            return Err(SetupError::Heartbeat);
+        }
+        let controller = NodeId::new(settings.controller_node)
+            .filter(|id| config.joints.iter().all(|j| j.drive.node_id != id.get()))
+            .ok_or(SetupError::ControllerNode)?;
+        let schedule = settings.schedule;
+        if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
+            return Err(SetupError::BadTiming);
+        }
+        let cycles = |seconds: f64| {
+            let n = libm::ceil(seconds / period - 1e-9);
+            (seconds.is_finite() && seconds >= 0.0 && n <= f64::from(u32::MAX))
+                .then_some(n.max(0.0) as u32)
+                .ok_or(SetupError::BadTiming)
+        };
+        Ok(Self {
+            period,
+            // Both checked above to fit.
+            samples_per_point: samples as u16,
+            // At least two cycles: a reply to a request sent in one cycle is read in the next.
+            reply_timeout: cycles(settings.reply_timeout)?.max(2),
+            nmt_settle: cycles(settings.nmt_settle)?,
+            unit_mode_settle: cycles(settings.unit_mode_settle)?,
+            heartbeat_timeout_ms: timeout_ms as u16,
+            controller,
+        })
+    }
+}

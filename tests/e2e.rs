@@ -1,0 +1,486 @@
+//! End to end: `armgate-sim` started as a process and driven over real UDP on loopback.
+//!
+//! Every reply is checked to the byte where it is fixed (characters, payload, index) against
+//! docs/protocol.md.
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::io::{BufRead, BufReader};
+use std::net::{SocketAddr, UdpSocket};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A running `armgate-sim` and a client socket.
+struct Sim {
+    child: Child,
+    socket: UdpSocket,
+    stderr: BufReader<std::process::ChildStderr>,
+    _dir: TempDir,
+}
+
+struct TempDir(PathBuf);
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A reply: characters, seven floats, index; or an ER/WN text.
+#[derive(Debug, PartialEq)]
+enum Answer {
+    Reply([u8; 2], [f32; 7], u8),
+    Text(String),
+}
+
+impl Sim {
+    /// Starts the simulator for `robot` with faster Cartesian limits than the seed's deployed
+    /// 0.03 m/s, so that the test's moves take a second or two.
+    fn start(robot: &str) -> Self {
+        Self::start_with(robot, &[])
+    }
+
+    fn start_with(robot: &str, extra: &[&str]) -> Self {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+        let dir = std::env::temp_dir().join(format!("armgate-e2e-{}-{robot}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text =
+            std::fs::read_to_string(root.join("robots").join(format!("{robot}.toml"))).unwrap();
+        let fast = text
+            .replace(
+                "max_velocity = [0.03, 0.03, 0.03, 0.05, 0.05, 0.05]",
+                "max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3]",
+            )
+            .replace(
+                "max_acceleration = [0.01, 0.01, 0.01, 0.05, 0.05, 0.05]",
+                "max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5]",
+            );
+        let file = dir.join("robot.toml");
+        std::fs::write(&file, fast).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+            .args(["--listen", "127.0.0.1:0", "--quiet", "--robot"])
+            .arg(&file)
+            .arg("--log-dir")
+            .arg(dir.join("logs"))
+            .args(extra)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stderr = BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        stderr.read_line(&mut line).unwrap();
+        let addr: SocketAddr = line
+            .split("udp://")
+            .nth(1)
+            .and_then(|s| s.split(',').next())
+            .unwrap_or_else(|| panic!("no address in {line:?}"))
+            .parse()
+            .unwrap();
+        let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+        socket.connect(addr).unwrap();
+        socket
+            .set_read_timeout(Some(Duration::from_millis(500)))
+            .unwrap();
+        Self {
+            child,
+            socket,
+            stderr,
+            _dir: TempDir(dir),
+        }
+    }
+
+    /// Whatever the simulator printed after its first line (read to the end).
+    fn stderr_rest(&mut self) -> String {
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut self.stderr, &mut rest).unwrap();
+        rest
+    }
+
+    fn send_raw(&self, bytes: &[u8]) -> Answer {
+        self.socket.send(bytes).unwrap();
+        self.receive_reply()
+    }
+
+    /// The next datagram that is not an unsolicited warning.
+    fn receive_reply(&self) -> Answer {
+        loop {
+            let mut buf = [0u8; 64];
+            let n = self.socket.recv(&mut buf).expect("no reply");
+            assert_eq!(n, 31, "replies are always 31 bytes");
+            let answer = decode(&buf);
+            match &answer {
+                Answer::Text(t) if is_unsolicited(t) => continue,
+                _ => return answer,
+            }
+        }
+    }
+
+    fn request(&self, cmd: &str, values: [f32; 7], index: u8) -> Answer {
+        self.send_raw(&datagram(cmd, values, index))
+    }
+
+    /// A normal reply's values, asserting its characters are `cmd` reversed.
+    fn ok(&self, cmd: &str, values: [f32; 7], index: u8) -> [f32; 7] {
+        match self.request(cmd, values, index) {
+            Answer::Reply(chars, v, _) => {
+                let b = cmd.as_bytes();
+                assert_eq!(chars, [b[1], b[0]], "reply to {cmd}");
+                v
+            }
+            Answer::Text(t) => panic!("{cmd}: {t}"),
+        }
+    }
+
+    fn text(&self, cmd: &str, values: [f32; 7], index: u8) -> String {
+        match self.request(cmd, values, index) {
+            Answer::Text(t) => t,
+            other => panic!("{cmd}: expected a text, got {other:?}"),
+        }
+    }
+
+    fn null(&self, cmd: &str) {
+        assert_eq!(self.ok(cmd, [0.0; 7], 0), [0.0; 7], "{cmd} null reply");
+    }
+
+    /// Polls PS until the position is within `tol` of `goal`.
+    fn wait_pose(&self, goal: [f32; 3], tol: f32, timeout: f32) -> [f32; 7] {
+        let start = Instant::now();
+        loop {
+            let ps = self.ok("PS", [0.0; 7], 0);
+            let d = (0..3)
+                .map(|k| (ps[k] - goal[k]).powi(2))
+                .sum::<f32>()
+                .sqrt();
+            if d < tol {
+                return ps;
+            }
+            assert!(
+                start.elapsed().as_secs_f32() < timeout,
+                "never reached {goal:?}: at {ps:?}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    fn wait_joints(&self, goal: &[f32], timeout: f32) {
+        let start = Instant::now();
+        loop {
+            let jp = self.ok("jP", [0.0; 7], 0);
+            if jp.iter().zip(goal).all(|(a, b)| (a - b).abs() < 1e-5) {
+                return;
+            }
+            assert!(
+                start.elapsed().as_secs_f32() < timeout,
+                "never reached {goal:?}: at {jp:?}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+fn is_unsolicited(text: &str) -> bool {
+    ["ER21", "WN12", "WN22", "WN27", "ER3"]
+        .iter()
+        .any(|p| text.starts_with(p))
+}
+
+fn datagram(cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
+    let mut d = [0u8; 31];
+    d[..2].copy_from_slice(cmd.as_bytes());
+    for (k, v) in values.iter().enumerate() {
+        d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+    }
+    d[30] = index;
+    d
+}
+
+fn decode(buf: &[u8]) -> Answer {
+    if &buf[..2] == b"ER" || &buf[..2] == b"WN" {
+        let end = buf[..31].iter().position(|b| *b == 0).unwrap();
+        assert!(buf[end..31].iter().all(|b| *b == 0), "text not zero-filled");
+        return Answer::Text(String::from_utf8(buf[..end].to_vec()).unwrap());
+    }
+    let values =
+        core::array::from_fn(|k| f32::from_le_bytes(buf[2 + 4 * k..6 + 4 * k].try_into().unwrap()));
+    Answer::Reply([buf[0], buf[1]], values, buf[30])
+}
+
+/// Roll, pitch, yaw of a quaternion (x, y, z, w), as spec §2.4 extracts them.
+fn rpy_of(q: &[f32]) -> [f32; 3] {
+    let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+    let r00 = w * w + x * x - y * y - z * z;
+    let r10 = 2.0 * (x * y + w * z);
+    let r20 = 2.0 * (x * z - w * y);
+    let r21 = 2.0 * (y * z + w * x);
+    let r22 = w * w - x * x - y * y + z * z;
+    [
+        r21.atan2(r22),
+        (-r20).atan2((r00 * r00 + r10 * r10).sqrt()),
+        r10.atan2(r00),
+    ]
+}
+
+fn with_joints(q: &[f32], last: f32) -> [f32; 7] {
+    let mut v = [0.0; 7];
+    v[..q.len()].copy_from_slice(q);
+    v[6] = last;
+    v
+}
+
+#[test]
+fn a_full_session_over_udp() {
+    // A well-conditioned start: the home pose of ranger-mk1 is nearly singular (manipulability
+    // 0.0017), where a sideways move needs joint speeds beyond the rate limit (WN22, hold).
+    let start = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    assert_eq!(
+        sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0),
+        [2.0, 0., 0., 0., 0., 0., 0.]
+    );
+    // The drives start running; OF then ON cycles them.
+    sim.null("OF");
+    sim.null("ON");
+    let ps = sim.ok("PS", [0.0; 7], 0);
+    let quaternion_norm: f32 = ps[3..].iter().map(|v| v * v).sum();
+    assert!(
+        (quaternion_norm - 1.0).abs() < 1e-6 && ps[6] >= 0.0,
+        "{ps:?}"
+    );
+    let jp = sim.ok("jP", [0.0; 7], 0);
+    assert_eq!(&jp[..6], &start[..]);
+    assert_eq!(jp[6], 0.0);
+    let rpy = rpy_of(&ps[3..]);
+
+    // GL goal + BG: 3 cm up, same orientation.
+    let gl = [ps[0], ps[1], ps[2] + 0.03, ps[3], ps[4], ps[5], ps[6]];
+    let lg = sim.ok("GL", gl, 0);
+    assert!((lg[2] - gl[2]).abs() < 1e-6 && (lg[6] - gl[6]).abs() < 1e-5);
+    sim.null("BG");
+    sim.wait_pose([gl[0], gl[1], gl[2]], 1e-3, 10.0);
+    // While the move finishes, another BG is refused; once there (to f32 precision) it is not.
+    sim.wait_pose([gl[0], gl[1], gl[2]], 2e-5, 10.0);
+    // GT goal + BG: back down, RPY of the home pose (yaw −π/2), at least 1.5 s.
+    let tg = sim.ok("GT", [ps[0], ps[1], ps[2], rpy[0], rpy[1], rpy[2], 1.5], 0);
+    assert_eq!(tg[6], 1.5);
+    sim.null("BG");
+    sim.wait_pose([ps[0], ps[1], ps[2]], 2e-5, 10.0);
+
+    // Four VP + VE: a small square in the x–z plane.
+    let corners = [[0.02, 0.0], [0.02, 0.02], [0.0, 0.02], [0.0, 0.0]];
+    for (i, [dx, dz]) in corners.iter().enumerate() {
+        let vp = [ps[0] + dx, ps[1], ps[2] + dz, rpy[0], rpy[1], rpy[2], 0.0];
+        match sim.request("VP", vp, i as u8) {
+            Answer::Reply(chars, v, index) => {
+                assert_eq!((&chars, index), (b"PV", i as u8));
+                assert_eq!(&v[..3], &vp[..3]);
+                assert!(
+                    v[3..6].iter().zip(rpy).all(|(a, b)| (a - b).abs() < 1e-5),
+                    "{v:?}"
+                );
+            }
+            other => panic!("VP: {other:?}"),
+        }
+    }
+    sim.null("VE");
+    sim.wait_pose([ps[0] + 0.02, ps[1], ps[2] + 0.02], 1e-3, 15.0);
+    sim.wait_pose([ps[0], ps[1], ps[2]], 1e-4, 15.0);
+
+    // Joint mode: jG + jB, then four jV + jE.
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    let mut goal: Vec<f32> = jp[..6].to_vec();
+    goal[0] += 0.05;
+    goal[2] -= 0.03;
+    let gj = sim.ok("jG", with_joints(&goal, 7.0), 0);
+    assert_eq!(&gj[..6], &goal[..]);
+    assert_eq!(gj[6], 0.0);
+    sim.null("jB");
+    sim.wait_joints(&goal, 10.0);
+    for i in 0..4u8 {
+        let mut q = goal.clone();
+        q[3] += 0.01 * f32::from(i + 1);
+        match sim.request("jV", with_joints(&q, 0.2), i) {
+            Answer::Reply(chars, v, index) => {
+                assert_eq!((&chars, index), (b"Vj", i));
+                assert_eq!(&v[..6], &q[..]);
+                assert_eq!(v[6], 0.2);
+            }
+            other => panic!("jV: {other:?}"),
+        }
+    }
+    sim.null("jE");
+    let mut last = goal.clone();
+    last[3] += 0.04;
+    sim.wait_joints(&last, 15.0);
+
+    sim.null("ST");
+    assert_eq!(sim.ok("CM", [0.0; 7], 0)[0], 0.0);
+    // RC: declare the current angles to be something else; jP reports them.
+    let rc: Vec<f32> = last.iter().map(|q| q + 0.001).collect();
+    sim.null_with("RC", with_joints(&rc, 0.0));
+    std::thread::sleep(Duration::from_millis(100));
+    let jp = sim.ok("jP", [0.0; 7], 0);
+    assert!(
+        jp.iter().zip(&rc).all(|(a, b)| (a - b).abs() < 1e-5),
+        "{jp:?}"
+    );
+    let mt = sim.ok("TM", [0.0; 7], 0);
+    assert_eq!(mt[6], -1000.0);
+    assert!(mt[..6].iter().all(|t| *t > -100.0));
+    sim.null("VC");
+    sim.null("jC");
+    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+}
+
+impl Sim {
+    fn null_with(&self, cmd: &str, values: [f32; 7]) {
+        assert_eq!(self.ok(cmd, values, 0), [0.0; 7], "{cmd} null reply");
+    }
+}
+
+#[test]
+fn bad_input_gets_its_documented_reply_and_the_controller_keeps_answering() {
+    let sim = Sim::start("ranger-mk1");
+    for (len, text) in [
+        (0, "ER01 Msg ?? undersized."),
+        (1, "ER01 Msg P? undersized."),
+        (2, "ER01 Msg PS undersized."),
+    ] {
+        assert_eq!(
+            sim.send_raw(&b"PSxx"[..len]),
+            Answer::Text(text.into()),
+            "{len} bytes"
+        );
+    }
+    let ps = datagram("PS", [0.0; 7], 0);
+    assert!(matches!(sim.send_raw(&ps[..30]), Answer::Reply(c, _, 0) if &c == b"SP"));
+    let mut long = ps.to_vec();
+    long.resize(100, 0x55);
+    assert!(matches!(sim.send_raw(&long[..32]), Answer::Reply(c, _, _) if &c == b"SP"));
+    assert!(matches!(sim.send_raw(&long), Answer::Reply(c, _, _) if &c == b"SP"));
+    assert_eq!(sim.text("QQ", [0.0; 7], 0), "ER00 Cmd QQ not understood");
+
+    // NaN/Inf in every float field of every command that reads floats.
+    let reads = [
+        ("GL", 7),
+        ("GT", 7),
+        ("VP", 7),
+        ("jV", 7),
+        ("jG", 6),
+        ("RC", 6),
+        ("CM", 1),
+    ];
+    for (cmd, fields) in reads {
+        for field in 0..fields {
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                let mut v = [0.0, 0.6, 1.0, 0.0, 0.0, 0.0, 1.0];
+                v[field] = bad;
+                assert_eq!(
+                    sim.text(cmd, v, 1),
+                    format!("ER23 Cmd {cmd} bad number"),
+                    "{cmd} f{field}"
+                );
+            }
+        }
+    }
+    assert_eq!(
+        sim.text("GL", [0.5, 0.6, 1.0, 0.0, 0.0, 0.0, 0.0], 0),
+        "ER23 Cmd GL bad number"
+    );
+    // Inside the column around the base.
+    assert_eq!(
+        sim.text("GT", [0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 0.0], 0),
+        "ER25 Cmd GT outside workspace"
+    );
+    let via = [0.3, 0.5, 0.9, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(sim.text("VP", via, 20), "ER24 Cmd VP bad index");
+    assert_eq!(sim.text("VP", via, 255), "ER24 Cmd VP bad index");
+    let q = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0, 0.0];
+    assert_eq!(sim.text("jV", q, 20), "ER24 Cmd jV bad index");
+    assert_eq!(sim.text("jV", q, 255), "ER24 Cmd jV bad index");
+    // BG with no goal; Cartesian commands in joint mode and the reverse.
+    sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    sim.ok("jG", q, 0);
+    assert_eq!(sim.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    assert_eq!(sim.text("jE", [0.0; 7], 0), "ER20 Cmd jE rejected");
+    sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    sim.ok("GT", [0.3, 0.5, 0.9, 0.0, 0.0, 0.0, 0.0], 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+    assert_eq!(
+        sim.text("jG", [1.5708, 0.0, 1.5708, 0.0, 0.0, 0.0, 0.0], 0),
+        "ER26 Cmd jG beyond joint limit"
+    );
+
+    // An out-of-reach goal (inside the bounds, 1.8 m out): accepted; the arm stops at the
+    // edge of its reach and warns WN22.
+    sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    let ps = sim.ok("PS", [0.0; 7], 0);
+    sim.ok("GL", [1.8, 0.0, 0.6, ps[3], ps[4], ps[5], ps[6]], 0);
+    sim.null("BG");
+    let start = Instant::now();
+    let mut warned = false;
+    while start.elapsed() < Duration::from_secs(30) && !warned {
+        let mut buf = [0u8; 64];
+        if let Ok(31) = sim.socket.recv(&mut buf) {
+            warned = decode(&buf) == Answer::Text("WN22 Inv Kin Divergence.".into());
+        }
+    }
+    assert!(warned, "no WN22 for an unreachable goal");
+    sim.null("ST");
+
+    // A burst of 1000 datagrams, read as they come back: every one answered.
+    let receiver = sim.socket.try_clone().unwrap();
+    let counter = std::thread::spawn(move || {
+        let mut answered = 0;
+        let mut buf = [0u8; 64];
+        while let Ok(n) = receiver.recv(&mut buf) {
+            assert_eq!(n, 31);
+            answered += usize::from(&buf[..2] == b"MT");
+            if answered == 1000 {
+                break;
+            }
+        }
+        answered
+    });
+    for k in 0..1000 {
+        sim.socket.send(&datagram("TM", [0.0; 7], 0)).unwrap();
+        if k % 100 == 99 {
+            // Loopback has no flow control: let the simulator's socket buffer drain.
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+    assert_eq!(counter.join().unwrap(), 1000);
+    assert!(matches!(sim.request("PS", [0.0; 7], 0), Answer::Reply(c, _, _) if &c == b"SP"));
+}
+
+#[test]
+fn datagrams_from_outside_the_allow_list_are_dropped_and_counted() {
+    // Allow only 10.0.0.0/8: the test's loopback datagrams are then from a foreign source.
+    let mut sim = Sim::start_with("ranger-mk1", &["--allow", "10.0.0.0/8", "--duration", "2"]);
+    for _ in 0..5 {
+        sim.socket.send(&datagram("PS", [0.0; 7], 0)).unwrap();
+    }
+    let mut buf = [0u8; 64];
+    assert!(
+        sim.socket.recv(&mut buf).is_err(),
+        "a foreign datagram was answered"
+    );
+    let status = sim.child.wait().unwrap();
+    assert!(status.success());
+    let summary = sim.stderr_rest();
+    assert!(summary.contains("5 from sources not allowed"), "{summary}");
+}
