@@ -269,3 +269,32 @@ fn manipulability_vanishes_at_a_singularity() {
     assert!(chain.manipulability(&singular).unwrap() < 1e-9);
     assert!(chain.manipulability(&regular).unwrap() > 1e-3);
 }
+
+/// FK of every shipped robot against fixtures computed independently with KDL (PyKDL's
+/// `ChainFkSolverPos_recursive`; `tools/fk_fixtures.py` regenerates them).
+#[test]
+fn fk_matches_kdl_fixtures() {
+    for (name, config) in common::all_robots() {
+        let chain = Chain::new(&config);
+        let path = common::robots_dir().join(format!("../core/tests/fixtures/fk_{name}.csv"));
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut rows = 0;
+        for line in text.lines().skip(1) {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let n = chain.dof();
+            assert_eq!(v.len(), n + 12, "{name}: {line}");
+            let f = chain.forward(&v[..n]).unwrap();
+            let want_p = &v[n..n + 3];
+            let want_r = &v[n + 3..];
+            for (got, want) in f.pos.to_array().iter().zip(want_p) {
+                assert!((got - want).abs() < 1e-12, "{name} position at {:?}", &v[..n]);
+            }
+            let rows_got: Vec<f64> = f.rot.to_rows().iter().flatten().copied().collect();
+            for (got, want) in rows_got.iter().zip(want_r) {
+                assert!((got - want).abs() < 1e-12, "{name} rotation at {:?}", &v[..n]);
+            }
+            rows += 1;
+        }
+        assert!(rows >= 23, "{name}: only {rows} fixture rows");
+    }
+}
