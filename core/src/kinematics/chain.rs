@@ -47,11 +47,12 @@ pub struct Chain {
     max: [f64; MAX_JOINTS],
 }
 
-/// Frames of one evaluation: every joint frame {1}..{n} and the tool frame, base coordinates.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Pose {
-    pub(super) links: [Frame; MAX_JOINTS],
-    pub(super) tool: Frame,
+/// The joint axes (z of each joint frame) and their origins from one evaluation, base
+/// coordinates: all the Jacobian needs. Kept by the solver across iterations, not rebuilt.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Axes {
+    pub(super) z: [Vec3; MAX_JOINTS],
+    pub(super) origin: [Vec3; MAX_JOINTS],
 }
 
 impl Chain {
@@ -136,7 +137,7 @@ impl Chain {
     /// The tool frame in the base frame.
     pub fn forward(&self, q: &[f64]) -> Result<Frame, KinematicsError> {
         let q = self.check(q)?;
-        Ok(self.pose(q.as_array()).tool)
+        Ok(self.walk(q.as_array(), |_, _, _| {}))
     }
 
     /// The frames {1}..{n} of every joint (written to `links[..n]`) and the tool frame.
@@ -146,15 +147,21 @@ impl Chain {
         links: &mut [Frame; MAX_JOINTS],
     ) -> Result<Frame, KinematicsError> {
         let q = self.check(q)?;
-        let pose = self.pose(q.as_array());
-        *links = pose.links;
-        Ok(pose.tool)
+        Ok(self.walk(q.as_array(), |i, rot, pos| {
+            if let Some(link) = links.get_mut(i) {
+                *link = Frame::new(*rot, pos);
+            }
+        }))
     }
 
     /// The geometric Jacobian at the tool origin, base coordinates.
     pub fn jacobian(&self, q: &[f64]) -> Result<Jacobian, KinematicsError> {
         let q = self.check(q)?;
-        Ok(self.jacobian_of(&self.pose(q.as_array())))
+        let mut axes = Axes::default();
+        let tool = self.tool_and_axes(q.as_array(), &mut axes);
+        let mut j = Jacobian::zero(self.n);
+        self.jacobian_into(&axes, tool.pos, &mut j);
+        Ok(j)
     }
 
     /// Yoshikawa's manipulability `√det(J Jᵀ)` (`√det(Jᵀ J)` for fewer than six joints); zero at
@@ -169,12 +176,14 @@ impl Chain {
         Ok(libm::sqrt(det.max(0.0)))
     }
 
-    /// Forward kinematics of every frame; `q` must hold valid values in its first `n` entries.
-    pub(super) fn pose(&self, q: &[f64; MAX_JOINTS]) -> Pose {
-        let mut links = [Frame::IDENTITY; MAX_JOINTS];
+    /// Forward kinematics: walks the chain, showing each joint frame's rotation and origin to
+    /// `visit`, and returns the tool frame. `q` must hold valid values in its first `n` entries.
+    /// One walk serves FK, link frames and the solvers, which differ only in what they keep.
+    #[inline(always)]
+    fn walk(&self, q: &[f64; MAX_JOINTS], mut visit: impl FnMut(usize, &Rotation, Vec3)) -> Frame {
         let mut rot = Rotation::IDENTITY;
         let mut pos = Vec3::ZERO;
-        for ((link, &qi), out) in self.links.iter().zip(q).zip(&mut links).take(self.n) {
+        for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
             } else {
@@ -189,31 +198,32 @@ impl Chain {
             // RotZ(θ) · TransZ(d)
             rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
             pos += z1 * d;
-            *out = Frame::new(rot, pos);
+            visit(i, &rot, pos);
         }
-        let tool = Frame::new(rot, pos) * self.tool;
-        Pose { links, tool }
+        Frame::new(rot, pos) * self.tool
     }
 
-    /// The Jacobian of an evaluated pose.
-    pub(super) fn jacobian_of(&self, pose: &Pose) -> Jacobian {
-        let mut cols = [[0.0; 6]; MAX_JOINTS];
-        let tip = pose.tool.pos;
-        for ((col, frame), link) in cols
-            .iter_mut()
-            .zip(&pose.links)
-            .zip(&self.links)
-            .take(self.n)
-        {
-            let axis = frame.rot.cols[2];
+    /// The tool frame, with every joint's axis and origin written to `axes`.
+    pub(super) fn tool_and_axes(&self, q: &[f64; MAX_JOINTS], axes: &mut Axes) -> Frame {
+        self.walk(q, |i, rot, pos| {
+            if let (Some(z), Some(o)) = (axes.z.get_mut(i), axes.origin.get_mut(i)) {
+                *z = rot.cols[2];
+                *o = pos;
+            }
+        })
+    }
+
+    /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
+    pub(super) fn jacobian_into(&self, axes: &Axes, tip: Vec3, j: &mut Jacobian) {
+        let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
+        for (col, ((axis, origin), link)) in j.cols.iter_mut().zip(joints).take(self.n) {
             *col = if link.prismatic {
                 [axis.x, axis.y, axis.z, 0.0, 0.0, 0.0]
             } else {
-                let v = axis.cross(tip - frame.pos);
+                let v = axis.cross(tip - *origin);
                 [v.x, v.y, v.z, axis.x, axis.y, axis.z]
             };
         }
-        Jacobian { cols, n: self.n }
     }
 
     /// Joint limits as fixed arrays, for the solvers.

@@ -12,7 +12,7 @@
 //! over; a joint that crosses a limit is stopped at it. The global solver also wraps revolute
 //! joints by 2π where the range allows, and restarts from deterministic random seeds.
 
-use super::chain::Chain;
+use super::chain::{Axes, Chain};
 use super::jacobian::Jacobian;
 use super::joints::Joints;
 use super::linalg;
@@ -219,9 +219,12 @@ impl Chain {
             position_error: f64::INFINITY,
             orientation_error: f64::INFINITY,
         };
+        // Reused across iterations: on the Cortex-M7 rebuilding them costs more than the maths.
+        let mut axes = Axes::default();
+        let mut jacobian = Jacobian::zero(n);
         for it in 0..=u32::from(iterations) {
-            let pose = self.pose(&q);
-            let e = pose.tool.diff(target);
+            let tool = self.tool_and_axes(&q, &mut axes);
+            let e = tool.diff(target);
             let solution = IkSolution {
                 q: joints_of(&q, n),
                 iterations: it,
@@ -243,7 +246,8 @@ impl Chain {
             }
             let e = e.to_array();
             let energy = 0.5 * e.iter().map(|v| v * v).sum::<f64>();
-            let step = self.step(&self.jacobian_of(&pose), &e, energy + LAMBDA_MIN, &q);
+            self.jacobian_into(&axes, tool.pos, &mut jacobian);
+            let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q);
             let largest = step.iter().fold(0.0f64, |m, v| m.max(libm::fabs(*v)));
             self.apply(&mut q, &step, wrap);
             if largest < STALL_STEP {
@@ -257,7 +261,13 @@ impl Chain {
         }
     }
 
-    /// One damped least-squares step, with joints that sit on a limit and push outwards locked.
+    /// One damped least-squares step with the joint limits as an active set (a small bounded
+    /// least-squares problem).
+    ///
+    /// A joint on a limit whose step points outwards is locked and the step re-solved without
+    /// it; a locked joint whose multiplier says the remaining error would shrink if it moved
+    /// inwards (`Jᵀ(e − J·dq)` points inwards) is released again. KDL's NR_JL only clamps, so a
+    /// joint pinned on a limit keeps absorbing its share of every step and the solver stalls.
     fn step(
         &self,
         j: &Jacobian,
@@ -266,39 +276,43 @@ impl Chain {
         q: &[f64; MAX_JOINTS],
     ) -> [f64; MAX_JOINTS] {
         let n = self.dof();
-        let gram = j.gram();
         let gradient = j.transpose_mul(e);
         let (min, max) = self.limits();
+        let pushes_out = |qi: f64, lo: f64, hi: f64, push: f64| {
+            (qi >= hi - AT_LIMIT && push > 0.0) || (qi <= lo + AT_LIMIT && push < 0.0)
+        };
         let mut locked = [false; MAX_JOINTS];
+        let mut a = [[0.0; MAX_JOINTS]; MAX_JOINTS];
         let mut dq = [0.0; MAX_JOINTS];
-        // Each pass locks at least one more joint or stops, so n + 1 passes suffice.
-        for _ in 0..=n {
-            let mut a = gram;
-            let mut b = gradient;
-            for (i, (row, bi)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
-                let row_locked = locked.get(i).copied().unwrap_or(true);
-                for (x, col_locked) in row.iter_mut().zip(&locked) {
-                    if row_locked || *col_locked {
-                        *x = 0.0;
-                    }
-                }
-                if row_locked {
-                    *bi = 0.0;
-                }
-                if let Some(d) = row.get_mut(i) {
-                    *d += lambda;
-                }
+        // Every pass changes the locked set; 2n + 2 passes bound even an add/drop cycle.
+        for _ in 0..2 * n + 2 {
+            j.damped_gram_into(lambda, &locked, &mut a);
+            for ((d, g), lock) in dq.iter_mut().zip(&gradient).zip(&locked) {
+                *d = if *lock { 0.0 } else { *g };
             }
-            dq = linalg::cholesky_solve(&a, &b, n).unwrap_or([0.0; MAX_JOINTS]);
+            if !linalg::cholesky_solve(&mut a, &mut dq, n) {
+                return [0.0; MAX_JOINTS];
+            }
             let mut changed = false;
             let joints = q.iter().zip(&dq).zip(min.iter().zip(max)).take(n);
             for (((qi, di), (lo, hi)), lock) in joints.zip(locked.iter_mut()) {
-                let target = qi + di;
-                let pushes_out = (target > *hi && *qi >= hi - AT_LIMIT)
-                    || (target < *lo && *qi <= lo + AT_LIMIT);
-                if !*lock && pushes_out {
+                if !*lock && pushes_out(*qi, *lo, *hi, *di) {
                     *lock = true;
                     changed = true;
+                }
+            }
+            if !changed && locked.iter().any(|l| *l) {
+                let mut residual = *e;
+                for (r, m) in residual.iter_mut().zip(j.twist(&dq).to_array()) {
+                    *r -= m;
+                }
+                let multiplier = j.transpose_mul(&residual);
+                let joints = q.iter().zip(&multiplier).zip(min.iter().zip(max)).take(n);
+                for (((qi, mi), (lo, hi)), lock) in joints.zip(locked.iter_mut()) {
+                    if *lock && !pushes_out(*qi, *lo, *hi, *mi) {
+                        *lock = false;
+                        changed = true;
+                    }
                 }
             }
             if !changed {

@@ -12,6 +12,14 @@ pub struct Jacobian {
 }
 
 impl Jacobian {
+    /// An all-zero Jacobian of `n` columns.
+    pub(super) fn zero(n: usize) -> Self {
+        Self {
+            cols: [[0.0; 6]; MAX_JOINTS],
+            n: n.min(MAX_JOINTS),
+        }
+    }
+
     /// Number of columns (joints).
     pub fn dof(&self) -> usize {
         self.n
@@ -42,21 +50,37 @@ impl Jacobian {
         g
     }
 
-    /// The n×n Gram matrix `Jᵀ · J` (upper and lower triangles filled).
+    /// The full n×n Gram matrix `Jᵀ · J`.
     pub(super) fn gram(&self) -> [[f64; MAX_JOINTS]; MAX_JOINTS] {
         let mut a = [[0.0; MAX_JOINTS]; MAX_JOINTS];
-        for (i, ci) in self.cols.iter().take(self.n).enumerate() {
-            for (j, cj) in self.cols.iter().take(i + 1).enumerate() {
-                let v = dot6(ci, cj);
-                if let Some(x) = a.get_mut(i).and_then(|row| row.get_mut(j)) {
-                    *x = v;
-                }
+        self.damped_gram_into(0.0, &[false; MAX_JOINTS], &mut a);
+        for i in 0..self.n {
+            for j in 0..i {
+                let v = a.get(i).and_then(|row| row.get(j)).copied().unwrap_or(0.0);
                 if let Some(x) = a.get_mut(j).and_then(|row| row.get_mut(i)) {
                     *x = v;
                 }
             }
         }
         a
+    }
+
+    /// The lower triangle of `JᵀJ + λI` with the rows and columns of `locked` joints removed
+    /// (only their λ stays on the diagonal), written into the leading n×n block of `a`.
+    pub(super) fn damped_gram_into(
+        &self,
+        lambda: f64,
+        locked: &[bool; MAX_JOINTS],
+        a: &mut [[f64; MAX_JOINTS]; MAX_JOINTS],
+    ) {
+        let columns = self.cols.iter().zip(locked).take(self.n);
+        for ((row, (ci, li)), i) in a.iter_mut().zip(columns).zip(0..) {
+            let others = self.cols.iter().zip(locked).take(i + 1);
+            for ((x, (cj, lj)), j) in row.iter_mut().zip(others).zip(0..) {
+                let product = if *li || *lj { 0.0 } else { dot6(ci, cj) };
+                *x = if i == j { product + lambda } else { product };
+            }
+        }
     }
 }
 

@@ -4,49 +4,48 @@
 //! indexing below cannot go out of bounds.
 #![allow(clippy::indexing_slicing)]
 
-/// Solves `A x = b` for symmetric positive definite `A` (first `n` rows/columns) by Cholesky
-/// factorisation. Returns `None` if `A` is not positive definite (or `n > N`).
+/// Solves `A x = b` in place for symmetric positive definite `A` (the lower triangle of the
+/// leading n×n block is read) by Cholesky factorisation: `a` is overwritten with the factor,
+/// `b` with the solution. Returns false if `A` is not positive definite (or `n > N`). In place
+/// because on the Cortex-M7 copying these arrays costs as much as the arithmetic.
 pub(super) fn cholesky_solve<const N: usize>(
-    a: &[[f64; N]; N],
-    b: &[f64; N],
+    a: &mut [[f64; N]; N],
+    b: &mut [f64; N],
     n: usize,
-) -> Option<[f64; N]> {
+) -> bool {
     if n > N {
-        return None;
+        return false;
     }
-    // L in the lower triangle of l.
-    let mut l = [[0.0; N]; N];
-    for i in 0..n {
-        for j in 0..=i {
-            let dot: f64 = l[i].iter().zip(&l[j]).take(j).map(|(x, y)| x * y).sum();
-            let s = a[i][j] - dot;
-            if i == j {
-                if s <= 0.0 || !s.is_finite() {
-                    return None;
-                }
-                l[i][i] = libm::sqrt(s);
-            } else {
-                l[i][j] = s / l[j][j];
-            }
+    for j in 0..n {
+        let d = a[j][j] - a[j][..j].iter().map(|x| x * x).sum::<f64>();
+        if d <= 0.0 || !d.is_finite() {
+            return false;
+        }
+        let d = libm::sqrt(d);
+        a[j][j] = d;
+        for i in j + 1..n {
+            let (upper, lower) = a.split_at_mut(i);
+            let dot: f64 = lower[0][..j]
+                .iter()
+                .zip(&upper[j][..j])
+                .map(|(x, y)| x * y)
+                .sum();
+            lower[0][j] = (lower[0][j] - dot) / d;
         }
     }
     // L y = b, then Lᵀ x = y.
-    let mut x = [0.0; N];
     for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[i][k] * x[k];
-        }
-        x[i] = s / l[i][i];
+        let dot: f64 = a[i][..i].iter().zip(&b[..i]).map(|(l, y)| l * y).sum();
+        b[i] = (b[i] - dot) / a[i][i];
     }
     for i in (0..n).rev() {
-        let mut s = x[i];
+        let mut s = b[i];
         for k in i + 1..n {
-            s -= l[k][i] * x[k];
+            s -= a[k][i] * b[k];
         }
-        x[i] = s / l[i][i];
+        b[i] = s / a[i][i];
     }
-    Some(x)
+    true
 }
 
 /// Determinant of the leading `n × n` block by Gaussian elimination with partial pivoting.
@@ -99,16 +98,17 @@ mod tests {
         for (bi, row) in b.iter_mut().zip(&a) {
             *bi = row.iter().zip(&x_true).map(|(r, x)| r * x).sum();
         }
-        let x = cholesky_solve(&a, &b, 3).unwrap();
-        for (xi, ti) in x.iter().zip(&x_true) {
+        let mut a = a;
+        assert!(cholesky_solve(&mut a, &mut b, 3));
+        for (xi, ti) in b.iter().zip(&x_true) {
             assert!((xi - ti).abs() < 1e-14);
         }
     }
 
     #[test]
     fn rejects_indefinite_matrix() {
-        let a = [[1.0, 2.0], [2.0, 1.0]];
-        assert!(cholesky_solve(&a, &[1.0, 1.0], 2).is_none());
+        let mut a = [[1.0, 2.0], [2.0, 1.0]];
+        assert!(!cholesky_solve(&mut a, &mut [1.0, 1.0], 2));
     }
 
     #[test]

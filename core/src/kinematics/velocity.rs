@@ -35,15 +35,12 @@ impl Chain {
         for (r, m) in residual.iter_mut().zip(moved) {
             *r -= m;
         }
-        let mut a = j.gram();
-        let lambda2 = (damping * damping).max(1e-12);
-        for (i, row) in a.iter_mut().enumerate().take(n) {
-            if let Some(d) = row.get_mut(i) {
-                *d += lambda2;
-            }
+        let mut a = [[0.0; MAX_JOINTS]; MAX_JOINTS];
+        j.damped_gram_into((damping * damping).max(1e-12), &[false; MAX_JOINTS], &mut a);
+        let mut dq = j.transpose_mul(&residual);
+        if !linalg::cholesky_solve(&mut a, &mut dq, n) {
+            dq = [0.0; MAX_JOINTS];
         }
-        let dq = linalg::cholesky_solve::<MAX_JOINTS>(&a, &j.transpose_mul(&residual), n)
-            .unwrap_or([0.0; MAX_JOINTS]);
         let mut rates = z;
         for (r, d) in rates.iter_mut().zip(dq) {
             *r += d;
