@@ -277,7 +277,8 @@ fn fk_matches_kdl_fixtures() {
     for (name, config) in common::all_robots() {
         let chain = Chain::new(&config);
         let path = common::robots_dir().join(format!("../core/tests/fixtures/fk_{name}.csv"));
-        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut rows = 0;
         for line in text.lines().skip(1) {
             let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
@@ -287,11 +288,19 @@ fn fk_matches_kdl_fixtures() {
             let want_p = &v[n..n + 3];
             let want_r = &v[n + 3..];
             for (got, want) in f.pos.to_array().iter().zip(want_p) {
-                assert!((got - want).abs() < 1e-12, "{name} position at {:?}", &v[..n]);
+                assert!(
+                    (got - want).abs() < 1e-12,
+                    "{name} position at {:?}",
+                    &v[..n]
+                );
             }
             let rows_got: Vec<f64> = f.rot.to_rows().iter().flatten().copied().collect();
             for (got, want) in rows_got.iter().zip(want_r) {
-                assert!((got - want).abs() < 1e-12, "{name} rotation at {:?}", &v[..n]);
+                assert!(
+                    (got - want).abs() < 1e-12,
+                    "{name} rotation at {:?}",
+                    &v[..n]
+                );
             }
             rows += 1;
         }
