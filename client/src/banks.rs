@@ -1,0 +1,136 @@
+//! Joint vectors on the wire, including the bank rule for arms with 7 or 8 joints
+//! (docs/protocol.md, "Arms with more than six joints").
+//!
+//! * Writes (`jG`, `jV`, `RC`) carry six joints. For more than six, a bank-2 request (index bit 7
+//!   set, joints 7.. in f0..) goes first, then the bank-1 request (joints 1..6) completes the
+//!   vector. For `jV` the slot stays in bits 0–6 of both.
+//! * Reads (`jP`, `TM`) answer joints 1..7 in f0..f6. For more than seven joints, a second read
+//!   with bit 7 set answers joints 7.. in f0.. (so joint 8 is its f1).
+
+use armgate_protocol::client::VALUES;
+
+use crate::ClientError;
+use crate::matching::BANK2;
+
+/// Joints per write request.
+pub const WRITE_JOINTS: usize = 6;
+
+/// Joints per read reply.
+pub const READ_JOINTS: usize = 7;
+
+/// The most joints an arm may have.
+pub const MAX_JOINTS: usize = armgate_core::MAX_JOINTS;
+
+/// One datagram of a joint write: its index byte and f0..f6.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BankRequest {
+    /// The index byte: the slot, with bit 7 set for bank 2.
+    pub index: u8,
+    /// f0..f5 the joints of this bank (zero-padded), f6 as given.
+    pub values: [f32; VALUES],
+}
+
+/// Checks a joint count.
+pub fn check_count(n: usize) -> Result<(), ClientError> {
+    if (1..=MAX_JOINTS).contains(&n) {
+        Ok(())
+    } else {
+        Err(ClientError::InvalidArgument(format!(
+            "{n} joints: an arm has 1 to {MAX_JOINTS} joints"
+        )))
+    }
+}
+
+/// The datagrams of a joint write, in send order: bank 2 first if `q` has more than six joints,
+/// then bank 1. `slot` is the via slot (0 for `jG`/`RC`), `f6` the last value (the duration for
+/// `jV`, 0 otherwise).
+pub fn split(q: &[f64], slot: u8, f6: f32) -> Result<Vec<BankRequest>, ClientError> {
+    check_count(q.len())?;
+    if slot & BANK2 != 0 {
+        return Err(ClientError::InvalidArgument(format!(
+            "via slot {slot}: bit 7 of the index selects the joint bank, slots are 0..=127"
+        )));
+    }
+    let bank = |joints: &[f64], index: u8| {
+        let mut values = [0.0; VALUES];
+        values
+            .iter_mut()
+            .zip(joints.iter().take(WRITE_JOINTS))
+            .for_each(|(v, q)| *v = *q as f32);
+        if let Some(last) = values.last_mut() {
+            *last = f6;
+        }
+        BankRequest { index, values }
+    };
+    let (lower, upper) = q.split_at(q.len().min(WRITE_JOINTS));
+    let mut out = Vec::with_capacity(2);
+    if !upper.is_empty() {
+        out.push(bank(upper, slot | BANK2));
+    }
+    out.push(bank(lower, slot));
+    Ok(out)
+}
+
+/// Whether reading `n` joints needs the bank-2 read.
+pub fn needs_bank2_read(n: usize) -> bool {
+    n > READ_JOINTS
+}
+
+/// The `n` joint values of a read: joints 1..7 from the bank-1 reply, joints 8.. from the
+/// bank-2 reply (which starts at joint 7).
+pub fn merge_read(n: usize, bank1: &[f32; VALUES], bank2: Option<&[f32; VALUES]>) -> Vec<f64> {
+    let upper = bank2
+        .into_iter()
+        .flat_map(|b| b.iter().skip(READ_JOINTS - WRITE_JOINTS));
+    bank1
+        .iter()
+        .chain(upper)
+        .take(n)
+        .map(|v| f64::from(*v))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn six_joints_is_one_bank() {
+        let banks = split(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], 0, 0.0).unwrap();
+        assert_eq!(banks.len(), 1);
+        assert_eq!(banks[0].index, 0);
+        assert_eq!(banks[0].values, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 0.0]);
+    }
+
+    #[test]
+    fn eight_joints_send_bank_two_first() {
+        let q = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
+        let banks = split(&q, 5, 2.5).unwrap();
+        assert_eq!(banks.len(), 2);
+        assert_eq!(banks[0].index, 0x85);
+        assert_eq!(banks[0].values, [7.0, 8.0, 0.0, 0.0, 0.0, 0.0, 2.5]);
+        assert_eq!(banks[1].index, 0x05);
+        assert_eq!(banks[1].values, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 2.5]);
+    }
+
+    #[test]
+    fn counts_and_slots_are_checked() {
+        assert!(split(&[], 0, 0.0).is_err());
+        assert!(split(&[0.0; 9], 0, 0.0).is_err());
+        assert!(split(&[0.0; 6], 0x80, 0.0).is_err());
+        assert!(split(&[0.0; 3], 0, 0.0).is_ok());
+    }
+
+    #[test]
+    fn reads_merge_at_joint_eight() {
+        let b1 = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+        let b2 = [7.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert_eq!(
+            merge_read(8, &b1, Some(&b2)),
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]
+        );
+        assert_eq!(merge_read(6, &b1, None), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert!(!needs_bank2_read(7));
+        assert!(needs_bank2_read(8));
+    }
+}

@@ -1,0 +1,54 @@
+//! armgate's client: talk to an armgate controller over its 31-byte UDP protocol
+//! (docs/protocol.md), from Rust or from the `armgate` command line.
+//!
+//! ```no_run
+//! use armgate_client::{Client, Mode, Pose, WaitOptions};
+//!
+//! # fn main() -> Result<(), armgate_client::ClientError> {
+//! let mut arm = Client::connect("127.0.0.1:7031")?;
+//! arm.set_mode(Mode::Cartesian)?;
+//! arm.goal_rpy([0.5, 0.2, 0.1], [0.0, 0.0, 0.0], 5.0)?;
+//! arm.begin()?;
+//! let goal = Pose::from_xyz_rpy([0.5, 0.2, 0.1], [0.0, 0.0, 0.0]);
+//! let pose = arm.wait_until_pose(&goal, &WaitOptions::default(), |p| {
+//!     eprintln!("{:.1} mm to go", p.distance * 1e3);
+//! })?;
+//! println!("arrived at {:?}", pose.xyz);
+//! for notice in arm.take_notices() {
+//!     eprintln!("{notice}"); // e.g. "WN12 Joint limit."
+//! }
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! * [`Client`]: requests with timeout and retries, reply matching ([`matching`]), the queue of
+//!   unsolicited notices, and one typed method per command (`pose`, `joints`, `goal_rpy`,
+//!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
+//! * [`wait`]: polling until a pose or joint target is reached.
+//! * [`runfile`]: TOML via-point sequences.
+//! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
+
+pub mod banks;
+pub mod cli;
+mod client;
+mod commands;
+mod error;
+#[cfg(test)]
+mod fake;
+pub mod matching;
+mod pose;
+pub mod runfile;
+pub mod teleop;
+pub mod wait;
+
+pub use armgate_core::math::Quaternion;
+pub use armgate_protocol::client::{Command, Reply, Request, Text};
+pub use client::{
+    Client, ClientConfig, DEFAULT_ADDR, DEFAULT_NOTICE_CAPACITY, DEFAULT_RETRIES, DEFAULT_TIMEOUT,
+    RawReply,
+};
+pub use commands::NO_READING;
+pub use error::ClientError;
+pub use pose::{Mode, Pose};
+pub use runfile::{RunFile, RunFileError};
+pub use wait::{Progress, WaitOptions};

@@ -1,0 +1,144 @@
+//! `armgate teleop`: the keyboard client of the seed thesis (Fig. 3.3, spec §7.3).
+//!
+//! The screen shows four columns, *Current Pose* (x, y, z, q1..q4 from PS), *Desired Pose*,
+//! *Joints* (jP) and *Temp(C)* (TM), then the `RPY:` of the current and desired pose, the
+//! `Scale:`, the latest ER/WN text and the key help.
+//!
+//! | Key | Cartesian keys | Joint keys (`j`) |
+//! |---|---|---|
+//! | ← / → | desired x − / + | selected joint − / + |
+//! | ↓ / ↑ | desired y − / + | select the next / previous joint |
+//! | PgDn / PgUp | desired z − / + | — |
+//! | 1..8 | — | select joint 1..8 |
+//! | + / − | double / halve the scale | same |
+//! | space | desired pose ← current pose | desired joints ← current joints |
+//! | Enter | GT (desired position, current RPY, T = 0) + BG | jG + jB |
+//! | j | switch to joint keys | switch to Cartesian keys |
+//! | m | next mode via CM: off → joint → cart → off | same |
+//! | q, Esc, Ctrl-C | quit (the terminal is restored) | same |
+//!
+//! A Cartesian step is 1 mm × scale, a joint step 0.01 rad × scale. Keys edit the desired
+//! values; Enter sends them (`--live`: every key press sends). If BG (jB) is refused, typically
+//! because a motion is still running, the client sends ST and then BG (jB) once more.
+//!
+//! The mode is unknown until the first `m` (the protocol cannot read it); `m` from an unknown
+//! mode selects joint mode.
+//!
+//! Structure: [`state`] holds the screen's data and the key handling (no I/O), [`render`] draws
+//! it (a pure function), [`io`] is the thread that owns the socket and polls PS/jP/TM at
+//! `--rate` Hz, so the UI never blocks on the network.
+
+pub mod io;
+pub mod render;
+pub mod state;
+
+use std::time::Duration;
+
+use ratatui::crossterm::event::{self, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+
+use crate::Client;
+use state::{Key, TeleopState};
+
+/// How the keyboard client runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TeleopOptions {
+    /// The arm's number of joints.
+    pub joints: usize,
+    /// Send on every key press instead of on Enter.
+    pub live: bool,
+    /// The polling period of PS, jP and TM.
+    pub poll: Duration,
+    /// The controller's address, for the title.
+    pub addr: String,
+}
+
+/// The teleop key for a terminal key event (Ctrl-C is Esc).
+pub fn key(event: &KeyEvent) -> Option<Key> {
+    if event.kind != KeyEventKind::Press {
+        return None;
+    }
+    if event.modifiers.contains(KeyModifiers::CONTROL) {
+        return (event.code == KeyCode::Char('c')).then_some(Key::Esc);
+    }
+    Some(match event.code {
+        KeyCode::Left => Key::Left,
+        KeyCode::Right => Key::Right,
+        KeyCode::Up => Key::Up,
+        KeyCode::Down => Key::Down,
+        KeyCode::PageUp => Key::PageUp,
+        KeyCode::PageDown => Key::PageDown,
+        KeyCode::Enter => Key::Enter,
+        KeyCode::Esc => Key::Esc,
+        KeyCode::Char(c) => Key::Char(c),
+        _ => return None,
+    })
+}
+
+/// Restores the terminal when dropped, also on an error return.
+struct Restore;
+
+impl Drop for Restore {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+/// Runs the keyboard client until q / Esc.
+pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
+    let io = io::spawn(client, options.joints, options.poll)?;
+    let mut state = TeleopState::new(options.addr, options.joints, options.live);
+    let mut terminal = ratatui::try_init()?;
+    let _restore = Restore;
+    while !state.quit {
+        while let Ok(event) = io.events.try_recv() {
+            state.apply(event);
+        }
+        terminal.draw(|frame| render::render(&state, frame))?;
+        if event::poll(Duration::from_millis(30))?
+            && let event::Event::Key(k) = event::read()?
+            && let Some(key) = key(&k)
+            && let Some(action) = state.handle_key(key)
+            && io.actions.send(action).is_err()
+        {
+            state.status = String::from("the I/O thread has ended");
+        }
+    }
+    // Dropping the sender ends the I/O thread after its current request; it is not joined, so
+    // that quitting never waits for a timeout.
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ratatui::crossterm::event::KeyEventState;
+
+    fn press(code: KeyCode, modifiers: KeyModifiers) -> KeyEvent {
+        KeyEvent {
+            code,
+            modifiers,
+            kind: KeyEventKind::Press,
+            state: KeyEventState::NONE,
+        }
+    }
+
+    #[test]
+    fn terminal_keys_map_to_teleop_keys() {
+        let none = KeyModifiers::NONE;
+        assert_eq!(key(&press(KeyCode::Left, none)), Some(Key::Left));
+        assert_eq!(key(&press(KeyCode::PageDown, none)), Some(Key::PageDown));
+        assert_eq!(
+            key(&press(KeyCode::Char('+'), KeyModifiers::SHIFT)),
+            Some(Key::Char('+'))
+        );
+        assert_eq!(
+            key(&press(KeyCode::Char('c'), KeyModifiers::CONTROL)),
+            Some(Key::Esc)
+        );
+        assert_eq!(key(&press(KeyCode::Char('x'), KeyModifiers::CONTROL)), None);
+        assert_eq!(key(&press(KeyCode::F(1), none)), None);
+        let mut release = press(KeyCode::Left, none);
+        release.kind = KeyEventKind::Release;
+        assert_eq!(key(&release), None);
+    }
+}

@@ -1,0 +1,189 @@
+//! The measurements: forward kinematics and tracking IK on every embedded robot.
+//!
+//! The samples follow the host benchmark (`core/examples/ik_bench.rs`, tracking mode) draw for
+//! draw: the same generator and seed, a configuration uniform within the joint limits, its tool
+//! frame as the target, and the seed `q + uniform(−0.1, 0.1)` per joint; so the first
+//! [`SAMPLES`] targets and seeds are the host benchmark's first ones. Success means position and
+//! orientation errors below 1e-5 (m, rad) and all joints within limits, as there.
+
+use core::hint::black_box;
+
+use armgate_core::config::RobotConfig;
+use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::math::Frame;
+use armgate_core::rng::SplitMix64;
+use cortex_m_semihosting::hprintln;
+
+use crate::counter::{Counter, measure};
+
+include!(concat!(env!("OUT_DIR"), "/robots.rs"));
+
+/// The host benchmark's seed.
+const SEED: u64 = 0x01C0_FFEE;
+/// Random configurations per robot.
+const SAMPLES: u32 = 200;
+/// Seed perturbation of tracking IK, per joint (rad, or m for prismatic joints).
+const PERTURBATION: f64 = 0.1;
+/// Success threshold on position (m) and orientation (rad) error.
+const SUCCESS_TOLERANCE: f64 = 1e-5;
+
+/// Ticks of one operation over all samples.
+#[derive(Default)]
+struct Timing {
+    calls: u32,
+    ticks: u64,
+    max_ticks: u32,
+}
+
+impl Timing {
+    fn add(&mut self, ticks: u32) {
+        self.calls += 1;
+        self.ticks += u64::from(ticks);
+        self.max_ticks = self.max_ticks.max(ticks);
+    }
+
+    /// Mean and maximum instructions per call.
+    fn instructions(&self, counter: &Counter) -> (f64, f64) {
+        let mean = self.ticks as f64 / f64::from(self.calls.max(1));
+        (
+            counter.instructions(mean),
+            counter.instructions(f64::from(self.max_ticks)),
+        )
+    }
+}
+
+/// Everything measured on one robot.
+#[derive(Default)]
+struct Results {
+    sincos: Timing,
+    forward: Timing,
+    jacobian: Timing,
+    tracking: Timing,
+    iterations: u64,
+    successes: u32,
+    errors: u32,
+}
+
+/// Measures every embedded robot and prints the table; false if a robot could not be measured.
+pub fn run(counter: Counter) -> bool {
+    hprintln!(
+        "calibration: {} nop = {} SysTick ticks (empty window {:.2} ticks) -> {:.3} instructions/tick (40 expected: 1 ns per instruction, 25 MHz SysTick)",
+        Counter::calibration_instructions(),
+        counter.calibration_ticks,
+        counter.empty_ticks,
+        counter.instructions_per_tick
+    );
+    hprintln!(
+        "{} samples per robot, seed {:#x}; instructions per call, mean (max)",
+        SAMPLES,
+        SEED
+    );
+    hprintln!(
+        "| robot              | operation          | instructions/call     | mean iterations | success % |"
+    );
+    hprintln!(
+        "|--------------------|--------------------|-----------------------|-----------------|-----------|"
+    );
+    let mut ok = true;
+    for (name, bytes) in ROBOTS {
+        match postcard::from_bytes::<RobotConfig>(bytes) {
+            Ok(config) if config.validate().is_ok() => {
+                let results = measure_robot(&config);
+                print_rows(name, &results, &counter);
+                ok &= results.errors == 0;
+            }
+            _ => {
+                hprintln!(
+                    "{}: the embedded description does not decode or validate",
+                    name
+                );
+                ok = false;
+            }
+        }
+    }
+    ok
+}
+
+fn measure_robot(config: &RobotConfig) -> Results {
+    let chain = Chain::new(config);
+    let n = chain.dof();
+    let mut results = Results::default();
+    let mut rng = SplitMix64::new(SEED);
+    for _ in 0..SAMPLES {
+        let mut q = Joints::zeros(n);
+        for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
+            *v = rng.uniform(*lo, *hi);
+        }
+
+        let angle = q.first().copied().unwrap_or(0.0);
+        let (ticks, _) = measure(|| libm::sincos(black_box(angle)));
+        results.sincos.add(ticks);
+
+        let (ticks, target) = measure(|| chain.forward(black_box(&q)));
+        results.forward.add(ticks);
+        let (ticks, jacobian) = measure(|| chain.jacobian(black_box(&q)));
+        results.jacobian.add(ticks);
+        let (Ok(target), Ok(_)) = (target, jacobian) else {
+            results.errors += 1;
+            continue;
+        };
+
+        let mut seed = q;
+        for v in seed.iter_mut() {
+            *v += rng.uniform(-PERTURBATION, PERTURBATION);
+        }
+        let (ticks, solved) =
+            measure(|| chain.solve_tracking(&target, black_box(&seed), &config.ik));
+        results.tracking.add(ticks);
+        match solved {
+            Ok(result) => {
+                let solution = result.solution();
+                results.iterations += u64::from(solution.iterations);
+                if succeeded(&chain, &target, &solution.q) {
+                    results.successes += 1;
+                }
+            }
+            Err(_) => results.errors += 1,
+        }
+    }
+    results
+}
+
+fn succeeded(chain: &Chain, target: &Frame, q: &Joints) -> bool {
+    chain.forward(q).is_ok_and(|reached| {
+        let d = reached.diff(target);
+        d.linear.norm() < SUCCESS_TOLERANCE
+            && d.angular.norm() < SUCCESS_TOLERANCE
+            && chain.within_limits(q)
+    })
+}
+
+fn print_rows(name: &str, results: &Results, counter: &Counter) {
+    let row = |operation: &str, timing: &Timing| {
+        let (mean, max) = timing.instructions(counter);
+        hprintln!(
+            "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - |         - |",
+            name,
+            operation,
+            mean,
+            max
+        );
+    };
+    row("libm::sincos", &results.sincos);
+    row("forward (FK)", &results.forward);
+    row("jacobian (FK + J)", &results.jacobian);
+    let (mean, max) = results.tracking.instructions(counter);
+    let calls = f64::from(results.tracking.calls.max(1));
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15.2} | {:>9.1} |",
+        name,
+        "tracking IK",
+        mean,
+        max,
+        results.iterations as f64 / calls,
+        100.0 * f64::from(results.successes) / calls
+    );
+    if results.errors > 0 {
+        hprintln!("{}: {} calls refused", name, results.errors);
+    }
+}

@@ -1,0 +1,32 @@
+// Shared by the build scripts of `firmware/` and `qemu-bench/` through `include!`: turns a robot
+// TOML file into the postcard bytes that a bare-metal binary embeds with `include_bytes!`.
+// The including build script needs the build-dependencies `armgate-core` (feature `std`) and
+// `postcard` (feature `use-std`).
+
+/// Reads `workspace_root/relative`, parses and validates it with `armgate_core::config::parse_toml`
+/// and writes the postcard serialisation of the `RobotConfig` to `out`. Prints the
+/// `rerun-if-changed` line for the robot file. The error names the file and, for a refused robot,
+/// the field.
+fn embed_robot(
+    workspace_root: &std::path::Path,
+    relative: &str,
+    out: &std::path::Path,
+) -> Result<armgate_core::config::RobotConfig, String> {
+    let path = workspace_root.join(relative);
+    println!("cargo:rerun-if-changed={}", path.display());
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("cannot read robot file {}: {e}", path.display()))?;
+    let config =
+        armgate_core::config::parse_toml(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = postcard::to_stdvec(&config)
+        .map_err(|e| format!("{}: cannot serialise with postcard: {e}", path.display()))?;
+    std::fs::write(out, bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    Ok(config)
+}
+
+/// Reports a build-script error on stderr (cargo shows it under the failing build script) and
+/// fails the build.
+fn fail_build(message: &str) -> ! {
+    eprintln!("error: {message}");
+    std::process::exit(1)
+}
