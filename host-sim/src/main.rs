@@ -125,7 +125,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
         None => Logger::disabled(),
     };
-    let socket = UdpSocket::bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
     let running = Arc::new(AtomicBool::new(true));
     let stop = running.clone();
     ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
@@ -237,6 +237,20 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         stats.received, stats.refused_sources, stats.notices, stats.overruns, dropped
     );
     Ok(())
+}
+
+/// Receive buffer asked of the kernel: about 4,000 queued datagrams, so that a burst from a
+/// client is not dropped while a tick runs (the kernel caps it at `net.core.rmem_max`).
+const RECEIVE_BUFFER: usize = 4 << 20;
+
+/// A UDP socket on `addr` with a large receive buffer.
+fn bind(addr: SocketAddr) -> std::io::Result<UdpSocket> {
+    use socket2::{Domain, Protocol, Socket, Type};
+    let socket = Socket::new(Domain::for_address(addr), Type::DGRAM, Some(Protocol::UDP))?;
+    // A smaller buffer only makes bursts lossier; it is no reason to refuse to run.
+    let _ = socket.set_recv_buffer_size(RECEIVE_BUFFER);
+    socket.bind(&addr.into())?;
+    Ok(socket.into())
 }
 
 fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
