@@ -92,7 +92,9 @@ impl Sim {
             .unwrap();
         let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
         // Room for a whole burst of replies (the default holds about 200 datagrams).
-        socket2::SockRef::from(&socket).set_recv_buffer_size(4 << 20).unwrap();
+        socket2::SockRef::from(&socket)
+            .set_recv_buffer_size(4 << 20)
+            .unwrap();
         socket.connect(addr).unwrap();
         socket
             .set_read_timeout(Some(Duration::from_millis(500)))
@@ -166,7 +168,10 @@ impl Sim {
                     return;
                 }
                 Answer::Text(t) if t == format!("ER20 Cmd {cmd} rejected") => {
-                    assert!(started.elapsed() < Duration::from_secs(5), "{cmd} never accepted");
+                    assert!(
+                        started.elapsed() < Duration::from_secs(5),
+                        "{cmd} never accepted"
+                    );
                     std::thread::sleep(Duration::from_millis(20));
                 }
                 Answer::Text(t) => panic!("{cmd}: {t}"),
