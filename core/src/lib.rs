@@ -11,11 +11,14 @@
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
 //! * [`motion`]: generators, sequences, limiters, the mode switch and the control step.
+//! * [`drives`]: the servo drives on the CAN bus (start-up, PT streaming, faults), and a
+//!   simulated bus with simulated drives.
 //! * [`rng`]: the small deterministic random generator used by global IK and by tests.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
 pub mod command;
 pub mod config;
+pub mod drives;
 pub mod kinematics;
 pub mod math;
 pub mod motion;

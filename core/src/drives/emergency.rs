@@ -23,7 +23,7 @@ mod elmo {
     pub const MOTION_TERMINATED: u8 = 0x08;
     /// A received CAN message was lost (the interpreter's queue overflowed).
     pub const MESSAGE_LOST: u8 = 0x09;
-    /// Fewer unexecuted points than MP[5] remain.
+    /// Fewer unexecuted points than `MP[5]` remain.
     pub const QUEUE_LOW: u8 = 0x56;
 }
 
@@ -38,7 +38,7 @@ pub enum DriveEmergency {
     /// Code 0x8380, register 0x81: what the seed treated as a digital Hall sensor error and
     /// ignored (spec §6.7); kept as a harmless warning.
     DigitalHall,
-    /// Fewer unexecuted PT points than MP[5] remain (a warning: the motion goes on).
+    /// Fewer unexecuted PT points than `MP[5]` remain (a warning: the motion goes on).
     QueueLow {
         /// The drive's write pointer.
         write: u16,

@@ -4,6 +4,8 @@ use armgate_protocol::can::Emcy;
 use armgate_protocol::can::interpreter::Mnemonic;
 use armgate_protocol::client::{Severity, Text};
 
+use super::settings::POSITION_MODE;
+
 /// A drive or bus fault. Every fault stops the arm (the drives hold the last commanded
 /// position where they still can) and refuses motion until the next start (ON).
 ///
@@ -102,7 +104,9 @@ impl DriveFault {
         let code = self.code();
         let text = |body: core::fmt::Arguments<'_>| Text::new(Severity::Error, code, body);
         match *self {
-            Self::NotAnswering { joint } => text(format_args!("J{} drive not answering", joint + 1)),
+            Self::NotAnswering { joint } => {
+                text(format_args!("J{} drive not answering", joint + 1))
+            }
             Self::ErrorReply {
                 joint,
                 command,
@@ -114,7 +118,11 @@ impl DriveFault {
             }
             Self::Emergency { joint, emcy } => {
                 let [elmo, ..] = emcy.manufacturer;
-                text(format_args!("J{} EMCY {:04X} {elmo:02X}", joint + 1, emcy.code))
+                text(format_args!(
+                    "J{} EMCY {:04X} {elmo:02X}",
+                    joint + 1,
+                    emcy.code
+                ))
             }
             Self::Underflow { joint } => text(format_args!("J{} PT buffer underflow", joint + 1)),
             Self::Overrun { joint } => text(format_args!("J{} PT buffer overrun", joint + 1)),
@@ -123,9 +131,10 @@ impl DriveFault {
             Self::HeartbeatLost { joint } => {
                 text(format_args!("J{} lost ctrl heartbeat", joint + 1))
             }
-            Self::WrongUnitMode { joint, found } => {
-                text(format_args!("J{} unit mode {found} not 5", joint + 1))
-            }
+            Self::WrongUnitMode { joint, found } => text(format_args!(
+                "J{} unit mode {found} not {POSITION_MODE}",
+                joint + 1
+            )),
             Self::BeginRefused { joint, value } => {
                 text(format_args!("J{} did not begin ({value})", joint + 1))
             }

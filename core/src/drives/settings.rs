@@ -7,7 +7,7 @@ use super::streaming::Schedule;
 use crate::config::RobotConfig;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
-/// number of these (MP[4]).
+/// number of these (`MP[4]`).
 pub const SAMPLE_TIME: f64 = 360e-6;
 
 /// The only unit mode the manager streams to: position (PT motion).
@@ -29,7 +29,7 @@ pub struct DriveSettings {
     pub nmt_settle: f64,
     /// Pause after changing a drive's unit mode (the seed waited 100 ms).
     pub unit_mode_settle: f64,
-    /// Entries of the drives' PT ring, QP[1..=ring_len] (the seed used 6).
+    /// Entries of the drives' PT ring, `QP[1..=ring_len]` (the seed used 6).
     pub ring_len: u16,
     /// Which query each drive sends in each streaming cycle.
     pub schedule: Schedule,
@@ -57,7 +57,7 @@ pub enum SetupError {
     /// Only position mode (unit mode 5) is streamed; the robot asks for another.
     UnsupportedUnitMode(u8),
     /// The control period is not a whole number of 360 µs drive samples (the PT segment time
-    /// MP[4] × 360 µs must equal it), or is out of range.
+    /// `MP[4]` × 360 µs must equal it), or is out of range.
     PeriodNotWholeSamples,
     /// The PT ring must have 6 to 64 entries: the drive holds three points and the flow
     /// control keeps up to five ahead.
@@ -69,6 +69,8 @@ pub enum SetupError {
     ControllerNode,
     /// A timeout or settle time is negative or not finite, or a schedule interval is zero.
     BadTiming,
+    /// A joint's drive has a node id above 127 or no counts per revolution.
+    BadDrive,
 }
 
 impl core::fmt::Display for SetupError {
@@ -84,6 +86,7 @@ impl core::fmt::Display for SetupError {
             Self::Heartbeat => f.write_str("bad heartbeat period or timeout"),
             Self::ControllerNode => f.write_str("controller node id invalid or a drive's"),
             Self::BadTiming => f.write_str("bad timeout, settle time or schedule"),
+            Self::BadDrive => f.write_str("bad drive node id or counts per revolution"),
         }
     }
 }
@@ -93,7 +96,7 @@ impl core::fmt::Display for SetupError {
 pub(crate) struct Timing {
     /// The control period (s).
     pub period: f64,
-    /// Drive samples per PT point (MP[4]).
+    /// Drive samples per PT point (`MP[4]`).
     pub samples_per_point: u16,
     /// Cycles a request may stay unanswered.
     pub reply_timeout: u32,
@@ -101,6 +104,8 @@ pub(crate) struct Timing {
     pub nmt_settle: u32,
     /// Cycles to wait after a unit-mode change.
     pub unit_mode_settle: u32,
+    /// Seconds between the controller's heartbeats.
+    pub heartbeat_period: f64,
     /// The consumer heartbeat time for object 0x1016 (ms).
     pub heartbeat_timeout_ms: u16,
     /// The controller's node id.
@@ -148,6 +153,7 @@ impl Timing {
             reply_timeout: cycles(settings.reply_timeout)?.max(2),
             nmt_settle: cycles(settings.nmt_settle)?,
             unit_mode_settle: cycles(settings.unit_mode_settle)?,
+            heartbeat_period: beat,
             heartbeat_timeout_ms: timeout_ms as u16,
             controller,
         })

@@ -78,6 +78,72 @@ pub fn bits_on_wire(frame: &CanFrame) -> u32 {
     47 + data_bits + (34 + data_bits - 1) / 4
 }
 
+/// The exact number of bits `frame` occupies on the bus, including the stuff bits its actual
+/// content needs and the 3-bit interframe space: what a bus analyser would count, where
+/// [`bits_on_wire`] is the worst case for any content of that length.
+///
+/// Stuffing covers start-of-frame through the CRC sequence (ISO 11898-1): after five equal bits
+/// a complementary bit is inserted, and it starts the next run. The CRC is CRC-15/CAN.
+pub fn exact_bits_on_wire(frame: &CanFrame) -> u32 {
+    let mut stuffing = Stuffing::default();
+    let mut crc = Crc15::default();
+    let header = (u32::from(frame.id()) << 7) | u32::from(frame.dlc()); // ID, RTR, IDE, r0, DLC
+    let sof_to_dlc = (0..19).rev().map(|bit| (header >> bit) & 1 == 1);
+    let data = frame
+        .data()
+        .iter()
+        .flat_map(|byte| (0..8).rev().map(move |bit| (byte >> bit) & 1 == 1));
+    for bit in sof_to_dlc.chain(data) {
+        crc.push(bit);
+        stuffing.push(bit);
+    }
+    let checksum = crc.0;
+    (0..15)
+        .rev()
+        .for_each(|bit| stuffing.push((checksum >> bit) & 1 == 1));
+    // Stuffed part, then CRC delimiter, ACK slot and delimiter, end of frame, interframe space.
+    stuffing.bits + 1 + 2 + 7 + 3
+}
+
+/// Counts the bits of the stuffed part of a frame, stuff bits included.
+#[derive(Default)]
+struct Stuffing {
+    bits: u32,
+    last: bool,
+    run: u8,
+}
+
+impl Stuffing {
+    fn push(&mut self, bit: bool) {
+        self.bits += 1;
+        if self.run > 0 && bit == self.last {
+            self.run += 1;
+        } else {
+            self.last = bit;
+            self.run = 1;
+        }
+        if self.run == 5 {
+            self.bits += 1;
+            self.last = !bit;
+            self.run = 1;
+        }
+    }
+}
+
+/// CRC-15/CAN (polynomial 0x4599, initial value 0) over the unstuffed bits.
+#[derive(Default)]
+struct Crc15(u16);
+
+impl Crc15 {
+    fn push(&mut self, bit: bool) {
+        let feedback = bit ^ (self.0 & 0x4000 != 0);
+        self.0 = (self.0 << 1) & 0x7FFF;
+        if feedback {
+            self.0 ^= 0x4599;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +174,37 @@ mod tests {
         assert_eq!(bits(0), 55);
         assert_eq!(bits(4), 47 + 32 + 16);
         assert_eq!(bits(8), 135);
+    }
+
+    #[test]
+    fn exact_bits_count_the_stuffing_of_the_content() {
+        // ID 0, no data: 34 dominant bits and a zero CRC need a stuff bit after every fifth.
+        let zeros = CanFrame::new(0, &[]).unwrap();
+        assert_eq!(exact_bits_on_wire(&zeros), 47 + 6);
+        // Never more than the worst case, never less than the unstuffed length.
+        let mut seed = 0x1234_5678_u32;
+        for n in 0..=8 {
+            for _ in 0..200 {
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let bytes = seed.to_le_bytes();
+                let data = [bytes, bytes.map(|b| b.rotate_left(3))].concat();
+                let frame = CanFrame::new((seed >> 21) as u16, &data[..n]).unwrap();
+                let exact = exact_bits_on_wire(&frame);
+                assert!(exact <= bits_on_wire(&frame), "{frame:?}");
+                assert!(exact >= 47 + 8 * n as u32, "{frame:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn crc15_of_a_known_message() {
+        // CRC-15/CAN check value: the CRC of ASCII "123456789" is 0x059E.
+        let mut crc = Crc15::default();
+        for byte in b"123456789" {
+            (0..8)
+                .rev()
+                .for_each(|bit| crc.push((byte >> bit) & 1 == 1));
+        }
+        assert_eq!(crc.0, 0x059E);
     }
 }

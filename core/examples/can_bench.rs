@@ -1,0 +1,199 @@
+//! CAN bench: set-point rate, bus load and latency of PT streaming to six simulated Whistles
+//! at 500 kbit/s and 1 Mbit/s, each at the fastest control period under 70 % load.
+//!
+//! ```sh
+//! cargo run --release -p armgate-core --example can_bench
+//! ```
+//!
+//! For each bit rate the load model ([`armgate_core::drives::load`]) picks the fastest period
+//! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
+//! controller then drives ranger-mk1 through a joint move and a Cartesian circle for 30 s of
+//! simulated time on the virtual bus, and the table reports what the bus and the drives saw.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::approx_constant // the seed's home angles, as it wrote them
+)]
+
+use std::path::PathBuf;
+
+use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
+use armgate_core::drives::{DriveManager, DriveSettings, DriveState, VirtualBus};
+use armgate_core::motion::{Controller, Mode, Shape};
+
+const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+const RUN_SECONDS: f64 = 30.0;
+
+fn main() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
+    let base = load_file(&path).expect("robot file");
+    let settings = DriveSettings::default();
+    let model = LoadModel::new(&base, &settings);
+    println!(
+        "ranger-mk1, {} drives; per drive and cycle {} bits worst case (QP + echo, query + answer)",
+        model.drives,
+        model.bits_per_drive()
+    );
+    println!();
+    println!(
+        "| bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | BG skew | underflows |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for bitrate in [500_000, 1_000_000] {
+        let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
+        let mut config = base.clone();
+        config.drives.can_bitrate = bitrate;
+        config.control_period = fastest.period;
+        let r = run(&config, &settings);
+        println!(
+            "| {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs | {} |",
+            bitrate / 1000,
+            fastest.period * 1e3,
+            fastest.samples,
+            1.0 / fastest.period,
+            fastest.load * 100.0,
+            r.worst_load * 100.0,
+            r.typical_load * 100.0,
+            r.leads,
+            r.latency_max / fastest.period,
+            r.latency_max * 1e3,
+            (r.latency_max + r.write_delay_max) * 1e3,
+            r.skew * 1e6,
+            r.underflows,
+        );
+    }
+    let seed = base.control_period;
+    println!();
+    let mk2 = LoadModel { drives: 8, ..model };
+    for bitrate in [500_000, 1_000_000] {
+        let p = mk2.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
+        println!(
+            "8 drives (ranger-mk2) at {} kbit/s: {:.2} ms = {:.1} Hz, {:.1} % worst case",
+            bitrate / 1000,
+            p.period * 1e3,
+            1.0 / p.period,
+            p.load * 100.0
+        );
+    }
+    println!(
+        "seed schedule (spec §6.5): 60 frames per {:.2} ms at 500 kbit/s = {:.1} % worst case; latency 5 points = {:.0} ms",
+        seed * 1e3,
+        seed_load(seed, 500_000) * 100.0,
+        5.0 * seed * 1e3
+    );
+}
+
+struct Outcome {
+    worst_load: f64,
+    typical_load: f64,
+    leads: String,
+    latency_max: f64,
+    write_delay_max: f64,
+    skew: f64,
+    underflows: u32,
+}
+
+/// The control loop: bus, drive manager and controller, stepped once per period.
+struct Loop {
+    bus: VirtualBus,
+    manager: DriveManager,
+    ctrl: Controller,
+    period: f64,
+    now: f64,
+}
+
+impl Loop {
+    fn tick(&mut self) {
+        self.now += self.period;
+        self.bus.advance(self.now).unwrap();
+        self.manager.receive(&mut self.bus);
+        let out = self.ctrl.step(self.now, &self.manager.measured()).unwrap();
+        self.manager
+            .transmit(self.now, out.command.as_ref(), &mut self.bus);
+    }
+}
+
+fn run(config: &RobotConfig, settings: &DriveSettings) -> Outcome {
+    let mut l = Loop {
+        bus: VirtualBus::for_robot(config),
+        manager: DriveManager::new(config, settings).unwrap(),
+        ctrl: Controller::new(config),
+        period: config.control_period,
+        now: 0.0,
+    };
+    l.manager.start().unwrap();
+    for _ in 0..500 {
+        l.tick();
+        if l.manager.state() != DriveState::Starting {
+            break;
+        }
+    }
+    assert!(l.manager.is_operational(), "{:?}", l.manager.fault());
+    // Let the flow control settle, then measure.
+    for _ in 0..20 {
+        l.tick();
+    }
+    let begun: Vec<u64> = l.bus.drives().filter_map(|d| d.stats().begun_at).collect();
+    let skew = (begun.iter().max().unwrap() - begun.iter().min().unwrap()) as f64 * 1e-9;
+    l.bus.reset_stats();
+    let start = l.now;
+    l.ctrl.set_mode(Mode::Joint).unwrap();
+    l.ctrl.move_joints(&READY, 0.0).unwrap();
+    let mut leads = std::collections::BTreeSet::new();
+    let mut circle_started = false;
+    let mut write_delay_max: f64 = 0.0;
+    while l.now - start < RUN_SECONDS {
+        let step_time = l.now;
+        l.tick();
+        // The points sent at the last step have been written by now: how long after it.
+        for drive in l.bus.drives() {
+            let written = drive.table().last_write().unwrap() as f64 * 1e-9;
+            write_delay_max = write_delay_max.max(written - step_time);
+        }
+        assert!(l.manager.is_operational(), "{:?}", l.manager.fault());
+        (0..6).filter_map(|j| l.manager.lead(j)).for_each(|lead| {
+            leads.insert(lead);
+        });
+        if !l.ctrl.is_moving() && !circle_started && l.now - start > 1.0 {
+            l.ctrl.set_mode(Mode::Cartesian).unwrap();
+            l.ctrl
+                .start_shape(Shape::Circle {
+                    radius: 0.1,
+                    period: 10.0,
+                    axis_i: 0,
+                    axis_j: 2,
+                })
+                .unwrap();
+            circle_started = true;
+        }
+    }
+    let stats = l.bus.stats();
+    let latency_max = l
+        .bus
+        .drives()
+        .map(|d| d.stats().latency.max_ns)
+        .max()
+        .unwrap() as f64
+        * 1e-9;
+    Outcome {
+        worst_load: stats.worst_case_load(config.drives.can_bitrate),
+        typical_load: stats.load(config.drives.can_bitrate),
+        leads: format!("{leads:?}"),
+        latency_max,
+        write_delay_max,
+        skew,
+        underflows: l.bus.drives().map(|d| d.stats().underflows).sum(),
+    }
+}
+
+/// The seed's schedule: per drive and kinematic period one QP write, four queries and five
+/// 8-byte answers (spec §6.5).
+fn seed_load(period: f64, bitrate: u32) -> f64 {
+    use armgate_protocol::can::{CanFrame, bits_on_wire};
+    let frame = |n: usize| bits_on_wire(&CanFrame::new(0x365, &[0; 8][..n]).unwrap());
+    let per_drive = frame(8) + 4 * frame(4) + 5 * frame(8);
+    f64::from(6 * per_drive) / (period * f64::from(bitrate))
+}

@@ -1,0 +1,125 @@
+//! Bus load of set-point streaming, and the fastest control period a bus carries.
+//!
+//! Every frame is counted at its worst-case length (stuff bits included, protocol's
+//! [`bits_on_wire`]): a schedule that fits with the worst case fits whatever the data. Per
+//! drive and cycle the manager sends its PT point (`QP`, 8 bytes) and one query (4 bytes), and
+//! the drive answers both (8 bytes each) — 500 bits whichever the query is; the controller's
+//! heartbeat adds one 1-byte frame per heartbeat period.
+
+use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
+use armgate_protocol::can::{Heartbeat, NmtState, NodeId, NodeMessage, bits_on_wire};
+
+use super::settings::{DriveSettings, SAMPLE_TIME};
+use super::streaming::Query;
+use crate::config::RobotConfig;
+
+/// The load ceiling the fastest period keeps under by default.
+pub const DEFAULT_CEILING: f64 = 0.7;
+
+/// Longest PT segment considered (samples): 655 ms.
+const MAX_SAMPLES: u16 = 1820;
+
+/// The streaming traffic of one bus.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadModel {
+    /// Drives on the bus.
+    pub drives: usize,
+    /// Seconds between the controller's heartbeats.
+    pub heartbeat_period: f64,
+}
+
+/// A control period and the load it makes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeriodLoad {
+    /// Drive samples per period (`MP[4]`).
+    pub samples: u16,
+    /// The period (s).
+    pub period: f64,
+    /// The fraction of the bus in use, worst-case stuffing.
+    pub load: f64,
+}
+
+impl LoadModel {
+    /// The traffic of `config`'s drives with `settings`.
+    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Self {
+        Self {
+            drives: config
+                .joints
+                .iter()
+                .filter(|j| j.drive.node_id != 0)
+                .count(),
+            heartbeat_period: settings.heartbeat_period,
+        }
+    }
+
+    /// Worst-case bits one drive moves in one streaming cycle: its point and one query, and
+    /// their answers. (Every query has the same length, so the schedule does not change it.)
+    pub fn bits_per_drive(&self) -> u32 {
+        // Any node: the length of a frame does not depend on its identifier.
+        NodeId::new(1).map_or(0, |node| {
+            let point = Request::Set {
+                command: Mnemonic::QP,
+                index: Index::from(1),
+                value: Value::Int(0),
+            };
+            let query = Query::Position.request();
+            let answer = |command| Reply::Value {
+                command,
+                index: Index::ZERO,
+                value: Value::Int(0),
+            };
+            [
+                point.to_frame(node),
+                answer(Mnemonic::QP).to_frame(node),
+                query.to_frame(node),
+                answer(Mnemonic::PX).to_frame(node),
+            ]
+            .iter()
+            .map(bits_on_wire)
+            .sum()
+        })
+    }
+
+    /// Worst-case bits of one heartbeat.
+    pub fn heartbeat_bits(&self) -> u32 {
+        NodeId::new(1).map_or(0, |node| {
+            let beat = Heartbeat {
+                state: NmtState::Operational,
+            };
+            bits_on_wire(&beat.to_frame(node))
+        })
+    }
+
+    /// Worst-case bits per control cycle of `period` seconds, averaged over heartbeats.
+    pub fn bits_per_cycle(&self, period: f64) -> f64 {
+        let streaming = f64::from(self.bits_per_drive()) * self.drives as f64;
+        let heartbeat = if self.drives > 0 && self.heartbeat_period > 0.0 {
+            f64::from(self.heartbeat_bits()) * period / self.heartbeat_period
+        } else {
+            0.0
+        };
+        streaming + heartbeat
+    }
+
+    /// The fraction of a `bitrate` bus in use with a control period of `period` seconds.
+    pub fn load(&self, period: f64, bitrate: u32) -> f64 {
+        if period <= 0.0 || bitrate == 0 {
+            return f64::INFINITY;
+        }
+        self.bits_per_cycle(period) / (period * f64::from(bitrate))
+    }
+
+    /// The shortest control period — a whole number of 360 µs drive samples, as the PT
+    /// segment time must be — whose load stays at or under `ceiling`.
+    pub fn fastest_period(&self, bitrate: u32, ceiling: f64) -> Option<PeriodLoad> {
+        (1..=MAX_SAMPLES).find_map(|samples| {
+            let period = f64::from(samples) * SAMPLE_TIME;
+            let load = self.load(period, bitrate);
+            (load <= ceiling).then_some(PeriodLoad {
+                samples,
+                period,
+                load,
+            })
+        })
+    }
+}

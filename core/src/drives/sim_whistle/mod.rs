@@ -1,0 +1,570 @@
+//! A simulated Elmo Whistle on the CAN bus, so the firmware and the tests can run without an
+//! arm.
+//!
+//! It answers what the drive manager uses — NMT, the consumer-heartbeat SDO (0x1016), and the
+//! binary interpreter commands `UM`, `MO`, `PX`, `VX`, `PT`, `MP[1..=6]`, `QP[k]`, `TI[1]`,
+//! `BG`, `ST` — runs PT motion through its table ([`pt_table`]), moves a speed-limited,
+//! lagging motor ([`servo`]), watches the controller's heartbeat, and sends the emergencies a
+//! real drive would. Its interpreter runs one command at a time and queues one more: a third
+//! command arriving meanwhile replaces the queued one, which is lost (what the thesis observed,
+//! spec §6.5), and the drive reports it with an emergency. [`WhistleFaults`] injects faults.
+//!
+//! Time is in nanoseconds on the bus's clock; the drive samples its position loop every
+//! 360 µs of its own clock, which may run fast or slow by a few ppm.
+
+pub mod pt_table;
+pub mod servo;
+
+use armgate_protocol::can::interpreter::{Mnemonic, Reply, Request, Value};
+use armgate_protocol::can::{
+    CanFrame, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId, NodeMessage, Object,
+    SdoRequest, SdoResponse, SdoValue,
+};
+use heapless::Deque;
+
+use self::pt_table::{Latency, PtTable, WriteError};
+use self::servo::Servo;
+use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
+use super::settings::{POSITION_MODE, SAMPLE_TIME};
+use super::units::JointUnits;
+use crate::config::JointConfig;
+
+/// Frames a drive can have waiting to be sent.
+const TX_QUEUE: usize = 16;
+/// Internal events handled per `advance_to` call at most (a call normally covers a few
+/// samples).
+const MAX_EVENTS: u32 = 1_000_000;
+/// The consumer heartbeat object.
+const CONSUMER_HEARTBEAT: Object = Object {
+    index: 0x1016,
+    subindex: 1,
+};
+/// SDO abort: object does not exist.
+const NO_OBJECT: u32 = 0x0602_0000;
+
+/// Error codes the simulated interpreter answers with. They are the simulation's own; a real
+/// drive's are listed under `EC` in the SimplIQ command reference.
+pub mod error_code {
+    /// Unknown command.
+    pub const BAD_COMMAND: u8 = 2;
+    /// Array index out of range.
+    pub const BAD_INDEX: u8 = 3;
+    /// The command cannot be assigned, or queried.
+    pub const BAD_ACCESS: u8 = 7;
+    /// A value out of range.
+    pub const BAD_VALUE: u8 = 21;
+    /// Not allowed with the motor on (`UM`).
+    pub const MOTOR_ON: u8 = 57;
+    /// Not allowed with the motor off (`BG`).
+    pub const MOTOR_OFF: u8 = 58;
+    /// `BG` without a valid PT set-up.
+    pub const BAD_SETUP: u8 = 60;
+    /// Injected: [`WhistleFaults::error_on`](super::WhistleFaults::error_on).
+    pub const INJECTED: u8 = 99;
+}
+
+/// A simulated drive's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WhistleConfig {
+    /// Its node id.
+    pub node: NodeId,
+    /// Its joint's units (for the speed limit in joint units).
+    pub units: JointUnits,
+    /// Speed limit (rad/s or m/s); the thesis observed about 0.9 rad/s.
+    pub max_speed: f64,
+    /// Time constant of the position loop's lag (s).
+    pub lag: f64,
+    /// Time the interpreter takes per command (s).
+    pub interpreter_time: f64,
+    /// How fast the drive's clock runs (ppm; positive = fast).
+    pub clock_error_ppm: f64,
+    /// Where the drive's first sample falls (s, within one sample time).
+    pub sample_phase: f64,
+    /// The unit mode at power-up.
+    pub unit_mode: i32,
+    /// The encoder counts at power-up.
+    pub counts: i32,
+    /// Ambient temperature (°C).
+    pub ambient: f64,
+}
+
+impl WhistleConfig {
+    /// The drive of `joint` with the default behaviour, or `None` for a joint without one.
+    pub fn for_joint(joint: &JointConfig) -> Option<Self> {
+        let node = NodeId::new(joint.drive.node_id)?;
+        Some(Self {
+            node,
+            units: JointUnits::new(joint)?,
+            max_speed: 0.9,
+            lag: 0.004,
+            interpreter_time: 250e-6,
+            clock_error_ppm: 0.0,
+            // Spread the drives' sample instants a little, as independent clocks would be.
+            sample_phase: f64::from(node.get() % 9) * SAMPLE_TIME / 9.0,
+            unit_mode: POSITION_MODE,
+            counts: 0,
+            ambient: 25.0,
+        })
+    }
+}
+
+/// Faults to inject; the default injects none.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WhistleFaults {
+    /// The drive sends nothing at all (it still receives and moves).
+    pub silent: bool,
+    /// Every n-th interpreter reply is lost (0: none).
+    pub drop_every_reply: u32,
+    /// Every n-th interpreter command received is lost (0: none).
+    pub drop_every_command: u32,
+    /// Extra delay of every reply (s).
+    pub reply_delay: f64,
+    /// This command is answered with the error bit.
+    pub error_on: Option<Mnemonic>,
+    /// PT motion stops advancing, without notice.
+    pub stall: bool,
+    /// `UM=` is echoed but does not change the unit mode.
+    pub stuck_unit_mode: bool,
+}
+
+/// What happened to a simulated drive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WhistleStats {
+    /// Interpreter commands lost because two were already waiting.
+    pub commands_lost: u32,
+    /// PT motions ended by a buffer underflow.
+    pub underflows: u32,
+    /// QP writes refused because the entry was not yet executed.
+    pub overflows: u32,
+    /// Consumer heartbeat timeouts.
+    pub heartbeat_timeouts: u32,
+    /// Frames that did not fit the transmit queue.
+    pub transmit_overruns: u32,
+    /// When PT motion last began (ns on the bus clock).
+    pub begun_at: Option<u64>,
+    /// Write-to-reach times of the PT points.
+    pub latency: Latency,
+}
+
+/// A simulated Whistle.
+#[derive(Clone, Debug)]
+pub struct SimWhistle {
+    config: WhistleConfig,
+    /// Nanoseconds per sample on the bus clock.
+    sample_ns: f64,
+    /// Samples done since power-up.
+    samples: u64,
+    /// The time of the last event handled (ns).
+    now: u64,
+    nmt: NmtState,
+    unit_mode: i32,
+    motor_on: bool,
+    table: PtTable,
+    servo: Servo,
+    /// The position the servo follows (counts).
+    reference: f64,
+    /// The command running and when it completes.
+    running: Option<(Request, u64)>,
+    /// The command waiting.
+    waiting: Option<Request>,
+    /// The producer and timeout (ns) of the consumer heartbeat.
+    consumer: Option<(NodeId, u64)>,
+    /// When the watched heartbeat was last heard (ns); `None` until the first one.
+    last_beat: Option<u64>,
+    commands_received: u32,
+    replies_made: u32,
+    tx: Deque<(CanFrame, u64), TX_QUEUE>,
+    stats: WhistleStats,
+    /// Faults being injected.
+    pub faults: WhistleFaults,
+}
+
+impl SimWhistle {
+    /// A drive at power-up: pre-operational, motor off, at `config.counts`.
+    pub fn new(config: WhistleConfig) -> Self {
+        let sample_ns = SAMPLE_TIME * 1e9 * (1.0 + config.clock_error_ppm * 1e-6);
+        let dt = sample_ns * 1e-9;
+        let max_speed = config
+            .units
+            .counts_per_second(config.max_speed)
+            .map_or(f64::MAX, f64::from);
+        let position = f64::from(config.counts);
+        Self {
+            config,
+            sample_ns,
+            samples: 0,
+            now: 0,
+            nmt: NmtState::PreOperational,
+            unit_mode: config.unit_mode,
+            motor_on: false,
+            table: PtTable::default(),
+            servo: Servo::new(position, max_speed, config.lag, dt, config.ambient),
+            reference: position,
+            running: None,
+            waiting: None,
+            consumer: None,
+            last_beat: None,
+            commands_received: 0,
+            replies_made: 0,
+            tx: Deque::new(),
+            stats: WhistleStats::default(),
+            faults: WhistleFaults::default(),
+        }
+    }
+
+    /// Its node id.
+    pub fn node(&self) -> NodeId {
+        self.config.node
+    }
+
+    /// The motor position (counts, rounded as `PX` reports it).
+    pub fn position(&self) -> i32 {
+        round_i32(self.servo.position())
+    }
+
+    /// The position the motor is told to follow (counts): the PT profile, held where it
+    /// ended.
+    pub fn profile(&self) -> f64 {
+        self.reference
+    }
+
+    /// The motor position in joint units (rad or m), from the rounded counts.
+    pub fn joint_position(&self) -> f64 {
+        self.config.units.position(self.position())
+    }
+
+    /// True while PT motion runs.
+    pub fn pt_running(&self) -> bool {
+        self.table.running()
+    }
+
+    /// Its NMT state.
+    pub fn nmt_state(&self) -> NmtState {
+        self.nmt
+    }
+
+    /// The PT table.
+    pub fn table(&self) -> &PtTable {
+        &self.table
+    }
+
+    /// What happened so far.
+    pub fn stats(&self) -> WhistleStats {
+        WhistleStats {
+            begun_at: self.table.begun_at(),
+            latency: self.table.latency(),
+            ..self.stats
+        }
+    }
+
+    /// Forgets the counters and latencies so far.
+    pub fn reset_stats(&mut self) {
+        self.stats = WhistleStats::default();
+        self.table.reset_latency();
+    }
+
+    /// Sends `emergency` now (an injected fault).
+    pub fn inject(&mut self, emergency: DriveEmergency) {
+        self.emit(emergency.encode().to_frame(self.config.node), self.now);
+    }
+
+    /// The time of the drive's next internal event (ns): a sample, or a command completing.
+    pub fn next_event(&self) -> u64 {
+        let sample = self.sample_time(self.samples + 1);
+        self.running.map_or(sample, |(_, done)| done.min(sample))
+    }
+
+    /// The bus-clock time of sample `k` (ns).
+    fn sample_time(&self, k: u64) -> u64 {
+        let t = self.config.sample_phase * 1e9 + k as f64 * self.sample_ns;
+        t.max(0.0) as u64
+    }
+
+    /// Runs the drive up to time `t` (ns).
+    pub fn advance_to(&mut self, t: u64) {
+        for _ in 0..MAX_EVENTS {
+            let next = self.next_event();
+            if next > t {
+                break;
+            }
+            self.now = next;
+            match self.running {
+                Some((request, done)) if done == next => self.complete(request),
+                _ => self.sample(),
+            }
+        }
+        self.now = self.now.max(t);
+    }
+
+    /// The next frame to send and the time it is ready (ns), if any.
+    pub fn pop_transmit(&mut self) -> Option<(CanFrame, u64)> {
+        self.tx.pop_front()
+    }
+
+    /// Takes a frame from the bus at the current time.
+    pub fn receive(&mut self, frame: &CanFrame) {
+        let node = self.config.node;
+        if let Ok(nmt) = Nmt::parse(frame) {
+            if nmt.node.is_none_or(|n| n == node) {
+                self.nmt_command(nmt.command);
+            }
+            return;
+        }
+        match Function::split(frame.id()) {
+            Some((Function::Rpdo2, to)) if to == node => {
+                if let (Ok((_, request)), NmtState::Operational) = (Request::parse(frame), self.nmt)
+                {
+                    self.command(request);
+                }
+            }
+            Some((Function::SdoRequest, to)) if to == node && self.nmt != NmtState::Stopped => {
+                if let Ok((_, request)) = SdoRequest::parse(frame) {
+                    self.sdo(request);
+                }
+            }
+            Some((Function::Heartbeat, from)) => {
+                let watched = self.consumer.is_some_and(|(producer, _)| producer == from);
+                if watched && Heartbeat::parse(frame).is_ok() {
+                    self.last_beat = Some(self.now);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn nmt_command(&mut self, command: NmtCommand) {
+        match command {
+            NmtCommand::Start => self.nmt = NmtState::Operational,
+            NmtCommand::Stop => self.nmt = NmtState::Stopped,
+            NmtCommand::EnterPreOperational => self.nmt = NmtState::PreOperational,
+            NmtCommand::ResetNode | NmtCommand::ResetCommunication => {
+                self.table = PtTable::default();
+                self.motor_on = false;
+                self.consumer = None;
+                self.last_beat = None;
+                self.running = None;
+                self.waiting = None;
+                self.nmt = NmtState::PreOperational;
+                let boot = Heartbeat {
+                    state: NmtState::BootUp,
+                };
+                self.emit(boot.to_frame(self.config.node), self.now);
+            }
+        }
+    }
+
+    /// An interpreter command arrives: it runs at once if the interpreter is idle, else waits;
+    /// a waiting command is replaced, and lost.
+    fn command(&mut self, request: Request) {
+        self.commands_received = self.commands_received.wrapping_add(1);
+        if nth(self.commands_received, self.faults.drop_every_command) {
+            return;
+        }
+        if self.running.is_none() {
+            let done = self.now + seconds_to_ns(self.config.interpreter_time).max(1);
+            self.running = Some((request, done));
+        } else if self.waiting.replace(request).is_some() {
+            self.stats.commands_lost += 1;
+            self.inject(DriveEmergency::MessageLost);
+        }
+    }
+
+    /// The running command completes now: its effect, its reply, and the next command starts.
+    fn complete(&mut self, request: Request) {
+        let reply = self.execute(request);
+        self.replies_made = self.replies_made.wrapping_add(1);
+        if !nth(self.replies_made, self.faults.drop_every_reply) {
+            let ready = self.now + seconds_to_ns(self.faults.reply_delay);
+            self.emit(reply.to_frame(self.config.node), ready);
+        }
+        self.running = self.waiting.take().map(|next| {
+            let done = self.now + seconds_to_ns(self.config.interpreter_time).max(1);
+            (next, done)
+        });
+    }
+
+    /// Executes an interpreter command.
+    fn execute(&mut self, request: Request) -> Reply {
+        let (command, index, assigned) = match request {
+            Request::Query { command, index } => (command, index, None),
+            Request::Set {
+                command,
+                index,
+                value,
+            } => (command, index, Some(value)),
+        };
+        let answer = |value: i32| Reply::Value {
+            command,
+            index,
+            value: Value::Int(value),
+        };
+        let refuse = |code: u8| Reply::Error {
+            command,
+            index,
+            code,
+        };
+        if self.faults.error_on == Some(command) {
+            return refuse(error_code::INJECTED);
+        }
+        let value = match assigned {
+            Some(Value::Int(v)) => Some(v),
+            Some(Value::Float(_)) => return refuse(error_code::BAD_VALUE),
+            None => None,
+        };
+        let i = index.get();
+        let result = match (command, value) {
+            (Mnemonic::UM, None) => Ok(self.unit_mode),
+            (Mnemonic::UM, Some(_)) if self.motor_on => Err(error_code::MOTOR_ON),
+            (Mnemonic::UM, Some(mode @ 1..=5)) => {
+                if !self.faults.stuck_unit_mode {
+                    self.unit_mode = mode;
+                }
+                Ok(mode)
+            }
+            (Mnemonic::MO, None) => Ok(i32::from(self.motor_on)),
+            (Mnemonic::MO, Some(on @ 0..=1)) => {
+                self.motor_on = on == 1;
+                self.reference = self.servo.position();
+                self.table.stop();
+                Ok(on)
+            }
+            (Mnemonic::PX, None) => Ok(self.position()),
+            (Mnemonic::VX, None) => Ok(round_i32(self.servo.velocity())),
+            (Mnemonic::TI, None) if i == 1 => Ok(round_i32(self.servo.temperature())),
+            (Mnemonic::TI, None) => Err(error_code::BAD_INDEX),
+            (Mnemonic::PT, None) => Ok(i32::from(self.table.read_index())),
+            (Mnemonic::PT, Some(k)) if self.table.arm(k) => Ok(k),
+            (Mnemonic::PT, Some(_)) => Err(error_code::BAD_INDEX),
+            (Mnemonic::MP, None) => self.table.mp(i).ok_or(error_code::BAD_INDEX),
+            (Mnemonic::MP, Some(v)) if self.table.set_mp(i, v) => Ok(v),
+            (Mnemonic::MP, Some(_)) => Err(error_code::BAD_INDEX),
+            (Mnemonic::QP, None) => self.table.qp(i).ok_or(error_code::BAD_INDEX),
+            (Mnemonic::QP, Some(v)) => match self.table.write(i, v, self.now) {
+                Ok(()) => Ok(v),
+                Err(WriteError::BadIndex) => Err(error_code::BAD_INDEX),
+                Err(WriteError::QueueFull) => {
+                    self.stats.overflows += 1;
+                    self.inject(DriveEmergency::QueueFull { index: i });
+                    Ok(v)
+                }
+            },
+            (Mnemonic::BG, None) if !self.motor_on => Err(error_code::MOTOR_OFF),
+            (Mnemonic::BG, None) if self.unit_mode != POSITION_MODE => Err(error_code::BAD_SETUP),
+            (Mnemonic::BG, None) => self
+                .table
+                .begin(self.now)
+                .map(|()| 0)
+                .map_err(|_| error_code::BAD_SETUP),
+            (Mnemonic::ST, None) => {
+                self.table.stop();
+                Ok(0)
+            }
+            (Mnemonic::UM | Mnemonic::MO, Some(_)) => Err(error_code::BAD_VALUE),
+            (Mnemonic::PX | Mnemonic::VX | Mnemonic::TI | Mnemonic::BG | Mnemonic::ST, _) => {
+                Err(error_code::BAD_ACCESS)
+            }
+            _ => Err(error_code::BAD_COMMAND),
+        };
+        match result {
+            Ok(v) => answer(v),
+            Err(code) => refuse(code),
+        }
+    }
+
+    /// An SDO request: only the consumer heartbeat entry exists.
+    fn sdo(&mut self, request: SdoRequest) {
+        let response = match request {
+            SdoRequest::Download {
+                object: CONSUMER_HEARTBEAT,
+                value: SdoValue::U32(value),
+            } => {
+                let producer = NodeId::new(((value >> 16) & 0x7F) as u8);
+                let time_ns = u64::from(value & 0xFFFF) * 1_000_000;
+                self.consumer = producer.filter(|_| time_ns > 0).map(|p| (p, time_ns));
+                self.last_beat = None;
+                SdoResponse::Downloaded {
+                    object: CONSUMER_HEARTBEAT,
+                }
+            }
+            SdoRequest::Upload {
+                object: CONSUMER_HEARTBEAT,
+            } => {
+                let value = self.consumer.map_or(0, |(producer, time_ns)| {
+                    (u32::from(producer.get()) << 16) | (time_ns / 1_000_000) as u32
+                });
+                SdoResponse::Uploaded {
+                    object: CONSUMER_HEARTBEAT,
+                    value: SdoValue::U32(value),
+                }
+            }
+            SdoRequest::Download { object, .. } | SdoRequest::Upload { object } => {
+                SdoResponse::Abort {
+                    object,
+                    code: NO_OBJECT,
+                }
+            }
+        };
+        let ready = self.now + seconds_to_ns(self.config.interpreter_time);
+        self.emit(response.to_frame(self.config.node), ready);
+    }
+
+    /// One position-loop sample: heartbeat watch, PT motion, motor.
+    fn sample(&mut self) {
+        self.samples += 1;
+        let dt = self.sample_ns * 1e-9;
+        let timed_out = match (self.consumer, self.last_beat) {
+            (Some((_, timeout)), Some(last)) => self.now.saturating_sub(last) > timeout,
+            _ => false,
+        };
+        if timed_out {
+            // CiA 301 default reaction (object 0x1029): pre-operational; the drive stops its
+            // motion and holds where it is.
+            self.stats.heartbeat_timeouts += 1;
+            self.last_beat = None;
+            self.table.stop();
+            self.nmt = NmtState::PreOperational;
+            self.inject(DriveEmergency::HeartbeatLost);
+        }
+        let sample = self.table.sample(self.now, self.faults.stall);
+        if let Some(reference) = sample.reference {
+            self.reference = reference;
+        }
+        if let Some(emergency) = sample.emergency {
+            if let DriveEmergency::MotionTerminated {
+                reason: REASON_UNDERFLOW,
+                ..
+            } = emergency
+            {
+                self.stats.underflows += 1;
+            }
+            self.inject(emergency);
+        }
+        self.servo
+            .sample(self.motor_on.then_some(self.reference), dt);
+    }
+
+    /// Queues `frame` for sending at `ready` (ns), unless the drive is silent.
+    fn emit(&mut self, frame: CanFrame, ready: u64) {
+        if self.faults.silent {
+            return;
+        }
+        if self.tx.push_back((frame, ready)).is_err() {
+            self.stats.transmit_overruns += 1;
+        }
+    }
+}
+
+/// True if `count` is a multiple of `every` (never for `every` = 0).
+fn nth(count: u32, every: u32) -> bool {
+    every != 0 && count.is_multiple_of(every)
+}
+
+/// Seconds to nanoseconds (0 for negative or NaN).
+fn seconds_to_ns(seconds: f64) -> u64 {
+    libm::round(seconds * 1e9).max(0.0) as u64
+}
+
+/// `value` rounded to an `i32`, saturating.
+fn round_i32(value: f64) -> i32 {
+    libm::round(value).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+}

@@ -1,0 +1,163 @@
+//! One drive's start sequence (spec §6.4 "Start" and §6.6 "Initialisation").
+//!
+//! Each step sends at most two frames and completes when the drive has answered all of them,
+//! so no drive ever gets more than two frames per cycle. (The seed sent twelve in one cycle
+//! and waited with sleeps, §9 item 31; it also wrote the unused QT table and the write pointer
+//! `MP[6]`, which interpreter writes by index do not use — both dropped here.)
+//!
+//! | Step | Frames | Meaning |
+//! |---|---|---|
+//! | `ConsumerHeartbeat` | SDO 0x1016:1 | stop by yourself if the controller's heartbeat stops |
+//! | `ReadUnitMode` | `UM` | |
+//! | `MotorOff`, `SetUnitMode` | `MO=0`, `UM=5` | only if the unit mode differs |
+//! | `SettleUnitMode` | — | counted wait |
+//! | `CheckUnitMode` | `UM` | must now be 5 |
+//! | `MotorOn` | `MO=1` | |
+//! | `ReadPosition` | `PX` | the start position and the first hold point |
+//! | `Configure(0)` | `MP[1]=1`, `MP[2]=ring` | ring `QP[1..=ring]` |
+//! | `Configure(1)` | `MP[3]=1`, `MP[4]=samples` | cyclic; segment = one control period |
+//! | `Configure(2)` | `MP[5]=0`, `QP[1]=PX` | no queue-low warning: the read index paces the writer |
+//! | `Configure(3)` | `QP[2]=PX`, `QP[3]=PX` | |
+//! | `Configure(4)` | `QP[4]=PX`, `PT=1` | the next `BG` starts PT motion at `QP[1]` |
+//! | `Ready` | — | waits for every drive |
+//! | `Begin` | `BG` | all drives in one cycle |
+
+use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
+use armgate_protocol::can::{NodeId, Object, SdoRequest};
+use heapless::Vec;
+
+use super::settings::POSITION_MODE;
+use super::streaming::FILLED_POINTS;
+
+/// Where one drive is in its start sequence.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StartStep {
+    /// Configure the consumer heartbeat (object 0x1016).
+    ConsumerHeartbeat,
+    /// Read the unit mode.
+    ReadUnitMode,
+    /// Switch the motor off before changing the unit mode.
+    MotorOff,
+    /// Set position mode.
+    SetUnitMode,
+    /// Wait this many more cycles after the change.
+    SettleUnitMode(u32),
+    /// Read the unit mode again.
+    CheckUnitMode,
+    /// Switch the motor on.
+    MotorOn,
+    /// Read the start position.
+    ReadPosition,
+    /// Configure the PT ring and fill it (five parts).
+    Configure(u8),
+    /// Waiting for every other drive.
+    Ready,
+    /// `BG` sent: PT motion runs.
+    Begin,
+}
+
+/// A frame a step sends, and the answer it waits for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outgoing {
+    /// An interpreter command; the answer echoes its command and index.
+    Interpreter(Request),
+    /// An SDO request; the answer names its object.
+    Sdo(SdoRequest),
+}
+
+/// What a step needs to build its frames.
+#[derive(Clone, Copy, Debug)]
+pub struct StepContext {
+    /// The controller, producer of the heartbeat the drives watch.
+    pub controller: NodeId,
+    /// The drives' consumer heartbeat time (ms).
+    pub heartbeat_timeout_ms: u16,
+    /// Entries of the PT ring.
+    pub ring_len: u16,
+    /// Samples per PT segment (`MP[4]`).
+    pub samples_per_point: u16,
+    /// The start position (counts), once read; the ring is filled with it.
+    pub position: Option<i32>,
+}
+
+impl StartStep {
+    /// The frames this step sends (at most two).
+    pub fn frames(&self, ctx: &StepContext) -> Vec<Outgoing, 2> {
+        let set = |command, index: u8, value: i32| {
+            Outgoing::Interpreter(Request::Set {
+                command,
+                index: Index::from(index),
+                value: Value::Int(value),
+            })
+        };
+        let query = |command| {
+            Outgoing::Interpreter(Request::Query {
+                command,
+                index: Index::ZERO,
+            })
+        };
+        // No position, no fill: a point is never invented (and `BG` is then refused).
+        let fill = |slot: u16| ctx.position.map(|p| set(Mnemonic::QP, slot as u8, p));
+        let frames: &[Option<Outgoing>] = match *self {
+            Self::ConsumerHeartbeat => &[Some(Outgoing::Sdo(SdoRequest::consumer_heartbeat(
+                ctx.controller,
+                ctx.heartbeat_timeout_ms,
+            )))],
+            Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
+            Self::MotorOff => &[Some(set(Mnemonic::MO, 0, 0))],
+            Self::SetUnitMode => &[Some(set(Mnemonic::UM, 0, POSITION_MODE))],
+            Self::MotorOn => &[Some(set(Mnemonic::MO, 0, 1))],
+            Self::ReadPosition => &[Some(query(Mnemonic::PX))],
+            Self::Configure(0) => &[
+                Some(set(Mnemonic::MP, 1, 1)),
+                Some(set(Mnemonic::MP, 2, i32::from(ctx.ring_len))),
+            ],
+            Self::Configure(1) => &[
+                Some(set(Mnemonic::MP, 3, 1)),
+                Some(set(Mnemonic::MP, 4, i32::from(ctx.samples_per_point))),
+            ],
+            Self::Configure(2) => &[Some(set(Mnemonic::MP, 5, 0)), fill(1)],
+            Self::Configure(3) => &[fill(2), fill(3)],
+            Self::Configure(_) => &[fill(FILLED_POINTS), Some(set(Mnemonic::PT, 0, 1))],
+            Self::Begin => &[Some(query(Mnemonic::BG))],
+            Self::SettleUnitMode(_) | Self::Ready => &[],
+        };
+        frames.iter().flatten().copied().collect()
+    }
+
+    /// The step after this one, given the unit mode the drive reported; `Err(found)` if the
+    /// drive is still not in position mode after the change.
+    pub fn next(&self, unit_mode: Option<i32>, settle: u32) -> Result<Self, i32> {
+        let in_position_mode = unit_mode == Some(POSITION_MODE);
+        Ok(match *self {
+            Self::ConsumerHeartbeat => Self::ReadUnitMode,
+            Self::ReadUnitMode if in_position_mode => Self::MotorOn,
+            Self::ReadUnitMode => Self::MotorOff,
+            Self::MotorOff => Self::SetUnitMode,
+            Self::SetUnitMode => Self::SettleUnitMode(settle),
+            Self::SettleUnitMode(0) => Self::CheckUnitMode,
+            Self::SettleUnitMode(n) => Self::SettleUnitMode(n - 1),
+            Self::CheckUnitMode if in_position_mode => Self::MotorOn,
+            Self::CheckUnitMode => return Err(unit_mode.unwrap_or(0)),
+            Self::MotorOn => Self::ReadPosition,
+            Self::ReadPosition => Self::Configure(0),
+            Self::Configure(n @ 0..=3) => Self::Configure(n + 1),
+            Self::Configure(_) | Self::Ready => Self::Ready,
+            Self::Begin => Self::Begin,
+        })
+    }
+}
+
+impl Outgoing {
+    /// True if `reply` (command and index of an interpreter answer) answers this frame.
+    pub fn answered_by(&self, command: Mnemonic, index: Index) -> bool {
+        matches!(*self, Self::Interpreter(Request::Query { command: c, index: i }
+            | Request::Set { command: c, index: i, .. }) if c == command && i == index)
+    }
+
+    /// True if an SDO answer about `object` answers this frame.
+    pub fn answered_by_sdo(&self, object: Object) -> bool {
+        matches!(*self, Self::Sdo(SdoRequest::Download { object: o, .. }
+            | SdoRequest::Upload { object: o }) if o == object)
+    }
+}
