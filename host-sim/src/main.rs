@@ -4,7 +4,9 @@
 //! 31-byte UDP command protocol. Only bytes and time are handled here.
 
 mod allow;
+mod backend;
 mod log;
+mod socketcan;
 
 use std::io::IsTerminal;
 use std::net::{SocketAddr, UdpSocket};
@@ -15,11 +17,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use allow::Network;
-use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
+use armgate_core::command::{ArmModel, CommandHandler};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
 use armgate_core::motion::{IdealArm, Mode, RateLimitedArm};
+use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
 
@@ -42,7 +45,12 @@ struct Args {
     /// only (127.0.0.0/8 and ::1). Datagrams from elsewhere are dropped and counted.
     #[arg(long = "allow", value_name = "NETWORK")]
     allow: Vec<Network>,
-    /// How the simulated joints follow the commands.
+    /// Where set-points go: `sim` = one simulated Elmo Whistle per drive of the robot file on
+    /// a virtual CAN bus; `socketcan:IFACE` = real drives through Linux SocketCAN (e.g.
+    /// socketcan:can0); `off` = no drives, a simulated arm (see --arm).
+    #[arg(long, default_value = "sim", value_name = "sim|socketcan:IFACE|off")]
+    can: CanChoice,
+    /// With --can off: how the simulated joints follow the commands.
     #[arg(long, value_enum, default_value_t = ArmKind::Ideal)]
     arm: ArmKind,
     /// Starting joint positions, comma-separated (default: the drives' home positions).
@@ -114,7 +122,9 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     let start = Chain::new(config)
         .check(&start)
         .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
-    let mut drives = SimulatedDrives::new(arm_model(args.arm, config, start));
+    let mut drives = Backend::open(&args.can, config, &start, || {
+        arm_model(args.arm, config, start)
+    })?;
     let mut handler = CommandHandler::new(config);
     let allow = if args.allow.is_empty() {
         vec!["127.0.0.0/8".parse()?, "::1".parse()?]
@@ -126,15 +136,19 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         None => Logger::disabled(),
     };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    socket
+        .set_nonblocking(true)
+        .map_err(|e| format!("{}: {e}", args.listen))?;
     let running = Arc::new(AtomicBool::new(true));
     let stop = running.clone();
     ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
     let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
     eprintln!(
-        "armgate-sim: {} ({n} joints, {:.2} ms period) on udp://{}, allowing {}",
+        "armgate-sim: {} ({n} joints, {:.2} ms period, drives: {}) on udp://{}, allowing {}",
         config.name,
         config.control_period * 1e3,
+        drives.describe(),
         socket.local_addr().map_err(|e| e.to_string())?,
         allowed.join(", ")
     );
@@ -158,10 +172,11 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         if now >= next_tick {
             // Time inside the core is the scheduled tick time: deterministic, not wall-clock.
             let t = (next_tick - epoch).as_secs_f64();
+            drives.receive(t)?;
             let out = handler
-                .tick(t, &drives.measured(), &drives)
+                .tick(t, &drives.measured(), drives.drives())
                 .map_err(|e| format!("control tick: {e}"))?;
-            drives.apply(out.command.as_ref(), config.control_period);
+            drives.transmit(t, out.command.as_ref());
             while let Some(text) = handler.next_notice() {
                 stats.notices += 1;
                 logger.log(Record::Warning {
@@ -183,8 +198,11 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
                     setpoint: out.setpoint,
                 })));
             }
+            // Simulated time stays strictly periodic: after a late tick the next ones run back
+            // to back (each one PT point for the drives) rather than skipping points, unless
+            // the loop is hopelessly behind.
             next_tick += period;
-            if next_tick < now {
+            if now > next_tick + period * MAX_CATCH_UP {
                 stats.overruns += 1;
                 next_tick = now + period;
             }
@@ -194,17 +212,12 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             }
             continue;
         }
-        socket
-            .set_read_timeout(Some(next_tick - now))
-            .map_err(|e| e.to_string())?;
         let (len, from) = match socket.recv_from(&mut buf) {
             Ok(received) => received,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) =>
-            {
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                // Socket timeouts are rounded to the kernel's tick (several ms); a sleep is
+                // precise. Replies wait at most POLL_INTERVAL.
+                std::thread::sleep((next_tick - now).min(POLL_INTERVAL));
                 continue;
             }
             Err(e) => return Err(format!("udp receive: {e}")),
@@ -221,7 +234,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             t,
             datagram: datagram.to_vec(),
         });
-        let reply = handler.handle(datagram, &mut drives);
+        let reply = handler.handle(datagram, drives.drives_mut());
         logger.log(Record::Reply { t, datagram: reply });
         socket
             .send_to(&reply, from)
@@ -238,6 +251,11 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     );
     Ok(())
 }
+
+/// Longest wait for a datagram between two checks of the tick clock.
+const POLL_INTERVAL: Duration = Duration::from_micros(500);
+/// Late ticks are caught up back to back while the loop is at most this many periods behind.
+const MAX_CATCH_UP: u32 = 50;
 
 /// Receive buffer asked of the kernel: about 4,000 queued datagrams, so that a burst from a
 /// client is not dropped while a tick runs (the kernel caps it at `net.core.rmem_max`).

@@ -7,8 +7,10 @@ use crate::kinematics::Joints;
 /// The drive side of the arm as the client commands see it (ON, OF, RC, TM): the CAN drive
 /// manager on the board, or a simulated arm.
 pub trait Drives {
-    /// Starts the drives (motor on, set-point streaming); false if they did not start, e.g.
-    /// because they already run or a drive did not answer.
+    /// Starts the drives (motor on, set-point streaming); false if they cannot start now, e.g.
+    /// because they already run. Starting may take several cycles: a drive that then fails to
+    /// answer shows as a [`fault`](Self::fault), and motion stays refused until
+    /// [`is_operational`](Self::is_operational).
     fn start(&mut self) -> bool;
     /// Stops the drives; false if they were not running.
     fn stop(&mut self) -> bool;

@@ -55,14 +55,22 @@ impl CommandHandler {
     }
 
     /// One control tick (see [`Controller::step`]); its events feed the warning relay.
+    /// While the drives take no commands (starting, stopped, or stopped by a fault, when they
+    /// hold their last point) the controller holds the measured position, so motion resumes
+    /// from where the arm is; motion requests are refused meanwhile
+    /// ([`Drives::is_operational`]).
     pub fn tick(
         &mut self,
         now: f64,
         measured: &[f64],
-        drives: &impl Drives,
+        drives: &(impl Drives + ?Sized),
     ) -> Result<StepOutput, KinematicsError> {
+        let fault = drives.fault();
         let out = self.controller.step(now, measured)?;
-        self.relay.observe(now, &out.events, drives.fault());
+        if !drives.is_operational() {
+            self.controller.release();
+        }
+        self.relay.observe(now, &out.events, fault);
         Ok(out)
     }
 
@@ -77,7 +85,11 @@ impl CommandHandler {
     }
 
     /// Handles one datagram of any length and returns the reply datagram.
-    pub fn handle(&mut self, datagram: &[u8], drives: &mut impl Drives) -> [u8; MESSAGE_LEN] {
+    pub fn handle(
+        &mut self,
+        datagram: &[u8],
+        drives: &mut (impl Drives + ?Sized),
+    ) -> [u8; MESSAGE_LEN] {
         let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
         let reply = match request {
             Ok(request) => self.execute(&request, drives),
@@ -89,7 +101,11 @@ impl CommandHandler {
         }
     }
 
-    fn execute(&mut self, req: &Request, drives: &mut impl Drives) -> Result<Reply, Notice> {
+    fn execute(
+        &mut self,
+        req: &Request,
+        drives: &mut (impl Drives + ?Sized),
+    ) -> Result<Reply, Notice> {
         let cmd = req.command;
         let v = req.values.map(f64::from);
         let slot = usize::from(req.index & !BANK_2);
@@ -285,7 +301,7 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
     }
 }
 
-fn operational(drives: &impl Drives, cmd: Command) -> Result<(), Notice> {
+fn operational(drives: &(impl Drives + ?Sized), cmd: Command) -> Result<(), Notice> {
     if drives.is_operational() {
         Ok(())
     } else {

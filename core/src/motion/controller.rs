@@ -294,6 +294,15 @@ impl Controller {
         Ok(())
     }
 
+    /// Forgets the last command and holds the measured position: for while the drives do not
+    /// take commands (starting, stopped, faulted), so that when they do, the first command is
+    /// where the arm actually is rather than a stale set-point (the seed reset its generator
+    /// after start-up for the same reason). Stops every motion and sequence.
+    pub fn release(&mut self) {
+        self.command = None;
+        self.stop();
+    }
+
     /// Stops every motion and sequence; the arm holds its commanded position.
     pub fn stop(&mut self) {
         if let Some((q_m, _)) = self.measured {
