@@ -24,7 +24,13 @@ fn main() {
     println!("|------------|--------|---------|-----------|--------|--------|");
     for (name, start) in [
         ("ranger-mk1", vec![1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]),
-        ("ranger-mk2", vec![0.1, 0.4, -0.2, 0.8, 0.1, 0.5, 0.2, 0.1]),
+        // The E9 rectangle's first corner: well conditioned, the circle stays reachable.
+        (
+            "ranger-mk2",
+            vec![
+                0.1508, -0.5897, 0.3452, -1.9859, -0.3564, 0.2665, 0.6688, 0.4256,
+            ],
+        ),
     ] {
         let path = format!("{}/../robots/{name}.toml", env!("CARGO_MANIFEST_DIR"));
         let mut config = load_file(&path).unwrap();
