@@ -147,11 +147,7 @@ impl CanBus for SocketCan {
     }
 
     fn state(&self) -> BusState {
-        if self.bus_off {
-            BusState::BusOff
-        } else {
-            BusState::ErrorActive
-        }
+        BusState::from_bus_off(self.bus_off)
     }
 }
 

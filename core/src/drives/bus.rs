@@ -27,6 +27,17 @@ pub enum BusState {
     BusOff,
 }
 
+impl BusState {
+    /// Error-active, or bus-off: the two states a controller that does not count errors knows.
+    pub fn from_bus_off(bus_off: bool) -> Self {
+        if bus_off {
+            Self::BusOff
+        } else {
+            Self::ErrorActive
+        }
+    }
+}
+
 /// Why a frame was not queued.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TxError {

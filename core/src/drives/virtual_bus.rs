@@ -298,10 +298,6 @@ impl CanBus for VirtualBus {
     }
 
     fn state(&self) -> BusState {
-        if self.bus_off {
-            BusState::BusOff
-        } else {
-            BusState::ErrorActive
-        }
+        BusState::from_bus_off(self.bus_off)
     }
 }

@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
-use armgate_core::motion::{Controller, IdealArm, Mode};
+use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
 
 /// The rectangle of E8/E9 (m), closed: the last point is the first.
 pub const RECTANGLE: [[f64; 3]; 5] = [
@@ -25,6 +25,20 @@ pub const RECTANGLE: [[f64; 3]; 5] = [
     [0.5, -0.2, 0.1],
     [0.5, 0.2, 0.1],
 ];
+
+/// One control tick with an ideal arm: the output, the new joints and the largest joint step.
+fn tick(ctrl: &mut Controller, arm: &mut IdealArm, now: f64) -> (StepOutput, Joints, f64) {
+    let before = arm.measured();
+    let out = ctrl.step(now, &before).unwrap();
+    arm.step(out.command.as_ref());
+    let q = arm.measured();
+    let step = q
+        .iter()
+        .zip(before.iter())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (out, q, step)
+}
 
 /// Results of a rectangle run.
 #[derive(Debug)]
@@ -125,15 +139,7 @@ pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
     };
     for _ in 0..100_000 {
         now += period;
-        let before = arm.measured();
-        let out = ctrl.step(now, &before).unwrap();
-        arm.step(out.command.as_ref());
-        let q = arm.measured();
-        let step = q
-            .iter()
-            .zip(before.iter())
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
         let p = chain.forward(&q).unwrap().pos;
@@ -227,15 +233,7 @@ pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
     // Long enough for the set-point to travel ~4 m at 0.03 m/s and the sequence to give up.
     for _ in 0..((400.0 / period) as usize) {
         now += period;
-        let before = arm.measured();
-        let out = ctrl.step(now, &before).unwrap();
-        arm.step(out.command.as_ref());
-        let q = arm.measured();
-        let step = q
-            .iter()
-            .zip(before.iter())
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
         let p = chain.forward(&q).unwrap().pos;

@@ -180,10 +180,6 @@ impl CanBus for ScriptedBus {
     }
 
     fn state(&self) -> BusState {
-        if self.bus_off {
-            BusState::BusOff
-        } else {
-            BusState::ErrorActive
-        }
+        BusState::from_bus_off(self.bus_off)
     }
 }
