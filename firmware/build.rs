@@ -6,11 +6,24 @@
 //!   workspace root), validates it and writes its postcard serialisation to
 //!   `OUT_DIR/robot.postcard`, which `src/config.rs` embeds. A refused robot file fails the
 //!   build with the error naming the field;
+//! * parses the network and simulation settings (`ARMGATE_IP`, `ARMGATE_GATEWAY`,
+//!   `ARMGATE_PORT`, `ARMGATE_ALLOW`, `ARMGATE_SIM_ARM`; see `docs/firmware.md`) and writes them
+//!   as Rust constants to `OUT_DIR/settings.rs`, which `src/settings.rs` includes. A malformed
+//!   value fails the build with a message naming the variable;
 //! * sets `DEFMT_LOG=info` for this crate unless the user set `DEFMT_LOG`.
 
+use std::fmt::Write as _;
+use std::net::Ipv4Addr;
 use std::path::{Path, PathBuf};
 
 include!("../tools/embed_robot.rs");
+
+/// The board's address and prefix length when `ARMGATE_IP` is not set.
+const DEFAULT_IP: &str = "192.168.1.50/24";
+/// The UDP port when `ARMGATE_PORT` is not set (the protocol's port, as `armgate-sim`'s).
+const DEFAULT_PORT: u16 = 7031;
+/// The allow-list when `ARMGATE_ALLOW` is not set: the board's own network.
+const DEFAULT_ALLOW: &str = "local";
 
 /// The robot embedded when `ROBOT` is not set.
 const DEFAULT_ROBOT: &str = "robots/ranger-mk1.toml";
@@ -43,6 +56,154 @@ fn main() {
     if let Err(message) = embed_robot(&workspace_root, &robot, &out_dir.join("robot.postcard")) {
         fail_build(&message);
     }
+
+    match settings() {
+        Ok(text) => {
+            let path = out_dir.join("settings.rs");
+            if let Err(e) = std::fs::write(&path, text) {
+                fail_build(&format!("cannot write {}: {e}", path.display()));
+            }
+        }
+        Err(message) => fail_build(&message),
+    }
+}
+
+/// An environment variable of the build, with its `rerun-if-env-changed` line; unset and empty
+/// count as absent.
+fn env(name: &str) -> Option<String> {
+    println!("cargo:rerun-if-env-changed={name}");
+    std::env::var(name).ok().filter(|v| !v.trim().is_empty())
+}
+
+/// `a.b.c.d/n` (or a bare `a.b.c.d`, which means `/32`).
+fn parse_network(text: &str) -> Result<(Ipv4Addr, u8), String> {
+    let text = text.trim();
+    let (address, prefix) = match text.split_once('/') {
+        Some((address, prefix)) => (address, Some(prefix)),
+        None => (text, None),
+    };
+    let address: Ipv4Addr = address
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not an IPv4 address (a.b.c.d or a.b.c.d/n)"))?;
+    let prefix = match prefix {
+        None => 32,
+        Some(p) => match p.trim().parse::<u8>() {
+            Ok(p) if p <= 32 => p,
+            _ => return Err(format!("`{text}`: the prefix length must be 0..=32")),
+        },
+    };
+    Ok((address, prefix))
+}
+
+/// The generated constants of `src/settings.rs`, or the error naming the variable.
+fn settings() -> Result<String, String> {
+    let ip = env("ARMGATE_IP").unwrap_or_else(|| DEFAULT_IP.to_owned());
+    let (address, prefix) = parse_network(&ip).map_err(|e| format!("ARMGATE_IP: {e}"))?;
+    if prefix == 0 || prefix == 32 {
+        return Err(format!(
+            "ARMGATE_IP: `{ip}`: give the board's address with its network prefix, e.g. {DEFAULT_IP}"
+        ));
+    }
+    let gateway = match env("ARMGATE_GATEWAY") {
+        None => None,
+        Some(g) if g.trim() == "none" => None,
+        Some(g) => Some(
+            g.trim()
+                .parse::<Ipv4Addr>()
+                .map_err(|_| format!("ARMGATE_GATEWAY: `{g}` is not an IPv4 address"))?,
+        ),
+    };
+    let port = match env("ARMGATE_PORT") {
+        None => DEFAULT_PORT,
+        Some(p) => match p.trim().parse::<u16>() {
+            Ok(p) if p > 0 => p,
+            _ => {
+                return Err(format!(
+                    "ARMGATE_PORT: `{p}` is not a port number (1..=65535)"
+                ));
+            }
+        },
+    };
+    let allow_text = env("ARMGATE_ALLOW").unwrap_or_else(|| DEFAULT_ALLOW.to_owned());
+    let mut allow_local = false;
+    let mut allow = Vec::new();
+    for entry in allow_text
+        .split(',')
+        .map(str::trim)
+        .filter(|e| !e.is_empty())
+    {
+        if entry == "local" {
+            allow_local = true;
+        } else {
+            allow.push(parse_network(entry).map_err(|e| format!("ARMGATE_ALLOW: {e}"))?);
+        }
+    }
+    if !allow_local && allow.is_empty() {
+        return Err("ARMGATE_ALLOW: empty: no client could command the arm".to_owned());
+    }
+    let sim_arm = match env("ARMGATE_SIM_ARM").as_deref().map(str::trim) {
+        None | Some("ideal") => "Ideal",
+        Some("rate-limited") => "RateLimited",
+        Some(other) => {
+            return Err(format!(
+                "ARMGATE_SIM_ARM: `{other}`: expected `ideal` or `rate-limited`"
+            ));
+        }
+    };
+
+    let ipv4 = |a: Ipv4Addr| {
+        let [a, b, c, d] = a.octets();
+        format!("Ipv4Addr::new({a}, {b}, {c}, {d})")
+    };
+    let mut out = String::from("// Generated by firmware/build.rs from the ARMGATE_* variables.\n");
+    // With DHCP the static address is not used.
+    let unused_with_dhcp = "#[cfg_attr(feature = \"dhcp\", allow(dead_code))]";
+    let _ = writeln!(
+        out,
+        "/// The board's IPv4 address (`ARMGATE_IP`; unused with `dhcp`)."
+    );
+    let _ = writeln!(out, "{unused_with_dhcp}");
+    let _ = writeln!(out, "pub const ADDRESS: Ipv4Addr = {};", ipv4(address));
+    let _ = writeln!(out, "/// Its network prefix length (`ARMGATE_IP`).");
+    let _ = writeln!(out, "{unused_with_dhcp}");
+    let _ = writeln!(out, "pub const PREFIX_LEN: u8 = {prefix};");
+    let _ = writeln!(out, "/// The default gateway (`ARMGATE_GATEWAY`), if any.");
+    let _ = writeln!(out, "{unused_with_dhcp}");
+    match gateway {
+        Some(g) => {
+            let _ = writeln!(
+                out,
+                "pub const GATEWAY: Option<Ipv4Addr> = Some({});",
+                ipv4(g)
+            );
+        }
+        None => {
+            let _ = writeln!(out, "pub const GATEWAY: Option<Ipv4Addr> = None;");
+        }
+    }
+    let _ = writeln!(
+        out,
+        "/// The UDP port of the command protocol (`ARMGATE_PORT`)."
+    );
+    let _ = writeln!(out, "pub const PORT: u16 = {port};");
+    let _ = writeln!(
+        out,
+        "/// Whether the board's own network may command the arm (`local` in `ARMGATE_ALLOW`)."
+    );
+    let _ = writeln!(out, "pub const ALLOW_LOCAL: bool = {allow_local};");
+    let _ = writeln!(
+        out,
+        "/// Further networks that may command the arm (`ARMGATE_ALLOW`)."
+    );
+    let _ = writeln!(out, "pub const ALLOW: &[Network] = &[");
+    for (a, p) in &allow {
+        let _ = writeln!(out, "    Network::new({}, {p}),", ipv4(*a));
+    }
+    let _ = writeln!(out, "];");
+    let _ = writeln!(out, "/// The simulated arm's dynamics (`ARMGATE_SIM_ARM`).");
+    let _ = writeln!(out, "pub const SIM_ARM: SimArm = SimArm::{sim_arm};");
+    Ok(out)
 }
 
 /// `memory.x` lives at the workspace root (one memory map for the one board). rust-lld looks for

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Builds the bare-metal kinematics benchmark and runs it in QEMU; prints its table.
+# Builds the bare-metal benchmarks and runs them in QEMU; prints their tables: instructions per
+# call of FK and tracking IK (armgate-qemu-bench), then per full control tick (armgate-qemu-tick).
 #
 #   qemu-bench/run.sh            (from anywhere; honours CARGO_TARGET_DIR)
 #
@@ -12,20 +13,26 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 target=thumbv7em-none-eabihf
-elf=$(cargo build -p armgate-qemu-bench --target "$target" --release \
+executables=$(cargo build -p armgate-qemu-bench --target "$target" --release \
         --message-format=json-render-diagnostics |
-      sed -n 's/.*"executable":"\([^"]*armgate-qemu-bench\)".*/\1/p' | tail -n 1)
-if [[ -z "$elf" || ! -f "$elf" ]]; then
-    echo "run.sh: cannot find the armgate-qemu-bench executable after the build" >&2
-    exit 1
-fi
+      sed -n 's/.*"executable":"\([^"]*\)".*/\1/p')
 
 status=0
-timeout "${QEMU_TIMEOUT:-300}" qemu-system-arm -machine mps2-an500 -cpu cortex-m7 -nographic \
-    -semihosting-config enable=on,target=native -icount shift=0 -kernel "$elf" || status=$?
-if [[ $status -eq 124 ]]; then
-    echo "run.sh: QEMU did not finish within ${QEMU_TIMEOUT:-300} s" >&2
-elif [[ $status -ne 0 ]]; then
-    echo "run.sh: the benchmark failed (QEMU exit status $status)" >&2
-fi
+for name in armgate-qemu-bench armgate-qemu-tick; do
+    elf=$(grep "/$name\$" <<<"$executables" | tail -n 1 || true)
+    if [[ -z "$elf" || ! -f "$elf" ]]; then
+        echo "run.sh: cannot find the $name executable after the build" >&2
+        exit 1
+    fi
+    [[ $name == armgate-qemu-bench ]] || echo
+    run=0
+    timeout "${QEMU_TIMEOUT:-300}" qemu-system-arm -machine mps2-an500 -cpu cortex-m7 -nographic \
+        -semihosting-config enable=on,target=native -icount shift=0 -kernel "$elf" || run=$?
+    if [[ $run -eq 124 ]]; then
+        echo "run.sh: $name: QEMU did not finish within ${QEMU_TIMEOUT:-300} s" >&2
+    elif [[ $run -ne 0 ]]; then
+        echo "run.sh: $name failed (QEMU exit status $run)" >&2
+    fi
+    [[ $status -ne 0 ]] || status=$run
+done
 exit "$status"

@@ -1,34 +1,41 @@
-//! The periodic control tick.
+//! The control task: the core's tick at the robot's control period, on the high-priority
+//! interrupt executor.
 //!
-//! For now the tick is a smoke workload that exercises the core at the real control period: it
-//! moves every joint about the middle of its range (`q_i = mid_i + 0.1 sin(t + 0.5 i)`), computes
-//! the tool frame by forward kinematics and recovers the joints with tracking IK seeded with the
-//! previous tick's solution, as the full controller will do for Cartesian commands. Statistics
-//! are logged once per second.
+//! It owns the core's state — the [`CommandHandler`] and the drives — and does exactly what
+//! `armgate-sim` does with them, with the queues of [`crate::link`] in place of a socket. Each
+//! tick:
+//!
+//! 1. handles every request waiting in [`REQUESTS`] (at most [`REQUEST_QUEUE`]) with
+//!    [`CommandHandler::handle`] and queues each reply to its sender;
+//! 2. runs [`CommandHandler::tick`] on the measured joints and gives the command to the drives
+//!    ([`Arm::apply`]; on the CAN path this writes the tick's set-point frames);
+//! 3. queues the unsolicited notices to the last sender;
+//! 4. feeds the independent watchdog. Nothing else feeds it: if a tick does not finish within
+//!    [`watchdog_timeout`], the board resets.
+//!
+//! The core's clock is the tick's scheduled time since start-up, as in `armgate-sim`: the core
+//! computes the same results on the host and on the board. A tick that starts more than one
+//! period late restarts the schedule (the core never catches up by running ticks back to back).
 
+use armgate_core::command::CommandHandler;
 use armgate_core::config::RobotConfig;
-use armgate_core::kinematics::{Chain, IkResult, Joints};
-use embassy_time::{Duration, Instant, Ticker};
+use embassy_net::IpEndpoint;
+use embassy_stm32::peripherals::IWDG1;
+use embassy_stm32::wdg::IndependentWatchdog;
+use embassy_time::{Duration, Instant, Timer};
 
-/// Amplitude of the joint motion (rad or m).
-const AMPLITUDE: f64 = 0.1;
-/// Phase step between successive joints (rad).
-const PHASE_STEP: f64 = 0.5;
-/// Interval between two statistics lines.
+use crate::drives::{Arm, BoardDrives};
+use crate::link::{COUNTERS, Datagram, OUTGOING, REQUEST_QUEUE, REQUESTS, count};
+use crate::telemetry::{STATUS, Status};
+
+/// Interval between two status snapshots.
 const REPORT_INTERVAL: Duration = Duration::from_secs(1);
-
-/// Counters over one report interval.
-#[derive(Default)]
-struct Stats {
-    ticks: u32,
-    converged: u32,
-    not_converged: u32,
-    errors: u32,
-    iterations: u32,
-    compute_us_total: u64,
-    compute_us_max: u64,
-    worst_position_error: f64,
-}
+/// Notices sent per tick at most: the core's relay holds 8; any left wait for the next tick.
+const NOTICES_PER_TICK: usize = 8;
+/// The watchdog timeout is this many control periods, but at least [`MIN_WATCHDOG_TIMEOUT`].
+const WATCHDOG_PERIODS: u32 = 4;
+/// The shortest watchdog timeout.
+const MIN_WATCHDOG_TIMEOUT: Duration = Duration::from_millis(100);
 
 /// The control period of `robot` as an embassy duration (whole microseconds, at least 1 µs).
 pub fn period(robot: &RobotConfig) -> Duration {
@@ -37,92 +44,143 @@ pub fn period(robot: &RobotConfig) -> Duration {
     Duration::from_micros(micros.max(1))
 }
 
-/// The control task: one tick every `robot.control_period`, forever.
+/// The independent watchdog's timeout for a control period: [`WATCHDOG_PERIODS`] periods, at
+/// least [`MIN_WATCHDOG_TIMEOUT`] (the IWDG's 32 kHz clock is only good to a few per cent, and
+/// a tick must be able to be late by a period without resetting the board).
+pub fn watchdog_timeout(period: Duration) -> Duration {
+    (period * WATCHDOG_PERIODS).max(MIN_WATCHDOG_TIMEOUT)
+}
+
+/// Statistics over one report interval.
+#[derive(Default)]
+struct Interval {
+    ticks: u32,
+    overruns: u32,
+    tick_errors: u32,
+    requests: u32,
+    compute_total_us: u64,
+    compute_max_us: u64,
+    wake_latency_max_us: u64,
+}
+
+impl Interval {
+    fn add(&mut self, latency: Duration, compute: Duration) {
+        self.ticks += 1;
+        self.compute_total_us += compute.as_micros();
+        self.compute_max_us = self.compute_max_us.max(compute.as_micros());
+        self.wake_latency_max_us = self.wake_latency_max_us.max(latency.as_micros());
+    }
+
+    fn status(&self, handler: &CommandHandler) -> Status {
+        let controller = handler.controller();
+        let saturate = |v: u64| u32::try_from(v).unwrap_or(u32::MAX);
+        Status {
+            mode: controller.mode(),
+            moving: controller.is_moving(),
+            position: controller.measured().map(|(_, pose)| pose.pos.to_array()),
+            ticks: self.ticks,
+            overruns: self.overruns,
+            tick_errors: self.tick_errors,
+            requests: self.requests,
+            compute_mean_us: saturate(self.compute_total_us / u64::from(self.ticks.max(1))),
+            compute_max_us: saturate(self.compute_max_us),
+            wake_latency_max_us: saturate(self.wake_latency_max_us),
+            relay_dropped: handler.dropped_notices(),
+        }
+    }
+}
+
+/// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
 #[embassy_executor::task]
-pub async fn run(robot: &'static RobotConfig, chain: Chain) {
+pub async fn run(
+    robot: &'static RobotConfig,
+    mut drives: BoardDrives,
+    mut watchdog: IndependentWatchdog<'static, IWDG1>,
+) {
     let period = period(robot);
+    let dt = robot.control_period;
     defmt::info!(
-        "control: {} ({} joints), period {} us",
+        "control: {} ({} joints), period {} us, watchdog {} ms",
         robot.name.as_str(),
-        chain.dof(),
-        period.as_micros()
+        robot.dof(),
+        period.as_micros(),
+        watchdog_timeout(period).as_millis()
     );
-    let mid = chain.mid_range();
-    let mut seed = mid;
-    let mut stats = Stats::default();
-    let start = Instant::now();
-    let mut next_report = start + REPORT_INTERVAL;
-    let mut ticker = Ticker::every(period);
+    let mut handler = CommandHandler::new(robot);
+    let mut last_sender: Option<IpEndpoint> = None;
+    let mut interval = Interval::default();
+    let epoch = Instant::now();
+    let mut scheduled = epoch;
+    let mut next_report = epoch + REPORT_INTERVAL;
+    watchdog.unleash();
     loop {
-        ticker.next().await;
+        Timer::at(scheduled).await;
         let begin = Instant::now();
-        let t = (begin - start).as_micros() as f64 * 1e-6;
-        tick(robot, &chain, &mid, t, &mut seed, &mut stats);
-        let compute = (Instant::now() - begin).as_micros();
-        stats.compute_us_total += compute;
-        stats.compute_us_max = stats.compute_us_max.max(compute);
+        let now = (scheduled - epoch).as_micros() as f64 * 1e-6;
+
+        interval.requests += handle_requests(&mut handler, &mut drives, &mut last_sender);
+        match handler.tick(now, &Arm::measured(&drives), &drives) {
+            Ok(out) => Arm::apply(&mut drives, out.command.as_ref(), dt),
+            Err(_) => {
+                // The measurement does not fit the arm: hold, and say so in the status line.
+                interval.tick_errors += 1;
+                Arm::apply(&mut drives, None, dt);
+            }
+        }
+        send_notices(&mut handler, last_sender);
+        watchdog.pet();
+
+        let end = Instant::now();
+        interval.add(begin - scheduled, end - begin);
+        scheduled += period;
+        if scheduled < end {
+            interval.overruns += 1;
+            scheduled = end + period;
+        }
         if begin >= next_report {
-            report(&stats);
-            stats = Stats::default();
+            STATUS.signal(interval.status(&handler));
+            interval = Interval::default();
             next_report += REPORT_INTERVAL;
         }
     }
 }
 
-/// One tick of the smoke workload: FK at the moving configuration, then tracking IK from `seed`.
-fn tick(
-    robot: &RobotConfig,
-    chain: &Chain,
-    mid: &Joints,
-    t: f64,
-    seed: &mut Joints,
-    stats: &mut Stats,
-) {
-    stats.ticks += 1;
-    let mut q = *mid;
-    let mut phase = t;
-    for v in q.iter_mut() {
-        *v += AMPLITUDE * libm::sin(phase);
-        phase += PHASE_STEP;
+/// Handles the waiting requests (at most [`REQUEST_QUEUE`]: later ones wait for the next tick,
+/// so a tick's work stays bounded) and queues their replies; returns how many it handled.
+fn handle_requests(
+    handler: &mut CommandHandler,
+    drives: &mut BoardDrives,
+    last_sender: &mut Option<IpEndpoint>,
+) -> u32 {
+    let mut handled = 0;
+    for _ in 0..REQUEST_QUEUE {
+        let Ok(request) = REQUESTS.try_receive() else {
+            break;
+        };
+        let reply = handler.handle(request.payload(), drives);
+        *last_sender = Some(request.peer);
+        post(Datagram::new(&reply, request.peer));
+        handled += 1;
     }
-    let target = match chain.forward(&q) {
-        Ok(frame) => frame,
-        Err(e) => {
-            stats.errors += 1;
-            defmt::warn!("control: FK refused: {}", defmt::Display2Format(&e));
-            return;
-        }
-    };
-    match chain.solve_tracking(&target, seed, &robot.ik) {
-        Ok(result) => {
-            let solution = result.solution();
-            stats.iterations += solution.iterations;
-            stats.worst_position_error = stats.worst_position_error.max(solution.position_error);
-            match result {
-                IkResult::Converged(_) => stats.converged += 1,
-                IkResult::NotConverged(_) => stats.not_converged += 1,
-            }
-            *seed = solution.q;
-        }
-        Err(e) => {
-            stats.errors += 1;
-            defmt::warn!("control: IK refused: {}", defmt::Display2Format(&e));
+    handled
+}
+
+/// Queues the core's unsolicited notices to the last sender.
+fn send_notices(handler: &mut CommandHandler, last_sender: Option<IpEndpoint>) {
+    for _ in 0..NOTICES_PER_TICK {
+        let Some(text) = handler.next_notice() else {
+            break;
+        };
+        match last_sender {
+            Some(peer) => post(Datagram::new(&text.to_bytes(), peer)),
+            None => count(&COUNTERS.notices_unaddressed),
         }
     }
 }
 
-/// Logs one statistics line.
-fn report(stats: &Stats) {
-    let ticks = u64::from(stats.ticks.max(1));
-    defmt::info!(
-        "control: {} ticks, {} converged, {} not converged, {} errors, {} IK iterations, worst position error {=f64} m, compute mean {} us max {} us",
-        stats.ticks,
-        stats.converged,
-        stats.not_converged,
-        stats.errors,
-        stats.iterations,
-        stats.worst_position_error,
-        stats.compute_us_total / ticks,
-        stats.compute_us_max
-    );
+/// Queues one datagram for the UDP server, or counts it as dropped.
+fn post(datagram: Datagram) {
+    if OUTGOING.try_send(datagram).is_err() {
+        count(&COUNTERS.outgoing_full);
+    }
 }

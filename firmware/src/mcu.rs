@@ -1,24 +1,24 @@
-//! Start-up: clocks, the embedded robot, the executors and their tasks.
+//! Start-up: clocks, the embedded robot, the watchdog, Ethernet, the executors and their tasks.
 
 use armgate_core::config::RobotConfig;
-use armgate_core::kinematics::Chain;
 use embassy_executor::{Executor, InterruptExecutor};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::wdg::IndependentWatchdog;
 use static_cell::StaticCell;
 use {defmt_rtt as _, panic_probe as _};
 
-use crate::{clocks, config, control};
+use crate::{clocks, config, control, drives, net, telemetry};
 
-/// Priority of the control executor's interrupt. The control tasks preempt the thread executor
-/// (networking, drives); the short hardware handlers, which embassy leaves at P0 (time driver,
-/// DMA, peripheral interrupts), preempt the control tasks. P1..P5 stay free for anything that
-/// must preempt control later.
+/// Priority of the control executor's interrupt. The control task preempts the thread executor
+/// (networking, status); the short hardware handlers, which embassy leaves at P0 (time driver,
+/// Ethernet, DMA), preempt the control task. P1..P5 stay free for anything that must preempt
+/// control later (the CAN drive bus).
 const CONTROL_PRIORITY: Priority = Priority::P6;
 
 /// The control executor; its interrupt vector is `UART4`, a peripheral this board does not use.
 static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
-/// The thread-mode executor (networking, drives, watchdog: later).
+/// The thread-mode executor: network stack, UDP server, status line.
 static THREAD_EXECUTOR: StaticCell<Executor> = StaticCell::new();
 /// The robot description, decoded once at boot and shared by every task.
 static ROBOT: StaticCell<RobotConfig> = StaticCell::new();
@@ -37,34 +37,73 @@ unsafe fn UART4() {
 #[cortex_m_rt::entry]
 fn main() -> ! {
     if let Some(mut core) = cortex_m::Peripherals::take() {
-        // The I-cache is safe to enable at any time. The D-cache is left off until the
-        // Ethernet DMA buffers get a non-cacheable MPU region (networking issue).
+        // The I-cache is safe to enable at any time. The D-cache stays off: the Ethernet DMA
+        // descriptors and buffers would need a non-cacheable MPU region (docs/firmware.md).
         core.SCB.enable_icache();
     }
-    let _peripherals = embassy_stm32::init(clocks::config());
+    let p = embassy_stm32::init(clocks::config());
     defmt::info!(
         "armgate firmware {}: 480 MHz, embedded robot {} bytes",
         env!("CARGO_PKG_VERSION"),
         config::embedded_len()
     );
+    // The watchdog stops while a debugger halts the core (breakpoints would reset the board).
+    embassy_stm32::pac::DBGMCU
+        .apb4fzr1()
+        .modify(|w| w.set_iwdg1(true));
 
     let robot: &'static RobotConfig = match config::load() {
         Ok(robot) => ROBOT.init(robot),
         // Unrecoverable: build.rs validated this very description, so only a core change since
-        // the build can get here. Halt with the reason rather than run an unknown arm.
+        // the build can get here. Halt with the reason rather than run an unknown arm (the
+        // watchdog is not running yet: the board stays halted).
         Err(e) => defmt::panic!("{}", e),
     };
-    let chain = Chain::new(robot);
 
+    // The control task first: from here on the watchdog runs and only the control task feeds
+    // it; the control task preempts everything below.
+    let drives = drives::new(robot);
+    defmt::info!("drives: {}", drives::describe());
+    let timeout = control::watchdog_timeout(control::period(robot));
+    let timeout_us = u32::try_from(timeout.as_micros()).unwrap_or(u32::MAX);
+    let watchdog = IndependentWatchdog::new(p.IWDG1, timeout_us);
     interrupt::UART4.set_priority(CONTROL_PRIORITY);
     let control_spawner = CONTROL_EXECUTOR.start(interrupt::UART4);
-    match control::run(robot, chain) {
+    match control::run(robot, drives, watchdog) {
         Ok(task) => control_spawner.spawn(task),
         Err(e) => defmt::panic!("cannot spawn the control task: {}", e),
     }
 
+    let (stack, runner) = net::init(
+        net::Pins {
+            eth: p.ETH,
+            sma: p.ETH_SMA,
+            ref_clk: p.PA1,
+            mdio: p.PA2,
+            mdc: p.PC1,
+            crs_dv: p.PA7,
+            rxd0: p.PC4,
+            rxd1: p.PC5,
+            tx_en: p.PG11,
+            txd0: p.PG13,
+            txd1: p.PB13,
+        },
+        &embassy_stm32::uid::uid(),
+    );
+
     let executor = THREAD_EXECUTOR.init(Executor::new());
-    executor.run(|_spawner| {
-        // Thread-mode tasks (UDP, CAN, watchdog) are spawned here by later issues.
+    executor.run(|spawner| {
+        match net::runner(runner) {
+            Ok(task) => spawner.spawn(task),
+            Err(e) => defmt::panic!("cannot spawn the network stack: {}", e),
+        }
+        match net::udp_server(stack) {
+            Ok(task) => spawner.spawn(task),
+            Err(e) => defmt::panic!("cannot spawn the UDP server: {}", e),
+        }
+        match telemetry::run(stack) {
+            Ok(task) => spawner.spawn(task),
+            Err(e) => defmt::panic!("cannot spawn the status task: {}", e),
+        }
     })
 }

@@ -14,7 +14,7 @@ use armgate_core::math::Frame;
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
-use crate::counter::{Counter, measure};
+use crate::counter::{Counter, Timing, measure};
 
 include!(concat!(env!("OUT_DIR"), "/robots.rs"));
 
@@ -26,31 +26,6 @@ const SAMPLES: u32 = 200;
 const PERTURBATION: f64 = 0.1;
 /// Success threshold on position (m) and orientation (rad) error.
 const SUCCESS_TOLERANCE: f64 = 1e-5;
-
-/// Ticks of one operation over all samples.
-#[derive(Default)]
-struct Timing {
-    calls: u32,
-    ticks: u64,
-    max_ticks: u32,
-}
-
-impl Timing {
-    fn add(&mut self, ticks: u32) {
-        self.calls += 1;
-        self.ticks += u64::from(ticks);
-        self.max_ticks = self.max_ticks.max(ticks);
-    }
-
-    /// Mean and maximum instructions per call.
-    fn instructions(&self, counter: &Counter) -> (f64, f64) {
-        let mean = self.ticks as f64 / f64::from(self.calls.max(1));
-        (
-            counter.instructions(mean),
-            counter.instructions(f64::from(self.max_ticks)),
-        )
-    }
-}
 
 /// Everything measured on one robot.
 #[derive(Default)]
@@ -65,7 +40,7 @@ struct Results {
 }
 
 /// Measures every embedded robot and prints the table; false if a robot could not be measured.
-pub fn run(counter: Counter) -> bool {
+pub fn run(counter: &Counter) -> bool {
     hprintln!(
         "calibration: {} nop = {} SysTick ticks (empty window {:.2} ticks) -> {:.3} instructions/tick (40 expected: 1 ns per instruction, 25 MHz SysTick)",
         Counter::calibration_instructions(),
@@ -89,7 +64,7 @@ pub fn run(counter: Counter) -> bool {
         match postcard::from_bytes::<RobotConfig>(bytes) {
             Ok(config) if config.validate().is_ok() => {
                 let results = measure_robot(&config);
-                print_rows(name, &results, &counter);
+                print_rows(name, &results, counter);
                 ok &= results.errors == 0;
             }
             _ => {

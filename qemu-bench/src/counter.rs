@@ -90,3 +90,30 @@ fn nop_block() {
         );
     }
 }
+
+/// Ticks of one operation over all samples.
+#[derive(Default)]
+pub struct Timing {
+    /// Calls measured.
+    pub calls: u32,
+    ticks: u64,
+    max_ticks: u32,
+}
+
+impl Timing {
+    /// Adds one call that took `ticks`.
+    pub fn add(&mut self, ticks: u32) {
+        self.calls += 1;
+        self.ticks += u64::from(ticks);
+        self.max_ticks = self.max_ticks.max(ticks);
+    }
+
+    /// Mean and maximum instructions per call.
+    pub fn instructions(&self, counter: &Counter) -> (f64, f64) {
+        let mean = self.ticks as f64 / f64::from(self.calls.max(1));
+        (
+            counter.instructions(mean),
+            counter.instructions(f64::from(self.max_ticks)),
+        )
+    }
+}

@@ -5,7 +5,10 @@
 //! SysTick, clocked from the 25 MHz system clock, then counts one tick per 40 instructions; a
 //! calibration against blocks of `nop`s checks that factor before anything is measured.
 //! Prints, over semihosting, instructions per call of forward kinematics and of tracking IK for
-//! every robot of `robots/`, and exits QEMU. `qemu-bench/run.sh` builds and runs it.
+//! every robot of `robots/`, and exits QEMU. `qemu-bench/run.sh` builds and runs it, and then the
+//! second binary of this package, `armgate-qemu-tick` (`src/tick_main.rs`: one full control
+//! tick). They are separate binaries so that neither changes how the compiler inlines the core
+//! into the other: the counts depend on the machine code, not only on the source.
 //!
 //! Instructions are not cycles: a real Cortex-M7 dual-issues simple instructions, but an f64
 //! divide or square root takes many cycles. The count is a deterministic, host-independent
@@ -18,6 +21,12 @@ mod bench;
 mod counter;
 #[cfg(target_os = "none")]
 mod mcu;
+
+#[cfg(target_os = "none")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    mcu::run(bench::run)
+}
 
 /// Host builds: nothing to run (the benchmark runs only in QEMU).
 #[cfg(not(target_os = "none"))]

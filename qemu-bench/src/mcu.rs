@@ -1,14 +1,15 @@
-//! Entry point, panic and fault handlers: everything reports over semihosting and exits QEMU.
+//! Start-up, panic and fault handlers, shared by both binaries: everything reports over
+//! semihosting and exits QEMU.
 
-use cortex_m_rt::{ExceptionFrame, entry, exception};
+use cortex_m_rt::{ExceptionFrame, exception};
 use cortex_m_semihosting::{debug, hprintln};
 
-use crate::{bench, counter::Counter};
+use crate::counter::Counter;
 
-#[entry]
-fn main() -> ! {
+/// Starts and calibrates the counter, runs `bench` and exits QEMU with its verdict.
+pub fn run(bench: impl FnOnce(&Counter) -> bool) -> ! {
     let ok = match cortex_m::Peripherals::take() {
-        Some(core) => bench::run(Counter::start(core.SYST)),
+        Some(core) => bench(&Counter::start(core.SYST)),
         None => false,
     };
     debug::exit(if ok {

@@ -1,0 +1,107 @@
+//! What passes between the UDP server (thread executor) and the control task (interrupt
+//! executor): two bounded queues of datagrams, and counters of what had to be dropped.
+//!
+//! The control task owns the core ([`CommandHandler`] and the drives); the UDP server never
+//! touches it. Requests wait in [`REQUESTS`] until the next tick handles them all; replies and
+//! unsolicited notices wait in [`OUTGOING`] until the UDP server sends them. Neither side ever
+//! waits on the other: a full queue drops the datagram and counts it ([`COUNTERS`]).
+//!
+//! [`CommandHandler`]: armgate_core::command::CommandHandler
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use armgate_protocol::client::MESSAGE_LEN;
+use embassy_net::IpEndpoint;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::channel::Channel;
+
+/// Requests that can wait for the next tick. A client waits for each reply (the `armgate`
+/// client resends after 200 ms), so one client has at most one request in flight; 8 leave room
+/// for a few clients and for bursts. The socket buffers another [`crate::net::SOCKET_PACKETS`]
+/// datagrams before the queue.
+pub const REQUEST_QUEUE: usize = 8;
+/// Replies and notices waiting to be sent: one tick produces at most one reply per queued
+/// request and at most 8 notices (the core's relay holds 8), and the UDP server empties the
+/// queue between two ticks.
+pub const OUTGOING_QUEUE: usize = REQUEST_QUEUE + 8;
+
+/// A datagram of the client protocol and the peer it came from or goes to.
+#[derive(Clone, Copy)]
+pub struct Datagram {
+    /// The first bytes of the datagram (a request longer than 31 bytes is cut: the protocol
+    /// reads 31 at most).
+    bytes: [u8; MESSAGE_LEN],
+    /// How many of `bytes` are valid.
+    len: u8,
+    /// Source of a request, destination of a reply or notice.
+    pub peer: IpEndpoint,
+}
+
+impl Datagram {
+    /// The first (at most 31) bytes of `payload`, from or to `peer`.
+    pub fn new(payload: &[u8], peer: IpEndpoint) -> Self {
+        let mut bytes = [0; MESSAGE_LEN];
+        let len = payload.len().min(MESSAGE_LEN);
+        for (b, p) in bytes.iter_mut().zip(payload) {
+            *b = *p;
+        }
+        Self {
+            bytes,
+            // `len` ≤ 31.
+            len: len as u8,
+            peer,
+        }
+    }
+
+    /// The valid bytes.
+    pub fn payload(&self) -> &[u8] {
+        self.bytes.get(..usize::from(self.len)).unwrap_or_default()
+    }
+}
+
+/// Requests from allowed sources, in arrival order.
+pub static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
+/// Replies and notices, in the order the control task produced them.
+pub static OUTGOING: Channel<CriticalSectionRawMutex, Datagram, OUTGOING_QUEUE> = Channel::new();
+
+/// Event counters since boot (they wrap after 2^32).
+pub struct Counters {
+    /// Requests passed to the control task.
+    pub received: AtomicU32,
+    /// Datagrams from sources not on the allow-list (dropped).
+    pub foreign: AtomicU32,
+    /// Requests dropped because [`REQUESTS`] was full.
+    pub requests_full: AtomicU32,
+    /// Replies and notices dropped because [`OUTGOING`] was full.
+    pub outgoing_full: AtomicU32,
+    /// Notices not sent because no client had sent anything yet.
+    pub notices_unaddressed: AtomicU32,
+    /// Datagrams the network stack refused to send (no route, not bound).
+    pub send_errors: AtomicU32,
+}
+
+impl Counters {
+    const fn new() -> Self {
+        Self {
+            received: AtomicU32::new(0),
+            foreign: AtomicU32::new(0),
+            requests_full: AtomicU32::new(0),
+            outgoing_full: AtomicU32::new(0),
+            notices_unaddressed: AtomicU32::new(0),
+            send_errors: AtomicU32::new(0),
+        }
+    }
+}
+
+/// The counters, shared by every task.
+pub static COUNTERS: Counters = Counters::new();
+
+/// Adds one to `counter`.
+pub fn count(counter: &AtomicU32) {
+    counter.fetch_add(1, Ordering::Relaxed);
+}
+
+/// The current value of `counter`.
+pub fn read(counter: &AtomicU32) -> u32 {
+    counter.load(Ordering::Relaxed)
+}

@@ -1,0 +1,83 @@
+//! The once-per-second status line.
+//!
+//! The control task publishes a [`Status`] snapshot once per second through [`STATUS`]; this
+//! task, on the thread executor, writes it to the defmt log together with the queue counters,
+//! so that formatting and the RTT write never run on the control tick.
+
+use armgate_core::motion::Mode;
+use embassy_net::Stack;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::signal::Signal;
+
+use crate::link::{COUNTERS, read};
+
+/// One report interval of the control task.
+#[derive(Clone, Copy, Default)]
+pub struct Status {
+    /// The control mode at the end of the interval.
+    pub mode: Mode,
+    /// Whether a motion or sequence was running.
+    pub moving: bool,
+    /// Measured tool position (m), if a tick has run.
+    pub position: Option<[f64; 3]>,
+    /// Ticks in the interval.
+    pub ticks: u32,
+    /// Ticks that started more than one period late (the schedule was reset).
+    pub overruns: u32,
+    /// Ticks whose measurement the core refused (the arm held).
+    pub tick_errors: u32,
+    /// Requests handled in the interval.
+    pub requests: u32,
+    /// Compute time per tick (requests, tick, command, notices), mean and maximum (µs).
+    pub compute_mean_us: u32,
+    /// See `compute_mean_us`.
+    pub compute_max_us: u32,
+    /// Largest delay between a tick's scheduled time and its start (µs).
+    pub wake_latency_max_us: u32,
+    /// Notices the core's relay dropped since boot (its outbox was full).
+    pub relay_dropped: u32,
+}
+
+/// The latest snapshot; a new one replaces an unread one.
+pub static STATUS: Signal<CriticalSectionRawMutex, Status> = Signal::new();
+
+/// The status task: one log line per snapshot.
+#[embassy_executor::task]
+pub async fn run(stack: Stack<'static>) {
+    loop {
+        let s = STATUS.wait().await;
+        let [x, y, z] = s.position.unwrap_or([f64::NAN; 3]);
+        defmt::info!(
+            "status: link {}, {} {}, xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",
+            if stack.is_link_up() { "up" } else { "down" },
+            mode_name(s.mode),
+            if s.moving { "moving" } else { "holding" },
+            x,
+            y,
+            z,
+            s.ticks,
+            s.overruns,
+            s.tick_errors,
+            s.compute_mean_us,
+            s.compute_max_us,
+            s.wake_latency_max_us,
+            s.requests,
+            read(&COUNTERS.received),
+            read(&COUNTERS.foreign),
+            read(&COUNTERS.requests_full),
+            read(&COUNTERS.outgoing_full),
+            read(&COUNTERS.notices_unaddressed),
+            read(&COUNTERS.send_errors),
+            s.relay_dropped,
+        );
+    }
+}
+
+/// The mode as the client names it.
+pub fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Off => "off",
+        Mode::Joint => "joint",
+        Mode::Cartesian => "cartesian",
+    }
+}
