@@ -157,6 +157,10 @@ fn fixed_seed_defects_vc_rc_and_stale_bytes() {
     for (a, b) in jp.iter().zip(target) {
         assert!((a - b).abs() < 1e-6);
     }
+    // Angles outside the joint limits are refused (joint 5's range is [0.785, 3.926]).
+    let mut outside = values;
+    outside[4] = 0.0;
+    assert_eq!(rig.text("RC", outside, 0), "ER26 Cmd RC beyond joint limit");
     // RC outside mode 0 is refused.
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
     assert_eq!(rig.text("RC", values, 0), "ER20 Cmd RC rejected");

@@ -237,6 +237,9 @@ impl CommandHandler {
                     return Err(Notice::Rejected(cmd));
                 }
                 let q = self.complete(BankKey::Recalibrate, joints, cmd)?;
+                // Declaring the arm outside its range would make the measured pose illegal
+                // and the limiter ease commands back from there (the seed did not check).
+                let q = self.controller.check_joint_goal(&q).map_err(refused)?;
                 if !drives.recalibrate(&q) {
                     return Err(Notice::Rejected(cmd));
                 }
