@@ -35,7 +35,7 @@ pub enum SequenceStep<P> {
 pub struct Tolerances {
     /// Below this the next leg starts at once.
     pub fine: f64,
-    /// After [`SETTLE_CHECKS`] failed checks, below this the sequence moves on anyway.
+    /// After ten failed checks, below this the sequence moves on anyway.
     pub coarse: f64,
 }
 
