@@ -6,8 +6,8 @@
 //!   workspace root), validates it and writes its postcard serialisation to
 //!   `OUT_DIR/robot.postcard`, which `src/config.rs` embeds. A refused robot file fails the
 //!   build with the error naming the field;
-//! * parses the network and simulation settings (`ARMGATE_IP`, `ARMGATE_GATEWAY`,
-//!   `ARMGATE_PORT`, `ARMGATE_ALLOW`, `ARMGATE_SIM_ARM`; see `docs/firmware.md`) and writes them
+//! * parses the network settings (`ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT`,
+//!   `ARMGATE_ALLOW`; see `docs/firmware.md`) and writes them
 //!   as Rust constants to `OUT_DIR/settings.rs`, which `src/settings.rs` includes. A malformed
 //!   value fails the build with a message naming the variable;
 //! * sets `DEFMT_LOG=info` for this crate unless the user set `DEFMT_LOG`.
@@ -142,16 +142,6 @@ fn settings() -> Result<String, String> {
     if !allow_local && allow.is_empty() {
         return Err("ARMGATE_ALLOW: empty: no client could command the arm".to_owned());
     }
-    let sim_arm = match env("ARMGATE_SIM_ARM").as_deref().map(str::trim) {
-        None | Some("ideal") => "Ideal",
-        Some("rate-limited") => "RateLimited",
-        Some(other) => {
-            return Err(format!(
-                "ARMGATE_SIM_ARM: `{other}`: expected `ideal` or `rate-limited`"
-            ));
-        }
-    };
-
     let ipv4 = |a: Ipv4Addr| {
         let [a, b, c, d] = a.octets();
         format!("Ipv4Addr::new({a}, {b}, {c}, {d})")
@@ -201,8 +191,6 @@ fn settings() -> Result<String, String> {
         let _ = writeln!(out, "    Network::new({}, {p}),", ipv4(*a));
     }
     let _ = writeln!(out, "];");
-    let _ = writeln!(out, "/// The simulated arm's dynamics (`ARMGATE_SIM_ARM`).");
-    let _ = writeln!(out, "pub const SIM_ARM: SimArm = SimArm::{sim_arm};");
     Ok(out)
 }
 

@@ -2,7 +2,7 @@
 
 use embassy_stm32::rcc::{
     AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllDiv, PllMul, PllPreDiv, PllSource, Sysclk,
-    VoltageScale,
+    VoltageScale, mux,
 };
 use embassy_stm32::time::Hertz;
 
@@ -10,7 +10,8 @@ use embassy_stm32::time::Hertz;
 ///
 /// * HSE: 8 MHz from the ST-LINK's MCO, bypass mode (no crystal on the NUCLEO by default).
 /// * PLL1: 8 MHz / 1 × 120 = 960 MHz VCO (wide range); P / 2 = 480 MHz system clock,
-///   Q / 8 = 120 MHz (for FDCAN later).
+///   Q / 8 = 120 MHz: FDCAN's kernel clock (every bit rate of the robot files, 125 k to
+///   1 Mbit/s, divides it exactly).
 /// * D1CPRE / 1 = 480 MHz CPU, HPRE / 2 = 240 MHz AXI/AHB, every APB / 2 = 120 MHz.
 /// * VOS0 (voltage scale 0, overdrive, which embassy enables through VOS1): required above
 ///   400 MHz; the H743's LDO supply is fixed (no SMPS), which embassy sets up by default.
@@ -39,5 +40,6 @@ pub fn config() -> embassy_stm32::Config {
     rcc.apb3_pre = APBPrescaler::DIV2;
     rcc.apb4_pre = APBPrescaler::DIV2;
     rcc.voltage_scale = VoltageScale::Scale0;
+    rcc.mux.fdcansel = mux::Fdcansel::PLL1_Q;
     config
 }

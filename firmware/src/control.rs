@@ -1,14 +1,15 @@
 //! The control task: the core's tick at the robot's control period, on the high-priority
 //! interrupt executor.
 //!
-//! It owns the core's state — the [`CommandHandler`] and the drives — and does exactly what
-//! `armgate-sim` does with them, with the queues of [`crate::link`] in place of a socket. Each
-//! tick:
+//! It owns the core's state — the [`CommandHandler`] and the drives (the CANopen drive manager
+//! and its bus, [`BoardDrives`]) — and does exactly what `armgate-sim` does with them, with the
+//! queues of [`crate::link`] in place of a socket. Each tick:
 //!
 //! 1. handles every request waiting in [`REQUESTS`] (at most [`REQUEST_QUEUE`]) with
 //!    [`CommandHandler::handle`] and queues each reply to its sender;
-//! 2. runs [`CommandHandler::tick`] on the measured joints and gives the command to the drives
-//!    ([`Arm::apply`]; on the CAN path this writes the tick's set-point frames);
+//! 2. the drive manager takes what the bus received ([`BoardDrives::receive`]), runs
+//!    [`CommandHandler::tick`] on the measured joints, and the manager queues the cycle's
+//!    frames ([`BoardDrives::transmit`]: set-points, queries, heartbeat; never waits on the bus);
 //! 3. queues the unsolicited notices to the last sender;
 //! 4. feeds the independent watchdog. Nothing else feeds it: if a tick does not finish within
 //!    [`watchdog_timeout`], the board resets.
@@ -24,7 +25,7 @@ use embassy_stm32::peripherals::IWDG1;
 use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_time::{Duration, Instant, Timer};
 
-use crate::drives::{Arm, BoardDrives};
+use crate::drives::BoardDrives;
 use crate::link::{COUNTERS, Datagram, OUTGOING, REQUEST_QUEUE, REQUESTS, count};
 use crate::telemetry::{STATUS, Status};
 
@@ -71,7 +72,7 @@ impl Interval {
         self.wake_latency_max_us = self.wake_latency_max_us.max(latency.as_micros());
     }
 
-    fn status(&self, handler: &CommandHandler) -> Status {
+    fn status(&self, handler: &CommandHandler, drives: &BoardDrives) -> Status {
         let controller = handler.controller();
         let saturate = |v: u64| u32::try_from(v).unwrap_or(u32::MAX);
         Status {
@@ -86,6 +87,8 @@ impl Interval {
             compute_max_us: saturate(self.compute_max_us),
             wake_latency_max_us: saturate(self.wake_latency_max_us),
             relay_dropped: handler.dropped_notices(),
+            drives: drives.manager().state(),
+            fault: drives.manager().fault().map(|f| f.text()),
         }
     }
 }
@@ -98,7 +101,6 @@ pub async fn run(
     mut watchdog: IndependentWatchdog<'static, IWDG1>,
 ) {
     let period = period(robot);
-    let dt = robot.control_period;
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",
         robot.name.as_str(),
@@ -119,12 +121,16 @@ pub async fn run(
         let now = (scheduled - epoch).as_micros() as f64 * 1e-6;
 
         interval.requests += handle_requests(&mut handler, &mut drives, &mut last_sender);
-        match handler.tick(now, &Arm::measured(&drives), &drives) {
-            Ok(out) => Arm::apply(&mut drives, out.command.as_ref(), dt),
+        if !drives.receive(now) {
+            // The simulated bus stalled (`sim-drives`): the manager's timeouts will fault.
+            interval.tick_errors += 1;
+        }
+        match handler.tick(now, &drives.measured(), drives.manager()) {
+            Ok(out) => drives.transmit(now, out.command.as_ref()),
             Err(_) => {
                 // The measurement does not fit the arm: hold, and say so in the status line.
                 interval.tick_errors += 1;
-                Arm::apply(&mut drives, None, dt);
+                drives.transmit(now, None);
             }
         }
         send_notices(&mut handler, last_sender);
@@ -138,7 +144,7 @@ pub async fn run(
             scheduled = end + period;
         }
         if begin >= next_report {
-            STATUS.signal(interval.status(&handler));
+            STATUS.signal(interval.status(&handler, &drives));
             interval = Interval::default();
             next_report += REPORT_INTERVAL;
         }
@@ -157,7 +163,7 @@ fn handle_requests(
         let Ok(request) = REQUESTS.try_receive() else {
             break;
         };
-        let reply = handler.handle(request.payload(), drives);
+        let reply = handler.handle(request.payload(), drives.manager_mut());
         *last_sender = Some(request.peer);
         post(Datagram::new(&reply, request.peer));
         handled += 1;

@@ -10,14 +10,17 @@
 //!   the UDP server ([`net`]), and the status line ([`telemetry`]). Datagrams pass between the
 //!   two through bounded queues ([`link`]).
 //!
-//! The drive side is chosen in one place ([`drives`]): simulated drives (feature `sim-drives`,
-//! the default for now) or, with the drive work, the CANopen drives on FDCAN1.
+//! The drive side is the core's CANopen drive manager; its bus is chosen in one place
+//! ([`drives`]): FDCAN1 ([`can`], the default) or, with feature `sim-drives`, a simulated bus
+//! with simulated Whistles inside the firmware.
 //! The robot description ([`config`], `ROBOT=robots/....toml`) and the network settings
 //! ([`settings`], `ARMGATE_*`) are embedded at build time.
 //! On the host this crate compiles to an empty `main`, so that `cargo clippy --workspace
 //! --all-targets` works without the thumb target.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
+#[cfg(all(target_os = "none", not(feature = "sim-drives")))]
+mod can;
 #[cfg(target_os = "none")]
 mod clocks;
 #[cfg(target_os = "none")]

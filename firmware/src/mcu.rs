@@ -11,9 +11,8 @@ use {defmt_rtt as _, panic_probe as _};
 use crate::{clocks, config, control, drives, net, telemetry};
 
 /// Priority of the control executor's interrupt. The control task preempts the thread executor
-/// (networking, status); the short hardware handlers, which embassy leaves at P0 (time driver,
-/// Ethernet, DMA), preempt the control task. P1..P5 stay free for anything that must preempt
-/// control later (the CAN drive bus).
+/// (networking, status); the FDCAN interrupt (P5, `can.rs`) and the short hardware handlers,
+/// which embassy leaves at P0 (time driver, Ethernet, DMA), preempt the control task.
 const CONTROL_PRIORITY: Priority = Priority::P6;
 
 /// The control executor; its interrupt vector is `UART4`, a peripheral this board does not use.
@@ -62,7 +61,7 @@ fn main() -> ! {
 
     // The control task first: from here on the watchdog runs and only the control task feeds
     // it; the control task preempts everything below.
-    let drives = drives::new(robot);
+    let drives = drives::new(robot, p.FDCAN1, p.PD0, p.PD1);
     defmt::info!("drives: {}", drives::describe());
     let timeout = control::watchdog_timeout(control::period(robot));
     let timeout_us = u32::try_from(timeout.as_micros()).unwrap_or(u32::MAX);

@@ -1,9 +1,9 @@
-//! Network and simulation settings embedded at build time.
+//! Network settings embedded at build time.
 //!
-//! `build.rs` reads `ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT`, `ARMGATE_ALLOW` and
-//! `ARMGATE_SIM_ARM` and writes the constants below (`OUT_DIR/settings.rs`); a malformed value
-//! fails the build. Defaults: `192.168.1.50/24`, no gateway, port 7031, allow-list `local` (the
-//! board's own network), ideal simulated arm. See `docs/firmware.md`.
+//! `build.rs` reads `ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT` and `ARMGATE_ALLOW` and
+//! writes the constants below (`OUT_DIR/settings.rs`); a malformed value fails the build.
+//! Defaults: `192.168.1.50/24`, no gateway, port 7031, allow-list `local` (the board's own
+//! network). See `docs/firmware.md`.
 
 use core::net::Ipv4Addr;
 
@@ -37,17 +37,6 @@ impl defmt::Format for Network {
         let [a, b, c, d] = self.address.octets();
         defmt::write!(f, "{}.{}.{}.{}/{}", a, b, c, d, self.prefix_len);
     }
-}
-
-/// How the simulated joints follow the commands (feature `sim-drives`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-// The build constructs only the variant `ARMGATE_SIM_ARM` names (and none without `sim-drives`).
-#[allow(dead_code)]
-pub enum SimArm {
-    /// Every command is reached at once.
-    Ideal,
-    /// Joints follow with the robot file's joint rate and acceleration limits.
-    RateLimited,
 }
 
 include!(concat!(env!("OUT_DIR"), "/settings.rs"));

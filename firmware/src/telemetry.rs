@@ -4,15 +4,19 @@
 //! task, on the thread executor, writes it to the defmt log together with the queue counters,
 //! so that formatting and the RTT write never run on the control tick.
 
+use armgate_core::drives::DriveState;
 use armgate_core::motion::Mode;
+use armgate_protocol::client::Text;
 use embassy_net::Stack;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 
+#[cfg(not(feature = "sim-drives"))]
+use crate::can::CAN_COUNTERS;
 use crate::link::{COUNTERS, read};
 
 /// One report interval of the control task.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub struct Status {
     /// The control mode at the end of the interval.
     pub mode: Mode,
@@ -36,6 +40,10 @@ pub struct Status {
     pub wake_latency_max_us: u32,
     /// Notices the core's relay dropped since boot (its outbox was full).
     pub relay_dropped: u32,
+    /// What the drive manager is doing.
+    pub drives: DriveState,
+    /// Its fault (the client's `ER3x` text), if any.
+    pub fault: Option<Text>,
 }
 
 /// The latest snapshot; a new one replaces an unread one.
@@ -47,11 +55,21 @@ pub async fn run(stack: Stack<'static>) {
     loop {
         let s = STATUS.wait().await;
         let [x, y, z] = s.position.unwrap_or([f64::NAN; 3]);
+        let fault = s.fault.as_ref().map_or("no fault", Text::as_str);
+        #[cfg(not(feature = "sim-drives"))]
         defmt::info!(
-            "status: link {}, {} {}, xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",
+            "can: {} bus errors, {} foreign frames, {} bus-off recoveries",
+            read(&CAN_COUNTERS.bus_errors),
+            read(&CAN_COUNTERS.foreign_frames),
+            read(&CAN_COUNTERS.bus_offs),
+        );
+        defmt::info!(
+            "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",
             if stack.is_link_up() { "up" } else { "down" },
             mode_name(s.mode),
             if s.moving { "moving" } else { "holding" },
+            drive_state_name(s.drives),
+            fault,
             x,
             y,
             z,
@@ -79,5 +97,17 @@ pub fn mode_name(mode: Mode) -> &'static str {
         Mode::Off => "off",
         Mode::Joint => "joint",
         Mode::Cartesian => "cartesian",
+    }
+}
+
+/// The drive manager's state, for the status line.
+fn drive_state_name(state: DriveState) -> &'static str {
+    match state {
+        DriveState::Idle => "idle",
+        DriveState::Starting => "starting",
+        DriveState::Operational => "operational",
+        DriveState::Stopping => "stopping",
+        DriveState::Stopped => "stopped",
+        DriveState::Faulted => "faulted",
     }
 }

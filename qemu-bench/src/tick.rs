@@ -1,16 +1,20 @@
-//! One full control tick of the core, as the firmware runs it: [`CommandHandler`] with
-//! [`SimulatedDrives`] (ideal arm) in Cartesian mode, during a straight-line move started with
-//! datagrams (`CM 2`, `GT`, `BG`), on the robots of [`TICK_ROBOTS`].
+//! One full control tick of the core, as the firmware runs it: [`CommandHandler`] with the
+//! CANopen [`DriveManager`] on a [`VirtualBus`] of simulated Whistles (the firmware's
+//! `sim-drives` build), in Cartesian mode, during a straight-line move started with datagrams
+//! (`CM 2`, `GT`, `BG`), on the robots of [`TICK_ROBOTS`]. The drives start (NMT, configuration,
+//! PT initialisation) before the move, as at the firmware's power-up.
 //!
 //! The move runs three times from the same start; the core is deterministic, so every pass
 //! does the same work.
 //!
 //! 1. **Whole tick**: one window per tick around what the firmware's control task does when no
-//!    request waits: `drives.measured()`, `handler.tick`, `drives.apply`, draining the notices
-//!    ([`Session::tick`]; each step is a function of its own, not inlined, so that pass 2 times
-//!    the same code).
-//! 2. **Breakdown**: each of those steps in a window of its own, plus replicas that run beside
-//!    the handler with the same inputs: a second [`Controller`] given the same requests
+//!    request waits: `manager.receive`, `manager.measured()`, `handler.tick`,
+//!    `manager.transmit`, draining the notices ([`Session::tick`]; each step is a function of
+//!    its own, not inlined, so that pass 2 times the same code). The virtual bus's `advance`
+//!    (the simulated Whistles and the bus: on a board with real drives, the drives and the
+//!    FDCAN peripheral) runs before it, in a window of its own.
+//! 2. **Breakdown**: each of those steps in a window of its own (the drive manager's two halves
+//!    summed per tick), plus replicas that run beside the handler with the same inputs: a second [`Controller`] given the same requests
 //!    (`Controller::step`; its command is checked against the handler's every tick), and the
 //!    calls a Cartesian `step` makes: FK of the measured joints (`Chain::forward`), the
 //!    generator (a second `CartesianGenerator` with the same move: `sample` + `advance_to`),
@@ -24,12 +28,13 @@
 
 use core::f64::consts::FRAC_PI_2;
 
-use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
+use armgate_core::command::CommandHandler;
 use armgate_core::config::RobotConfig;
+use armgate_core::drives::{DriveManager, DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
 use armgate_core::kinematics::{Chain, Joints, KinematicsError};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{
-    CartesianGenerator, Controller, IdealArm, JointLimiter, Mode, StepOutput, Workspace,
+    CartesianGenerator, Controller, JointLimiter, Mode, StepOutput, Workspace,
 };
 use armgate_protocol::client::{Command, MESSAGE_LEN, Request, VALUES};
 use cortex_m_semihosting::hprintln;
@@ -62,61 +67,100 @@ const MAX_TICKS: u32 = 2_000;
 const HOLD_TICKS: u32 = 50;
 /// PS requests measured after the move.
 const POSE_REQUESTS: u32 = 20;
+/// Ticks the drives may take to start (12 with drives already in position mode).
+const START_TICKS: u32 = 100;
 /// Stack painted below the caller for the high-water mark (bytes).
 const STACK_DEPTH: usize = 32 * 1024;
 
-/// The firmware's control state: a handler and simulated drives, and the time of the next tick.
+/// The firmware's control state with `sim-drives`: a handler, the drive manager, the virtual
+/// bus with a simulated Whistle per drive, and the time of the next tick.
 struct Session<'a> {
     config: &'a RobotConfig,
     handler: CommandHandler,
-    drives: SimulatedDrives,
+    manager: DriveManager,
+    bus: VirtualBus,
     time: f64,
 }
 
 impl<'a> Session<'a> {
-    /// The arm at `start` (or at the drives' home positions), after one tick (so that the arm's
-    /// pose is measured).
+    /// The drives at `start` (or at their home positions), started (the firmware starts the
+    /// drive manager at power-up) and streaming, after one more tick (so that the arm's pose is
+    /// measured).
     fn new(config: &'a RobotConfig, start: Option<&[f64]>) -> Result<Self, &'static str> {
         let q = start_joints(config, start)?;
+        let mut manager = DriveManager::new(config, &DriveSettings::default())
+            .map_err(|_| "the drive manager refused the robot")?;
+        manager
+            .start()
+            .map_err(|_| "the drive manager did not start")?;
         let mut session = Self {
             config,
             handler: CommandHandler::new(config),
-            drives: SimulatedDrives::new(ArmModel::Ideal(IdealArm::new(q))),
+            manager,
+            bus: virtual_bus(config, &q),
             time: 0.0,
         };
+        for _ in 0..START_TICKS {
+            session.advance_bus()?;
+            session.tick()?;
+            if session.manager.is_operational() {
+                break;
+            }
+        }
+        if !session.manager.is_operational() {
+            return Err("the drives did not become operational");
+        }
+        session.advance_bus()?;
         session.tick()?;
         Ok(session)
     }
 
-    /// What the firmware's control task does per tick when no request waits.
+    /// The simulated Whistles and bus up to the tick's time: `sim-drives` only, not part of
+    /// the firmware's work on a board with real drives.
+    #[inline(never)]
+    fn advance_bus(&mut self) -> Result<(), &'static str> {
+        self.bus
+            .advance(self.time)
+            .map_err(|_| "the virtual bus stalled")
+    }
+
+    /// What the firmware's control task does per tick when no request waits (the virtual bus
+    /// already advanced).
     #[inline(never)]
     fn tick(&mut self) -> Result<(), &'static str> {
+        self.receive();
         let measured = self.measured();
+        let now = self.time;
         let out = self.core_tick(&measured)?;
-        self.apply(&out);
+        self.transmit(now, &out);
         self.drain_notices();
         Ok(())
     }
 
     #[inline(never)]
+    fn receive(&mut self) {
+        self.manager.receive(&mut self.bus);
+    }
+
+    #[inline(never)]
     fn measured(&self) -> Joints {
-        self.drives.measured()
+        self.manager.measured()
     }
 
     #[inline(never)]
     fn core_tick(&mut self, measured: &Joints) -> Result<StepOutput, &'static str> {
         let out = self
             .handler
-            .tick(self.time, measured, &self.drives)
+            .tick(self.time, measured, &self.manager)
             .map_err(|_| "the core refused the measured joints")?;
         self.time += self.config.control_period;
         Ok(out)
     }
 
     #[inline(never)]
-    fn apply(&mut self, out: &StepOutput) {
-        self.drives
-            .apply(out.command.as_ref(), self.config.control_period);
+    fn transmit(&mut self, now: f64, out: &StepOutput) {
+        self.manager
+            .transmit(now, out.command.as_ref(), &mut self.bus);
     }
 
     #[inline(never)]
@@ -138,7 +182,7 @@ impl<'a> Session<'a> {
         }
         .to_bytes();
         let (ticks, reply): (u32, [u8; MESSAGE_LEN]) =
-            measure(|| self.handler.handle(&datagram, &mut self.drives));
+            measure(|| self.handler.handle(&datagram, &mut self.manager));
         if reply.starts_with(expect) {
             Ok(ticks)
         } else {
@@ -183,6 +227,17 @@ impl<'a> Session<'a> {
     }
 }
 
+/// The robot's bus with a simulated Whistle for every drive, its encoder at `q` (as
+/// `armgate-sim --can sim` builds it).
+fn virtual_bus(config: &RobotConfig, q: &Joints) -> VirtualBus {
+    let drives = config.joints.iter().zip(q.iter()).filter_map(|(joint, q)| {
+        let mut whistle = WhistleConfig::for_joint(joint)?;
+        whistle.counts = whistle.units.counts(*q).unwrap_or(0);
+        Some(SimWhistle::new(whistle))
+    });
+    VirtualBus::new(config.drives.can_bitrate, drives)
+}
+
 /// The joints at `start`, or at the drives' home positions.
 fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &'static str> {
     match start {
@@ -201,7 +256,10 @@ fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &
 
 /// Pass 1 from one start.
 struct Whole {
+    /// The firmware's work per tick (without the virtual bus).
     moving: Timing,
+    /// The virtual bus's `advance` before each moving tick.
+    bus_moving: Timing,
     holding: Timing,
     /// CM 2, GT, BG.
     requests: [u32; 3],
@@ -213,6 +271,8 @@ struct Whole {
 /// Pass 2.
 #[derive(Default)]
 struct Breakdown {
+    /// `manager.receive` + `manager.transmit`, one sum per tick.
+    manager: Timing,
     measured: Timing,
     core_tick: Timing,
     step: Timing,
@@ -221,7 +281,6 @@ struct Breakdown {
     workspace: Timing,
     ik: Timing,
     limiter: Timing,
-    apply: Timing,
     notices: Timing,
     ik_iterations: u64,
     /// Ticks in which the replica controller's command or the replica generator's set-point
@@ -238,7 +297,7 @@ pub fn run(counter: &Counter) -> bool {
         counter.instructions_per_tick
     );
     hprintln!(
-        "control tick: CommandHandler + SimulatedDrives (ideal arm) in Cartesian mode, during a straight move by ({}, {}, {}) m and {} rad yaw in >= {} s started with CM 2, GT, BG; instructions per tick, mean (max)",
+        "control tick: CommandHandler + DriveManager on a VirtualBus of simulated Whistles (as sim-drives) in Cartesian mode, during a straight move by ({}, {}, {}) m and {} rad yaw in >= {} s started with CM 2, GT, BG; instructions per tick, mean (max)",
         OFFSET[0],
         OFFSET[1],
         OFFSET[2],
@@ -312,6 +371,11 @@ fn measure_robot(
     let mean = |t: &Timing| t.instructions(counter).0;
 
     row("whole tick, moving", &whole.moving, "window per tick");
+    difference(
+        "whole tick + virtual bus (sim-drives board)",
+        mean(&whole.moving) + mean(&whole.bus_moving),
+        "the two windows per tick (means)",
+    );
     row(
         "whole tick, holding after the move",
         &whole.holding,
@@ -324,7 +388,12 @@ fn measure_robot(
             "window per tick",
         );
     }
-    row("  drives.measured()", &parts.measured, "window");
+    row(
+        "  drive manager (receive + transmit)",
+        &parts.manager,
+        "two windows per tick",
+    );
+    row("  manager.measured()", &parts.measured, "window");
     row("  handler.tick", &parts.core_tick, "window");
     row(
         "    Controller::step",
@@ -367,15 +436,19 @@ fn measure_robot(
         "step - the five above (means)",
     );
     difference(
-        "    relay, drives.fault/is_operational",
+        "    relay, manager.fault/is_operational",
         mean(&parts.core_tick) - mean(&parts.step),
         "handler.tick - step (means)",
     );
-    row("  drives.apply()", &parts.apply, "window");
     row(
         "  notices: next_notice() until None",
         &parts.notices,
         "window",
+    );
+    row(
+        "virtual bus (simulation, not on the board)",
+        &whole.bus_moving,
+        "window per moving tick",
     );
     let once = |ticks: u32| {
         let mut t = Timing::default();
@@ -419,13 +492,18 @@ fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'s
     let mut session = Session::new(config, start)?;
     let (requests, _, _) = session.start_move()?;
     let mut moving = Timing::default();
+    let mut bus_moving = Timing::default();
     while session.moving() && moving.calls < MAX_TICKS {
+        let (ticks, result) = measure(|| session.advance_bus());
+        result?;
+        bus_moving.add(ticks);
         let (ticks, result) = measure(|| session.tick());
         result?;
         moving.add(ticks);
     }
     let mut holding = Timing::default();
     for _ in 0..HOLD_TICKS {
+        session.advance_bus()?;
         let (ticks, result) = measure(|| session.tick());
         result?;
         holding.add(ticks);
@@ -437,6 +515,7 @@ fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'s
     Ok(Whole {
         duration: f64::from(moving.calls) * config.control_period,
         moving,
+        bus_moving,
         holding,
         requests,
         pose,
@@ -452,9 +531,11 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
     let refused = |_: KinematicsError| "the replica controller refused the measured joints";
 
     let mut session = Session::new(config, Some(start))?;
+    // The replica starts where the handler's controller stands after the drives' start: its
+    // last tick's time and measurement.
     let mut controller = Controller::new(config);
     controller
-        .step(0.0, &start_joints(config, Some(start))?)
+        .step(session.time - period, &session.measured())
         .map_err(refused)?;
     let (_, start_pose, goal) = session.start_move()?;
     controller
@@ -475,13 +556,15 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
         let time = session.time;
         let last_command = session.handler.controller().command();
 
+        session.advance_bus()?;
+        let (receive, ()) = measure(|| session.receive());
         let (ticks, measured) = measure(|| session.measured());
         parts.measured.add(ticks);
         let (ticks, out) = measure(|| session.core_tick(&measured));
         parts.core_tick.add(ticks);
         let out = out?;
-        let (ticks, ()) = measure(|| session.apply(&out));
-        parts.apply.add(ticks);
+        let (transmit, ()) = measure(|| session.transmit(time, &out));
+        parts.manager.add(receive + transmit);
         let (ticks, ()) = measure(|| session.drain_notices());
         parts.notices.add(ticks);
 
@@ -522,14 +605,17 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
 
 /// Pass 3: the stack the requests and ticks of the move need, below this function's frame.
 fn stack_high_water(config: &RobotConfig, start: &[f64]) -> Result<usize, &'static str> {
+    // The session (with the ≈ 24 KB virtual bus, a static in the firmware) and the drives'
+    // start before the painting: only the control work is measured.
+    let mut session = Session::new(config, Some(start))?;
     let base = stack::pointer();
     let painted = stack::paint(base, STACK_DEPTH);
-    let mut session = Session::new(config, Some(start))?;
     session.start_move()?;
     for _ in 0..MAX_TICKS {
         if !session.moving() {
             break;
         }
+        session.advance_bus()?;
         session.tick()?;
     }
     Ok(stack::high_water(&painted))
