@@ -96,6 +96,17 @@ pub fn diverges(target: &Frame, solved: &Frame, current: &Frame, margin: f64) ->
 }
 
 /// The result of one descent from one starting point.
+/// How a descent treats the joint limits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Bounds {
+    /// Ignored: a first attempt whose answer is checked afterwards.
+    Free,
+    /// Enforced (active set, clamping).
+    Enforced,
+    /// Enforced, and revolute joints may also wrap by 2π (the global search).
+    Wrapping,
+}
+
 struct Descent {
     best: IkSolution,
     converged: bool,
@@ -105,6 +116,12 @@ impl Chain {
     /// Tracking IK: a few damped Newton steps from a nearby `seed`, typically the previous
     /// tick's solution. Never wraps joints by 2π, so the result stays on the seed's branch and
     /// a commanded trajectory cannot jump a whole turn.
+    ///
+    /// The limits only matter when the nearby solution violates them, so the first descent
+    /// ignores them and its answer is checked; only if it breaks a limit (or does not converge)
+    /// does a bounded descent from the same seed follow. An unbounded Newton path may pass
+    /// outside a limit on its way to a solution inside; a bounded one can then end on the
+    /// limit in a local minimum (seeds a few millimetres inside UR5's ±2π limits did).
     pub fn solve_tracking(
         &self,
         target: &Frame,
@@ -112,14 +129,28 @@ impl Chain {
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
         let q = self.prepare(target, seed)?;
-        let descent = self.descend(
-            target,
-            q,
-            config.tracking_iterations,
-            config.tolerance,
-            false,
-        );
-        Ok(descent.into_result())
+        let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
+        let free = self.descend(target, q, iterations, tolerance, Bounds::Free);
+        let mut used = free.best.iterations;
+        if free.converged {
+            if self.within_limits(&free.best.q) {
+                return Ok(IkResult::Converged(free.best));
+            }
+            // Converged beyond a limit: near a stretched or folded singularity the nearby
+            // branches mirror each other about the joint value there, so the solution
+            // reflected about the limit seeds the bounded descent well.
+            let mirrored = self.reflected_into_limits(&free.best.q);
+            let retry = self.descend(target, mirrored, iterations, tolerance, Bounds::Enforced);
+            used += retry.best.iterations;
+            if retry.converged {
+                let mut best = retry.best;
+                best.iterations = used;
+                return Ok(IkResult::Converged(best));
+            }
+        }
+        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced);
+        bounded.best.iterations += used;
+        Ok(bounded.into_result())
     }
 
     /// Global IK: descends from `seed`, then from deterministic random configurations drawn
@@ -141,7 +172,7 @@ impl Chain {
         // Each attempt spends at least one iteration, so this bound is never the binding one.
         for _ in 0..config.global_iterations {
             let limit = budget.min(ATTEMPT_ITERATIONS);
-            let descent = self.descend(target, q, limit, config.tolerance, true);
+            let descent = self.descend(target, q, limit, config.tolerance, Bounds::Wrapping);
             used += descent.best.iterations;
             budget = budget.saturating_sub(descent.best.iterations.max(1) as u16);
             let mut found = descent.best;
@@ -158,10 +189,29 @@ impl Chain {
             q = self.random_configuration(&mut rng);
         }
         // Only a zero budget leaves no attempt: then the answer is the (clamped) seed itself.
-        let mut best =
-            best.unwrap_or_else(|| self.descend(target, start, 0, config.tolerance, true).best);
+        let mut best = best.unwrap_or_else(|| {
+            self.descend(target, start, 0, config.tolerance, Bounds::Wrapping)
+                .best
+        });
         best.iterations = used;
         Ok(IkResult::NotConverged(best))
+    }
+
+    /// `q` with every joint beyond a limit reflected about that limit (then clamped).
+    fn reflected_into_limits(&self, q: &[f64]) -> [f64; MAX_JOINTS] {
+        let mut out = [0.0; MAX_JOINTS];
+        let (min, max) = self.limits();
+        for ((o, v), (lo, hi)) in out.iter_mut().zip(q).zip(min.iter().zip(max)) {
+            let reflected = if *v > *hi {
+                2.0 * hi - v
+            } else if *v < *lo {
+                2.0 * lo - v
+            } else {
+                *v
+            };
+            *o = reflected.clamp(*lo, *hi);
+        }
+        out
     }
 
     /// Validates the inputs and returns the seed clamped into the limits.
@@ -210,7 +260,7 @@ impl Chain {
         mut q: [f64; MAX_JOINTS],
         iterations: u16,
         tolerance: f64,
-        wrap: bool,
+        bounds: Bounds,
     ) -> Descent {
         let n = self.dof();
         let mut best = IkSolution {
@@ -247,9 +297,9 @@ impl Chain {
             let e = e.to_array();
             let energy = 0.5 * e.iter().map(|v| v * v).sum::<f64>();
             self.jacobian_into(&axes, tool.pos, &mut jacobian);
-            let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q);
+            let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q, bounds);
             let largest = step.iter().fold(0.0f64, |m, v| m.max(libm::fabs(*v)));
-            self.apply(&mut q, &step, wrap);
+            self.apply(&mut q, &step, bounds);
             if largest < STALL_STEP {
                 best.iterations = it + 1;
                 break;
@@ -274,6 +324,7 @@ impl Chain {
         e: &[f64; 6],
         lambda: f64,
         q: &[f64; MAX_JOINTS],
+        bounds: Bounds,
     ) -> [f64; MAX_JOINTS] {
         let n = self.dof();
         let gradient = j.transpose_mul(e);
@@ -292,6 +343,9 @@ impl Chain {
             }
             if !linalg::cholesky_solve(&mut a, &mut dq, n) {
                 return [0.0; MAX_JOINTS];
+            }
+            if bounds == Bounds::Free {
+                break;
             }
             let mut changed = false;
             let joints = q.iter().zip(&dq).zip(min.iter().zip(max)).take(n);
@@ -322,14 +376,19 @@ impl Chain {
         dq
     }
 
-    /// `q += dq`, wrapping revolute joints by 2π into range when allowed, then clamping.
-    fn apply(&self, q: &mut [f64; MAX_JOINTS], dq: &[f64; MAX_JOINTS], wrap: bool) {
+    /// `q += dq`; with bounds, revolute joints wrapped by 2π into range when allowed, then
+    /// clamped.
+    fn apply(&self, q: &mut [f64; MAX_JOINTS], dq: &[f64; MAX_JOINTS], bounds: Bounds) {
         const TAU: f64 = core::f64::consts::TAU;
         let (min, max) = self.limits();
         let joints = q.iter_mut().zip(dq).zip(min.iter().zip(max)).enumerate();
         for (i, ((qi, di), (lo, hi))) in joints.take(self.dof()) {
             let mut v = *qi + di;
-            if wrap && !self.is_prismatic(i) && (v < *lo || v > *hi) {
+            if bounds == Bounds::Free {
+                *qi = v;
+                continue;
+            }
+            if bounds == Bounds::Wrapping && !self.is_prismatic(i) && (v < *lo || v > *hi) {
                 let turns = libm::round((0.5 * (lo + hi) - v) / TAU);
                 let wrapped = v + turns * TAU;
                 if *lo <= wrapped && wrapped <= *hi {
