@@ -19,10 +19,14 @@
 
 use std::path::PathBuf;
 
+#[path = "common/drive_loop.rs"]
+mod drive_loop;
+use drive_loop::DriveLoop;
+
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
-use armgate_core::drives::{DriveManager, DriveSettings, DriveState, VirtualBus};
-use armgate_core::motion::{Controller, Mode, Shape};
+use armgate_core::drives::{DriveSettings, VirtualBus};
+use armgate_core::motion::{Mode, Shape};
 
 const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 const RUN_SECONDS: f64 = 30.0;
@@ -97,56 +101,19 @@ struct Outcome {
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
-struct Loop {
-    bus: VirtualBus,
-    manager: DriveManager,
-    ctrl: Controller,
-    period: f64,
-    now: f64,
-}
-
-impl Loop {
-    fn tick(&mut self) {
-        self.now += self.period;
-        self.bus.advance(self.now).unwrap();
-        self.manager.receive(&mut self.bus);
-        let out = self.ctrl.step(self.now, &self.manager.measured()).unwrap();
-        self.manager
-            .transmit(self.now, out.command.as_ref(), &mut self.bus);
-    }
-}
-
 fn run(config: &RobotConfig, settings: &DriveSettings) -> Outcome {
-    let mut l = Loop {
-        bus: VirtualBus::for_robot(config),
-        manager: DriveManager::new(config, settings).unwrap(),
-        ctrl: Controller::new(config),
-        period: config.control_period,
-        now: 0.0,
-    };
-    l.manager.start().unwrap();
-    for _ in 0..500 {
-        l.tick();
-        if l.manager.state() != DriveState::Starting {
-            break;
-        }
-    }
-    assert!(l.manager.is_operational(), "{:?}", l.manager.fault());
-    // Let the flow control settle, then measure.
-    for _ in 0..20 {
-        l.tick();
-    }
+    let mut l = DriveLoop::started(config, settings, VirtualBus::for_robot(config));
     let begun: Vec<u64> = l.bus.drives().filter_map(|d| d.stats().begun_at).collect();
     let skew = (begun.iter().max().unwrap() - begun.iter().min().unwrap()) as f64 * 1e-9;
     l.bus.reset_stats();
-    let start = l.now;
+    let start = l.now();
     l.ctrl.set_mode(Mode::Joint).unwrap();
     l.ctrl.move_joints(&READY, 0.0).unwrap();
     let mut leads = std::collections::BTreeSet::new();
     let mut circle_started = false;
     let mut write_delay_max: f64 = 0.0;
-    while l.now - start < RUN_SECONDS {
-        let step_time = l.now;
+    while l.now() - start < RUN_SECONDS {
+        let step_time = l.now();
         l.tick();
         // The points sent at the last step have been written by now: how long after it.
         for drive in l.bus.drives() {
@@ -157,7 +124,7 @@ fn run(config: &RobotConfig, settings: &DriveSettings) -> Outcome {
         (0..6).filter_map(|j| l.manager.lead(j)).for_each(|lead| {
             leads.insert(lead);
         });
-        if !l.ctrl.is_moving() && !circle_started && l.now - start > 1.0 {
+        if !l.ctrl.is_moving() && !circle_started && l.now() - start > 1.0 {
             l.ctrl.set_mode(Mode::Cartesian).unwrap();
             l.ctrl
                 .start_shape(Shape::Circle {

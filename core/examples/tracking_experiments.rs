@@ -37,13 +37,15 @@
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+#[path = "common/drive_loop.rs"]
+mod drive_loop;
+use drive_loop::DriveLoop;
+
 use armgate_core::config::{RobotConfig, load_file};
-use armgate_core::drives::{
-    DriveManager, DriveSettings, DriveState, SimWhistle, VirtualBus, WhistleConfig,
-};
+use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
-use armgate_core::motion::{Controller, IdealArm, Mode, Shape, StepOutput};
+use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
 
 /// The start pose's position (m): the sinusoids' centre (spec §4.5), and the circles' start.
 const START: [f64; 3] = [0.0, 0.62, 0.52];
@@ -406,37 +408,17 @@ struct Run {
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
-struct Loop {
-    bus: VirtualBus,
-    manager: DriveManager,
-    ctrl: Controller,
-    period: f64,
-    now: f64,
-}
-
-impl Loop {
-    fn tick(&mut self) -> StepOutput {
-        self.now += self.period;
-        self.bus.advance(self.now).unwrap();
-        self.manager.receive(&mut self.bus);
-        let out = self.ctrl.step(self.now, &self.manager.measured()).unwrap();
-        self.manager
-            .transmit(self.now, out.command.as_ref(), &mut self.bus);
-        out
+/// The simulated drives' actual positions (joint units), in joint order.
+fn actual(l: &DriveLoop, config: &RobotConfig) -> Joints {
+    let mut q = Joints::zeros(config.dof());
+    for (v, joint) in q.iter_mut().zip(config.joints.iter()) {
+        *v = l
+            .bus
+            .drive(joint.drive.node_id)
+            .expect("a drive per joint")
+            .joint_position();
     }
-
-    /// The simulated drives' actual positions (joint units), in joint order.
-    fn actual(&self, config: &RobotConfig) -> Joints {
-        let mut q = Joints::zeros(config.dof());
-        for (v, joint) in q.iter_mut().zip(config.joints.iter()) {
-            *v = self
-                .bus
-                .drive(joint.drive.node_id)
-                .expect("a drive per joint")
-                .joint_position();
-        }
-        q
-    }
+    q
 }
 
 /// Simulated Whistles with their encoders at `q0` and the given speed limit.
@@ -455,50 +437,33 @@ fn virtual_bus(config: &RobotConfig, q0: &Joints, max_speed: f64) -> VirtualBus 
 }
 
 fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
-    let mut l = Loop {
-        bus: virtual_bus(config, q0, drive_speed),
-        manager: DriveManager::new(config, &DriveSettings::default()).unwrap(),
-        ctrl: Controller::new(config),
-        period: config.control_period,
-        now: 0.0,
-    };
-    l.manager.start().unwrap();
-    for _ in 0..500 {
-        l.tick();
-        if l.manager.state() != DriveState::Starting {
-            break;
-        }
-    }
-    assert!(l.manager.is_operational(), "{:?}", l.manager.fault());
-    // Let the flow control settle with the arm holding still.
-    for _ in 0..20 {
-        l.tick();
-    }
+    let bus = virtual_bus(config, q0, drive_speed);
+    let mut l = DriveLoop::started(config, &DriveSettings::default(), bus);
     l.ctrl.set_mode(Mode::Cartesian).unwrap();
     let origin = l.ctrl.cartesian_setpoint().pos;
     l.ctrl.start_shape(*shape).unwrap();
 
     let period = config.control_period;
     let end = CYCLES * shape_period(shape);
-    let t_start = l.now;
+    let t_start = l.now();
     let mut notes = Vec::new();
     let mut previous = l.manager.measured();
     let (mut cmd_sum, mut cmd_max, mut cmd_n) = (0.0, 0.0f64, 0usize);
     let mut peak = Joints::zeros(config.dof());
     // (time since the start, FK of the drives' actual joints)
-    let mut samples = vec![(0.0, chain.forward(&l.actual(config)).unwrap().pos)];
+    let mut samples = vec![(0.0, chain.forward(&actual(&l, config)).unwrap().pos)];
     let mut finishing = false;
     let mut k = 0usize;
     while k as f64 * period <= end + 1.0 {
         k += 1;
         let out = l.tick();
-        let t = l.now - t_start;
+        let t = l.now() - t_start;
         let e = out.events;
         if e.ik_divergence || e.joint_limit || e.rate_limit || e.workspace_limit {
             notes.push(format!("event at {t:.2} s: {e:?}"));
         }
         if t <= end {
-            samples.push((t, chain.forward(&l.actual(config)).unwrap().pos));
+            samples.push((t, chain.forward(&actual(&l, config)).unwrap().pos));
         }
         let command = out.command.expect("Cartesian mode commands every tick");
         // Command k is the shape at phase k · period.
