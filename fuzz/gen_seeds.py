@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Writes the seed corpus of the `datagram` fuzz target to seeds/datagram/.
+
+Input format (see fuzz_targets/datagram.rs): chunks of one header byte (bits 0-5: datagram
+length, bits 6-7: ticks after it, 0/1/8/64) followed by the datagram. The poses are the
+ranger-mk1 home pose (drives' home angles) and small moves from it.
+"""
+import os
+import struct
+
+HOME_XYZ = (0.0, 0.02, 0.666)
+HOME_RPY = (0.0, 0.0, -1.5707963)
+HOME_Q = (1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0)
+TICKS = {0: 0x00, 1: 0x40, 8: 0x80, 64: 0xC0}
+
+
+def dgram(cmd, values=(), index=0):
+    v = list(values) + [0.0] * (7 - len(values))
+    return cmd.encode() + struct.pack("<7f", *v) + bytes([index])
+
+
+def chunk(data, ticks=0):
+    assert len(data) <= 40
+    return bytes([len(data) | TICKS[ticks]]) + data
+
+
+def moved(xyz, dx=0.0, dy=0.0, dz=0.0):
+    return (xyz[0] + dx, xyz[1] + dy, xyz[2] + dz)
+
+
+def joints(dq=None):
+    q = list(HOME_Q)
+    for i, d in (dq or {}).items():
+        q[i] += d
+    return q
+
+
+SEEDS = {
+    # Single datagrams.
+    "cm2": chunk(dgram("CM", [2.0]), 1),
+    "gt": chunk(dgram("GT", [*moved(HOME_XYZ, dz=0.002), *HOME_RPY, 0.5])),
+    "gl": chunk(dgram("GL", [*moved(HOME_XYZ, dz=0.002), 0.0, 0.0, -0.7071068, 0.7071068])),
+    "bg": chunk(dgram("BG"), 8),
+    "vp": chunk(dgram("VP", [*moved(HOME_XYZ, dx=0.002), *HOME_RPY, 0.0], 0)),
+    "ve": chunk(dgram("VE"), 8),
+    "jg": chunk(dgram("jG", joints({0: 0.01}))),
+    "jb": chunk(dgram("jB"), 8),
+    "ps": chunk(dgram("PS")),
+    "tm": chunk(dgram("TM")),
+    "rc": chunk(dgram("RC", joints({0: 0.001}))),
+    "undersized": chunk(b"BG", 1),
+    "unknown": chunk(dgram("XX")),
+    # Sequences that run motions.
+    "cart_move": chunk(dgram("CM", [2.0]), 1)
+    + chunk(dgram("GT", [*moved(HOME_XYZ, dz=0.002), *HOME_RPY, 0.5]))
+    + chunk(dgram("BG"), 64)
+    + chunk(dgram("PS"), 64)
+    + chunk(dgram("BG"), 1),
+    "cart_via": chunk(dgram("CM", [2.0]), 1)
+    + chunk(dgram("VP", [*moved(HOME_XYZ, dx=0.002), *HOME_RPY, 0.0], 0))
+    + chunk(dgram("VP", [*moved(HOME_XYZ, dx=0.002, dz=0.002), *HOME_RPY, 0.0], 1))
+    + chunk(dgram("VP", [*HOME_XYZ, *HOME_RPY, 0.0], 2))
+    + chunk(dgram("VE"), 64)
+    + chunk(dgram("PS"), 64)
+    + chunk(dgram("VC"), 1),
+    "joint_move": chunk(dgram("CM", [1.0]), 1)
+    + chunk(dgram("jG", joints({0: 0.01, 2: -0.01})))
+    + chunk(dgram("jB"), 64)
+    + chunk(dgram("jP"), 1)
+    + chunk(dgram("jR"), 1),
+    "joint_via": chunk(dgram("CM", [1.0]), 1)
+    + chunk(dgram("jV", [*joints({3: 0.01}), 0.1], 0))
+    + chunk(dgram("jV", [*joints({3: 0.02}), 0.1], 1))
+    + chunk(dgram("jV", [*joints({3: 0.0}), 0.1], 2))
+    + chunk(dgram("jE"), 64)
+    + chunk(dgram("jP"), 64)
+    + chunk(dgram("jC"), 1),
+    "drives": chunk(dgram("OF"), 1)
+    + chunk(dgram("OF"))
+    + chunk(dgram("ON"), 1)
+    + chunk(dgram("ON"))
+    + chunk(dgram("RC", joints({0: 0.001})), 1)
+    + chunk(dgram("jP"))
+    + chunk(dgram("TM"))
+    + chunk(dgram("ST"), 1),
+}
+
+# Inputs that fail a check of the target in some configuration (see README.md, "Findings").
+FINDINGS = {
+    # RC (mode 0) declares joint 5 to be 0 rad, below its 0.785 rad limit; it is accepted. CM 1
+    # and one tick: the joint command for joint 5 is 0.003888 rad (0 + max_rate * period), still
+    # outside the limits. Fails only with ARMGATE_FUZZ_STRICT_LIMITS=1.
+    "rc-outside-joint-limits": chunk(dgram("RC", joints({4: -1.5708})))
+    + chunk(dgram("CM", [1.0]), 1),
+}
+
+here = os.path.dirname(os.path.abspath(__file__))
+for kind, inputs in (("seeds", SEEDS), ("findings", FINDINGS)):
+    out = os.path.join(here, kind, "datagram")
+    os.makedirs(out, exist_ok=True)
+    for name, data in inputs.items():
+        with open(os.path.join(out, name), "wb") as f:
+            f.write(data)
+    print(f"{len(inputs)} {kind} in {out}")
