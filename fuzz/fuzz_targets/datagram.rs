@@ -22,8 +22,7 @@
 //!   A datagram that is not a request gets exactly `ER00`/`ER01`.
 //!
 //! and for every tick: `tick` never fails, every joint command is finite and within the joint
-//! limits (see [`check_limits`] for the one exception, an arm recalibrated outside its range),
-//! and every unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27`.
+//! limits, and every unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27`.
 #![no_main]
 
 use std::sync::OnceLock;
@@ -52,8 +51,6 @@ struct Start {
     handler: CommandHandler,
     drives: SimulatedDrives,
     period: f64,
-    /// `ARMGATE_FUZZ_STRICT_LIMITS` is set (not empty, not `0`): every command must lie within the joint limits.
-    strict_limits: bool,
 }
 
 fn start() -> &'static Start {
@@ -74,8 +71,6 @@ fn start() -> &'static Start {
             handler,
             drives,
             period,
-            strict_limits: std::env::var_os("ARMGATE_FUZZ_STRICT_LIMITS")
-                .is_some_and(|v| !v.is_empty() && v != "0"),
         }
     })
 }
@@ -106,14 +101,15 @@ fuzz_target!(|data: &[u8]| {
             ticks += 1;
             let t = f64::from(ticks) * period;
             let measured = drives.measured();
-            // What the joint limiter steps from: the last command, or the measured joints.
-            let previous = handler.controller().command().unwrap_or(measured);
             let out = handler
                 .tick(t, &measured, &drives)
                 .unwrap_or_else(|e| panic!("tick {ticks} failed: {e:?}; measured {measured:?}"));
             if let Some(cmd) = &out.command {
                 assert!(cmd.is_finite(), "tick {ticks}: non-finite command {cmd:?}");
-                check_limits(&handler, cmd, &previous, start.strict_limits, ticks);
+                assert!(
+                    handler.controller().chain().within_limits(cmd),
+                    "tick {ticks}: command beyond the joint limits {cmd:?}"
+                );
             }
             drives.apply(out.command.as_ref(), period);
             while let Some(text) = handler.next_notice() {
@@ -122,44 +118,6 @@ fuzz_target!(|data: &[u8]| {
         }
     }
 });
-
-/// The joint command against the joint limits.
-///
-/// Strict (`ARMGATE_FUZZ_STRICT_LIMITS=1`): every joint within its range. Default: a joint may
-/// be outside its range only if the previous command (or, without one, the measured joint) was
-/// outside too, and the new command is no farther outside. This is what the joint limiter does
-/// when the arm is measured outside its range, which `RC` (recalibration with angles beyond the
-/// limits, accepted in mode 0) brings about: it clamps to the range, then to `max_rate · period`
-/// from the previous command, so the arm eases back at the rate limit instead of jumping. See
-/// fuzz/README.md ("Findings").
-fn check_limits(
-    handler: &CommandHandler,
-    cmd: &Joints,
-    previous: &Joints,
-    strict: bool,
-    tick: u32,
-) {
-    let chain = handler.controller().chain();
-    if chain.within_limits(cmd) {
-        return;
-    }
-    assert!(
-        !strict,
-        "tick {tick}: command beyond the joint limits {cmd:?}"
-    );
-    assert_eq!(cmd.len(), chain.dof(), "tick {tick}: command {cmd:?}");
-    let outside = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
-    let limits = chain.min().iter().zip(chain.max());
-    for (j, ((c, p), (lo, hi))) in cmd.iter().zip(previous.iter()).zip(limits).enumerate() {
-        let (now, before) = (outside(*c, *lo, *hi), outside(*p, *lo, *hi));
-        assert!(
-            now == 0.0 || (before > 0.0 && now <= before),
-            "tick {tick}: joint {} command {c} beyond its limits [{lo}, {hi}] (previous {p}); \
-             command {cmd:?}",
-            j + 1
-        );
-    }
-}
 
 /// The protocol parsers on the raw datagram: no panics, and a request round-trips.
 fn check_parsers(datagram: &[u8]) -> Result<Request, Notice> {
