@@ -3,10 +3,11 @@
 // The including build script needs the build-dependencies `armgate-core` (feature `std`) and
 // `postcard` (feature `use-std`).
 
-/// Reads `workspace_root/relative`, parses and validates it with `armgate_core::config::parse_toml`
-/// and writes the postcard serialisation of the `RobotConfig` to `out`. Prints the
-/// `rerun-if-changed` line for the robot file. The error names the file and, for a refused robot,
-/// the field.
+/// Reads `workspace_root/relative`, parses and validates it with `armgate_core::config::parse_toml`,
+/// checks that the drive manager accepts it with the default drive settings (which the firmware
+/// uses: a refusal there would otherwise stop the board at boot), and writes the postcard
+/// serialisation of the `RobotConfig` to `out`. Prints the `rerun-if-changed` line for the robot
+/// file. The error names the file and, for a refused robot, the field or the drive setting.
 fn embed_robot(
     workspace_root: &std::path::Path,
     relative: &str,
@@ -18,6 +19,9 @@ fn embed_robot(
         .map_err(|e| format!("cannot read robot file {}: {e}", path.display()))?;
     let config =
         armgate_core::config::parse_toml(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let settings = armgate_core::drives::DriveSettings::default();
+    armgate_core::drives::DriveManager::new(&config, &settings)
+        .map_err(|e| format!("{}: the drive manager refuses this robot: {e}", path.display()))?;
     let bytes = postcard::to_stdvec(&config)
         .map_err(|e| format!("{}: cannot serialise with postcard: {e}", path.display()))?;
     std::fs::write(out, bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;

@@ -129,7 +129,7 @@ impl BoardDrives {
 }
 
 /// Opens the bus and starts the drive manager. Panics (before the watchdog runs) if the drive
-/// manager refuses the robot.
+/// manager refuses the robot, which `build.rs` already rules out for the embedded robot.
 pub fn new(
     robot: &RobotConfig,
     can: Peri<'static, FDCAN1>,
