@@ -231,6 +231,7 @@ impl Client {
             }
             // Advance over every target reached by this sample.
             let (mut distance, mut angle) = (f64::INFINITY, None);
+            let mut arrived = goals.is_empty();
             while let Some(goal) = goals.get(target) {
                 let last = target + 1 == goals.len();
                 let (d, a, reached) = measure(&current, goal, last);
@@ -239,16 +240,8 @@ impl Client {
                     break;
                 }
                 if last {
-                    progress(&Progress {
-                        current: &current,
-                        target,
-                        targets: goals.len(),
-                        distance,
-                        angle,
-                        elapsed: now - started,
-                        notices: &notices,
-                    });
-                    return Ok(current);
+                    arrived = true;
+                    break;
                 }
                 target += 1;
             }
@@ -261,7 +254,7 @@ impl Client {
                 elapsed: now - started,
                 notices: &notices,
             });
-            if goals.is_empty() {
+            if arrived {
                 return Ok(current);
             }
             if let Some(text) = notices.iter().find(|t| matching::ends_motion(t)) {
