@@ -10,6 +10,7 @@
 mod common;
 
 use armgate_core::config::{ConfigReason, LoadError, RobotConfig, parse_toml};
+use armgate_core::drives::{DriveManager, DriveSettings};
 
 fn mk1_text() -> String {
     std::fs::read_to_string(common::robots_dir().join("ranger-mk1.toml")).unwrap()
@@ -37,6 +38,17 @@ fn every_shipped_robot_loads_and_round_trips_through_postcard() {
         let back: RobotConfig = postcard::from_bytes(bytes).unwrap();
         assert_eq!(back, config, "{name}");
         back.validate().unwrap();
+    }
+}
+
+/// The firmware's build script refuses a robot that the drive manager would refuse at boot
+/// with its default settings; every shipped robot must pass that check.
+#[test]
+fn every_shipped_robot_is_accepted_by_the_drive_manager() {
+    for (name, config) in common::all_robots() {
+        if let Err(e) = DriveManager::new(&config, &DriveSettings::default()) {
+            panic!("{name}: {e}");
+        }
     }
 }
 
