@@ -42,7 +42,7 @@ Examples:
   armgate teleop                             keyboard client (Fig. 3.3 of the thesis)
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
-WN23, ER3x), 2 no reply, I/O error, bad arguments or a bad run file.
+WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file.
 Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
 
 const RUN_LONG: &str = "\

@@ -520,7 +520,7 @@ mod tests {
         let fake = FakeController::spawn(move |_| {
             let reply = Reply::null(Command::Stop).to_bytes().to_vec();
             if std::mem::take(&mut first) {
-                vec![reply.clone(), reply, text("WN23 Via point missed.")]
+                vec![reply.clone(), reply, text("WN27 Via point missed.")]
             } else {
                 vec![]
             }

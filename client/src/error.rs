@@ -36,7 +36,7 @@ pub enum ClientError {
     #[error("{0}")]
     Rejected(Text),
     /// A wait ended because the controller reported that the motion cannot complete
-    /// (`ER21`, `WN22`, `WN23` or a drive fault `ER3x`).
+    /// (`ER21`, `WN22`, `WN27` or a drive fault `ER3x`).
     #[error("motion aborted: {0}")]
     Aborted(Text),
     /// A wait ended because the arm stopped moving before it reached the target.

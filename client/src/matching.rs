@@ -9,11 +9,11 @@
 //!   `ER00 Cmd XX not understood`, `ER01 Msg XX undersized.`), or `ER10` for `OF` / `ER11` for
 //!   `ON`: the request was refused.
 //!
-//! Every other `ER`/`WN` text is an unsolicited notice (`ER21`, `WN12`, `WN22`, `WN23`, drive
+//! Every other `ER`/`WN` text is an unsolicited notice (`ER21`, `WN12`, `WN22`, `WN27`, drive
 //! faults `ER3x`, or a refusal of an earlier request). Every other normal reply is stale (the
 //! late answer to an earlier, retried request) and is dropped.
 
-use armgate_protocol::client::{Message, Severity, Text};
+use armgate_protocol::client::{Message, Notice, Severity, Text};
 
 /// Bit 7 of the index: bank 2 (joints 7..) for joint requests.
 pub const BANK2: u8 = 0x80;
@@ -109,14 +109,22 @@ pub fn code(text: &Text) -> Option<u8> {
 }
 
 /// Whether a notice means that a running motion will not complete: `ER21` (workspace limit,
-/// the generator is reset), `WN22` (IK divergence, the arm holds), `WN23` (via point missed, the
+/// the generator is reset), `WN22` (IK divergence, the arm holds), `WN27` (via point missed, the
 /// sequence stopped) and drive faults `ER30`..`ER39`.
 pub fn ends_motion(text: &Text) -> bool {
-    match (text.severity(), code(text)) {
-        (Severity::Error, Some(c)) => c == 21 || (30..40).contains(&c),
-        (Severity::Warning, Some(c)) => c == 22 || c == 23,
-        _ => false,
-    }
+    const ENDING: [Notice; 3] = [
+        Notice::WorkspaceLimit,
+        Notice::IkDivergence,
+        Notice::ViaPointMissed,
+    ];
+    let Some(c) = code(text) else {
+        return false;
+    };
+    let severity = text.severity();
+    ENDING
+        .iter()
+        .any(|n| n.severity() == severity && n.code() == c)
+        || (severity == Severity::Error && (30..40).contains(&c))
 }
 
 #[cfg(test)]
@@ -217,7 +225,7 @@ mod tests {
             "ER21 Work space limit.",
             "WN12 Joint limit.",
             "WN22 Inv Kin Divergence.",
-            "WN23 Via point missed.",
+            "WN27 Via point missed.",
             "ER31 Drive 2 fault",
         ] {
             assert!(matches!(e.classify(&text(s)), Incoming::Notice(t) if t.as_str() == s));
@@ -233,7 +241,15 @@ mod tests {
         };
         assert!(ends_motion(&parse("ER21 Work space limit.")));
         assert!(ends_motion(&parse("WN22 Inv Kin Divergence.")));
-        assert!(ends_motion(&parse("WN23 Via point missed.")));
+        assert!(ends_motion(&parse("WN27 Via point missed.")));
+        for notice in [
+            Notice::WorkspaceLimit,
+            Notice::IkDivergence,
+            Notice::ViaPointMissed,
+        ] {
+            assert!(ends_motion(&notice.text()), "{notice:?}");
+        }
+        assert!(!ends_motion(&Notice::JointLimit.text()));
         assert!(ends_motion(&parse("ER33 Drive fault")));
         assert!(!ends_motion(&parse("WN12 Joint limit.")));
         assert!(!ends_motion(&parse("ER20 Cmd BG rejected")));

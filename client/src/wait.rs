@@ -7,9 +7,9 @@
 //! * with success when the last target is reached (position within [`WaitOptions::tolerance`],
 //!   orientation within [`WaitOptions::angle_tolerance`]);
 //! * with [`ClientError::Aborted`] when a notice says the motion cannot complete (`ER21`,
-//!   `WN22`, `WN23`, drive faults `ER3x`; see [`matching::ends_motion`]);
+//!   `WN22`, `WN27`, drive faults `ER3x`; see [`matching::ends_motion`]);
 //! * with [`ClientError::Stalled`] when the arm has not moved for [`WaitOptions::stall`]
-//!   (a sequence that gave up on a via point sends no message);
+//!   (held short of the target without a motion-ending notice, e.g. clamped at a joint limit);
 //! * with [`ClientError::WaitTimeout`] after [`WaitOptions::timeout`].
 //!
 //! Notices that arrive during a wait are handed to the progress callback (and not left in
@@ -376,7 +376,7 @@ mod tests {
 
     #[test]
     fn a_motion_ending_notice_aborts_and_is_reported() {
-        let fake = arm(0.0, 0.1, Some((3, "WN23 Via point missed.")));
+        let fake = arm(0.0, 0.1, Some((3, "WN27 Via point missed.")));
         let mut c = client(&fake);
         c.begin().unwrap();
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0; 3]);
@@ -386,8 +386,8 @@ mod tests {
                 seen.extend(p.notices.iter().map(|t| t.as_str().to_owned()))
             })
             .unwrap_err();
-        assert!(matches!(err, ClientError::Aborted(t) if t.as_str() == "WN23 Via point missed."));
-        assert_eq!(seen, ["WN23 Via point missed."]);
+        assert!(matches!(err, ClientError::Aborted(t) if t.as_str() == "WN27 Via point missed."));
+        assert_eq!(seen, ["WN27 Via point missed."]);
     }
 
     #[test]
