@@ -577,8 +577,9 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
         let pose = pose.map_err(|_| "FK refused the measured joints")?;
         let (ticks, (setpoint, _)) = measure(|| {
             let t = generator.elapsed() + period;
-            let _ = generator.sample(t);
-            generator.advance_to(t)
+            let sample = generator.sample(t);
+            generator.commit(t, sample);
+            sample
         });
         parts.generator.add(ticks);
         if replica.command != out.command || out.setpoint != Some(setpoint) {

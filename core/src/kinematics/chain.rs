@@ -137,7 +137,12 @@ impl Chain {
     /// The tool frame in the base frame.
     pub fn forward(&self, q: &[f64]) -> Result<Frame, KinematicsError> {
         let q = self.check(q)?;
-        Ok(self.walk(q.as_array(), |_, _, _| {}))
+        Ok(self.pose(&q))
+    }
+
+    /// The tool frame for joints that [`check`](Self::check) returned (not checked again).
+    pub(crate) fn pose(&self, q: &Joints) -> Frame {
+        self.walk(q.as_array(), |_, _, _| {})
     }
 
     /// The frames {1}..{n} of every joint (written to `links[..n]`) and the tool frame.

@@ -166,21 +166,21 @@ impl CartesianGenerator {
         self.motion.as_ref().map_or(0.0, Motion::elapsed)
     }
 
-    /// The set-point the motion would have at motion time `t`, without advancing; the held
-    /// set-point when idle.
-    pub fn sample(&self, t: f64) -> Frame {
+    /// The set-point the motion would have at motion time `t`, without advancing, and whether
+    /// the motion ends there (then the set-point is exactly its goal, or the shape's start
+    /// point); the held set-point when idle.
+    pub fn sample(&self, t: f64) -> (Frame, bool) {
         self.motion
             .as_ref()
-            .map_or(self.setpoint, |m| m.sample(t).0)
+            .map_or((self.setpoint, false), |m| m.sample(t))
     }
 
-    /// Advances the motion to motion time `t` and returns the set-point and whether the motion
-    /// ended (then the set-point is exactly its goal, or the shape's start point, and held).
-    pub fn advance_to(&mut self, t: f64) -> (Frame, bool) {
+    /// Advances the motion to motion time `t`, given `sample = self.sample(t)` (computed once by
+    /// a caller that first checks the set-point); an ended motion holds its last set-point.
+    pub fn commit(&mut self, t: f64, (setpoint, ended): (Frame, bool)) {
         let Some(motion) = &mut self.motion else {
-            return (self.setpoint, false);
+            return;
         };
-        let (setpoint, ended) = motion.sample(t);
         match motion {
             Motion::Move { elapsed, .. } | Motion::Shape { elapsed, .. } => *elapsed = t,
         }
@@ -189,7 +189,14 @@ impl CartesianGenerator {
         } else {
             self.setpoint = setpoint;
         }
-        (setpoint, ended)
+    }
+
+    /// Advances the motion to motion time `t` and returns the set-point and whether the motion
+    /// ended ([`sample`](Self::sample), then [`commit`](Self::commit)).
+    pub fn advance_to(&mut self, t: f64) -> (Frame, bool) {
+        let sample = self.sample(t);
+        self.commit(t, sample);
+        sample
     }
 
     /// True while a move or shape is in progress.

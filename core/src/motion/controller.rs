@@ -148,7 +148,7 @@ impl Controller {
     /// tick never makes the arm jump to catch up. `now` only stamps the output.
     pub fn step(&mut self, now: f64, measured: &[f64]) -> Result<StepOutput, KinematicsError> {
         let q_m = self.chain.check(measured)?;
-        let f_m = self.chain.forward(&q_m)?;
+        let f_m = self.chain.pose(&q_m);
         self.measured = Some((q_m, f_m));
         let mut events = Events {
             workspace_limit: !self.workspace.allows(f_m.pos),
@@ -226,7 +226,8 @@ impl Controller {
         let mut scale = 1.0;
         for _ in 0..SLOWDOWN_ATTEMPTS {
             let t = t0 + self.period * scale;
-            let setpoint = self.cartesian_generator.sample(t);
+            let sample = self.cartesian_generator.sample(t);
+            let (setpoint, finished) = sample;
             if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
                 // An illegal set-point never reaches the IK: abort and hold the commanded pose.
                 events.workspace_limit = true;
@@ -235,7 +236,7 @@ impl Controller {
             match self.track(&setpoint, &seed) {
                 Tracking::Reached(q) => {
                     self.stalled_ticks = 0;
-                    let (setpoint, finished) = self.cartesian_generator.advance_to(t);
+                    self.cartesian_generator.commit(t, sample);
                     events.motion_finished |= finished && !self.cartesian_sequence.is_running();
                     return (q, setpoint);
                 }
