@@ -8,7 +8,7 @@ use crate::matching::BANK2;
 use crate::{Client, ClientError, Mode, Pose};
 
 /// The temperature a drive that never answered reports (°C).
-pub const NO_READING: f64 = -100.0;
+pub const NO_READING: f64 = armgate_core::drives::UNKNOWN_TEMPERATURE;
 
 fn request(command: Command, values: [f32; VALUES], index: u8) -> Request {
     Request {

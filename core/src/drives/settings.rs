@@ -94,8 +94,6 @@ impl core::fmt::Display for SetupError {
 /// The settings turned into cycle counts for one control period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Timing {
-    /// The control period (s).
-    pub period: f64,
     /// Drive samples per PT point (`MP[4]`).
     pub samples_per_point: u16,
     /// Cycles a request may stay unanswered.
@@ -146,7 +144,6 @@ impl Timing {
                 .ok_or(SetupError::BadTiming)
         };
         Ok(Self {
-            period,
             // Both checked above to fit.
             samples_per_point: samples as u16,
             // At least two cycles: a reply to a request sent in one cycle is read in the next.

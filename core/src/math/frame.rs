@@ -73,11 +73,6 @@ impl Frame {
         Self::new(rot, -(rot * self.pos))
     }
 
-    /// Maps a point from this frame to the reference frame.
-    pub fn transform_point(&self, p: Vec3) -> Vec3 {
-        self.rot * p + self.pos
-    }
-
     /// The displacement from `self` to `goal` in base coordinates: `(p_goal − p, rotvec)` where
     /// rotvec is the rotation vector of `R_goal · Rᵀ` (KDL `diff`, with a robust log map).
     pub fn diff(&self, goal: &Frame) -> Twist {

@@ -76,16 +76,6 @@ impl StraightLine {
         self.profile.position(f64::INFINITY)
     }
 
-    /// Distance travelled along the segment at time `t`.
-    pub fn travelled(&self, t: f64) -> f64 {
-        self.profile.position(t)
-    }
-
-    /// The unit direction of the segment.
-    pub fn direction(&self) -> &[f64] {
-        self.direction.get(..self.n).unwrap_or(&[])
-    }
-
     /// The point at time `t`, written to `out[..n]`.
     pub fn point(&self, t: f64, out: &mut [f64]) {
         let s = self.profile.position(t);
