@@ -361,16 +361,16 @@ fn joint_limiter_clamps_range_and_rate_and_reports() {
     at[1] = -0.785;
     let mut prev_at = prev;
     prev_at[1] = -0.785;
-    let l = limiter.limit(&Joints::from_slice(&at).unwrap(), Some(&prev_at));
+    let l = limiter.limit(&Joints::from_slice(&at).unwrap(), &prev_at);
     assert!(!l.position_clamped && !l.rate_clamped);
     let mut beyond = at;
     beyond[1] = -0.9;
-    let l = limiter.limit(&Joints::from_slice(&beyond).unwrap(), Some(&prev_at));
+    let l = limiter.limit(&Joints::from_slice(&beyond).unwrap(), &prev_at);
     assert!(l.position_clamped && l.q[1] == -0.785);
     // Rate: 0.2 rad/s × 0.01944 s per tick.
     let mut jump = MK1_HOME;
     jump[0] += 0.5;
-    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), Some(&prev));
+    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), &prev);
     assert!(l.rate_clamped && !l.position_clamped);
     assert!((l.q[0] - (MK1_HOME[0] + 0.2 * 0.01944)).abs() < 1e-12);
 }

@@ -29,7 +29,6 @@ use std::sync::OnceLock;
 
 use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
 use armgate_core::config::{RobotConfig, load_file};
-use armgate_core::kinematics::Joints;
 use armgate_core::motion::IdealArm;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
@@ -57,8 +56,7 @@ fn start() -> &'static Start {
     static START: OnceLock<Start> = OnceLock::new();
     START.get_or_init(|| {
         let config: RobotConfig = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
-        let home: Vec<f64> = config.joints.iter().map(|j| j.drive.home).collect();
-        let home = Joints::from_slice(&home).expect("too many joints");
+        let home = config.home();
         let mut handler = CommandHandler::new(&config);
         let mut drives = SimulatedDrives::new(ArmModel::Ideal(IdealArm::new(home)));
         let period = config.control_period;

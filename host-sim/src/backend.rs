@@ -5,9 +5,7 @@ use std::str::FromStr;
 
 use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
 use armgate_core::config::RobotConfig;
-use armgate_core::drives::{
-    BusState, CanBus, DriveManager, DriveSettings, SimWhistle, TxError, VirtualBus, WhistleConfig,
-};
+use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
 use armgate_protocol::can::CanFrame;
 
@@ -77,7 +75,7 @@ impl Backend {
                     period: config.control_period,
                 });
             }
-            CanChoice::Sim => Bus::Virtual(Box::new(virtual_bus(config, start))),
+            CanChoice::Sim => Bus::Virtual(Box::new(VirtualBus::for_robot_at(config, start))),
             CanChoice::SocketCan(iface) => {
                 Bus::Socket(SocketCan::open(iface).map_err(|e| socketcan::explain(iface, &e))?)
             }
@@ -148,20 +146,6 @@ impl Backend {
             Self::Can { manager, .. } => manager.as_mut(),
         }
     }
-}
-
-/// One simulated Whistle per drive of the robot, its encoder at the `start` position.
-fn virtual_bus(config: &RobotConfig, start: &Joints) -> VirtualBus {
-    let drives = config
-        .joints
-        .iter()
-        .zip(start.iter())
-        .filter_map(|(joint, q)| {
-            let mut whistle = WhistleConfig::for_joint(joint)?;
-            whistle.counts = whistle.units.counts(*q).unwrap_or(0);
-            Some(SimWhistle::new(whistle))
-        });
-    VirtualBus::new(config.drives.can_bitrate, drives)
 }
 
 impl CanBus for Bus {

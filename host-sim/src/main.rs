@@ -117,10 +117,9 @@ struct Stats {
 
 fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     let n = config.dof();
-    let home: Vec<f64> = config.joints.iter().map(|j| j.drive.home).collect();
-    let start = args.start.clone().unwrap_or(home);
+    let home = config.home();
     let start = Chain::new(config)
-        .check(&start)
+        .check(args.start.as_deref().unwrap_or(&home))
         .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
     let mut drives = Backend::open(&args.can, config, &start, || {
         arm_model(args.arm, config, start)
@@ -321,7 +320,7 @@ fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> Stri
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
 fn print_home(config: &RobotConfig) {
     let chain = Chain::new(config);
-    let home: Vec<f64> = config.joints.iter().map(|j| j.drive.home).collect();
+    let home = config.home();
     let (Ok(tool), Ok(w)) = (chain.forward(&home), chain.manipulability(&home)) else {
         eprintln!("armgate-sim: home pose outside the model");
         return;

@@ -30,7 +30,7 @@ use core::f64::consts::FRAC_PI_2;
 
 use armgate_core::command::CommandHandler;
 use armgate_core::config::RobotConfig;
-use armgate_core::drives::{DriveManager, DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
+use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
 use armgate_core::kinematics::{Chain, Joints, KinematicsError};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{
@@ -97,7 +97,7 @@ impl<'a> Session<'a> {
             config,
             handler: CommandHandler::new(config),
             manager,
-            bus: virtual_bus(config, &q),
+            bus: VirtualBus::for_robot_at(config, &q),
             time: 0.0,
         };
         for _ in 0..START_TICKS {
@@ -227,30 +227,13 @@ impl<'a> Session<'a> {
     }
 }
 
-/// The robot's bus with a simulated Whistle for every drive, its encoder at `q` (as
-/// `armgate-sim --can sim` builds it).
-fn virtual_bus(config: &RobotConfig, q: &Joints) -> VirtualBus {
-    let drives = config.joints.iter().zip(q.iter()).filter_map(|(joint, q)| {
-        let mut whistle = WhistleConfig::for_joint(joint)?;
-        whistle.counts = whistle.units.counts(*q).unwrap_or(0);
-        Some(SimWhistle::new(whistle))
-    });
-    VirtualBus::new(config.drives.can_bitrate, drives)
-}
-
 /// The joints at `start`, or at the drives' home positions.
 fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &'static str> {
     match start {
         Some(start) => Joints::from_slice(start)
             .filter(|q| q.len() == config.dof())
             .ok_or("the start has the wrong number of joints"),
-        None => {
-            let mut q = Joints::zeros(config.dof());
-            for (q, joint) in q.iter_mut().zip(&config.joints) {
-                *q = joint.drive.home;
-            }
-            Ok(q)
-        }
+        None => Ok(config.home()),
     }
 }
 
@@ -597,7 +580,7 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
         parts.ik_iterations += u64::from(solution.iterations);
         let (ticks, _) = measure(|| {
             let ratio = limiter.rate_ratio(&solution.q, &seed);
-            (ratio, limiter.limit(&solution.q, Some(&seed)))
+            (ratio, limiter.limit(&solution.q, &seed))
         });
         parts.limiter.add(ticks);
     }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::{ConfigError, ConfigReason};
 use crate::MAX_JOINTS;
+use crate::kinematics::Joints;
 
 /// Longest robot name, in bytes.
 pub const MAX_NAME_LEN: usize = 32;
@@ -175,6 +176,15 @@ impl RobotConfig {
     /// Number of joints.
     pub fn dof(&self) -> usize {
         self.joints.len()
+    }
+
+    /// Every joint at its drive's home position (zero encoder counts).
+    pub fn home(&self) -> Joints {
+        let mut q = Joints::zeros(self.dof());
+        for (q, joint) in q.iter_mut().zip(&self.joints) {
+            *q = joint.drive.home;
+        }
+        q
     }
 
     /// Checks every value, so that nothing downstream has to: finite numbers, positive limits,

@@ -84,7 +84,6 @@ pub struct Stalled;
 /// A CAN bus with simulated drives; the controller's side implements [`CanBus`].
 #[derive(Clone, Debug)]
 pub struct VirtualBus {
-    bitrate: u32,
     /// Nanoseconds per bit.
     bit_ns: u64,
     now: u64,
@@ -104,7 +103,6 @@ impl VirtualBus {
     /// A bus at `bitrate` with `drives` on it, at time 0.
     pub fn new(bitrate: u32, drives: impl IntoIterator<Item = SimWhistle>) -> Self {
         Self {
-            bitrate,
             bit_ns: 1_000_000_000 / u64::from(bitrate.max(1)),
             now: 0,
             drives: drives.into_iter().take(MAX_JOINTS).collect(),
@@ -119,19 +117,20 @@ impl VirtualBus {
     }
 
     /// The bus of `config`: its bit rate, and a default simulated drive for every joint that
-    /// has one.
+    /// has one, at its home position.
     pub fn for_robot(config: &RobotConfig) -> Self {
-        let drives = config
-            .joints
-            .iter()
-            .filter_map(WhistleConfig::for_joint)
-            .map(SimWhistle::new);
-        Self::new(config.drives.can_bitrate, drives)
+        Self::for_robot_at(config, &config.home())
     }
 
-    /// The bit rate (bit/s).
-    pub fn bitrate(&self) -> u32 {
-        self.bitrate
+    /// The same, with every drive's encoder at joint position `q` (rad or m; a drive whose
+    /// position does not fit the encoder's counts starts at home).
+    pub fn for_robot_at(config: &RobotConfig, q: &[f64]) -> Self {
+        let drives = config.joints.iter().zip(q).filter_map(|(joint, q)| {
+            let mut whistle = WhistleConfig::for_joint(joint)?;
+            whistle.counts = whistle.units.counts(*q).unwrap_or(0);
+            Some(SimWhistle::new(whistle))
+        });
+        Self::new(config.drives.can_bitrate, drives)
     }
 
     /// The bus time (s).

@@ -165,7 +165,7 @@ impl Controller {
         let command = request.map(|r| {
             let limited = self
                 .limiter
-                .limit(&r, Some(self.command.as_ref().unwrap_or(&q_m)));
+                .limit(&r, self.command.as_ref().unwrap_or(&q_m));
             events.joint_limit = limited.position_clamped;
             events.rate_limit = limited.rate_clamped;
             limited.q

@@ -50,10 +50,11 @@ impl JointLimiter {
             .fold(0.0, f64::max)
     }
 
-    /// Limits `request` given the previous command. A request exactly at a limit is not a
-    /// violation (the seed raised its event there on every tick, spec §9 item 26); the seed
-    /// ignored the rate in position mode (§9 item 27), here it is enforced.
-    pub fn limit(&self, request: &Joints, previous: Option<&Joints>) -> Limited {
+    /// Limits `request` given the previous command (of the same arm, so of the same length).
+    /// A request exactly at a limit is not a violation (the seed raised its event there on
+    /// every tick, spec §9 item 26); the seed ignored the rate in position mode (§9 item 27),
+    /// here it is enforced.
+    pub fn limit(&self, request: &Joints, previous: &Joints) -> Limited {
         let mut out = Limited {
             q: *request,
             position_clamped: false,
@@ -64,17 +65,15 @@ impl JointLimiter {
             .iter()
             .zip(self.max.iter())
             .zip(self.max_step.iter());
-        for (i, (v, ((lo, hi), step))) in out.q.iter_mut().zip(bounds).enumerate() {
+        for ((v, prev), ((lo, hi), step)) in out.q.iter_mut().zip(previous.iter()).zip(bounds) {
             if *v < *lo || *v > *hi {
                 out.position_clamped = true;
                 *v = v.clamp(*lo, *hi);
             }
-            if let Some(prev) = previous.and_then(|p| p.get(i)) {
-                let limited = v.clamp(prev - step, prev + step);
-                if limited != *v {
-                    out.rate_clamped = true;
-                    *v = limited;
-                }
+            let limited = v.clamp(prev - step, prev + step);
+            if limited != *v {
+                out.rate_clamped = true;
+                *v = limited;
             }
         }
         out
