@@ -2,8 +2,10 @@
 //! interrupt executor.
 //!
 //! It owns the core's state — the [`CommandHandler`] and the drives (the CANopen drive manager
-//! and its bus, [`BoardDrives`]) — and does exactly what `armgate-sim` does with them, with the
-//! queues of [`crate::link`] in place of a socket. Each tick:
+//! and its bus, [`BoardDrives`]) — and does what `armgate-sim` does with them, with the
+//! queues of [`crate::link`] in place of a socket (one difference: a tick the core refuses,
+//! because the measurement does not fit the arm, makes `armgate-sim` exit with the reason,
+//! while the board holds and counts it in the status line). Each tick:
 //!
 //! 1. handles every request waiting in [`REQUESTS`] (at most [`REQUEST_QUEUE`]) with
 //!    [`CommandHandler::handle`] and queues each reply to its sender;
@@ -18,7 +20,7 @@
 //! computes the same results on the host and on the board. A tick that starts more than one
 //! period late restarts the schedule (the core never catches up by running ticks back to back).
 
-use armgate_core::command::CommandHandler;
+use armgate_core::command::{CommandHandler, NOTICE_CAPACITY};
 use armgate_core::config::RobotConfig;
 use embassy_net::IpEndpoint;
 use embassy_stm32::peripherals::IWDG1;
@@ -31,8 +33,6 @@ use crate::telemetry::{STATUS, Status};
 
 /// Interval between two status snapshots.
 const REPORT_INTERVAL: Duration = Duration::from_secs(1);
-/// Notices sent per tick at most: the core's relay holds 8; any left wait for the next tick.
-const NOTICES_PER_TICK: usize = 8;
 /// The watchdog timeout is this many control periods, but at least [`MIN_WATCHDOG_TIMEOUT`].
 const WATCHDOG_PERIODS: u32 = 4;
 /// The shortest watchdog timeout.
@@ -171,9 +171,10 @@ fn handle_requests(
     handled
 }
 
-/// Queues the core's unsolicited notices to the last sender.
+/// Queues the core's unsolicited notices to the last sender (at most as many as its relay
+/// holds, which [`OUTGOING_QUEUE`](crate::link::OUTGOING_QUEUE) has room for).
 fn send_notices(handler: &mut CommandHandler, last_sender: Option<IpEndpoint>) {
-    for _ in 0..NOTICES_PER_TICK {
+    for _ in 0..NOTICE_CAPACITY {
         let Some(text) = handler.next_notice() else {
             break;
         };

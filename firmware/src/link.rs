@@ -10,6 +10,7 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use armgate_core::command::NOTICE_CAPACITY;
 use armgate_protocol::client::MESSAGE_LEN;
 use embassy_net::IpEndpoint;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
@@ -21,9 +22,9 @@ use embassy_sync::channel::Channel;
 /// datagrams before the queue.
 pub const REQUEST_QUEUE: usize = 8;
 /// Replies and notices waiting to be sent: one tick produces at most one reply per queued
-/// request and at most 8 notices (the core's relay holds 8), and the UDP server empties the
+/// request and at most the notices the core's relay holds, and the UDP server empties the
 /// queue between two ticks.
-pub const OUTGOING_QUEUE: usize = REQUEST_QUEUE + 8;
+pub const OUTGOING_QUEUE: usize = REQUEST_QUEUE + NOTICE_CAPACITY;
 
 /// A datagram of the client protocol and the peer it came from or goes to.
 #[derive(Clone, Copy)]

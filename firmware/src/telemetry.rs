@@ -66,7 +66,7 @@ pub async fn run(stack: Stack<'static>) {
         defmt::info!(
             "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",
             if stack.is_link_up() { "up" } else { "down" },
-            mode_name(s.mode),
+            s.mode.name(),
             if s.moving { "moving" } else { "holding" },
             drive_state_name(s.drives),
             fault,
@@ -88,15 +88,6 @@ pub async fn run(stack: Stack<'static>) {
             read(&COUNTERS.send_errors),
             s.relay_dropped,
         );
-    }
-}
-
-/// The mode as the client names it.
-pub fn mode_name(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Off => "off",
-        Mode::Joint => "joint",
-        Mode::Cartesian => "cartesian",
     }
 }
 

@@ -21,7 +21,7 @@ use armgate_core::command::{ArmModel, CommandHandler};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
-use armgate_core::motion::{IdealArm, Mode, RateLimitedArm};
+use armgate_core::motion::{IdealArm, RateLimitedArm};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
@@ -190,7 +190,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             if logger.enabled() {
                 logger.log(Record::Tick(Box::new(Tick {
                     t,
-                    mode: mode_name(handler.controller().mode()),
+                    mode: handler.controller().mode().name(),
                     pose: out.measured_pose,
                     joints: drives.measured(),
                     command: out.command,
@@ -285,14 +285,6 @@ fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
     }
 }
 
-fn mode_name(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Off => "off",
-        Mode::Joint => "joint",
-        Mode::Cartesian => "cartesian",
-    }
-}
-
 fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> String {
     let ctrl = handler.controller();
     let pose = ctrl
@@ -309,7 +301,7 @@ fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> Stri
     };
     format!(
         "mode {:<9} {state:<7} {pose} | rx {} refused {} warnings {} log dropped {}",
-        mode_name(ctrl.mode()),
+        ctrl.mode().name(),
         stats.received,
         stats.refused_sources,
         stats.notices,

@@ -12,5 +12,5 @@ mod simulated;
 
 pub use drives::Drives;
 pub use handler::CommandHandler;
-pub use relay::{NOTICE_INTERVAL, NoticeRelay};
+pub use relay::{NOTICE_CAPACITY, NOTICE_INTERVAL, NoticeRelay};
 pub use simulated::{ArmModel, SimulatedDrives};

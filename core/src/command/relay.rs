@@ -7,8 +7,8 @@ use crate::motion::Events;
 
 /// While a condition lasts, its warning is repeated at most this often (s).
 pub const NOTICE_INTERVAL: f64 = 0.2;
-/// Warnings waiting to be sent; more are dropped and counted.
-const OUTBOX: usize = 8;
+/// Warnings waiting to be sent at most; more are dropped and counted.
+pub const NOTICE_CAPACITY: usize = 8;
 
 /// Turns per-tick conditions into client warnings: on the first occurrence, then at most once
 /// per [`NOTICE_INTERVAL`] while the condition lasts. (The seed's mod-11 counters could skip a
@@ -18,7 +18,7 @@ const OUTBOX: usize = 8;
 pub struct NoticeRelay {
     channels: [Channel; 4],
     fault_reported: bool,
-    outbox: Deque<Text, OUTBOX>,
+    outbox: Deque<Text, NOTICE_CAPACITY>,
     dropped: u32,
 }
 

@@ -55,6 +55,17 @@ pub enum Mode {
     Cartesian,
 }
 
+impl Mode {
+    /// The mode's lower-case name, as the status lines show it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Joint => "joint",
+            Self::Cartesian => "cartesian",
+        }
+    }
+}
+
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepOutput {
