@@ -13,6 +13,7 @@ use std::thread::JoinHandle;
 
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{Frame, Quaternion};
+use armgate_protocol::client::{MESSAGE_LEN, Message};
 
 /// Records waiting to be written; more are dropped and counted.
 const QUEUE: usize = 4096;
@@ -23,7 +24,7 @@ pub enum Record {
     /// A datagram received from the client (as raw bytes).
     Command { t: f64, datagram: Vec<u8> },
     /// A reply sent.
-    Reply { t: f64, datagram: [u8; 31] },
+    Reply { t: f64, datagram: [u8; MESSAGE_LEN] },
     /// An unsolicited warning sent.
     Warning { t: f64, text: String },
     /// One control tick (boxed: it is much larger than the other records).
@@ -146,15 +147,11 @@ impl Files {
     fn write(&mut self, record: Record) -> std::io::Result<()> {
         match record {
             Record::Command { t, datagram } => {
-                let mut padded = [0u8; 31];
-                for (p, b) in padded.iter_mut().zip(&datagram) {
-                    *p = *b;
-                }
-                write!(self.commands, "{t:.6},{}", message_fields(&padded))?;
+                write!(self.commands, "{t:.6},{}", message_fields(&datagram))?;
                 writeln!(self.commands, ",{}", datagram.len())
             }
             Record::Reply { t, datagram } => {
-                writeln!(self.replies, "{t:.6},{}", message_fields(&datagram))
+                writeln!(self.replies, "{t:.6},{}", message_fields(&datagram[..]))
             }
             Record::Warning { t, text } => writeln!(self.warnings, "{t:.6},{text}"),
             Record::Tick(tick) => {
@@ -214,12 +211,19 @@ fn write_pose(f: &mut impl Write, pose: Option<&Frame>) -> std::io::Result<()> {
     }
 }
 
-/// `cmd,f0..f6,index` of a 31-byte message; ER/WN texts go in the `cmd` column, quoted.
-fn message_fields(m: &[u8; 31]) -> String {
-    let [c0, c1, body @ .., index] = *m;
-    let is_text = matches!(&[c0, c1], b"ER" | b"WN");
-    if is_text {
-        let text: String = m
+/// `cmd,f0..f6,index` of a datagram, zero-padded to 31 bytes (an undersized one is logged as
+/// well); ER/WN texts go in the `cmd` column, quoted.
+fn message_fields(datagram: &[u8]) -> String {
+    let mut padded = [0u8; MESSAGE_LEN];
+    for (p, b) in padded.iter_mut().zip(datagram) {
+        *p = *b;
+    }
+    let Ok(message) = Message::new_checked(&padded[..]) else {
+        return ",,,,,,,,".to_string(); // not reached: the buffer is a whole message
+    };
+    let [c0, c1] = message.command();
+    if matches!(&[c0, c1], b"ER" | b"WN") {
+        let text: String = padded
             .iter()
             .take_while(|b| **b != 0)
             .map(|b| char::from(*b))
@@ -227,12 +231,10 @@ fn message_fields(m: &[u8; 31]) -> String {
         return format!("\"{text}\",,,,,,,,");
     }
     let mut s = format!("{}{}", printable(c0), printable(c1));
-    for chunk in body.chunks_exact(4) {
-        if let [a, b, c, d] = *chunk {
-            s.push_str(&format!(",{}", f32::from_le_bytes([a, b, c, d])));
-        }
+    for v in message.values() {
+        s.push_str(&format!(",{v}"));
     }
-    s.push_str(&format!(",{index}"));
+    s.push_str(&format!(",{}", message.index()));
     s
 }
 
