@@ -22,4 +22,9 @@ pub trait Drives {
     fn is_operational(&self) -> bool;
     /// The text of the current drive fault, if any (sent once to the client when it appears).
     fn fault(&self) -> Option<Text>;
+    /// Whether there is a drive fault: what the handler asks every tick, so an implementation
+    /// that formats the [`fault`](Self::fault) text should answer it without formatting.
+    fn has_fault(&self) -> bool {
+        self.fault().is_some()
+    }
 }

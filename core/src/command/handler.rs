@@ -65,12 +65,13 @@ impl CommandHandler {
         measured: &[f64],
         drives: &(impl Drives + ?Sized),
     ) -> Result<StepOutput, KinematicsError> {
-        let fault = drives.fault();
+        let faulted = drives.has_fault();
         let out = self.controller.step(now, measured)?;
         if !drives.is_operational() {
             self.controller.release();
         }
-        self.relay.observe(now, &out.events, fault);
+        self.relay.observe(now, &out.events);
+        self.relay.observe_fault(faulted, || drives.fault());
         Ok(out)
     }
 

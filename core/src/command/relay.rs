@@ -51,8 +51,8 @@ impl Default for NoticeRelay {
 }
 
 impl NoticeRelay {
-    /// Takes note of one tick's events and the drive fault at time `now` (s).
-    pub fn observe(&mut self, now: f64, events: &Events, fault: Option<Text>) {
+    /// Takes note of one tick's events at time `now` (s).
+    pub fn observe(&mut self, now: f64, events: &Events) {
         let raised = [
             events.workspace_limit,
             events.joint_limit,
@@ -68,15 +68,20 @@ impl NoticeRelay {
             }
             channel.active = raised;
         }
-        match fault {
-            Some(text) if !self.fault_reported => {
-                self.fault_reported = true;
-                if self.outbox.push_back(text).is_err() {
-                    self.dropped = self.dropped.saturating_add(1);
-                }
+    }
+
+    /// Takes note of whether the drives are faulted; `text` is asked for only when a fault
+    /// appears, so a lasting fault is not formatted again every tick.
+    pub fn observe_fault(&mut self, faulted: bool, text: impl FnOnce() -> Option<Text>) {
+        if !faulted {
+            self.fault_reported = false;
+        } else if !self.fault_reported {
+            self.fault_reported = true;
+            if let Some(text) = text()
+                && self.outbox.push_back(text).is_err()
+            {
+                self.dropped = self.dropped.saturating_add(1);
             }
-            Some(_) => {}
-            None => self.fault_reported = false,
         }
     }
 
@@ -111,15 +116,15 @@ mod tests {
         let mut sent = Vec::new();
         // A condition raised every 19.44 ms for one second.
         for k in 0..52 {
-            relay.observe(k as f64 * 0.01944, &limit, None);
+            relay.observe(k as f64 * 0.01944, &limit);
             sent.extend(drain(&mut relay).into_iter().map(|t| (k, t)));
         }
         let ticks: Vec<_> = sent.iter().map(|(k, _)| *k).collect();
         assert_eq!(ticks, vec![0, 11, 22, 33, 44]);
         assert!(sent.iter().all(|(_, t)| t == "WN12 Joint limit."));
         // The condition ends and comes back: reported at once.
-        relay.observe(1.02, &Events::default(), None);
-        relay.observe(1.04, &limit, None);
+        relay.observe(1.02, &Events::default());
+        relay.observe(1.04, &limit);
         assert_eq!(drain(&mut relay), vec!["WN12 Joint limit."]);
     }
 
@@ -127,12 +132,17 @@ mod tests {
     fn a_fault_is_reported_once_per_appearance() {
         let mut relay = NoticeRelay::default();
         let fault = Notice::ArmDidNotStart.text();
-        for k in 0..10 {
-            relay.observe(k as f64, &Events::default(), Some(fault));
+        let mut formatted = 0;
+        for _ in 0..10 {
+            relay.observe_fault(true, || {
+                formatted += 1;
+                Some(fault)
+            });
         }
         assert_eq!(drain(&mut relay).len(), 1);
-        relay.observe(11.0, &Events::default(), None);
-        relay.observe(12.0, &Events::default(), Some(fault));
+        assert_eq!(formatted, 1, "a lasting fault is formatted once");
+        relay.observe_fault(false, || None);
+        relay.observe_fault(true, || Some(fault));
         assert_eq!(drain(&mut relay).len(), 1);
     }
 
@@ -147,7 +157,7 @@ mod tests {
             ..Events::default()
         };
         for k in 0..3 {
-            relay.observe(k as f64, &all, None);
+            relay.observe(k as f64, &all);
         }
         assert_eq!(relay.dropped(), 4);
         assert_eq!(drain(&mut relay).len(), 8);

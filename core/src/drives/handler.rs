@@ -32,4 +32,8 @@ impl Drives for DriveManager {
     fn fault(&self) -> Option<Text> {
         DriveManager::fault(self).map(|fault| fault.text())
     }
+
+    fn has_fault(&self) -> bool {
+        DriveManager::fault(self).is_some()
+    }
 }
