@@ -256,43 +256,40 @@ impl DriveManager {
     /// The measured joints: from the drives' last `PX` (the home position before it is
     /// read), the last command for joints without a drive.
     pub fn measured(&self) -> Joints {
-        let mut q = Joints::zeros(self.joints.len());
-        for (value, joint) in q.iter_mut().zip(&self.joints) {
-            *value = match joint {
-                Joint::Pretend { position } => *position,
-                Joint::Real(drive) => drive.units.position(drive.position.unwrap_or(0)),
-            };
-        }
-        q
+        self.per_joint(|joint| match joint {
+            Joint::Pretend { position } => *position,
+            Joint::Real(drive) => drive.units.position(drive.position.unwrap_or(0)),
+        })
     }
 
     /// The position the drives are commanded to (and, once stopped, hold): the last command
     /// taken, or the start position; the home position for a drive never started.
     pub fn commanded(&self) -> Joints {
-        let mut q = Joints::zeros(self.joints.len());
-        for (value, joint) in q.iter_mut().zip(&self.joints) {
-            *value = match joint {
-                Joint::Pretend { position } => *position,
-                Joint::Real(drive) => drive.units.position(drive.target.unwrap_or(0)),
-            };
-        }
-        q
+        self.per_joint(|joint| match joint {
+            Joint::Pretend { position } => *position,
+            Joint::Real(drive) => drive.units.position(drive.target.unwrap_or(0)),
+        })
     }
 
     /// Drive temperatures (°C), one per joint; [`UNKNOWN_TEMPERATURE`] for a drive not yet
     /// heard from and for joints without a drive.
     pub fn temperatures(&self) -> Joints {
-        let mut t = Joints::zeros(self.joints.len());
-        for (value, joint) in t.iter_mut().zip(&self.joints) {
-            *value = match joint {
-                Joint::Real(Drive {
-                    temperature: Some(celsius),
-                    ..
-                }) => f64::from(*celsius),
-                _ => UNKNOWN_TEMPERATURE,
-            };
+        self.per_joint(|joint| match joint {
+            Joint::Real(Drive {
+                temperature: Some(celsius),
+                ..
+            }) => f64::from(*celsius),
+            _ => UNKNOWN_TEMPERATURE,
+        })
+    }
+
+    /// One value per joint.
+    fn per_joint(&self, value: impl Fn(&Joint) -> f64) -> Joints {
+        let mut q = Joints::zeros(self.joints.len());
+        for (v, joint) in q.iter_mut().zip(&self.joints) {
+            *v = value(joint);
         }
-        t
+        q
     }
 
     /// What the manager is doing.
