@@ -13,8 +13,10 @@
 //! * sets `DEFMT_LOG=info` for this crate unless the user set `DEFMT_LOG`.
 
 use std::fmt::Write as _;
-use std::net::Ipv4Addr;
+use std::net::{IpAddr, Ipv4Addr};
 use std::path::{Path, PathBuf};
+
+use armgate_core::command::{Network, NetworkError};
 
 include!("../tools/embed_robot.rs");
 
@@ -75,25 +77,21 @@ fn env(name: &str) -> Option<String> {
     std::env::var(name).ok().filter(|v| !v.trim().is_empty())
 }
 
-/// `a.b.c.d/n` (or a bare `a.b.c.d`, which means `/32`).
+/// `a.b.c.d/n` (or a bare `a.b.c.d`, which means `/32`), parsed as the core's allow-list
+/// [`Network`] is; the board speaks IPv4 only.
 fn parse_network(text: &str) -> Result<(Ipv4Addr, u8), String> {
     let text = text.trim();
-    let (address, prefix) = match text.split_once('/') {
-        Some((address, prefix)) => (address, Some(prefix)),
-        None => (text, None),
-    };
-    let address: Ipv4Addr = address
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{text}` is not an IPv4 address (a.b.c.d or a.b.c.d/n)"))?;
-    let prefix = match prefix {
-        None => 32,
-        Some(p) => match p.trim().parse::<u8>() {
-            Ok(p) if p <= 32 => p,
-            _ => return Err(format!("`{text}`: the prefix length must be 0..=32")),
-        },
-    };
-    Ok((address, prefix))
+    let not_ipv4 = || format!("`{text}` is not an IPv4 address (a.b.c.d or a.b.c.d/n)");
+    let network: Network = text.parse().map_err(|e| match e {
+        NetworkError::BadPrefix { max: 32 } => {
+            format!("`{text}`: the prefix length must be 0..=32")
+        }
+        _ => not_ipv4(),
+    })?;
+    match network.addr() {
+        IpAddr::V4(address) => Ok((address, network.prefix())),
+        IpAddr::V6(_) => Err(not_ipv4()),
+    }
 }
 
 /// The generated constants of `src/settings.rs`, or the error naming the variable.
@@ -188,7 +186,7 @@ fn settings() -> Result<String, String> {
     );
     let _ = writeln!(out, "pub const ALLOW: &[Network] = &[");
     for (a, p) in &allow {
-        let _ = writeln!(out, "    Network::new({}, {p}),", ipv4(*a));
+        let _ = writeln!(out, "    Network::new(core::net::IpAddr::V4({}), {p}),", ipv4(*a));
     }
     let _ = writeln!(out, "];");
     Ok(out)

@@ -190,13 +190,12 @@ pub async fn udp_server(stack: Stack<'static>) {
 /// on the board's own network. (A source address proves nothing about the sender; the
 /// allow-list keeps out the rest of the network, not an attacker on it.)
 fn allowed(stack: Stack<'_>, source: IpAddress) -> bool {
-    let IpAddr::V4(source) = IpAddr::from(source) else {
-        return false;
-    };
+    let source = IpAddr::from(source);
     ALLOW.iter().any(|network| network.contains(source))
         || (ALLOW_LOCAL
             && stack.config_v4().is_some_and(|config| {
-                Network::new(config.address.address(), config.address.prefix_len()).contains(source)
+                let local = IpAddr::V4(config.address.address());
+                Network::new(local, config.address.prefix_len()).contains(source)
             }))
 }
 
@@ -205,7 +204,7 @@ fn log_allow_list() {
         defmt::info!("net: allowing the local network");
     }
     for network in ALLOW {
-        defmt::info!("net: allowing {}", network);
+        defmt::info!("net: allowing {}", defmt::Display2Format(network));
     }
 }
 

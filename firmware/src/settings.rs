@@ -7,36 +7,6 @@
 
 use core::net::Ipv4Addr;
 
-/// An IPv4 network: an address and a prefix length (0..=32).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Network {
-    address: Ipv4Addr,
-    prefix_len: u8,
-}
-
-impl Network {
-    /// The network of `address` with `prefix_len` leading bits (more than 32 count as 32).
-    pub const fn new(address: Ipv4Addr, prefix_len: u8) -> Self {
-        Self {
-            address,
-            prefix_len: if prefix_len > 32 { 32 } else { prefix_len },
-        }
-    }
-
-    /// True if `address` lies in this network.
-    pub fn contains(&self, address: Ipv4Addr) -> bool {
-        let mask = u32::MAX
-            .checked_shl(32 - u32::from(self.prefix_len))
-            .unwrap_or(0);
-        (u32::from(address) ^ u32::from(self.address)) & mask == 0
-    }
-}
-
-impl defmt::Format for Network {
-    fn format(&self, f: defmt::Formatter<'_>) {
-        let [a, b, c, d] = self.address.octets();
-        defmt::write!(f, "{}.{}.{}.{}/{}", a, b, c, d, self.prefix_len);
-    }
-}
+pub use armgate_core::command::Network;
 
 include!(concat!(env!("OUT_DIR"), "/settings.rs"));

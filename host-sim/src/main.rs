@@ -3,21 +3,19 @@
 //! It runs the same core as the firmware: the control tick at the robot's period, and the
 //! 31-byte UDP command protocol. Only bytes and time are handled here.
 
-mod allow;
 mod backend;
 mod log;
 mod socketcan;
 
 use std::io::IsTerminal;
-use std::net::{SocketAddr, UdpSocket};
+use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use allow::Network;
-use armgate_core::command::{ArmModel, CommandHandler};
+use armgate_core::command::{ArmModel, CommandHandler, Network};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
@@ -126,7 +124,10 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     })?;
     let mut handler = CommandHandler::new(config);
     let allow = if args.allow.is_empty() {
-        vec!["127.0.0.0/8".parse()?, "::1".parse()?]
+        vec![
+            Network::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 8),
+            Network::new(IpAddr::V6(Ipv6Addr::LOCALHOST), 128),
+        ]
     } else {
         args.allow.clone()
     };
