@@ -389,7 +389,7 @@ fn measure_robot(
         "window, Chain::forward",
     );
     row(
-        "      generator: sample + advance_to",
+        "      generator: sample + commit",
         &parts.generator,
         "window, replica generator",
     );
