@@ -186,7 +186,11 @@ fn settings() -> Result<String, String> {
     );
     let _ = writeln!(out, "pub const ALLOW: &[Network] = &[");
     for (a, p) in &allow {
-        let _ = writeln!(out, "    Network::new(core::net::IpAddr::V4({}), {p}),", ipv4(*a));
+        let _ = writeln!(
+            out,
+            "    Network::new(core::net::IpAddr::V4({}), {p}),",
+            ipv4(*a)
+        );
     }
     let _ = writeln!(out, "];");
     Ok(out)

@@ -274,15 +274,11 @@ fn bind(addr: SocketAddr) -> std::io::Result<UdpSocket> {
 fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
     match kind {
         ArmKind::Ideal => ArmModel::Ideal(IdealArm::new(start)),
-        ArmKind::RateLimited => {
-            let mut v = Joints::zeros(start.len());
-            let mut a = Joints::zeros(start.len());
-            for (j, (v, a)) in config.joints.iter().zip(v.iter_mut().zip(a.iter_mut())) {
-                *v = j.max_rate;
-                *a = j.max_acceleration;
-            }
-            ArmModel::RateLimited(RateLimitedArm::new(start, v, a))
-        }
+        ArmKind::RateLimited => ArmModel::RateLimited(RateLimitedArm::new(
+            start,
+            config.per_joint(|j| j.max_rate),
+            config.per_joint(|j| j.max_acceleration),
+        )),
     }
 }
 

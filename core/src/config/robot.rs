@@ -180,9 +180,14 @@ impl RobotConfig {
 
     /// Every joint at its drive's home position (zero encoder counts).
     pub fn home(&self) -> Joints {
+        self.per_joint(|joint| joint.drive.home)
+    }
+
+    /// One value per joint, e.g. `config.per_joint(|j| j.max_velocity)`.
+    pub fn per_joint(&self, value: impl Fn(&JointConfig) -> f64) -> Joints {
         let mut q = Joints::zeros(self.dof());
         for (q, joint) in q.iter_mut().zip(&self.joints) {
-            *q = joint.drive.home;
+            *q = value(joint);
         }
         q
     }

@@ -119,16 +119,8 @@ impl Controller {
     /// A controller for a validated robot description, in mode off.
     pub fn new(config: &RobotConfig) -> Self {
         let n = config.dof();
-        let mut v_max = Joints::zeros(n);
-        let mut a_max = Joints::zeros(n);
-        for (j, (v, a)) in config
-            .joints
-            .iter()
-            .zip(v_max.iter_mut().zip(a_max.iter_mut()))
-        {
-            *v = j.max_velocity;
-            *a = j.max_acceleration;
-        }
+        let v_max = config.per_joint(|j| j.max_velocity);
+        let a_max = config.per_joint(|j| j.max_acceleration);
         let cartesian = &config.cartesian;
         Self {
             chain: Chain::new(config),

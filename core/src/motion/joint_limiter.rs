@@ -25,19 +25,11 @@ pub struct Limited {
 impl JointLimiter {
     /// The limiter of a robot.
     pub fn new(config: &RobotConfig) -> Self {
-        let n = config.dof();
-        let (mut min, mut max, mut max_step) =
-            (Joints::zeros(n), Joints::zeros(n), Joints::zeros(n));
-        for (j, ((lo, hi), step)) in config
-            .joints
-            .iter()
-            .zip(min.iter_mut().zip(max.iter_mut()).zip(max_step.iter_mut()))
-        {
-            *lo = j.min;
-            *hi = j.max;
-            *step = j.max_rate * config.control_period;
+        Self {
+            min: config.per_joint(|j| j.min),
+            max: config.per_joint(|j| j.max),
+            max_step: config.per_joint(|j| j.max_rate * config.control_period),
         }
-        Self { min, max, max_step }
     }
 
     /// How far moving from `previous` to `q` in one tick exceeds the rate limits: the largest
