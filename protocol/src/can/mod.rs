@@ -35,4 +35,4 @@ pub use error::Error;
 pub use frame::{CanFrame, MAX_DLC, MAX_ID, bits_on_wire, exact_bits_on_wire};
 pub use incoming::Incoming;
 pub use nmt::{Heartbeat, Nmt, NmtCommand, NmtState};
-pub use sdo::{Object, SdoRequest, SdoResponse, SdoValue};
+pub use sdo::{ConsumerHeartbeat, Object, SdoRequest, SdoResponse, SdoValue};

@@ -32,6 +32,44 @@ pub struct Object {
     pub subindex: u8,
 }
 
+impl Object {
+    /// 0x1016 sub 1, the first consumer heartbeat entry (value: [`ConsumerHeartbeat`]).
+    pub const CONSUMER_HEARTBEAT: Self = Self {
+        index: 0x1016,
+        subindex: 1,
+    };
+}
+
+/// The value of a consumer heartbeat entry: expect `producer`'s heartbeat at least every
+/// `time_ms` milliseconds (0 disables). On the wire: the node id in bits 16..=22, the time in
+/// bits 0..=15.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ConsumerHeartbeat {
+    /// The node whose heartbeat is expected; `None` for an entry whose node id is 0.
+    pub producer: Option<NodeId>,
+    /// The longest gap between two heartbeats (ms).
+    pub time_ms: u16,
+}
+
+impl ConsumerHeartbeat {
+    /// The entry's 32-bit value.
+    pub const fn to_value(self) -> u32 {
+        let node = match self.producer {
+            Some(node) => node.get() as u32,
+            None => 0,
+        };
+        node << 16 | self.time_ms as u32
+    }
+
+    /// The entry of a 32-bit value (the reserved bits ignored).
+    pub fn from_value(value: u32) -> Self {
+        Self {
+            producer: NodeId::new(((value >> 16) & 0x7F) as u8),
+            time_ms: (value & 0xFFFF) as u16,
+        }
+    }
+}
+
 /// An expedited value; its size sets the command specifier.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -103,14 +141,13 @@ impl SdoRequest {
     /// Object 0x1016 sub 1, the first consumer heartbeat entry: expect `producer`'s heartbeat at
     /// least every `time_ms` milliseconds (0 disables).
     pub const fn consumer_heartbeat(producer: NodeId, time_ms: u16) -> Self {
-        let value = (producer.get() as u32) << 16 | time_ms as u32;
-        let object = Object {
-            index: 0x1016,
-            subindex: 1,
+        let entry = ConsumerHeartbeat {
+            producer: Some(producer),
+            time_ms,
         };
         Self::Download {
-            object,
-            value: SdoValue::U32(value),
+            object: Object::CONSUMER_HEARTBEAT,
+            value: SdoValue::U32(entry.to_value()),
         }
     }
 
@@ -291,6 +328,18 @@ mod tests {
             response(&[0x23, 0, 0x10, 0, 4, 0, 0, 0]),
             Err(Error::Malformed)
         );
+    }
+
+    #[test]
+    fn consumer_heartbeat_entry() {
+        // The manager's entry: controller node 127, 300 ms.
+        let entry = ConsumerHeartbeat::from_value(0x007F_012C);
+        assert_eq!(entry.producer.map(NodeId::get), Some(127));
+        assert_eq!(entry.time_ms, 300);
+        assert_eq!(entry.to_value(), 0x007F_012C);
+        let disabled = ConsumerHeartbeat::from_value(0);
+        assert_eq!((disabled.producer, disabled.time_ms), (None, 0));
+        assert_eq!(disabled.to_value(), 0);
     }
 
     #[test]

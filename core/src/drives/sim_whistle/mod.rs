@@ -17,8 +17,8 @@ pub mod servo;
 
 use armgate_protocol::can::interpreter::{Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId, NodeMessage, Object,
-    SdoRequest, SdoResponse, SdoValue,
+    CanFrame, ConsumerHeartbeat, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId,
+    NodeMessage, Object, SdoRequest, SdoResponse, SdoValue,
 };
 use heapless::Deque;
 
@@ -34,11 +34,6 @@ const TX_QUEUE: usize = 16;
 /// Internal events handled per `advance_to` call at most (a call normally covers a few
 /// samples).
 const MAX_EVENTS: u32 = 1_000_000;
-/// The consumer heartbeat object.
-const CONSUMER_HEARTBEAT: Object = Object {
-    index: 0x1016,
-    subindex: 1,
-};
 /// SDO abort: object does not exist.
 const NO_OBJECT: u32 = 0x0602_0000;
 
@@ -475,25 +470,29 @@ impl SimWhistle {
     fn sdo(&mut self, request: SdoRequest) {
         let response = match request {
             SdoRequest::Download {
-                object: CONSUMER_HEARTBEAT,
+                object: Object::CONSUMER_HEARTBEAT,
                 value: SdoValue::U32(value),
             } => {
-                let producer = NodeId::new(((value >> 16) & 0x7F) as u8);
-                let time_ns = u64::from(value & 0xFFFF) * 1_000_000;
-                self.consumer = producer.filter(|_| time_ns > 0).map(|p| (p, time_ns));
+                let entry = ConsumerHeartbeat::from_value(value);
+                let time_ns = u64::from(entry.time_ms) * 1_000_000;
+                self.consumer = entry.producer.filter(|_| time_ns > 0).map(|p| (p, time_ns));
                 self.last_beat = None;
                 SdoResponse::Downloaded {
-                    object: CONSUMER_HEARTBEAT,
+                    object: Object::CONSUMER_HEARTBEAT,
                 }
             }
             SdoRequest::Upload {
-                object: CONSUMER_HEARTBEAT,
+                object: Object::CONSUMER_HEARTBEAT,
             } => {
                 let value = self.consumer.map_or(0, |(producer, time_ns)| {
-                    (u32::from(producer.get()) << 16) | (time_ns / 1_000_000) as u32
+                    ConsumerHeartbeat {
+                        producer: Some(producer),
+                        time_ms: (time_ns / 1_000_000) as u16,
+                    }
+                    .to_value()
                 });
                 SdoResponse::Uploaded {
-                    object: CONSUMER_HEARTBEAT,
+                    object: Object::CONSUMER_HEARTBEAT,
                     value: SdoValue::U32(value),
                 }
             }
