@@ -7,7 +7,7 @@ use armgate_protocol::client::{
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
 use super::relay::NoticeRelay;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{Frame, Quaternion, Rotation, Vec3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
@@ -39,7 +39,7 @@ pub struct CommandHandler {
 
 impl CommandHandler {
     /// A handler for a validated robot description.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         Self {
             controller: Controller::new(config),
             goal: None,

@@ -17,7 +17,7 @@ use super::state::{DriveState, Phase};
 use super::streaming::{FlowError, PtStream, Query, Schedule};
 use super::units::JointUnits;
 use crate::MAX_JOINTS;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -87,7 +87,7 @@ pub struct DriveManager {
 
 impl DriveManager {
     /// A manager for `config`'s drives, idle until [`start`](Self::start).
-    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Result<Self, SetupError> {
+    pub fn new(config: &ValidRobot, settings: &DriveSettings) -> Result<Self, SetupError> {
         let timing = Timing::new(config, settings)?;
         let mut joints = Vec::new();
         for joint in &config.joints {

@@ -35,6 +35,7 @@ pub use emergency::{DriveEmergency, REASON_UNDERFLOW};
 pub use fault::{BusFault, DriveFault};
 pub use manager::{DriveManager, DriveStats, LifecycleError, UNKNOWN_TEMPERATURE};
 pub use settings::{DriveSettings, POSITION_MODE, SAMPLE_TIME, SetupError};
+pub(crate) use settings::whole_samples;
 pub use sim_whistle::{SimWhistle, WhistleConfig, WhistleFaults, WhistleStats};
 pub use state::{DriveState, STOP_HOLD_CYCLES};
 pub use units::JointUnits;

@@ -7,7 +7,7 @@ use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
-use crate::config::{IkConfig, RobotConfig};
+use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::Frame;
 
@@ -117,7 +117,7 @@ pub struct Controller {
 
 impl Controller {
     /// A controller for a validated robot description, in mode off.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         let n = config.dof();
         let v_max = config.per_joint(|j| j.max_velocity);
         let a_max = config.per_joint(|j| j.max_acceleration);

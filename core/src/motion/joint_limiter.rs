@@ -1,6 +1,6 @@
 //! The joint limiter (spec §5.1): the last guard before a set-point reaches the drives.
 
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::Joints;
 
 /// Clamps each joint set-point to its range and its step to `max_rate · period`.
@@ -24,7 +24,7 @@ pub struct Limited {
 
 impl JointLimiter {
     /// The limiter of a robot.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         Self {
             min: config.per_joint(|j| j.min),
             max: config.per_joint(|j| j.max),
