@@ -76,7 +76,9 @@ fn nan_names_the_field() {
 fn control_periods_the_shells_cannot_run_are_refused() {
     // 1e30 s made armgate-sim panic converting it to a Duration; 1e-9 s busy-looped; 0.01 s
     // is no whole number of 360 µs samples (a PT segment must be); 0.72 ms is too short.
-    for period in ["1e30", "1e-9", "0.0", "-0.01944", "nan", "0.01", "0.00072", "1.0008"] {
+    for period in [
+        "1e30", "1e-9", "0.0", "-0.01944", "nan", "0.01", "0.00072", "1.0008",
+    ] {
         let text = mk1_text().replacen(
             "control_period = 0.01944",
             &format!("control_period = {period}"),
@@ -130,11 +132,17 @@ fn a_drive_schedule_over_the_bus_ceiling_is_refused() {
     );
     // At 500 kbit/s the same schedule takes 41.3 %: refused under a 40 % ceiling only.
     assert!(mk2.clone().edit(|c| c.drives.max_bus_load = 0.42).is_ok());
-    let e = mk2.clone().edit(|c| c.drives.max_bus_load = 0.41).unwrap_err();
+    let e = mk2
+        .clone()
+        .edit(|c| c.drives.max_bus_load = 0.41)
+        .unwrap_err();
     assert_eq!(e.reason, ConfigReason::BusOverloaded { percent: 42 });
     // The ceiling is a fraction of the bus.
     for ceiling in [0.0, 1.5, f64::NAN] {
-        let e = mk2.clone().edit(|c| c.drives.max_bus_load = ceiling).unwrap_err();
+        let e = mk2
+            .clone()
+            .edit(|c| c.drives.max_bus_load = ceiling)
+            .unwrap_err();
         assert_eq!(
             (e.field, e.reason),
             ("drives.max_bus_load", ConfigReason::NotAFraction)

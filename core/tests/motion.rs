@@ -71,13 +71,15 @@ const MK1_HOME: [f64; 6] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0];
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
 fn mk1_fast() -> ValidRobot {
-    common::robot("ranger-mk1").edit(|config| {
-    config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
-    config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
-    for j in config.joints.iter_mut() {
-        j.max_rate = 2.0;
-    }
-    }).unwrap()
+    common::robot("ranger-mk1")
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            for j in config.joints.iter_mut() {
+                j.max_rate = 2.0;
+            }
+        })
+        .unwrap()
 }
 
 #[test]
