@@ -23,6 +23,7 @@ pub mod kinematics;
 pub mod math;
 pub mod motion;
 pub mod rng;
+mod saturate;
 
 /// The largest number of joints a robot may have (the seed's Ranger Mark II has 8).
 pub const MAX_JOINTS: usize = 8;

@@ -202,8 +202,9 @@ impl CommandHandler {
                         .set_joint_via(slot, &q, duration)
                         .map_err(refused)?;
                 }
-                let mut values = [0.0; VALUES];
-                values[..BANK_LEN].copy_from_slice(joints);
+                // The echo: the joints as sent (`joints` is `v`'s first BANK_LEN values), then
+                // the clamped duration. No slice copy that could panic on a length mismatch.
+                let mut values = v;
                 values[BANK_LEN] = duration;
                 Ok(values_reply(cmd, &values, req.index))
             }

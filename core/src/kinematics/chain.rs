@@ -178,7 +178,9 @@ impl Chain {
         } else {
             linalg::determinant(&j.gram(), self.n)
         };
-        Ok(libm::sqrt(det.max(0.0)))
+        // NaN-safe by construction: only a positive determinant has a root (`det.max(0.0)`
+        // relied on `max` dropping NaN).
+        Ok(if det > 0.0 { libm::sqrt(det) } else { 0.0 })
     }
 
     /// Forward kinematics: walks the chain, showing each joint frame's rotation and origin to

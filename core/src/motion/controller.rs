@@ -266,7 +266,11 @@ impl Controller {
             return Tracking::Unreachable;
         };
         let s = result.solution();
-        if s.position_error > REACH_TOLERANCE || s.orientation_error > REACH_TOLERANCE {
+        // Written so that a NaN error (or solution) fails: it is not reached.
+        let reached = s.position_error <= REACH_TOLERANCE
+            && s.orientation_error <= REACH_TOLERANCE
+            && s.q.is_finite();
+        if !reached {
             return Tracking::Unreachable;
         }
         match self.limiter.rate_ratio(&s.q, seed) {
