@@ -2,7 +2,9 @@
 //!
 //! The core is `no_std`, never allocates, never panics on any input (fallible operations return
 //! typed errors) and bounds every loop by a count, so that the host simulation and the
-//! microcontroller compute identical results. It does no I/O: the shells (`firmware`, `host-sim`)
+//! microcontroller compute identical results. "Never panics" is checked at link time for what
+//! runs every cycle and on every datagram: `panic-check/` links the control tick, request
+//! parsing and command handling for the Cortex-M7 with a panic handler that cannot link. It does no I/O: the shells (`firmware`, `host-sim`)
 //! only move bytes and time.
 //!
 //! * [`command`]: the client protocol's commands mapped onto the controller, and the relay of

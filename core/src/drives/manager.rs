@@ -447,7 +447,8 @@ impl DriveManager {
             self.stats.commands_rejected = self.stats.commands_rejected.saturating_add(1);
             return;
         }
-        for ((joint, &value), counts) in self.joints.iter_mut().zip(q.iter()).zip(counts) {
+        // `&counts`: dropping heapless's by-value iterator has a panic path.
+        for ((joint, &value), &counts) in self.joints.iter_mut().zip(q.iter()).zip(&counts) {
             match joint {
                 Joint::Pretend { position } => *position = value,
                 Joint::Real(drive) => drive.target = counts,
@@ -656,9 +657,10 @@ impl DriveManager {
 /// Sends the frames of `drive`'s current start step; the step now waits for their answers.
 fn send_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'_, B>) {
     drive.awaiting.clear();
-    for frame in drive.step.frames(ctx) {
-        out.request(drive, &frame);
-        let _ = drive.awaiting.push(frame);
+    // By reference: dropping heapless's by-value iterator has a panic path.
+    for frame in &drive.step.frames(ctx) {
+        out.request(drive, frame);
+        let _ = drive.awaiting.push(*frame);
     }
     drive.step_sent = true;
 }
