@@ -27,5 +27,6 @@ pub mod motion;
 pub mod rng;
 mod saturate;
 
-/// The largest number of joints a robot may have (the seed's Ranger Mark II has 8).
-pub const MAX_JOINTS: usize = 8;
+/// The largest number of joints a robot may have (the seed's Ranger Mark II has 8): as many
+/// as the protocol's joint banks address.
+pub const MAX_JOINTS: usize = armgate_protocol::client::banks::MAX_JOINTS;

@@ -1,7 +1,7 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::{
-    Command, MESSAGE_LEN, Message, Notice, Reply, Request, Text, VALUES,
+    Command, MESSAGE_LEN, Message, NO_JOINT_TEMPERATURE, Notice, Reply, Request, Text, VALUES,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
@@ -13,9 +13,7 @@ use crate::math::{Frame, Quaternion, Rotation, Vec3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
 
 /// Joint values a normal reply carries (f0..f6).
-const REPLY_JOINTS: usize = VALUES;
-/// Padding of unused temperature slots in a TM reply (spec §2.5).
-const NO_TEMPERATURE: f32 = -1000.0;
+use armgate_protocol::client::banks::READ_JOINTS as REPLY_JOINTS;
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -124,15 +122,10 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::ChangeMode => {
-                let mode = match libm::floor(v[0] + 0.5) {
-                    0.0 => Mode::Off,
-                    1.0 => Mode::Joint,
-                    2.0 => Mode::Cartesian,
-                    // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
-                    _ => return Err(Notice::BadNumber(cmd)),
-                };
+                // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
+                let mode = Mode::from_value(req.values[0]).ok_or(Notice::BadNumber(cmd))?;
                 self.controller.set_mode(mode).map_err(refused)?;
-                Ok(values_reply(cmd, &[mode as u8 as f64], 0))
+                Ok(values_reply(cmd, &[f64::from(mode.value())], 0))
             }
             Command::GoalQuaternion => {
                 let [x, y, z, qx, qy, qz, qw] = v;
@@ -249,7 +242,7 @@ impl CommandHandler {
             }
             Command::Temperature => {
                 let t = drives.temperatures();
-                Ok(joint_reply(cmd, &t, bank_2, n, NO_TEMPERATURE))
+                Ok(joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE))
             }
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();

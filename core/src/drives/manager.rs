@@ -25,8 +25,8 @@ use crate::motion::Refusal;
 /// are two per drive, so this is far more than a healthy bus delivers.
 const MAX_FRAMES_PER_CALL: usize = 128;
 
-/// The temperature reported for a drive never heard from (spec §6.9).
-pub const UNKNOWN_TEMPERATURE: f64 = -100.0;
+/// The temperature reported for a drive never heard from (spec §6.9): the wire's sentinel.
+pub const UNKNOWN_TEMPERATURE: f64 = armgate_protocol::client::UNKNOWN_TEMPERATURE as f64;
 
 /// Why `start` or `stop` was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -43,28 +43,8 @@ enum Tracking {
     Unreachable,
 }
 
-/// The control mode (the seed's switch: off / joint / Cartesian).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// No command: the drives hold their last set-point.
-    #[default]
-    Off,
-    /// The joint generator and joint sequences drive the arm.
-    Joint,
-    /// The Cartesian generator, shapes and Cartesian sequences drive the arm through the IK.
-    Cartesian,
-}
-
-impl Mode {
-    /// The mode's lower-case name, as the status lines show it.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Off => "off",
-            Self::Joint => "joint",
-            Self::Cartesian => "cartesian",
-        }
-    }
-}
+/// The control mode: a rule of the wire (`CM`), defined once in the protocol crate.
+pub use armgate_protocol::client::Mode;
 
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
