@@ -1,5 +1,6 @@
 //! The command handler: one client datagram in, one reply out.
 
+use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, Message, NO_JOINT_TEMPERATURE, Notice, Reply, Request, Text, VALUES,
 };
@@ -11,9 +12,6 @@ use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{Frame, Quaternion, Rotation, Vec3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
-
-/// Joint values a normal reply carries (f0..f6).
-use armgate_protocol::client::banks::READ_JOINTS as REPLY_JOINTS;
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -342,7 +340,7 @@ fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Rep
     for (o, v) in values
         .iter_mut()
         .zip(q.iter().take(n).skip(skip))
-        .take(REPLY_JOINTS)
+        .take(READ_JOINTS)
     {
         *o = *v as f32;
     }
