@@ -9,7 +9,7 @@
 
 mod common;
 
-use armgate_core::config::{ConfigReason, LoadError, RobotConfig, parse_toml};
+use armgate_core::config::{ConfigReason, LoadError, RobotConfig, ValidRobot, parse_toml};
 use armgate_core::drives::{DriveManager, DriveSettings};
 
 fn mk1_text() -> String {
@@ -151,6 +151,20 @@ fn a_drive_schedule_over_the_bus_ceiling_is_refused() {
     // Joints without a drive put nothing on the bus.
     let hybrid = common::robot("hybrid").edit(|c| c.drives.can_bitrate = 125_000);
     assert!(hybrid.is_ok());
+}
+
+#[test]
+fn only_validation_makes_a_valid_robot() {
+    // The round trip through the plain description validates again, with the same result.
+    let robot = common::robot("ranger-mk1");
+    let again = ValidRobot::try_from(robot.clone().into_config()).unwrap();
+    assert_eq!(again, robot);
+    // An edit that breaks a rule gives the error, not a robot.
+    let e = robot.edit(|c| c.joints[0].max = -5.0).unwrap_err();
+    assert_eq!(
+        (e.joint, e.field, e.reason),
+        (Some(0), "min", ConfigReason::MinAboveMax)
+    );
 }
 
 #[test]

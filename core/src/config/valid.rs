@@ -11,6 +11,13 @@ use super::{ConfigError, RobotConfig};
 /// Only [`RobotConfig::validate`] makes one (the field is private); it reads like the
 /// description through `Deref`. To change a value, take the description back with
 /// [`into_config`](Self::into_config), change it and validate again.
+///
+/// ```compile_fail
+/// # fn skip(config: armgate_core::config::RobotConfig) {
+/// // The field is private: the only way in is `RobotConfig::validate`.
+/// let robot = armgate_core::config::ValidRobot { config };
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ValidRobot {
     config: RobotConfig,
