@@ -1,6 +1,6 @@
 //! Tool poses as the protocol carries them, and the control mode.
 
-use armgate_core::math::{Quaternion, Rotation};
+use armgate_core::math::{self, Quaternion, Rotation3};
 
 /// A tool pose: position (m) and orientation as a quaternion in wire order (x, y, z, w).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,13 +26,13 @@ impl Pose {
     pub fn from_xyz_rpy(xyz: [f64; 3], [roll, pitch, yaw]: [f64; 3]) -> Self {
         Self {
             xyz,
-            quaternion: Quaternion::from_rotation(&Rotation::from_rpy(roll, pitch, yaw)),
+            quaternion: Quaternion::from_rotation(&Rotation3::from_euler_angles(roll, pitch, yaw)),
         }
     }
 
     /// The orientation as a rotation matrix (the quaternion normalised first, since the wire
     /// carries it as float32; a zero quaternion reads as the identity).
-    pub fn rotation(&self) -> Rotation {
+    pub fn rotation(&self) -> Rotation3<f64> {
         self.quaternion
             .normalized()
             .unwrap_or(Quaternion::IDENTITY)
@@ -42,7 +42,7 @@ impl Pose {
     /// Roll, pitch, yaw (rad), extracted exactly as spec §2.4 says, including its gimbal branch:
     /// if |r20| > 1 − 1e-6 then yaw = 0, pitch = ∓π/2 and roll = −sgn(r20)·atan2(r01, r11).
     pub fn rpy(&self) -> [f64; 3] {
-        self.rotation().to_rpy()
+        math::rpy(&self.rotation())
     }
 
     /// The distance between the positions (m).

@@ -10,7 +10,7 @@ use core::hint::black_box;
 
 use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::Frame;
+use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -126,9 +126,9 @@ fn measure_robot(config: &RobotConfig) -> Results {
 
 fn succeeded(chain: &Chain, target: &Frame, q: &Joints) -> bool {
     chain.forward(q).is_ok_and(|reached| {
-        let d = reached.diff(target);
-        d.linear.norm() < SUCCESS_TOLERANCE
-            && d.angular.norm() < SUCCESS_TOLERANCE
+        let d = math::diff(&reached, target);
+        d.fixed_rows::<3>(0).norm() < SUCCESS_TOLERANCE
+            && d.fixed_rows::<3>(3).norm() < SUCCESS_TOLERANCE
             && chain.within_limits(q)
     })
 }

@@ -1,11 +1,12 @@
 //! The kinematic chain: forward kinematics, link frames, Jacobian, manipulability.
 
+use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3, Vector6};
+
 use super::jacobian::Jacobian;
 use super::joints::Joints;
-use super::linalg;
 use crate::MAX_JOINTS;
 use crate::config::{JointType, RobotConfig};
-use crate::math::{Frame, Rotation, Vec3};
+use crate::math::{self, Frame};
 
 /// Why a kinematics call was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,8 +52,8 @@ pub struct Chain {
 /// coordinates: all the Jacobian needs. Kept by the solver across iterations, not rebuilt.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Axes {
-    pub(super) z: [Vec3; MAX_JOINTS],
-    pub(super) origin: [Vec3; MAX_JOINTS],
+    pub(super) z: [Vector3<f64>; MAX_JOINTS],
+    pub(super) origin: [Vector3<f64>; MAX_JOINTS],
 }
 
 impl Chain {
@@ -154,7 +155,7 @@ impl Chain {
         let q = self.check(q)?;
         Ok(self.walk(q.as_array(), |i, rot, pos| {
             if let Some(link) = links.get_mut(i) {
-                *link = Frame::new(*rot, pos);
+                *link = Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(*rot));
             }
         }))
     }
@@ -164,8 +165,8 @@ impl Chain {
         let q = self.check(q)?;
         let mut axes = Axes::default();
         let tool = self.tool_and_axes(q.as_array(), &mut axes);
-        let mut j = Jacobian::zero(self.n);
-        self.jacobian_into(&axes, tool.pos, &mut j);
+        let mut j = Jacobian::zeros();
+        self.jacobian_into(&axes, &tool.translation.vector, &mut j);
         Ok(j)
     }
 
@@ -174,9 +175,14 @@ impl Chain {
     pub fn manipulability(&self, q: &[f64]) -> Result<f64, KinematicsError> {
         let j = self.jacobian(q)?;
         let det = if self.n >= 6 {
-            linalg::determinant6(&j.outer_gram())
+            let outer: Matrix6<f64> = j * j.transpose();
+            outer.determinant()
         } else {
-            linalg::determinant(&j.gram(), self.n)
+            // JᵀJ with ones on the diagonal of the unused (zero) columns: the determinant of
+            // its leading n×n block.
+            let unused =
+                SVector::<f64, MAX_JOINTS>::from_fn(|i, _| f64::from(u8::from(i >= self.n)));
+            (j.tr_mul(&j) + SMatrix::from_diagonal(&unused)).determinant()
         };
         Ok(libm::sqrt(det.max(0.0)))
     }
@@ -185,9 +191,13 @@ impl Chain {
     /// `visit`, and returns the tool frame. `q` must hold valid values in its first `n` entries.
     /// One walk serves FK, link frames and the solvers, which differ only in what they keep.
     #[inline(always)]
-    fn walk(&self, q: &[f64; MAX_JOINTS], mut visit: impl FnMut(usize, &Rotation, Vec3)) -> Frame {
-        let mut rot = Rotation::IDENTITY;
-        let mut pos = Vec3::ZERO;
+    fn walk(
+        &self,
+        q: &[f64; MAX_JOINTS],
+        mut visit: impl FnMut(usize, &Matrix3<f64>, Vector3<f64>),
+    ) -> Frame {
+        let mut rot = Matrix3::identity();
+        let mut pos = Vector3::zeros();
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
@@ -195,39 +205,39 @@ impl Chain {
                 (link.theta + qi, link.d)
             };
             let (st, ct) = libm::sincos(theta);
-            let [x, y, z] = rot.cols;
+            let (x, y, z) = (rot.column(0), rot.column(1), rot.column(2));
             // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
             let z1 = z * link.cos_alpha - y * link.sin_alpha;
             // RotZ(θ) · TransZ(d)
-            rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
             pos += z1 * d;
+            rot = Matrix3::from_columns(&[x * ct + y1 * st, y1 * ct - x * st, z1]);
             visit(i, &rot, pos);
         }
-        Frame::new(rot, pos) * self.tool
+        Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot)) * self.tool
     }
 
     /// The tool frame, with every joint's axis and origin written to `axes`.
     pub(super) fn tool_and_axes(&self, q: &[f64; MAX_JOINTS], axes: &mut Axes) -> Frame {
         self.walk(q, |i, rot, pos| {
             if let (Some(z), Some(o)) = (axes.z.get_mut(i), axes.origin.get_mut(i)) {
-                *z = rot.cols[2];
+                *z = rot.column(2).into_owned();
                 *o = pos;
             }
         })
     }
 
     /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
-    pub(super) fn jacobian_into(&self, axes: &Axes, tip: Vec3, j: &mut Jacobian) {
+    pub(super) fn jacobian_into(&self, axes: &Axes, tip: &Vector3<f64>, j: &mut Jacobian) {
         let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
-        for (col, ((axis, origin), link)) in j.cols.iter_mut().zip(joints).take(self.n) {
-            *col = if link.prismatic {
-                [axis.x, axis.y, axis.z, 0.0, 0.0, 0.0]
+        for (mut col, ((axis, origin), link)) in j.column_iter_mut().zip(joints).take(self.n) {
+            col.copy_from(&if link.prismatic {
+                Vector6::new(axis.x, axis.y, axis.z, 0.0, 0.0, 0.0)
             } else {
-                let v = axis.cross(tip - *origin);
-                [v.x, v.y, v.z, axis.x, axis.y, axis.z]
-            };
+                let v = axis.cross(&(tip - origin));
+                Vector6::new(v.x, v.y, v.z, axis.x, axis.y, axis.z)
+            });
         }
     }
 
@@ -241,9 +251,9 @@ impl Chain {
 fn tool_frame(config: &RobotConfig) -> Frame {
     let t = &config.tool;
     let [roll, pitch, yaw] = t.rpy;
-    Frame::dh(t.a, t.alpha, t.d, t.theta)
-        * Frame::new(
-            Rotation::from_rpy(roll, pitch, yaw),
-            Vec3::from_array(t.xyz),
+    math::dh(t.a, t.alpha, t.d, t.theta)
+        * Frame::from_parts(
+            Vector3::from(t.xyz).into(),
+            Rotation3::from_euler_angles(roll, pitch, yaw),
         )
 }
