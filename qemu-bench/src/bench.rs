@@ -10,7 +10,7 @@ use core::hint::black_box;
 
 use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{self, Frame};
+use armgate_core::math::{self, Frame, Twist};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -31,8 +31,10 @@ const SUCCESS_TOLERANCE: f64 = 1e-5;
 #[derive(Default)]
 struct Results {
     sincos: Timing,
+    sqrt: Timing,
     forward: Timing,
     jacobian: Timing,
+    joint_rates: Timing,
     tracking: Timing,
     iterations: u64,
     successes: u32,
@@ -93,11 +95,18 @@ fn measure_robot(config: &RobotConfig) -> Results {
         let angle = q.first().copied().unwrap_or(0.0);
         let (ticks, _) = measure(|| libm::sincos(black_box(angle)));
         results.sincos.add(ticks);
+        // libm's software sqrt: the M7's VSQRT.F64 is out of reach without `unsafe` asm.
+        let (ticks, _) = measure(|| libm::sqrt(black_box(angle.abs() + 0.5)));
+        results.sqrt.add(ticks);
 
         let (ticks, target) = measure(|| chain.forward(black_box(&q)));
         results.forward.add(ticks);
         let (ticks, jacobian) = measure(|| chain.jacobian(black_box(&q)));
         results.jacobian.add(ticks);
+        // Joint rates = FK + J + one damped least-squares solve (the IK's step kernel).
+        let twist = Twist::new(0.01, -0.02, 0.005, 0.02, 0.0, -0.01);
+        let (ticks, _) = measure(|| chain.joint_rates(black_box(&q), &twist, 0.01, None));
+        results.joint_rates.add(ticks);
         let (Ok(target), Ok(_)) = (target, jacobian) else {
             results.errors += 1;
             continue;
@@ -145,8 +154,10 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         );
     };
     row("libm::sincos", &results.sincos);
+    row("libm::sqrt", &results.sqrt);
     row("forward (FK)", &results.forward);
     row("jacobian (FK + J)", &results.jacobian);
+    row("joint_rates (+DLS)", &results.joint_rates);
     let (mean, max) = results.tracking.instructions(counter);
     let calls = f64::from(results.tracking.calls.max(1));
     hprintln!(

@@ -1,6 +1,6 @@
 //! The kinematic chain: forward kinematics, link frames, Jacobian, manipulability.
 
-use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 
 use super::jacobian::Jacobian;
 use super::joints::Joints;
@@ -155,7 +155,8 @@ impl Chain {
         let q = self.check(q)?;
         Ok(self.walk(q.as_array(), |i, rot, pos| {
             if let Some(link) = links.get_mut(i) {
-                *link = Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(*rot));
+                let rot = Matrix3::from_columns(&rot.map(|c| *c));
+                *link = Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot));
             }
         }))
     }
@@ -194,9 +195,10 @@ impl Chain {
     fn walk(
         &self,
         q: &[f64; MAX_JOINTS],
-        mut visit: impl FnMut(usize, &Matrix3<f64>, Vector3<f64>),
+        mut visit: impl FnMut(usize, [&Vector3<f64>; 3], Vector3<f64>),
     ) -> Frame {
-        let mut rot = Matrix3::identity();
+        // The rotation is kept as its three columns (the joint frame's axes).
+        let [mut x, mut y, mut z] = [Vector3::x(), Vector3::y(), Vector3::z()];
         let mut pos = Vector3::zeros();
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
@@ -205,24 +207,24 @@ impl Chain {
                 (link.theta + qi, link.d)
             };
             let (st, ct) = libm::sincos(theta);
-            let (x, y, z) = (rot.column(0), rot.column(1), rot.column(2));
             // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
-            let z1 = z * link.cos_alpha - y * link.sin_alpha;
+            z = z * link.cos_alpha - y * link.sin_alpha;
             // RotZ(θ) · TransZ(d)
-            pos += z1 * d;
-            rot = Matrix3::from_columns(&[x * ct + y1 * st, y1 * ct - x * st, z1]);
-            visit(i, &rot, pos);
+            pos += z * d;
+            (x, y) = (x * ct + y1 * st, y1 * ct - x * st);
+            visit(i, [&x, &y, &z], pos);
         }
+        let rot = Matrix3::from_columns(&[x, y, z]);
         Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot)) * self.tool
     }
 
     /// The tool frame, with every joint's axis and origin written to `axes`.
     pub(super) fn tool_and_axes(&self, q: &[f64; MAX_JOINTS], axes: &mut Axes) -> Frame {
-        self.walk(q, |i, rot, pos| {
+        self.walk(q, |i, [_, _, axis], pos| {
             if let (Some(z), Some(o)) = (axes.z.get_mut(i), axes.origin.get_mut(i)) {
-                *z = rot.column(2).into_owned();
+                *z = *axis;
                 *o = pos;
             }
         })
@@ -231,13 +233,17 @@ impl Chain {
     /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
     pub(super) fn jacobian_into(&self, axes: &Axes, tip: &Vector3<f64>, j: &mut Jacobian) {
         let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
-        for (mut col, ((axis, origin), link)) in j.column_iter_mut().zip(joints).take(self.n) {
-            col.copy_from(&if link.prismatic {
-                Vector6::new(axis.x, axis.y, axis.z, 0.0, 0.0, 0.0)
+        // Column-major storage: each chunk of six is one column.
+        let columns = j.as_mut_slice().chunks_exact_mut(6);
+        for (col, ((axis, origin), link)) in columns.zip(joints).take(self.n) {
+            let (linear, angular) = if link.prismatic {
+                (*axis, Vector3::zeros())
             } else {
-                let v = axis.cross(&(tip - origin));
-                Vector6::new(v.x, v.y, v.z, axis.x, axis.y, axis.z)
-            });
+                (axis.cross(&(tip - origin)), *axis)
+            };
+            for (c, v) in col.iter_mut().zip(linear.iter().chain(angular.iter())) {
+                *c = *v;
+            }
         }
     }
 

@@ -383,7 +383,7 @@ impl Chain {
         // Every pass changes the locked set; 2n + 2 passes bound even an add/drop cycle.
         for _ in 0..2 * n + 2 {
             // A locked joint is a zeroed column of the Jacobian.
-            let Some(solved) = damped_least_squares(j, e, lambda, &locked) else {
+            let Some(solved) = damped_least_squares(j, n, e, lambda, &locked) else {
                 return JointVector::zeros();
             };
             dq = solved;

@@ -14,17 +14,20 @@ pub(super) type JointVector = SVector<f64, MAX_JOINTS>;
 
 /// Damped least squares `Δq = Jᵀ (J Jᵀ + λI)⁻¹ e`, which equals `(JᵀJ + λI)⁻¹ Jᵀ e` but is
 /// always a 6×6 solve, whatever the joint count. The columns of `locked` joints count as zero,
-/// so their entries of `Δq` are zero. `None` if the system is not positive definite (λ ≤ 0 or
-/// a non-finite Jacobian).
+/// so their entries of `Δq` are zero, and so do the columns from `n` on (joints the chain does
+/// not have), which are skipped. `None` if the system is not positive definite (λ ≤ 0 or a
+/// non-finite Jacobian).
 pub(super) fn damped_least_squares(
     j: &Jacobian,
+    n: usize,
     e: &Vector6<f64>,
     lambda: f64,
     locked: &[bool; MAX_JOINTS],
 ) -> Option<JointVector> {
     // Only the lower triangle is built: the rank-one updates and the Cholesky read no more.
     let mut a = Matrix6::from_diagonal_element(lambda);
-    for (column, _) in j.column_iter().zip(locked).filter(|(_, l)| !**l) {
+    let columns = j.column_iter().zip(locked).take(n);
+    for (column, _) in columns.filter(|(_, l)| !**l) {
         a.syger(1.0, &column, &column, 1.0);
     }
     let y = Cholesky::new(a)?.solve(e);

@@ -32,7 +32,7 @@ impl Chain {
         }
         let residual = twist - j * JointVector::from(*z.as_array());
         let lambda = (damping * damping).max(1e-12);
-        let dq = damped_least_squares(&j, &residual, lambda, &[false; MAX_JOINTS])
+        let dq = damped_least_squares(&j, n, &residual, lambda, &[false; MAX_JOINTS])
             .unwrap_or_else(JointVector::zeros);
         let mut rates = z;
         for (r, d) in rates.iter_mut().zip(dq.iter()) {

@@ -34,11 +34,13 @@ pub fn rotation_vector(r: &Rotation3<f64>) -> Vector3<f64> {
     #[allow(clippy::manual_clamp)]
     let c = ((m.m11 + m.m22 + m.m33 - 1.0) * 0.5).max(-1.0).min(1.0);
     let s = v.norm();
-    let theta = libm::atan2(s, c);
-    if theta < 1e-6 {
-        // θ/sin θ ≈ 1 + θ²/6
-        return v * (1.0 + theta * theta / 6.0);
+    if s < 1e-3 && c > 0.0 {
+        // θ/sin θ = asin(s)/s = 1 + s²/6 + 3s⁴/40 + …; the next term (≤ 5e-20) is below
+        // rounding. Saves the atan2 on the IK's last iterations, where the error is small.
+        let s2 = s * s;
+        return v * (1.0 + s2 / 6.0 + 0.075 * s2 * s2);
     }
+    let theta = libm::atan2(s, c);
     if c > -0.5 {
         return v * (theta / s);
     }
