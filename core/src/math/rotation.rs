@@ -33,13 +33,13 @@ pub fn rotation_vector(r: &Rotation3<f64>) -> Vector3<f64> {
     // max/min rather than `f64::clamp`, which has a panic path.
     #[allow(clippy::manual_clamp)]
     let c = ((m.m11 + m.m22 + m.m33 - 1.0) * 0.5).max(-1.0).min(1.0);
-    let s = v.norm();
-    if s < 1e-3 && c > 0.0 {
+    let s2 = v.norm_squared();
+    if s2 < 1e-6 && c > 0.0 {
         // θ/sin θ = asin(s)/s = 1 + s²/6 + 3s⁴/40 + …; the next term (≤ 5e-20) is below
-        // rounding. Saves the atan2 on the IK's last iterations, where the error is small.
-        let s2 = s * s;
+        // rounding. Saves the square root and the atan2 on the IK's last iterations.
         return v * (1.0 + s2 / 6.0 + 0.075 * s2 * s2);
     }
+    let s = libm::sqrt(s2);
     let theta = libm::atan2(s, c);
     if c > -0.5 {
         return v * (theta / s);
