@@ -11,7 +11,8 @@
 //! solver stalls. Here a joint that sits at a limit and whose step points outwards is *locked*
 //! for that iteration (its column is removed and the step re-solved), so the other joints take
 //! over; a joint that crosses a limit is stopped at it. The global solver also wraps revolute
-//! joints by 2π where the range allows, and restarts from deterministic random seeds.
+//! joints by 2π where the range allows, and restarts from deterministic random seeds, early
+//! when an attempt stops making progress.
 
 use nalgebra::Vector6;
 
@@ -30,6 +31,8 @@ const LAMBDA_MIN: f64 = 1e-9;
 const AT_LIMIT: f64 = 1e-12;
 /// Iterations of one global attempt before it restarts from a new random seed.
 const ATTEMPT_ITERATIONS: u16 = 30;
+/// A global attempt must halve its error every this many steps, or it is abandoned.
+const PROGRESS_WINDOW: u32 = 5;
 /// Steps smaller than this (∞-norm) without convergence mean a local minimum.
 const STALL_STEP: f64 = 1e-10;
 
@@ -317,6 +320,7 @@ impl Chain {
         let mut axes = Axes::default();
         let mut jacobian = Jacobian::zeros();
         let mut steps = 0;
+        let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
             let tool = self.tool_and_axes(&q, &mut axes);
             let e = math::diff(&tool, target);
@@ -348,6 +352,16 @@ impl Chain {
             self.apply(&mut q, &step, bounds);
             if step.amax() < STALL_STEP {
                 break;
+            }
+            // A global attempt that has not halved its error in the last PROGRESS_WINDOW
+            // steps is in a local minimum or pinned on a limit: a new seed is a better use
+            // of the budget.
+            if bounds == Bounds::Wrapping && steps % PROGRESS_WINDOW == 0 {
+                let now = score(&best);
+                if now > 0.5 * checkpoint {
+                    break;
+                }
+                checkpoint = now;
             }
         }
         best.iterations = steps;
