@@ -10,7 +10,7 @@ use core::hint::black_box;
 
 use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{self, Frame, Twist};
+use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -36,6 +36,8 @@ struct Results {
     jacobian: Timing,
     joint_rates: Timing,
     tracking: Timing,
+    unreachable: Timing,
+    unreachable_iterations: u32,
     iterations: u64,
     successes: u32,
     errors: u32,
@@ -130,8 +132,29 @@ fn measure_robot(config: &RobotConfig) -> Results {
             Err(_) => results.errors += 1,
         }
     }
+    // The worst case of a global solve: a target 10 m out is never reached, so every solve
+    // spends the whole budget (`ik.global_iterations` Newton steps).
+    for k in 0..UNREACHABLE_SAMPLES {
+        let target = Frame::from_parts(
+            Vector3::new(10.0, -0.5 * k as f64, 0.3).into(),
+            Rotation3::identity(),
+        );
+        let seed = chain.mid_range();
+        let (ticks, solved) =
+            measure(|| chain.solve_global(&target, black_box(&seed), &config.ik, k));
+        results.unreachable.add(ticks);
+        match solved {
+            Ok(result) if !result.is_converged() => {
+                results.unreachable_iterations = result.solution().iterations;
+            }
+            _ => results.errors += 1,
+        }
+    }
     results
 }
+
+/// Global solves of unreachable targets per robot (each runs the whole budget).
+const UNREACHABLE_SAMPLES: u64 = 3;
 
 fn succeeded(chain: &Chain, target: &Frame, q: &Joints) -> bool {
     chain.forward(q).is_ok_and(|reached| {
@@ -168,6 +191,15 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         max,
         results.iterations as f64 / calls,
         100.0 * f64::from(results.successes) / calls
+    );
+    let (mean, max) = results.unreachable.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15} |         - |",
+        name,
+        "global unreachable",
+        mean,
+        max,
+        results.unreachable_iterations
     );
     if results.errors > 0 {
         hprintln!("{}: {} calls refused", name, results.errors);
