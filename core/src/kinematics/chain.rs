@@ -125,20 +125,35 @@ impl Chain {
 
     /// Checks a joint vector's length and values.
     pub fn check(&self, q: &[f64]) -> Result<Joints, KinematicsError> {
-        if q.len() != self.n {
-            return Err(KinematicsError::WrongJointCount);
-        }
-        let joints = Joints::from_slice(q).ok_or(KinematicsError::WrongJointCount)?;
-        if !joints.is_finite() {
-            return Err(KinematicsError::NonFiniteJoints);
+        let values = self.checked(q)?;
+        let mut joints = Joints::zeros(self.n);
+        for (j, v) in joints.iter_mut().zip(values) {
+            *j = v;
         }
         Ok(joints)
     }
 
+    /// [`check`](Self::check) into the fixed array the walk reads (entries past `n` zero).
+    /// Returning the bare array, not a `Joints` through `Option` and `Result`, spares the
+    /// Cortex-M7 several unaligned 72-byte copies per call.
+    fn checked(&self, q: &[f64]) -> Result<[f64; MAX_JOINTS], KinematicsError> {
+        if q.len() != self.n {
+            return Err(KinematicsError::WrongJointCount);
+        }
+        let mut values = [0.0; MAX_JOINTS];
+        for (x, v) in values.iter_mut().zip(q) {
+            if !v.is_finite() {
+                return Err(KinematicsError::NonFiniteJoints);
+            }
+            *x = *v;
+        }
+        Ok(values)
+    }
+
     /// The tool frame in the base frame.
     pub fn forward(&self, q: &[f64]) -> Result<Frame, KinematicsError> {
-        let q = self.check(q)?;
-        Ok(self.pose(&q))
+        let q = self.checked(q)?;
+        Ok(self.walk(&q, |_, _, _| {}))
     }
 
     /// The tool frame for joints that [`check`](Self::check) returned (not checked again).
@@ -152,8 +167,8 @@ impl Chain {
         q: &[f64],
         links: &mut [Frame; MAX_JOINTS],
     ) -> Result<Frame, KinematicsError> {
-        let q = self.check(q)?;
-        Ok(self.walk(q.as_array(), |i, rot, pos| {
+        let q = self.checked(q)?;
+        Ok(self.walk(&q, |i, rot, pos| {
             if let Some(link) = links.get_mut(i) {
                 let rot = Matrix3::from_columns(&rot.map(|c| *c));
                 *link = Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot));
@@ -163,9 +178,9 @@ impl Chain {
 
     /// The geometric Jacobian at the tool origin, base coordinates.
     pub fn jacobian(&self, q: &[f64]) -> Result<Jacobian, KinematicsError> {
-        let q = self.check(q)?;
+        let q = self.checked(q)?;
         let mut axes = Axes::default();
-        let tool = self.tool_and_axes(q.as_array(), &mut axes);
+        let tool = self.tool_and_axes(&q, &mut axes);
         let mut j = Jacobian::zeros();
         self.jacobian_into(&axes, &tool.translation.vector, &mut j);
         Ok(j)

@@ -309,10 +309,10 @@ impl Chain {
         bounds: Bounds,
         on_step: &mut impl FnMut(),
     ) -> Descent {
-        let n = self.dof();
-        let mut best = IkSolution {
-            q: Joints::zeros(n),
-            iterations: 0,
+        // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
+        // the end: moving it every iteration cost the Cortex-M7 more than the step's maths.
+        let mut best = Pose {
+            q,
             position_error: f64::INFINITY,
             orientation_error: f64::INFINITY,
         };
@@ -324,19 +324,18 @@ impl Chain {
         for it in 0..=u32::from(iterations) {
             let tool = self.tool_and_axes(&q, &mut axes);
             let e = math::diff(&tool, target);
-            let solution = IkSolution {
-                q: joints_of(&q, n),
-                iterations: it,
+            let pose = Pose {
+                q,
                 position_error: e.fixed_rows::<3>(0).norm(),
                 orientation_error: e.fixed_rows::<3>(3).norm(),
             };
             // The first evaluation always counts: with a huge target every score is infinite.
-            if it == 0 || score(&solution) < score(&best) {
-                best = solution;
+            if it == 0 || pose.score() < best.score() {
+                best = pose;
             }
-            if solution.position_error < tolerance && solution.orientation_error < tolerance {
+            if pose.position_error < tolerance && pose.orientation_error < tolerance {
                 return Descent {
-                    best: solution,
+                    best: pose.solution(self.dof(), steps),
                     converged: true,
                     steps,
                 };
@@ -357,16 +356,15 @@ impl Chain {
             // steps is in a local minimum or pinned on a limit: a new seed is a better use
             // of the budget.
             if bounds == Bounds::Wrapping && steps % PROGRESS_WINDOW == 0 {
-                let now = score(&best);
+                let now = best.score();
                 if now > 0.5 * checkpoint {
                     break;
                 }
                 checkpoint = now;
             }
         }
-        best.iterations = steps;
         Descent {
-            best,
+            best: best.solution(self.dof(), steps),
             converged: false,
             steps,
         }
@@ -476,10 +474,33 @@ fn score(s: &IkSolution) -> f64 {
     s.position_error + s.orientation_error
 }
 
-fn joints_of(q: &[f64; MAX_JOINTS], n: usize) -> Joints {
-    let mut joints = Joints::zeros(n);
-    joints.copy_from_slice(q.get(..n).unwrap_or(&[]));
-    joints
+/// A pose visited by a descent: joint values and their errors.
+#[derive(Clone, Copy)]
+struct Pose {
+    q: [f64; MAX_JOINTS],
+    position_error: f64,
+    orientation_error: f64,
+}
+
+impl Pose {
+    /// The seed's mixed metric: metres plus radians.
+    fn score(&self) -> f64 {
+        self.position_error + self.orientation_error
+    }
+
+    /// The solution of `n` joints reached after `steps` Newton steps.
+    fn solution(&self, n: usize, steps: u32) -> IkSolution {
+        let mut q = Joints::zeros(n);
+        for (j, v) in q.iter_mut().zip(self.q) {
+            *j = v;
+        }
+        IkSolution {
+            q,
+            iterations: steps,
+            position_error: self.position_error,
+            orientation_error: self.orientation_error,
+        }
+    }
 }
 
 #[cfg(test)]
