@@ -138,8 +138,8 @@ impl Chain {
     ) -> Result<IkResult, IkError> {
         let q = self.prepare(target, seed)?;
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
-        let step = &mut || {};
-        let free = self.descend(target, q, iterations, tolerance, Bounds::Free, step);
+        let no_hook = &mut || {};
+        let free = self.descend(target, q, iterations, tolerance, Bounds::Free, no_hook);
         let mut used = free.steps;
         if free.converged {
             if self.within_limits(&free.best.q) {
@@ -155,7 +155,7 @@ impl Chain {
                 iterations,
                 tolerance,
                 Bounds::Enforced,
-                step,
+                no_hook,
             );
             used += retry.steps;
             if retry.converged {
@@ -164,7 +164,7 @@ impl Chain {
                 return Ok(IkResult::Converged(best));
             }
         }
-        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced, step);
+        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced, no_hook);
         bounded.best.iterations += used;
         Ok(bounded.into_result())
     }
