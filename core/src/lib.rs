@@ -7,6 +7,7 @@
 //!
 //! * [`command`]: the client protocol's commands mapped onto the controller, and the relay of
 //!   unsolicited warnings.
+//! * [`cycle`]: the control tick every shell runs: requests, drives, control step, notices.
 //! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
@@ -18,6 +19,7 @@
 
 pub mod command;
 pub mod config;
+pub mod cycle;
 pub mod drives;
 pub mod kinematics;
 pub mod math;

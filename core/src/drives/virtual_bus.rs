@@ -296,6 +296,11 @@ impl CanBus for VirtualBus {
         self.inbox.pop_front()
     }
 
+    /// Runs the simulated drives and the bus up to `now`.
+    fn advance_to(&mut self, now: f64) -> bool {
+        self.advance(now).is_ok()
+    }
+
     fn state(&self) -> BusState {
         BusState::from_bus_off(self.bus_off)
     }
