@@ -36,12 +36,12 @@
 
 mod can_drives;
 mod counters;
-mod cycle;
 mod link;
 mod side;
+mod tick;
 
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
-pub use cycle::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};
 pub use link::{Datagram, Dropped, Link, Outgoing};
 pub use side::DriveSide;
+pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};
