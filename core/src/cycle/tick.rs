@@ -6,6 +6,7 @@ use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::RobotConfig;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
+use armgate_protocol::client::MESSAGE_LEN;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
 /// each reply, so this leaves room for several clients and for bursts, and bounds the tick.
@@ -145,14 +146,20 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
         self.last_sender
     }
 
+    /// Answers one request from `peer` (who then gets the notices). [`tick`](Self::tick)
+    /// calls it for the requests its link delivers; protocol tests call it between ticks.
+    pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
+        bump(&mut self.counters.requests);
+        self.last_sender = Some(peer);
+        self.handler.handle(datagram, &mut self.drives)
+    }
+
     fn handle_requests(&mut self, link: &mut impl Link<P>) {
         for _ in 0..REQUESTS_PER_TICK {
             let Some(request) = link.receive() else {
                 break;
             };
-            bump(&mut self.counters.requests);
-            let reply = self.handler.handle(request.payload(), &mut self.drives);
-            self.last_sender = Some(request.peer);
+            let reply = self.answer(request.payload(), request.peer);
             self.send(link, Datagram::new(&reply, request.peer), Outgoing::Reply);
         }
     }
