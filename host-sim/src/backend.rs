@@ -87,6 +87,21 @@ impl Backend {
         }
     }
 
+    /// What the SocketCAN adapter ignored or could not do, for the exit summary.
+    pub fn socketcan_summary(&self) -> Option<String> {
+        let Self::Can(drives) = self else {
+            return None;
+        };
+        let Bus::Socket(socket) = drives.bus() else {
+            return None;
+        };
+        let c = socket.counters();
+        Some(format!(
+            "SocketCAN: {} extended/remote frames ignored, {} error frames ignored, {} bus-offs, {} frames refused by a full transmit queue, {} other socket errors",
+            c.foreign_frames, c.error_frames, c.bus_offs, c.queue_full, c.socket_errors
+        ))
+    }
+
     /// The one in use, as a [`DriveSide`].
     fn side(&self) -> &dyn DriveSide {
         match self {

@@ -211,6 +211,9 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         counters.tick_errors,
         dropped
     );
+    if let Some(summary) = cycle.drives().socketcan_summary() {
+        eprintln!("armgate-sim: {summary}");
+    }
     Ok(())
 }
 
