@@ -41,32 +41,13 @@ mod bus {
 #[cfg(feature = "sim-drives")]
 mod bus {
     use armgate_core::config::RobotConfig;
-    use armgate_core::drives::{BusState, CanBus, TxError, VirtualBus};
-    use armgate_protocol::can::CanFrame;
+    use armgate_core::drives::VirtualBus;
     use embassy_stm32::Peri;
     use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
     use static_cell::StaticCell;
 
     /// The simulated bus (≈ 24 KB: a static, never on the stack).
-    pub struct Bus(&'static mut VirtualBus);
-
-    impl CanBus for Bus {
-        fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
-            self.0.try_transmit(frame)
-        }
-
-        fn try_receive(&mut self) -> Option<CanFrame> {
-            self.0.try_receive()
-        }
-
-        fn state(&self) -> BusState {
-            self.0.state()
-        }
-
-        fn advance_to(&mut self, now: f64) -> bool {
-            self.0.advance_to(now)
-        }
-    }
+    pub type Bus = &'static mut VirtualBus;
 
     static VIRTUAL_BUS: StaticCell<VirtualBus> = StaticCell::new();
 
@@ -77,7 +58,7 @@ mod bus {
         _rx: Peri<'static, PD0>,
         _tx: Peri<'static, PD1>,
     ) -> Bus {
-        Bus(VIRTUAL_BUS.init_with(|| VirtualBus::for_robot(robot)))
+        VIRTUAL_BUS.init_with(|| VirtualBus::for_robot(robot))
     }
 
     pub const DESCRIPTION: &str =

@@ -27,6 +27,29 @@ pub trait CanBus {
     fn recover(&mut self) {}
 }
 
+/// A bus borrowed for good (the firmware keeps its simulated bus in a static).
+impl<B: CanBus + ?Sized> CanBus for &mut B {
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
+        (**self).try_transmit(frame)
+    }
+
+    fn try_receive(&mut self) -> Option<CanFrame> {
+        (**self).try_receive()
+    }
+
+    fn state(&self) -> BusState {
+        (**self).state()
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        (**self).advance_to(now)
+    }
+
+    fn recover(&mut self) {
+        (**self).recover();
+    }
+}
+
 /// The CAN fault-confinement state of the controller (ISO 11898-1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BusState {
