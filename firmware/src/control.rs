@@ -12,10 +12,9 @@
 use armgate_core::config::RobotConfig;
 use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
 use embassy_net::IpEndpoint;
-use embassy_stm32::peripherals::IWDG1;
-use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_time::{Duration, Instant, Timer};
 
+use crate::board::Watchdog;
 use crate::drives::BoardDrives;
 use crate::link::{COUNTERS, OUTGOING, REQUESTS, count};
 use crate::telemetry::{STATUS, Status};
@@ -87,11 +86,7 @@ impl Interval {
 
 /// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
 #[embassy_executor::task]
-pub async fn run(
-    robot: &'static RobotConfig,
-    drives: BoardDrives,
-    mut watchdog: IndependentWatchdog<'static, IWDG1>,
-) {
+pub async fn run(robot: &'static RobotConfig, drives: BoardDrives, mut watchdog: Watchdog) {
     let period = period(robot);
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",

@@ -2,7 +2,7 @@
 //! at build time in this one place.
 //!
 //! * default: FDCAN1 ([`crate::can::Fdcan`]) to the real drives;
-//! * feature `sim-drives`: the core's `VirtualBus` with a simulated Whistle for every drive
+//! * feature `sim-drives`, and always on the host: the core's `VirtualBus` with a simulated Whistle for every drive
 //!   of the robot (`VirtualBus::for_robot`), advanced to the tick's time before the manager
 //!   reads it. A bare board runs the whole drive path — manager, frames, flow control — with
 //!   no arm and no transceiver attached.
@@ -14,11 +14,9 @@
 use armgate_core::config::RobotConfig;
 use armgate_core::cycle::CanDrives;
 use armgate_core::drives::DriveSettings;
-use embassy_stm32::Peri;
-use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
 
-#[cfg(not(feature = "sim-drives"))]
-mod bus {
+#[cfg(all(target_os = "none", not(feature = "sim-drives")))]
+pub mod bus {
     use armgate_core::config::RobotConfig;
     use embassy_stm32::Peri;
     use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
@@ -38,12 +36,15 @@ mod bus {
     pub const DESCRIPTION: &str = "CANopen drive manager on FDCAN1 (PD0 RX, PD1 TX)";
 }
 
-#[cfg(feature = "sim-drives")]
-mod bus {
+#[cfg(any(feature = "sim-drives", not(target_os = "none")))]
+pub mod bus {
     use armgate_core::config::RobotConfig;
     use armgate_core::drives::VirtualBus;
-    use embassy_stm32::Peri;
-    use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
+    #[cfg(target_os = "none")]
+    use embassy_stm32::{
+        Peri,
+        peripherals::{FDCAN1, PD0, PD1},
+    };
     use static_cell::StaticCell;
 
     /// The simulated bus (≈ 24 KB: a static, never on the stack).
@@ -52,12 +53,18 @@ mod bus {
     static VIRTUAL_BUS: StaticCell<VirtualBus> = StaticCell::new();
 
     /// Simulated Whistles at their home positions; FDCAN1 and its pins stay unused.
+    #[cfg(target_os = "none")]
     pub fn open(
         robot: &RobotConfig,
         _peri: Peri<'static, FDCAN1>,
         _rx: Peri<'static, PD0>,
         _tx: Peri<'static, PD1>,
     ) -> Bus {
+        simulated(robot)
+    }
+
+    /// Simulated Whistles at their home positions (the host has no FDCAN).
+    pub fn simulated(robot: &RobotConfig) -> Bus {
         VIRTUAL_BUS.init_with(|| VirtualBus::for_robot(robot))
     }
 
@@ -68,15 +75,10 @@ mod bus {
 /// The drive manager and its bus, as the cycle's drive side.
 pub type BoardDrives = CanDrives<bus::Bus>;
 
-/// Opens the bus and starts the drive manager. Panics (before the watchdog runs) if the drive
-/// manager refuses the robot, which `build.rs` already rules out for the embedded robot.
-pub fn new(
-    robot: &RobotConfig,
-    can: Peri<'static, FDCAN1>,
-    rx: Peri<'static, PD0>,
-    tx: Peri<'static, PD1>,
-) -> BoardDrives {
-    let bus = bus::open(robot, can, rx, tx);
+/// Starts the drive manager on `bus` ([`bus::open`] on the board). Panics (before the watchdog
+/// runs) if the drive manager refuses the robot, which `build.rs` already rules out for the
+/// embedded robot.
+pub fn new(robot: &RobotConfig, bus: bus::Bus) -> BoardDrives {
     match CanDrives::started(robot, &DriveSettings::default(), bus) {
         Ok(drives) => drives,
         Err(e) => defmt::panic!("drives: {}", defmt::Display2Format(&e)),

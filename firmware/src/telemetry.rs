@@ -11,7 +11,7 @@ use embassy_net::Stack;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 
-#[cfg(not(feature = "sim-drives"))]
+#[cfg(all(target_os = "none", not(feature = "sim-drives")))]
 use crate::can::CAN_COUNTERS;
 use crate::link::{COUNTERS, read};
 
@@ -58,7 +58,7 @@ pub async fn run(stack: Stack<'static>) {
         let s = STATUS.wait().await;
         let [x, y, z] = s.position.unwrap_or([f64::NAN; 3]);
         let fault = s.fault.as_ref().map_or("no fault", Text::as_str);
-        #[cfg(not(feature = "sim-drives"))]
+        #[cfg(all(target_os = "none", not(feature = "sim-drives")))]
         defmt::info!(
             "can: {} bus errors, {} foreign frames, {} bus-off recoveries",
             read(&CAN_COUNTERS.bus_errors),

@@ -1,0 +1,117 @@
+//! The firmware on Linux: the board's tasks — control, network stack, UDP server, status — on
+//! embassy's std executor, with the board's peripherals swapped behind the seams they use:
+//!
+//! * Ethernet MAC and PHY → a TAP device (`embassy-net-tuntap`), named by `ARMGATE_TAP`
+//!   (default `tap0`), which must exist (scripts/firmware-on-host.sh creates it inside a
+//!   network namespace);
+//! * FDCAN1 → the simulated bus of simulated Whistles (as the `sim-drives` build);
+//! * the independent watchdog → [`Watchdog`], which does nothing;
+//! * clocks → embassy-time's std driver; the chip's unique id → a fixed one ([`HOST_UID`]).
+//!
+//! One difference from the board remains: the control task shares the single executor thread
+//! with the network tasks instead of preempting them from an interrupt executor, which changes
+//! when ticks start, not what they compute. defmt's log goes nowhere here (a defmt log needs
+//! the board's linker script and probe); the start-up line is printed on stderr.
+
+use armgate_core::config::RobotConfig;
+use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
+use embassy_net_tuntap::TunTapDevice;
+use static_cell::StaticCell;
+
+use crate::{config, control, drives, net, settings, telemetry};
+
+/// The network driver on the host.
+pub type NetDevice = TunTapDevice;
+
+/// The unique id the MAC address and the stack's seed derive from.
+const HOST_UID: &[u8] = b"armgate-host";
+
+/// The host has no independent watchdog: the methods the control task calls do nothing.
+pub struct Watchdog;
+
+impl Watchdog {
+    /// Would start the watchdog.
+    pub fn unleash(&mut self) {}
+
+    /// Would feed it.
+    pub fn pet(&mut self) {}
+}
+
+static EXECUTOR: StaticCell<Executor> = StaticCell::new();
+static ROBOT: StaticCell<RobotConfig> = StaticCell::new();
+
+/// defmt needs a global logger; on the host its frames are dropped.
+#[defmt::global_logger]
+struct NoLog;
+
+// SAFETY: the logger keeps no state, so any sequence of calls is sound.
+#[allow(unsafe_code)]
+unsafe impl defmt::Logger for NoLog {
+    fn acquire() {}
+    unsafe fn flush() {}
+    unsafe fn release() {}
+    unsafe fn write(_bytes: &[u8]) {}
+}
+
+defmt::timestamp!("{=u64:us}", embassy_time::Instant::now().as_micros());
+
+/// `defmt::panic!` on the host: the process ends.
+#[defmt::panic_handler]
+fn defmt_panic() -> ! {
+    eprintln!("armgate-firmware: defmt panic (its message is in the defmt log)");
+    std::process::abort()
+}
+
+/// Starts the tasks; never returns.
+pub fn main() {
+    let tap = std::env::var("ARMGATE_TAP").unwrap_or_else(|_| "tap0".to_owned());
+    let robot: &'static RobotConfig = match config::load() {
+        Ok(robot) => ROBOT.init(robot),
+        Err(_) => {
+            eprintln!("armgate-firmware: the embedded robot does not decode or validate");
+            std::process::exit(1);
+        }
+    };
+    let mut device = match TunTapDevice::new(&tap) {
+        Ok(device) => device,
+        Err(e) => {
+            eprintln!(
+                "armgate-firmware: cannot open TAP device {tap}: {e} (create it as root: \
+                 `ip tuntap add dev {tap} mode tap && ip link set {tap} up`, or run \
+                 scripts/firmware-on-host.sh)"
+            );
+            std::process::exit(1);
+        }
+    };
+    device.set_hardware_address(net::mac_address(HOST_UID));
+    let drives = drives::new(robot, drives::bus::simulated(robot));
+    let (stack, runner) = net::stack(device, HOST_UID);
+    eprintln!(
+        "armgate-firmware (host): {} ({} joints, {:.2} ms period, embedded robot {} bytes, drives: {}) on udp://{}:{} via {tap}",
+        robot.name.as_str(),
+        robot.dof(),
+        robot.control_period * 1e3,
+        config::embedded_len(),
+        drives::describe(),
+        settings::ADDRESS,
+        settings::PORT
+    );
+    let executor = EXECUTOR.init(Executor::new());
+    executor.run(|spawner| {
+        spawn(spawner, "control", control::run(robot, drives, Watchdog));
+        spawn(spawner, "network stack", net::runner(runner));
+        spawn(spawner, "UDP server", net::udp_server(stack));
+        spawn(spawner, "status", telemetry::run(stack));
+    })
+}
+
+/// Spawns a task, or ends the process saying which one could not be.
+fn spawn<S>(spawner: Spawner, name: &str, task: Result<SpawnToken<S>, SpawnError>) {
+    match task {
+        Ok(task) => spawner.spawn(task),
+        Err(e) => {
+            eprintln!("armgate-firmware: cannot spawn the {name} task: {e:?}");
+            std::process::exit(1);
+        }
+    }
+}
