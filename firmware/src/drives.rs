@@ -60,12 +60,13 @@ pub mod bus {
         _rx: Peri<'static, PD0>,
         _tx: Peri<'static, PD1>,
     ) -> Bus {
-        simulated(robot)
+        simulated_at(robot, &robot.home())
     }
 
-    /// Simulated Whistles at their home positions (the host has no FDCAN).
-    pub fn simulated(robot: &RobotConfig) -> Bus {
-        VIRTUAL_BUS.init_with(|| VirtualBus::for_robot(robot))
+    /// Simulated Whistles with their encoders at joint positions `q` (the host has no FDCAN;
+    /// tests start the arm where they need it).
+    pub fn simulated_at(robot: &RobotConfig, q: &[f64]) -> Bus {
+        VIRTUAL_BUS.init_with(|| VirtualBus::for_robot_at(robot, q))
     }
 
     pub const DESCRIPTION: &str =

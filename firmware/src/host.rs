@@ -2,18 +2,23 @@
 //! embassy's std executor, with the board's peripherals swapped behind the seams they use:
 //!
 //! * Ethernet MAC and PHY → a TAP device (`embassy-net-tuntap`), named by `ARMGATE_TAP`
-//!   (default `tap0`), which must exist (scripts/firmware-on-host.sh creates it inside a
+//!   (default `tap0`), which must exist (tools/firmware-e2e.sh creates it inside a
 //!   network namespace);
 //! * FDCAN1 → the simulated bus of simulated Whistles (as the `sim-drives` build);
 //! * the independent watchdog → [`Watchdog`], which does nothing;
-//! * clocks → embassy-time's std driver; the chip's unique id → a fixed one ([`HOST_UID`]).
+//! * clocks → embassy-time's std driver; the chip's unique id → a fixed one ([`HOST_UID`]);
+//! * the robot embedded in flash → the same, unless `ARMGATE_ROBOT_FILE` names a robot file to
+//!   load instead, and `ARMGATE_START` (comma-separated joint values) puts the simulated drives'
+//!   encoders somewhere else than home: what the end-to-end tests need to run the same session
+//!   against this and against `armgate-sim`.
 //!
 //! One difference from the board remains: the control task shares the single executor thread
 //! with the network tasks instead of preempting them from an interrupt executor, which changes
 //! when ticks start, not what they compute. defmt's log goes nowhere here (a defmt log needs
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::kinematics::{Chain, Joints};
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;
@@ -65,10 +70,17 @@ fn defmt_panic() -> ! {
 /// Starts the tasks; never returns.
 pub fn main() {
     let tap = std::env::var("ARMGATE_TAP").unwrap_or_else(|_| "tap0".to_owned());
-    let robot: &'static RobotConfig = match config::load() {
+    let robot: &'static RobotConfig = match load_robot() {
         Ok(robot) => ROBOT.init(robot),
-        Err(_) => {
-            eprintln!("armgate-firmware: the embedded robot does not decode or validate");
+        Err(e) => {
+            eprintln!("armgate-firmware: {e}");
+            std::process::exit(1);
+        }
+    };
+    let start = match start_joints(robot) {
+        Ok(start) => start,
+        Err(e) => {
+            eprintln!("armgate-firmware: ARMGATE_START: {e}");
             std::process::exit(1);
         }
     };
@@ -78,16 +90,16 @@ pub fn main() {
             eprintln!(
                 "armgate-firmware: cannot open TAP device {tap}: {e} (create it as root: \
                  `ip tuntap add dev {tap} mode tap && ip link set {tap} up`, or run \
-                 scripts/firmware-on-host.sh)"
+                 tools/firmware-e2e.sh)"
             );
             std::process::exit(1);
         }
     };
     device.set_hardware_address(net::mac_address(HOST_UID));
-    let drives = drives::new(robot, drives::bus::simulated(robot));
+    let drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
     let (stack, runner) = net::stack(device, HOST_UID);
     eprintln!(
-        "armgate-firmware (host): {} ({} joints, {:.2} ms period, embedded robot {} bytes, drives: {}) on udp://{}:{} via {tap}",
+        "armgate-firmware (host): {} ({} joints, {:.2} ms period, embedded robot {} bytes, drives: {}) on udp://{}:{}, via {tap}",
         robot.name.as_str(),
         robot.dof(),
         robot.control_period * 1e3,
@@ -103,6 +115,31 @@ pub fn main() {
         spawn(spawner, "UDP server", net::udp_server(stack));
         spawn(spawner, "status", telemetry::run(stack));
     })
+}
+
+/// The embedded robot, or the one `ARMGATE_ROBOT_FILE` names.
+fn load_robot() -> Result<RobotConfig, String> {
+    match std::env::var_os("ARMGATE_ROBOT_FILE") {
+        Some(path) => load_file(&path).map_err(|e| format!("{}: {e}", path.display())),
+        None => {
+            config::load().map_err(|_| "the embedded robot does not decode or validate".to_owned())
+        }
+    }
+}
+
+/// The joints `ARMGATE_START` gives (default: the drives' home positions).
+fn start_joints(robot: &RobotConfig) -> Result<Joints, String> {
+    let home = robot.home();
+    let Ok(text) = std::env::var("ARMGATE_START") else {
+        return Ok(home);
+    };
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|e| format!("`{v}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    Chain::new(robot)
+        .check(&values)
+        .map_err(|e| format!("{e} (the robot has {} joints)", robot.dof()))
 }
 
 /// Spawns a task, or ends the process saying which one could not be.

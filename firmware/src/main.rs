@@ -17,7 +17,7 @@
 //! ([`settings`], `ARMGATE_*`) are embedded at build time.
 //! On Linux the same tasks run on embassy's std executor ([`host`]): embassy-net over a TAP
 //! device instead of the Ethernet MAC, the simulated bus instead of FDCAN1, no watchdog
-//! (scripts/firmware-on-host.sh; docs/firmware.md).
+//! (tools/firmware-e2e.sh; docs/firmware.md).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(all(target_os = "none", not(feature = "sim-drives")))]
