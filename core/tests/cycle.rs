@@ -157,3 +157,33 @@ fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
         cycle.drives().manager().fault()
     );
 }
+
+#[test]
+fn a_replay_offers_each_datagram_to_the_first_tick_due_after_it_arrives() {
+    use armgate_core::cycle::replay::Replay;
+    let ps = request(Command::Pose);
+    let hex: String = ps.payload().iter().map(|b| format!("{b:02x}")).collect();
+    let mut text = String::from("# ten PS in one tick, then an undersized one\n");
+    for _ in 0..10 {
+        text.push_str(&format!("30000 {hex}\n"));
+    }
+    text.push_str("100000 5053  # `PS`, 2 bytes\n");
+    let mut cycle = simulated_arm();
+    let transcript = Replay::parse(&text)
+        .unwrap()
+        .run(&mut cycle, 8, |_| "arm".into());
+    let replies: Vec<usize> = transcript
+        .lines()
+        .map(|line| line.matches("reply:").count())
+        .collect();
+    // ranger-mk1's period is 19.44 ms: tick 2 (38.88 ms) is the first after 30 ms, tick 6
+    // (116.64 ms) the first after 100 ms.
+    assert_eq!(replies, [0, 0, 8, 2, 0, 0, 1, 0]);
+    let er01: String = b"ER01".iter().map(|b| format!("{b:02x}")).collect();
+    assert!(
+        transcript.lines().nth(6).unwrap().contains(&er01),
+        "{transcript}"
+    );
+    assert!(Replay::parse("12 zz\n").is_err());
+    assert!(Replay::parse("x 00\n").is_err());
+}

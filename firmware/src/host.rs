@@ -18,6 +18,8 @@
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
 use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::cycle::Cycle;
+use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::kinematics::{Chain, Joints};
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
@@ -84,6 +86,16 @@ pub fn main() {
             std::process::exit(1);
         }
     };
+    if let Ok(replay) = std::env::var("ARMGATE_REPLAY") {
+        let drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
+        match replay_exchange(robot, drives, &replay) {
+            Ok(()) => std::process::exit(0),
+            Err(e) => {
+                eprintln!("armgate-firmware: ARMGATE_REPLAY: {e}");
+                std::process::exit(1);
+            }
+        }
+    }
     let mut device = match TunTapDevice::new(&tap) {
         Ok(device) => device,
         Err(e) => {
@@ -115,6 +127,27 @@ pub fn main() {
         spawn(spawner, "UDP server", net::udp_server(stack));
         spawn(spawner, "status", telemetry::run(stack));
     })
+}
+
+/// `ARMGATE_REPLAY="FILE TICKS"`: the cycle as the control task builds it, on the recorded
+/// exchange, its transcript on stdout (what `armgate-sim --replay` must match).
+fn replay_exchange(
+    robot: &RobotConfig,
+    drives: drives::BoardDrives,
+    replay: &str,
+) -> Result<(), String> {
+    let Some((file, ticks)) = replay.split_once(' ') else {
+        return Err("expected `FILE TICKS`".into());
+    };
+    let ticks: u64 = ticks.trim().parse().map_err(|e| format!("{ticks}: {e}"))?;
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{file}: {e}"))?;
+    let recording = Replay::parse(&text).map_err(|e| format!("{file}: {e}"))?;
+    let mut cycle: Cycle<drives::BoardDrives, ()> = Cycle::new(robot, drives);
+    let transcript = recording.run(&mut cycle, ticks, |drives| {
+        replay::can_drives(drives.manager(), drives.bus())
+    });
+    print!("{transcript}");
+    Ok(())
 }
 
 /// The embedded robot, or the one `ARMGATE_ROBOT_FILE` names.

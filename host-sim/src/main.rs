@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 
 use armgate_core::command::{ArmModel, Network};
 use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::cycle::{Cycle, DriveSide};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
@@ -74,6 +75,10 @@ struct Args {
     /// Print the arm's pose at its home position and exit.
     #[arg(long)]
     print_home: bool,
+    /// Replay a recorded exchange (docs/architecture.md) on a virtual clock for this many ticks
+    /// instead of serving UDP, and print the transcript: what the firmware on Linux must match.
+    #[arg(long, value_names = ["FILE", "TICKS"], num_args = 2, hide = true)]
+    replay: Option<Vec<String>>,
 }
 
 /// The simulated arm's dynamics.
@@ -117,6 +122,9 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         arm_model(args.arm, config, start)
     })?;
     let describe = drives.describe();
+    if let Some(replay) = &args.replay {
+        return replay_exchange(config, drives, replay);
+    }
     let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives);
     let allow = if args.allow.is_empty() {
         vec![
@@ -214,6 +222,28 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     if let Some(summary) = cycle.drives().socketcan_summary() {
         eprintln!("armgate-sim: {summary}");
     }
+    Ok(())
+}
+
+/// `--replay FILE TICKS`: the cycle as `run` builds it, on the recorded exchange.
+fn replay_exchange(config: &RobotConfig, drives: Backend, replay: &[String]) -> Result<(), String> {
+    let [file, ticks] = replay else {
+        return Err("--replay takes FILE TICKS".into());
+    };
+    let ticks: u64 = ticks
+        .parse()
+        .map_err(|e| format!("--replay {ticks}: {e}"))?;
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{file}: {e}"))?;
+    let recording = Replay::parse(&text).map_err(|e| format!("{file}: {e}"))?;
+    let mut cycle: Cycle<Backend, ()> = Cycle::new(config, drives);
+    let transcript = recording.run(&mut cycle, ticks, |drives| match drives {
+        Backend::Can(can) => match can.bus() {
+            backend::Bus::Virtual(bus) => replay::can_drives(can.manager(), bus),
+            backend::Bus::Socket(_) => "SocketCAN".into(),
+        },
+        Backend::Direct(_) => "simulated arm".into(),
+    });
+    print!("{transcript}");
     Ok(())
 }
 

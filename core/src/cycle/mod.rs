@@ -37,6 +37,8 @@
 mod can_drives;
 mod counters;
 mod link;
+#[cfg(feature = "std")]
+pub mod replay;
 mod side;
 mod tick;
 
