@@ -109,18 +109,19 @@ impl Link<()> for Port {
 }
 
 /// What a replay transcript says about CAN drives on the virtual bus after a tick: the drive
-/// manager's state, commanded and measured joints, the frames and bits the bus carried so far,
-/// and the simulated drives' positions. The same text in every shell, so that they compare.
+/// manager's state, commanded and measured joints, the frames and bits the bus carried so far
+/// with a digest of their identifiers and data, and the simulated drives' positions. The same text in every shell, so that they compare.
 pub fn can_drives(manager: &DriveManager, bus: &VirtualBus) -> String {
     let stats = bus.stats();
     let positions: Vec<f64> = bus.drives().map(SimWhistle::joint_position).collect();
     format!(
-        "{:?} commanded {:?} measured {:?} frames {} bits {} drives {:?}",
+        "{:?} commanded {:?} measured {:?} frames {} bits {} wire {:016x} drives {:?}",
         manager.state(),
         &*manager.commanded(),
         &*manager.measured(),
         stats.frames,
         stats.bits,
+        stats.digest,
         positions
     )
 }
