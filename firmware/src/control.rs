@@ -9,7 +9,7 @@
 //! ticks, requests per tick, notices, bus-off — is the core's, described in
 //! `armgate_core::cycle` and docs/architecture.md.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
 use embassy_net::IpEndpoint;
 use embassy_time::{Duration, Instant, Timer};
@@ -30,7 +30,7 @@ const WATCHDOG_PERIODS: u32 = 4;
 const MIN_WATCHDOG_TIMEOUT: Duration = Duration::from_millis(100);
 
 /// The control period of `robot` as an embassy duration (whole microseconds, at least 1 µs).
-pub fn period(robot: &RobotConfig) -> Duration {
+pub fn period(robot: &ValidRobot) -> Duration {
     // The period is validated finite and positive; the cast saturates for absurd values.
     let micros = libm::round(robot.control_period * 1e6) as u64;
     Duration::from_micros(micros.max(1))
@@ -86,7 +86,7 @@ impl Interval {
 
 /// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
 #[embassy_executor::task]
-pub async fn run(robot: &'static RobotConfig, drives: BoardDrives, mut watchdog: Watchdog) {
+pub async fn run(robot: &'static ValidRobot, drives: BoardDrives, mut watchdog: Watchdog) {
     let period = period(robot);
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",

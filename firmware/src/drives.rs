@@ -11,13 +11,13 @@
 //! brought up to the tick's time by the cycle). The manager is started at power-up, as the
 //! seed auto-started its robot component.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::cycle::CanDrives;
 use armgate_core::drives::DriveSettings;
 
 #[cfg(all(target_os = "none", not(feature = "sim-drives")))]
 pub mod bus {
-    use armgate_core::config::RobotConfig;
+    use armgate_core::config::ValidRobot;
     use embassy_stm32::Peri;
     use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
 
@@ -25,7 +25,7 @@ pub mod bus {
 
     /// FDCAN1 at the robot's bit rate.
     pub fn open(
-        robot: &RobotConfig,
+        robot: &ValidRobot,
         peri: Peri<'static, FDCAN1>,
         rx: Peri<'static, PD0>,
         tx: Peri<'static, PD1>,
@@ -38,7 +38,7 @@ pub mod bus {
 
 #[cfg(any(feature = "sim-drives", not(target_os = "none")))]
 pub mod bus {
-    use armgate_core::config::RobotConfig;
+    use armgate_core::config::ValidRobot;
     use armgate_core::drives::VirtualBus;
     #[cfg(target_os = "none")]
     use embassy_stm32::{
@@ -55,7 +55,7 @@ pub mod bus {
     /// Simulated Whistles at their home positions; FDCAN1 and its pins stay unused.
     #[cfg(target_os = "none")]
     pub fn open(
-        robot: &RobotConfig,
+        robot: &ValidRobot,
         _peri: Peri<'static, FDCAN1>,
         _rx: Peri<'static, PD0>,
         _tx: Peri<'static, PD1>,
@@ -65,7 +65,7 @@ pub mod bus {
 
     /// Simulated Whistles with their encoders at joint positions `q` (the host has no FDCAN;
     /// tests start the arm where they need it).
-    pub fn simulated_at(robot: &RobotConfig, q: &[f64]) -> Bus {
+    pub fn simulated_at(robot: &ValidRobot, q: &[f64]) -> Bus {
         VIRTUAL_BUS.init_with(|| VirtualBus::for_robot_at(robot, q))
     }
 
@@ -79,7 +79,7 @@ pub type BoardDrives = CanDrives<bus::Bus>;
 /// Starts the drive manager on `bus` ([`bus::open`] on the board). Panics (before the watchdog
 /// runs) if the drive manager refuses the robot, which `build.rs` already rules out for the
 /// embedded robot.
-pub fn new(robot: &RobotConfig, bus: bus::Bus) -> BoardDrives {
+pub fn new(robot: &ValidRobot, bus: bus::Bus) -> BoardDrives {
     match CanDrives::started(robot, &DriveSettings::default(), bus) {
         Ok(drives) => drives,
         Err(e) => defmt::panic!("drives: {}", defmt::Display2Format(&e)),

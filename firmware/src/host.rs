@@ -17,7 +17,7 @@
 //! when ticks start, not what they compute. defmt's log goes nowhere here (a defmt log needs
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::Cycle;
 use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::kinematics::{Chain, Joints};
@@ -45,7 +45,7 @@ impl Watchdog {
 }
 
 static EXECUTOR: StaticCell<Executor> = StaticCell::new();
-static ROBOT: StaticCell<RobotConfig> = StaticCell::new();
+static ROBOT: StaticCell<ValidRobot> = StaticCell::new();
 
 /// defmt needs a global logger; on the host its frames are dropped.
 #[defmt::global_logger]
@@ -72,7 +72,7 @@ fn defmt_panic() -> ! {
 /// Starts the tasks; never returns.
 pub fn main() {
     let tap = std::env::var("ARMGATE_TAP").unwrap_or_else(|_| "tap0".to_owned());
-    let robot: &'static RobotConfig = match load_robot() {
+    let robot: &'static ValidRobot = match load_robot() {
         Ok(robot) => ROBOT.init(robot),
         Err(e) => {
             eprintln!("armgate-firmware: {e}");
@@ -132,7 +132,7 @@ pub fn main() {
 /// `ARMGATE_REPLAY="FILE TICKS"`: the cycle as the control task builds it, on the recorded
 /// exchange, its transcript on stdout (what `armgate-sim --replay` must match).
 fn replay_exchange(
-    robot: &RobotConfig,
+    robot: &ValidRobot,
     drives: drives::BoardDrives,
     replay: &str,
 ) -> Result<(), String> {
@@ -151,7 +151,7 @@ fn replay_exchange(
 }
 
 /// The embedded robot, or the one `ARMGATE_ROBOT_FILE` names.
-fn load_robot() -> Result<RobotConfig, String> {
+fn load_robot() -> Result<ValidRobot, String> {
     match std::env::var_os("ARMGATE_ROBOT_FILE") {
         Some(path) => load_file(&path).map_err(|e| format!("{}: {e}", path.display())),
         None => {
@@ -161,7 +161,7 @@ fn load_robot() -> Result<RobotConfig, String> {
 }
 
 /// The joints `ARMGATE_START` gives (default: the drives' home positions).
-fn start_joints(robot: &RobotConfig) -> Result<Joints, String> {
+fn start_joints(robot: &ValidRobot) -> Result<Joints, String> {
     let home = robot.home();
     let Ok(text) = std::env::var("ARMGATE_START") else {
         return Ok(home);

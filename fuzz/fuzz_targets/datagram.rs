@@ -32,7 +32,7 @@
 use std::collections::VecDeque;
 use std::sync::OnceLock;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_protocol::can::CanFrame;
@@ -107,7 +107,7 @@ impl Link<()> for Client {
 fn start() -> &'static FuzzCycle {
     static START: OnceLock<FuzzCycle> = OnceLock::new();
     START.get_or_init(|| {
-        let config: RobotConfig = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
+        let config: ValidRobot = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
         let bus = FuzzBus {
             bus: VirtualBus::for_robot(&config),
             injected: VecDeque::new(),

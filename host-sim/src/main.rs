@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use armgate_core::command::{ArmModel, Network};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::cycle::{Cycle, DriveSide};
 use armgate_core::kinematics::{Chain, Joints};
@@ -112,7 +112,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
+fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let n = config.dof();
     let home = config.home();
     let start = Chain::new(config)
@@ -226,7 +226,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
 }
 
 /// `--replay FILE TICKS`: the cycle as `run` builds it, on the recorded exchange.
-fn replay_exchange(config: &RobotConfig, drives: Backend, replay: &[String]) -> Result<(), String> {
+fn replay_exchange(config: &ValidRobot, drives: Backend, replay: &[String]) -> Result<(), String> {
     let [file, ticks] = replay else {
         return Err("--replay takes FILE TICKS".into());
     };
@@ -266,7 +266,7 @@ fn bind(addr: SocketAddr) -> std::io::Result<UdpSocket> {
     Ok(socket.into())
 }
 
-fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
+fn arm_model(kind: ArmKind, config: &ValidRobot, start: Joints) -> ArmModel {
     match kind {
         ArmKind::Ideal => ArmModel::Ideal(IdealArm::new(start)),
         ArmKind::RateLimited => ArmModel::RateLimited(RateLimitedArm::new(
@@ -302,7 +302,7 @@ fn status_line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logge
 }
 
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
-fn print_home(config: &RobotConfig) {
+fn print_home(config: &ValidRobot) {
     let chain = Chain::new(config);
     let home = config.home();
     let (Ok(tool), Ok(w)) = (chain.forward(&home), chain.manipulability(&home)) else {

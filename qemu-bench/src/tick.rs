@@ -18,7 +18,7 @@
 
 use core::f64::consts::FRAC_PI_2;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
@@ -107,7 +107,7 @@ impl Session {
     /// The drives at `start` (or at their home positions), started (the firmware starts the
     /// drive manager at power-up) and streaming, after one more tick (so that the arm's pose is
     /// measured).
-    fn new(config: &RobotConfig, start: Option<&[f64]>) -> Result<Self, &'static str> {
+    fn new(config: &ValidRobot, start: Option<&[f64]>) -> Result<Self, &'static str> {
         let q = start_joints(config, start)?;
         let bus = BenchBus(VirtualBus::for_robot_at(config, &q));
         let drives = CanDrives::started(config, &DriveSettings::default(), bus)
@@ -211,7 +211,7 @@ impl Session {
 }
 
 /// The joints at `start`, or at the drives' home positions.
-fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &'static str> {
+fn start_joints(config: &ValidRobot, start: Option<&[f64]>) -> Result<Joints, &'static str> {
     match start {
         Some(start) => Joints::from_slice(start)
             .filter(|q| q.len() == config.dof())
@@ -263,7 +263,7 @@ pub fn run(counter: &Counter) -> bool {
             .iter()
             .find(|(n, _)| *n == name)
             .and_then(|(_, bytes)| postcard::from_bytes::<RobotConfig>(bytes).ok())
-            .filter(|c| c.validate().is_ok());
+            .and_then(|c| c.validate().ok());
         let Some(config) = config else {
             hprintln!("{}: not embedded, or does not decode", name);
             ok = false;
@@ -279,7 +279,7 @@ pub fn run(counter: &Counter) -> bool {
 
 fn measure_robot(
     name: &str,
-    config: &RobotConfig,
+    config: &ValidRobot,
     start: &[f64],
     counter: &Counter,
 ) -> Result<(), &'static str> {
@@ -369,7 +369,7 @@ fn measure_robot(
 }
 
 /// The whole tick, one window per tick, during the move and then holding; the requests.
-fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'static str> {
+fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'static str> {
     let mut session = Session::new(config, start)?;
     let requests = session.start_move()?;
     let mut moving = Timing::default();
@@ -402,7 +402,7 @@ fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'s
 }
 
 /// The stack the requests and ticks of the move need, below this function's frame.
-fn stack_high_water(config: &RobotConfig, start: &[f64]) -> Result<usize, &'static str> {
+fn stack_high_water(config: &ValidRobot, start: &[f64]) -> Result<usize, &'static str> {
     // The session (with the ≈ 24 KB virtual bus, a static in the firmware) and the drives'
     // start before the painting: only the control work is measured.
     let mut session = Session::new(config, Some(start))?;

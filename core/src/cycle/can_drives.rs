@@ -4,7 +4,7 @@ use armgate_protocol::client::Text;
 
 use super::DriveSide;
 use crate::command::Drives;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::drives::{CanBus, DriveManager, DriveSettings, SetupError};
 use crate::kinematics::Joints;
 
@@ -19,7 +19,7 @@ impl<B: CanBus> CanDrives<B> {
     /// The drives of `config` on `bus`, started (the seed auto-started its robot component;
     /// the start runs over the next ticks).
     pub fn started(
-        config: &RobotConfig,
+        config: &ValidRobot,
         settings: &DriveSettings,
         bus: B,
     ) -> Result<Self, SetupError> {
@@ -30,11 +30,7 @@ impl<B: CanBus> CanDrives<B> {
     }
 
     /// The same, idle until the client's `ON` (or [`manager_mut`](Self::manager_mut)`.start()`).
-    pub fn idle(
-        config: &RobotConfig,
-        settings: &DriveSettings,
-        bus: B,
-    ) -> Result<Self, SetupError> {
+    pub fn idle(config: &ValidRobot, settings: &DriveSettings, bus: B) -> Result<Self, SetupError> {
         Ok(Self {
             manager: DriveManager::new(config, settings)?,
             bus,
@@ -49,6 +45,11 @@ impl<B: CanBus> CanDrives<B> {
     /// The drive manager, mutable (test rigs and benches).
     pub fn manager_mut(&mut self) -> &mut DriveManager {
         &mut self.manager
+    }
+
+    /// The drive manager and the bus at once, mutable (tests that step the manager by hand).
+    pub fn split_mut(&mut self) -> (&mut DriveManager, &mut B) {
+        (&mut self.manager, &mut self.bus)
     }
 
     /// The bus.

@@ -3,10 +3,11 @@
 use super::counters::bump;
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
 use armgate_protocol::client::MESSAGE_LEN;
+use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
 /// each reply, so this leaves room for several clients and for bursts, and bounds the tick.
@@ -37,7 +38,7 @@ pub struct Cycle<D, P> {
     drives: D,
     /// The control period (s), and in whole microseconds for the shell's clock.
     period: f64,
-    period_us: u64,
+    period_us: NonZeroU64,
     /// Index of the next tick on the schedule.
     next: u64,
     /// Time of the previous tick (s).
@@ -48,14 +49,14 @@ pub struct Cycle<D, P> {
 
 impl<D: DriveSide, P: Copy> Cycle<D, P> {
     /// A cycle for a validated robot description with `drives`, before its first tick.
-    pub fn new(config: &RobotConfig, drives: D) -> Self {
+    pub fn new(config: &ValidRobot, drives: D) -> Self {
         // The period is validated finite and positive; the cast saturates for absurd values.
         let period_us = libm::round(config.control_period * 1e6) as u64;
         Self {
             handler: CommandHandler::new(config),
             drives,
             period: config.control_period,
-            period_us: period_us.max(1),
+            period_us: NonZeroU64::new(period_us).unwrap_or(NonZeroU64::MIN),
             next: 0,
             previous: None,
             last_sender: None,
@@ -65,12 +66,12 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
 
     /// When the next tick is due on the shell's clock (µs since the cycle started).
     pub fn next_due_us(&self) -> u64 {
-        self.next.saturating_mul(self.period_us)
+        self.next.saturating_mul(self.period_us.get())
     }
 
     /// The control period in whole microseconds (at least 1).
     pub fn period_us(&self) -> u64 {
-        self.period_us
+        self.period_us.get()
     }
 
     /// Runs the next tick on the schedule; `now_us` is the shell's clock (µs since the cycle

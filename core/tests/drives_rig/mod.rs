@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use std::collections::VecDeque;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{
     BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
@@ -16,7 +16,7 @@ use armgate_core::motion::{Controller, StepOutput};
 use armgate_protocol::can::CanFrame;
 
 /// Loads `robots/<name>.toml`.
-pub fn robot(name: &str) -> RobotConfig {
+pub fn robot(name: &str) -> ValidRobot {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../robots/{name}.toml"));
     load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
@@ -24,7 +24,7 @@ pub fn robot(name: &str) -> RobotConfig {
 /// The core's control cycle with the drive manager on a virtual bus of simulated Whistles,
 /// ticked on time: the firmware's `sim-drives` build without the network.
 pub struct Rig {
-    pub config: RobotConfig,
+    pub config: ValidRobot,
     pub cycle: Cycle<CanDrives<Recorder>, ()>,
     pub period: f64,
     /// Time of the last tick (s; read only).
@@ -36,14 +36,14 @@ pub struct Rig {
 }
 
 impl Rig {
-    pub fn new(config: RobotConfig) -> Self {
+    pub fn new(config: ValidRobot) -> Self {
         Self::with(config, DriveSettings::default(), |_| {})
     }
 
     /// A rig whose bus is adjusted by `tweak` before anything runs; the drives idle until
     /// [`start`](Self::start).
     pub fn with(
-        config: RobotConfig,
+        config: ValidRobot,
         settings: DriveSettings,
         tweak: impl FnOnce(&mut VirtualBus),
     ) -> Self {
@@ -53,7 +53,7 @@ impl Rig {
     }
 
     /// A rig on `bus`, the drives idle.
-    pub fn on(config: RobotConfig, settings: &DriveSettings, bus: VirtualBus) -> Self {
+    pub fn on(config: ValidRobot, settings: &DriveSettings, bus: VirtualBus) -> Self {
         let drives = CanDrives::idle(
             &config,
             settings,
@@ -75,7 +75,7 @@ impl Rig {
 
     /// A rig on `bus` with the drives started and streaming, and the flow control settled
     /// (20 more ticks).
-    pub fn started(config: &RobotConfig, settings: &DriveSettings, bus: VirtualBus) -> Self {
+    pub fn started(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus) -> Self {
         let mut rig = Self::on(config.clone(), settings, bus);
         rig.start();
         rig.ticks(20);
