@@ -17,6 +17,7 @@ use armgate_core::motion::{
     Refusal, Shape, StepOutput, Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
+use armgate_protocol::client::{JointBound, PathPoint};
 
 /// A controller and an ideal arm, stepped together at the robot's period.
 struct Rig {
@@ -230,7 +231,12 @@ fn refusals_say_why() {
     beyond[4] = 0.0; // joint 5 range is [0.785, 3.926]
     assert_eq!(
         rig.ctrl.move_joints(&beyond, 0.0),
-        Err(Refusal::OutsideJointLimits)
+        Err(Refusal::OutsideJointLimits(JointBound::new(
+            4,
+            false,
+            0.785,
+            PathPoint::Goal
+        )))
     );
     assert_eq!(rig.ctrl.start_joint_sequence(), Err(Refusal::NoGoal));
     let mut target = MK1_READY;
@@ -405,7 +411,16 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
     assert!(in_box(chain.forward(&q_mid).unwrap().pos));
 
-    // Cartesian: the move is aborted at the wall; no set-point inside ever reaches the IK.
+    // Cartesian: the move is refused up front, with where the line enters the box.
+    let mut rig = Rig::new(&config, &q_a);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    match rig.ctrl.move_cartesian(pb, 0.0) {
+        Err(Refusal::CrossesBox(percent)) => assert!((20..50).contains(&percent), "{percent}"),
+        other => panic!("{other:?}"),
+    }
+    // Without the check, the move is aborted at the wall; no set-point inside ever reaches
+    // the IK.
+    config.ik.check_lines = false;
     let mut rig = Rig::new(&config, &q_a);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
@@ -430,7 +445,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     assert_eq!(
         rig.ctrl.move_cartesian(pa, 0.0),
-        Err(Refusal::OutsideWorkspace)
+        Err(Refusal::ArmOutsideWorkspace)
     );
     rig.ctrl.set_mode(Mode::Joint).unwrap();
     rig.ctrl.move_joints(&q_a, 0.0).unwrap();

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used)]
 
 use armgate_protocol::client::{
-    Command, Error, MESSAGE_LEN, Message, Notice, Reply, Request, Severity, Text,
+    Command, Error, MESSAGE_LEN, Message, Notice, Rejection, Reply, Request, Severity, Text,
 };
 
 /// `GT` to x = 0.5, y = 0.2, z = 0.1 m, roll = pitch = yaw = 0, T = 5 s (spec §2.9).
@@ -152,7 +152,10 @@ fn unknown_commands_are_named() {
 
 #[test]
 fn texts_are_zero_filled_over_stale_bytes() {
-    for notice in [Notice::Rejected(Command::Begin), Notice::JointLimit] {
+    for notice in [
+        Notice::Rejected(Command::Begin, Rejection::Busy),
+        Notice::JointLimit,
+    ] {
         let mut buffer = [0xFF; MESSAGE_LEN];
         let mut message = Message::new_checked(&mut buffer[..]).unwrap();
         notice.text().emit(&mut message);

@@ -159,6 +159,10 @@ pub struct IkConfig {
     /// Divergence guard margin (m + rad): a solution worse than the current pose by more than
     /// this is rejected (the seed: 1e-4).
     pub divergence_margin: f64,
+    /// Check the straight line of every Cartesian move (BG, each VE leg) before starting it,
+    /// and refuse a move the arm cannot follow (`ER25`/`ER26` with where along the line).
+    /// False: the seed's behaviour, the arm moves until the IK fails, then holds (`WN22`).
+    pub check_lines: bool,
 }
 
 impl Default for IkConfig {
@@ -168,6 +172,7 @@ impl Default for IkConfig {
             tracking_iterations: 20,
             global_iterations: 2000,
             divergence_margin: 1e-4,
+            check_lines: true,
         }
     }
 }

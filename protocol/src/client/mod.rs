@@ -22,21 +22,27 @@
 //! * [`Message`]: the length-checked view of a datagram, with field accessors.
 //! * [`Command`]: the request command pairs.
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
-//! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts.
+//! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
+//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
+//! * [`StatusReport`] and [`RobotName`]: the replies to the status request `SQ`.
 //! * [`Error`]: why a datagram is not a request (or reply).
 
 mod command;
 mod error;
 mod message;
 mod notice;
+mod reason;
 mod reply;
 mod request;
+mod status;
 mod text;
 
 pub use command::Command;
 pub use error::Error;
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use notice::Notice;
+pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
+pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
 pub use text::{Severity, TEXT_CAPACITY, Text};

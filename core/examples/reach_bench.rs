@@ -1,0 +1,149 @@
+//! What the up-front check of a Cartesian move's straight line costs, and what it says.
+//!
+//! `cargo run --release -p armgate-core --example reach_bench [-- MOVES]`
+//!
+//! For every shipped robot: random Cartesian goals 2–60 cm (and up to 1 rad) from a random
+//! reachable configuration (fixed seed), each checked by `Controller::move_cartesian` in
+//! Cartesian mode (the check plus planning; the move is then stopped). Prints the time per
+//! check (mean, 99th percentile, worst) with and without the check, and how many moves it
+//! refused. Then the README's example move on ranger-mk1: its verdict, and the run of the move
+//! without the check.
+#![allow(missing_docs, clippy::indexing_slicing, clippy::unwrap_used)]
+
+use std::time::Instant;
+
+use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE};
+use armgate_core::rng::SplitMix64;
+
+const SEED: u64 = 0x5EED_0016;
+
+fn robot(name: &str) -> RobotConfig {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    load_file(&root.join("robots").join(format!("{name}.toml"))).unwrap()
+}
+
+/// A controller in Cartesian mode holding at `q`.
+fn holding_at(config: &RobotConfig, q: &Joints) -> Controller {
+    let mut ctrl = Controller::new(config);
+    ctrl.step(0.0, q).unwrap();
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    ctrl
+}
+
+fn row(robot: &str, check: bool, micros: &mut [f64], refused: usize) {
+    micros.sort_by(f64::total_cmp);
+    let n = micros.len();
+    let mean = micros.iter().sum::<f64>() / n as f64;
+    let p99 = micros[((n as f64 * 0.99) as usize).min(n - 1)];
+    println!(
+        "| {robot:<18} | {:<5} | {n:>5} | {mean:>9.1} | {p99:>9.1} | {:>9.1} | {:>7.1} |",
+        if check { "on" } else { "off" },
+        micros[n - 1],
+        100.0 * refused as f64 / n as f64
+    );
+}
+
+fn bench(name: &str, moves: usize) {
+    let base = robot(name);
+    let chain = Chain::new(&base);
+    for check in [true, false] {
+        let mut config = base.clone();
+        config.ik.check_lines = check;
+        let mut rng = SplitMix64::new(SEED);
+        let (mut micros, mut refused) = (Vec::new(), 0);
+        while micros.len() < moves {
+            let mut q = chain.mid_range();
+            for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
+                *v = lo + (hi - lo) * rng.next_f64();
+            }
+            let start = chain.forward(&q).unwrap();
+            let mut ctrl = holding_at(&config, &q);
+            if ctrl.move_cartesian(start, 0.0).is_err() {
+                continue; // the start itself is outside the workspace
+            }
+            ctrl.stop();
+            let dir = Vec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+            let length = 0.02 + 0.58 * rng.next_f64();
+            let turn = Vec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+            let goal = Frame::new(
+                Rotation::from_rotation_vector(turn * rng.next_f64()) * start.rot,
+                start.pos + dir * (length / dir.norm()),
+            );
+            let t = Instant::now();
+            let result = ctrl.move_cartesian(goal, 0.0);
+            micros.push(t.elapsed().as_secs_f64() * 1e6);
+            refused += usize::from(result.is_err());
+        }
+        row(name, check, &mut micros, refused);
+    }
+}
+
+/// The README's `armgate move 0.5 0.2 0.1 0 0 0 --time 5` from ranger-mk1's home.
+fn readme_move() {
+    let config = robot("ranger-mk1");
+    let home = config.home();
+    let goal = Frame::new(Rotation::from_rpy(0.0, 0.0, 0.0), Vec3::new(0.5, 0.2, 0.1));
+    let mut ctrl = holding_at(&config, &home);
+    let t = Instant::now();
+    let verdict = ctrl.move_cartesian(goal, 5.0);
+    let micros = t.elapsed().as_secs_f64() * 1e6;
+    println!("README move on ranger-mk1 from home: {verdict:?} ({micros:.0} µs)");
+    if let Err(refusal) = verdict {
+        println!("  refused: {refusal}");
+    }
+
+    // Without the check: how far the move gets and where it stops.
+    let mut config = config.clone();
+    config.ik.check_lines = false;
+    let mut ctrl = holding_at(&config, &home);
+    let duration = ctrl.move_cartesian(goal, 5.0).unwrap();
+    let mut q = home;
+    let mut now = 0.0;
+    for _ in 0..(duration / config.control_period) as usize + 100 {
+        now += config.control_period;
+        let out = ctrl.step(now, &q).unwrap();
+        if let Some(c) = out.command {
+            q = c;
+        }
+        if !ctrl.is_moving() {
+            break;
+        }
+    }
+    let chain = Chain::new(&config);
+    let reached = chain.forward(&q).unwrap().pos;
+    let start = chain.forward(&home).unwrap().pos;
+    let fraction = (reached - start).norm() / (goal.pos - start).norm();
+    println!(
+        "  without the check: planned {duration:.1} s, stopped after {now:.2} s at {:.0}% of the line, joints {:.3?}",
+        100.0 * fraction,
+        &q[..]
+    );
+    let (lo, hi) = (chain.min(), chain.max());
+    for (j, v) in q.iter().enumerate() {
+        if (v - lo[j]).abs() < 1e-6 || (v - hi[j]).abs() < 1e-6 {
+            println!(
+                "  joint {} is at its limit [{}, {}]",
+                j + 1,
+                lo[j],
+                hi[j]
+            );
+        }
+    }
+}
+
+fn main() {
+    let moves = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(2000);
+    println!("at most {SOLVES_PER_LINE} tracking solves per line");
+    println!("| robot              | check | moves | mean (µs) | p99 (µs)  | max (µs)  | refused % |");
+    println!("|--------------------|-------|-------|-----------|-----------|-----------|---------|");
+    for name in ["ranger-mk1", "ranger-mk2", "ur5", "puma560", "iiwa14"] {
+        bench(name, moves);
+    }
+    readme_move();
+}

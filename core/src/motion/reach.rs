@@ -1,0 +1,128 @@
+//! Checking a Cartesian move before it starts: can the arm follow the straight line from the
+//! commanded pose to the goal without leaving the workspace, crossing a joint limit or losing
+//! its IK solution? A move that cannot is refused up front with the reason and where along the
+//! line it fails, instead of being accepted and then aborted halfway with `WN22`.
+//!
+//! The line is the generator's geometric path (position along the segment, orientation about
+//! the fixed axis of the relative rotation, both at the same fraction of the way). Exclusion
+//! boxes are checked exactly (segment against box). Reachability is checked at
+//! [`LINE_SAMPLES`] points by tracking IK from one point to the next, seeded with the
+//! commanded joints, as the ticks will; where a step fails the step is halved (down to 1/8),
+//! so that only a real limit refuses the move. The work is bounded: at most
+//! [`SOLVES_PER_LINE`] tracking solves per line.
+//!
+//! What remains unchecked (between samples, joint rates near singularities) is still caught
+//! by the tick: the motion slows down or stops with `WN22`.
+
+use armgate_protocol::client::{JointBound, PathPoint};
+
+use super::Refusal;
+use super::workspace::Workspace;
+use crate::config::IkConfig;
+use crate::kinematics::{Chain, Joints};
+use crate::math::{Frame, Rotation};
+
+/// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
+pub const LINE_SAMPLES: usize = 16;
+/// Tracking solves per line at most (each failed step is retried at half the step).
+pub const SOLVES_PER_LINE: usize = 4 * LINE_SAMPLES;
+/// The smallest step tried, as a fraction of the way.
+const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
+/// A joint this close to a limit in a non-converged solution is taken as what stopped it.
+const PINNED: f64 = 1e-9;
+
+/// The checker: the arm's kinematics, IK settings, workspace and the pose error below which a
+/// set-point counts as reached (the tick's).
+pub(super) struct Reach<'a> {
+    pub chain: &'a Chain,
+    pub ik: &'a IkConfig,
+    pub workspace: &'a Workspace,
+    pub tolerance: f64,
+}
+
+impl Reach<'_> {
+    /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
+    /// `goal`; returns the joints at the goal. (If the solve budget runs out the move gets the
+    /// benefit of the doubt, and the joints reached so far are returned.)
+    pub fn line(&self, start: &Frame, goal: &Frame, seed: &Joints) -> Result<Joints, Refusal> {
+        if let Some(entry) = self.workspace.first_box_crossing(start.pos, goal.pos) {
+            return match PathPoint::at(entry) {
+                PathPoint::Along(percent) => Err(Refusal::CrossesBox(percent)),
+                PathPoint::Goal => Err(Refusal::OutsideWorkspace),
+            };
+        }
+        let turn = start.diff(goal).angular;
+        let point = |s: f64| {
+            if s >= 1.0 {
+                return *goal;
+            }
+            let rot = Rotation::from_rotation_vector(turn * s) * start.rot;
+            Frame::new(rot, start.pos + (goal.pos - start.pos) * s)
+        };
+        let full_step = 1.0 / LINE_SAMPLES as f64;
+        let (mut done, mut step, mut q) = (0.0, full_step, *seed);
+        for _ in 0..SOLVES_PER_LINE {
+            if done >= 1.0 {
+                break;
+            }
+            let next = (done + step).min(1.0);
+            match self.solve(&point(next), &q, PathPoint::at(next)) {
+                Ok(solved) => {
+                    (done, q) = (next, solved);
+                    step = (step * 2.0).min(full_step);
+                }
+                Err(refusal) if step <= MIN_STEP => return Err(refusal),
+                Err(_) => step *= 0.5,
+            }
+        }
+        Ok(q)
+    }
+
+    /// Tracking IK to `target` from `seed`, within the limits and the tolerance; else why not.
+    fn solve(&self, target: &Frame, seed: &Joints, at: PathPoint) -> Result<Joints, Refusal> {
+        let unreachable = Refusal::Unreachable(at);
+        let result = self
+            .chain
+            .solve_tracking(target, seed, self.ik)
+            .map_err(|_| unreachable)?;
+        let s = result.solution();
+        if s.position_error <= self.tolerance && s.orientation_error <= self.tolerance {
+            return Ok(s.q);
+        }
+        // The bounded descent stops joints exactly at their limits: one that sits there is
+        // what kept the solution from the target.
+        Err(pinned_joint(self.chain, &s.q, at).map_or(unreachable, Refusal::OutsideJointLimits))
+    }
+}
+
+/// The first joint of `q` at (within [`PINNED`]) or beyond one of its limits.
+fn pinned_joint(chain: &Chain, q: &[f64], at: PathPoint) -> Option<JointBound> {
+    first_bound(chain, q, at, |past| past >= -PINNED)
+}
+
+/// The first joint of `q` beyond one of its limits, if any (for joint goals).
+pub(super) fn joint_beyond_limit(chain: &Chain, q: &[f64]) -> Option<JointBound> {
+    first_bound(chain, q, PathPoint::Goal, |past| past > 0.0)
+}
+
+/// The first joint and limit for which `hit(how far q is past the limit)` holds (negative:
+/// inside).
+fn first_bound(
+    chain: &Chain,
+    q: &[f64],
+    at: PathPoint,
+    hit: impl Fn(f64) -> bool,
+) -> Option<JointBound> {
+    q.iter()
+        .zip(chain.min().iter().zip(chain.max()))
+        .enumerate()
+        .find_map(|(joint, (&v, (&lo, &hi)))| {
+            if hit(lo - v) {
+                Some(JointBound::new(joint, false, lo, at))
+            } else if hit(v - hi) {
+                Some(JointBound::new(joint, true, hi, at))
+            } else {
+                None
+            }
+        })
+}
