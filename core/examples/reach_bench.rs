@@ -65,9 +65,17 @@ fn bench(name: &str, moves: usize) {
                 continue; // the start itself is outside the workspace
             }
             ctrl.stop();
-            let dir = Vec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+            let dir = Vec3::new(
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            );
             let length = 0.02 + 0.58 * rng.next_f64();
-            let turn = Vec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() - 0.5);
+            let turn = Vec3::new(
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+                rng.next_f64() - 0.5,
+            );
             let goal = Frame::new(
                 Rotation::from_rotation_vector(turn * rng.next_f64()) * start.rot,
                 start.pos + dir * (length / dir.norm()),
@@ -124,12 +132,7 @@ fn readme_move() {
     let (lo, hi) = (chain.min(), chain.max());
     for (j, v) in q.iter().enumerate() {
         if (v - lo[j]).abs() < 1e-6 || (v - hi[j]).abs() < 1e-6 {
-            println!(
-                "  joint {} is at its limit [{}, {}]",
-                j + 1,
-                lo[j],
-                hi[j]
-            );
+            println!("  joint {} is at its limit [{}, {}]", j + 1, lo[j], hi[j]);
         }
     }
 }
@@ -140,8 +143,12 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(2000);
     println!("at most {SOLVES_PER_LINE} tracking solves per line");
-    println!("| robot              | check | moves | mean (µs) | p99 (µs)  | max (µs)  | refused % |");
-    println!("|--------------------|-------|-------|-----------|-----------|-----------|---------|");
+    println!(
+        "| robot              | check | moves | mean (µs) | p99 (µs)  | max (µs)  | refused % |"
+    );
+    println!(
+        "|--------------------|-------|-------|-----------|-----------|-----------|---------|"
+    );
     for name in ["ranger-mk1", "ranger-mk2", "ur5", "puma560", "iiwa14"] {
         bench(name, moves);
     }

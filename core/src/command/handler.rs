@@ -159,6 +159,7 @@ impl CommandHandler {
         match cmd {
             Command::Begin => {
                 let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller
                     .move_cartesian(goal, duration)
@@ -203,6 +204,7 @@ impl CommandHandler {
                 let goal = self
                     .joint_goal
                     .ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller.move_joints(&goal, 0.0).map_err(refused)?;
                 Ok(null)
@@ -212,6 +214,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::JointExecute => {
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller.start_joint_sequence().map_err(refused)?;
                 Ok(null)
@@ -282,9 +285,7 @@ impl CommandHandler {
                     return Ok(values_reply(cmd, joints, BANK_2));
                 }
                 // Only with the arm off: the measured angles jump (spec §6.8).
-                if self.controller.mode() != Mode::Off {
-                    return Err(refused(Refusal::WrongMode));
-                }
+                self.in_mode(cmd)?;
                 let q = self.complete(BankKey::Recalibrate, joints, cmd)?;
                 // Declaring the arm outside its range would make the measured pose illegal
                 // and the limiter ease commands back from there (the seed did not check).
@@ -307,6 +308,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::ViaExecute => {
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller
                     .start_cartesian_sequence()
@@ -326,6 +328,15 @@ impl CommandHandler {
                 let [r, p, w] = pose.rot.to_rpy();
                 Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
             }
+        }
+    }
+
+    /// A wrong mode is reported before the drives' state: it outlasts it.
+    fn in_mode(&self, cmd: Command) -> Result<(), Notice> {
+        if self.controller.mode() == required_mode(cmd) {
+            Ok(())
+        } else {
+            Err(refusal_notice(cmd, Refusal::WrongMode))
         }
     }
 
@@ -366,7 +377,7 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
     }
 }
 
-/// The mode a request needs (asked only of requests that are refused in the wrong mode).
+/// The mode a motion request needs (RC: off).
 fn required_mode(cmd: Command) -> Mode {
     match cmd {
         Command::Begin | Command::ViaExecute => Mode::Cartesian,
