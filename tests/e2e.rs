@@ -624,7 +624,10 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     }
     assert!(settling, "RC never caught the drives settling");
     std::thread::sleep(Duration::from_millis(50));
-    assert_eq!(sim.request("RC", here, 0), Answer::Reply(*b"CR", [0.0; 7], 0));
+    assert_eq!(
+        sim.request("RC", here, 0),
+        Answer::Reply(*b"CR", [0.0; 7], 0)
+    );
 
     // After OF: stopping, then off; ON while stopping says so.
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
