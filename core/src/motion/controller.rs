@@ -3,7 +3,7 @@
 use super::cartesian_generator::CartesianGenerator;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
-use super::reach::{Reach, joint_beyond_limit};
+use super::reach::{CHECK_ITERATIONS, Reach, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
@@ -332,7 +332,7 @@ impl Controller {
     /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
-        if let Some(reach) = self.reach() {
+        if let Some(mut reach) = self.reach() {
             let (start, seed) = self.cartesian_start();
             reach.line(&start, &goal, &seed)?;
         }
@@ -356,6 +356,7 @@ impl Controller {
             ik: &self.ik,
             workspace: &self.workspace,
             tolerance: REACH_TOLERANCE,
+            iterations_left: CHECK_ITERATIONS,
         })
     }
 
@@ -427,7 +428,7 @@ impl Controller {
     /// Every leg's straight line is checked first, as for a move.
     pub fn start_cartesian_sequence(&mut self) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
-        if let Some(reach) = self.reach() {
+        if let Some(mut reach) = self.reach() {
             let (mut from, mut q) = self.cartesian_start();
             for via in self.cartesian_sequence.ready() {
                 q = reach.line(&from, &via.point, &q)?;

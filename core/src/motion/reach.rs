@@ -8,8 +8,14 @@
 //! boxes are checked exactly (segment against box). Reachability is checked at
 //! [`LINE_SAMPLES`] points by tracking IK from one point to the next, seeded with the
 //! commanded joints, as the ticks will; where a step fails the step is halved (down to 1/8),
-//! so that only a real limit refuses the move. The work is bounded: at most
-//! [`SOLVES_PER_LINE`] tracking solves per line.
+//! so that only a real limit refuses the move.
+//!
+//! The check runs while a request is answered, inside a tick on the firmware, so its work is
+//! bounded: at most [`SOLVES_PER_LINE`] tracking solves per line and [`CHECK_ITERATIONS`] IK
+//! iterations per request (a VE checks all its legs within it). A check that runs out gives
+//! the move the benefit of the doubt. Measured (`examples/reach_bench.rs`, shipped arms,
+//! random moves up to 60 cm): 48 iterations for a typical accepted line, at most 257 for a
+//! refused one.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -26,25 +32,29 @@ use crate::math::{Frame, Rotation};
 pub const LINE_SAMPLES: usize = 16;
 /// Tracking solves per line at most (each failed step is retried at half the step).
 pub const SOLVES_PER_LINE: usize = 4 * LINE_SAMPLES;
+/// IK iterations per checked request at most (about 5,000 instructions each on the
+/// Cortex-M7: ≈ 2 million, a few milliseconds of the 19.44 ms period of ranger-mk1).
+pub const CHECK_ITERATIONS: u32 = 384;
 /// The smallest step tried, as a fraction of the way.
 const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
 /// A joint this close to a limit in a non-converged solution is taken as what stopped it.
 const PINNED: f64 = 1e-9;
 
-/// The checker: the arm's kinematics, IK settings, workspace and the pose error below which a
-/// set-point counts as reached (the tick's).
+/// The checker of one request: the arm's kinematics, IK settings, workspace, the pose error
+/// below which a set-point counts as reached (the tick's), and the IK iterations left.
 pub(super) struct Reach<'a> {
     pub chain: &'a Chain,
     pub ik: &'a IkConfig,
     pub workspace: &'a Workspace,
     pub tolerance: f64,
+    pub iterations_left: u32,
 }
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
-    /// `goal`; returns the joints at the goal. (If the solve budget runs out the move gets the
+    /// `goal`; returns the joints at the goal. (If the budget runs out the move gets the
     /// benefit of the doubt, and the joints reached so far are returned.)
-    pub fn line(&self, start: &Frame, goal: &Frame, seed: &Joints) -> Result<Joints, Refusal> {
+    pub fn line(&mut self, start: &Frame, goal: &Frame, seed: &Joints) -> Result<Joints, Refusal> {
         if let Some(entry) = self.workspace.first_box_crossing(start.pos, goal.pos) {
             return match PathPoint::at(entry) {
                 PathPoint::Along(percent) => Err(Refusal::CrossesBox(percent)),
@@ -62,7 +72,7 @@ impl Reach<'_> {
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step, mut q) = (0.0, full_step, *seed);
         for _ in 0..SOLVES_PER_LINE {
-            if done >= 1.0 {
+            if done >= 1.0 || self.iterations_left == 0 {
                 break;
             }
             let next = (done + step).min(1.0);
@@ -79,13 +89,14 @@ impl Reach<'_> {
     }
 
     /// Tracking IK to `target` from `seed`, within the limits and the tolerance; else why not.
-    fn solve(&self, target: &Frame, seed: &Joints, at: PathPoint) -> Result<Joints, Refusal> {
+    fn solve(&mut self, target: &Frame, seed: &Joints, at: PathPoint) -> Result<Joints, Refusal> {
         let unreachable = Refusal::Unreachable(at);
         let result = self
             .chain
             .solve_tracking(target, seed, self.ik)
             .map_err(|_| unreachable)?;
         let s = result.solution();
+        self.iterations_left = self.iterations_left.saturating_sub(s.iterations);
         if s.position_error <= self.tolerance && s.orientation_error <= self.tolerance {
             return Ok(s.q);
         }
