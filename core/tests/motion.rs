@@ -625,3 +625,141 @@ fn rate_limited_arm_follows_a_stream_without_restarting_from_rest() {
         max_q - target[0]
     );
 }
+
+#[test]
+fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
+    // `armgate move 0.5 0.2 0.1 0 0 0 --time 5` from ranger-mk1's home: the straight line
+    // needs joint 3 beyond its 1.600 maximum 3 % of the way (the seed's arm stopped there
+    // after 3.9 s with WN22).
+    let config = common::robot("ranger-mk1");
+    let goal = Frame::new(Rotation::from_rpy(0.0, 0.0, 0.0), Vec3::new(0.5, 0.2, 0.1));
+    let mut rig = Rig::new(&config, &MK1_HOME);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
+    assert_eq!(
+        rig.ctrl.move_cartesian(goal, 5.0),
+        Err(Refusal::OutsideJointLimits(j3_max))
+    );
+    assert!(!rig.ctrl.is_moving());
+    // Without the check the move starts, and stalls with joint 3 on that limit.
+    let mut config = config;
+    config.ik.check_lines = false;
+    let mut rig = Rig::new(&config, &MK1_HOME);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    rig.ctrl.move_cartesian(goal, 5.0).unwrap();
+    let outs = rig.settle(5_000);
+    assert!(outs.iter().any(|o| o.events.ik_divergence));
+    assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
+    assert!((rig.pose().pos - goal.pos).norm() > 0.5);
+}
+
+#[test]
+fn lines_beyond_reach_or_through_boxes_are_refused_with_where() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let here = rig.pose();
+    // 1.8 m out, inside the bounds: lost part of the way there.
+    let far = Frame::new(here.rot, Vec3::new(1.8, 0.0, 0.6));
+    match rig.ctrl.move_cartesian(far, 0.0) {
+        Err(Refusal::Unreachable(PathPoint::Along(p))) => assert!((1..100).contains(&p)),
+        Err(Refusal::OutsideJointLimits(JointBound { at, .. })) => {
+            assert!(matches!(at, PathPoint::Along(_)), "{at:?}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Straight through the column around the base to the other side (midpoint at z = 0.15).
+    let across = Frame::new(
+        here.rot,
+        Vec3::new(-here.pos.x, -here.pos.y, 0.3 - here.pos.z),
+    );
+    assert!(matches!(
+        rig.ctrl.move_cartesian(across, 0.0),
+        Err(Refusal::CrossesBox(_))
+    ));
+    // A reachable goal 5 cm up is accepted and reached.
+    let up = Frame::new(here.rot, here.pos + Vec3::new(0.0, 0.0, 0.05));
+    rig.ctrl.move_cartesian(up, 0.0).unwrap();
+    let outs = rig.settle(5_000);
+    assert!(outs.iter().all(|o| !o.events.ik_divergence));
+    assert!((rig.pose().pos - up.pos).norm() < 1e-6);
+}
+
+#[test]
+fn a_sequence_is_refused_if_any_leg_cannot_be_followed() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let here = rig.pose();
+    let at = |dx, dz| Frame::new(here.rot, here.pos + Vec3::new(dx, 0.0, dz));
+    rig.ctrl.set_cartesian_via(0, at(0.05, 0.0), 0.0).unwrap();
+    rig.ctrl.set_cartesian_via(1, at(0.05, 0.05), 0.0).unwrap();
+    // The third leg goes 1.8 m out.
+    let far = Frame::new(here.rot, Vec3::new(1.8, 0.0, 0.6));
+    rig.ctrl.set_cartesian_via(2, far, 0.0).unwrap();
+    let refusal = rig.ctrl.start_cartesian_sequence().unwrap_err();
+    assert!(
+        matches!(
+            refusal,
+            Refusal::Unreachable(_) | Refusal::OutsideJointLimits(_)
+        ),
+        "{refusal:?}"
+    );
+    assert!(!rig.ctrl.is_moving());
+    // Fixed, it runs.
+    rig.ctrl.set_cartesian_via(2, at(0.0, 0.05), 0.0).unwrap();
+    rig.ctrl.start_cartesian_sequence().unwrap();
+    let outs = rig.settle(20_000);
+    assert!(outs.iter().any(|o| o.events.sequence_finished));
+}
+
+#[test]
+fn accepted_random_lines_complete_and_refused_ones_do_not() {
+    // Fixed seed: random goals up to 40 cm from random configurations of ranger-mk1. The
+    // check's verdict must match a run without it (reach_bench prints the rate on every arm).
+    let config = mk1_fast();
+    let chain = Chain::new(&config);
+    let mut unchecked = config.clone();
+    unchecked.ik.check_lines = false;
+    let mut rng = SplitMix64::new(16);
+    let (mut accepted, mut refused) = (0, 0);
+    while accepted + refused < 40 {
+        let q: Vec<f64> = chain
+            .min()
+            .iter()
+            .zip(chain.max())
+            .map(|(lo, hi)| rng.uniform(*lo, *hi))
+            .collect();
+        let start = chain.forward(&q).unwrap();
+        let dir = Vec3::new(
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+        );
+        let goal = Frame::new(
+            start.rot,
+            start.pos + dir * (rng.uniform(0.02, 0.4) / dir.norm()),
+        );
+        let mut rig = Rig::new(&config, &q);
+        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+        let verdict = rig.ctrl.move_cartesian(goal, 0.0);
+        if matches!(
+            verdict,
+            Err(Refusal::OutsideWorkspace | Refusal::ArmOutsideWorkspace | Refusal::CrossesBox(_))
+        ) {
+            continue;
+        }
+        let mut run = Rig::new(&unchecked, &q);
+        run.ctrl.set_mode(Mode::Cartesian).unwrap();
+        run.ctrl.move_cartesian(goal, 0.0).unwrap();
+        run.settle(20_000);
+        let reached = (run.pose().pos - goal.pos).norm() < 1e-6;
+        assert_eq!(verdict.is_ok(), reached, "{q:?} → {goal:?}: {verdict:?}");
+        if reached {
+            accepted += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert!(accepted >= 5 && refused >= 5, "{accepted} / {refused}");
+}
