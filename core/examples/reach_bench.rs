@@ -23,7 +23,7 @@ const SEED: u64 = 0x5EED_0016;
 
 fn robot(name: &str) -> RobotConfig {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    load_file(&root.join("robots").join(format!("{name}.toml"))).unwrap()
+    load_file(root.join("robots").join(format!("{name}.toml"))).unwrap()
 }
 
 /// A controller in Cartesian mode holding at `q`.
