@@ -585,6 +585,18 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     assert_eq!(s[2], 0.0);
     assert_eq!(sim.text("ON", [0.0; 7], 0), "ER11 Arm already on");
 
+    // The README's former examples from home: the move's straight line needs joint 3 beyond
+    // its maximum 3 % of the way, refused before the arm moves; the joint goal is below
+    // joint 5's minimum.
+    sim.ok("GT", [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 5.0], 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER26 Cmd BG j3 > 1.600 at 3%");
+    assert_eq!(
+        sim.text("jG", [0.0, 0.5, 1.0, 0.0, 0.3, 0.0, 0.0], 0),
+        "ER26 Cmd jG j5 < 0.785"
+    );
+    assert_eq!(status(&sim)[4], 0.0, "nothing moves");
+    sim.ok("GT", gt, 0);
+
     // The robot's name, at index 1; any other index is refused.
     sim.socket.send(&datagram("SQ", [0.0; 7], 1)).unwrap();
     let mut buf = [0u8; 64];
