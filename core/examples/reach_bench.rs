@@ -16,7 +16,7 @@ use std::time::Instant;
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
-use armgate_core::motion::{CHECK_ITERATIONS, Controller, Mode, SOLVES_PER_LINE};
+use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE, check_iterations};
 use armgate_core::rng::SplitMix64;
 
 const SEED: u64 = 0x5EED_0016;
@@ -193,7 +193,9 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(2000);
     println!(
-        "at most {SOLVES_PER_LINE} tracking solves per line, {CHECK_ITERATIONS} IK iterations per request"
+        "at most {SOLVES_PER_LINE} tracking solves per line; IK iterations per request: {} at 19.44 ms, {} at 5.04 ms",
+        check_iterations(0.01944),
+        check_iterations(0.00504)
     );
     println!(
         "| robot              | check | moves | mean (µs) | p99 (µs)  | max (µs)  | refused % |"

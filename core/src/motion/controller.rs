@@ -3,7 +3,7 @@
 use super::cartesian_generator::CartesianGenerator;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
-use super::reach::{CHECK_ITERATIONS, Reach, joint_beyond_limit};
+use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
@@ -356,7 +356,7 @@ impl Controller {
             ik: &self.ik,
             workspace: &self.workspace,
             tolerance: REACH_TOLERANCE,
-            iterations_left: CHECK_ITERATIONS,
+            iterations_left: check_iterations(self.period),
         })
     }
 

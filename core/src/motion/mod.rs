@@ -27,7 +27,7 @@ pub use controller::{Controller, Mode, StepOutput};
 pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
-pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE};
+pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iterations};
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;

@@ -11,11 +11,12 @@
 //! so that only a real limit refuses the move.
 //!
 //! The check runs while a request is answered, inside a tick on the firmware, so its work is
-//! bounded: at most [`SOLVES_PER_LINE`] tracking solves per line and [`CHECK_ITERATIONS`] IK
-//! iterations per request (a VE checks all its legs within it). A check that runs out gives
-//! the move the benefit of the doubt. Measured (`examples/reach_bench.rs`, shipped arms,
-//! random moves up to 60 cm): 48 iterations for a typical accepted line, at most 257 for a
-//! refused one.
+//! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
+//! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
+//! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
+//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.34–0.68
+//! million instructions per check on average, at most 1.78 million (ranger-mk2, 19.44 ms
+//! period) and 1.70 million (iiwa14, 5.04 ms): within one period at 480 MHz.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -32,11 +33,27 @@ use crate::math::{Frame, Rotation};
 pub const LINE_SAMPLES: usize = 16;
 /// Tracking solves per line at most (each failed step is retried at half the step).
 pub const SOLVES_PER_LINE: usize = 4 * LINE_SAMPLES;
-/// IK iterations per checked request at most (about 5,000 instructions each on the
-/// Cortex-M7: ≈ 2 million, a few milliseconds of the 19.44 ms period of ranger-mk1).
+/// IK iterations per checked request at most (reached at periods from 15.4 ms up).
 pub const CHECK_ITERATIONS: u32 = 384;
+/// IK iterations per second of control period (each up to about 10,000 Cortex-M7
+/// instructions with its share of FK and bookkeeping: a quarter to a half of the period at
+/// 480 MHz).
+const ITERATIONS_PER_SECOND: f64 = 25_000.0;
+/// The fewest iterations a check gets, whatever the period (a short line needs about 48).
+const MIN_CHECK_ITERATIONS: u32 = 64;
+
+/// The IK iteration budget of one checked request for a control period (s): proportional,
+/// within [`MIN_CHECK_ITERATIONS`]..=[`CHECK_ITERATIONS`] (126 at 5.04 ms).
+pub fn check_iterations(period: f64) -> u32 {
+    // Saturating cast: NaN gives 0, then the minimum.
+    let proportional = (period * ITERATIONS_PER_SECOND) as u32;
+    // Cannot panic: the bounds are constants in order.
+    proportional.clamp(MIN_CHECK_ITERATIONS, CHECK_ITERATIONS)
+}
 /// The smallest step tried, as a fraction of the way.
 const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
+/// Iterations of one tracking solve in the check at most.
+const CHECK_SOLVE_ITERATIONS: u16 = 10;
 /// A joint this close to a limit in a non-converged solution is taken as what stopped it.
 const PINNED: f64 = 1e-9;
 
@@ -88,12 +105,21 @@ impl Reach<'_> {
         Ok(q)
     }
 
+    /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
+    /// sixteenth of the line converges in a few, and a failing one costs less.
+    fn solve_config(&self) -> IkConfig {
+        IkConfig {
+            tracking_iterations: self.ik.tracking_iterations.min(CHECK_SOLVE_ITERATIONS),
+            ..*self.ik
+        }
+    }
+
     /// Tracking IK to `target` from `seed`, within the limits and the tolerance; else why not.
     fn solve(&mut self, target: &Frame, seed: &Joints, at: PathPoint) -> Result<Joints, Refusal> {
         let unreachable = Refusal::Unreachable(at);
         let result = self
             .chain
-            .solve_tracking(target, seed, self.ik)
+            .solve_tracking(target, seed, &self.solve_config())
             .map_err(|_| unreachable)?;
         let s = result.solution();
         self.iterations_left = self.iterations_left.saturating_sub(s.iterations);
