@@ -25,10 +25,11 @@ const NO_TEMPERATURE: f32 = -1000.0;
 /// Semantics are the ones the seed intended (spec §2.8): BG/jB/VE/jE are refused with `ER20`
 /// when there is no goal, in the wrong mode, while something moves or while the drives are not
 /// operational. Every refusal names its reason after `ERnn Cmd XX` (docs/protocol.md), and
-/// Cartesian moves are refused up front when the arm cannot follow the line to the goal. Its defects are fixed (spec §9): VC answers `CV` and RC `CR`; NaN/Inf values and
-/// zero quaternions are refused (`ER23`) instead of poisoning state; via indices ≥ 20 are
-/// refused (`ER24`); jB needs a prior jG; VP no longer overwrites the BG goal; negative
-/// durations are clamped to 0.
+/// Cartesian moves are refused up front when the arm cannot follow the line to the goal. Its
+/// defects are fixed (spec §9): VC answers `CV` and RC `CR`; NaN/Inf values and zero
+/// quaternions are refused (`ER23`) instead of poisoning state; via indices ≥ 20 are refused
+/// (`ER24`), and so are bank-2 `jP`/`TM` on six joints; jB needs a prior jG; VP no longer
+/// overwrites the BG goal; negative durations are clamped to 0.
 #[derive(Clone, Debug)]
 pub struct CommandHandler {
     controller: Controller,
