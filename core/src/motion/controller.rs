@@ -328,7 +328,7 @@ impl Controller {
 
     /// Moves the tool to `goal` (base frame) in at least `min_duration` seconds (negative: as
     /// fast as the limits allow). Cartesian mode only.
-    /// The straight line to the goal is checked first ([`Reach`]): a move the arm cannot
+    /// The straight line to the goal is checked first (docs/protocol.md): a move the arm cannot
     /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;

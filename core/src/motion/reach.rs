@@ -43,7 +43,7 @@ const ITERATIONS_PER_SECOND: f64 = 25_000.0;
 const MIN_CHECK_ITERATIONS: u32 = 64;
 
 /// The IK iteration budget of one checked request for a control period (s): proportional,
-/// within [`MIN_CHECK_ITERATIONS`]..=[`CHECK_ITERATIONS`] (126 at 5.04 ms).
+/// within 64..=[`CHECK_ITERATIONS`] (126 at 5.04 ms).
 pub fn check_iterations(period: f64) -> u32 {
     // Saturating cast: NaN gives 0, then the minimum.
     let proportional = (period * ITERATIONS_PER_SECOND) as u32;
