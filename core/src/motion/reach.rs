@@ -163,3 +163,17 @@ fn first_bound(
             }
         })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_budget_follows_the_control_period_within_its_bounds() {
+        assert_eq!(check_iterations(0.01944), CHECK_ITERATIONS);
+        assert_eq!(check_iterations(0.00504), 126);
+        assert_eq!(check_iterations(0.0001), MIN_CHECK_ITERATIONS);
+        assert_eq!(check_iterations(f64::NAN), MIN_CHECK_ITERATIONS);
+        assert_eq!(check_iterations(f64::INFINITY), CHECK_ITERATIONS);
+    }
+}
