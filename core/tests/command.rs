@@ -362,7 +362,7 @@ fn random_datagrams_never_panic_and_ps_still_answers() {
     let mut rng = SplitMix64::new(99);
     let commands = [
         "BG", "CM", "GL", "GT", "jB", "jC", "jE", "jG", "jP", "jR", "jV", "ON", "OF", "PS", "RC",
-        "ST", "TM", "VC", "VE", "VP",
+        "SQ", "ST", "TM", "VC", "VE", "VP",
     ];
     for k in 0..20_000 {
         let len = (rng.next_u64() % 40) as usize;
@@ -381,4 +381,21 @@ fn random_datagrams_never_panic_and_ps_still_answers() {
     rig.tick();
     assert_eq!(&rig.request("PS", [0.0; 7], 0)[..2], b"SP");
     assert!(rig.drives.temperatures().len() == 6);
+}
+
+#[test]
+fn bank_2_reads_are_refused_on_a_six_joint_arm() {
+    // docs/protocol.md: "On a six-joint arm, bit 7 is refused."
+    let mut rig = mk1();
+    for (cmd, text) in [
+        ("jP", b"ER24 Cmd jP bad index"),
+        ("TM", b"ER24 Cmd TM bad index"),
+    ] {
+        let mut expected = [0u8; 31];
+        expected[..21].copy_from_slice(text);
+        assert_eq!(rig.request(cmd, [0.0; 7], 0x80), expected);
+    }
+    // Bank 1 still answers, index 0.
+    let pj = rig.request("jP", [0.0; 7], 0);
+    assert_eq!((&pj[..2], pj[30]), (&b"Pj"[..], 0));
 }
