@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE, check_iterations};
@@ -21,13 +21,13 @@ use armgate_core::rng::SplitMix64;
 
 const SEED: u64 = 0x5EED_0016;
 
-fn robot(name: &str) -> RobotConfig {
+fn robot(name: &str) -> ValidRobot {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     load_file(root.join("robots").join(format!("{name}.toml"))).unwrap()
 }
 
 /// A controller in Cartesian mode holding at `q`.
-fn holding_at(config: &RobotConfig, q: &Joints) -> Controller {
+fn holding_at(config: &ValidRobot, q: &Joints) -> Controller {
     let mut ctrl = Controller::new(config);
     ctrl.step(0.0, q).unwrap();
     ctrl.set_mode(Mode::Cartesian).unwrap();
@@ -51,8 +51,7 @@ fn bench(name: &str, moves: usize) {
     let base = robot(name);
     let chain = Chain::new(&base);
     for check in [true, false] {
-        let mut config = base.clone();
-        config.ik.check_lines = check;
+        let config = base.clone().edit(|c| c.ik.check_lines = check).unwrap();
         let mut rng = SplitMix64::new(SEED);
         let (mut micros, mut refused) = (Vec::new(), 0);
         let mut agreement = Vec::new();
@@ -114,9 +113,8 @@ const AGREEMENT_MOVES: usize = 100;
 
 /// Whether the move from `q` to `goal` completes without the check (ideal arm): it reaches
 /// the goal within 1 mm and 1 mrad.
-fn completes(config: &RobotConfig, q: &Joints, goal: Frame) -> bool {
-    let mut config = config.clone();
-    config.ik.check_lines = false;
+fn completes(config: &ValidRobot, q: &Joints, goal: Frame) -> bool {
+    let config = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
     let chain = Chain::new(&config);
     let mut ctrl = holding_at(&config, q);
     let Ok(duration) = ctrl.move_cartesian(goal, 0.0) else {
@@ -154,8 +152,7 @@ fn readme_move() {
     }
 
     // Without the check: how far the move gets and where it stops.
-    let mut config = config.clone();
-    config.ik.check_lines = false;
+    let config = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
     let mut ctrl = holding_at(&config, &home);
     let duration = ctrl.move_cartesian(goal, 5.0).unwrap();
     let mut q = home;

@@ -9,7 +9,7 @@
 
 mod common;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{
@@ -28,7 +28,7 @@ struct Rig {
 }
 
 impl Rig {
-    fn new(config: &RobotConfig, q0: &[f64]) -> Self {
+    fn new(config: &ValidRobot, q0: &[f64]) -> Self {
         let mut rig = Self {
             ctrl: Controller::new(config),
             arm: IdealArm::new(Joints::from_slice(q0).unwrap()),
@@ -71,14 +71,16 @@ const MK1_HOME: [f64; 6] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0];
 /// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
-fn mk1_fast() -> RobotConfig {
-    let mut config = common::robot("ranger-mk1");
-    config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
-    config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
-    for j in config.joints.iter_mut() {
-        j.max_rate = 2.0;
-    }
-    config
+fn mk1_fast() -> ValidRobot {
+    common::robot("ranger-mk1")
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            for j in config.joints.iter_mut() {
+                j.max_rate = 2.0;
+            }
+        })
+        .unwrap()
 }
 
 #[test]
@@ -385,7 +387,7 @@ fn joint_limiter_clamps_range_and_rate_and_reports() {
 fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     // Two poses on an arc about the base axis; a box around the chord's midpoint blocks the
     // straight Cartesian path and contains the arc's midpoint.
-    let mut config = mk1_fast();
+    let config = mk1_fast();
     let chain = Chain::new(&config);
     let q_a = MK1_READY;
     let mut q_b = MK1_READY;
@@ -395,18 +397,19 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let (pa, pb) = (chain.forward(&q_a).unwrap(), chain.forward(&q_b).unwrap());
     let m = (pa.pos + pb.pos) * 0.5;
     let half = 0.05;
-    config.workspace.boxes.clear();
-    config
-        .workspace
-        .boxes
-        .push([
-            m.x - half,
-            m.x + half,
-            m.y - half,
-            m.y + half,
-            m.z - half,
-            m.z + half,
-        ])
+    let box_around_m = [
+        m.x - half,
+        m.x + half,
+        m.y - half,
+        m.y + half,
+        m.z - half,
+        m.z + half,
+    ];
+    let config = config
+        .edit(|config| {
+            config.workspace.boxes.clear();
+            config.workspace.boxes.push(box_around_m).unwrap();
+        })
         .unwrap();
     let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
     assert!(in_box(chain.forward(&q_mid).unwrap().pos));
@@ -420,7 +423,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     }
     // Without the check, the move is aborted at the wall; no set-point inside ever reaches
     // the IK.
-    config.ik.check_lines = false;
+    let config = config.edit(|c| c.ik.check_lines = false).unwrap();
     let mut rig = Rig::new(&config, &q_a);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
@@ -642,8 +645,7 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     );
     assert!(!rig.ctrl.is_moving());
     // Without the check the move starts, and stalls with joint 3 on that limit.
-    let mut config = config;
-    config.ik.check_lines = false;
+    let config = config.edit(|c| c.ik.check_lines = false).unwrap();
     let mut rig = Rig::new(&config, &MK1_HOME);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     rig.ctrl.move_cartesian(goal, 5.0).unwrap();
@@ -719,8 +721,7 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
     // check's verdict must match a run without it (reach_bench prints the rate on every arm).
     let config = mk1_fast();
     let chain = Chain::new(&config);
-    let mut unchecked = config.clone();
-    unchecked.ik.check_lines = false;
+    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
     let mut rng = SplitMix64::new(16);
     let (mut accepted, mut refused) = (0, 0);
     while accepted + refused < 40 {

@@ -26,23 +26,30 @@
 //!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
 //! * [`StatusReport`] and [`RobotName`]: the replies to the status request `SQ`.
 //! * [`Error`]: why a datagram is not a request (or reply).
+//! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
+//!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
 
+pub mod banks;
 mod command;
 mod error;
 mod message;
+mod mode;
 mod notice;
 mod reason;
 mod reply;
 mod request;
 mod status;
+mod temperature;
 mod text;
 
 pub use command::Command;
 pub use error::Error;
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
+pub use mode::Mode;
 pub use notice::Notice;
 pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
+pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};
