@@ -364,7 +364,7 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
             Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,
             _ => Rejection::NoGoal,
         }),
-        Refusal::WrongMode => rejected(Rejection::NeedsMode(required_mode(cmd) as u8)),
+        Refusal::WrongMode => rejected(Rejection::NeedsMode(required_mode(cmd))),
         Refusal::Busy => rejected(Rejection::Busy),
         Refusal::NotReady => rejected(Rejection::NoMeasurement),
     }

@@ -30,7 +30,7 @@ impl Status {
     /// The wire form (`QS`, index 0).
     pub fn report(&self) -> StatusReport {
         StatusReport {
-            mode: self.mode as u8,
+            mode: self.mode,
             drives: self.drives,
             fault: self.fault.unwrap_or(0),
             joints: u8::try_from(self.joints).unwrap_or(u8::MAX),

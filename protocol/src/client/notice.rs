@@ -178,7 +178,10 @@ mod tests {
                 "ER20 Cmd RC drives settling",
             ),
             (
-                Notice::Rejected(Command::Recalibrate, Rejection::NeedsMode(0)),
+                Notice::Rejected(
+                    Command::Recalibrate,
+                    Rejection::NeedsMode(crate::client::Mode::Off),
+                ),
                 "ER20 Cmd RC needs mode 0",
             ),
             (

@@ -5,6 +5,8 @@
 
 use core::fmt;
 
+use super::Mode;
+
 /// The drives' state, as a status reply (`QS` f1) and refusals report it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -53,7 +55,7 @@ pub enum Rejection {
     /// just switched off); retry a few ticks later.
     DrivesSettling,
     /// `needs mode N`: the request needs control mode N (0 off, 1 joint, 2 Cartesian).
-    NeedsMode(u8),
+    NeedsMode(Mode),
     /// `no goal`: `BG` without a `GL`/`GT`, `jB` without a `jG`.
     NoGoal,
     /// `no via point 0`: `VE`/`jE` with via slot 0 empty.
@@ -73,7 +75,7 @@ impl fmt::Display for Rejection {
             Self::Drives(DriveStatus::Faulted) => f.write_str("drive fault"),
             Self::DriveFault(code) => write!(f, "drive fault {code:02}"),
             Self::DrivesSettling => f.write_str("drives settling"),
-            Self::NeedsMode(mode) => write!(f, "needs mode {mode}"),
+            Self::NeedsMode(mode) => write!(f, "needs mode {}", mode.value()),
             Self::NoGoal => f.write_str("no goal"),
             Self::NoViaPoint => f.write_str("no via point 0"),
             Self::NoMeasurement => f.write_str("no measurement"),

@@ -5,7 +5,7 @@
 //! `ER24 Cmd SQ bad index`.
 
 use super::message::datagram;
-use super::{Command, DriveStatus, MESSAGE_LEN, Message, Reply, VALUES};
+use super::{Command, DriveStatus, MESSAGE_LEN, Message, Mode, Reply, VALUES};
 
 /// `SQ` index of the state report.
 pub const STATUS_INDEX: u8 = 0;
@@ -51,7 +51,7 @@ impl Motion {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct StatusReport {
     /// f0: control mode, as `CM` takes it (0 off, 1 joint, 2 Cartesian).
-    pub mode: u8,
+    pub mode: Mode,
     /// f1: the drives' state.
     pub drives: DriveStatus,
     /// f2: the current drive fault's code (30..=39, the `NN` of its `ERNN` text); 0 for none.
@@ -71,7 +71,7 @@ impl StatusReport {
     pub fn to_reply(&self) -> Reply {
         // u32 → f32 rounds above 2²⁴ refusals; the count is for people, not for arithmetic.
         let values = [
-            f32::from(self.mode),
+            f32::from(self.mode.value()),
             f32::from(self.drives as u8),
             f32::from(self.fault),
             f32::from(self.joints),
@@ -94,7 +94,9 @@ impl StatusReport {
         }
         let [mode, drives, fault, joints, motion, refused, uptime] = reply.values;
         Some(Self {
-            mode: small(mode).filter(|m| *m <= 2)?,
+            mode: Mode::ALL
+                .into_iter()
+                .find(|m| Some(m.value()) == small(mode))?,
             drives: DriveStatus::from_code(small(drives)?)?,
             fault: small(fault)?,
             joints: small(joints)?,
@@ -182,7 +184,7 @@ mod tests {
 
     fn report() -> StatusReport {
         StatusReport {
-            mode: 2,
+            mode: Mode::Cartesian,
             drives: DriveStatus::Faulted,
             fault: 33,
             joints: 6,
