@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE, check_iterations};
 use armgate_core::rng::SplitMix64;
 
@@ -66,20 +66,20 @@ fn bench(name: &str, moves: usize) {
                 continue; // the start itself is outside the workspace
             }
             ctrl.stop();
-            let dir = Vec3::new(
+            let dir = Vector3::new(
                 rng.next_f64() - 0.5,
                 rng.next_f64() - 0.5,
                 rng.next_f64() - 0.5,
             );
             let length = 0.02 + 0.58 * rng.next_f64();
-            let turn = Vec3::new(
+            let turn = Vector3::new(
                 rng.next_f64() - 0.5,
                 rng.next_f64() - 0.5,
                 rng.next_f64() - 0.5,
             );
-            let goal = Frame::new(
-                Rotation::from_rotation_vector(turn * rng.next_f64()) * start.rot,
-                start.pos + dir * (length / dir.norm()),
+            let goal = Frame::from_parts(
+                (start.translation.vector + dir * (length / dir.norm())).into(),
+                Rotation3::new(turn * rng.next_f64()) * start.rotation,
             );
             let mut fastest = f64::INFINITY;
             let mut result = Ok(0.0);
@@ -133,15 +133,18 @@ fn completes(config: &ValidRobot, q: &Joints, goal: Frame) -> bool {
         }
     }
     let reached = chain.forward(&q).unwrap();
-    let error = reached.diff(&goal);
-    error.linear.norm() < 1e-3 && error.angular.norm() < 1e-3
+    let error = math::diff(&reached, &goal);
+    error.fixed_rows::<3>(0).norm() < 1e-3 && error.fixed_rows::<3>(3).norm() < 1e-3
 }
 
 /// The README's `armgate move 0.5 0.2 0.1 0 0 0 --time 5` from ranger-mk1's home.
 fn readme_move() {
     let config = robot("ranger-mk1");
     let home = config.home();
-    let goal = Frame::new(Rotation::from_rpy(0.0, 0.0, 0.0), Vec3::new(0.5, 0.2, 0.1));
+    let goal = Frame::from_parts(
+        Vector3::new(0.5, 0.2, 0.1).into(),
+        Rotation3::from_euler_angles(0.0, 0.0, 0.0),
+    );
     let mut ctrl = holding_at(&config, &home);
     let t = Instant::now();
     let verdict = ctrl.move_cartesian(goal, 5.0);
@@ -168,9 +171,9 @@ fn readme_move() {
         }
     }
     let chain = Chain::new(&config);
-    let reached = chain.forward(&q).unwrap().pos;
-    let start = chain.forward(&home).unwrap().pos;
-    let fraction = (reached - start).norm() / (goal.pos - start).norm();
+    let reached = chain.forward(&q).unwrap().translation.vector;
+    let start = chain.forward(&home).unwrap().translation.vector;
+    let fraction = (reached - start).norm() / (goal.translation.vector - start).norm();
     println!(
         "  without the check: planned {duration:.1} s, stopped after {now:.2} s at {:.0}% of the line, joints {:.3?}",
         100.0 * fraction,

@@ -11,7 +11,7 @@ mod common;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
     CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode, RateLimitedArm,
     Refusal, Shape, StepOutput, Trapezoid,
@@ -147,29 +147,38 @@ fn trapezoid_never_exceeds_its_limits_on_random_moves() {
 fn cartesian_path_is_straight_and_orientation_turns_monotonically_about_a_fixed_axis() {
     let v = [0.1, 0.05, 0.2, 0.3, 0.2, 0.1];
     let a = [0.2, 0.1, 0.3, 0.5, 0.4, 0.3];
-    let start = Frame::new(Rotation::from_rpy(0.1, -0.2, 0.3), Vec3::new(0.4, 0.1, 0.5));
-    let goal = Frame::new(Rotation::from_rpy(-0.5, 0.4, 1.2), Vec3::new(0.1, 0.3, 0.2));
+    let start = Frame::from_parts(
+        Vector3::new(0.4, 0.1, 0.5).into(),
+        Rotation3::from_euler_angles(0.1, -0.2, 0.3),
+    );
+    let goal = Frame::from_parts(
+        Vector3::new(0.1, 0.3, 0.2).into(),
+        Rotation3::from_euler_angles(-0.5, 0.4, 1.2),
+    );
     let mut generator = CartesianGenerator::new(start, v, a);
     let duration = generator.move_to(goal, 0.0).unwrap();
-    let axis = start.diff(&goal).angular;
+    let axis = math::diff(&start, &goal).fixed_rows::<3>(3).into_owned();
     let axis = axis * (1.0 / axis.norm());
-    let line = goal.pos - start.pos;
+    let line = goal.translation.vector - start.translation.vector;
     let mut prev_angle = f64::INFINITY;
-    let mut prev_pos = start.pos;
+    let mut prev_pos = start.translation.vector;
     let dt = 0.002;
     for k in 1..=((duration / dt) as usize + 2) {
         let (sp, finished) = generator.advance_to(k as f64 * dt);
         // On the line through start and goal.
-        let off = (sp.pos - start.pos).cross(line).norm() / line.norm();
+        let off = (sp.translation.vector - start.translation.vector)
+            .cross(&line)
+            .norm()
+            / line.norm();
         assert!(off < 1e-12, "{off} m off the line");
-        for (i, d) in (sp.pos - prev_pos).to_array().iter().enumerate() {
+        for (i, d) in (sp.translation.vector - prev_pos).iter().enumerate() {
             assert!((d / dt).abs() <= v[i] * (1.0 + 1e-9), "axis {i} too fast");
         }
-        prev_pos = sp.pos;
+        prev_pos = sp.translation.vector;
         // Turning about the fixed axis, monotonically towards the goal.
-        let turned = start.diff(&sp).angular;
-        assert!(turned.cross(axis).norm() < 1e-9, "axis drifted");
-        let angle = sp.diff(&goal).angular.norm();
+        let turned = math::diff(&start, &sp).fixed_rows::<3>(3).into_owned();
+        assert!(turned.cross(&axis).norm() < 1e-9, "axis drifted");
+        let angle = math::diff(&sp, &goal).fixed_rows::<3>(3).norm();
         assert!(angle <= prev_angle + 1e-12, "orientation went back");
         prev_angle = angle;
         if finished {
@@ -186,9 +195,9 @@ fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
     let mut rig = Rig::new(&config, &MK1_READY);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let start = rig.pose();
-    let goal = Frame::new(
-        Rotation::rot_z(0.2) * start.rot,
-        start.pos + Vec3::new(0.05, -0.08, 0.1),
+    let goal = Frame::from_parts(
+        (start.translation.vector + Vector3::new(0.05, -0.08, 0.1)).into(),
+        Rotation3::from_axis_angle(&Vector3::z_axis(), 0.2) * start.rotation,
     );
     rig.ctrl.move_cartesian(goal, 2.0).unwrap();
     let outs = rig.settle(2000);
@@ -197,9 +206,9 @@ fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
         outs.iter()
             .all(|o| !o.events.ik_divergence && !o.events.rate_limit)
     );
-    let reached = rig.pose().diff(&goal);
+    let reached = math::diff(&rig.pose(), &goal);
     assert!(
-        reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9,
+        reached.fixed_rows::<3>(0).norm() < 1e-9 && reached.fixed_rows::<3>(3).norm() < 1e-9,
         "{reached:?}"
     );
 }
@@ -252,13 +261,13 @@ fn refusals_say_why() {
     rig.ctrl.stop();
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let mut bad = pose;
-    bad.pos.x = f64::NAN;
+    bad.translation.vector.x = f64::NAN;
     assert_eq!(
         rig.ctrl.move_cartesian(bad, 0.0),
         Err(Refusal::InvalidNumber)
     );
     // Inside the column around the base.
-    let inside = Frame::new(pose.rot, Vec3::new(0.0, 0.0, 0.2));
+    let inside = Frame::from_parts(Vector3::new(0.0, 0.0, 0.2).into(), pose.rotation);
     assert_eq!(
         rig.ctrl.move_cartesian(inside, 0.0),
         Err(Refusal::OutsideWorkspace)
@@ -333,21 +342,25 @@ fn cartesian_sequence_visits_every_point() {
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let start = rig.pose();
     let corners = [
-        Vec3::new(0.05, 0.0, 0.0),
-        Vec3::new(0.05, 0.0, 0.05),
-        Vec3::new(0.0, 0.0, 0.05),
-        Vec3::ZERO,
+        Vector3::new(0.05, 0.0, 0.0),
+        Vector3::new(0.05, 0.0, 0.05),
+        Vector3::new(0.0, 0.0, 0.05),
+        Vector3::zeros(),
     ];
     for (k, c) in corners.iter().enumerate() {
         rig.ctrl
-            .set_cartesian_via(k, Frame::new(start.rot, start.pos + *c), 0.0)
+            .set_cartesian_via(
+                k,
+                Frame::from_parts((start.translation.vector + *c).into(), start.rotation),
+                0.0,
+            )
             .unwrap();
     }
     rig.ctrl.start_cartesian_sequence().unwrap();
     let mut hits = 0;
     for _ in 0..20_000 {
         let out = rig.tick();
-        let p = rig.pose().pos - start.pos;
+        let p = rig.pose().translation.vector - start.translation.vector;
         if corners.get(hits).is_some_and(|c| (p - *c).norm() < 1e-9) {
             hits += 1;
         }
@@ -395,7 +408,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let mut q_mid = MK1_READY;
     q_mid[0] += 0.25;
     let (pa, pb) = (chain.forward(&q_a).unwrap(), chain.forward(&q_b).unwrap());
-    let m = (pa.pos + pb.pos) * 0.5;
+    let m = (pa.translation.vector + pb.translation.vector) * 0.5;
     let half = 0.05;
     let box_around_m = [
         m.x - half,
@@ -411,8 +424,8 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
             config.workspace.boxes.push(box_around_m).unwrap();
         })
         .unwrap();
-    let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
-    assert!(in_box(chain.forward(&q_mid).unwrap().pos));
+    let in_box = |p: Vector3<f64>| (p - m).iter().all(|c| c.abs() < half);
+    assert!(in_box(chain.forward(&q_mid).unwrap().translation.vector));
 
     // Cartesian: the move is refused up front, with where the line enters the box.
     let mut rig = Rig::new(&config, &q_a);
@@ -429,10 +442,16 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
     let outs = rig.settle(20_000);
     assert!(outs.iter().any(|o| o.events.workspace_limit));
-    assert!(outs.iter().all(|o| !in_box(o.setpoint.unwrap().pos)));
-    assert!(!in_box(rig.pose().pos) && (rig.pose().pos - pb.pos).norm() > 0.05);
+    assert!(
+        outs.iter()
+            .all(|o| !in_box(o.setpoint.unwrap().translation.vector))
+    );
+    assert!(
+        !in_box(rig.pose().translation.vector)
+            && (rig.pose().translation.vector - pb.translation.vector).norm() > 0.05
+    );
     // A goal inside the box is refused outright.
-    let inside = Frame::new(pa.rot, m);
+    let inside = Frame::from_parts(m.into(), pa.rotation);
     assert_eq!(
         rig.ctrl.move_cartesian(inside, 0.0),
         Err(Refusal::OutsideWorkspace)
@@ -505,7 +524,10 @@ fn mode_transitions_never_jump() {
     );
     check(&out);
     let pose = rig.pose();
-    let goal_pose = Frame::new(pose.rot, pose.pos + Vec3::new(0.0, -0.1, -0.05));
+    let goal_pose = Frame::from_parts(
+        (pose.translation.vector + Vector3::new(0.0, -0.1, -0.05)).into(),
+        pose.rotation,
+    );
     rig.ctrl.move_cartesian(goal_pose, 0.0).unwrap();
     for _ in 0..60 {
         check(&rig.tick());
@@ -543,16 +565,19 @@ fn shapes_trace_their_path_and_end_where_they_started() {
             axis_j: 2,
         })
         .unwrap();
-    let centre = start.pos - Vec3::X * radius;
+    let centre = start.translation.vector - Vector3::x() * radius;
     let mut finish_requested = false;
     let mut ended = false;
     for k in 0..2000 {
         let out = rig.tick();
         let sp = out.setpoint.unwrap();
-        assert!(((sp.pos - centre).norm() - radius).abs() < 1e-12);
-        assert!((sp.pos.y - start.pos.y).abs() < 1e-12, "left the x-z plane");
+        assert!(((sp.translation.vector - centre).norm() - radius).abs() < 1e-12);
+        assert!(
+            (sp.translation.vector.y - start.translation.vector.y).abs() < 1e-12,
+            "left the x-z plane"
+        );
         assert!(!out.events.ik_divergence);
-        let reached = (rig.pose().pos - sp.pos).norm();
+        let reached = (rig.pose().translation.vector - sp.translation.vector).norm();
         assert!(reached < 1e-9, "commanded path error {reached}");
         if k == 100 {
             rig.ctrl.finish_shape().unwrap();
@@ -565,7 +590,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
     }
     assert!(finish_requested && ended);
     assert!(
-        (rig.pose().pos - start.pos).norm() < 1e-9,
+        (rig.pose().translation.vector - start.translation.vector).norm() < 1e-9,
         "did not end at the start"
     );
     // A sinusoid along z, stopped at its next centre crossing.
@@ -579,7 +604,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
     let mut peak: f64 = 0.0;
     for k in 0..2000 {
         let out = rig.tick();
-        let off = out.setpoint.unwrap().pos - start.pos;
+        let off = out.setpoint.unwrap().translation.vector - start.translation.vector;
         assert!(off.x.abs() < 1e-12 && off.y.abs() < 1e-12);
         peak = peak.max(off.z.abs());
         if k == 120 {
@@ -590,7 +615,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
         }
     }
     assert!((peak - 0.04).abs() < 1e-4);
-    assert!((rig.pose().pos - start.pos).norm() < 1e-9);
+    assert!((rig.pose().translation.vector - start.translation.vector).norm() < 1e-9);
 }
 
 #[test]
@@ -635,7 +660,10 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     // needs joint 3 beyond its 1.600 maximum 3 % of the way (the seed's arm stopped there
     // after 3.9 s with WN22).
     let config = common::robot("ranger-mk1");
-    let goal = Frame::new(Rotation::from_rpy(0.0, 0.0, 0.0), Vec3::new(0.5, 0.2, 0.1));
+    let goal = at(
+        Rotation3::from_euler_angles(0.0, 0.0, 0.0),
+        Vector3::new(0.5, 0.2, 0.1),
+    );
     let mut rig = Rig::new(&config, &MK1_HOME);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
@@ -652,7 +680,7 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     let outs = rig.settle(5_000);
     assert!(outs.iter().any(|o| o.events.ik_divergence));
     assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
-    assert!((rig.pose().pos - goal.pos).norm() > 0.5);
+    assert!((rig.pose().translation.vector - goal.translation.vector).norm() > 0.5);
 }
 
 #[test]
@@ -662,7 +690,7 @@ fn lines_beyond_reach_or_through_boxes_are_refused_with_where() {
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let here = rig.pose();
     // 1.8 m out, inside the bounds: lost part of the way there.
-    let far = Frame::new(here.rot, Vec3::new(1.8, 0.0, 0.6));
+    let far = at(here.rotation, Vector3::new(1.8, 0.0, 0.6));
     match rig.ctrl.move_cartesian(far, 0.0) {
         Err(Refusal::Unreachable(PathPoint::Along(p))) => assert!((1..100).contains(&p)),
         Err(Refusal::OutsideJointLimits(JointBound { at, .. })) => {
@@ -671,20 +699,21 @@ fn lines_beyond_reach_or_through_boxes_are_refused_with_where() {
         other => panic!("{other:?}"),
     }
     // Straight through the column around the base to the other side (midpoint at z = 0.15).
-    let across = Frame::new(
-        here.rot,
-        Vec3::new(-here.pos.x, -here.pos.y, 0.3 - here.pos.z),
-    );
+    let p = here.translation.vector;
+    let across = at(here.rotation, Vector3::new(-p.x, -p.y, 0.3 - p.z));
     assert!(matches!(
         rig.ctrl.move_cartesian(across, 0.0),
         Err(Refusal::CrossesBox(_))
     ));
     // A reachable goal 5 cm up is accepted and reached.
-    let up = Frame::new(here.rot, here.pos + Vec3::new(0.0, 0.0, 0.05));
+    let up = at(
+        here.rotation,
+        here.translation.vector + Vector3::new(0.0, 0.0, 0.05),
+    );
     rig.ctrl.move_cartesian(up, 0.0).unwrap();
     let outs = rig.settle(5_000);
     assert!(outs.iter().all(|o| !o.events.ik_divergence));
-    assert!((rig.pose().pos - up.pos).norm() < 1e-6);
+    assert!((rig.pose().translation.vector - up.translation.vector).norm() < 1e-6);
 }
 
 #[test]
@@ -693,11 +722,18 @@ fn a_sequence_is_refused_if_any_leg_cannot_be_followed() {
     let mut rig = Rig::new(&config, &MK1_READY);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let here = rig.pose();
-    let at = |dx, dz| Frame::new(here.rot, here.pos + Vec3::new(dx, 0.0, dz));
-    rig.ctrl.set_cartesian_via(0, at(0.05, 0.0), 0.0).unwrap();
-    rig.ctrl.set_cartesian_via(1, at(0.05, 0.05), 0.0).unwrap();
+    let near = |dx, dz| {
+        at(
+            here.rotation,
+            here.translation.vector + Vector3::new(dx, 0.0, dz),
+        )
+    };
+    rig.ctrl.set_cartesian_via(0, near(0.05, 0.0), 0.0).unwrap();
+    rig.ctrl
+        .set_cartesian_via(1, near(0.05, 0.05), 0.0)
+        .unwrap();
     // The third leg goes 1.8 m out.
-    let far = Frame::new(here.rot, Vec3::new(1.8, 0.0, 0.6));
+    let far = at(here.rotation, Vector3::new(1.8, 0.0, 0.6));
     rig.ctrl.set_cartesian_via(2, far, 0.0).unwrap();
     let refusal = rig.ctrl.start_cartesian_sequence().unwrap_err();
     assert!(
@@ -709,7 +745,7 @@ fn a_sequence_is_refused_if_any_leg_cannot_be_followed() {
     );
     assert!(!rig.ctrl.is_moving());
     // Fixed, it runs.
-    rig.ctrl.set_cartesian_via(2, at(0.0, 0.05), 0.0).unwrap();
+    rig.ctrl.set_cartesian_via(2, near(0.0, 0.05), 0.0).unwrap();
     rig.ctrl.start_cartesian_sequence().unwrap();
     let outs = rig.settle(20_000);
     assert!(outs.iter().any(|o| o.events.sequence_finished));
@@ -732,14 +768,14 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
             .map(|(lo, hi)| rng.uniform(*lo, *hi))
             .collect();
         let start = chain.forward(&q).unwrap();
-        let dir = Vec3::new(
+        let dir = Vector3::new(
             rng.uniform(-1.0, 1.0),
             rng.uniform(-1.0, 1.0),
             rng.uniform(-1.0, 1.0),
         );
-        let goal = Frame::new(
-            start.rot,
-            start.pos + dir * (rng.uniform(0.02, 0.4) / dir.norm()),
+        let goal = at(
+            start.rotation,
+            start.translation.vector + dir * (rng.uniform(0.02, 0.4) / dir.norm()),
         );
         let mut rig = Rig::new(&config, &q);
         rig.ctrl.set_mode(Mode::Cartesian).unwrap();
@@ -754,7 +790,7 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
         run.ctrl.set_mode(Mode::Cartesian).unwrap();
         run.ctrl.move_cartesian(goal, 0.0).unwrap();
         run.settle(20_000);
-        let reached = (run.pose().pos - goal.pos).norm() < 1e-6;
+        let reached = (run.pose().translation.vector - goal.translation.vector).norm() < 1e-6;
         assert_eq!(verdict.is_ok(), reached, "{q:?} → {goal:?}: {verdict:?}");
         if reached {
             accepted += 1;
@@ -763,4 +799,9 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
         }
     }
     assert!(accepted >= 5 && refused >= 5, "{accepted} / {refused}");
+}
+
+/// The frame with this rotation and position.
+fn at(rotation: Rotation3<f64>, position: Vector3<f64>) -> Frame {
+    Frame::from_parts(position.into(), rotation)
 }

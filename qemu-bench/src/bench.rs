@@ -15,7 +15,7 @@ use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
@@ -41,11 +41,15 @@ const LINE_SEED: u64 = 0x5EED_0016;
 #[derive(Default)]
 struct Results {
     sincos: Timing,
+    sqrt: Timing,
     forward: Timing,
     jacobian: Timing,
+    joint_rates: Timing,
     tracking: Timing,
     line_check: Timing,
     lines_refused: u32,
+    unreachable: Timing,
+    unreachable_iterations: u32,
     iterations: u64,
     successes: u32,
     errors: u32,
@@ -107,11 +111,18 @@ fn measure_robot(config: &ValidRobot) -> Results {
         let angle = q.first().copied().unwrap_or(0.0);
         let (ticks, _) = measure(|| libm::sincos(black_box(angle)));
         results.sincos.add(ticks);
+        // libm's software sqrt: the M7's VSQRT.F64 is out of reach without `unsafe` asm.
+        let (ticks, _) = measure(|| libm::sqrt(black_box(angle.abs() + 0.5)));
+        results.sqrt.add(ticks);
 
         let (ticks, target) = measure(|| chain.forward(black_box(&q)));
         results.forward.add(ticks);
         let (ticks, jacobian) = measure(|| chain.jacobian(black_box(&q)));
         results.jacobian.add(ticks);
+        // Joint rates = FK + J + one damped least-squares solve (the IK's step kernel).
+        let twist = Twist::new(0.01, -0.02, 0.005, 0.02, 0.0, -0.01);
+        let (ticks, _) = measure(|| chain.joint_rates(black_box(&q), &twist, 0.01, None));
+        results.joint_rates.add(ticks);
         let (Ok(target), Ok(_)) = (target, jacobian) else {
             results.errors += 1;
             continue;
@@ -139,12 +150,30 @@ fn measure_robot(config: &ValidRobot) -> Results {
             Err(_) => results.errors += 1,
         }
     }
+    // The worst case of a global solve: a target 10 m out is never reached, so every solve
+    // spends the whole budget (`ik.global_iterations` Newton steps).
+    for k in 0..UNREACHABLE_SAMPLES {
+        let target = Frame::from_parts(
+            Vector3::new(10.0, -0.5 * k as f64, 0.3).into(),
+            Rotation3::identity(),
+        );
+        let seed = chain.mid_range();
+        let (ticks, solved) =
+            measure(|| chain.solve_global(&target, black_box(&seed), &config.ik, k));
+        results.unreachable.add(ticks);
+        match solved {
+            Ok(result) if !result.is_converged() => {
+                results.unreachable_iterations = result.solution().iterations;
+            }
+            _ => results.errors += 1,
+        }
+    }
     results
 }
 
 /// One up-front check of a Cartesian move from `q` (tool at `start`) to a random goal.
 fn check_line(
-    config: &RobotConfig,
+    config: &ValidRobot,
     q: &Joints,
     start: &Frame,
     goals: &mut SplitMix64,
@@ -158,9 +187,9 @@ fn check_line(
     let dir = random_direction(goals);
     let length = 0.02 + 0.58 * goals.next_f64();
     let turn = random_direction(goals);
-    let goal = Frame::new(
-        Rotation::from_rotation_vector(turn * goals.next_f64()) * start.rot,
-        start.pos + dir * (length / dir.norm()),
+    let goal = Frame::from_parts(
+        (start.translation.vector + dir * (length / dir.norm())).into(),
+        Rotation3::new(turn * goals.next_f64()) * start.rotation,
     );
     let (ticks, verdict) = measure(|| black_box(&mut ctrl).move_cartesian(black_box(goal), 0.0));
     results.line_check.add(ticks);
@@ -168,19 +197,22 @@ fn check_line(
 }
 
 /// A vector with components uniform in −0.5..0.5.
-fn random_direction(rng: &mut SplitMix64) -> Vec3 {
-    Vec3::new(
+fn random_direction(rng: &mut SplitMix64) -> Vector3<f64> {
+    Vector3::new(
         rng.next_f64() - 0.5,
         rng.next_f64() - 0.5,
         rng.next_f64() - 0.5,
     )
 }
 
+/// Global solves of unreachable targets per robot (each runs the whole budget).
+const UNREACHABLE_SAMPLES: u64 = 3;
+
 fn succeeded(chain: &Chain, target: &Frame, q: &Joints) -> bool {
     chain.forward(q).is_ok_and(|reached| {
-        let d = reached.diff(target);
-        d.linear.norm() < SUCCESS_TOLERANCE
-            && d.angular.norm() < SUCCESS_TOLERANCE
+        let d = math::diff(&reached, target);
+        d.fixed_rows::<3>(0).norm() < SUCCESS_TOLERANCE
+            && d.fixed_rows::<3>(3).norm() < SUCCESS_TOLERANCE
             && chain.within_limits(q)
     })
 }
@@ -197,8 +229,10 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         );
     };
     row("libm::sincos", &results.sincos);
+    row("libm::sqrt", &results.sqrt);
     row("forward (FK)", &results.forward);
     row("jacobian (FK + J)", &results.jacobian);
+    row("joint_rates (+DLS)", &results.joint_rates);
     let (mean, max) = results.tracking.instructions(counter);
     let calls = f64::from(results.tracking.calls.max(1));
     hprintln!(
@@ -218,6 +252,15 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         mean,
         max,
         100.0 * f64::from(results.lines_refused) / f64::from(results.line_check.calls.max(1))
+    );
+    let (mean, max) = results.unreachable.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15} |         - |",
+        name,
+        "global unreachable",
+        mean,
+        max,
+        results.unreachable_iterations
     );
     if results.errors > 0 {
         hprintln!("{}: {} calls refused", name, results.errors);

@@ -27,7 +27,7 @@ use super::Refusal;
 use super::workspace::Workspace;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints};
-use crate::math::{Frame, Rotation};
+use crate::math::{self, Frame, Rotation3, Vector3};
 
 /// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
 pub const LINE_SAMPLES: usize = 16;
@@ -72,19 +72,23 @@ impl Reach<'_> {
     /// `goal`; returns the joints at the goal. (If the budget runs out the move gets the
     /// benefit of the doubt, and the joints reached so far are returned.)
     pub fn line(&mut self, start: &Frame, goal: &Frame, seed: &Joints) -> Result<Joints, Refusal> {
-        if let Some(entry) = self.workspace.first_box_crossing(start.pos, goal.pos) {
+        let (from, to) = (&start.translation.vector, &goal.translation.vector);
+        if let Some(entry) = self.workspace.first_box_crossing(from, to) {
             return match PathPoint::at(entry) {
                 PathPoint::Along(percent) => Err(Refusal::CrossesBox(percent)),
                 PathPoint::Goal => Err(Refusal::OutsideWorkspace),
             };
         }
-        let turn = start.diff(goal).angular;
+        let twist = math::diff(start, goal);
+        let turn = Vector3::new(twist[3], twist[4], twist[5]);
         let point = |s: f64| {
             if s >= 1.0 {
                 return *goal;
             }
-            let rot = Rotation::from_rotation_vector(turn * s) * start.rot;
-            Frame::new(rot, start.pos + (goal.pos - start.pos) * s)
+            Frame::from_parts(
+                (from + (to - from) * s).into(),
+                Rotation3::new(turn * s) * start.rotation,
+            )
         };
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step, mut q) = (0.0, full_step, *seed);
