@@ -27,7 +27,7 @@ use super::Refusal;
 use super::workspace::Workspace;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints};
-use crate::math::{self, Frame, Rotation3, Vector3};
+use crate::math::{self, Frame, Rotation3};
 
 /// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
 pub const LINE_SAMPLES: usize = 16;
@@ -79,8 +79,8 @@ impl Reach<'_> {
                 PathPoint::Goal => Err(Refusal::OutsideWorkspace),
             };
         }
-        let twist = math::diff(start, goal);
-        let turn = Vector3::new(twist[3], twist[4], twist[5]);
+        // The generator's turn: the rotation vector of R_goal · R_startᵀ (as math::diff).
+        let turn = math::rotation_vector(&start.rotation.rotation_to(&goal.rotation));
         let point = |s: f64| {
             if s >= 1.0 {
                 return *goal;
