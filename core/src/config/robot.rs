@@ -173,6 +173,10 @@ pub struct IkConfig {
     pub tracking_iterations: u16,
     /// Total iteration budget of one global solve, over all restarts.
     pub global_iterations: u16,
+    /// Check the straight line of every Cartesian move (BG, each VE leg) before starting it,
+    /// and refuse a move the arm cannot follow (`ER25`/`ER26` with where along the line).
+    /// False: the seed's behaviour, the arm moves until the IK fails, then holds (`WN22`).
+    pub check_lines: bool,
 }
 
 impl Default for IkConfig {
@@ -181,6 +185,7 @@ impl Default for IkConfig {
             tolerance: 1e-9,
             tracking_iterations: 20,
             global_iterations: 2000,
+            check_lines: true,
         }
     }
 }
