@@ -12,8 +12,8 @@ mod toml_file;
 
 pub use error::{ConfigError, ConfigReason};
 pub use robot::{
-    CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType, MAX_BOXES,
-    MAX_NAME_LEN, RobotConfig, ToolConfig, WorkspaceConfig,
+    BaseConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType,
+    MAX_BOXES, MAX_NAME_LEN, RobotConfig, ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};

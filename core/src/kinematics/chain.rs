@@ -32,6 +32,8 @@ struct Link {
     prismatic: bool,
     cos_alpha: f64,
     sin_alpha: f64,
+    cos_beta: f64,
+    sin_beta: f64,
     a: f64,
     d: f64,
     theta: f64,
@@ -42,6 +44,7 @@ struct Link {
 pub struct Chain {
     links: [Link; MAX_JOINTS],
     n: usize,
+    base: Frame,
     tool: Frame,
     min: [f64; MAX_JOINTS],
     max: [f64; MAX_JOINTS],
@@ -61,6 +64,7 @@ impl Chain {
         let mut chain = Self {
             links: [Link::default(); MAX_JOINTS],
             n: config.joints.len().min(MAX_JOINTS),
+            base: base_frame(config),
             tool: tool_frame(config),
             min: [0.0; MAX_JOINTS],
             max: [0.0; MAX_JOINTS],
@@ -71,10 +75,13 @@ impl Chain {
             .zip(chain.min.iter_mut().zip(chain.max.iter_mut()));
         for (joint, (link, (min, max))) in config.joints.iter().zip(slots) {
             let (sin_alpha, cos_alpha) = libm::sincos(joint.alpha);
+            let (sin_beta, cos_beta) = libm::sincos(joint.beta);
             *link = Link {
                 prismatic: joint.kind == JointType::Prismatic,
                 cos_alpha,
                 sin_alpha,
+                cos_beta,
+                sin_beta,
                 a: joint.a,
                 d: joint.d,
                 theta: joint.theta,
@@ -186,8 +193,8 @@ impl Chain {
     /// One walk serves FK, link frames and the solvers, which differ only in what they keep.
     #[inline(always)]
     fn walk(&self, q: &[f64; MAX_JOINTS], mut visit: impl FnMut(usize, &Rotation, Vec3)) -> Frame {
-        let mut rot = Rotation::IDENTITY;
-        let mut pos = Vec3::ZERO;
+        let mut rot = self.base.rot;
+        let mut pos = self.base.pos;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
@@ -200,8 +207,11 @@ impl Chain {
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
             let z1 = z * link.cos_alpha - y * link.sin_alpha;
+            // RotY(β), Hayati's calibration angle (zero unless calibrated): x, z turn about y.
+            let x1 = x * link.cos_beta - z1 * link.sin_beta;
+            let z1 = x * link.sin_beta + z1 * link.cos_beta;
             // RotZ(θ) · TransZ(d)
-            rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
+            rot = Rotation::from_cols(x1 * ct + y1 * st, y1 * ct - x1 * st, z1);
             pos += z1 * d;
             visit(i, &rot, pos);
         }
@@ -235,6 +245,15 @@ impl Chain {
     pub(super) fn limits(&self) -> (&[f64; MAX_JOINTS], &[f64; MAX_JOINTS]) {
         (&self.min, &self.max)
     }
+}
+
+/// `Trans(xyz) · RPY(rpy)` of the robot's base in the world.
+fn base_frame(config: &RobotConfig) -> Frame {
+    let [roll, pitch, yaw] = config.base.rpy;
+    Frame::new(
+        Rotation::from_rpy(roll, pitch, yaw),
+        Vec3::from_array(config.base.xyz),
+    )
 }
 
 /// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)` of the robot's tool.
