@@ -84,6 +84,10 @@ enum Cmd {
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// First perturb the truth with random errors of typical size (offsets ±0.5°, lengths,
+        /// base and tool ±1 mm, twists ±0.05°) drawn with this seed.
+        #[arg(long)]
+        perturb: Option<u64>,
         /// Where to write the measurements.
         #[arg(long)]
         out: PathBuf,
@@ -106,8 +110,9 @@ fn main() -> ExitCode {
             poses,
             noise_mm,
             seed,
+            perturb,
             out,
-        }) => run_simulate(&truth, &poses, noise_mm * 1e-3, seed, &out),
+        }) => run_simulate(&truth, &poses, noise_mm * 1e-3, seed, perturb, &out),
         None => run_fit(&cli.fit),
     };
     match result {
@@ -226,8 +231,18 @@ fn run_plan(
     Ok(())
 }
 
-fn run_simulate(truth: &Path, poses: &Path, noise: f64, seed: u64, out: &Path) -> Result<()> {
-    let config = robot(truth)?;
+fn run_simulate(
+    truth: &Path,
+    poses: &Path,
+    noise: f64,
+    seed: u64,
+    perturb: Option<u64>,
+    out: &Path,
+) -> Result<()> {
+    let mut config = robot(truth)?;
+    if let Some(seed) = perturb {
+        config = sim::perturb(&config, &sim::Errors::TYPICAL, seed);
+    }
     let poses = measurements::parse_poses(&read(poses)?, config.dof())
         .map_err(|e| format!("{}: {e}", poses.display()))?;
     let measured = sim::measure(&config, &poses, noise, seed);

@@ -13,8 +13,9 @@ use crate::model::{Geometry, Param};
 pub const BEGIN: &str = "# >>> armgate-calibrate";
 /// Last line of the calibration comment block.
 pub const END: &str = "# <<< armgate-calibrate";
-/// Written values are rounded to this (m or rad): far below any metrology, short to read.
-const RESOLUTION: f64 = 1e-9;
+/// Written values are rounded to this many decimals (nm, nrad): far below any metrology, short
+/// to read.
+const DECIMALS: usize = 9;
 
 /// Why the robot file could not be edited.
 #[derive(Debug)]
@@ -38,7 +39,7 @@ pub fn edit(
 ) -> Result<String, EditError> {
     let mut doc: DocumentMut = without_block(original).parse().map_err(EditError)?;
     for &p in fitted {
-        let number = |p: Param| Value::from((geometry.get(p) / RESOLUTION).round() * RESOLUTION);
+        let number = |p: Param| Value::from(rounded(geometry.get(p)));
         let triple = |make: fn(usize) -> Param| {
             Value::Array((0..3).map(|k| number(make(k))).collect::<Array>())
         };
@@ -64,6 +65,11 @@ pub fn edit(
     out.push('\n');
     out.push_str(&doc.to_string());
     Ok(out)
+}
+
+/// `v` rounded to [`DECIMALS`] decimals (its shortest representation is then short too).
+fn rounded(v: f64) -> f64 {
+    format!("{v:.DECIMALS$}").parse().unwrap_or(v)
 }
 
 /// The text without an earlier calibration block.
