@@ -10,6 +10,9 @@ use crate::model::{FitSet, Geometry};
 
 /// Folds of the cross-validation run when no held-out poses are given.
 pub const FOLDS: usize = 5;
+/// Above this condition number the poses determine the parameters poorly: the fit may match
+/// them and be wrong elsewhere (published guidance: ≲ 100).
+pub const WELL_CONDITIONED: f64 = 100.0;
 
 /// How the calibrated model was checked on poses it was not fitted to.
 #[derive(Clone, Copy, Debug)]
@@ -112,6 +115,14 @@ impl Calibration {
             "condition number {:.1}, observability index O1 {:.4} m (angles scaled by {:.3} m)",
             a.condition, a.observability, a.reach
         );
+        if a.condition > WELL_CONDITIONED {
+            let _ = writeln!(
+                out,
+                "WARNING: condition number above {WELL_CONDITIONED}: some parameters are poorly \
+                 determined (large σ below); poses from `armgate calibrate plan` help unless \
+                 the arm's geometry itself hides them"
+            );
+        }
         let _ = writeln!(
             out,
             "fit: {} iterations, residual per coordinate {:.4} mm",
