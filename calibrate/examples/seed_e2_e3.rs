@@ -11,7 +11,7 @@
 
 use armgate_calibrate::calibration::{Calibration, Validation, calibrate};
 use armgate_calibrate::fit::Residuals;
-use armgate_calibrate::model::{FitSet, Geometry};
+use armgate_calibrate::model::{FitSet, Geometry, Param};
 use armgate_calibrate::{plan, sim};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::{Chain, IkResult};
@@ -28,24 +28,25 @@ fn nominal() -> RobotConfig {
     .expect("robots/ranger-mk1.toml");
     config.tool.a = -0.00438;
     config.tool.d = 0.3122;
-    if let Some(j6) = config.joints.get_mut(5) {
-        j6.theta = 1.3;
-    }
+    let mut g = Geometry::new(&config);
+    g.set(Param::Theta(5), 1.3);
+    g.apply_to(&mut config);
     config
 }
 
 /// The arm as the thesis identified it (Table 4.2).
 fn truth() -> RobotConfig {
     let mut config = nominal();
+    let mut g = Geometry::new(&config);
     let offsets = [-0.002627, 0.000863, 0.01267, -0.006912, -0.006189];
-    for (joint, offset) in config.joints.iter_mut().zip(offsets) {
-        joint.theta = offset;
+    for (i, offset) in offsets.into_iter().enumerate() {
+        g.set(Param::Theta(i), offset);
     }
-    let j = &mut config.joints;
-    j[0].d = 0.2505;
-    j[2].a = 0.5599;
-    j[3].a = 0.1525;
-    j[3].d = 0.5335;
+    g.set(Param::D(0), 0.2505);
+    g.set(Param::A(2), 0.5599);
+    g.set(Param::A(3), 0.1525);
+    g.set(Param::D(3), 0.5335);
+    g.apply_to(&mut config);
     config
 }
 
