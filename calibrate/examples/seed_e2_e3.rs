@@ -145,4 +145,5 @@ fn main() {
     let full = calibrate(&nominal, &measured, &check, FitSet::All).unwrap();
     result_row("armgate: 50 planned poses, all parameters", &full);
     println!("\nE3 (c) report:\n{}", c.report());
+    println!("\narmgate report:\n{}", full.report());
 }
