@@ -5,13 +5,14 @@
 //! tool position lies in the robot's workspace. From them, N poses are chosen greedily to
 //! maximise `det(JᵀJ)` of the scaled identification Jacobian — equivalently the observability
 //! index O1 = (σ₁…σ_m)^(1/m) / √N (Borm and Menq) — each step adding the candidate with the
-//! largest `det(I + B M⁻¹ Bᵀ)`, where B is its 3-row block and M the information so far.
+//! largest `det(I + B M⁻¹ Bᵀ)`, where B is its 3-row block and M the information so far; then
+//! exchange passes swap a chosen pose for a candidate while that raises the determinant.
 
 use armgate_core::config::RobotConfig;
 use armgate_core::kinematics::Chain;
 use armgate_core::motion::Workspace;
 use armgate_core::rng::SplitMix64;
-use nalgebra::{DMatrix, Matrix3};
+use nalgebra::DMatrix;
 
 use crate::identify::{self, Identifiability};
 use crate::model::{FitSet, Geometry};
@@ -113,7 +114,7 @@ pub fn plan(
         params,
         all.reach,
     );
-    let chosen = greedy_d_optimal(&j, count);
+    let chosen = d_optimal(&j, count);
     let poses: Vec<Vec<f64>> = chosen
         .iter()
         .filter_map(|&k| pool.get(k).cloned())
@@ -126,34 +127,75 @@ pub fn plan(
     })
 }
 
-/// Indices of `count` 3-row blocks of `j` chosen greedily for the largest `det(JᵀJ)`.
-fn greedy_d_optimal(j: &DMatrix<f64>, count: usize) -> Vec<usize> {
+/// How often the exchange sweeps over the chosen poses at most.
+const EXCHANGE_PASSES: usize = 3;
+
+/// Indices of `count` 3-row blocks of `j` with a large `det(JᵀJ)`: chosen greedily, then
+/// improved by exchanges.
+fn d_optimal(j: &DMatrix<f64>, count: usize) -> Vec<usize> {
     let m = j.ncols();
     let blocks = j.nrows() / 3;
-    let mut inverse = DMatrix::<f64>::identity(m, m) / PRIOR;
+    let block = |k: usize| j.rows(3 * k, 3);
+    // The gain of adding block b to information whose inverse is `inverse`:
+    // det(M + BᵀB) / det(M) = det(I + B M⁻¹ Bᵀ).
+    let gain = |k: usize, inverse: &DMatrix<f64>| {
+        let b = block(k);
+        (DMatrix::<f64>::identity(3, 3) + b * inverse * b.transpose()).determinant()
+    };
+    let best_free = |free: &[bool], inverse: &DMatrix<f64>| {
+        free.iter()
+            .enumerate()
+            .filter(|(_, f)| **f)
+            .map(|(k, _)| (k, gain(k, inverse)))
+            .fold(None, |best: Option<(usize, f64)>, (k, g)| match best {
+                Some((_, bg)) if bg >= g => best,
+                _ => Some((k, g)),
+            })
+    };
+    let mut information = DMatrix::<f64>::identity(m, m) * PRIOR;
     let mut chosen = Vec::with_capacity(count);
     let mut free = vec![true; blocks];
     for _ in 0..count.min(blocks) {
-        let mut best: Option<(usize, f64)> = None;
-        for (k, _) in free.iter().enumerate().filter(|(_, f)| **f) {
-            let b = j.rows(3 * k, 3);
-            let s = Matrix3::identity() + (b * &inverse * b.transpose()).fixed_view::<3, 3>(0, 0);
-            let gain = s.determinant();
-            if best.is_none_or(|(_, g)| gain > g) {
-                best = Some((k, gain));
-            }
-        }
-        let Some((k, _)) = best else { break };
-        let b = j.rows(3 * k, 3).into_owned();
-        let bm = &b * &inverse;
-        let s = DMatrix::<f64>::identity(3, 3) + &bm * b.transpose();
-        if let Some(s_inv) = s.try_inverse() {
-            inverse -= bm.transpose() * s_inv * &bm;
-        }
+        let Some(inverse) = information.clone().try_inverse() else {
+            break;
+        };
+        let Some((k, _)) = best_free(&free, &inverse) else {
+            break;
+        };
+        information += block(k).transpose() * block(k);
         if let Some(f) = free.get_mut(k) {
             *f = false;
         }
         chosen.push(k);
+    }
+    // Exchange: replace a chosen pose by a free one while that raises det(JᵀJ).
+    for _ in 0..EXCHANGE_PASSES {
+        let mut improved = false;
+        for slot in 0..chosen.len() {
+            let Some(&k) = chosen.get(slot) else { break };
+            let without = &information - block(k).transpose() * block(k);
+            let Some(inverse) = without.clone().try_inverse() else {
+                continue;
+            };
+            let keep = gain(k, &inverse);
+            let Some((c, g)) = best_free(&free, &inverse) else {
+                break;
+            };
+            if g > keep * (1.0 + 1e-9) {
+                information = without + block(c).transpose() * block(c);
+                if let (Some(out), Some(into)) = (free.get_mut(k), chosen.get_mut(slot)) {
+                    *out = true;
+                    *into = c;
+                }
+                if let Some(f) = free.get_mut(c) {
+                    *f = false;
+                }
+                improved = true;
+            }
+        }
+        if !improved {
+            break;
+        }
     }
     chosen
 }
