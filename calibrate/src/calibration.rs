@@ -6,7 +6,7 @@ use armgate_core::config::RobotConfig;
 
 use crate::fit::{self, Fit, FitError, Measurement, Residuals};
 use crate::identify::{self, Identifiability};
-use crate::model::{FitSet, Geometry};
+use crate::model::{self, FitSet, Geometry};
 
 /// Folds of the cross-validation run when no held-out poses are given.
 pub const FOLDS: usize = 5;
@@ -95,20 +95,12 @@ impl Calibration {
     pub fn report(&self) -> String {
         let mut out = String::new();
         let a = &self.analysis;
-        let names = |ps: &[crate::model::Param]| {
-            let v: Vec<String> = ps.iter().map(ToString::to_string).collect();
-            v.join(", ")
-        };
         let _ = writeln!(
             out,
             "{} parameters identified from {} poses; not identifiable (kept nominal): {}",
             a.identified.len(),
             self.before.count,
-            if a.unidentifiable.is_empty() {
-                "none".to_string()
-            } else {
-                names(&a.unidentifiable)
-            }
+            model::list(&a.unidentifiable)
         );
         let _ = writeln!(
             out,

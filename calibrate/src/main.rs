@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use armgate_calibrate::calibration::{self, Calibration, Validation};
-use armgate_calibrate::model::FitSet;
+use armgate_calibrate::model::{self, FitSet};
 use armgate_calibrate::{measurements, plan, robot_file, sim};
 use armgate_core::config::{RobotConfig, load_file};
 use clap::{Args, Parser, Subcommand};
@@ -208,11 +208,7 @@ fn run_plan(
         a.observability,
         a.condition,
         a.identified.len(),
-        a.unidentifiable
-            .iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join(", ")
+        model::list(&a.unidentifiable)
     );
     text += &measurements::format_poses(&plan.poses, config.dof());
     match out {

@@ -72,6 +72,15 @@ impl fmt::Display for Param {
     }
 }
 
+/// The names of `params`, comma-separated ("none" for none): how reports list them.
+pub fn list(params: &[Param]) -> String {
+    if params.is_empty() {
+        return "none".into();
+    }
+    let names: Vec<String> = params.iter().map(ToString::to_string).collect();
+    names.join(", ")
+}
+
 /// Which parameters a calibration may fit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum FitSet {

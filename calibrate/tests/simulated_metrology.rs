@@ -4,7 +4,7 @@
 
 use armgate_calibrate::calibration::{Validation, calibrate};
 use armgate_calibrate::fit::{self, Residuals};
-use armgate_calibrate::model::{FitSet, Geometry, Param};
+use armgate_calibrate::model::{self, FitSet, Geometry, Param};
 use armgate_calibrate::{plan, sim};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::Chain;
@@ -82,10 +82,6 @@ fn scenario(name: &str, seed: u64) -> Vec<Param> {
     result.analysis.unidentifiable.clone()
 }
 
-fn names(params: &[Param]) -> Vec<String> {
-    params.iter().map(ToString::to_string).collect()
-}
-
 // Both arms: the base pose's x, z, roll and yaw duplicate joint 1's a, d, alpha and theta; the
 // tool lies on axis 6, so its offset does not show and a_5, alpha_5 and the tool's z duplicate
 // other lengths; parallel axes share one d.
@@ -94,18 +90,8 @@ fn names(params: &[Param]) -> Vec<String> {
 fn ranger_mk1_calibrates_to_a_tenth_of_a_millimetre() {
     let unidentifiable = scenario("ranger-mk1", 15);
     assert_eq!(
-        names(&unidentifiable),
-        [
-            "J6.theta",
-            "J3.d",
-            "J6.a",
-            "tool.z",
-            "J6.alpha",
-            "base.x",
-            "base.z",
-            "base.roll",
-            "base.yaw"
-        ]
+        model::list(&unidentifiable),
+        "J6.theta, J3.d, J6.a, tool.z, J6.alpha, base.x, base.z, base.roll, base.yaw"
     );
 }
 
@@ -114,19 +100,8 @@ fn ur5_calibrates_to_a_tenth_of_a_millimetre() {
     // Axes 2, 3 and 4 are parallel: only one of d2, d3, d4 can be identified.
     let unidentifiable = scenario("ur5", 5);
     assert_eq!(
-        names(&unidentifiable),
-        [
-            "J6.theta",
-            "J3.d",
-            "J4.d",
-            "J6.a",
-            "tool.z",
-            "J6.alpha",
-            "base.x",
-            "base.z",
-            "base.roll",
-            "base.yaw"
-        ]
+        model::list(&unidentifiable),
+        "J6.theta, J3.d, J4.d, J6.a, tool.z, J6.alpha, base.x, base.z, base.roll, base.yaw"
     );
 }
 
