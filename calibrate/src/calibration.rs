@@ -31,6 +31,8 @@ pub enum Validation {
         /// Errors of the left-out poses.
         after: Residuals,
     },
+    /// No held-out poses, and too few poses to fit without a fold.
+    Unavailable,
 }
 
 /// The outcome of a calibration.
@@ -59,6 +61,9 @@ pub fn calibrate(
     set: FitSet,
 ) -> Result<Calibration, FitError> {
     let nominal = Geometry::new(config);
+    if measurements.is_empty() {
+        return Err(FitError::NoMeasurements);
+    }
     if let Some(pose) = measurements
         .iter()
         .chain(held_out)
@@ -70,9 +75,12 @@ pub fn calibrate(
     let analysis = identify::analyse(&nominal, &nominal.candidates(set), &poses);
     let fit = fit::fit(&nominal, &analysis.identified, measurements)?;
     let validation = if held_out.is_empty() {
-        Validation::CrossValidation {
-            folds: FOLDS,
-            after: fit::cross_validate(&nominal, &analysis.identified, measurements, FOLDS)?,
+        match fit::cross_validate(&nominal, &analysis.identified, measurements, FOLDS) {
+            Ok(after) => Validation::CrossValidation {
+                folds: FOLDS,
+                after,
+            },
+            Err(_) => Validation::Unavailable,
         }
     } else {
         Validation::HeldOut {
@@ -145,6 +153,13 @@ impl Calibration {
             }
             Validation::CrossValidation { folds, after } => {
                 row(&format!("{folds}-fold cross-validation"), after);
+            }
+            Validation::Unavailable => {
+                let _ = writeln!(
+                    out,
+                    "not validated: no held-out poses, and too few poses for {FOLDS}-fold \
+                     cross-validation"
+                );
             }
         }
         let _ = writeln!(

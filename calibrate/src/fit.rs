@@ -85,6 +85,8 @@ pub struct Fit {
 /// Why a fit failed.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FitError {
+    /// No measurements at all.
+    NoMeasurements,
     /// Fewer residuals (3 per pose) than parameters plus one.
     TooFewPoses {
         /// Poses given.
@@ -104,6 +106,7 @@ pub enum FitError {
 impl std::fmt::Display for FitError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Self::NoMeasurements => f.write_str("no measurements"),
             Self::TooFewPoses { poses, params } => write!(
                 f,
                 "{poses} poses give {} residuals; {params} parameters need more",

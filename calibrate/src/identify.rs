@@ -119,8 +119,11 @@ pub fn analyse(geometry: &Geometry, params: &[Param], poses: &[Vec<f64>]) -> Ide
     }
 }
 
-/// Singular values, largest first.
+/// Singular values, largest first (none for an empty matrix).
 pub fn singular_values(j: &DMatrix<f64>) -> Vec<f64> {
+    if j.is_empty() {
+        return Vec::new();
+    }
     let mut s: Vec<f64> = j.singular_values().iter().copied().collect();
     s.sort_by(|a, b| b.total_cmp(a));
     s

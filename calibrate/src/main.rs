@@ -1,6 +1,7 @@
 //! `armgate-calibrate`: fit a robot file to measured tool positions, or plan the poses to
 //! measure. `armgate calibrate …` runs this binary. See `docs/calibration.md`.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -124,6 +125,11 @@ fn main() -> ExitCode {
     }
 }
 
+/// Prints to standard output; a closed pipe (`| head`) is not an error.
+fn say(text: &str) {
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
 fn read(path: &Path) -> Result<String> {
@@ -150,7 +156,7 @@ fn run_fit(args: &FitArgs) -> Result<()> {
     };
     let result = calibration::calibrate(&config, &measured, &held_out, args.fit)?;
     let report = result.report();
-    print!("{report}");
+    say(&report);
     let comment = comment_block(&result, robot_path, data, args.held_out.as_deref(), &report);
     let text = robot_file::edit(
         &read(robot_path)?,
@@ -161,7 +167,7 @@ fn run_fit(args: &FitArgs) -> Result<()> {
     armgate_core::config::parse_toml(&text)
         .map_err(|e| format!("the calibrated file does not load ({e}); not written"))?;
     std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?;
-    println!("\nwrote {}", out.display());
+    say(&format!("\nwrote {}\n", out.display()));
     Ok(())
 }
 
@@ -175,6 +181,7 @@ fn comment_block(
 ) -> String {
     let check = match (&result.validation, held_out) {
         (Validation::HeldOut { .. }, Some(path)) => format!("held-out poses {}", path.display()),
+        (Validation::Unavailable, _) => "nothing (too few poses)".to_string(),
         _ => format!("{}-fold cross-validation", calibration::FOLDS),
     };
     format!(
@@ -195,6 +202,9 @@ fn run_plan(
     fit: FitSet,
     out: Option<&Path>,
 ) -> Result<()> {
+    if poses == 0 {
+        return Err("--poses must be at least 1".into());
+    }
     let config = robot(robot_path)?;
     let plan = plan::plan(&config, fit, poses, candidates, seed)?;
     let a = &plan.analysis;
@@ -222,7 +232,7 @@ fn run_plan(
                 a.condition
             );
         }
-        None => print!("{text}"),
+        None => say(&text),
     }
     Ok(())
 }
