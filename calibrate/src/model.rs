@@ -229,8 +229,8 @@ impl Geometry {
     }
 
     /// The parameters `set` may fit, most meaningful first: where parameters are redundant,
-    /// identifiability analysis keeps the earlier one. Joint offsets come first, then DH lengths,
-    /// DH angles, Hayati angles, the tool position and last the base frame.
+    /// identifiability analysis keeps the earlier one. Joint offsets come first, then DH lengths
+    /// and the tool position, DH angles, Hayati angles and last the base frame.
     pub fn candidates(&self, set: FitSet) -> Vec<Param> {
         let n = self.dof();
         let offset = |i: usize| {
@@ -248,6 +248,10 @@ impl Geometry {
             }
         };
         let offsets = (0..n).map(offset);
+        // A prismatic joint's constant θ is a DH angle like α.
+        let prismatic_angles = (0..n)
+            .filter(|&i| self.links.get(i).is_some_and(|l| l.prismatic))
+            .map(Param::Theta);
         let lengths = (0..n)
             .flat_map(|i| [Some(Param::A(i)), length(i)])
             .flatten()
@@ -258,6 +262,7 @@ impl Geometry {
             FitSet::All => offsets
                 .chain(lengths)
                 .chain((0..n).map(Param::Alpha))
+                .chain(prismatic_angles)
                 .chain(self.nearly_parallel().into_iter().map(Param::Beta))
                 .chain((0..3).map(Param::BaseXyz))
                 .chain((0..3).map(Param::BaseRpy))
