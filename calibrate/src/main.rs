@@ -9,7 +9,7 @@ use armgate_calibrate::calibration::{self, Calibration, Validation};
 use armgate_calibrate::model::{self, FitSet};
 use armgate_calibrate::{measurements, plan, robot_file, sim};
 use armgate_core::config::{RobotConfig, load_file};
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Kinematic calibration: fit a robot file's geometry to measured tool positions.
 #[derive(Debug, Parser)]
@@ -157,7 +157,7 @@ fn run_fit(args: &FitArgs) -> Result<()> {
     let result = calibration::calibrate(&config, &measured, &held_out, args.fit)?;
     let report = result.report();
     say(&report);
-    let comment = comment_block(&result, robot_path, data, args.held_out.as_deref(), &report);
+    let comment = comment_block(&result, args, &report);
     let text = robot_file::edit(
         &read(robot_path)?,
         &result.fit.geometry,
@@ -172,25 +172,25 @@ fn run_fit(args: &FitArgs) -> Result<()> {
 }
 
 /// The comment block of the calibrated file: where the data came from, then the report.
-fn comment_block(
-    result: &Calibration,
-    robot: &Path,
-    data: &Path,
-    held_out: Option<&Path>,
-    report: &str,
-) -> String {
-    let check = match (&result.validation, held_out) {
-        (Validation::HeldOut { .. }, Some(path)) => format!("held-out poses {}", path.display()),
-        (Validation::Unavailable, _) => "nothing (too few poses)".to_string(),
-        _ => format!("{}-fold cross-validation", calibration::FOLDS),
+fn comment_block(result: &Calibration, args: &FitArgs, report: &str) -> String {
+    let show = |p: &Option<PathBuf>| p.as_deref().unwrap_or(Path::new("?")).display().to_string();
+    let check = match &result.validation {
+        Validation::HeldOut { .. } => format!("the held-out poses {}", show(&args.held_out)),
+        Validation::CrossValidation { folds, .. } => format!("{folds}-fold cross-validation"),
+        Validation::Unavailable => "nothing (too few poses)".to_string(),
     };
+    let fit = args
+        .fit
+        .to_possible_value()
+        .map(|v| v.get_name().to_string());
     format!(
-        "Calibrated by armgate-calibrate from {} with the measurements {} ({} poses); checked \
-         by {check}.\nOnly the fitted values below differ from {}.\n\n{report}",
-        robot.display(),
-        data.display(),
+        "Calibrated by armgate-calibrate (--fit {}) from {} with the measurements {} ({} \
+         poses); checked by {check}.\nOnly the fitted values below differ from {}.\n\n{report}",
+        fit.unwrap_or_default(),
+        show(&args.robot),
+        show(&args.measurements),
         result.before.count,
-        robot.display(),
+        show(&args.robot),
     )
 }
 
