@@ -5,7 +5,7 @@
 use armgate_calibrate::calibration::{Validation, calibrate};
 use armgate_calibrate::fit::{self, Residuals};
 use armgate_calibrate::model::{self, FitSet, Geometry, Param};
-use armgate_calibrate::{plan, sim};
+use armgate_calibrate::{identify, plan, sim};
 use armgate_core::config::{RobotConfig, load_file};
 use armgate_core::kinematics::Chain;
 
@@ -120,4 +120,37 @@ fn the_model_is_cores_forward_kinematics() {
             assert!(diff < 1e-12, "{name}: {diff}");
         }
     }
+}
+
+#[test]
+fn hayati_beta_absorbs_a_tilt_between_parallel_axes() {
+    // ur5's axes 2 and 3 are parallel; tilt axis 3 by 0.06° about y. Plain DH can express that
+    // only by moving the common normal (and d) metres away — not a small correction — so
+    // without β the fit is left with the tilt; with β it is exact.
+    let nominal = robot("ur5");
+    let mut truth = nominal.clone();
+    truth.joints[2].beta = 0.001;
+    let poses = plan::plan(&nominal, FitSet::All, 50, 600, 1).unwrap().poses;
+    let measured = sim::measure(&truth, &poses, 0.0, 0);
+    let check = sim::measure(
+        &truth,
+        &plan::random_poses(&nominal, 100, 2).unwrap(),
+        0.0,
+        0,
+    );
+    let start = Geometry::new(&nominal);
+    let max_error = |with_beta: bool| {
+        let candidates: Vec<Param> = start
+            .candidates(FitSet::All)
+            .into_iter()
+            .filter(|p| with_beta || !matches!(p, Param::Beta(_)))
+            .collect();
+        let params = identify::analyse(&start, &candidates, &poses).identified;
+        let fitted = fit::fit(&start, &params, &measured).unwrap();
+        Residuals::of(&fitted.geometry, &check).max
+    };
+    let (with, without) = (max_error(true), max_error(false));
+    println!("max error with β {:.2e} m, without {:.2e} m", with, without);
+    assert!(with < 1e-6, "{with}");
+    assert!(without > 0.1e-3, "{without}");
 }
