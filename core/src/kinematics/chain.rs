@@ -32,6 +32,7 @@ struct Link {
     prismatic: bool,
     cos_alpha: f64,
     sin_alpha: f64,
+    tilted: bool,
     cos_beta: f64,
     sin_beta: f64,
     a: f64,
@@ -80,6 +81,7 @@ impl Chain {
                 prismatic: joint.kind == JointType::Prismatic,
                 cos_alpha,
                 sin_alpha,
+                tilted: joint.beta != 0.0,
                 cos_beta,
                 sin_beta,
                 a: joint.a,
@@ -207,11 +209,18 @@ impl Chain {
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
             let z1 = z * link.cos_alpha - y * link.sin_alpha;
-            // RotY(β), Hayati's calibration angle (zero unless calibrated): x, z turn about y.
-            let x1 = x * link.cos_beta - z1 * link.sin_beta;
-            let z1 = x * link.sin_beta + z1 * link.cos_beta;
+            // RotY(β), Hayati's calibration angle: x, z turn about y (skipped when β = 0, as in
+            // every uncalibrated file, to keep the tick's cost).
+            let (x, z1) = if link.tilted {
+                (
+                    x * link.cos_beta - z1 * link.sin_beta,
+                    x * link.sin_beta + z1 * link.cos_beta,
+                )
+            } else {
+                (x, z1)
+            };
             // RotZ(θ) · TransZ(d)
-            rot = Rotation::from_cols(x1 * ct + y1 * st, y1 * ct - x1 * st, z1);
+            rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
             pos += z1 * d;
             visit(i, &rot, pos);
         }
