@@ -19,8 +19,18 @@ fn robot(name: &str) -> RobotConfig {
 
 const NOISE: f64 = 0.05e-3;
 
-/// Runs the whole scenario and returns the unidentifiable parameters.
-fn scenario(name: &str, seed: u64) -> Vec<Param> {
+/// What a scenario found beyond its accuracy checks.
+struct Outcome {
+    report: String,
+    /// Held-out errors of the calibrated model.
+    after: Residuals,
+    unidentifiable: Vec<Param>,
+    /// The identified parameter farthest from the truth, and that distance in σ.
+    worst: (Param, f64),
+}
+
+/// Runs the whole scenario, asserting the accuracy figures.
+fn scenario(name: &str, seed: u64) -> Outcome {
     let nominal = robot(name);
     let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, seed);
     let plan = plan::plan(&nominal, FitSet::All, 50, 1000, seed).unwrap();
@@ -29,7 +39,7 @@ fn scenario(name: &str, seed: u64) -> Vec<Param> {
     // Held-out poses measured without noise: the errors are the model's, not the instrument's.
     let held_out = sim::measure(&truth, &check_poses, 0.0, 0);
     let result = calibrate(&nominal, &measured, &held_out, FitSet::All).unwrap();
-    println!("{name}:\n{}", result.report());
+    let report = result.report();
 
     let Validation::HeldOut { before, after } = result.validation else {
         panic!("held-out poses were given")
@@ -49,37 +59,36 @@ fn scenario(name: &str, seed: u64) -> Vec<Param> {
 
     // The truth in the identified parametrisation: the unidentifiable parameters are redundant
     // at the nominal geometry, so the identified ones alone reproduce the true arm — with values
-    // that absorb the errors of the fixed ones. Away from nominal the redundancy holds to second
-    // order only (e.g. d of two axes tilted by 0.05°: 1 mm · 0.05° ≈ 1 µm), so the reduced model
-    // matches the truth to some µm, far below the noise. Each estimate must lie within 3σ of
-    // those values, which is what the fit converges to with endless noise-free data.
-    let exact = sim::measure(
-        &truth,
-        &plan::random_poses(&nominal, 200, seed + 3).unwrap(),
-        0.0,
-        0,
-    );
+    // that absorb the errors of the fixed ones (e.g. base.z goes into J1.d). Away from nominal
+    // the redundancy holds only approximately: the fixed J6.theta moves a tool point that the
+    // errors put up to 1.4 mm off axis 6 (0.5° · 1.4 mm ≈ 12 µm), and the d of axes tilted by
+    // 0.05° (≈ 1 µm). So "the truth" is the noise-free fit at the same poses — what the estimate
+    // is the noisy version of — and it must reproduce the arm to well below the noise.
+    let exact = sim::measure(&truth, &plan.poses, 0.0, 0);
     let start = Geometry::new(&nominal);
     let equivalent = fit::fit(&start, &result.fit.params, &exact).unwrap();
     let residual = Residuals::of(&equivalent.geometry, &exact);
     assert!(
-        residual.max < 0.01e-3,
+        residual.max < 0.025e-3,
         "the reduced model misses the truth by {} m",
         residual.max
     );
+    let mut worst = (Param::Theta(0), 0.0);
     for (p, sd) in result.fit.params.iter().zip(&result.fit.std_dev) {
-        let estimate = result.fit.geometry.get(*p);
-        let true_value = equivalent.geometry.get(*p);
-        assert!(
-            (estimate - true_value).abs() <= 3.0 * sd,
-            "{name} {p}: estimate {estimate} truth {true_value} σ {sd}"
-        );
+        let sigmas = (result.fit.geometry.get(*p) - equivalent.geometry.get(*p)).abs() / sd;
+        if sigmas > worst.1 {
+            worst = (*p, sigmas);
+        }
     }
-    let report = result.report();
     for p in &result.analysis.unidentifiable {
         assert!(report.contains(&p.to_string()), "{p} not in the report");
     }
-    result.analysis.unidentifiable.clone()
+    Outcome {
+        report,
+        after,
+        unidentifiable: result.analysis.unidentifiable.clone(),
+        worst,
+    }
 }
 
 // Both arms: the base pose's x, z, roll and yaw duplicate joint 1's a, d, alpha and theta; the
@@ -88,9 +97,16 @@ fn scenario(name: &str, seed: u64) -> Vec<Param> {
 
 #[test]
 fn ranger_mk1_calibrates_to_a_tenth_of_a_millimetre() {
-    let unidentifiable = scenario("ranger-mk1", 15);
+    let outcome = scenario("ranger-mk1", 15);
+    println!("{}", outcome.report);
+    assert!(
+        outcome.worst.1 <= 3.0,
+        "{} off by {:.2}σ",
+        outcome.worst.0,
+        outcome.worst.1
+    );
     assert_eq!(
-        model::list(&unidentifiable),
+        model::list(&outcome.unidentifiable),
         "J6.theta, J3.d, J6.a, tool.z, J6.alpha, base.x, base.z, base.roll, base.yaw"
     );
 }
@@ -98,11 +114,52 @@ fn ranger_mk1_calibrates_to_a_tenth_of_a_millimetre() {
 #[test]
 fn ur5_calibrates_to_a_tenth_of_a_millimetre() {
     // Axes 2, 3 and 4 are parallel: only one of d2, d3, d4 can be identified.
-    let unidentifiable = scenario("ur5", 5);
+    let outcome = scenario("ur5", 5);
+    println!("{}", outcome.report);
+    assert!(
+        outcome.worst.1 <= 3.0,
+        "{} off by {:.2}σ",
+        outcome.worst.0,
+        outcome.worst.1
+    );
     assert_eq!(
-        model::list(&unidentifiable),
+        model::list(&outcome.unidentifiable),
         "J6.theta, J3.d, J4.d, J6.a, tool.z, J6.alpha, base.x, base.z, base.roll, base.yaw"
     );
+}
+
+/// 50 seeds per arm (about a minute: `cargo test -p armgate-calibrate --test
+/// simulated_metrology -- --ignored --nocapture`). Accuracy must hold for every seed. With about
+/// 25 parameters, a seed whose worst parameter lies beyond 3σ is expected by chance (6.5 % of
+/// seeds for independent Gaussian errors); beyond 4.5σ it is not (0.02 %).
+#[test]
+#[ignore]
+fn many_seeds() {
+    let mut beyond_3 = 0;
+    let mut worst: f64 = 0.0;
+    let (mut mean, mut max): (f64, f64) = (0.0, 0.0);
+    for seed in 100..150 {
+        for name in ["ranger-mk1", "ur5"] {
+            let outcome = scenario(name, seed);
+            if outcome.worst.1 > 3.0 {
+                beyond_3 += 1;
+                eprintln!(
+                    "{name} seed {seed}: {} off by {:.2}σ",
+                    outcome.worst.0, outcome.worst.1
+                );
+            }
+            worst = worst.max(outcome.worst.1);
+            mean = mean.max(outcome.after.mean);
+            max = max.max(outcome.after.max);
+        }
+    }
+    eprintln!(
+        "100 scenarios: held-out error at most {:.3} mm mean, {:.3} mm max; {beyond_3} with a \
+         parameter beyond 3σ, the worst {worst:.2}σ",
+        mean * 1e3,
+        max * 1e3
+    );
+    assert!(worst < 4.5);
 }
 
 #[test]
