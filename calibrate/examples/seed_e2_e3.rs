@@ -13,51 +13,56 @@ use armgate_calibrate::calibration::{Calibration, Validation, calibrate};
 use armgate_calibrate::fit::Residuals;
 use armgate_calibrate::model::{FitSet, Geometry, Param};
 use armgate_calibrate::{plan, sim};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, IkResult};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::Frame;
+use nalgebra::{Rotation3, Vector3};
 
 const NOISE: f64 = 0.05e-3;
 
 /// ranger-mk1 carrying the Faro tip (both models know it).
-fn nominal() -> RobotConfig {
-    let mut config = load_file(concat!(
+fn nominal() -> ValidRobot {
+    let file = load_file(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../robots/ranger-mk1.toml"
     ))
     .expect("robots/ranger-mk1.toml");
-    config.tool.a = -0.00438;
-    config.tool.d = 0.3122;
-    let mut g = Geometry::new(&config);
-    g.set(Param::Theta(5), 1.3);
-    g.apply_to(&mut config);
-    config
+    file.edit(|config| {
+        config.tool.a = -0.00438;
+        config.tool.d = 0.3122;
+        let mut g = Geometry::new(config);
+        g.set(Param::Theta(5), 1.3);
+        g.apply_to(config);
+    })
+    .expect("a valid tip")
 }
 
 /// The arm as the thesis identified it (Table 4.2).
-fn truth() -> RobotConfig {
-    let mut config = nominal();
-    let mut g = Geometry::new(&config);
-    let offsets = [-0.002627, 0.000863, 0.01267, -0.006912, -0.006189];
-    for (i, offset) in offsets.into_iter().enumerate() {
-        g.set(Param::Theta(i), offset);
-    }
-    g.set(Param::D(0), 0.2505);
-    g.set(Param::A(2), 0.5599);
-    g.set(Param::A(3), 0.1525);
-    g.set(Param::D(3), 0.5335);
-    g.apply_to(&mut config);
-    config
+fn truth() -> ValidRobot {
+    nominal()
+        .edit(|config| {
+            let mut g = Geometry::new(config);
+            let offsets = [-0.002627, 0.000863, 0.01267, -0.006912, -0.006189];
+            for (i, offset) in offsets.into_iter().enumerate() {
+                g.set(Param::Theta(i), offset);
+            }
+            g.set(Param::D(0), 0.2505);
+            g.set(Param::A(2), 0.5599);
+            g.set(Param::A(3), 0.1525);
+            g.set(Param::D(3), 0.5335);
+            g.apply_to(config);
+        })
+        .expect("valid geometry")
 }
 
 /// E2's test points (spec §8.2): two horizontal lines along base x, 10 cm apart in a plane
 /// tilted 54.7° above horizontal, each with 4 waypoints 20 cm apart; with each line's centre,
 /// 10 vertices (the thesis's figure with the exact points is lost). The tool keeps one level
 /// attitude, pointing along +y at the plane, near where E4–E6 worked (y ≈ 0.6 m, z ≈ 0.5 m).
-fn e2_vertices(config: &RobotConfig) -> Vec<Vec<f64>> {
+fn e2_vertices(config: &ValidRobot) -> Vec<Vec<f64>> {
     let chain = Chain::new(config);
     let slope = 2f64.sqrt().atan();
-    let level = Rotation::from_rpy(-std::f64::consts::FRAC_PI_2, 0.0, 0.0);
+    let level = Rotation3::from_euler_angles(-std::f64::consts::FRAC_PI_2, 0.0, 0.0);
     let mut seed = config.home().as_array().get(..6).unwrap().to_vec();
     let mut vertices = Vec::new();
     for line in 0..2 {
@@ -66,7 +71,7 @@ fn e2_vertices(config: &RobotConfig) -> Vec<Vec<f64>> {
             0.45 + 0.1 * line as f64 * slope.sin(),
         );
         for x in [-0.3, -0.1, 0.0, 0.1, 0.3] {
-            let target = Frame::new(level, Vec3::new(x, y, z));
+            let target = Frame::from_parts(Vector3::new(x, y, z).into(), level);
             let ik = chain.solve_global(&target, &seed, &config.ik, 1).unwrap();
             let IkResult::Converged(solution) = ik else {
                 panic!("E2 point ({x}, {y}, {z}) is unreachable")
@@ -132,8 +137,10 @@ fn main() {
     // E3 (a): joint offsets only; (b): then lengths only, offsets held; (c): all together.
     let a = calibrate(&nominal, &e2, &check, FitSet::Offsets).unwrap();
     result_row("E3 (a) offsets only", &a);
-    let mut after_a = nominal.clone();
-    a.fit.geometry.apply_to(&mut after_a);
+    let after_a = nominal
+        .clone()
+        .edit(|config| a.fit.geometry.apply_to(config))
+        .unwrap();
     let b = calibrate(&after_a, &e2, &check, FitSet::Lengths).unwrap();
     result_row("E3 (b) then lengths, offsets held", &b);
     let c = calibrate(&nominal, &e2, &check, FitSet::All).unwrap();

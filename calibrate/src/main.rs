@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use armgate_calibrate::calibration::{self, Calibration, Validation};
 use armgate_calibrate::model::{self, FitSet};
 use armgate_calibrate::{measurements, plan, robot_file, sim};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 /// Kinematic calibration: fit a robot file's geometry to measured tool positions.
@@ -136,7 +136,7 @@ fn read(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()).into())
 }
 
-fn robot(path: &Path) -> Result<RobotConfig> {
+fn robot(path: &Path) -> Result<ValidRobot> {
     load_file(path).map_err(|e| format!("{}: {e}", path.display()).into())
 }
 
@@ -247,7 +247,7 @@ fn run_simulate(
 ) -> Result<()> {
     let mut config = robot(truth)?;
     if let Some(seed) = perturb {
-        config = sim::perturb(&config, &sim::Errors::TYPICAL, seed);
+        config = sim::perturb(&config, &sim::Errors::TYPICAL, seed)?;
     }
     let poses = measurements::parse_poses(&read(poses)?, config.dof())
         .map_err(|e| format!("{}: {e}", poses.display()))?;

@@ -8,7 +8,7 @@
 //! largest `det(I + B M⁻¹ Bᵀ)`, where B is its 3-row block and M the information so far; then
 //! exchange passes swap a chosen pose for a candidate while that raises the determinant.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Chain;
 use armgate_core::motion::Workspace;
 use armgate_core::rng::SplitMix64;
@@ -51,7 +51,7 @@ impl std::error::Error for PlanError {}
 /// `count` random joint configurations within the limits whose nominal tool position the
 /// workspace allows, from generator `seed`.
 pub fn random_poses(
-    config: &RobotConfig,
+    config: &ValidRobot,
     count: usize,
     seed: u64,
 ) -> Result<Vec<Vec<f64>>, PlanError> {
@@ -71,7 +71,7 @@ pub fn random_poses(
             .collect();
         if chain
             .forward(&q)
-            .is_ok_and(|tool| workspace.allows(tool.pos))
+            .is_ok_and(|tool| workspace.allows(&tool.translation.vector))
         {
             poses.push(q);
         }
@@ -99,7 +99,7 @@ pub struct Plan {
 /// Chooses `count` poses out of `candidates` random ones (seeded) that best determine the
 /// parameters of `set`.
 pub fn plan(
-    config: &RobotConfig,
+    config: &ValidRobot,
     set: FitSet,
     count: usize,
     candidates: usize,

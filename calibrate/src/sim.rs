@@ -2,7 +2,7 @@
 //! a noisy instrument. The measurements use `armgate_core`'s forward kinematics, independent of
 //! the calibration model.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{ConfigError, ValidRobot};
 use armgate_core::kinematics::Chain;
 use armgate_core::rng::SplitMix64;
 use nalgebra::Vector3;
@@ -44,8 +44,9 @@ impl Errors {
     };
 }
 
-/// `config` with every calibratable constant off by a uniform draw within `errors`.
-pub fn perturb(config: &RobotConfig, errors: &Errors, seed: u64) -> RobotConfig {
+/// `config` with every calibratable constant off by a uniform draw within `errors` (an error
+/// only if the errors are not finite).
+pub fn perturb(config: &ValidRobot, errors: &Errors, seed: u64) -> Result<ValidRobot, ConfigError> {
     let mut rng = SplitMix64::new(seed);
     let mut geometry = Geometry::new(config);
     for p in geometry.candidates(FitSet::All) {
@@ -59,24 +60,22 @@ pub fn perturb(config: &RobotConfig, errors: &Errors, seed: u64) -> RobotConfig 
         let value = geometry.get(p) + rng.uniform(-bound, bound);
         geometry.set(p, value);
     }
-    let mut truth = config.clone();
-    geometry.apply_to(&mut truth);
-    truth
+    config.clone().edit(|truth| geometry.apply_to(truth))
 }
 
 /// Measures the tool position of `truth` at each pose with Gaussian noise of standard
 /// deviation `noise` (m) per coordinate.
-pub fn measure(truth: &RobotConfig, poses: &[Vec<f64>], noise: f64, seed: u64) -> Vec<Measurement> {
+pub fn measure(truth: &ValidRobot, poses: &[Vec<f64>], noise: f64, seed: u64) -> Vec<Measurement> {
     let chain = Chain::new(truth);
     let mut rng = SplitMix64::new(seed);
     poses
         .iter()
         .filter_map(|q| {
-            let p = chain.forward(q).ok()?.pos;
-            let mut n = || noise * gaussian(&mut rng);
+            let p = chain.forward(q).ok()?.translation.vector;
+            let n = Vector3::from_fn(|_, _| noise * gaussian(&mut rng));
             Some(Measurement {
                 q: q.clone(),
-                position: Vector3::new(p.x + n(), p.y + n(), p.z + n()),
+                position: p + n,
                 weight: 1.0,
             })
         })

@@ -6,7 +6,7 @@ use armgate_calibrate::measurements::{format, format_poses, parse, parse_poses};
 use armgate_calibrate::model::{FitSet, Geometry, Param};
 use armgate_calibrate::robot_file::{BEGIN, END, edit};
 use armgate_calibrate::{plan, sim};
-use armgate_core::config::{RobotConfig, parse_toml};
+use armgate_core::config::{ValidRobot, parse_toml};
 use armgate_core::kinematics::Chain;
 use armgate_core::motion::Workspace;
 
@@ -18,7 +18,7 @@ fn text(name: &str) -> String {
     .unwrap()
 }
 
-fn robot(name: &str) -> RobotConfig {
+fn robot(name: &str) -> ValidRobot {
     parse_toml(&text(name)).unwrap()
 }
 
@@ -26,7 +26,7 @@ fn robot(name: &str) -> RobotConfig {
 fn the_written_file_changes_only_the_fitted_values() {
     let original = text("ranger-mk1");
     let nominal = robot("ranger-mk1");
-    let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, 9);
+    let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, 9).unwrap();
     let fitted = Geometry::new(&nominal).candidates(FitSet::All);
     let written = edit(
         &original,
@@ -40,14 +40,15 @@ fn the_written_file_changes_only_the_fitted_values() {
     let reloaded = parse_toml(&written).unwrap();
     let (a, b) = (Chain::new(&reloaded), Chain::new(&truth));
     for q in plan::random_poses(&nominal, 10, 2).unwrap() {
-        let (p, t) = (a.forward(&q).unwrap().pos, b.forward(&q).unwrap().pos);
+        let (p, t) = (a.forward(&q).unwrap(), b.forward(&q).unwrap());
+        let (p, t) = (p.translation.vector, t.translation.vector);
         assert!((p.x - t.x).abs() + (p.y - t.y).abs() + (p.z - t.z).abs() < 1e-8);
     }
-    let mut expected = truth.clone();
+    let mut expected = truth.clone().into_config();
     expected.joints = reloaded.joints.clone();
     expected.base = reloaded.base;
     expected.tool = reloaded.tool;
-    assert_eq!(reloaded, expected);
+    assert_eq!(*reloaded, expected);
 
     // The comment block comes first; every original comment line survives.
     assert!(written.starts_with(&format!("{BEGIN}\n# line one\n#\n# line two\n{END}\n")));
@@ -114,7 +115,7 @@ fn planned_poses_are_reachable_deterministic_and_better_than_random() {
         assert_eq!(planned.poses.len(), 30);
         for q in &planned.poses {
             assert!(chain.within_limits(q));
-            assert!(workspace.allows(chain.forward(q).unwrap().pos));
+            assert!(workspace.allows(&chain.forward(q).unwrap().translation.vector));
         }
         let again = plan::plan(&config, FitSet::All, 30, 600, 4).unwrap();
         assert_eq!(planned.poses, again.poses);

@@ -6,10 +6,10 @@ use armgate_calibrate::calibration::{Validation, calibrate};
 use armgate_calibrate::fit::{self, Residuals};
 use armgate_calibrate::model::{self, FitSet, Geometry, Param};
 use armgate_calibrate::{identify, plan, sim};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Chain;
 
-fn robot(name: &str) -> RobotConfig {
+fn robot(name: &str) -> ValidRobot {
     load_file(format!(
         "{}/../robots/{name}.toml",
         env!("CARGO_MANIFEST_DIR")
@@ -32,7 +32,7 @@ struct Outcome {
 /// Runs the whole scenario, asserting the accuracy figures.
 fn scenario(name: &str, seed: u64) -> Outcome {
     let nominal = robot(name);
-    let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, seed);
+    let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, seed).unwrap();
     let plan = plan::plan(&nominal, FitSet::All, 50, 1000, seed).unwrap();
     let measured = sim::measure(&truth, &plan.poses, NOISE, seed + 1);
     let check_poses = plan::random_poses(&nominal, 100, seed + 2).unwrap();
@@ -165,15 +165,12 @@ fn many_seeds() {
 #[test]
 fn the_model_is_cores_forward_kinematics() {
     for name in ["ranger-mk1", "ur5", "hybrid", "ranger-mk2"] {
-        let truth = sim::perturb(&robot(name), &sim::Errors::TYPICAL, 3);
+        let truth = sim::perturb(&robot(name), &sim::Errors::TYPICAL, 3).unwrap();
         let chain = Chain::new(&truth);
         let geometry = Geometry::new(&truth);
         for q in plan::random_poses(&robot(name), 20, 4).unwrap() {
-            let core = chain.forward(&q).unwrap().pos;
-            let ours = geometry.position(&q);
-            let diff =
-                ((core.x - ours.x).powi(2) + (core.y - ours.y).powi(2) + (core.z - ours.z).powi(2))
-                    .sqrt();
+            let core = chain.forward(&q).unwrap().translation.vector;
+            let diff = (core - geometry.position(&q)).norm();
             assert!(diff < 1e-12, "{name}: {diff}");
         }
     }
@@ -185,8 +182,7 @@ fn hayati_beta_absorbs_a_tilt_between_parallel_axes() {
     // only by moving the common normal (and d) metres away — not a small correction — so
     // without β the fit is left with the tilt; with β it is exact.
     let nominal = robot("ur5");
-    let mut truth = nominal.clone();
-    truth.joints[2].beta = 0.001;
+    let truth = nominal.clone().edit(|c| c.joints[2].beta = 0.001).unwrap();
     let poses = plan::plan(&nominal, FitSet::All, 50, 600, 1).unwrap().poses;
     let measured = sim::measure(&truth, &poses, 0.0, 0);
     let check = sim::measure(

@@ -11,8 +11,9 @@ mod common;
 
 use armgate_core::config::parse_toml;
 use armgate_core::kinematics::Chain;
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
+use nalgebra::{Rotation3, Vector3};
 
 #[test]
 fn absent_base_and_beta_are_zero() {
@@ -25,39 +26,50 @@ fn absent_base_and_beta_are_zero() {
 #[test]
 fn the_base_frame_moves_every_pose() {
     let plain = common::robot("ranger-mk1");
-    let mut placed = plain.clone();
-    placed.base.xyz = [0.1, -0.2, 0.3];
-    placed.base.rpy = [0.01, -0.02, 0.5];
-    let base = Frame::new(
-        Rotation::from_rpy(0.01, -0.02, 0.5),
-        Vec3::new(0.1, -0.2, 0.3),
+    let placed = plain
+        .clone()
+        .edit(|c| {
+            c.base.xyz = [0.1, -0.2, 0.3];
+            c.base.rpy = [0.01, -0.02, 0.5];
+        })
+        .unwrap();
+    let base = Frame::from_parts(
+        Vector3::new(0.1, -0.2, 0.3).into(),
+        Rotation3::from_euler_angles(0.01, -0.02, 0.5),
     );
     let (a, b) = (Chain::new(&plain), Chain::new(&placed));
     let mut rng = SplitMix64::new(7);
     for _ in 0..20 {
         let q = common::random_q(&a, &mut rng);
         let expected = base * a.forward(&q).unwrap();
-        assert!(b.forward(&q).unwrap().dist(&expected) < 1e-12);
+        assert!(math::dist(&b.forward(&q).unwrap(), &expected) < 1e-12);
     }
 }
 
 #[test]
 fn beta_turns_about_y_after_a() {
-    let mut config = common::robot("ranger-mk1");
-    config.joints[2].beta = 0.02;
+    let config = common::robot("ranger-mk1")
+        .edit(|c| c.joints[2].beta = 0.02)
+        .unwrap();
     let chain = Chain::new(&config);
     let mut rng = SplitMix64::new(8);
     for _ in 0..20 {
         let q = common::random_q(&chain, &mut rng);
-        let mut expected = Frame::IDENTITY;
+        let mut expected = Frame::identity();
         for (j, qi) in config.joints.iter().zip(&q) {
-            let x = Frame::new(Rotation::rot_x(j.alpha), Vec3::new(j.a, 0.0, 0.0));
-            let y = Frame::new(Rotation::rot_y(j.beta), Vec3::ZERO);
-            expected = expected * x * y * Frame::dh(0.0, 0.0, j.d, j.theta + qi);
+            let x = Frame::from_parts(
+                Vector3::new(j.a, 0.0, 0.0).into(),
+                Rotation3::from_euler_angles(j.alpha, 0.0, 0.0),
+            );
+            let y = Frame::from_parts(
+                Vector3::zeros().into(),
+                Rotation3::from_euler_angles(0.0, j.beta, 0.0),
+            );
+            expected = expected * x * y * math::dh(0.0, 0.0, j.d, j.theta + qi);
         }
         let t = &config.tool;
-        expected = expected * Frame::dh(t.a, t.alpha, t.d, t.theta);
-        assert!(chain.forward(&q).unwrap().dist(&expected) < 1e-12);
+        expected *= math::dh(t.a, t.alpha, t.d, t.theta);
+        assert!(math::dist(&chain.forward(&q).unwrap(), &expected) < 1e-12);
     }
 }
 
