@@ -225,8 +225,12 @@ impl Chain {
     ) -> Frame {
         // The rotation is kept as its three columns (the joint frame's axes), starting from the
         // base frame's (the identity unless the file places the base).
-        let base = self.base.rotation.matrix();
-        let [mut x, mut y, mut z] = [0, 1, 2].map(|k| base.column(k).into_owned());
+        let b = self.base.rotation.matrix();
+        let [mut x, mut y, mut z] = [
+            Vector3::new(b.m11, b.m21, b.m31),
+            Vector3::new(b.m12, b.m22, b.m32),
+            Vector3::new(b.m13, b.m23, b.m33),
+        ];
         let mut pos = self.base.translation.vector;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
