@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::thin::{Grid, thin};
-use crate::{Figure, MarkerKind, Panel, Series, Style};
+use crate::{Figure, Marker, MarkerKind, Panel, Series, Style};
 
 /// Drawing or writing the SVG failed.
 #[derive(Debug)]
@@ -46,6 +46,11 @@ const X_LABEL_AREA: u32 = 42;
 const Y_LABEL_AREA: u32 = 70;
 const CAPTION: u32 = 16;
 const TITLE: u32 = 22;
+/// Rows of marker labels, and the height of one (pixels).
+const MARKER_ROWS: usize = 3;
+const MARKER_ROW: u32 = 13;
+/// Height of one legend entry (pixels).
+const LEGEND_ROW: u32 = 19;
 
 /// Draws `figure` into an SVG file at `path`.
 pub fn write_svg(path: &Path, figure: &Figure) -> Result<(), PlotError> {
@@ -88,25 +93,28 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, panel: &Panel) -> Resul
         .bold_line_style(BLACK.mix(0.12))
         .x_desc(&panel.x_label)
         .y_desc(&panel.y_label)
+        .x_label_formatter(&|v| tick_label(*v, grid.x))
+        .y_label_formatter(&|v| tick_label(*v, grid.y))
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 14))
         .draw()?;
 
+    // References (ideal paths, limits) first, under the data; colours by position.
     let mut labelled = false;
-    for (k, series) in panel.series.iter().enumerate() {
+    let mut order: Vec<(usize, &Series)> = panel.series.iter().enumerate().collect();
+    order.sort_by_key(|(_, s)| s.style != Style::Reference);
+    for (k, series) in order {
         let color = PALETTE
             .get(series.color.unwrap_or(k) % PALETTE.len())
             .copied()
             .unwrap_or(BLACK);
         labelled |= draw_series(&mut chart, series, color, &grid)?;
     }
-    for kind in [MarkerKind::Event, MarkerKind::Warning] {
-        labelled |= draw_markers(&mut chart, panel, kind, &grid)?;
-    }
+    labelled |= draw_markers(&mut chart, panel, &grid)?;
     if labelled {
         chart
             .configure_series_labels()
-            .position(panel.legend.clone())
+            .position(SeriesLabelPosition::UpperRight)
             .label_font((FONT, 13))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK.mix(0.4))
@@ -149,55 +157,53 @@ fn draw_series(
         };
         if first && !series.name.is_empty() {
             let legend = style.stroke_width(2);
-            drawn
-                .label(&series.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], legend));
+            let drawn = drawn.label(&series.name);
+            if series.style == Style::Points {
+                drawn.legend(move |(x, y)| Circle::new((x + 10, y), 3, legend.filled()));
+            } else {
+                drawn.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], legend));
+            }
         }
         first = false;
     }
     Ok(!first && !series.name.is_empty())
 }
 
-/// Draws the panel's markers of one kind, labels staggered over three rows; true if there
-/// were any (they then have a legend entry).
-fn draw_markers(
-    chart: &mut Chart<'_, '_>,
-    panel: &Panel,
-    kind: MarkerKind,
-    grid: &Grid,
-) -> Result<bool, PlotError> {
-    let (color, name) = match kind {
-        MarkerKind::Event => (EVENT, "mode change"),
-        MarkerKind::Warning => (WARNING, "warning / error"),
-    };
-    let markers: Vec<_> = panel.markers.iter().filter(|m| m.kind == kind).collect();
-    if markers.is_empty() {
-        return Ok(false);
-    }
+/// Draws the panel's markers: a vertical line each, the label at the foot in the headroom
+/// kept free for it (staggered over three rows, by x); true if there were any (each kind
+/// present then has a legend entry).
+fn draw_markers(chart: &mut Chart<'_, '_>, panel: &Panel, grid: &Grid) -> Result<bool, PlotError> {
+    let mut markers: Vec<&Marker> = panel.markers.iter().filter(|m| m.x.is_finite()).collect();
+    markers.sort_by(|a, b| a.x.total_cmp(&b.x));
     let (y0, y1) = grid.y;
-    let line = color.mix(0.6).stroke_width(1);
-    chart
-        .draw_series(
-            markers
-                .iter()
-                .map(|m| PathElement::new(vec![(m.x, y0), (m.x, y1)], line)),
-        )?
-        .label(name)
-        .legend(move |(x, y)| PathElement::new(vec![(x + 10, y - 6), (x + 10, y + 6)], line));
-    let font = (FONT, 11).into_font().color(&color);
-    let row = (y1 - y0) * 0.05;
-    chart.draw_series(markers.iter().enumerate().map(|(k, m)| {
-        let offset = match kind {
-            MarkerKind::Event => (k % 3) as f64,
-            MarkerKind::Warning => 3.0 + (k % 3) as f64,
+    let row = (y1 - y0) / f64::from(grid.pixels.1.max(1)) * f64::from(MARKER_ROW);
+    for kind in [MarkerKind::Event, MarkerKind::Warning] {
+        let (color, name) = match kind {
+            MarkerKind::Event => (EVENT, "mode change"),
+            MarkerKind::Warning => (WARNING, "warning / error"),
         };
-        Text::new(
-            format!(" {}", m.label),
-            (m.x, y1 - row * (0.2 + offset)),
-            font.clone(),
-        )
-    }))?;
-    Ok(true)
+        let of_kind = || markers.iter().enumerate().filter(|(_, m)| m.kind == kind);
+        if of_kind().next().is_none() {
+            continue;
+        }
+        let line = color.mix(0.6).stroke_width(1);
+        chart
+            .draw_series(
+                of_kind().map(|(_, m)| PathElement::new(vec![(m.x, y0), (m.x, y1)], line)),
+            )?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x + 10, y - 6), (x + 10, y + 6)], line));
+        let font = (FONT, 11).into_font().color(&color);
+        chart.draw_series(of_kind().map(|(k, m)| {
+            let level = 2.8 - (k % MARKER_ROWS) as f64;
+            Text::new(
+                format!(" {}", m.label),
+                (m.x, y0 + row * level),
+                font.clone(),
+            )
+        }))?;
+    }
+    Ok(!markers.is_empty())
 }
 
 /// The axis ranges: the data (and markers) with a 4 % margin, or the panel's fixed y range;
@@ -220,12 +226,60 @@ fn ranges(panel: &Panel, pixels: (u32, u32)) -> Grid {
     let y = panel
         .y_range
         .unwrap_or_else(|| pad(bounds(&mut finite().map(|p| p.1))));
+    let y = headroom(y, pixels.1, panel);
     let (x, y) = if panel.equal_aspect {
         equal_scale(x, y, pixels)
     } else {
         (x, y)
     };
     Grid { x, y, pixels }
+}
+
+/// Widens the y range so that the legend (at the top) and the marker labels (at the foot)
+/// have room of their own and cover no data.
+fn headroom((lo, hi): (f64, f64), height: u32, panel: &Panel) -> (f64, f64) {
+    let named = panel.series.iter().filter(|s| !s.name.is_empty()).count();
+    let kinds = [MarkerKind::Event, MarkerKind::Warning]
+        .iter()
+        .filter(|k| panel.markers.iter().any(|m| m.kind == **k))
+        .count();
+    let entries = u32::try_from(named + kinds).unwrap_or(u32::MAX);
+    let top = if entries > 0 {
+        entries.saturating_mul(LEGEND_ROW).saturating_add(16)
+    } else {
+        0
+    };
+    let bottom = if panel.markers.is_empty() {
+        0
+    } else {
+        MARKER_ROW * 3 + 6
+    };
+    let free = f64::from(height.saturating_sub(top + bottom).max(height / 3).max(1));
+    let per_px = (hi - lo) / free;
+    (
+        lo - per_px * f64::from(bottom),
+        hi + per_px * f64::from(top),
+    )
+}
+
+/// A tick value with as many decimals as the range needs (a tenth of it shows), and no "-0".
+fn tick_label(v: f64, (lo, hi): (f64, f64)) -> String {
+    let step = (hi - lo).abs() / 10.0;
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10().floor()).clamp(0.0, 12.0) as usize
+    } else {
+        3
+    };
+    let text = format!("{v:.decimals$}");
+    if text
+        .trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        text.trim_start_matches('-').to_owned()
+    } else {
+        text
+    }
 }
 
 fn pad(bounds: Option<(f64, f64)>) -> (f64, f64) {
@@ -268,6 +322,14 @@ mod tests {
         let sy = (g.y.1 - g.y.0) / 200.0;
         assert!((sx - sy).abs() < 1e-12, "{sx} {sy}");
         assert!(g.x.0 < 0.0 && g.x.1 > 1.0 && g.y.0 < 0.0 && g.y.1 > 0.1);
+    }
+
+    #[test]
+    fn tick_labels_have_the_decimals_the_range_needs() {
+        assert_eq!(tick_label(-0.0001, (-1.0, 1.0)), "0.0");
+        assert_eq!(tick_label(0.26, (0.0, 1.0)), "0.3");
+        assert_eq!(tick_label(0.0126, (0.0, 0.05)), "0.013");
+        assert_eq!(tick_label(120.0, (0.0, 300.0)), "120");
     }
 
     #[test]

@@ -23,7 +23,6 @@ pub mod thin;
 
 pub use args::plots_dir_from_args;
 pub use draw::{PlotError, write_svg};
-pub use plotters::chart::SeriesLabelPosition as LegendPosition;
 
 /// A picture: a title over panels laid out in a grid, row by row.
 #[derive(Clone, Debug)]
@@ -62,7 +61,9 @@ impl Figure {
     }
 }
 
-/// One chart: axes with their labels (units in brackets), series and markers.
+/// One chart: axes with their labels (units in brackets), series and markers. The legend
+/// goes top right and the marker labels at the foot, each in room of its own above and below
+/// the data.
 #[derive(Clone, Debug)]
 pub struct Panel {
     /// Drawn above the chart.
@@ -79,8 +80,6 @@ pub struct Panel {
     pub y_range: Option<(f64, f64)>,
     /// One metre (or unit) is as long along x as along y: for paths in a plane.
     pub equal_aspect: bool,
-    /// Where the legend goes.
-    pub legend: LegendPosition,
 }
 
 impl Panel {
@@ -98,7 +97,6 @@ impl Panel {
             markers: Vec::new(),
             y_range: None,
             equal_aspect: false,
-            legend: LegendPosition::UpperRight,
         }
     }
 
@@ -123,12 +121,6 @@ impl Panel {
     /// Draws x and y to the same scale.
     pub fn equal_aspect(mut self) -> Self {
         self.equal_aspect = true;
-        self
-    }
-
-    /// Moves the legend.
-    pub fn legend(mut self, position: LegendPosition) -> Self {
-        self.legend = position;
         self
     }
 }
