@@ -223,10 +223,17 @@ fn ranges(panel: &Panel, pixels: (u32, u32)) -> Grid {
     };
     let markers = panel.markers.iter().map(|m| m.x).filter(|x| x.is_finite());
     let x = pad(bounds(&mut finite().map(|p| p.0).chain(markers)));
-    let y = panel
-        .y_range
-        .unwrap_or_else(|| pad(bounds(&mut finite().map(|p| p.1))));
-    let y = headroom(y, pixels.1, panel);
+    // A fixed range is kept as it is: its owner left room for the legend.
+    let y = panel.y_range.unwrap_or_else(|| {
+        let values = finite()
+            .map(|p| p.1)
+            .chain(panel.y_includes.iter().copied());
+        headroom(
+            pad(bounds(&mut values.filter(|v| v.is_finite()))),
+            pixels.1,
+            panel,
+        )
+    });
     let (x, y) = if panel.equal_aspect {
         equal_scale(x, y, pixels)
     } else {

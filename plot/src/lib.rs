@@ -76,8 +76,10 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Vertical lines at events (mode changes, warnings).
     pub markers: Vec<Marker>,
-    /// The y range; from the data if none.
+    /// The y range; from the data, with room for the legend and marker labels, if none.
     pub y_range: Option<(f64, f64)>,
+    /// Values the y range reaches, with the data (such as 0 for a load).
+    pub y_includes: Vec<f64>,
     /// One metre (or unit) is as long along x as along y: for paths in a plane.
     pub equal_aspect: bool,
 }
@@ -96,6 +98,7 @@ impl Panel {
             series: Vec::new(),
             markers: Vec::new(),
             y_range: None,
+            y_includes: Vec::new(),
             equal_aspect: false,
         }
     }
@@ -112,9 +115,15 @@ impl Panel {
         self
     }
 
-    /// Fixes the y range.
+    /// Fixes the y range, with no room added for the legend and the marker labels.
     pub fn y_range(mut self, min: f64, max: f64) -> Self {
         self.y_range = Some((min, max));
+        self
+    }
+
+    /// Makes the y range reach `value` (from the data, with room for the legend).
+    pub fn include_y(mut self, value: f64) -> Self {
+        self.y_includes.push(value);
         self
     }
 
