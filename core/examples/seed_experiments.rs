@@ -124,12 +124,7 @@ fn plot_approach(dir: &Path, d: &DivergenceRun) {
 }
 
 fn plot_rectangles(dir: &Path, runs: &[(&str, &str, RectangleRun)]) {
-    let mut path = Panel::new("tool path, y–z view (x = 0.5 m)", "y (m)", "z (m)")
-        .series(Series::reference(
-            "ideal rectangle",
-            RECTANGLE.iter().map(|p| (p[1], p[2])),
-        ))
-        .equal_aspect();
+    let mut path = Panel::new("tool path, y–z view (x = 0.5 m)", "y (m)", "z (m)").equal_aspect();
     let mut panels = Vec::new();
     for (k, (exp, robot, r)) in runs.iter().enumerate() {
         path = path.series(
@@ -166,6 +161,9 @@ fn plot_rectangles(dir: &Path, runs: &[(&str, &str, RectangleRun)]) {
             .markers(divergence_markers(&r.trace)),
         );
     }
+    path = path.series(
+        Series::reference("ideal rectangle", RECTANGLE.iter().map(|p| (p[1], p[2]))).color(0),
+    );
     panels.insert(0, path);
     let figure = Figure::new(
         "E8/E9: the rectangle at v_max 0.05 m/s, a_max 0.10 m/s², ideal arm",

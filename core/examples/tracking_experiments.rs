@@ -300,25 +300,26 @@ fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
     let path = match row.shape {
         Shape::Circle { .. } => {
             let xz = |p: Vec3| (p.x, p.z);
-            let n = 720;
-            let mut panel = Panel::new("the path in the x–z plane", "x (m)", "z (m)")
-                .series(Series::reference(
-                    "ideal",
-                    (0..=n).map(|k| {
-                        xz(ideal(
-                            f64::from(k) / f64::from(n) * shape_period(&row.shape),
-                        ))
-                    }),
-                ))
-                .equal_aspect();
+            let mut panel =
+                Panel::new("the path in the x–z plane", "x (m)", "z (m)").equal_aspect();
             for (k, r) in runs.iter().enumerate() {
                 panel = panel.series(
                     Series::line(drives(r), r.drive_path.iter().map(|(_, p)| xz(*p))).color(k + 2),
                 );
             }
-            panel.series(
-                Series::line("commanded", first.commanded.iter().map(|(_, p)| xz(*p))).color(1),
-            )
+            let n = 720;
+            let period = shape_period(&row.shape);
+            panel
+                .series(
+                    Series::line("commanded", first.commanded.iter().map(|(_, p)| xz(*p))).color(1),
+                )
+                .series(
+                    Series::reference(
+                        "ideal",
+                        (0..=n).map(|k| xz(ideal(f64::from(k) / f64::from(n) * period))),
+                    )
+                    .color(0),
+                )
         }
         Shape::Sinusoid { axis, .. } => {
             let axis = usize::from(axis);
@@ -328,24 +329,28 @@ fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
                 format!("{name} over time (the other axes held)"),
                 "t (s)",
                 format!("{name} (m)"),
-            )
-            .series(Series::reference(
-                "ideal",
-                first.commanded.iter().map(|(t, _)| (*t, along(ideal(*t)))),
-            ));
+            );
             for (k, r) in runs.iter().enumerate() {
                 panel = panel.series(
                     Series::line(drives(r), r.drive_path.iter().map(|(t, p)| (*t, along(*p))))
                         .color(k + 2),
                 );
             }
-            panel.series(
-                Series::line(
-                    "commanded",
-                    first.commanded.iter().map(|(t, p)| (*t, along(*p))),
+            panel
+                .series(
+                    Series::line(
+                        "commanded",
+                        first.commanded.iter().map(|(t, p)| (*t, along(*p))),
+                    )
+                    .color(1),
                 )
-                .color(1),
-            )
+                .series(
+                    Series::reference(
+                        "ideal",
+                        first.commanded.iter().map(|(t, _)| (*t, along(ideal(*t)))),
+                    )
+                    .color(0),
+                )
         }
     };
     let mut error = Panel::new(

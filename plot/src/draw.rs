@@ -99,11 +99,9 @@ fn draw_panel(area: &DrawingArea<SVGBackend<'_>, Shift>, panel: &Panel) -> Resul
         .axis_desc_style((FONT, 14))
         .draw()?;
 
-    // References (ideal paths, limits) first, under the data; colours by position.
+    // In order: a thin reference drawn after a thick line shows on top of it.
     let mut labelled = false;
-    let mut order: Vec<(usize, &Series)> = panel.series.iter().enumerate().collect();
-    order.sort_by_key(|(_, s)| s.style != Style::Reference);
-    for (k, series) in order {
+    for (k, series) in panel.series.iter().enumerate() {
         let color = PALETTE
             .get(series.color.unwrap_or(k) % PALETTE.len())
             .copied()
@@ -138,7 +136,7 @@ fn draw_series(
 ) -> Result<bool, PlotError> {
     let style = match series.style {
         Style::Line | Style::Points => color.stroke_width(2),
-        Style::Reference => color.mix(0.7).stroke_width(1),
+        Style::Reference => color.stroke_width(1),
     };
     let mut first = true;
     for segment in series

@@ -139,7 +139,8 @@ impl Panel {
 pub enum Style {
     /// A line through the points; a non-finite point breaks it.
     Line,
-    /// A thin line, for references such as an ideal path or a limit.
+    /// A thin line, for references such as an ideal path or a limit; added after the data,
+    /// it shows on top of a thick line that follows it closely.
     Reference,
     /// A dot at each point.
     Points,
