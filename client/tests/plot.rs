@@ -48,7 +48,8 @@ fn plot_writes_the_tool_path_and_the_joints() {
         "position (m)",
         "measured",
         "Cartesian set-point",
-        "start, end",
+        "start",
+        "end",
         "mode change",
         "warning / error",
     ] {

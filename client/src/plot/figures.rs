@@ -8,6 +8,8 @@ use super::logs::{Logs, StateLog};
 const MEASURED: usize = 0;
 const COMMANDED: usize = 1;
 const AXES: [usize; 3] = [2, 4, 3];
+const START: usize = 2;
+const END: usize = 6;
 
 /// The tool path in three views (top x–y, front x–z, side y–z, each to scale) and the tool's
 /// x, y, z over time with the markers.
@@ -23,10 +25,11 @@ pub fn tool_path(logs: &Logs, title: &str) -> Figure {
             }
         };
         let measured = pairs(&s.tool);
-        let ends = measured.first().into_iter().chain(measured.last()).copied();
+        let (start, end) = (measured.first().copied(), measured.last().copied());
         let mut panel = Panel::new(name, label(a), label(b))
-            .series(Series::line("measured", measured.clone()).color(MEASURED))
-            .series(Series::points("start, end", ends.collect::<Vec<_>>()).color(MEASURED))
+            .series(Series::line("measured", measured).color(MEASURED))
+            .series(Series::points("start", start).color(START))
+            .series(Series::points("end", end).color(END))
             .equal_aspect();
         let setpoint = pairs(&s.setpoint);
         if setpoint.iter().any(|(u, v)| u.is_finite() && v.is_finite()) {
