@@ -46,10 +46,10 @@ use std::path::{Path, PathBuf};
 mod drive_loop;
 use drive_loop::DriveLoop;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
 use armgate_core::kinematics::{Chain, IkResult, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
 use armgate_plot::{Figure, Panel, Series, write_svg};
 
@@ -155,19 +155,22 @@ fn shape_speed(shape: &Shape) -> f64 {
 }
 
 /// The experiment's robot: ranger-mk1 with every joint's rate limit raised.
-fn config() -> RobotConfig {
+fn config() -> ValidRobot {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
-    let mut config = load_file(&path).expect("robot file");
-    for joint in config.joints.iter_mut() {
-        joint.max_rate = JOINT_RATE;
-    }
-    config
+    load_file(&path)
+        .expect("robot file")
+        .edit(|config| {
+            for joint in config.joints.iter_mut() {
+                joint.max_rate = JOINT_RATE;
+            }
+        })
+        .expect("valid with the raised rate")
 }
 
 /// A start pose: how its orientation was chosen, the orientation and the joints.
 struct StartPose {
     name: &'static str,
-    rot: Rotation,
+    rot: Rotation3<f64>,
     q: Joints,
 }
 
@@ -203,7 +206,7 @@ fn main() {
 
 /// Prints the table for one start pose; with `plots`, writes each row's figure there.
 fn print_table(
-    config: &RobotConfig,
+    config: &ValidRobot,
     chain: &Chain,
     rows: &[Experiment],
     pose: &StartPose,
@@ -212,8 +215,8 @@ fn print_table(
     println!(
         "\nstart orientation {} (tool z axis {:.3?}, rpy {:.4?}), joints {:.4?}\n",
         pose.name,
-        (pose.rot * Vec3::Z).to_array(),
-        pose.rot.to_rpy(),
+        (pose.rot * Vector3::z()).as_slice(),
+        math::rpy(&pose.rot),
         &pose.q[..]
     );
     println!(
@@ -299,7 +302,7 @@ fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
     let drives = |r: &Run| format!("drives at {:.1} rad/s", r.drive_speed);
     let path = match row.shape {
         Shape::Circle { .. } => {
-            let xz = |p: Vec3| (p.x, p.z);
+            let xz = |p: Vector3<f64>| (p.x, p.z);
             let mut panel =
                 Panel::new("the path in the x–z plane", "x (m)", "z (m)").equal_aspect();
             for (k, r) in runs.iter().enumerate() {
@@ -324,7 +327,8 @@ fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
         Shape::Sinusoid { axis, .. } => {
             let axis = usize::from(axis);
             let name = ["x", "y", "z"].get(axis).copied().unwrap_or("?");
-            let along = move |p: Vec3| [p.x, p.y, p.z].get(axis).copied().unwrap_or(f64::NAN);
+            let along =
+                move |p: Vector3<f64>| [p.x, p.y, p.z].get(axis).copied().unwrap_or(f64::NAN);
             let mut panel = Panel::new(
                 format!("{name} over time (the other axes held)"),
                 "t (s)",
@@ -395,21 +399,24 @@ fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
 /// Candidate start poses, in order: each orientation solved by global IK from each seed; the
 /// ones whose every shape runs through the controller (ideal arm) with no IK, joint-limit,
 /// rate or workspace event. Prints why the others were passed over.
-fn start_poses(config: &RobotConfig, chain: &Chain, rows: &[Experiment]) -> Vec<StartPose> {
+fn start_poses(config: &ValidRobot, chain: &Chain, rows: &[Experiment]) -> Vec<StartPose> {
     let orientations = [
         (
             "of the comfortable pose (1.5708, 0.6, -0.4, 0.2, 1.8, 0.1)",
-            chain.forward(&COMFORT).unwrap().rot,
+            chain.forward(&COMFORT).unwrap().rotation,
         ),
         (
             "level, tool pointing forward (+y)",
-            Rotation::from_rpy(0.0, PI / 2.0, PI / 2.0),
+            Rotation3::from_euler_angles(0.0, PI / 2.0, PI / 2.0),
         ),
-        ("tool pointing down", Rotation::from_rpy(PI, 0.0, 0.0)),
+        (
+            "tool pointing down",
+            Rotation3::from_euler_angles(PI, 0.0, 0.0),
+        ),
     ];
     let mut found = Vec::new();
     for (name, rot) in orientations {
-        let target = Frame::new(rot, Vec3::from_array(START));
+        let target = Frame::from_parts(Vector3::from(START).into(), rot);
         let mut tried: Vec<Joints> = Vec::new();
         for seed in IK_SEEDS {
             let Ok(IkResult::Converged(s)) = chain.solve_global(&target, &seed, &config.ik, 1)
@@ -446,7 +453,7 @@ fn start_poses(config: &RobotConfig, chain: &Chain, rows: &[Experiment]) -> Vec<
 /// IK, joint-limit, rate-limit or workspace event and the commands follow the shape within
 /// 1 µm; otherwise why not.
 fn dry_run(
-    config: &RobotConfig,
+    config: &ValidRobot,
     chain: &Chain,
     q0: &Joints,
     shape: &Shape,
@@ -457,7 +464,7 @@ fn dry_run(
     ctrl.step(0.0, &arm.measured()).unwrap();
     ctrl.set_mode(Mode::Cartesian)
         .map_err(|e| format!("{e:?}"))?;
-    let origin = ctrl.cartesian_setpoint().pos;
+    let origin = ctrl.cartesian_setpoint().translation.vector;
     ctrl.start_shape(*shape).map_err(|e| format!("{e:?}"))?;
     let end = CYCLES * shape_period(shape);
     let mut finishing = false;
@@ -495,7 +502,7 @@ fn dry_run(
         for ((p, a), b) in peak.iter_mut().zip(q.iter()).zip(before.iter()) {
             *p = p.max((a - b).abs() / period);
         }
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         let d = (p - ideal(origin, shape, t, end)).norm();
         if d > 1e-6 {
             return Err(format!("off the path by {d:.2e} m at {t:.2} s"));
@@ -513,7 +520,7 @@ fn dry_run(
 
 /// The ideal shape point at phase `s`, held at the start before the shape begins and after it
 /// ends.
-fn ideal(origin: Vec3, shape: &Shape, s: f64, end: f64) -> Vec3 {
+fn ideal(origin: Vector3<f64>, shape: &Shape, s: f64, end: f64) -> Vector3<f64> {
     origin + shape.offset(s.clamp(0.0, end))
 }
 
@@ -533,17 +540,17 @@ struct Run {
     /// The drives' speed limit (rad/s).
     drive_speed: f64,
     /// Where the shape started (m), and its end (phase, s).
-    origin: Vec3,
+    origin: Vector3<f64>,
     end: f64,
     /// FK of each command, at its phase.
-    commanded: Vec<(f64, Vec3)>,
+    commanded: Vec<(f64, Vector3<f64>)>,
     /// FK of the drives' actual joints, at the time since the start.
-    drive_path: Vec<(f64, Vec3)>,
+    drive_path: Vec<(f64, Vector3<f64>)>,
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
 /// The simulated drives' actual positions (joint units), in joint order.
-fn actual(l: &DriveLoop, config: &RobotConfig) -> Joints {
+fn actual(l: &DriveLoop, config: &ValidRobot) -> Joints {
     let mut q = Joints::zeros(config.dof());
     for (v, joint) in q.iter_mut().zip(config.joints.iter()) {
         *v = l
@@ -556,7 +563,7 @@ fn actual(l: &DriveLoop, config: &RobotConfig) -> Joints {
 }
 
 /// Simulated Whistles with their encoders at `q0` and the given speed limit.
-fn virtual_bus(config: &RobotConfig, q0: &Joints, max_speed: f64) -> VirtualBus {
+fn virtual_bus(config: &ValidRobot, q0: &Joints, max_speed: f64) -> VirtualBus {
     let drives = config
         .joints
         .iter()
@@ -570,11 +577,11 @@ fn virtual_bus(config: &RobotConfig, q0: &Joints, max_speed: f64) -> VirtualBus 
     VirtualBus::new(config.drives.can_bitrate, drives)
 }
 
-fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
+fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
     let bus = virtual_bus(config, q0, drive_speed);
     let mut l = DriveLoop::started(config, &DriveSettings::default(), bus);
     l.ctrl.set_mode(Mode::Cartesian).unwrap();
-    let origin = l.ctrl.cartesian_setpoint().pos;
+    let origin = l.ctrl.cartesian_setpoint().translation.vector;
     l.ctrl.start_shape(*shape).unwrap();
 
     let period = config.control_period;
@@ -585,7 +592,14 @@ fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_sp
     let (mut cmd_sum, mut cmd_max, mut cmd_n) = (0.0, 0.0f64, 0usize);
     let mut peak = Joints::zeros(config.dof());
     // (time since the start, FK of the drives' actual joints)
-    let mut samples = vec![(0.0, chain.forward(&actual(&l, config)).unwrap().pos)];
+    let mut samples = vec![(
+        0.0,
+        chain
+            .forward(&actual(&l, config))
+            .unwrap()
+            .translation
+            .vector,
+    )];
     let mut commanded = Vec::new();
     let mut finishing = false;
     let mut k = 0usize;
@@ -598,13 +612,21 @@ fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_sp
             notes.push(format!("event at {t:.2} s: {e:?}"));
         }
         if t <= end {
-            samples.push((t, chain.forward(&actual(&l, config)).unwrap().pos));
+            samples.push((
+                t,
+                chain
+                    .forward(&actual(&l, config))
+                    .unwrap()
+                    .translation
+                    .vector,
+            ));
         }
         let command = out.command.expect("Cartesian mode commands every tick");
         // Command k is the shape at phase k · period.
         let phase = k as f64 * period;
-        let d = (chain.forward(&command).unwrap().pos - ideal(origin, shape, phase, end)).norm();
-        commanded.push((phase, chain.forward(&command).unwrap().pos));
+        let tool = chain.forward(&command).unwrap().translation.vector;
+        let d = (tool - ideal(origin, shape, phase, end)).norm();
+        commanded.push((phase, tool));
         cmd_sum += d;
         cmd_max = cmd_max.max(d);
         cmd_n += 1;
@@ -651,7 +673,10 @@ fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_sp
 
 /// The constant delay τ minimising Σ |p_i − ideal(t_i − τ)|², and the mean and sample standard
 /// deviation (spec §8.1) of the distances at that delay.
-fn fit_delay(samples: &[(f64, Vec3)], ideal: impl Fn(f64) -> Vec3) -> (f64, f64, f64) {
+fn fit_delay(
+    samples: &[(f64, Vector3<f64>)],
+    ideal: impl Fn(f64) -> Vector3<f64>,
+) -> (f64, f64, f64) {
     let cost = |tau: f64| -> f64 {
         samples
             .iter()

@@ -29,10 +29,10 @@
 use core::f64::consts::FRAC_PI_2;
 
 use armgate_core::command::CommandHandler;
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
 use armgate_core::kinematics::{Chain, Joints, KinematicsError};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
     CartesianGenerator, Controller, JointLimiter, Mode, StepOutput, Workspace,
 };
@@ -75,7 +75,7 @@ const STACK_DEPTH: usize = 32 * 1024;
 /// The firmware's control state with `sim-drives`: a handler, the drive manager, the virtual
 /// bus with a simulated Whistle per drive, and the time of the next tick.
 struct Session<'a> {
-    config: &'a RobotConfig,
+    config: &'a ValidRobot,
     handler: CommandHandler,
     manager: DriveManager,
     bus: VirtualBus,
@@ -86,7 +86,7 @@ impl<'a> Session<'a> {
     /// The drives at `start` (or at their home positions), started (the firmware starts the
     /// drive manager at power-up) and streaming, after one more tick (so that the arm's pose is
     /// measured).
-    fn new(config: &'a RobotConfig, start: Option<&[f64]>) -> Result<Self, &'static str> {
+    fn new(config: &'a ValidRobot, start: Option<&[f64]>) -> Result<Self, &'static str> {
         let q = start_joints(config, start)?;
         let mut manager = DriveManager::new(config, &DriveSettings::default())
             .map_err(|_| "the drive manager refused the robot")?;
@@ -198,8 +198,8 @@ impl<'a> Session<'a> {
             .controller()
             .measured()
             .ok_or("no measured pose")?;
-        let [x, y, z] = start.pos.to_array();
-        let [roll, pitch, yaw] = start.rot.to_rpy();
+        let [x, y, z]: [f64; 3] = start.translation.vector.into();
+        let [roll, pitch, yaw] = math::rpy(&start.rotation);
         let goal = [
             x + OFFSET[0],
             y + OFFSET[1],
@@ -218,7 +218,10 @@ impl<'a> Session<'a> {
         let store = self.request(Command::GoalRpy, goal, b"TG")?;
         let begin = self.request(Command::Begin, [0.0; VALUES], b"GB")?;
         let [x, y, z, roll, pitch, yaw, _] = goal.map(f64::from);
-        let goal = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+        let goal = Frame::from_parts(
+            Vector3::new(x, y, z).into(),
+            Rotation3::from_euler_angles(roll, pitch, yaw),
+        );
         Ok(([mode, store, begin], start, goal))
     }
 
@@ -228,7 +231,7 @@ impl<'a> Session<'a> {
 }
 
 /// The joints at `start`, or at the drives' home positions.
-fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &'static str> {
+fn start_joints(config: &ValidRobot, start: Option<&[f64]>) -> Result<Joints, &'static str> {
     match start {
         Some(start) => Joints::from_slice(start)
             .filter(|q| q.len() == config.dof())
@@ -299,7 +302,7 @@ pub fn run(counter: &Counter) -> bool {
             .iter()
             .find(|(n, _)| *n == name)
             .and_then(|(_, bytes)| postcard::from_bytes::<RobotConfig>(bytes).ok())
-            .filter(|c| c.validate().is_ok());
+            .and_then(|c| c.validate().ok());
         let Some(config) = config else {
             hprintln!("{}: not embedded, or does not decode", name);
             ok = false;
@@ -315,7 +318,7 @@ pub fn run(counter: &Counter) -> bool {
 
 fn measure_robot(
     name: &str,
-    config: &RobotConfig,
+    config: &ValidRobot,
     start: &[f64],
     counter: &Counter,
 ) -> Result<(), &'static str> {
@@ -471,7 +474,7 @@ fn measure_robot(
 }
 
 /// Pass 1: the whole tick, one window per tick, during the move and then holding; the requests.
-fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'static str> {
+fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'static str> {
     let mut session = Session::new(config, start)?;
     let (requests, _, _) = session.start_move()?;
     let mut moving = Timing::default();
@@ -506,7 +509,7 @@ fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'s
 }
 
 /// Pass 2: every step of the tick in a window of its own, and the replicas.
-fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static str> {
+fn breakdown(config: &ValidRobot, start: &[f64]) -> Result<Breakdown, &'static str> {
     let chain = Chain::new(config);
     let limiter = JointLimiter::new(config);
     let workspace = Workspace::new(&config.workspace);
@@ -568,7 +571,10 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
         if replica.command != out.command || out.setpoint != Some(setpoint) {
             parts.mismatches += 1;
         }
-        let (ticks, _) = measure(|| workspace.allows(pose.pos) && workspace.allows(setpoint.pos));
+        let (ticks, _) = measure(|| {
+            workspace.allows(&pose.translation.vector)
+                && workspace.allows(&setpoint.translation.vector)
+        });
         parts.workspace.add(ticks);
         // The set-point the tick's IK solved for, from the tick's seed.
         let target = out.setpoint.unwrap_or(setpoint);
@@ -588,7 +594,7 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
 }
 
 /// Pass 3: the stack the requests and ticks of the move need, below this function's frame.
-fn stack_high_water(config: &RobotConfig, start: &[f64]) -> Result<usize, &'static str> {
+fn stack_high_water(config: &ValidRobot, start: &[f64]) -> Result<usize, &'static str> {
     // The session (with the ≈ 24 KB virtual bus, a static in the firmware) and the drives'
     // start before the painting: only the control work is measured.
     let mut session = Session::new(config, Some(start))?;

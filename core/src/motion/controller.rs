@@ -7,9 +7,9 @@ use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
-use crate::config::{IkConfig, RobotConfig};
+use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
-use crate::math::Frame;
+use crate::math::{self, Frame};
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -43,28 +43,8 @@ enum Tracking {
     Unreachable,
 }
 
-/// The control mode (the seed's switch: off / joint / Cartesian).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// No command: the drives hold their last set-point.
-    #[default]
-    Off,
-    /// The joint generator and joint sequences drive the arm.
-    Joint,
-    /// The Cartesian generator, shapes and Cartesian sequences drive the arm through the IK.
-    Cartesian,
-}
-
-impl Mode {
-    /// The mode's lower-case name, as the status lines show it.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Off => "off",
-            Self::Joint => "joint",
-            Self::Cartesian => "cartesian",
-        }
-    }
-}
+/// The control mode: a rule of the wire (`CM`), defined once in the protocol crate.
+pub use armgate_protocol::client::Mode;
 
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,7 +97,7 @@ pub struct Controller {
 
 impl Controller {
     /// A controller for a validated robot description, in mode off.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         let n = config.dof();
         let v_max = config.per_joint(|j| j.max_velocity);
         let a_max = config.per_joint(|j| j.max_acceleration);
@@ -130,7 +110,7 @@ impl Controller {
             mode: Mode::Off,
             joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max),
             cartesian_generator: CartesianGenerator::new(
-                Frame::IDENTITY,
+                Frame::identity(),
                 cartesian.max_velocity,
                 cartesian.max_acceleration,
             ),
@@ -154,7 +134,7 @@ impl Controller {
         let f_m = self.chain.pose(&q_m);
         self.measured = Some((q_m, f_m));
         let mut events = Events {
-            workspace_limit: !self.workspace.allows(f_m.pos),
+            workspace_limit: !self.workspace.allows(&f_m.translation.vector),
             ..Events::default()
         };
         let (request, setpoint) = match self.mode {
@@ -216,7 +196,9 @@ impl Controller {
         events: &mut Events,
     ) -> (Joints, Frame) {
         let leg_done = !self.cartesian_generator.is_moving();
-        let step = self.cartesian_sequence.poll(leg_done, |p| p.dist(f_m));
+        let step = self
+            .cartesian_sequence
+            .poll(leg_done, |p| math::dist(p, f_m));
         if let SequenceStep::MoveTo(via) = step {
             let _ = self
                 .cartesian_generator
@@ -231,7 +213,7 @@ impl Controller {
             let t = t0 + self.period * scale;
             let sample = self.cartesian_generator.sample(t);
             let (setpoint, finished) = sample;
-            if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
+            if events.workspace_limit || !self.workspace.allows(&setpoint.translation.vector) {
                 // An illegal set-point never reaches the IK: abort and hold the commanded pose.
                 events.workspace_limit = true;
                 return (seed, self.abort_cartesian_motion(&seed, f_m, events));
@@ -266,7 +248,11 @@ impl Controller {
             return Tracking::Unreachable;
         };
         let s = result.solution();
-        if s.position_error > REACH_TOLERANCE || s.orientation_error > REACH_TOLERANCE {
+        // Written so that a NaN error (or solution) fails: it is not reached.
+        let reached = s.position_error <= REACH_TOLERANCE
+            && s.orientation_error <= REACH_TOLERANCE
+            && s.q.is_finite();
+        if !reached {
             return Tracking::Unreachable;
         }
         match self.limiter.rate_ratio(&s.q, seed) {
@@ -432,7 +418,7 @@ impl Controller {
         }
         let arm_inside = self
             .measured
-            .is_some_and(|(_, pose)| self.workspace.allows(pose.pos));
+            .is_some_and(|(_, pose)| self.workspace.allows(&pose.translation.vector));
         if !arm_inside {
             return Err(Refusal::OutsideWorkspace);
         }
@@ -471,10 +457,10 @@ impl Controller {
 
     /// Checks a Cartesian goal without moving: finite, and its position inside the workspace.
     pub fn check_cartesian_goal(&self, goal: &Frame) -> Result<(), Refusal> {
-        if !goal.is_finite() {
+        if !math::is_finite(goal) {
             return Err(Refusal::InvalidNumber);
         }
-        if !self.workspace.allows(goal.pos) {
+        if !self.workspace.allows(&goal.translation.vector) {
             return Err(Refusal::OutsideWorkspace);
         }
         Ok(())

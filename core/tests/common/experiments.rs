@@ -12,9 +12,9 @@
 
 use std::f64::consts::PI;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
 
 /// The rectangle of E8/E9 (m), closed: the last point is the first.
@@ -32,7 +32,7 @@ pub struct TraceTick {
     /// Time (s).
     pub t: f64,
     /// Tool position (m).
-    pub tool: Vec3,
+    pub tool: Vector3<f64>,
     /// The run's error measure at this tick (m): distance from the leg's line (E8/E9) or from
     /// the unreachable goal (E7).
     pub error: f64,
@@ -81,14 +81,17 @@ pub struct RectangleRun {
 
 /// The experiment's settings: v_max 0.05 m/s, a_max 0.10 m/s² on translation (spec §8.2 E8),
 /// no rate limit in the way (the seed enforced none in position mode).
-pub fn rectangle_config(mut config: RobotConfig) -> RobotConfig {
-    config.cartesian.max_velocity = [0.05, 0.05, 0.05, 0.1, 0.1, 0.1];
-    config.cartesian.max_acceleration = [0.10, 0.10, 0.10, 0.2, 0.2, 0.2];
-    for j in config.joints.iter_mut() {
-        j.max_rate = 100.0;
-    }
-    config.workspace.boxes.clear();
+pub fn rectangle_config(config: ValidRobot) -> ValidRobot {
     config
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.05, 0.05, 0.05, 0.1, 0.1, 0.1];
+            config.cartesian.max_acceleration = [0.10, 0.10, 0.10, 0.2, 0.2, 0.2];
+            for j in config.joints.iter_mut() {
+                j.max_rate = 100.0;
+            }
+            config.workspace.boxes.clear();
+        })
+        .unwrap()
 }
 
 /// Candidate "level" tool orientations (roll, pitch, yaw); the first that the arm reaches at
@@ -102,19 +105,19 @@ const LEVEL_ORIENTATIONS: [[f64; 3]; 6] = [
     [-PI / 2.0, 0.0, 0.0],
 ];
 
-fn corner(rot: Rotation, p: [f64; 3]) -> Frame {
-    Frame::new(rot, Vec3::from_array(p))
+fn corner(rot: Rotation3<f64>, p: [f64; 3]) -> Frame {
+    Frame::from_parts(Vector3::from(p).into(), rot)
 }
 
 /// Runs the rectangle as a Cartesian via-point sequence and measures the kinematic error: the
 /// distance from the tool to the line through the previous and the next waypoint, every tick.
-pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
+pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
     let chain = Chain::new(config);
     let mid = chain.mid_range();
     let (rpy, start) = LEVEL_ORIENTATIONS
         .iter()
         .find_map(|rpy| {
-            let rot = Rotation::from_rpy(rpy[0], rpy[1], rpy[2]);
+            let rot = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
             let mut first = None;
             for (k, p) in RECTANGLE.iter().enumerate() {
                 match chain
@@ -128,7 +131,7 @@ pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
             Some((*rpy, first?))
         })
         .expect("no level orientation reaches every corner");
-    let rot = Rotation::from_rpy(rpy[0], rpy[1], rpy[2]);
+    let rot = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
 
     let mut ctrl = Controller::new(config);
     let mut arm = IdealArm::new(start);
@@ -159,12 +162,12 @@ pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
         let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         let (a, b) = (
-            Vec3::from_array(RECTANGLE[leg]),
-            Vec3::from_array(RECTANGLE[leg + 1]),
+            Vector3::from(RECTANGLE[leg]),
+            Vector3::from(RECTANGLE[leg + 1]),
         );
-        let e = (p - a).cross(b - a).norm() / (b - a).norm();
+        let e = (p - a).cross(&(b - a)).norm() / (b - a).norm();
         run.trace.push(TraceTick {
             t: now,
             tool: p,
@@ -198,7 +201,7 @@ pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
 #[derive(Debug)]
 pub struct DivergenceRun {
     /// Tool position at the end (m).
-    pub final_position: Vec3,
+    pub final_position: Vector3<f64>,
     /// Distance from the unreachable goal at the end (m).
     pub final_distance: f64,
     /// Largest increase of the distance to the goal between two ticks during the last leg (m).
@@ -212,7 +215,7 @@ pub struct DivergenceRun {
     /// Distance from the shoulder (joint-2 origin) to the tool at the end, and the arm's reach.
     pub extension: (f64, f64),
     /// The sequence's via points (m), the last the unreachable goal.
-    pub waypoints: [Vec3; 3],
+    pub waypoints: [Vector3<f64>; 3],
     /// Every tick.
     pub trace: Vec<TraceTick>,
 }
@@ -223,9 +226,11 @@ pub const UNREACHABLE: [f64; 3] = [-0.5, 4.0, 0.7];
 /// E7: ranger-mk1, with its deployed generator limits, runs a short sequence whose last point is
 /// out of reach. The workspace bounds are widened so that the goal reaches the generator, as in
 /// the thesis's simulation.
-pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
-    let mut config = config.clone();
-    config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0];
+pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
+    let config = config
+        .clone()
+        .edit(|config| config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0])
+        .unwrap();
     let chain = Chain::new(&config);
     let start = Joints::from_slice(&[1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]).unwrap();
     let mut ctrl = Controller::new(&config);
@@ -236,18 +241,18 @@ pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
     ctrl.set_mode(Mode::Cartesian).unwrap();
     let home = chain.forward(&start).unwrap();
     let waypoints = [
-        home.pos + Vec3::new(0.1, 0.0, 0.0),
-        home.pos + Vec3::new(0.1, 0.1, -0.1),
-        Vec3::from_array(UNREACHABLE),
+        home.translation.vector + Vector3::new(0.1, 0.0, 0.0),
+        home.translation.vector + Vector3::new(0.1, 0.1, -0.1),
+        Vector3::from(UNREACHABLE),
     ];
     for (k, p) in waypoints.iter().enumerate() {
-        ctrl.set_cartesian_via(k, Frame::new(home.rot, *p), 0.0)
+        ctrl.set_cartesian_via(k, Frame::from_parts((*p).into(), home.rotation), 0.0)
             .unwrap();
     }
     ctrl.start_cartesian_sequence().unwrap();
-    let goal = Vec3::from_array(UNREACHABLE);
+    let goal = Vector3::from(UNREACHABLE);
     let mut run = DivergenceRun {
-        final_position: Vec3::ZERO,
+        final_position: Vector3::zeros(),
         final_distance: 0.0,
         worst_retreat: 0.0,
         total_retreat: 0.0,
@@ -265,7 +270,7 @@ pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
         let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         last_leg |= (p - waypoints[1]).norm() < 1e-6;
         let distance = (p - goal).norm();
         run.trace.push(TraceTick {
@@ -285,9 +290,9 @@ pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
             break;
         }
     }
-    let mut links = [Frame::IDENTITY; armgate_core::MAX_JOINTS];
+    let mut links = [Frame::identity(); armgate_core::MAX_JOINTS];
     chain.link_frames(&arm.measured(), &mut links).unwrap();
-    let shoulder = links[1].pos;
+    let shoulder = links[1].translation.vector;
     let j = &config.joints;
     let reach =
         (j[2].a.powi(2) + 0.0).sqrt() + (j[3].a.powi(2) + j[3].d.powi(2)).sqrt() + config.tool.d;
