@@ -41,13 +41,14 @@ const EVENT: RGBColor = RGBColor(110, 110, 110);
 const WARNING: RGBColor = RGBColor(200, 0, 0);
 
 const FONT: &str = "sans-serif";
+/// Layout (pixels): around each panel, the axis label areas, the panel and figure titles.
 const MARGIN: u32 = 12;
 const X_LABEL_AREA: u32 = 42;
 const Y_LABEL_AREA: u32 = 70;
 const CAPTION: u32 = 16;
 const TITLE: u32 = 22;
 /// Rows of marker labels, and the height of one (pixels).
-const MARKER_ROWS: usize = 3;
+const MARKER_ROWS: u32 = 3;
 const MARKER_ROW: u32 = 13;
 /// Height of one legend entry (pixels).
 const LEGEND_ROW: u32 = 19;
@@ -193,7 +194,8 @@ fn draw_markers(chart: &mut Chart<'_, '_>, panel: &Panel, grid: &Grid) -> Result
             .legend(move |(x, y)| PathElement::new(vec![(x + 10, y - 6), (x + 10, y + 6)], line));
         let font = (FONT, 11).into_font().color(&color);
         chart.draw_series(of_kind().map(|(k, m)| {
-            let level = 2.8 - (k % MARKER_ROWS) as f64;
+            // The text hangs from this height: rows counted up from the foot of the panel.
+            let level = 2.8 - f64::from(u32::try_from(k).unwrap_or(0) % MARKER_ROWS);
             Text::new(
                 format!(" {}", m.label),
                 (m.x, y0 + row * level),
@@ -257,7 +259,7 @@ fn headroom((lo, hi): (f64, f64), height: u32, panel: &Panel) -> (f64, f64) {
     let bottom = if panel.markers.is_empty() {
         0
     } else {
-        MARKER_ROW * 3 + 6
+        MARKER_ROW * MARKER_ROWS + 6
     };
     let free = f64::from(height.saturating_sub(top + bottom).max(height / 3).max(1));
     let per_px = (hi - lo) / free;
