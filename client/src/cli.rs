@@ -217,6 +217,9 @@ pub enum Cmd {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
+    /// Draw SVG figures from armgate-sim's --log-dir CSVs: tool path, joints over time, mode
+    /// changes and warnings (no controller needed).
+    Plot(crate::plot::PlotArgs),
 }
 
 /// The modes, as typed.
@@ -280,6 +283,9 @@ pub enum CliError {
     /// Writing the output failed.
     #[error("output: {0}")]
     Output(#[from] std::io::Error),
+    /// `armgate plot` failed.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
 }
 
 impl CliError {
@@ -361,6 +367,11 @@ fn hint(text: &Text) -> Option<&'static str> {
 
 /// Runs a parsed command, writing results to `out` and notices and progress to stderr.
 pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
+    if let Cmd::Plot(args) = &cli.command {
+        return crate::plot::run(args, out)
+            .map(drop)
+            .map_err(CliError::from);
+    }
     let config = ClientConfig {
         timeout: cli.timeout,
         retries: cli.retries,
@@ -512,8 +523,8 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             }
             Ok(())
         }
-        // Handled in `run`, which hands the client over.
-        Cmd::Teleop { .. } | Cmd::Calibrate { .. } => Ok(()),
+        // Handled in `run`: teleop takes the client over; calibrate and plot need none.
+        Cmd::Teleop { .. } | Cmd::Calibrate { .. } | Cmd::Plot(_) => Ok(()),
     }
 }
 

@@ -26,7 +26,7 @@
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
 //! * [`wait`]: polling until a pose or joint target is reached.
 //! * [`runfile`]: TOML via-point sequences.
-//! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
+//! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
 pub mod calibrate;
@@ -37,6 +37,7 @@ mod error;
 #[cfg(test)]
 mod fake;
 pub mod matching;
+pub mod plot;
 mod pose;
 pub mod runfile;
 pub mod teleop;

@@ -2,13 +2,15 @@
 //! at 500 kbit/s and 1 Mbit/s, each at the fastest control period under 70 % load.
 //!
 //! ```sh
-//! cargo run --release -p armgate-core --example can_bench
+//! cargo run --release -p armgate-core --example can_bench [-- --plots DIR]
 //! ```
 //!
 //! For each bit rate the load model ([`armgate_core::drives::load`]) picks the fastest period
 //! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
 //! controller then drives ranger-mk1 through a joint move and a Cartesian circle for 30 s of
 //! simulated time on the virtual bus, and the table reports what the bus and the drives saw.
+//! With `--plots DIR`, `can-bench.svg` shows the same per control cycle: the bus load and the
+//! mean write-to-reached latency of the PT points reached in that cycle.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -17,7 +19,7 @@
     clippy::approx_constant // the seed's home angles, as it wrote them
 )]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[path = "../tests/drives_rig/mod.rs"]
 mod drives_rig;
@@ -25,13 +27,15 @@ use drives_rig::Rig;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
-use armgate_core::drives::{DriveSettings, VirtualBus};
+use armgate_core::drives::{BusStats, DriveSettings, VirtualBus};
 use armgate_core::motion::{Mode, Shape};
+use armgate_plot::{Figure, Panel, Series, write_svg};
 
 const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 const RUN_SECONDS: f64 = 30.0;
 
 fn main() {
+    let plots = armgate_plot::plots_dir_from_args().unwrap();
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
     let base = load_file(&path).expect("robot file");
     let settings = DriveSettings::default();
@@ -46,6 +50,7 @@ fn main() {
         "| bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | BG skew | underflows |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut runs = Vec::new();
     for bitrate in [500_000, 1_000_000] {
         let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
         let config = base
@@ -72,6 +77,10 @@ fn main() {
             r.skew * 1e6,
             r.underflows,
         );
+        runs.push((bitrate, fastest.period, r));
+    }
+    if let Some(dir) = &plots {
+        plot_cycles(dir, &runs);
     }
     let seed = base.control_period;
     println!();
@@ -102,6 +111,26 @@ struct Outcome {
     write_delay_max: f64,
     skew: f64,
     underflows: u32,
+    cycles: Vec<Cycle>,
+}
+
+/// What one control cycle put on the bus, and what the drives reached in it.
+struct Cycle {
+    /// Time since the start of the run (s).
+    t: f64,
+    /// Bus load, actual and with worst-case stuffing.
+    load: f64,
+    worst_load: f64,
+    /// Mean write-to-reached time of the PT points reached in the cycle (s); none if none.
+    latency: Option<f64>,
+}
+
+/// The latency counters summed over the drives: (points, total ns).
+fn latency_totals(bus: &VirtualBus) -> (u64, u64) {
+    bus.drives().fold((0, 0), |(n, ns), d| {
+        let l = d.stats().latency;
+        (n + l.points, ns + l.total_ns)
+    })
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
@@ -120,9 +149,27 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
     let mut leads = std::collections::BTreeSet::new();
     let mut circle_started = false;
     let mut write_delay_max: f64 = 0.0;
+    let mut cycles = Vec::new();
+    let (mut bus_before, mut latency_before) = (l.bus().stats(), latency_totals(l.bus()));
     while l.now - start < RUN_SECONDS {
         let step_time = l.now;
         l.tick();
+        let (bus, latency) = (l.bus().stats(), latency_totals(l.bus()));
+        let cycle = BusStats {
+            bits: bus.bits - bus_before.bits,
+            worst_case_bits: bus.worst_case_bits - bus_before.worst_case_bits,
+            elapsed_ns: bus.elapsed_ns - bus_before.elapsed_ns,
+            ..bus
+        };
+        let points = latency.0 - latency_before.0;
+        cycles.push(Cycle {
+            t: l.now - start,
+            load: cycle.load(config.drives.can_bitrate),
+            worst_load: cycle.worst_case_load(config.drives.can_bitrate),
+            latency: (points > 0)
+                .then(|| (latency.1 - latency_before.1) as f64 * 1e-9 / points as f64),
+        });
+        (bus_before, latency_before) = (bus, latency);
         // The points sent at the last step have been written by now: how long after it.
         for drive in l.bus().drives() {
             let written = drive.table().last_write().unwrap() as f64 * 1e-9;
@@ -161,7 +208,62 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
         write_delay_max,
         skew,
         underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
+        cycles,
     }
+}
+
+/// `can-bench.svg`: per cycle, the bus load (actual and worst-case stuffing, against the
+/// 70 % ceiling) and the mean latency from writing a PT point to reaching it, per bit rate.
+fn plot_cycles(dir: &Path, runs: &[(u32, f64, Outcome)]) {
+    let mut load = Panel::new("bus load per control cycle", "t (s)", "load (%)").series(
+        Series::reference(
+            "ceiling",
+            [
+                (0.0, DEFAULT_CEILING * 100.0),
+                (RUN_SECONDS, DEFAULT_CEILING * 100.0),
+            ],
+        )
+        .color(7),
+    );
+    let mut latency = Panel::new(
+        "latency, PT point written → reached (mean of the points reached in the cycle)",
+        "t (s)",
+        "latency (ms)",
+    );
+    for (k, (bitrate, period, r)) in runs.iter().enumerate() {
+        let name = format!("{} kbit/s, {:.2} ms period", bitrate / 1000, period * 1e3);
+        load = load
+            .series(
+                Series::line(
+                    format!("{name}, worst-case stuffing"),
+                    r.cycles.iter().map(|c| (c.t, c.worst_load * 100.0)),
+                )
+                .color(2 * k + 1),
+            )
+            .series(
+                Series::line(
+                    format!("{name}, actual"),
+                    r.cycles.iter().map(|c| (c.t, c.load * 100.0)),
+                )
+                .color(2 * k),
+            );
+        latency = latency.series(
+            Series::line(
+                name,
+                r.cycles
+                    .iter()
+                    .map(|c| (c.t, c.latency.map_or(f64::NAN, |l| l * 1e3))),
+            )
+            .color(2 * k),
+        );
+    }
+    let figure = Figure::new(
+        "CAN bench: ranger-mk1, 6 simulated Whistles, joint move then a 0.1 m circle",
+        vec![load.include_y(0.0), latency.include_y(0.0)],
+    );
+    let file = dir.join("can-bench.svg");
+    write_svg(&file, &figure).unwrap();
+    println!("wrote {}", file.display());
 }
 
 /// The seed's schedule: per drive and kinematic period one QP write, four queries and five

@@ -1,15 +1,25 @@
 //! The seed thesis's simulation experiments (spec §8.2 E7–E9), printed next to the seed's
 //! numbers.
 //!
-//! `cargo run --release -p armgate-core --example seed_experiments`
+//! `cargo run --release -p armgate-core --example seed_experiments [-- --plots DIR]`
+//!
+//! With `--plots DIR`, also writes `e7-approach.svg` (distance to the unreachable goal and the
+//! tool path, WN22 marked) and `e8-e9-rectangle.svg` (the paths and the errors over time).
 #![allow(missing_docs, clippy::unwrap_used)]
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use common::experiments::{UNREACHABLE, rectangle_config, run_divergence, run_rectangle};
+use std::path::Path;
+
+use armgate_plot::{Figure, Marker, MarkerKind, Panel, Series, write_svg};
+use common::experiments::{
+    DivergenceRun, RECTANGLE, RectangleRun, TraceTick, UNREACHABLE, rectangle_config,
+    run_divergence, run_rectangle,
+};
 
 fn main() {
+    let plots = armgate_plot::plots_dir_from_args().unwrap();
     let d = run_divergence(&common::robot("ranger-mk1"));
     println!("E7: ranger-mk1 sequence ending at the unreachable {UNREACHABLE:?} m");
     println!(
@@ -35,6 +45,7 @@ fn main() {
     println!(
         "|-----|------------|-----------|-----------------|------------|------------|--------|---------------------|--------------|"
     );
+    let mut rectangles = Vec::new();
     for (exp, robot, seed_mean, seed_max) in [
         ("E8", "hybrid", "0.18 mm", "2.02 mm (23 s)"),
         ("E9", "ranger-mk2", "≈ 1 µm", "8 µm (23 s)"),
@@ -51,5 +62,119 @@ fn main() {
             &r.last_joints[..],
             r.divergence_ticks
         );
+        rectangles.push((exp, robot, r));
     }
+    if let Some(dir) = plots {
+        plot_approach(&dir, &d);
+        plot_rectangles(&dir, &rectangles);
+    }
+}
+
+fn xy(points: impl IntoIterator<Item = (f64, f64)>) -> Vec<(f64, f64)> {
+    points.into_iter().collect()
+}
+
+/// The start of each run of WN22 ticks.
+fn divergence_markers(trace: &[TraceTick]) -> Vec<Marker> {
+    let mut before = false;
+    let mut markers = Vec::new();
+    for tick in trace {
+        if tick.diverging && !before {
+            markers.push(Marker::new(tick.t, "WN22", MarkerKind::Warning));
+        }
+        before = tick.diverging;
+    }
+    markers
+}
+
+fn plot_approach(dir: &Path, d: &DivergenceRun) {
+    let distance = Panel::new(
+        "distance from the unreachable goal (guard on: no chaotic motion)",
+        "t (s)",
+        "distance (m)",
+    )
+    .series(Series::line(
+        "tool",
+        xy(d.trace.iter().map(|k| (k.t, k.error))),
+    ))
+    .markers(divergence_markers(&d.trace));
+    let [a, b, _] = d.waypoints;
+    let path = Panel::new(
+        format!("tool path, top view (goal {UNREACHABLE:?} m is off the chart)"),
+        "x (m)",
+        "y (m)",
+    )
+    .series(Series::line(
+        "tool",
+        xy(d.trace.iter().map(|k| (k.tool.x, k.tool.y))),
+    ))
+    .series(Series::points("via points 1, 2", [(a.x, a.y), (b.x, b.y)]))
+    .series(Series::points(
+        "where it stops",
+        [(d.final_position.x, d.final_position.y)],
+    ))
+    .equal_aspect();
+    let figure = Figure::new(
+        "E7: ranger-mk1 sent towards an unreachable point, divergence guard on",
+        vec![distance, path],
+    )
+    .columns(2)
+    .panel_size(640, 480);
+    write(dir, "e7-approach.svg", &figure);
+}
+
+fn plot_rectangles(dir: &Path, runs: &[(&str, &str, RectangleRun)]) {
+    let mut path = Panel::new("tool path, y–z view (x = 0.5 m)", "y (m)", "z (m)").equal_aspect();
+    let mut panels = Vec::new();
+    for (k, (exp, robot, r)) in runs.iter().enumerate() {
+        path = path.series(
+            Series::line(
+                format!("{exp} {robot}"),
+                xy(r.trace.iter().map(|t| (t.tool.y, t.tool.z))),
+            )
+            .color(k + 1),
+        );
+        // The seed's errors were millimetres (E8) and micrometres (E9); ours are far smaller:
+        // each on a scale of its own.
+        let (scale, unit) = match r.max_error {
+            e if e > 1e-4 => (1e3, "mm"),
+            e if e > 1e-7 => (1e6, "µm"),
+            _ => (1e9, "nm"),
+        };
+        panels.push(
+            Panel::new(
+                format!(
+                    "{exp} {robot}: distance from the leg's line (mean {:.3} {unit}, max {:.3} {unit})",
+                    r.mean_error * scale,
+                    r.max_error * scale
+                ),
+                "t (s)",
+                format!("error ({unit})"),
+            )
+            .series(
+                Series::line(
+                    "tool",
+                    xy(r.trace.iter().map(|t| (t.t, t.error * scale))),
+                )
+                .color(k + 1),
+            )
+            .markers(divergence_markers(&r.trace)),
+        );
+    }
+    path = path.series(
+        Series::reference("ideal rectangle", RECTANGLE.iter().map(|p| (p[1], p[2]))).color(0),
+    );
+    panels.insert(0, path);
+    let figure = Figure::new(
+        "E8/E9: the rectangle at v_max 0.05 m/s, a_max 0.10 m/s², ideal arm",
+        panels,
+    )
+    .panel_size(900, 340);
+    write(dir, "e8-e9-rectangle.svg", &figure);
+}
+
+fn write(dir: &Path, name: &str, figure: &Figure) {
+    let path = dir.join(name);
+    write_svg(&path, figure).unwrap();
+    println!("wrote {}", path.display());
 }

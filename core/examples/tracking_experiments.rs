@@ -3,8 +3,13 @@
 //! §8.2), printed next to the seed's measurements.
 //!
 //! ```sh
-//! cargo run --release -p armgate-core --example tracking_experiments
+//! cargo run --release -p armgate-core --example tracking_experiments [-- --plots DIR]
 //! ```
+//!
+//! With `--plots DIR`, writes one SVG per row (`e5-circle-T5.svg`, `e6-sin-x-T2.svg`, ...) for
+//! the chosen start pose: the path (the circle's plane, or the sinusoid's axis over time)
+//! ideal, commanded and as the drives followed it at both speed limits, and the drives'
+//! distance from the ideal point over time at the fitted delay.
 //!
 //! Each shape runs for 8 periods in the full control loop (controller, drive manager, PT
 //! streaming over the virtual CAN bus at the robot file's period and bit rate, simulated
@@ -35,7 +40,7 @@
 )]
 
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[path = "../tests/drives_rig/mod.rs"]
 mod drives_rig;
@@ -46,6 +51,7 @@ use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig}
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
+use armgate_plot::{Figure, Panel, Series, write_svg};
 
 /// The start pose's position (m): the sinusoids' centre (spec §4.5), and the circles' start.
 const START: [f64; 3] = [0.0, 0.62, 0.52];
@@ -169,6 +175,7 @@ struct StartPose {
 }
 
 fn main() {
+    let plots = armgate_plot::plots_dir_from_args().unwrap();
     let config = config();
     let chain = Chain::new(&config);
     let rows = experiments();
@@ -190,14 +197,21 @@ fn main() {
     let main = poses
         .first()
         .expect("no candidate start pose runs every shape");
-    print_table(&config, &chain, &rows, main);
+    print_table(&config, &chain, &rows, main, plots.as_deref());
     if let Some(other) = poses.get(1) {
         println!("\nFor comparison, the next candidate that runs every shape:");
-        print_table(&config, &chain, &rows, other);
+        print_table(&config, &chain, &rows, other, None);
     }
 }
 
-fn print_table(config: &ValidRobot, chain: &Chain, rows: &[Experiment], pose: &StartPose) {
+/// Prints the table for one start pose; with `plots`, writes each row's figure there.
+fn print_table(
+    config: &ValidRobot,
+    chain: &Chain,
+    rows: &[Experiment],
+    pose: &StartPose,
+    plots: Option<&Path>,
+) {
     println!(
         "\nstart orientation {} (tool z axis {:.3?}, rpy {:.4?}), joints {:.4?}\n",
         pose.name,
@@ -267,7 +281,119 @@ fn print_table(config: &ValidRobot, chain: &Chain, rows: &[Experiment], pose: &S
             health.0,
             health.1,
         );
+        if let Some(dir) = plots {
+            plot_row(dir, row, &runs);
+        }
     }
+}
+
+/// The file name of a row's figure, e.g. `e5-circle-T5.svg`.
+fn figure_name(row: &Experiment) -> String {
+    let slug = row.table.to_lowercase().replace(' ', "-");
+    format!("{slug}-T{}.svg", shape_period(&row.shape))
+}
+
+/// A row's figure: the path (the circle's x–z plane, or the sinusoid's axis over time),
+/// ideal, commanded and at each drive speed; and each drive run's distance from the ideal
+/// point at its fitted delay.
+fn plot_row(dir: &Path, row: &Experiment, runs: &[Run]) {
+    let Some(first) = runs.first() else { return };
+    let ideal = |s: f64| ideal(first.origin, &row.shape, s, first.end);
+    let drives = |r: &Run| format!("drives at {:.1} rad/s", r.drive_speed);
+    let path = match row.shape {
+        Shape::Circle { .. } => {
+            let xz = |p: Vector3<f64>| (p.x, p.z);
+            let mut panel =
+                Panel::new("the path in the x–z plane", "x (m)", "z (m)").equal_aspect();
+            for (k, r) in runs.iter().enumerate() {
+                panel = panel.series(
+                    Series::line(drives(r), r.drive_path.iter().map(|(_, p)| xz(*p))).color(k + 2),
+                );
+            }
+            let n = 720;
+            let period = shape_period(&row.shape);
+            panel
+                .series(
+                    Series::line("commanded", first.commanded.iter().map(|(_, p)| xz(*p))).color(1),
+                )
+                .series(
+                    Series::reference(
+                        "ideal",
+                        (0..=n).map(|k| xz(ideal(f64::from(k) / f64::from(n) * period))),
+                    )
+                    .color(0),
+                )
+        }
+        Shape::Sinusoid { axis, .. } => {
+            let axis = usize::from(axis);
+            let name = ["x", "y", "z"].get(axis).copied().unwrap_or("?");
+            let along =
+                move |p: Vector3<f64>| [p.x, p.y, p.z].get(axis).copied().unwrap_or(f64::NAN);
+            let mut panel = Panel::new(
+                format!("{name} over time (the other axes held)"),
+                "t (s)",
+                format!("{name} (m)"),
+            );
+            for (k, r) in runs.iter().enumerate() {
+                panel = panel.series(
+                    Series::line(drives(r), r.drive_path.iter().map(|(t, p)| (*t, along(*p))))
+                        .color(k + 2),
+                );
+            }
+            panel
+                .series(
+                    Series::line(
+                        "commanded",
+                        first.commanded.iter().map(|(t, p)| (*t, along(*p))),
+                    )
+                    .color(1),
+                )
+                .series(
+                    Series::reference(
+                        "ideal",
+                        first.commanded.iter().map(|(t, _)| (*t, along(ideal(*t)))),
+                    )
+                    .color(0),
+                )
+        }
+    };
+    let mut error = Panel::new(
+        "distance from the ideal point, drive time shifted by the fitted delay τ",
+        "t (s)",
+        "distance (mm)",
+    );
+    for (k, r) in runs.iter().enumerate() {
+        error = error.series(
+            Series::line(
+                format!(
+                    "{}: τ = {:.0} ms, d̄ = {:.2} mm, S = {:.2} mm",
+                    drives(r),
+                    r.delay * 1e3,
+                    r.track_mean * 1e3,
+                    r.track_s * 1e3
+                ),
+                r.drive_path
+                    .iter()
+                    .map(|(t, p)| (*t, (*p - ideal(t - r.delay)).norm() * 1e3)),
+            )
+            .color(k + 2),
+        );
+    }
+    let title = format!(
+        "{} T = {} s ({:.0} mm/s), ranger-mk1, {} cycles; seed: d̄ = {} mm, S = {} mm",
+        row.table,
+        shape_period(&row.shape),
+        shape_speed(&row.shape) * 1e3,
+        CYCLES,
+        row.seed.0,
+        row.seed.1
+    );
+    let figure = Figure::new(title, vec![path, error])
+        .columns(2)
+        .panel_size(640, 520);
+    let file = dir.join(figure_name(row));
+    write_svg(&file, &figure).unwrap();
+    println!("wrote {}", file.display());
 }
 
 /// Candidate start poses, in order: each orientation solved by global IK from each seed; the
@@ -411,6 +537,15 @@ struct Run {
     overruns: u32,
     /// Anything that went wrong (events, faults); empty on a clean run.
     notes: Vec<String>,
+    /// The drives' speed limit (rad/s).
+    drive_speed: f64,
+    /// Where the shape started (m), and its end (phase, s).
+    origin: Vector3<f64>,
+    end: f64,
+    /// FK of each command, at its phase.
+    commanded: Vec<(f64, Vector3<f64>)>,
+    /// FK of the drives' actual joints, at the time since the start.
+    drive_path: Vec<(f64, Vector3<f64>)>,
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
@@ -465,6 +600,7 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
             .translation
             .vector,
     )];
+    let mut commanded = Vec::new();
     let mut finishing = false;
     let mut k = 0usize;
     while k as f64 * period <= end + 1.0 {
@@ -488,9 +624,9 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
         let command = out.command.expect("Cartesian mode commands every tick");
         // Command k is the shape at phase k · period.
         let phase = k as f64 * period;
-        let d = (chain.forward(&command).unwrap().translation.vector
-            - ideal(origin, shape, phase, end))
-        .norm();
+        let tool = chain.forward(&command).unwrap().translation.vector;
+        let d = (tool - ideal(origin, shape, phase, end)).norm();
+        commanded.push((phase, tool));
         cmd_sum += d;
         cmd_max = cmd_max.max(d);
         cmd_n += 1;
@@ -527,6 +663,11 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
         underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
         overruns: l.bus().drives().map(|d| d.stats().overflows).sum(),
         notes,
+        drive_speed,
+        origin,
+        end,
+        commanded,
+        drive_path: samples,
     }
 }
 

@@ -26,6 +26,20 @@ pub const RECTANGLE: [[f64; 3]; 5] = [
     [0.5, 0.2, 0.1],
 ];
 
+/// One tick of a run, kept for the plots of `examples/seed_experiments.rs`.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceTick {
+    /// Time (s).
+    pub t: f64,
+    /// Tool position (m).
+    pub tool: Vector3<f64>,
+    /// The run's error measure at this tick (m): distance from the leg's line (E8/E9) or from
+    /// the unreachable goal (E7).
+    pub error: f64,
+    /// The IK divergence guard fired (WN22).
+    pub diverging: bool,
+}
+
 /// One control tick with an ideal arm: the output, the new joints and the largest joint step.
 fn tick(ctrl: &mut Controller, arm: &mut IdealArm, now: f64) -> (StepOutput, Joints, f64) {
     let before = arm.measured();
@@ -61,6 +75,8 @@ pub struct RectangleRun {
     pub last_joints: Joints,
     /// Ticks with an IK divergence event.
     pub divergence_ticks: usize,
+    /// Every tick.
+    pub trace: Vec<TraceTick>,
 }
 
 /// The experiment's settings: v_max 0.05 m/s, a_max 0.10 m/s² on translation (spec §8.2 E8),
@@ -139,6 +155,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
         first_joints: start,
         last_joints: start,
         divergence_ticks: 0,
+        trace: Vec::new(),
     };
     for _ in 0..100_000 {
         now += period;
@@ -151,6 +168,12 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
             Vector3::from(RECTANGLE[leg + 1]),
         );
         let e = (p - a).cross(&(b - a)).norm() / (b - a).norm();
+        run.trace.push(TraceTick {
+            t: now,
+            tool: p,
+            error: e,
+            diverging: out.events.ik_divergence,
+        });
         sum += e;
         count += 1;
         if e > run.max_error {
@@ -191,6 +214,10 @@ pub struct DivergenceRun {
     pub max_joint_step: f64,
     /// Distance from the shoulder (joint-2 origin) to the tool at the end, and the arm's reach.
     pub extension: (f64, f64),
+    /// The sequence's via points (m), the last the unreachable goal.
+    pub waypoints: [Vector3<f64>; 3],
+    /// Every tick.
+    pub trace: Vec<TraceTick>,
 }
 
 /// The unreachable goal of thesis Fig. 3.2.
@@ -236,6 +263,8 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
         divergence_ticks: 0,
         max_joint_step: 0.0,
         extension: (0.0, 0.0),
+        waypoints,
+        trace: Vec::new(),
     };
     let mut last_leg = false;
     let mut prev_distance = f64::INFINITY;
@@ -248,6 +277,12 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
         let p = chain.forward(&q).unwrap().translation.vector;
         last_leg |= (p - waypoints[1]).norm() < 1e-6;
         let distance = (p - goal).norm();
+        run.trace.push(TraceTick {
+            t: now,
+            tool: p,
+            error: distance,
+            diverging: out.events.ik_divergence,
+        });
         if last_leg {
             run.worst_retreat = run.worst_retreat.max(distance - prev_distance);
             run.total_retreat += (distance - prev_distance).max(0.0);
