@@ -23,7 +23,6 @@ use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
-// `f64::clamp` asserts lo ≤ hi and non-NaN bounds: a panic path in the tick (panic-check).
 use crate::saturate::saturate;
 
 /// Damping floor: keeps every system positive definite, small enough that steps near the
