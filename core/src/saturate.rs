@@ -2,13 +2,19 @@
 //!
 //! `f64::clamp` panics when a bound is NaN or `min > max`; a limit computed from inputs (a rate
 //! times a time step, a previous value plus a step) cannot always promise neither. These
-//! helpers are total: built from `f64::max`/`f64::min`, which return the other operand when one
-//! is NaN, they always return a number.
+//! helpers are total: two comparisons, no assertion.
 
-/// `v` limited to `[lo, hi]`. For `lo ≤ hi` and a number `v` this is `v.clamp(lo, hi)`; a NaN
-/// `v` gives `lo`, a NaN bound is ignored, and `lo > hi` gives `hi`. Never panics.
+/// `v` limited to `[lo, hi]`: bit for bit `v.clamp(lo, hi)` wherever that does not panic (so
+/// a NaN `v` stays NaN: callers that may see one check it first); a NaN bound is ignored and
+/// `lo > hi` gives `lo`. Never panics.
 pub(crate) fn saturate(v: f64, lo: f64, hi: f64) -> f64 {
-    v.max(lo).min(hi)
+    if v < lo {
+        lo
+    } else if v > hi {
+        hi
+    } else {
+        v
+    }
 }
 
 /// `delta` limited to `[-step, step]` (a rate limit): a negative or NaN `step` allows no
@@ -37,10 +43,11 @@ mod tests {
         ] {
             assert_eq!(saturate(v, -1.0, 1.0), v.clamp(-1.0, 1.0), "{v}");
         }
-        assert_eq!(saturate(f64::NAN, -1.0, 1.0), -1.0);
+        assert_eq!(saturate(-0.0, 0.0, 1.0).to_bits(), (-0.0f64).to_bits());
+        assert!(saturate(f64::NAN, -1.0, 1.0).is_nan());
         assert_eq!(saturate(0.5, f64::NAN, 1.0), 0.5);
         assert_eq!(saturate(2.0, -1.0, f64::NAN), 2.0);
-        assert_eq!(saturate(0.0, 1.0, -1.0), -1.0);
+        assert_eq!(saturate(0.0, 1.0, -1.0), 1.0);
     }
 
     #[test]
@@ -52,7 +59,7 @@ mod tests {
             assert_eq!(limit_step(5.0, step), 0.0, "{step}");
             assert_eq!(limit_step(-5.0, step), 0.0, "{step}");
         }
-        assert_eq!(limit_step(f64::NAN, 2.0), -2.0);
+        assert!(limit_step(f64::NAN, 2.0).is_nan());
         assert_eq!(limit_step(1e308, f64::INFINITY), 1e308);
     }
 }
