@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 use super::jacobian::Jacobian;
 use super::joints::Joints;
 use crate::MAX_JOINTS;
-use crate::config::{JointType, RobotConfig};
+use crate::config::{JointType, RobotConfig, ValidRobot};
 use crate::math::{self, Frame};
 
 /// Why a kinematics call was refused.
@@ -57,8 +57,8 @@ pub(super) struct Axes {
 }
 
 impl Chain {
-    /// Builds the chain of a (validated) robot description.
-    pub fn new(config: &RobotConfig) -> Self {
+    /// Builds the chain of a validated robot description.
+    pub fn new(config: &ValidRobot) -> Self {
         let mut chain = Self {
             links: [Link::default(); MAX_JOINTS],
             n: config.joints.len().min(MAX_JOINTS),
@@ -200,7 +200,9 @@ impl Chain {
                 SVector::<f64, MAX_JOINTS>::from_fn(|i, _| f64::from(u8::from(i >= self.n)));
             (j.tr_mul(&j) + SMatrix::from_diagonal(&unused)).determinant()
         };
-        Ok(libm::sqrt(det.max(0.0)))
+        // NaN-safe by construction: only a positive determinant has a root (`det.max(0.0)`
+        // relied on `max` dropping NaN).
+        Ok(if det > 0.0 { libm::sqrt(det) } else { 0.0 })
     }
 
     /// Forward kinematics: walks the chain, showing each joint frame's rotation and origin to
