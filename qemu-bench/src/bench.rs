@@ -1,4 +1,6 @@
-//! The measurements: forward kinematics and tracking IK on every embedded robot.
+//! The measurements on every embedded robot: `libm`'s `sincos` and `sqrt`, forward kinematics,
+//! the Jacobian, joint rates (one damped least-squares solve), tracking IK, and the worst case
+//! of global IK (an unreachable target, which spends the whole budget).
 //!
 //! The samples follow the host benchmark (`core/examples/ik_bench.rs`, tracking mode) draw for
 //! draw: the same generator and seed, a configuration uniform within the joint limits, its tool
