@@ -14,9 +14,9 @@
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
 //! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
 //! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.34–0.68
-//! million instructions per check on average, at most 1.78 million (ranger-mk2, 19.44 ms
-//! period) and 1.70 million (iiwa14, 5.04 ms): within one period at 480 MHz.
+//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.29–0.55
+//! million instructions per check on average, at most 1.29 million (ranger-mk2, 19.44 ms
+//! period) and 1.47 million (iiwa14, 5.04 ms): within one period at 480 MHz.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -35,15 +35,15 @@ pub const LINE_SAMPLES: usize = 16;
 pub const SOLVES_PER_LINE: usize = 4 * LINE_SAMPLES;
 /// IK iterations per checked request at most (reached at periods from 15.4 ms up).
 pub const CHECK_ITERATIONS: u32 = 384;
-/// IK iterations per second of control period (each up to about 10,000 Cortex-M7
-/// instructions with its share of FK and bookkeeping: a quarter to a half of the period at
+/// IK iterations per second of control period (each up to about 7,000 Cortex-M7
+/// instructions with its share of FK and bookkeeping: at most about 60 % of the period at
 /// 480 MHz).
-const ITERATIONS_PER_SECOND: f64 = 25_000.0;
+const ITERATIONS_PER_SECOND: f64 = 40_000.0;
 /// The fewest iterations a check gets, whatever the period (a short line needs about 48).
 const MIN_CHECK_ITERATIONS: u32 = 64;
 
 /// The IK iteration budget of one checked request for a control period (s): proportional,
-/// within 64..=[`CHECK_ITERATIONS`] (126 at 5.04 ms).
+/// within 64..=[`CHECK_ITERATIONS`] (201 at 5.04 ms).
 pub fn check_iterations(period: f64) -> u32 {
     // Saturating cast: NaN gives 0, then the minimum.
     let proportional = (period * ITERATIONS_PER_SECOND) as u32;
@@ -175,7 +175,7 @@ mod tests {
     #[test]
     fn the_budget_follows_the_control_period_within_its_bounds() {
         assert_eq!(check_iterations(0.01944), CHECK_ITERATIONS);
-        assert_eq!(check_iterations(0.00504), 126);
+        assert_eq!(check_iterations(0.00504), 201);
         assert_eq!(check_iterations(0.0001), MIN_CHECK_ITERATIONS);
         assert_eq!(check_iterations(f64::NAN), MIN_CHECK_ITERATIONS);
         assert_eq!(check_iterations(f64::INFINITY), CHECK_ITERATIONS);
