@@ -68,7 +68,9 @@ impl Interval {
         Status {
             mode: controller.mode(),
             moving: controller.is_moving(),
-            position: controller.measured().map(|(_, pose)| pose.pos.to_array()),
+            position: controller
+                .measured()
+                .map(|(_, pose)| pose.translation.vector.into()),
             ticks: self.ticks,
             overruns: saturate(counters.late_ticks + counters.skipped_ticks),
             tick_errors: saturate(counters.tick_errors),

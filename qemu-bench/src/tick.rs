@@ -22,6 +22,7 @@ use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
+use armgate_core::math;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Command, Request, VALUES};
 use cortex_m_semihosting::hprintln;
@@ -183,8 +184,8 @@ impl Session {
             .controller()
             .measured()
             .ok_or("no measured pose")?;
-        let [x, y, z] = start.pos.to_array();
-        let [roll, pitch, yaw] = start.rot.to_rpy();
+        let [x, y, z]: [f64; 3] = start.translation.vector.into();
+        let [roll, pitch, yaw] = math::rpy(&start.rotation);
         let goal = [
             x + OFFSET[0],
             y + OFFSET[1],
