@@ -131,8 +131,11 @@ impl Sim {
             .set_recv_buffer_size(4 << 20)
             .unwrap();
         socket.connect(addr).unwrap();
+        // The firmware's host build is unoptimised and runs its control and network tasks on one
+        // thread: on a loaded machine a reply can take longer than armgate-sim's.
+        let timeout = if firmware().is_some() { 2000 } else { 500 };
         socket
-            .set_read_timeout(Some(Duration::from_millis(500)))
+            .set_read_timeout(Some(Duration::from_millis(timeout)))
             .unwrap();
         Self {
             child,
