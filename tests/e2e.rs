@@ -131,8 +131,11 @@ impl Sim {
             .set_recv_buffer_size(4 << 20)
             .unwrap();
         socket.connect(addr).unwrap();
+        // The firmware's host build is unoptimised and runs its control and network tasks on one
+        // thread: on a loaded machine a reply can take longer than armgate-sim's.
+        let timeout = if firmware().is_some() { 2000 } else { 500 };
         socket
-            .set_read_timeout(Some(Duration::from_millis(500)))
+            .set_read_timeout(Some(Duration::from_millis(timeout)))
             .unwrap();
         Self {
             child,
@@ -619,6 +622,12 @@ fn wait_drives(sim: &Sim, state: f32) -> [f32; 7] {
 
 #[test]
 fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
+    if firmware().is_some() {
+        // It needs its first requests within the drives' 0.2 s boot; the firmware's first
+        // datagram over the TAP device waits for ARP and an unoptimised start-up.
+        eprintln!("skipped for the firmware: the drives have booted before the first request");
+        return;
+    }
     // Default: simulated Whistles on a virtual bus, which boot for about 0.2 s after start.
     let sim = Sim::start("ranger-mk1");
     // Right after start, while the drives boot: the move is refused for that reason, and ON
