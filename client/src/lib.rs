@@ -29,6 +29,7 @@
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
+pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;
