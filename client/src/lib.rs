@@ -26,6 +26,7 @@
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
 //! * [`wait`]: polling until a pose or joint target is reached.
 //! * [`runfile`]: TOML via-point sequences.
+//! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name).
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
 
 pub mod banks;
@@ -35,9 +36,12 @@ mod commands;
 mod error;
 #[cfg(test)]
 mod fake;
+mod hints;
+pub mod interrupt;
 pub mod matching;
 mod pose;
 pub mod runfile;
+pub mod status;
 pub mod teleop;
 pub mod wait;
 
@@ -51,4 +55,5 @@ pub use commands::NO_READING;
 pub use error::ClientError;
 pub use pose::{Mode, Pose};
 pub use runfile::{RunFile, RunFileError};
+pub use status::{DriveState, Motion, Status};
 pub use wait::{Progress, WaitOptions};

@@ -46,6 +46,8 @@ impl Expect {
         match &self.chars {
             b"jV" | b"VP" => index & !BANK2 == self.index & !BANK2,
             b"jP" | b"TM" => index & BANK2 == self.index & BANK2,
+            // The status request: index 0 the numbers, index 1 the name.
+            b"SQ" => index == self.index,
             _ => true,
         }
     }

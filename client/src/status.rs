@@ -1,0 +1,301 @@
+//! The status request `SQ` (docs/protocol.md, "Status"): mode, drive state, drive fault, joint
+//! count, motion, refusals, uptime and the robot's name.
+//!
+//! Two requests: index 0 answers the numbers in f0..f6, index 1 the robot's name as ASCII in
+//! bytes 2..30, NUL-padded. A controller older than the request answers
+//! `ER00 Cmd SQ not understood`, which [`Client::status`] turns into
+//! [`ClientError::TooOld`].
+
+use std::fmt;
+
+use armgate_protocol::client::{MESSAGE_LEN, VALUES};
+
+use crate::{Client, ClientError, Mode, matching};
+
+/// The request's characters. Built by hand with [`Client::send_raw`] so that the client does
+/// not depend on the protocol crate knowing the command yet; the reply is `QS`.
+pub const STATUS_CHARS: [u8; 2] = *b"SQ";
+
+/// The index of the request that answers the numbers.
+pub const STATUS_NUMBERS: u8 = 0;
+
+/// The index of the request that answers the robot's name.
+pub const STATUS_NAME: u8 = 1;
+
+/// The state of the drives (f1 of the status reply).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DriveState {
+    /// 0: off (after OF, or never started).
+    Off,
+    /// 1: starting (the drives boot for about 0.2 s after start or ON).
+    Starting,
+    /// 2: running: motions are accepted.
+    Running,
+    /// 3: stopping.
+    Stopping,
+    /// 4: stopped by a fault (f2 says which `ER3x`); ON clears it.
+    Faulted,
+}
+
+impl DriveState {
+    /// The state for a wire value.
+    pub fn from_value(v: f32) -> Option<Self> {
+        Some(match v {
+            0.0 => Self::Off,
+            1.0 => Self::Starting,
+            2.0 => Self::Running,
+            3.0 => Self::Stopping,
+            4.0 => Self::Faulted,
+            _ => return None,
+        })
+    }
+
+    /// How it is shown.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Starting => "starting",
+            Self::Running => "running",
+            Self::Stopping => "stopping",
+            Self::Faulted => "faulted",
+        }
+    }
+}
+
+/// What moves the arm (f4 of the status reply).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// 0: nothing; the arm holds.
+    Idle,
+    /// 1: a joint move (jB).
+    JointMove,
+    /// 2: a Cartesian move (BG).
+    CartesianMove,
+    /// 3: a joint via-point sequence (jE).
+    JointSequence,
+    /// 4: a Cartesian via-point sequence (VE).
+    CartesianSequence,
+}
+
+impl Motion {
+    /// The motion for a wire value.
+    pub fn from_value(v: f32) -> Option<Self> {
+        Some(match v {
+            0.0 => Self::Idle,
+            1.0 => Self::JointMove,
+            2.0 => Self::CartesianMove,
+            3.0 => Self::JointSequence,
+            4.0 => Self::CartesianSequence,
+            _ => return None,
+        })
+    }
+
+    /// How it is shown.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Idle => "idle",
+            Self::JointMove => "joint move",
+            Self::CartesianMove => "Cartesian move",
+            Self::JointSequence => "joint sequence",
+            Self::CartesianSequence => "Cartesian sequence",
+        }
+    }
+}
+
+/// The controller's state, as the two `SQ` replies report it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    /// The control mode.
+    pub mode: Mode,
+    /// The drives.
+    pub drives: DriveState,
+    /// The `NN` of the drive fault `ER3x` (0: none).
+    pub fault: u8,
+    /// The arm's number of joints.
+    pub joints: usize,
+    /// What moves the arm.
+    pub motion: Motion,
+    /// How many requests were refused since the controller started.
+    pub refused: u64,
+    /// Seconds since the controller started.
+    pub uptime: f64,
+    /// The robot's name (from its robot file).
+    pub name: String,
+}
+
+impl Status {
+    /// Decodes the numbers reply (index 0) and the name reply's bytes (index 1).
+    pub fn decode(values: &[f32; VALUES], name: &[u8; MESSAGE_LEN]) -> Result<Self, ClientError> {
+        let [mode, drives, fault, joints, motion, refused, uptime] = *values;
+        let bad = |what: &str, v: f32| {
+            ClientError::InvalidArgument(format!("the status reply has {what} {v}"))
+        };
+        let count = |what: &str, v: f32| {
+            if v.is_finite() && v >= 0.0 && v.fract() == 0.0 {
+                Ok(v)
+            } else {
+                Err(bad(what, v))
+            }
+        };
+        let joints = count("joint count", joints)?;
+        if !(1.0..=crate::banks::MAX_JOINTS as f32).contains(&joints) {
+            return Err(bad("joint count", joints));
+        }
+        let text: String = name
+            .get(2..MESSAGE_LEN - 1)
+            .unwrap_or_default()
+            .iter()
+            .take_while(|b| **b != 0)
+            .map(|b| {
+                if b.is_ascii_graphic() || *b == b' ' {
+                    char::from(*b)
+                } else {
+                    '?'
+                }
+            })
+            .collect();
+        Ok(Self {
+            mode: Mode::from_value(mode).ok_or_else(|| bad("mode", mode))?,
+            drives: DriveState::from_value(drives).ok_or_else(|| bad("drive state", drives))?,
+            fault: count("fault code", fault)? as u8,
+            joints: joints as usize,
+            motion: Motion::from_value(motion).ok_or_else(|| bad("motion", motion))?,
+            refused: count("refusal count", refused)? as u64,
+            uptime: f64::from(uptime),
+            name: text,
+        })
+    }
+
+    /// The drive state with its fault: `running`, `faulted (ER31)`.
+    pub fn drives_text(&self) -> String {
+        if self.fault != 0 {
+            format!("{} (ER{:02})", self.drives.name(), self.fault)
+        } else {
+            self.drives.name().to_owned()
+        }
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "robot      {} ({} joints)", self.name, self.joints)?;
+        writeln!(f, "mode       {} ({})", self.mode.name(), self.mode.value())?;
+        writeln!(f, "drives     {}", self.drives_text())?;
+        writeln!(f, "motion     {}", self.motion.name())?;
+        writeln!(f, "refused    {} requests", self.refused)?;
+        write!(f, "uptime     {:.1} s", self.uptime)
+    }
+}
+
+impl Client {
+    /// `SQ`: the controller's status (two requests). A controller that does not know the
+    /// request is [`ClientError::TooOld`].
+    pub fn status(&mut self) -> Result<Status, ClientError> {
+        let numbers = self.status_part(STATUS_NUMBERS)?;
+        let name = self.status_part(STATUS_NAME)?;
+        Status::decode(&numbers.values, &name.bytes)
+    }
+
+    fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {
+        match self.send_raw(STATUS_CHARS, [0.0; VALUES], index) {
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(0) => {
+                Err(ClientError::TooOld {
+                    request: "SQ (status)",
+                    text,
+                })
+            }
+            other => other,
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::ClientConfig;
+    use crate::fake::{FakeController, text};
+    use std::time::Duration;
+
+    /// The two replies of a controller in `mode`, drives `drives`, `joints` joints, `name`.
+    pub(crate) fn status_reply(request: &[u8], values: [f32; 7], name: &str) -> Vec<u8> {
+        let mut reply = vec![0; MESSAGE_LEN];
+        reply[..2].copy_from_slice(b"QS");
+        reply[30] = request[30];
+        if request[30] == STATUS_NAME {
+            reply[2..2 + name.len()].copy_from_slice(name.as_bytes());
+        } else {
+            for (k, v) in values.iter().enumerate() {
+                reply[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        reply
+    }
+
+    fn client(fake: &FakeController) -> Client {
+        Client::connect_with(
+            fake.addr(),
+            ClientConfig {
+                timeout: Duration::from_secs(1),
+                ..ClientConfig::default()
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn both_replies_are_decoded() {
+        let fake = FakeController::spawn(|d| {
+            vec![status_reply(
+                d,
+                [2.0, 4.0, 31.0, 8.0, 3.0, 17.0, 12.5],
+                "ranger-mk2",
+            )]
+        });
+        let s = client(&fake).status().unwrap();
+        assert_eq!(
+            s,
+            Status {
+                mode: Mode::Cartesian,
+                drives: DriveState::Faulted,
+                fault: 31,
+                joints: 8,
+                motion: Motion::JointSequence,
+                refused: 17,
+                uptime: 12.5,
+                name: "ranger-mk2".into(),
+            }
+        );
+        assert_eq!(s.drives_text(), "faulted (ER31)");
+        let sent = fake.received();
+        assert_eq!(sent.len(), 2);
+        assert_eq!((&sent[0][..2], sent[0][30]), (&b"SQ"[..], 0));
+        assert_eq!((&sent[1][..2], sent[1][30]), (&b"SQ"[..], 1));
+        assert!(s.to_string().contains("drives     faulted (ER31)"));
+    }
+
+    #[test]
+    fn an_old_controller_is_too_old() {
+        let fake = FakeController::spawn(|_| vec![text("ER00 Cmd SQ not understood")]);
+        let err = client(&fake).status().unwrap_err();
+        assert!(
+            err.to_string().contains("too old"),
+            "{err}: the controller's text is kept"
+        );
+        assert!(matches!(err, ClientError::TooOld { .. }));
+    }
+
+    #[test]
+    fn nonsense_values_are_errors() {
+        let name = [0; MESSAGE_LEN];
+        for values in [
+            [7.0, 2.0, 0.0, 6.0, 0.0, 0.0, 1.0],
+            [1.0, 9.0, 0.0, 6.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 9.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 6.0, 0.5, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 6.0, 0.0, f32::NAN, 1.0],
+        ] {
+            assert!(Status::decode(&values, &name).is_err(), "{values:?}");
+        }
+    }
+}
