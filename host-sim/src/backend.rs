@@ -5,7 +5,9 @@ use std::str::FromStr;
 
 use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
 use armgate_core::config::RobotConfig;
-use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, TxError, VirtualBus};
+use armgate_core::drives::{
+    BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
+};
 use armgate_core::kinematics::Joints;
 use armgate_protocol::can::CanFrame;
 
@@ -128,6 +130,14 @@ impl Backend {
         match self {
             Self::Direct { drives, .. } => drives.measured(),
             Self::Can { manager, .. } => manager.measured(),
+        }
+    }
+
+    /// The drive manager's state (none without a bus).
+    pub fn state(&self) -> Option<DriveState> {
+        match self {
+            Self::Direct { .. } => None,
+            Self::Can { manager, .. } => Some(manager.state()),
         }
     }
 

@@ -3,12 +3,14 @@
 //! It runs the same core as the firmware: the control tick at the robot's period, and the
 //! 31-byte UDP command protocol. Only bytes and time are handled here.
 
+mod args;
 mod backend;
 mod log;
 mod socketcan;
+mod status;
 
 use std::io::IsTerminal;
-use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, UdpSocket};
+use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -23,6 +25,7 @@ use armgate_core::motion::{IdealArm, RateLimitedArm};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
+use status::Stats;
 
 /// Run the armgate arm controller on this computer, with a simulated arm.
 ///
@@ -39,8 +42,9 @@ struct Args {
     /// UDP address to listen on for client commands.
     #[arg(long, default_value = "127.0.0.1:7031")]
     listen: SocketAddr,
-    /// Networks allowed to send commands, e.g. 192.168.1.0/24 (repeatable). Default: loopback
-    /// only (127.0.0.0/8 and ::1). Datagrams from elsewhere are dropped and counted.
+    /// Networks allowed to send commands besides loopback (127.0.0.0/8 and ::1, always
+    /// allowed), e.g. 192.168.1.0/24 (repeatable). Datagrams from elsewhere are dropped and
+    /// counted.
     #[arg(long = "allow", value_name = "NETWORK")]
     allow: Vec<Network>,
     /// Where set-points go: `sim` = one simulated Elmo Whistle per drive of the robot file on
@@ -51,7 +55,8 @@ struct Args {
     /// With --can off: how the simulated joints follow the commands.
     #[arg(long, value_enum, default_value_t = ArmKind::Ideal)]
     arm: ArmKind,
-    /// Starting joint positions, comma-separated (default: the drives' home positions).
+    /// Starting joint positions, comma-separated, within the joint limits (default: the drives'
+    /// home positions).
     #[arg(
         long,
         value_delimiter = ',',
@@ -62,8 +67,8 @@ struct Args {
     /// Write CSV logs (commands, replies, warnings, state) into this directory.
     #[arg(long, value_name = "DIR")]
     log_dir: Option<PathBuf>,
-    /// Exit after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_name = "SECONDS")]
+    /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
+    #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
     /// No status line on the terminal.
     #[arg(long)]
@@ -104,33 +109,21 @@ fn main() -> ExitCode {
     }
 }
 
-/// Counters shown in the status line and at exit.
-#[derive(Debug, Default)]
-struct Stats {
-    received: u64,
-    refused_sources: u64,
-    notices: u64,
-    overruns: u64,
-}
-
 fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     let n = config.dof();
-    let home = config.home();
-    let start = Chain::new(config)
-        .check(args.start.as_deref().unwrap_or(&home))
-        .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
+    let start = args::start_joints(config, args.start.as_deref()).map_err(|e| {
+        let what = if args.start.is_some() {
+            "--start"
+        } else {
+            "home"
+        };
+        format!("{what}: {e}")
+    })?;
     let mut drives = Backend::open(&args.can, config, &start, || {
         arm_model(args.arm, config, start)
     })?;
     let mut handler = CommandHandler::new(config);
-    let allow = if args.allow.is_empty() {
-        vec![
-            Network::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 8),
-            Network::new(IpAddr::V6(Ipv6Addr::LOCALHOST), 128),
-        ]
-    } else {
-        args.allow.clone()
-    };
+    let allow = args::allow_list(&args.allow);
     let logger = match &args.log_dir {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
         None => Logger::disabled(),
@@ -141,6 +134,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", args.listen))?;
     let running = Arc::new(AtomicBool::new(true));
     let stop = running.clone();
+    // Ctrl-C, and SIGTERM as well (the `termination` feature): the logs are flushed either way.
     ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
     let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
@@ -203,12 +197,15 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             // the loop is hopelessly behind.
             next_tick += period;
             if now > next_tick + period * MAX_CATCH_UP {
-                stats.overruns += 1;
+                stats.count_stall(now - next_tick, period);
                 next_tick = now + period;
             }
             if status && now >= next_status {
                 next_status = now + Duration::from_millis(250);
-                eprint!("\r{}\x1b[K", status_line(&handler, &stats, &logger));
+                eprint!(
+                    "\r{}\x1b[K",
+                    status::line(&handler, &drives, &stats, &logger)
+                );
             }
             continue;
         }
@@ -223,7 +220,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             Err(e) => return Err(format!("udp receive: {e}")),
         };
         if !allow.iter().any(|net| net.contains(from.ip())) {
-            stats.refused_sources += 1;
+            stats.denied_sources += 1;
             continue;
         }
         stats.received += 1;
@@ -235,6 +232,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             datagram: datagram.to_vec(),
         });
         let reply = handler.handle(datagram, drives.drives_mut());
+        stats.count_reply(&reply);
         logger.log(Record::Reply { t, datagram: reply });
         socket
             .send_to(&reply, from)
@@ -245,10 +243,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
     }
     let dropped = logger.dropped();
     logger.finish().map_err(|e| format!("log: {e}"))?;
-    eprintln!(
-        "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns, {} log records dropped",
-        stats.received, stats.refused_sources, stats.notices, stats.overruns, dropped
-    );
+    eprintln!("armgate-sim: stopped; {}", stats.summary(dropped));
     Ok(())
 }
 
@@ -282,30 +277,6 @@ fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
     }
 }
 
-fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> String {
-    let ctrl = handler.controller();
-    let pose = ctrl
-        .measured()
-        .map(|(_, p)| {
-            let [x, y, z] = p.pos.to_array();
-            format!("x {x:+.4} y {y:+.4} z {z:+.4}")
-        })
-        .unwrap_or_default();
-    let state = if ctrl.is_moving() {
-        "moving"
-    } else {
-        "holding"
-    };
-    format!(
-        "mode {:<9} {state:<7} {pose} | rx {} refused {} warnings {} log dropped {}",
-        ctrl.mode().name(),
-        stats.received,
-        stats.refused_sources,
-        stats.notices,
-        logger.dropped()
-    )
-}
-
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
 fn print_home(config: &RobotConfig) {
     let chain = Chain::new(config);
@@ -323,7 +294,11 @@ fn print_home(config: &RobotConfig) {
         chain.dof(),
         config.control_period
     );
-    println!("home joints: {home:.4?}");
+    let joints: Vec<String> = home.iter().map(|q| format!("{q:.4}")).collect();
+    println!(
+        "home joints (rad; m for prismatic joints): {}",
+        joints.join(" ")
+    );
     println!("tool position (m):           {x:.4} {y:.4} {z:.4}");
     println!("tool quaternion (x y z w):   {qx:.4} {qy:.4} {qz:.4} {qw:.4}");
     println!("tool RPY (rad):              {roll:.4} {pitch:.4} {yaw:.4}");
