@@ -50,7 +50,7 @@ pub fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joint
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used)]
+    #![allow(clippy::unwrap_used, clippy::approx_constant)]
     use super::*;
 
     fn ranger() -> RobotConfig {
