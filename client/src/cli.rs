@@ -35,9 +35,10 @@ Examples:
   armgate status                             mode, drives, joint count, robot name
   armgate pose                               where is the tool?
   armgate mode cart
-  armgate move 0.5 0.2 0.1 0 0 0 --time 5    GT + BG, then wait until within 1 mm
+  armgate move 0 0.2 0.8 0 0 -1.5708 --time 5
+                                             GT + BG, then wait until within 1 mm
   armgate mode joint
-  armgate jmove 0 0.5 1.0 0 0.3 0            jG + jB, then wait
+  armgate jmove 1.5708 0.4 1.2 0 1.2 0       jG + jB, then wait
   armgate run client/examples/rectangle.toml via points from a file
   armgate send PS                            any request, printed raw
   armgate send XY                            shows the controller's ER00 text
@@ -67,8 +68,10 @@ The entries go into via slots 0.. in file order and run: VC, VP 0.., VE (needs m
 or jC, jV 0.., jE (needs mode joint). The first leg starts wherever the arm is. The wait
 follows the points in order and ends within --tolerance of the last one.
 
-client/examples/rectangle.toml is the seed thesis's E8 rectangle: (0.5, 0.2, 0.1) ->
-(0.5, 0.2, 0.4) -> (0.5, -0.2, 0.4) -> (0.5, -0.2, 0.1) -> back to the start.";
+client/examples/rectangle.toml is a 0.2 m x 0.1 m rectangle for the default robot
+(ranger-mk1): (0, 0.2, 0.8) -> (0.1, 0.2, 0.8) -> (0.1, 0.2, 0.7) -> (-0.1, 0.2, 0.7) ->
+(-0.1, 0.2, 0.8) -> back. client/examples/rectangle-e8.toml is the seed thesis's E8 rectangle
+for the hybrid and ranger-mk2 robots.";
 
 const TELEOP_LONG: &str = "\
 The keyboard client (thesis Fig. 3.3): Current Pose, Desired Pose, Joints and Temp(C),
@@ -187,7 +190,7 @@ pub enum Cmd {
     ///
     /// Without --time: jG + jB, a minimum-time motion. With --time T: jC, jV slot 0 with T, jE,
     /// since jB takes no duration (this clears the joint via points).
-    #[command(after_help = "Example: armgate jmove 0 0.5 1.0 0 0.3 0 --time 3")]
+    #[command(after_help = "Example: armgate jmove 1.5708 0.4 1.2 0 1.2 0 --time 10")]
     Jmove {
         /// One value per joint (rad, or m for prismatic joints); --joints says how many.
         #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
@@ -453,19 +456,59 @@ fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
     })
 }
 
+/// After arrival within the tolerance the motion may still be ending (the last millimetre of
+/// a deceleration): waits until the controller reports no motion, so that the next command is
+/// not refused as busy (a controller without SQ: until the pose stops changing). Gives up
+/// quietly after `SETTLE`.
+fn settle(client: &mut Client) -> Result<(), CliError> {
+    const SETTLE: Duration = Duration::from_secs(5);
+    let started = Instant::now();
+    loop {
+        match client.status() {
+            Ok(status) if status.motion == crate::Motion::Idle => return Ok(()),
+            Ok(_) if started.elapsed() < SETTLE => std::thread::sleep(Duration::from_millis(20)),
+            Ok(_) => return Ok(()),
+            Err(ClientError::TooOld { .. }) => {
+                let options = WaitOptions {
+                    timeout: SETTLE,
+                    ..WaitOptions::default()
+                };
+                return match client.wait_idle(3, &options) {
+                    Ok(_) | Err(ClientError::WaitTimeout { .. }) => Ok(()),
+                    Err(e) => Err(e.into()),
+                };
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+}
+
 /// `armgate on`: ON, then SQ until the drives run, fail, or the time is up.
 fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Result<(), CliError> {
     let started = Instant::now();
-    let already = match client.on() {
-        Ok(()) => false,
-        // ON while they run or start: not a failure if they end up running.
-        Err(ClientError::Rejected(text)) if matching::code(&text) == Some(11) => {
-            match client.status() {
-                Ok(s) if matches!(s.drives, DriveState::Running | DriveState::Starting) => true,
-                _ => return Err(ClientError::Rejected(text).into()),
+    let already = loop {
+        match client.on() {
+            Ok(()) => break false,
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(11) => {
+                // ON while they run or start: not a failure if they end up running. While
+                // they stop (just after `off`), ON is refused: it is sent again once they
+                // have. A controller without SQ cannot say: ON is tried again for a second.
+                let retry = match client.status() {
+                    Ok(s) if matches!(s.drives, DriveState::Running | DriveState::Starting) => {
+                        break true;
+                    }
+                    // Stopping, or stopped since ON was refused.
+                    Ok(_) => started.elapsed() < timeout,
+                    Err(ClientError::TooOld { .. }) => started.elapsed() < Duration::from_secs(1),
+                    Err(e) => return Err(e.into()),
+                };
+                if !retry {
+                    return Err(ClientError::Rejected(text).into());
+                }
+                std::thread::sleep(Duration::from_millis(50));
             }
+            Err(e) => return Err(e.into()),
         }
-        Err(e) => return Err(e.into()),
     };
     loop {
         let status = match client.status() {
@@ -581,6 +624,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 )
                 .map_err(|e| stop_if_interrupted(client, e))?;
             finish_progress();
+            settle(client)?;
             writeln!(
                 out,
                 "arrived: {} ({:.2} mm from the goal)",
@@ -612,6 +656,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 .wait_until_joints(q, &options, joint_progress)
                 .map_err(|e| stop_if_interrupted(client, e))?;
             finish_progress();
+            settle(client)?;
             writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
@@ -637,6 +682,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                         .wait_through_poses(&goals, &options, pose_progress)
                         .map_err(|e| stop_if_interrupted(client, e))?;
                     finish_progress();
+                    settle(client)?;
                     writeln!(out, "done: {}", fmt_values(&pose.xyz, 4))?;
                 }
                 RunFile::Joint(points) => {
@@ -647,6 +693,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                         .wait_through_joints(&goals, &options, joint_progress)
                         .map_err(|e| stop_if_interrupted(client, e))?;
                     finish_progress();
+                    settle(client)?;
                     writeln!(out, "done: {}", fmt_values(&q, 4))?;
                 }
             }
@@ -901,6 +948,38 @@ mod tests {
     }
 
     #[test]
+    fn on_right_after_off_waits_for_the_drives_to_stop_and_sends_on_again() {
+        // Stopping for three status polls; ON is refused until then, and starts them at once.
+        let state = Arc::new(Mutex::new((3.0f32, 0usize)));
+        let fake = FakeController::spawn(move |d| {
+            let mut s = state.lock().unwrap();
+            match &d[..2] {
+                b"ON" if s.0 == 0.0 => {
+                    s.0 = 2.0;
+                    let mut r = d[..31].to_vec();
+                    r.swap(0, 1);
+                    vec![r]
+                }
+                b"ON" => vec![text("ER11 Arm did not start")],
+                _ => {
+                    if d[30] == 0 && s.0 == 3.0 {
+                        s.1 += 1;
+                        if s.1 >= 3 {
+                            s.0 = 0.0;
+                        }
+                    }
+                    vec![status_reply(d, [0.0, s.0, 0.0, 6.0, 0.0, 0.0, 1.0], "r")]
+                }
+            }
+        });
+        let (result, out) = run_with(&fake, &["on"]);
+        result.unwrap();
+        assert!(out.starts_with("drives running"), "{out}");
+        let ons = fake.received().iter().filter(|d| &d[..2] == b"ON").count();
+        assert_eq!(ons, 4);
+    }
+
+    #[test]
     fn a_refusal_with_the_drives_off_hints_at_on() {
         let fake = FakeController::spawn(|d| match &d[..2] {
             b"SQ" => vec![status_reply(d, [2.0, 0.0, 0.0, 6.0, 0.0, 3.0, 1.0], "r")],
@@ -1096,7 +1175,11 @@ mod tests {
             .collect();
         // The joint count comes from the status (SQ twice: numbers and name).
         assert_eq!(sent[..5], ["SQ", "SQ", "jC", "jV", "jE"]);
-        assert!(sent[5..].iter().all(|c| c == "jP"));
+        // Then jP until arrival, and SQ until the motion has ended.
+        let polls = &sent[5..];
+        let first_sq = polls.iter().position(|c| c == "SQ").unwrap();
+        assert!(polls[..first_sq].iter().all(|c| c == "jP"), "{polls:?}");
+        assert!(polls[first_sq..].iter().all(|c| c == "SQ"), "{polls:?}");
         let (result, _) = run_with(&fake, &["jmove", "0", "0.5"]);
         let err = result.unwrap_err();
         assert_eq!(err.exit_code(), 2);

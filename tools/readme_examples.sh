@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# Runs the README's examples against armgate-sim, in the README's order, and fails if any of
+# them fails: the quick start (the simulator and the client commands) and every line of the
+# client section's example block. The commands are read from README.md itself, so they cannot
+# drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
+# ranger-mk1's 3 cm/s).
+#
+# Not run: `cargo test` (CI's own step), the nightly fuzzer, and `armgate teleop` (it needs a
+# terminal; tests cover it at the state level).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+readme=README.md
+target=${CARGO_TARGET_DIR:-target}
+cargo build -q -p armgate-sim -p armgate-client
+
+# `armgate` as the README writes it: the binary just built.
+shim=$(mktemp -d)
+sim_pid=
+cleanup() {
+    if [[ -n $sim_pid ]] && kill -0 "$sim_pid" 2>/dev/null; then
+        kill "$sim_pid" 2>/dev/null || true
+    fi
+    rm -rf "$shim"
+}
+trap cleanup EXIT
+ln -s "$(realpath "$target/debug/armgate")" "$shim/armgate"
+export PATH="$shim:$PATH"
+
+# The non-empty lines of the ```sh blocks under the heading `## $1`, comments removed.
+examples() {
+    awk -v want="## $1" '
+        /^## / { section = $0 }
+        /^```sh$/ { inside = (section == want); next }
+        /^```/ { inside = 0; next }
+        inside {
+            sub(/[[:space:]]+#.*$/, ""); sub(/^#.*$/, "")
+            if (NF) print
+        }' "$readme"
+}
+
+failures=0
+run() {
+    local cmd=$1 started status
+    printf '\n$ %s\n' "$cmd"
+    started=$(date +%s.%N)
+    set +e
+    timeout 300 bash -c "$cmd"
+    status=$?
+    set -e
+    printf '(exit %s, %.1f s)\n' "$status" "$(echo "$(date +%s.%N) - $started" | bc)"
+    if [[ $status -ne 0 ]]; then
+        echo "FAILED: $cmd" >&2
+        failures=$((failures + 1))
+    fi
+}
+
+quick=$(examples "Quick start")
+client=$(examples 'Client: `armgate`')
+[[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
+
+# The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
+# itself by the binary, so $! is the simulator).
+sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
+log=$shim/sim.log
+echo "\$ $sim --listen 127.0.0.1:0"
+bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
+sim_pid=$!
+for _ in $(seq 100); do
+    grep -q 'udp://' "$log" && break
+    kill -0 "$sim_pid" 2>/dev/null || { cat "$log" >&2; exit 1; }
+    sleep 0.1
+done
+ARMGATE_ADDR=$(grep -o 'udp://[^,]*' "$log" | head -1 | cut -c7-)
+export ARMGATE_ADDR
+echo "armgate-sim listens on $ARMGATE_ADDR"
+
+while IFS= read -r line; do
+    case $line in
+        *armgate-sim*) ;;                                    # started above
+        "cargo test"*) echo "skipped: $line (a CI step of its own)" ;;
+        *"cargo +nightly"*) echo "skipped: $line (needs nightly)" ;;
+        *teleop*) echo "skipped: $line (needs a terminal)" ;;
+        *) run "$line" ;;
+    esac
+done <<<"$quick"
+
+# Client lines may hold several commands separated by `;`; each runs on its own.
+while IFS= read -r line; do
+    IFS=';' read -ra commands <<<"$line"
+    for cmd in "${commands[@]}"; do
+        cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
+        case $cmd in
+            *teleop*) echo "skipped: $cmd (needs a terminal)" ;;
+            *) run "$cmd" ;;
+        esac
+    done
+done <<<"$client"
+
+# The simulator ends cleanly on SIGTERM, with its summary.
+kill -TERM "$sim_pid"
+set +e
+wait "$sim_pid"
+status=$?
+set -e
+sim_pid=
+tail -n 1 "$log"
+if [[ $status -ne 0 ]]; then
+    echo "FAILED: armgate-sim exited with $status on SIGTERM" >&2
+    failures=$((failures + 1))
+fi
+
+if [[ $failures -ne 0 ]]; then
+    echo "$failures README example(s) failed" >&2
+    exit 1
+fi
+echo "all README examples ran"
