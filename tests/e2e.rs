@@ -614,3 +614,43 @@ fn logs_survive_garbage_are_flushed_every_second_and_sigterm_ends_cleanly() {
     let state = csv_rows(&logs.join("state.csv"));
     assert!(state.len() > 50, "{} state rows", state.len());
 }
+
+#[test]
+fn bad_command_line_values_are_refused_with_the_reason() {
+    let sim = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+            .args(["--listen", "127.0.0.1:0", "--quiet"])
+            .args(args)
+            .current_dir(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".."))
+            .output()
+            .unwrap();
+        (
+            out.status,
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (status, err) = sim(&["--start", "1.5708,0,1.5708,0,0.3,0"]);
+    assert!(!status.success());
+    assert!(
+        err.contains("--start: q5 = 0.3 is outside the joint's limits [0.785, 3.926]"),
+        "{err}"
+    );
+    for duration in ["nan", "-1", "inf"] {
+        let (status, err) = sim(&[&format!("--duration={duration}")]);
+        assert_eq!(status.code(), Some(2), "{duration}: {err}");
+        assert!(err.contains("give a number of seconds"), "{err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+        .arg("--print-home")
+        .current_dir(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .unwrap();
+    let home = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        home.contains(
+            "home joints (rad; m for prismatic joints): 1.5708 0.0000 1.5708 0.0000 1.5708 0.0000\n"
+        ),
+        "{home}"
+    );
+    assert!(!home.contains("Joints {"), "{home}");
+}

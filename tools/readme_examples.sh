@@ -97,6 +97,33 @@ while IFS= read -r line; do
     done
 done <<<"$client"
 
+# Ctrl-C during a wait sends ST: the arm stops and holds. (A background job of a script
+# ignores SIGINT until armgate installs its handler, as it does before its first request.)
+echo
+echo '$ armgate mode joint; armgate jmove 1.5708 0 1.5708 0 1.5708 0, Ctrl-C after 2 s'
+sleep 0.5 # a controller without SQ cannot say when the drives run after `armgate on`
+armgate mode joint >/dev/null
+armgate jmove 1.5708 0 1.5708 0 1.5708 0 >"$shim/jmove.out" 2>&1 &
+jmove_pid=$!
+sleep 2
+kill -INT "$jmove_pid" || true
+set +e
+wait "$jmove_pid"
+status=$?
+set -e
+tail -n 2 "$shim/jmove.out"
+sleep 1 # the stop decelerates, and the drives follow a few points behind
+before=$(armgate --joints 6 joints)
+sleep 1
+after=$(armgate --joints 6 joints)
+if [[ $status -ne 130 ]] || ! grep -q 'sent ST' "$shim/jmove.out" || [[ $before != "$after" ]]; then
+    echo "FAILED: Ctrl-C did not stop the arm (exit $status)" >&2
+    printf '%s\n---\n%s\n' "$before" "$after" >&2
+    failures=$((failures + 1))
+else
+    echo "(exit 130; the arm holds)"
+fi
+
 # The simulator ends cleanly on SIGTERM, with its summary.
 kill -TERM "$sim_pid"
 set +e
