@@ -595,7 +595,17 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             Ok(())
         }
         Cmd::On { wait_timeout } => drives_on(client, *wait_timeout, out),
-        Cmd::Off => ok(client.off(), "drives off", out),
+        Cmd::Off => match client.off() {
+            // `ER10 Arm already off` / `already stopping`: what was asked for.
+            Err(ClientError::Rejected(text))
+                if matching::code(&text) == Some(10) && text.as_str().contains(" already ") =>
+            {
+                let state = text.as_str().rsplit(' ').next().unwrap_or("off");
+                writeln!(out, "drives already {state}")?;
+                Ok(())
+            }
+            result => ok(result, "drives off", out),
+        },
         Cmd::Stop => ok(client.stop(), "stopped", out),
         Cmd::Move {
             x,
@@ -977,6 +987,23 @@ mod tests {
         assert!(out.starts_with("drives running"), "{out}");
         let ons = fake.received().iter().filter(|d| &d[..2] == b"ON").count();
         assert_eq!(ons, 4);
+    }
+
+    #[test]
+    fn off_when_already_off_is_no_failure() {
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"OF" => vec![text("ER10 Arm already off")],
+            _ => vec![],
+        });
+        let (result, out) = run_with(&fake, &["off"]);
+        result.unwrap();
+        assert_eq!(out, "drives already off\n");
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"OF" => vec![text("ER10 Arm stopped by fault")],
+            _ => vec![],
+        });
+        let (result, _) = run_with(&fake, &["off", "--timeout", "50ms"]);
+        assert_eq!(result.unwrap_err().to_string(), "ER10 Arm stopped by fault");
     }
 
     #[test]

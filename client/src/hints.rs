@@ -1,8 +1,9 @@
-//! What to do about a refusal: a hint from the controller's state (`SQ`) when it can say,
-//! else from the reason in the refusal's text.
+//! What to do about a refusal: from the reason in the refusal's text (`ER20 Cmd BG drives off`,
+//! docs/protocol.md), else from the controller's state (`SQ`), else a list of what the command
+//! needs (a controller that gives neither).
 //!
-//! The state decides first because it cannot guess wrong: with the drives off or faulted no
-//! motion starts whatever the mode, so the hint is `armgate on`; while they start, waiting is.
+//! The reason and the state cannot guess wrong: with the drives off or faulted no motion
+//! starts whatever the mode, so the hint is `armgate on`; while they start, waiting is.
 
 use crate::status::{DriveState, Motion, Status};
 use crate::{Mode, Text, matching};
@@ -21,6 +22,9 @@ pub fn hint(text: &Text, status: Option<&Status>) -> Option<String> {
     let code = matching::code(text)?;
     let s = text.as_str();
     let command = named_command(s).unwrap_or_default();
+    if let Some(h) = reason_hint(code, &s.to_ascii_lowercase()) {
+        return Some(h);
+    }
     if let Some(status) = status {
         if let Some(h) = drive_hint(status, code) {
             return Some(h);
@@ -85,17 +89,53 @@ fn state_hint(command: &str, status: &Status) -> Option<String> {
     }
 }
 
-/// The hint from the refusal's text alone (a controller without `SQ`).
-fn text_hint(code: u8, command: &str, reason: &str) -> Option<String> {
-    if reason.contains("drives off")
-        || reason.contains("fault")
-        || (reason.contains("stopping") && code != 10)
+/// The hint for a reason the refusal's text gives (the `ER20` reasons of docs/protocol.md).
+fn reason_hint(code: u8, reason: &str) -> Option<String> {
+    if code != 20 {
+        return None;
+    }
+    if reason.ends_with("drives off")
+        || reason.contains("drive fault")
+        || reason.ends_with("drives stopping")
     {
-        return Some("start the drives with `armgate on`".into());
+        return Some("start the drives with `armgate on` (it also clears a fault)".into());
     }
-    if reason.contains("starting") {
-        return Some("the drives are still starting: try again in a moment".into());
+    if reason.ends_with("drives starting") {
+        return Some(
+            "the drives are still starting: try again in a moment (`armgate on` waits for them)"
+                .into(),
+        );
     }
+    if reason.ends_with("drives settling") {
+        return Some("the drives still follow the last set-points: try again in a moment".into());
+    }
+    if let Some(mode) = reason
+        .split_once("needs mode ")
+        .and_then(|(_, m)| m.trim().parse::<f32>().ok())
+        .and_then(Mode::from_value)
+    {
+        return Some(format!(
+            "switch the mode first: `armgate mode {}`",
+            mode.name()
+        ));
+    }
+    if reason.ends_with("busy") {
+        return Some("a motion is running: wait for it or `armgate stop`".into());
+    }
+    if reason.ends_with("no goal") {
+        return Some(
+            "store a goal first (`armgate send GT ...` / jG), or use `armgate move` / `jmove`"
+                .into(),
+        );
+    }
+    if reason.ends_with("no via point 0") {
+        return Some("store via point 0 first (VP / jV), or use `armgate run`".into());
+    }
+    None
+}
+
+/// The hint from the refusal alone (a controller without reasons and without `SQ`).
+fn text_hint(code: u8, command: &str, reason: &str) -> Option<String> {
     if code != 20 {
         return None;
     }
@@ -108,11 +148,8 @@ fn text_hint(code: u8, command: &str, reason: &str) -> Option<String> {
     } else {
         return None;
     };
-    if reason.contains("mode") {
-        return Some(format!("needs {mode}"));
-    }
-    if reason.contains("busy") || reason.contains("running") || reason.contains("moving") {
-        return Some("a motion is running: wait for it or `armgate stop`".into());
+    if !reason.ends_with("rejected") {
+        return None;
     }
     Some(format!(
         "needs {mode}, running drives (`armgate on`), a goal, and no motion running (`armgate stop`)"
@@ -190,12 +227,20 @@ mod tests {
 
     #[test]
     fn without_status_the_reason_text_decides() {
-        // Texts are at most 30 characters on the wire.
+        // Texts are at most 30 characters on the wire (docs/protocol.md lists the reasons).
         assert!(hint_for("ER20 Cmd BG drives off", None).contains("`armgate on`"));
-        assert!(hint_for("ER20 Cmd BG drive fault ER31", None).contains("`armgate on`"));
+        assert!(hint_for("ER20 Cmd BG drives stopping", None).contains("`armgate on`"));
+        assert!(hint_for("ER20 Cmd BG drive fault 31", None).contains("`armgate on`"));
         assert!(hint_for("ER20 Cmd RC drives starting", None).contains("starting"));
-        assert!(hint_for("ER20 Cmd BG wrong mode", None).contains("mode cart"));
+        assert!(hint_for("ER20 Cmd RC drives settling", None).contains("in a moment"));
+        assert!(hint_for("ER20 Cmd BG needs mode 2", None).contains("`armgate mode cart`"));
+        assert!(hint_for("ER20 Cmd RC needs mode 0", None).contains("`armgate mode off`"));
         assert!(hint_for("ER20 Cmd jE busy", None).contains("`armgate stop`"));
+        assert!(hint_for("ER20 Cmd BG no goal", None).contains("goal"));
+        assert!(hint_for("ER20 Cmd VE no via point 0", None).contains("via point 0"));
+        // The reason wins over the state: it is what the controller checked.
+        let running = status(Mode::Off, DriveState::Running, 0, Motion::Idle);
+        assert!(hint_for("ER20 Cmd RC drives settling", Some(running)).contains("in a moment"));
         let old = hint_for("ER20 Cmd BG rejected", None);
         assert!(
             old.contains("mode cart") && old.contains("armgate on"),
