@@ -13,8 +13,8 @@ use crate::matching;
 use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
-    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DriveState, Mode, NO_READING,
-    Pose, Progress, Text, WaitOptions,
+    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DriveStatus, Mode,
+    NO_READING, Pose, Progress, Text, WaitOptions,
 };
 
 const ABOUT: &str = "Command an armgate robot-arm controller over UDP";
@@ -465,7 +465,7 @@ fn settle(client: &mut Client) -> Result<(), CliError> {
     let started = Instant::now();
     loop {
         match client.status() {
-            Ok(status) if status.motion == crate::Motion::Idle => return Ok(()),
+            Ok(status) if status.motion == crate::Motion::Holding => return Ok(()),
             Ok(_) if started.elapsed() < SETTLE => std::thread::sleep(Duration::from_millis(20)),
             Ok(_) => return Ok(()),
             Err(ClientError::TooOld { .. }) => {
@@ -494,7 +494,7 @@ fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Re
                 // they stop (just after `off`), ON is refused: it is sent again once they
                 // have. A controller without SQ cannot say: ON is tried again for a second.
                 let retry = match client.status() {
-                    Ok(s) if matches!(s.drives, DriveState::Running | DriveState::Starting) => {
+                    Ok(s) if matches!(s.drives, DriveStatus::Running | DriveStatus::Starting) => {
                         break true;
                     }
                     // Stopping, or stopped since ON was refused.
@@ -520,7 +520,7 @@ fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Re
             Err(e) => return Err(e.into()),
         };
         match status.drives {
-            DriveState::Running => {
+            DriveStatus::Running => {
                 let how = if already {
                     "already running"
                 } else {
@@ -533,10 +533,10 @@ fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Re
                 )?;
                 return Ok(());
             }
-            DriveState::Faulted | DriveState::Off => {
+            DriveStatus::Faulted | DriveStatus::Off => {
                 return Err(CliError::NotStarted(status.drives_text()));
             }
-            DriveState::Starting | DriveState::Stopping => {}
+            DriveStatus::Starting | DriveStatus::Stopping => {}
         }
         if started.elapsed() > timeout {
             return Err(CliError::NotStarted(format!(

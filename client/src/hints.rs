@@ -5,7 +5,7 @@
 //! The reason and the state cannot guess wrong: with the drives off or faulted no motion
 //! starts whatever the mode, so the hint is `armgate on`; while they start, waiting is.
 
-use crate::status::{DriveState, Motion, Status};
+use crate::status::{DriveStatus, Motion, Status};
 use crate::{Mode, Text, matching};
 
 /// The commands that start or load a Cartesian motion, and those of joint mode.
@@ -40,16 +40,16 @@ pub fn hint(text: &Text, status: Option<&Status>) -> Option<String> {
 /// The hint when the drives are the reason (any refusal but ON's and OF's own).
 fn drive_hint(status: &Status, code: u8) -> Option<String> {
     match (status.drives, code) {
-        (DriveState::Running, _) | (_, 10 | 11) => None,
-        (DriveState::Off, _) => Some("the drives are off: start them with `armgate on`".into()),
-        (DriveState::Faulted, _) => Some(format!(
+        (DriveStatus::Running, _) | (_, 10 | 11) => None,
+        (DriveStatus::Off, _) => Some("the drives are off: start them with `armgate on`".into()),
+        (DriveStatus::Faulted, _) => Some(format!(
             "the drives stopped on a fault ({}): `armgate on` clears it and restarts them",
             status.drives_text()
         )),
-        (DriveState::Starting, _) => {
+        (DriveStatus::Starting, _) => {
             Some("the drives are still starting: try again in a moment (`armgate on` waits)".into())
         }
-        (DriveState::Stopping, _) => {
+        (DriveStatus::Stopping, _) => {
             Some("the drives are stopping: `armgate on` restarts them".into())
         }
     }
@@ -67,7 +67,7 @@ fn state_hint(command: &str, status: &Status) -> Option<String> {
         })
     };
     let busy = || {
-        (status.motion != Motion::Idle).then(|| {
+        (status.motion != Motion::Holding).then(|| {
             format!(
                 "a {} is running: wait for it or `armgate stop`",
                 status.motion.name()
@@ -161,7 +161,7 @@ mod tests {
     use super::*;
     use crate::fake::parsed_text;
 
-    fn status(mode: Mode, drives: DriveState, fault: u8, motion: Motion) -> Status {
+    fn status(mode: Mode, drives: DriveStatus, fault: u8, motion: Motion) -> Status {
         Status {
             mode,
             drives,
@@ -180,8 +180,8 @@ mod tests {
 
     #[test]
     fn drives_off_or_faulted_hint_at_on_whatever_the_mode() {
-        let off = status(Mode::Off, DriveState::Off, 0, Motion::Idle);
-        let faulted = status(Mode::Cartesian, DriveState::Faulted, 31, Motion::Idle);
+        let off = status(Mode::Off, DriveStatus::Off, 0, Motion::Holding);
+        let faulted = status(Mode::Cartesian, DriveStatus::Faulted, 31, Motion::Holding);
         for text in [
             "ER20 Cmd BG rejected",
             "ER20 Cmd RC rejected",
@@ -191,13 +191,13 @@ mod tests {
             let h = hint_for(text, Some(faulted.clone()));
             assert!(h.contains("`armgate on`") && h.contains("ER31"), "{h}");
         }
-        let starting = status(Mode::Off, DriveState::Starting, 0, Motion::Idle);
+        let starting = status(Mode::Off, DriveStatus::Starting, 0, Motion::Holding);
         assert!(hint_for("ER20 Cmd RC rejected", Some(starting)).contains("still starting"));
     }
 
     #[test]
     fn with_the_drives_running_the_mode_motion_and_goal_decide() {
-        let s = status(Mode::Joint, DriveState::Running, 0, Motion::Idle);
+        let s = status(Mode::Joint, DriveStatus::Running, 0, Motion::Holding);
         assert_eq!(
             hint_for("ER20 Cmd BG rejected", Some(s.clone())),
             "BG needs mode cart, the mode is joint: `armgate mode cart`"
@@ -206,19 +206,19 @@ mod tests {
         assert!(hint_for("ER20 Cmd RC rejected", Some(s)).contains("`armgate mode off`"));
         let busy = status(
             Mode::Cartesian,
-            DriveState::Running,
+            DriveStatus::Running,
             0,
             Motion::CartesianMove,
         );
         assert!(hint_for("ER20 Cmd BG rejected", Some(busy)).contains("`armgate stop`"));
         // RC in mode off with idle, running drives: nothing to suggest.
-        let idle_off = status(Mode::Off, DriveState::Running, 0, Motion::Idle);
+        let idle_off = status(Mode::Off, DriveStatus::Running, 0, Motion::Holding);
         assert_eq!(
             hint(&parsed_text("ER20 Cmd RC rejected"), Some(&idle_off)),
             None
         );
         // Other refusals say enough by themselves.
-        let idle = status(Mode::Cartesian, DriveState::Running, 0, Motion::Idle);
+        let idle = status(Mode::Cartesian, DriveStatus::Running, 0, Motion::Holding);
         assert_eq!(
             hint(&parsed_text("ER25 Cmd GT outside workspace"), Some(&idle)),
             None
@@ -239,7 +239,7 @@ mod tests {
         assert!(hint_for("ER20 Cmd BG no goal", None).contains("goal"));
         assert!(hint_for("ER20 Cmd VE no via point 0", None).contains("via point 0"));
         // The reason wins over the state: it is what the controller checked.
-        let running = status(Mode::Off, DriveState::Running, 0, Motion::Idle);
+        let running = status(Mode::Off, DriveStatus::Running, 0, Motion::Holding);
         assert!(hint_for("ER20 Cmd RC drives settling", Some(running)).contains("in a moment"));
         let old = hint_for("ER20 Cmd BG rejected", None);
         assert!(

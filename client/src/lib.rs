@@ -55,5 +55,5 @@ pub use commands::NO_READING;
 pub use error::ClientError;
 pub use pose::{Mode, Pose};
 pub use runfile::{RunFile, RunFileError};
-pub use status::{DriveState, Motion, Status};
+pub use status::{DriveStatus, Motion, Status};
 pub use wait::{Progress, WaitOptions};

@@ -24,7 +24,7 @@ pub const STATUS_NAME: u8 = 1;
 
 /// The state of the drives (f1 of the status reply).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DriveState {
+pub enum DriveStatus {
     /// 0: off (after OF, or never started).
     Off,
     /// 1: starting (the drives boot for about 0.2 s after start or ON).
@@ -37,7 +37,7 @@ pub enum DriveState {
     Faulted,
 }
 
-impl DriveState {
+impl DriveStatus {
     /// The state for a wire value.
     pub fn from_value(v: f32) -> Option<Self> {
         Some(match v {
@@ -66,7 +66,7 @@ impl DriveState {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Motion {
     /// 0: nothing; the arm holds.
-    Idle,
+    Holding,
     /// 1: a joint move (jB).
     JointMove,
     /// 2: a Cartesian move (BG).
@@ -81,7 +81,7 @@ impl Motion {
     /// The motion for a wire value.
     pub fn from_value(v: f32) -> Option<Self> {
         Some(match v {
-            0.0 => Self::Idle,
+            0.0 => Self::Holding,
             1.0 => Self::JointMove,
             2.0 => Self::CartesianMove,
             3.0 => Self::JointSequence,
@@ -93,7 +93,7 @@ impl Motion {
     /// How it is shown.
     pub fn name(self) -> &'static str {
         match self {
-            Self::Idle => "idle",
+            Self::Holding => "holding",
             Self::JointMove => "joint move",
             Self::CartesianMove => "Cartesian move",
             Self::JointSequence => "joint sequence",
@@ -108,7 +108,7 @@ pub struct Status {
     /// The control mode.
     pub mode: Mode,
     /// The drives.
-    pub drives: DriveState,
+    pub drives: DriveStatus,
     /// The `NN` of the drive fault `ER3x` (0: none).
     pub fault: u8,
     /// The arm's number of joints.
@@ -156,7 +156,7 @@ impl Status {
             .collect();
         Ok(Self {
             mode: Mode::from_value(mode).ok_or_else(|| bad("mode", mode))?,
-            drives: DriveState::from_value(drives).ok_or_else(|| bad("drive state", drives))?,
+            drives: DriveStatus::from_value(drives).ok_or_else(|| bad("drive state", drives))?,
             fault: count("fault code", fault)? as u8,
             joints: joints as usize,
             motion: Motion::from_value(motion).ok_or_else(|| bad("motion", motion))?,
@@ -256,7 +256,7 @@ pub(crate) mod tests {
             s,
             Status {
                 mode: Mode::Cartesian,
-                drives: DriveState::Faulted,
+                drives: DriveStatus::Faulted,
                 fault: 31,
                 joints: 8,
                 motion: Motion::JointSequence,

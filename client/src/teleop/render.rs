@@ -1,7 +1,7 @@
 //! Drawing the keyboard client's screen: a pure function of [`TeleopState`].
 //!
 //! ```text
-//!  armgate teleop  127.0.0.1:7031  ranger-mk1  mode cart  drives running  idle   keys: Cartesian, send on Enter
+//!  armgate teleop  127.0.0.1:7031  ranger-mk1  mode cart  drives running  holding   keys: Cartesian, send on Enter
 //! ┌────────────────────────────────────────────────────────────────────────┐
 //! │Current Pose     Desired Pose     Joints           Temp(C)              │
 //! │x      0.5000    x      0.5010    j1     -1.5838   T1      35.0         │
@@ -272,17 +272,17 @@ mod tests {
         let mut s = state();
         s.apply(Event::Controller(crate::Status {
             mode: Mode::Joint,
-            drives: crate::DriveState::Faulted,
+            drives: crate::DriveStatus::Faulted,
             fault: 31,
             joints: 6,
-            motion: crate::Motion::Idle,
+            motion: crate::Motion::Holding,
             refused: 0,
             uptime: 1.0,
             name: "ranger-mk1".into(),
         }));
         let text = screen(&s);
         assert!(
-            text.contains("ranger-mk1  mode joint  drives faulted (ER31)  idle"),
+            text.contains("ranger-mk1  mode joint  drives faulted (ER31)  holding"),
             "{text}"
         );
         assert!(text.contains("Current Pose"), "{text}");

@@ -304,9 +304,9 @@ impl TeleopState {
     fn controller_state(&mut self, status: Status) {
         let mode_changed = self.mode.is_some_and(|m| m != status.mode);
         self.mode = Some(status.mode);
-        if self.own_motion && status.motion == Motion::Idle {
+        if self.own_motion && status.motion == Motion::Holding {
             self.motion_ended();
-        } else if !self.own_motion && status.motion != Motion::Idle {
+        } else if !self.own_motion && status.motion != Motion::Holding {
             self.moved_elsewhere("another motion runs");
         }
         if mode_changed {
@@ -694,7 +694,7 @@ mod tests {
     fn status(mode: Mode, motion: Motion) -> Status {
         Status {
             mode,
-            drives: crate::DriveState::Running,
+            drives: crate::DriveStatus::Running,
             fault: 0,
             joints: 6,
             motion,
@@ -707,7 +707,7 @@ mod tests {
     /// A six-joint arm in Cartesian mode, with the status request.
     fn six(mode: Mode) -> TeleopState {
         let mut s = TeleopState::new("127.0.0.1:7031", 6, false);
-        s.apply(Event::Controller(status(mode, Motion::Idle)));
+        s.apply(Event::Controller(status(mode, Motion::Holding)));
         s.apply(Event::Pose(pose(0.0, 0.2, 0.8)));
         s.apply(Event::Joints(vec![1.57, 0.0, 1.57, 0.0, 1.57, 0.0]));
         s
@@ -742,7 +742,7 @@ mod tests {
         assert!(close(s.desired.unwrap().xyz, [0.001, 0.2, 0.8]));
         assert_eq!(s.desired_joints, moving);
         let end = [1.55, 0.02, 1.59, 0.0, 1.55, 0.03];
-        measure(&mut s, [0.001, 0.2, 0.8], end, Some(Motion::Idle));
+        measure(&mut s, [0.001, 0.2, 0.8], end, Some(Motion::Holding));
         assert!(!s.own_motion);
         assert_eq!(s.pose_edit, Edit::Following);
         // Joint mode (the mode switch), joint keys, j2 one step: only j2 differs.
@@ -770,7 +770,7 @@ mod tests {
         measure(&mut s, [0.1, 0.3, 0.7], q, Some(Motion::CartesianMove));
         assert_eq!(s.pose_edit, Edit::Following);
         assert!(s.status.contains("desired <- current"), "{}", s.status);
-        measure(&mut s, [0.2, 0.3, 0.7], q, Some(Motion::Idle));
+        measure(&mut s, [0.2, 0.3, 0.7], q, Some(Motion::Holding));
         s.handle_key(Key::Right);
         let Some(Action::MoveCartesian { xyz, .. }) = s.handle_key(Key::Enter) else {
             panic!()
@@ -809,7 +809,7 @@ mod tests {
         let q = [1.57, 0.0, 1.57, 0.0, 1.57, 0.0];
         measure(&mut s, [0.0005, 0.2, 0.8], q, Some(Motion::CartesianMove));
         s.handle_key(Key::PageUp);
-        measure(&mut s, [0.001, 0.2, 0.8], q, Some(Motion::Idle));
+        measure(&mut s, [0.001, 0.2, 0.8], q, Some(Motion::Holding));
         assert_eq!(s.pose_edit, Edit::Unsent);
         assert!(close(s.desired.unwrap().xyz, [0.001, 0.2, 0.801]));
     }
@@ -818,7 +818,7 @@ mod tests {
     fn a_mode_switch_drops_edits_and_a_refusal_marks_the_goal() {
         let mut s = six(Mode::Cartesian);
         s.handle_key(Key::Up);
-        s.apply(Event::Controller(status(Mode::Joint, Motion::Idle)));
+        s.apply(Event::Controller(status(Mode::Joint, Motion::Holding)));
         assert_eq!(s.pose_edit, Edit::Following);
         assert_eq!(s.desired, s.current);
         s.handle_key(Key::Char('j'));
