@@ -654,3 +654,34 @@ fn bad_command_line_values_are_refused_with_the_reason() {
     );
     assert!(!home.contains("Joints {"), "{home}");
 }
+
+#[test]
+fn a_two_second_stall_is_reported_as_the_ticks_it_missed() {
+    let mut sim = Sim::start("ranger-mk1");
+    assert!(matches!(sim.request("PS", [0.0; 7], 0), Answer::Reply(..)));
+    let pid = sim.child.id().to_string();
+    let signal = |name: &str| {
+        assert!(
+            Command::new("kill")
+                .args([name, &pid])
+                .status()
+                .unwrap()
+                .success()
+        );
+    };
+    signal("-STOP");
+    std::thread::sleep(Duration::from_secs(2));
+    signal("-CONT");
+    assert!(matches!(sim.request("PS", [0.0; 7], 0), Answer::Reply(..)));
+    signal("-TERM");
+    assert!(sim.child.wait().unwrap().success());
+    let summary = sim.stderr_rest();
+    // 2 s at 19.44 ms is 103 periods (not "1 tick overrun").
+    let missed: u64 = summary
+        .split(" ticks missed in 1 stalls")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{summary}"));
+    assert!((95..=115).contains(&missed), "{missed}: {summary}");
+}
