@@ -212,9 +212,7 @@ impl Client {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::ClientConfig;
     use crate::fake::{FakeController, text};
-    use std::time::Duration;
 
     /// The two replies of a controller in `mode`, drives `drives`, `joints` joints, `name`.
     pub(crate) fn status_reply(request: &[u8], values: [f32; 7], name: &str) -> Vec<u8> {
@@ -232,14 +230,7 @@ pub(crate) mod tests {
     }
 
     fn client(fake: &FakeController) -> Client {
-        Client::connect_with(
-            fake.addr(),
-            ClientConfig {
-                timeout: Duration::from_secs(1),
-                ..ClientConfig::default()
-            },
-        )
-        .unwrap()
+        fake.client()
     }
 
     #[test]
