@@ -61,7 +61,7 @@ The file holds up to 20 [[cartesian]] entries or up to 20 [[joint]] entries, not
   time = 5.0                # minimum seconds for the leg to this point (default 0)
 
   [[joint]]
-  q = [0.0, 0.5, 1.0, 0.0, 0.3, 0.0]   # one value per joint (--joints)
+  q = [1.5708, 0.4, 1.2, 0.0, 1.2, 0.0]   # one value per joint
   time = 3.0
 
 The entries go into via slots 0.. in file order and run: VC, VP 0.., VE (needs mode cart)
@@ -192,7 +192,7 @@ pub enum Cmd {
     /// since jB takes no duration (this clears the joint via points).
     #[command(after_help = "Example: armgate jmove 1.5708 0.4 1.2 0 1.2 0 --time 10")]
     Jmove {
-        /// One value per joint (rad, or m for prismatic joints); --joints says how many.
+        /// One value per joint (rad, or m for prismatic joints), as many as the arm has.
         #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
         q: Vec<f64>,
         /// Minimum duration (s).
