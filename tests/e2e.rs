@@ -685,3 +685,101 @@ fn a_two_second_stall_is_reported_as_the_ticks_it_missed() {
         .unwrap_or_else(|| panic!("{summary}"));
     assert!((95..=115).contains(&missed), "{missed}: {summary}");
 }
+
+/// Runs `armgate ARGS` in-process against the simulator; returns the result and stdout.
+fn armgate(sim: &Sim, args: &[&str]) -> (Result<(), armgate_client::cli::CliError>, String) {
+    use clap::Parser;
+    let addr = sim.socket.peer_addr().unwrap().to_string();
+    let mut argv = vec!["armgate", "--addr", addr.as_str(), "--timeout", "1s"];
+    argv.extend_from_slice(args);
+    let cli = armgate_client::cli::Cli::try_parse_from(argv).unwrap();
+    let mut out = Vec::new();
+    let result = armgate_client::cli::run(&cli, &mut out);
+    (result, String::from_utf8(out).unwrap())
+}
+
+/// Whether the simulator answers the status request `SQ` (docs/protocol.md); the client falls
+/// back without it, and these tests have nothing to check then.
+fn knows_status(sim: &Sim) -> bool {
+    match sim.request("SQ", [0.0; 7], 0) {
+        Answer::Text(t) if t.starts_with("ER00") => {
+            eprintln!("skipped: this armgate-sim does not know SQ");
+            false
+        }
+        _ => true,
+    }
+}
+
+/// The refusal's text and hint, or a panic.
+fn refusal(result: Result<(), armgate_client::cli::CliError>) -> (String, String) {
+    match result {
+        Err(armgate_client::cli::CliError::Refused { text, hint }) => {
+            (text.as_str().to_owned(), hint.unwrap_or_default())
+        }
+        other => panic!("not a refusal: {other:?}"),
+    }
+}
+
+#[test]
+fn the_client_sees_the_state_waits_for_the_drives_and_says_why_it_was_refused() {
+    let sim = Sim::start("ranger-mk1");
+    if !knows_status(&sim) {
+        return;
+    }
+    // Right after start the drives boot: `armgate on` waits until they run.
+    let (result, out) = armgate(&sim, &["on"]);
+    result.unwrap();
+    assert!(out.contains("running"), "{out}");
+    let (result, out) = armgate(&sim, &["status"]);
+    result.unwrap();
+    for line in [
+        "robot      ranger-mk1 (6 joints)",
+        "mode       off (0)",
+        "drives     running",
+        "motion     holding",
+    ] {
+        assert!(out.contains(line), "{line}: {out}");
+    }
+    // Wrong mode: the reason says so and the hint names the mode command.
+    let (text, hint) = refusal(armgate(&sim, &["move", "0", "0.2", "0.8", "0", "0", "-1.5708"]).0);
+    assert_eq!(text, "ER20 Cmd BG needs mode 2");
+    assert!(hint.contains("`armgate mode cart`"), "{hint}");
+    armgate(&sim, &["mode", "cart"]).0.unwrap();
+    // Drives off: whatever the mode, the hint is `armgate on`.
+    armgate(&sim, &["off"]).0.unwrap();
+    let (text, hint) = refusal(armgate(&sim, &["move", "0", "0.2", "0.8", "0", "0", "-1.5708"]).0);
+    assert!(text.starts_with("ER20 Cmd BG drives "), "{text}");
+    assert!(hint.contains("`armgate on`"), "{hint}");
+    // On again right after off: ON is refused while they stop; `armgate on` waits that out.
+    let (result, out) = armgate(&sim, &["on"]);
+    result.unwrap();
+    assert!(out.starts_with("drives running"), "{out}");
+    // The README's old jmove: which joint and which limit.
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    let (text, _) = refusal(armgate(&sim, &["jmove", "0", "0.5", "1.0", "0", "0.3", "0"]).0);
+    assert_eq!(text, "ER26 Cmd jG j5 < 0.785");
+    let (result, out) = armgate(&sim, &["status"]);
+    result.unwrap();
+    let refused: u32 = out
+        .split("refused    ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    assert!(refused >= 3, "{out}");
+}
+
+#[test]
+fn the_joint_count_comes_from_the_controller() {
+    let sim = Sim::start("ranger-mk2");
+    if !knows_status(&sim) {
+        return;
+    }
+    let (result, out) = armgate(&sim, &["joints"]);
+    result.unwrap();
+    assert!(out.contains("q8"), "{out}");
+    // --joints still overrides it.
+    let (result, out) = armgate(&sim, &["--joints", "2", "joints"]);
+    result.unwrap();
+    assert!(out.contains("q2") && !out.contains("q3"), "{out}");
+}
