@@ -13,8 +13,8 @@ use crate::matching;
 use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
-    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DriveStatus, Mode,
-    NO_READING, Pose, Progress, Text, WaitOptions,
+    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DrivesOn, Mode, NO_READING,
+    Pose, Progress, Text, WaitOptions,
 };
 
 const ABOUT: &str = "Command an armgate robot-arm controller over UDP";
@@ -309,9 +309,6 @@ pub enum CliError {
         /// What to do about it.
         hint: Option<String>,
     },
-    /// ON was answered but the drives do not run.
-    #[error("the drives did not start: {0}")]
-    NotStarted(String),
     /// Ctrl-C during a wait; says whether ST was sent.
     #[error("interrupted: {0}")]
     Interrupted(String),
@@ -322,7 +319,7 @@ impl CliError {
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Client(e) => e.exit_code(),
-            Self::Refused { .. } | Self::NotStarted(_) => 1,
+            Self::Refused { .. } => 1,
             Self::Interrupted(_) => ClientError::Interrupted.exit_code(),
             _ => 2,
         }
@@ -456,96 +453,21 @@ fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
     })
 }
 
-/// After arrival within the tolerance the motion may still be ending (the last millimetre of
-/// a deceleration): waits until the controller reports no motion, so that the next command is
-/// not refused as busy (a controller without SQ: until the pose stops changing). Gives up
-/// quietly after `SETTLE`.
-fn settle(client: &mut Client) -> Result<(), CliError> {
-    const SETTLE: Duration = Duration::from_secs(5);
-    let started = Instant::now();
-    loop {
-        match client.status() {
-            Ok(status) if status.motion == crate::Motion::Holding => return Ok(()),
-            Ok(_) if started.elapsed() < SETTLE => std::thread::sleep(Duration::from_millis(20)),
-            Ok(_) => return Ok(()),
-            Err(ClientError::TooOld { .. }) => {
-                let options = WaitOptions {
-                    timeout: SETTLE,
-                    ..WaitOptions::default()
-                };
-                return match client.wait_idle(3, &options) {
-                    Ok(_) | Err(ClientError::WaitTimeout { .. }) => Ok(()),
-                    Err(e) => Err(e.into()),
-                };
-            }
-            Err(e) => return Err(e.into()),
+/// `armgate on`: ON, then wait until the drives run.
+fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Result<(), CliError> {
+    match client.start_drives(timeout)? {
+        DrivesOn::Started(after) => writeln!(out, "drives running ({:.2} s)", after.as_secs_f64())?,
+        DrivesOn::AlreadyRunning(after) => {
+            writeln!(out, "drives already running ({:.2} s)", after.as_secs_f64())?
         }
+        DrivesOn::Unconfirmed(why) => writeln!(out, "drives on (not confirmed: {why})")?,
     }
+    Ok(())
 }
 
-/// `armgate on`: ON, then SQ until the drives run, fail, or the time is up.
-fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Result<(), CliError> {
-    let started = Instant::now();
-    let already = loop {
-        match client.on() {
-            Ok(()) => break false,
-            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(11) => {
-                // ON while they run or start: not a failure if they end up running. While
-                // they stop (just after `off`), ON is refused: it is sent again once they
-                // have. A controller without SQ cannot say: ON is tried again for a second.
-                let retry = match client.status() {
-                    Ok(s) if matches!(s.drives, DriveStatus::Running | DriveStatus::Starting) => {
-                        break true;
-                    }
-                    // Stopping, or stopped since ON was refused.
-                    Ok(_) => started.elapsed() < timeout,
-                    Err(ClientError::TooOld { .. }) => started.elapsed() < Duration::from_secs(1),
-                    Err(e) => return Err(e.into()),
-                };
-                if !retry {
-                    return Err(ClientError::Rejected(text).into());
-                }
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            Err(e) => return Err(e.into()),
-        }
-    };
-    loop {
-        let status = match client.status() {
-            Ok(status) => status,
-            Err(e @ ClientError::TooOld { .. }) => {
-                writeln!(out, "drives on (not confirmed: {e})")?;
-                return Ok(());
-            }
-            Err(e) => return Err(e.into()),
-        };
-        match status.drives {
-            DriveStatus::Running => {
-                let how = if already {
-                    "already running"
-                } else {
-                    "running"
-                };
-                writeln!(
-                    out,
-                    "drives {how} ({:.2} s)",
-                    started.elapsed().as_secs_f64()
-                )?;
-                return Ok(());
-            }
-            DriveStatus::Faulted | DriveStatus::Off => {
-                return Err(CliError::NotStarted(status.drives_text()));
-            }
-            DriveStatus::Starting | DriveStatus::Stopping => {}
-        }
-        if started.elapsed() > timeout {
-            return Err(CliError::NotStarted(format!(
-                "still {} after {timeout:?}",
-                status.drives_text()
-            )));
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+/// After a wait: until the motion has ended (see [`Client::wait_motion_ended`]).
+fn settle(client: &mut Client) -> Result<(), CliError> {
+    Ok(client.wait_motion_ended(Duration::from_secs(5))?)
 }
 
 fn print_notices(client: &mut Client) {

@@ -78,6 +78,9 @@ pub enum ClientError {
         /// The controller's answer.
         text: Text,
     },
+    /// ON was answered but the drives do not run (faulted, off, or still starting).
+    #[error("the drives did not start: {0}")]
+    NotStarted(String),
     /// A wait ended because it was interrupted (Ctrl-C); the motion was not stopped.
     #[error("interrupted")]
     Interrupted,
@@ -98,7 +101,7 @@ impl ClientError {
     /// The exit status for the `armgate` tool: 1 if the controller refused or aborted, else 2.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Rejected(_) | Self::Aborted(_) | Self::TooOld { .. } => 1,
+            Self::Rejected(_) | Self::Aborted(_) | Self::TooOld { .. } | Self::NotStarted(_) => 1,
             // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
             Self::Interrupted => 130,
             _ => 2,

@@ -26,13 +26,15 @@
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
 //! * [`wait`]: polling until a pose or joint target is reached.
 //! * [`runfile`]: TOML via-point sequences.
-//! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name).
+//! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name);
+//!   [`Client::start_drives`] and [`Client::wait_motion_ended`] poll it.
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
 
 pub mod banks;
 pub mod cli;
 mod client;
 mod commands;
+mod drives;
 mod error;
 #[cfg(test)]
 mod fake;
@@ -52,6 +54,7 @@ pub use client::{
     RawReply,
 };
 pub use commands::NO_READING;
+pub use drives::DrivesOn;
 pub use error::ClientError;
 pub use pose::{Mode, Pose};
 pub use runfile::{RunFile, RunFileError};
