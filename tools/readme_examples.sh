@@ -34,7 +34,7 @@ examples() {
         /^```sh$/ { inside = (section == want); next }
         /^```/ { inside = 0; next }
         inside {
-            sub(/[[:space:]]+#.*$/, ""); sub(/^#.*$/, "")
+            sub(/[ \t]+#.*$/, ""); sub(/^#.*$/, "")
             if (NF) print
         }' "$readme"
 }
@@ -43,12 +43,13 @@ failures=0
 run() {
     local cmd=$1 started status
     printf '\n$ %s\n' "$cmd"
-    started=$(date +%s.%N)
+    started=$(date +%s%N)
     set +e
     timeout 300 bash -c "$cmd"
     status=$?
     set -e
-    printf '(exit %s, %.1f s)\n' "$status" "$(echo "$(date +%s.%N) - $started" | bc)"
+    local tenths=$((($(date +%s%N) - started) / 100000000))
+    printf '(exit %s, %d.%d s)\n' "$status" $((tenths / 10)) $((tenths % 10))
     if [[ $status -ne 0 ]]; then
         echo "FAILED: $cmd" >&2
         failures=$((failures + 1))
