@@ -230,7 +230,8 @@ pub enum ModeArg {
     Off,
     /// 1: joint mode.
     Joint,
-    /// 2: Cartesian mode.
+    /// 2: Cartesian mode (also `cartesian`, as the status shows it).
+    #[value(alias = "cartesian")]
     Cart,
 }
 
@@ -1014,6 +1015,14 @@ mod tests {
         assert!(parse_timeout("0ms").is_err());
         assert_eq!(parse_timeout("1ms"), Ok(Duration::from_millis(1)));
         assert!(Cli::try_parse_from(["armgate", "--timeout", "0s", "pose"]).is_err());
+        // The mode as the status shows it is accepted too.
+        let cli = Cli::try_parse_from(["armgate", "mode", "cartesian"]).unwrap();
+        assert!(matches!(
+            cli.command,
+            Cmd::Mode {
+                mode: ModeArg::Cart
+            }
+        ));
     }
 
     fn run_with(fake: &FakeController, args: &[&str]) -> (Result<(), CliError>, String) {

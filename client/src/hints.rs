@@ -200,7 +200,7 @@ mod tests {
         let s = status(Mode::Joint, DriveStatus::Running, 0, Motion::Holding);
         assert_eq!(
             hint_for("ER20 Cmd BG rejected", Some(s.clone())),
-            "BG needs mode cart, the mode is joint: `armgate mode cart`"
+            "BG needs mode cartesian, the mode is joint: `armgate mode cartesian`"
         );
         assert!(hint_for("ER20 Cmd jB rejected", Some(s.clone())).contains("no joint goal"));
         assert!(hint_for("ER20 Cmd RC rejected", Some(s)).contains("`armgate mode off`"));
@@ -233,7 +233,7 @@ mod tests {
         assert!(hint_for("ER20 Cmd BG drive fault 31", None).contains("`armgate on`"));
         assert!(hint_for("ER20 Cmd RC drives starting", None).contains("starting"));
         assert!(hint_for("ER20 Cmd RC drives settling", None).contains("in a moment"));
-        assert!(hint_for("ER20 Cmd BG needs mode 2", None).contains("`armgate mode cart`"));
+        assert!(hint_for("ER20 Cmd BG needs mode 2", None).contains("`armgate mode cartesian`"));
         assert!(hint_for("ER20 Cmd RC needs mode 0", None).contains("`armgate mode off`"));
         assert!(hint_for("ER20 Cmd jE busy", None).contains("`armgate stop`"));
         assert!(hint_for("ER20 Cmd BG no goal", None).contains("goal"));

@@ -47,7 +47,6 @@ pub mod status;
 pub mod teleop;
 pub mod wait;
 
-pub use armgate_core::math::Quaternion;
 pub use armgate_protocol::client::{Command, Reply, Request, Text};
 pub use client::{
     Client, ClientConfig, DEFAULT_ADDR, DEFAULT_NOTICE_CAPACITY, DEFAULT_RETRIES, DEFAULT_TIMEOUT,
@@ -56,7 +55,7 @@ pub use client::{
 pub use commands::NO_READING;
 pub use drives::DrivesOn;
 pub use error::ClientError;
-pub use pose::{Mode, Pose};
+pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
 pub use status::{DriveStatus, Motion, Status};
 pub use wait::{Progress, WaitOptions};

@@ -3,7 +3,7 @@
 use std::net::{IpAddr, Ipv4Addr, Ipv6Addr};
 
 use armgate_core::command::Network;
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
 
 /// `--duration`: a finite number of seconds, not negative.
@@ -26,7 +26,7 @@ pub fn allow_list(extra: &[Network]) -> Vec<Network> {
 
 /// `--start` (or the home position): one finite value per joint, each within its limits; a
 /// joint outside would be driven back by the limiter on its own.
-pub fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, String> {
+pub fn start_joints(config: &ValidRobot, start: Option<&[f64]>) -> Result<Joints, String> {
     let home = config.home();
     let chain = Chain::new(config);
     let n = chain.dof();
@@ -53,7 +53,7 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::approx_constant)]
     use super::*;
 
-    fn ranger() -> RobotConfig {
+    fn ranger() -> ValidRobot {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
         armgate_core::config::load_file(std::path::Path::new(path)).unwrap()
     }
