@@ -240,8 +240,8 @@ fn state_fields(tick: &Tick) -> Vec<String> {
 fn pose_fields(pose: Option<&Frame>) -> Vec<String> {
     match pose {
         Some(p) => {
-            let [x, y, z] = p.pos.to_array();
-            let [a, b, c, d] = Quaternion::from_rotation(&p.rot).to_array();
+            let [x, y, z]: [f64; 3] = p.translation.vector.into();
+            let [a, b, c, d] = Quaternion::from_rotation(&p.rotation).to_array();
             [x, y, z, a, b, c, d].map(|v| format!("{v:.9}")).into()
         }
         None => vec![String::new(); 7],

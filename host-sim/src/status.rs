@@ -88,7 +88,7 @@ pub fn line(handler: &CommandHandler, drives: &Backend, stats: &Stats, logger: &
     let pose = ctrl
         .measured()
         .map(|(_, p)| {
-            let [x, y, z] = p.pos.to_array();
+            let [x, y, z]: [f64; 3] = p.translation.vector.into();
             format!("x {x:+.4} y {y:+.4} z {z:+.4}")
         })
         .unwrap_or_default();
