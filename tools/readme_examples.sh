@@ -12,7 +12,10 @@ cd "$(dirname "$0")/.."
 
 readme=README.md
 target=${CARGO_TARGET_DIR:-target}
-cargo build -q -p armgate-sim -p armgate-client
+# One package per call, as `cargo run -p ...` in the README builds them (features unify per
+# call), so that the README's commands find them built.
+cargo build -q -p armgate-sim
+cargo build -q -p armgate-client
 
 # `armgate` as the README writes it: the binary just built.
 shim=$(mktemp -d)
@@ -67,11 +70,16 @@ log=$shim/sim.log
 echo "\$ $sim --listen 127.0.0.1:0"
 bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
 sim_pid=$!
-for _ in $(seq 100); do
+for _ in $(seq 600); do
     grep -q 'udp://' "$log" && break
     kill -0 "$sim_pid" 2>/dev/null || { cat "$log" >&2; exit 1; }
     sleep 0.1
 done
+if ! grep -q 'udp://' "$log"; then
+    echo "armgate-sim did not start within 60 s:" >&2
+    cat "$log" >&2
+    exit 1
+fi
 ARMGATE_ADDR=$(grep -o 'udp://[^,]*' "$log" | head -1 | cut -c7-)
 export ARMGATE_ADDR
 echo "armgate-sim listens on $ARMGATE_ADDR"
