@@ -23,6 +23,7 @@ use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
+use crate::saturate::saturate;
 
 /// Damping floor: keeps every system positive definite, small enough that steps near the
 /// solution are Newton steps.
@@ -255,7 +256,7 @@ impl Chain {
             } else {
                 *v
             };
-            *o = reflected.clamp(*lo, *hi);
+            *o = saturate(reflected, *lo, *hi);
         }
         out
     }
@@ -274,7 +275,7 @@ impl Chain {
             if !s.is_finite() {
                 return Err(IkError::NonFiniteSeed);
             }
-            *v = s.clamp(*lo, *hi);
+            *v = saturate(*s, *lo, *hi);
         }
         Ok(q)
     }
@@ -454,7 +455,7 @@ impl Chain {
                     v = wrapped;
                 }
             }
-            *qi = v.clamp(*lo, *hi);
+            *qi = saturate(v, *lo, *hi);
         }
     }
 }
