@@ -5,7 +5,7 @@
 //! The reason and the state cannot guess wrong: with the drives off or faulted no motion
 //! starts whatever the mode, so the hint is `armgate on`; while they start, waiting is.
 
-use crate::status::{DriveStatus, Motion, Status};
+use crate::status::{DriveStatus, Motion, Name, Status};
 use crate::{Mode, Text, matching};
 
 /// The commands that start or load a Cartesian motion, and those of joint mode.

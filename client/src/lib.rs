@@ -31,6 +31,7 @@
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
 
 pub mod banks;
+pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;

@@ -8,50 +8,21 @@
 
 use std::fmt;
 
-use armgate_protocol::client::{MESSAGE_LEN, VALUES};
+use armgate_protocol::client::{
+    Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName, STATUS_INDEX, StatusReport, VALUES,
+};
+pub use armgate_protocol::client::{DriveStatus, Motion};
 
 use crate::{Client, ClientError, Mode, matching};
 
-/// The request's characters. Built by hand with [`Client::send_raw`] so that the client does
-/// not depend on the protocol crate knowing the command yet; the reply is `QS`.
-pub const STATUS_CHARS: [u8; 2] = *b"SQ";
-
-/// The index of the request that answers the numbers.
-pub const STATUS_NUMBERS: u8 = 0;
-
-/// The index of the request that answers the robot's name.
-pub const STATUS_NAME: u8 = 1;
-
-/// The state of the drives (f1 of the status reply).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DriveStatus {
-    /// 0: off (after OF, or never started).
-    Off,
-    /// 1: starting (the drives boot for about 0.2 s after start or ON).
-    Starting,
-    /// 2: running: motions are accepted.
-    Running,
-    /// 3: stopping.
-    Stopping,
-    /// 4: stopped by a fault (f2 says which `ER3x`); ON clears it.
-    Faulted,
+/// How a drive state or a motion is shown.
+pub trait Name {
+    /// `running`, `Cartesian move`, ...
+    fn name(self) -> &'static str;
 }
 
-impl DriveStatus {
-    /// The state for a wire value.
-    pub fn from_value(v: f32) -> Option<Self> {
-        Some(match v {
-            0.0 => Self::Off,
-            1.0 => Self::Starting,
-            2.0 => Self::Running,
-            3.0 => Self::Stopping,
-            4.0 => Self::Faulted,
-            _ => return None,
-        })
-    }
-
-    /// How it is shown.
-    pub fn name(self) -> &'static str {
+impl Name for DriveStatus {
+    fn name(self) -> &'static str {
         match self {
             Self::Off => "off",
             Self::Starting => "starting",
@@ -62,36 +33,8 @@ impl DriveStatus {
     }
 }
 
-/// What moves the arm (f4 of the status reply).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Motion {
-    /// 0: nothing; the arm holds.
-    Holding,
-    /// 1: a joint move (jB).
-    JointMove,
-    /// 2: a Cartesian move (BG).
-    CartesianMove,
-    /// 3: a joint via-point sequence (jE).
-    JointSequence,
-    /// 4: a Cartesian via-point sequence (VE).
-    CartesianSequence,
-}
-
-impl Motion {
-    /// The motion for a wire value.
-    pub fn from_value(v: f32) -> Option<Self> {
-        Some(match v {
-            0.0 => Self::Holding,
-            1.0 => Self::JointMove,
-            2.0 => Self::CartesianMove,
-            3.0 => Self::JointSequence,
-            4.0 => Self::CartesianSequence,
-            _ => return None,
-        })
-    }
-
-    /// How it is shown.
-    pub fn name(self) -> &'static str {
+impl Name for Motion {
+    fn name(self) -> &'static str {
         match self {
             Self::Holding => "holding",
             Self::JointMove => "joint move",
@@ -126,43 +69,31 @@ pub struct Status {
 impl Status {
     /// Decodes the numbers reply (index 0) and the name reply's bytes (index 1).
     pub fn decode(values: &[f32; VALUES], name: &[u8; MESSAGE_LEN]) -> Result<Self, ClientError> {
-        let [mode, drives, fault, joints, motion, refused, uptime] = *values;
-        let bad = |what: &str, v: f32| {
-            ClientError::InvalidArgument(format!("the status reply has {what} {v}"))
+        let reply = Reply {
+            command: Command::Status,
+            values: *values,
+            index: STATUS_INDEX,
         };
-        let count = |what: &str, v: f32| {
-            if v.is_finite() && v >= 0.0 && v.fract() == 0.0 {
-                Ok(v)
-            } else {
-                Err(bad(what, v))
-            }
-        };
-        let joints = count("joint count", joints)?;
-        if !(1.0..=crate::banks::MAX_JOINTS as f32).contains(&joints) {
-            return Err(bad("joint count", joints));
+        let bad = |what: &str| ClientError::InvalidArgument(format!("the status reply has {what}"));
+        let report = StatusReport::from_reply(&reply)
+            .ok_or_else(|| bad(&format!("bad values {values:?}")))?;
+        let name = Message::new_checked(&name[..])
+            .ok()
+            .and_then(|m| RobotName::parse(&m))
+            .ok_or_else(|| bad("no name"))?;
+        let joints = usize::from(report.joints);
+        if !(1..=crate::banks::MAX_JOINTS).contains(&joints) {
+            return Err(bad(&format!("{joints} joints")));
         }
-        let text: String = name
-            .get(2..MESSAGE_LEN - 1)
-            .unwrap_or_default()
-            .iter()
-            .take_while(|b| **b != 0)
-            .map(|b| {
-                if b.is_ascii_graphic() || *b == b' ' {
-                    char::from(*b)
-                } else {
-                    '?'
-                }
-            })
-            .collect();
         Ok(Self {
-            mode: Mode::from_value(mode).ok_or_else(|| bad("mode", mode))?,
-            drives: DriveStatus::from_value(drives).ok_or_else(|| bad("drive state", drives))?,
-            fault: count("fault code", fault)? as u8,
-            joints: joints as usize,
-            motion: Motion::from_value(motion).ok_or_else(|| bad("motion", motion))?,
-            refused: count("refusal count", refused)? as u64,
-            uptime: f64::from(uptime),
-            name: text,
+            mode: report.mode,
+            drives: report.drives,
+            fault: report.fault,
+            joints,
+            motion: report.motion,
+            refused: u64::from(report.refused),
+            uptime: f64::from(report.uptime),
+            name: name.as_str().to_owned(),
         })
     }
 
@@ -191,13 +122,14 @@ impl Client {
     /// `SQ`: the controller's status (two requests). A controller that does not know the
     /// request is [`ClientError::TooOld`].
     pub fn status(&mut self) -> Result<Status, ClientError> {
-        let numbers = self.status_part(STATUS_NUMBERS)?;
-        let name = self.status_part(STATUS_NAME)?;
+        let numbers = self.status_part(STATUS_INDEX)?;
+        let name = self.status_part(NAME_INDEX)?;
         Status::decode(&numbers.values, &name.bytes)
     }
 
     fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {
-        match self.send_raw(STATUS_CHARS, [0.0; VALUES], index) {
+        // Raw: the name reply carries text where the floats would be.
+        match self.send_raw(Command::Status.chars(), [0.0; VALUES], index) {
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(0) => {
                 Err(ClientError::TooOld {
                     request: "SQ (status)",
@@ -219,7 +151,7 @@ pub(crate) mod tests {
         let mut reply = vec![0; MESSAGE_LEN];
         reply[..2].copy_from_slice(b"QS");
         reply[30] = request[30];
-        if request[30] == STATUS_NAME {
+        if request[30] == NAME_INDEX {
             reply[2..2 + name.len()].copy_from_slice(name.as_bytes());
         } else {
             for (k, v) in values.iter().enumerate() {

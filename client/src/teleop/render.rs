@@ -22,6 +22,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Paragraph, Row, Table};
 
 use super::state::{TeleopState, Variant};
+use crate::status::Name;
 use crate::{NO_READING, Pose};
 
 /// The labels of the seven pose values.
