@@ -6,7 +6,7 @@ use std::str::FromStr;
 use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{CanDrives, DriveSide};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError, VirtualBus};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Refusal;
 use armgate_protocol::can::CanFrame;
@@ -101,14 +101,6 @@ impl Backend {
             "SocketCAN: {} extended/remote frames ignored, {} error frames ignored, {} bus-offs, {} frames refused by a full transmit queue, {} other socket errors",
             c.foreign_frames, c.error_frames, c.bus_offs, c.queue_full, c.socket_errors
         ))
-    }
-
-    /// The drive manager's state (none without a bus).
-    pub fn state(&self) -> Option<DriveState> {
-        match self {
-            Self::Direct(_) => None,
-            Self::Can(drives) => Some(drives.manager().state()),
-        }
     }
 
     /// The one in use, as a [`DriveSide`].

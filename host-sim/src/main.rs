@@ -213,7 +213,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let counters = cycle.counters();
     eprintln!(
         "armgate-sim: stopped; {}",
-        status::summary(&stats, &counters, dropped)
+        status::summary(&stats, status::snapshot(&cycle).refused, &counters, dropped)
     );
     if let Some(summary) = cycle.drives().socketcan_summary() {
         eprintln!("armgate-sim: {summary}");

@@ -2,33 +2,38 @@
 
 use std::net::SocketAddr;
 
-use armgate_core::command::Drives;
+use armgate_core::command::Status;
 use armgate_core::cycle::{Cycle, CycleCounters};
-use armgate_core::drives::DriveState;
+use armgate_protocol::client::DriveStatus;
 
 use crate::backend::Backend;
 use crate::log::Logger;
 use crate::udp::Stats;
 
 /// What the drives do, as the status line shows it: `running`, `starting`, `off`,
-/// `faulted ER31 …`.
-pub fn drive_state(drives: &Backend) -> String {
-    if let Some(fault) = drives.fault() {
-        return format!("faulted {}", fault.as_str());
-    }
-    match drives.state() {
-        Some(DriveState::Idle | DriveState::Stopped) => "off".into(),
-        Some(DriveState::Starting) => "starting".into(),
-        Some(DriveState::Operational) => "running".into(),
-        Some(DriveState::Stopping) => "stopping".into(),
-        Some(DriveState::Faulted) => "faulted".into(),
-        None if drives.is_operational() => "running".into(),
-        None => "off".into(),
+/// `faulted ER31`.
+pub fn drive_state(status: &Status) -> String {
+    let state = match status.drives {
+        DriveStatus::Off => "off",
+        DriveStatus::Starting => "starting",
+        DriveStatus::Running => "running",
+        DriveStatus::Stopping => "stopping",
+        DriveStatus::Faulted => "faulted",
+    };
+    match status.fault {
+        Some(code) => format!("{state} ER{code:02}"),
+        None => state.to_owned(),
     }
 }
 
-/// One status line: mode, drives, motion, pose, counters.
+/// The core's status snapshot (what `SQ` reports).
+pub fn snapshot(cycle: &Cycle<Backend, SocketAddr>) -> Status {
+    cycle.handler().status(cycle.drives())
+}
+
+/// One status line: mode, drives, motion, pose, counters (from the core's status snapshot).
 pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) -> String {
+    let status = snapshot(cycle);
     let ctrl = cycle.handler().controller();
     let pose = ctrl
         .measured()
@@ -45,9 +50,9 @@ pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) 
     format!(
         "mode {:<9} drives {:<8} {motion:<7} {pose} | rx {} refused {} denied {} warnings {} log dropped {}",
         ctrl.mode().name(),
-        drive_state(cycle.drives()),
+        drive_state(&status),
         stats.received,
-        stats.refused,
+        status.refused,
         stats.refused_sources,
         cycle.counters().notices,
         logger.dropped()
@@ -56,13 +61,14 @@ pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) 
 
 /// The line printed at exit. Ticks skipped in a stall are counted as the ticks they are (a 2 s
 /// stall at 19.44 ms misses about 100), not as one overrun.
-pub fn summary(stats: &Stats, counters: &CycleCounters, log_dropped: u64) -> String {
+/// `refused` is the core's count of refused requests.
+pub fn summary(stats: &Stats, refused: u32, counters: &CycleCounters, log_dropped: u64) -> String {
     format!(
         "{} datagrams handled ({} refused), {} from sources not allowed (dropped), \
          {} warnings sent, {} ticks late (caught up), {} ticks missed (skipped), \
          {} tick errors, {} log records dropped",
         stats.received,
-        stats.refused,
+        refused,
         stats.refused_sources,
         counters.notices,
         counters.late_ticks,
@@ -80,7 +86,6 @@ mod tests {
     fn the_summary_counts_refusals_and_missed_ticks() {
         let stats = Stats {
             received: 5,
-            refused: 2,
             refused_sources: 1,
         };
         let counters = CycleCounters {
@@ -88,7 +93,7 @@ mod tests {
             late_ticks: 50,
             ..CycleCounters::default()
         };
-        let s = summary(&stats, &counters, 0);
+        let s = summary(&stats, 2, &counters, 0);
         assert!(
             s.starts_with("5 datagrams handled (2 refused), 1 from"),
             "{s}"
@@ -97,5 +102,19 @@ mod tests {
             s.contains("50 ticks late (caught up), 103 ticks missed (skipped)"),
             "{s}"
         );
+    }
+
+    #[test]
+    fn the_drive_state_shows_its_fault() {
+        let status = Status {
+            mode: armgate_protocol::client::Mode::Off,
+            drives: DriveStatus::Faulted,
+            fault: Some(31),
+            joints: 6,
+            motion: armgate_protocol::client::Motion::Holding,
+            refused: 2,
+            uptime: 1.0,
+        };
+        assert_eq!(drive_state(&status), "faulted ER31");
     }
 }

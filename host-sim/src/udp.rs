@@ -17,8 +17,6 @@ const MAX_SKIPPED: usize = 256;
 pub struct Stats {
     /// Requests from allowed sources.
     pub received: u64,
-    /// Requests answered with an `ER` text (refused).
-    pub refused: u64,
     /// Datagrams from sources not allowed (dropped).
     pub refused_sources: u64,
 }
@@ -70,9 +68,6 @@ impl Link<SocketAddr> for UdpLink<'_> {
         let bytes = datagram.payload();
         let record = match kind {
             Outgoing::Reply => {
-                if bytes.starts_with(b"ER") {
-                    self.stats.refused += 1;
-                }
                 let mut reply = [0u8; armgate_protocol::client::MESSAGE_LEN];
                 for (r, b) in reply.iter_mut().zip(bytes) {
                     *r = *b;
