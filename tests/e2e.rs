@@ -788,13 +788,24 @@ fn armgate(sim: &Sim, args: &[&str]) -> (Result<(), armgate_client::cli::CliErro
 /// Whether the simulator answers the status request `SQ` (docs/protocol.md); the client falls
 /// back without it, and these tests have nothing to check then.
 fn knows_status(sim: &Sim) -> bool {
-    match sim.request("SQ", [0.0; 7], 0) {
-        Answer::Text(t) if t.starts_with("ER00") => {
-            eprintln!("skipped: this armgate-sim does not know SQ");
-            false
-        }
-        _ => true,
+    // A controller that has just started (the firmware in its namespace) may miss the first
+    // datagrams: asked up to five times.
+    for _ in 0..5 {
+        sim.socket.send(&datagram("SQ", [0.0; 7], 0)).unwrap();
+        let mut buf = [0u8; 64];
+        let Ok(n) = sim.socket.recv(&mut buf) else {
+            continue;
+        };
+        assert_eq!(n, 31);
+        return match decode(&buf) {
+            Answer::Text(t) if t.starts_with("ER00") => {
+                eprintln!("skipped: this controller does not know SQ");
+                false
+            }
+            _ => true,
+        };
     }
+    panic!("no answer to SQ");
 }
 
 /// The refusal's text and hint, or a panic.
