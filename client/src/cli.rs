@@ -7,12 +7,14 @@ use std::time::{Duration, Instant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::banks::MAX_JOINTS;
+use crate::hints;
+use crate::interrupt;
 use crate::matching;
 use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
-    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, Mode, NO_READING, Pose,
-    Progress, Text, WaitOptions,
+    Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DrivesOn, Mode, NO_READING,
+    Pose, Progress, Text, WaitOptions,
 };
 
 const ABOUT: &str = "Command an armgate robot-arm controller over UDP";
@@ -30,21 +32,24 @@ Motions need the right mode first: `armgate mode cart` for move/run with [[carte
 
 const AFTER_HELP: &str = "\
 Examples:
+  armgate status                             mode, drives, joint count, robot name
   armgate pose                               where is the tool?
   armgate mode cart
-  armgate move 0.5 0.2 0.1 0 0 0 --time 5    GT + BG, then wait until within 1 mm
+  armgate move 0 0.2 0.8 0 0 -1.5708 --time 5
+                                             GT + BG, then wait until within 1 mm
   armgate mode joint
-  armgate jmove 0 0.5 1.0 0 0.3 0            jG + jB, then wait
+  armgate jmove 1.5708 0.4 1.2 0 1.2 0       jG + jB, then wait
   armgate run client/examples/rectangle.toml via points from a file
   armgate send PS                            any request, printed raw
   armgate send XY                            shows the controller's ER00 text
-  armgate --joints 8 joints                  an 8-joint arm (two jP requests)
+  armgate --joints 8 joints                  override the joint count the controller reports
   armgate teleop                             keyboard client (Fig. 3.3 of the thesis)
   armgate calibrate plan --robot robots/ur5.toml --poses 50
                                              poses to measure for kinematic calibration
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
-WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file.
+WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
+(Ctrl-C during move, jmove or run sends ST first: the arm stops and holds).
 Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
 
 const RUN_LONG: &str = "\
@@ -58,15 +63,17 @@ The file holds up to 20 [[cartesian]] entries or up to 20 [[joint]] entries, not
   time = 5.0                # minimum seconds for the leg to this point (default 0)
 
   [[joint]]
-  q = [0.0, 0.5, 1.0, 0.0, 0.3, 0.0]   # one value per joint (--joints)
+  q = [1.5708, 0.4, 1.2, 0.0, 1.2, 0.0]   # one value per joint
   time = 3.0
 
 The entries go into via slots 0.. in file order and run: VC, VP 0.., VE (needs mode cart)
 or jC, jV 0.., jE (needs mode joint). The first leg starts wherever the arm is. The wait
 follows the points in order and ends within --tolerance of the last one.
 
-client/examples/rectangle.toml is the seed thesis's E8 rectangle: (0.5, 0.2, 0.1) ->
-(0.5, 0.2, 0.4) -> (0.5, -0.2, 0.4) -> (0.5, -0.2, 0.1) -> back to the start.";
+client/examples/rectangle.toml is a 0.2 m x 0.1 m rectangle for the default robot
+(ranger-mk1): (0, 0.2, 0.8) -> (0.1, 0.2, 0.8) -> (0.1, 0.2, 0.7) -> (-0.1, 0.2, 0.7) ->
+(-0.1, 0.2, 0.8) -> back. client/examples/rectangle-e8.toml is the seed thesis's E8 rectangle
+for the hybrid and ranger-mk2 robots.";
 
 const TELEOP_LONG: &str = "\
 The keyboard client (thesis Fig. 3.3): Current Pose, Desired Pose, Joints and Temp(C),
@@ -96,16 +103,17 @@ pub struct Cli {
     /// The controller's address, host:port.
     #[arg(long, global = true, env = "ARMGATE_ADDR", default_value = DEFAULT_ADDR)]
     pub addr: String,
-    /// How long to wait for each reply: 200ms, 1s, 1.5s, or a number of milliseconds.
-    #[arg(long, global = true, default_value = "200ms", value_parser = parse_duration)]
+    /// How long to wait for each reply: 200ms, 1s, 1.5s, or a number of milliseconds (> 0).
+    #[arg(long, global = true, default_value = "200ms", value_parser = parse_timeout)]
     pub timeout: Duration,
     /// How many times a request is sent again when no reply came.
     #[arg(long, global = true, default_value_t = DEFAULT_RETRIES)]
     pub retries: u32,
-    /// How many joints the arm has, 1 to 8 (the replies do not say). Joint lists must have this
-    /// many values; more than 6 joints use the two-bank requests.
-    #[arg(long, global = true, default_value_t = 6, value_parser = parse_joints)]
-    pub joints: usize,
+    /// How many joints the arm has, 1 to 8. Default: what the controller's status (SQ) says,
+    /// 6 if it is too old to say. Joint lists must have this many values; more than 6 joints
+    /// use the two-bank requests.
+    #[arg(long, global = true, value_parser = parse_joints)]
+    pub joints: Option<usize>,
     /// What to do.
     #[command(subcommand)]
     pub command: Cmd,
@@ -127,6 +135,9 @@ pub enum Cmd {
         #[arg(long, short, default_value_t = 0)]
         index: u8,
     },
+    /// Print the controller's state: robot, joint count, mode, drives (and their fault),
+    /// motion, refused requests, uptime (SQ).
+    Status,
     /// Print the measured tool pose: position, quaternion (x, y, z, w) and roll/pitch/yaw (PS).
     Pose,
     /// Print the measured joints (jP; two requests for more than 7 joints).
@@ -138,8 +149,12 @@ pub enum Cmd {
         /// off (0), joint (1) or cart (2).
         mode: ModeArg,
     },
-    /// Start the drives (ON); also clears a drive fault.
-    On,
+    /// Start the drives (ON; also clears a drive fault) and wait until they run (SQ).
+    On {
+        /// Give up waiting for the drives after this long.
+        #[arg(long, default_value = "5s", value_parser = parse_duration)]
+        wait_timeout: Duration,
+    },
     /// Stop the drives (OF).
     Off,
     /// Stop every motion and sequence; the arm holds its position (ST).
@@ -177,9 +192,9 @@ pub enum Cmd {
     ///
     /// Without --time: jG + jB, a minimum-time motion. With --time T: jC, jV slot 0 with T, jE,
     /// since jB takes no duration (this clears the joint via points).
-    #[command(after_help = "Example: armgate jmove 0 0.5 1.0 0 0.3 0 --time 3")]
+    #[command(after_help = "Example: armgate jmove 1.5708 0.4 1.2 0 1.2 0 --time 10")]
     Jmove {
-        /// One value per joint (rad, or m for prismatic joints); --joints says how many.
+        /// One value per joint (rad, or m for prismatic joints), as many as the arm has.
         #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
         q: Vec<f64>,
         /// Minimum duration (s).
@@ -229,7 +244,8 @@ pub enum ModeArg {
     Off,
     /// 1: joint mode.
     Joint,
-    /// 2: Cartesian mode.
+    /// 2: Cartesian mode (also `cartesian`, as the status shows it).
+    #[value(alias = "cartesian")]
     Cart,
 }
 
@@ -255,16 +271,33 @@ pub struct WaitArgs {
     /// Arrival tolerance, mm (joints: mrad).
     #[arg(long, default_value_t = 1.0)]
     pub tolerance: f64,
+    /// On Ctrl-C just exit and leave the arm moving (by default ST is sent first).
+    #[arg(long)]
+    pub no_stop_on_interrupt: bool,
 }
 
 impl WaitArgs {
-    fn options(&self, requested: f64) -> WaitOptions {
+    /// The wait's options; with `interrupt`, Ctrl-C ends the wait.
+    fn options(&self, requested: f64, interrupt: Option<&interrupt::Interrupt>) -> WaitOptions {
         let extra = Duration::try_from_secs_f64(requested).unwrap_or_default();
         WaitOptions {
             tolerance: self.tolerance * 1e-3,
             timeout: self.wait_timeout.unwrap_or(Duration::from_secs(30) + extra),
+            interrupt: interrupt.cloned(),
             ..WaitOptions::default()
         }
+    }
+
+    /// Installs the Ctrl-C handler unless told not to (or there is no wait to interrupt).
+    /// Installed before the first request, so that Ctrl-C while the motion is being started
+    /// stops it as well.
+    fn interrupt(&self) -> Option<interrupt::Interrupt> {
+        if self.no_wait || self.no_stop_on_interrupt {
+            return None;
+        }
+        interrupt::ctrl_c()
+            .map_err(|e| eprintln!("armgate: {e}; Ctrl-C will not stop the arm"))
+            .ok()
     }
 }
 
@@ -286,15 +319,33 @@ pub enum CliError {
     /// `armgate plot` failed.
     #[error(transparent)]
     Plot(#[from] crate::plot::PlotError),
+    /// The controller refused a request; the hint says what would help.
+    #[error("{text}")]
+    Refused {
+        /// The refusal, with its reason.
+        text: Text,
+        /// What to do about it.
+        hint: Option<String>,
+    },
+    /// Ctrl-C during a wait; says whether ST was sent.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
 }
 
 impl CliError {
-    /// 1 if the controller refused or aborted, else 2.
+    /// 1 if the controller refused or aborted, 130 if interrupted, else 2.
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Client(e) => e.exit_code(),
+            Self::Refused { .. } => 1,
+            Self::Interrupted(_) => ClientError::Interrupted.exit_code(),
             _ => 2,
         }
+    }
+
+    /// Whether the error is a closed output pipe (`armgate pose | head -1`): not worth a word.
+    fn is_broken_pipe(&self) -> bool {
+        matches!(self, Self::Output(e) if e.kind() == std::io::ErrorKind::BrokenPipe)
     }
 }
 
@@ -316,6 +367,14 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s)"))
 }
 
+/// A duration that is not zero: a zero reply timeout would never wait for a reply.
+pub fn parse_timeout(s: &str) -> Result<Duration, String> {
+    match parse_duration(s)? {
+        Duration::ZERO => Err(format!("`{s}`: the timeout must be longer than 0")),
+        timeout => Ok(timeout),
+    }
+}
+
 fn parse_joints(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if (1..=MAX_JOINTS).contains(&n) => Ok(n),
@@ -330,13 +389,17 @@ pub fn main() -> u8 {
         return crate::calibrate::run(args);
     }
     let mut out = std::io::stdout().lock();
-    match run(&cli, &mut out) {
+    let result = run(&cli, &mut out).and_then(|()| out.flush().map_err(CliError::Output));
+    match result {
         Ok(()) => 0,
+        // The reader has gone (`| head`): nobody is left to tell.
+        Err(e) if e.is_broken_pipe() => 0,
         Err(e) => {
             let _ = out.flush();
             eprintln!("armgate: {e}");
-            if let CliError::Client(ClientError::Rejected(text)) = &e
-                && let Some(hint) = hint(text)
+            if let CliError::Refused {
+                hint: Some(hint), ..
+            } = &e
             {
                 eprintln!("hint: {hint}");
             }
@@ -345,23 +408,16 @@ pub fn main() -> u8 {
     }
 }
 
-/// A hint for a refusal whose cause is usually the mode.
-fn hint(text: &Text) -> Option<&'static str> {
-    if matching::code(text) != Some(20) {
-        return None;
-    }
-    let s = text.as_str();
-    let named = |chars: &[&str]| chars.iter().any(|c| s.contains(&format!("Cmd {c} ")));
-    if named(&["BG", "VE"]) {
-        Some(
-            "needs Cartesian mode (`armgate mode cart`), a goal, and no motion running (`armgate stop`)",
-        )
-    } else if named(&["jB", "jE"]) {
-        Some("needs joint mode (`armgate mode joint`) and no motion running (`armgate stop`)")
-    } else if named(&["RC"]) {
-        Some("recalibration needs mode off (`armgate mode off`)")
-    } else {
-        None
+/// A refusal with its hint, asking the controller's state when it can tell (a refusal of `SQ`
+/// itself, or a controller without it, leaves the hint to the text).
+fn with_hint(client: &mut Client, error: CliError) -> CliError {
+    let CliError::Client(ClientError::Rejected(text)) = error else {
+        return error;
+    };
+    let status = client.status().ok();
+    CliError::Refused {
+        hint: hints::hint(&text, status.as_ref()),
+        text,
     }
 }
 
@@ -380,20 +436,64 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
     if let Cmd::Teleop { live, rate } = &cli.command {
         let poll = Some(1.0 / rate)
-            .filter(|p| *p > 0.0)
+            .filter(|p| p.is_finite() && *p > 0.0)
             .and_then(|p| Duration::try_from_secs_f64(p).ok())
             .ok_or_else(|| CliError::Usage(format!("--rate {rate}: must be > 0")))?;
         let options = TeleopOptions {
-            joints: cli.joints,
+            joints: joint_count(cli, &mut client)?,
             live: *live,
             poll,
             addr: cli.addr.clone(),
         };
         return teleop::run(client, options).map_err(CliError::Output);
     }
-    let result = dispatch(cli, &mut client, out);
+    let result = dispatch(cli, &mut client, out).map_err(|e| with_hint(&mut client, e));
     print_notices(&mut client);
     result
+}
+
+/// `--joints`, else the joint count the controller reports, else (a controller without `SQ`) 6.
+fn joint_count(cli: &Cli, client: &mut Client) -> Result<usize, CliError> {
+    if let Some(n) = cli.joints {
+        return Ok(n);
+    }
+    match client.status() {
+        Ok(status) => Ok(status.joints),
+        Err(e @ ClientError::TooOld { .. }) => {
+            eprintln!("armgate: {e}; assuming 6 joints (set --joints)");
+            Ok(6)
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// After Ctrl-C ended a wait: ST (unless the wait ended otherwise).
+fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
+    if !matches!(error, ClientError::Interrupted) {
+        return error.into();
+    }
+    finish_progress();
+    CliError::Interrupted(match client.stop() {
+        Ok(()) => "sent ST: the arm stops and holds".to_owned(),
+        Err(e) => format!("ST failed ({e}): the arm may still be moving"),
+    })
+}
+
+/// `armgate on`: ON, then wait until the drives run.
+fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Result<(), CliError> {
+    match client.start_drives(timeout)? {
+        DrivesOn::Started(after) => writeln!(out, "drives running ({:.2} s)", after.as_secs_f64())?,
+        DrivesOn::AlreadyRunning(after) => {
+            writeln!(out, "drives already running ({:.2} s)", after.as_secs_f64())?
+        }
+        DrivesOn::Unconfirmed(why) => writeln!(out, "drives on (not confirmed: {why})")?,
+    }
+    Ok(())
+}
+
+/// After a wait: until the motion has ended (see [`Client::wait_motion_ended`]).
+fn settle(client: &mut Client) -> Result<(), CliError> {
+    Ok(client.wait_motion_ended(Duration::from_secs(5))?)
 }
 
 fn print_notices(client: &mut Client) {
@@ -404,15 +504,19 @@ fn print_notices(client: &mut Client) {
 }
 
 fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), CliError> {
-    let n = cli.joints;
     match &cli.command {
         Cmd::Send {
             chars,
             values,
             index,
         } => send(client, chars, values, *index, out),
+        Cmd::Status => {
+            writeln!(out, "{}", client.status()?)?;
+            Ok(())
+        }
         Cmd::Pose => print_pose(&client.pose()?, out),
         Cmd::Joints => {
+            let n = joint_count(cli, client)?;
             let q = client.joints(n)?;
             writeln!(out, "joints (rad; m for prismatic joints)")?;
             for (k, v) in q.iter().enumerate() {
@@ -421,6 +525,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             Ok(())
         }
         Cmd::Temps => {
+            let n = joint_count(cli, client)?;
             let t = client.temperatures(n)?;
             writeln!(out, "drive temperatures (°C)")?;
             for (k, v) in t.iter().enumerate() {
@@ -437,8 +542,18 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             writeln!(out, "mode {} ({})", reported.name(), reported.value())?;
             Ok(())
         }
-        Cmd::On => ok(client.on(), "drives on", out),
-        Cmd::Off => ok(client.off(), "drives off", out),
+        Cmd::On { wait_timeout } => drives_on(client, *wait_timeout, out),
+        Cmd::Off => match client.off() {
+            // `ER10 Arm already off` / `already stopping`: what was asked for.
+            Err(ClientError::Rejected(text))
+                if matching::code(&text) == Some(10) && text.as_str().contains(" already ") =>
+            {
+                let state = text.as_str().rsplit(' ').next().unwrap_or("off");
+                writeln!(out, "drives already {state}")?;
+                Ok(())
+            }
+            result => ok(result, "drives off", out),
+        },
         Cmd::Stop => ok(client.stop(), "stopped", out),
         Cmd::Move {
             x,
@@ -451,6 +566,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             wait,
         } => {
             let (xyz, rpy) = ([*x, *y, *z], [*roll, *pitch, *yaw]);
+            let interrupt = wait.interrupt();
             client.goal_rpy(xyz, rpy, *time)?;
             client.begin()?;
             writeln!(out, "moving")?;
@@ -458,8 +574,15 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 return Ok(());
             }
             let goal = Pose::from_xyz_rpy(xyz, rpy);
-            let pose = client.wait_until_pose(&goal, &wait.options(*time), pose_progress)?;
+            let pose = client
+                .wait_until_pose(
+                    &goal,
+                    &wait.options(*time, interrupt.as_ref()),
+                    pose_progress,
+                )
+                .map_err(|e| stop_if_interrupted(client, e))?;
             finish_progress();
+            settle(client)?;
             writeln!(
                 out,
                 "arrived: {} ({:.2} mm from the goal)",
@@ -469,7 +592,8 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             Ok(())
         }
         Cmd::Jmove { q, time, wait } => {
-            check_joint_count(q.len(), n)?;
+            check_joint_count(q.len(), joint_count(cli, client)?)?;
+            let interrupt = wait.interrupt();
             match time {
                 None => {
                     client.joint_goal(q)?;
@@ -485,14 +609,18 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             if wait.no_wait {
                 return Ok(());
             }
-            let reached =
-                client.wait_until_joints(q, &wait.options(time.unwrap_or(0.0)), joint_progress)?;
+            let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
+            let reached = client
+                .wait_until_joints(q, &options, joint_progress)
+                .map_err(|e| stop_if_interrupted(client, e))?;
             finish_progress();
+            settle(client)?;
             writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
         Cmd::Run { file, wait } => {
-            let run = RunFile::load(file, n)?;
+            let run = RunFile::load(file, joint_count(cli, client)?)?;
+            let interrupt = wait.interrupt();
             client.start_run(&run)?;
             writeln!(
                 out,
@@ -507,17 +635,23 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 RunFile::Cartesian(points) => {
                     let total = points.iter().map(|p| p.time).sum();
                     let goals = RunFile::poses(points);
-                    let pose =
-                        client.wait_through_poses(&goals, &wait.options(total), pose_progress)?;
+                    let options = wait.options(total, interrupt.as_ref());
+                    let pose = client
+                        .wait_through_poses(&goals, &options, pose_progress)
+                        .map_err(|e| stop_if_interrupted(client, e))?;
                     finish_progress();
+                    settle(client)?;
                     writeln!(out, "done: {}", fmt_values(&pose.xyz, 4))?;
                 }
                 RunFile::Joint(points) => {
                     let total = points.iter().map(|p| p.time).sum();
                     let goals: Vec<Vec<f64>> = points.iter().map(|p| p.q.clone()).collect();
-                    let q =
-                        client.wait_through_joints(&goals, &wait.options(total), joint_progress)?;
+                    let options = wait.options(total, interrupt.as_ref());
+                    let q = client
+                        .wait_through_joints(&goals, &options, joint_progress)
+                        .map_err(|e| stop_if_interrupted(client, e))?;
                     finish_progress();
+                    settle(client)?;
                     writeln!(out, "done: {}", fmt_values(&q, 4))?;
                 }
             }
@@ -533,7 +667,7 @@ fn check_joint_count(given: usize, joints: usize) -> Result<(), CliError> {
         Ok(())
     } else {
         Err(CliError::Usage(format!(
-            "{given} joint values, but the arm has {joints} joints (set --joints)"
+            "{given} joint values, but the arm has {joints} joints (--joints overrides)"
         )))
     }
 }
@@ -687,8 +821,181 @@ fn joint_progress(p: &Progress<'_, [f64]>) {
 mod tests {
     use super::*;
     use crate::fake::{FakeController, text};
+    use crate::status::tests::status_reply;
     use armgate_protocol::client::{Command, Message, Reply, Request};
     use clap::CommandFactory;
+    use std::sync::{Arc, Mutex};
+
+    /// SQ numbers: Cartesian mode, drives running, no fault, 6 joints, idle.
+    const RUNNING_CART: [f32; 7] = [2.0, 2.0, 0.0, 6.0, 0.0, 0.0, 1.0];
+
+    #[test]
+    fn status_prints_the_state() {
+        let fake = FakeController::spawn(|d| {
+            vec![status_reply(
+                d,
+                [1.0, 4.0, 33.0, 8.0, 0.0, 5.0, 9.5],
+                "ranger-mk2",
+            )]
+        });
+        let (result, out) = run_with(&fake, &["status"]);
+        result.unwrap();
+        for line in [
+            "robot      ranger-mk2 (8 joints)",
+            "mode       joint (1)",
+            "drives     faulted (ER33)",
+            "refused    5 requests",
+        ] {
+            assert!(out.contains(line), "{line}: {out}");
+        }
+        let old = FakeController::spawn(|_| vec![text("ER00 Cmd SQ not understood")]);
+        let (result, _) = run_with(&old, &["status"]);
+        assert!(result.unwrap_err().to_string().contains("too old"));
+    }
+
+    /// A controller whose drives start when ON arrives and run after `polls` status polls;
+    /// ON while they start or run is `ER11`.
+    fn booting(polls: usize, fault: bool) -> FakeController {
+        let state = Arc::new(Mutex::new((0.0f32, 0usize)));
+        FakeController::spawn(move |d| {
+            let mut s = state.lock().unwrap();
+            match &d[..2] {
+                b"ON" if s.0 == 0.0 || s.0 == 4.0 => {
+                    *s = (1.0, 0);
+                    let mut r = d[..31].to_vec();
+                    r.swap(0, 1);
+                    vec![r]
+                }
+                b"ON" => vec![text("ER11 Arm did not start")],
+                _ => {
+                    if d[30] == 0 && s.0 == 1.0 {
+                        s.1 += 1;
+                        if s.1 > polls {
+                            s.0 = if fault { 4.0 } else { 2.0 };
+                        }
+                    }
+                    let fault_code = if s.0 == 4.0 { 31.0 } else { 0.0 };
+                    vec![status_reply(
+                        d,
+                        [0.0, s.0, fault_code, 6.0, 0.0, 0.0, 1.0],
+                        "r",
+                    )]
+                }
+            }
+        })
+    }
+
+    #[test]
+    fn on_waits_until_the_drives_run() {
+        let fake = booting(3, false);
+        let (result, out) = run_with(&fake, &["on"]);
+        result.unwrap();
+        assert!(out.starts_with("drives running ("), "{out}");
+        // ON again: ER11, but they run, so that is success.
+        let (result, out) = run_with(&fake, &["on"]);
+        result.unwrap();
+        assert!(out.starts_with("drives already running"), "{out}");
+        let faulty = booting(2, true);
+        let (result, _) = run_with(&faulty, &["on"]);
+        let err = result.unwrap_err();
+        assert_eq!(err.to_string(), "the drives did not start: faulted (ER31)");
+        assert_eq!(err.exit_code(), 1);
+        let slow = booting(usize::MAX, false);
+        let (result, _) = run_with(&slow, &["on", "--wait-timeout", "200ms"]);
+        assert!(result.unwrap_err().to_string().contains("still starting"));
+    }
+
+    #[test]
+    fn on_right_after_off_waits_for_the_drives_to_stop_and_sends_on_again() {
+        // Stopping for three status polls; ON is refused until then, and starts them at once.
+        let state = Arc::new(Mutex::new((3.0f32, 0usize)));
+        let fake = FakeController::spawn(move |d| {
+            let mut s = state.lock().unwrap();
+            match &d[..2] {
+                b"ON" if s.0 == 0.0 => {
+                    s.0 = 2.0;
+                    let mut r = d[..31].to_vec();
+                    r.swap(0, 1);
+                    vec![r]
+                }
+                b"ON" => vec![text("ER11 Arm did not start")],
+                _ => {
+                    if d[30] == 0 && s.0 == 3.0 {
+                        s.1 += 1;
+                        if s.1 >= 3 {
+                            s.0 = 0.0;
+                        }
+                    }
+                    vec![status_reply(d, [0.0, s.0, 0.0, 6.0, 0.0, 0.0, 1.0], "r")]
+                }
+            }
+        });
+        let (result, out) = run_with(&fake, &["on"]);
+        result.unwrap();
+        assert!(out.starts_with("drives running"), "{out}");
+        let ons = fake.received().iter().filter(|d| &d[..2] == b"ON").count();
+        assert_eq!(ons, 4);
+    }
+
+    #[test]
+    fn off_when_already_off_is_no_failure() {
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"OF" => vec![text("ER10 Arm already off")],
+            _ => vec![],
+        });
+        let (result, out) = run_with(&fake, &["off"]);
+        result.unwrap();
+        assert_eq!(out, "drives already off\n");
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"OF" => vec![text("ER10 Arm stopped by fault")],
+            _ => vec![],
+        });
+        let (result, _) = run_with(&fake, &["off", "--timeout", "50ms"]);
+        assert_eq!(result.unwrap_err().to_string(), "ER10 Arm stopped by fault");
+    }
+
+    #[test]
+    fn a_refusal_with_the_drives_off_hints_at_on() {
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"SQ" => vec![status_reply(d, [2.0, 0.0, 0.0, 6.0, 0.0, 3.0, 1.0], "r")],
+            b"BG" => vec![text("ER20 Cmd BG drives off")],
+            _ => {
+                let mut r = d[..31].to_vec();
+                r.swap(0, 1);
+                vec![r]
+            }
+        });
+        let (result, _) = run_with(&fake, &["move", "0.5", "0.2", "0.1", "0", "0", "0"]);
+        let CliError::Refused { text, hint } = result.unwrap_err() else {
+            panic!()
+        };
+        assert_eq!(text.as_str(), "ER20 Cmd BG drives off");
+        assert!(hint.unwrap().contains("`armgate on`"));
+    }
+
+    #[test]
+    fn an_interrupted_wait_sends_st() {
+        let fake = FakeController::spawn(|d| {
+            let mut r = d[..31].to_vec();
+            r.swap(0, 1);
+            vec![r]
+        });
+        let mut client = Client::connect(fake.addr()).unwrap();
+        let err = stop_if_interrupted(&mut client, ClientError::Interrupted);
+        assert_eq!(
+            err.to_string(),
+            "interrupted: sent ST: the arm stops and holds"
+        );
+        assert_eq!(err.exit_code(), 130);
+        assert_eq!(&fake.received()[0][..2], b"ST");
+        // Any other end of a wait is passed on, and nothing is sent.
+        let err = stop_if_interrupted(
+            &mut client,
+            ClientError::Aborted(crate::fake::parsed_text("WN22 Inv Kin Divergence.")),
+        );
+        assert_eq!(err.exit_code(), 1);
+        assert_eq!(fake.received().len(), 1);
+    }
 
     #[test]
     fn the_command_line_is_consistent() {
@@ -709,7 +1016,7 @@ mod tests {
             "armgate", "--joints", "8", "jmove", "-1", "0", "0", "0", "0", "0", "0", "-0.5",
         ])
         .unwrap();
-        assert_eq!(cli.joints, 8);
+        assert_eq!(cli.joints, Some(8));
         let Cmd::Jmove { q, time: None, .. } = cli.command else {
             panic!()
         };
@@ -729,6 +1036,18 @@ mod tests {
         assert_eq!(parse_duration("50"), Ok(Duration::from_millis(50)));
         assert!(parse_duration("soon").is_err());
         assert!(parse_duration("-1s").is_err());
+        assert!(parse_timeout("0").is_err());
+        assert!(parse_timeout("0ms").is_err());
+        assert_eq!(parse_timeout("1ms"), Ok(Duration::from_millis(1)));
+        assert!(Cli::try_parse_from(["armgate", "--timeout", "0s", "pose"]).is_err());
+        // The mode as the status shows it is accepted too.
+        let cli = Cli::try_parse_from(["armgate", "mode", "cartesian"]).unwrap();
+        assert!(matches!(
+            cli.command,
+            Cmd::Mode {
+                mode: ModeArg::Cart
+            }
+        ));
     }
 
     fn run_with(fake: &FakeController, args: &[&str]) -> (Result<(), CliError>, String) {
@@ -803,15 +1122,20 @@ mod tests {
         let (result, _) = run_with(&fake, &["move", "0.5", "0.2", "0.1", "0", "0", "0"]);
         let err = result.unwrap_err();
         assert_eq!(err.exit_code(), 1);
-        let CliError::Client(ClientError::Rejected(t)) = err else {
+        let CliError::Refused { text, hint } = err else {
             panic!()
         };
-        assert!(hint(&t).unwrap().contains("mode cart"));
+        assert_eq!(text.as_str(), "ER20 Cmd BG rejected");
+        // No status from this fake: the hint lists what BG needs.
+        assert!(hint.unwrap().contains("mode cart"));
     }
 
     #[test]
     fn jmove_with_a_time_uses_a_via_point() {
         let fake = FakeController::spawn(|d| {
+            if &d[..2] == b"SQ" {
+                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
+            }
             let m = Message::new_checked(d).unwrap();
             let r = Request::parse(&m).unwrap();
             let mut reply = Reply::null(r.command);
@@ -832,15 +1156,30 @@ mod tests {
             .iter()
             .map(|d| String::from_utf8_lossy(&d[..2]).into_owned())
             .collect();
-        assert_eq!(sent[..3], ["jC", "jV", "jE"]);
-        assert!(sent[3..].iter().all(|c| c == "jP"));
+        // The joint count comes from the status (SQ twice: numbers and name).
+        assert_eq!(sent[..5], ["SQ", "SQ", "jC", "jV", "jE"]);
+        // Then jP until arrival, and SQ until the motion has ended.
+        let polls = &sent[5..];
+        let first_sq = polls.iter().position(|c| c == "SQ").unwrap();
+        assert!(polls[..first_sq].iter().all(|c| c == "jP"), "{polls:?}");
+        assert!(polls[first_sq..].iter().all(|c| c == "SQ"), "{polls:?}");
         let (result, _) = run_with(&fake, &["jmove", "0", "0.5"]);
-        assert_eq!(result.unwrap_err().exit_code(), 2);
+        let err = result.unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.to_string().contains("the arm has 6 joints"), "{err}");
+        // --joints overrides the status.
+        let before = fake.received().len();
+        let (result, _) = run_with(&fake, &["--joints", "2", "jmove", "0", "0.5", "--no-wait"]);
+        result.unwrap();
+        assert_eq!(fake.received()[before..][0][..2], *b"jG");
     }
 
     #[test]
     fn run_loads_the_file_into_via_slots() {
         let fake = FakeController::spawn(|d| {
+            if &d[..2] == b"SQ" {
+                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
+            }
             let m = Message::new_checked(d).unwrap();
             let r = Request::parse(&m).unwrap();
             let mut reply = Reply::null(r.command);
@@ -863,8 +1202,8 @@ mod tests {
         assert!(out.contains("running 2 via points"), "{out}");
         let sent = fake.received();
         let chars: Vec<&[u8]> = sent.iter().map(|d| &d[..2]).collect();
-        assert_eq!(chars[..4], [b"VC", b"VP", b"VP", b"VE"]);
-        assert_eq!(sent[1][30], 0);
-        assert_eq!(sent[2][30], 1);
+        assert_eq!(chars[..6], [b"SQ", b"SQ", b"VC", b"VP", b"VP", b"VE"]);
+        assert_eq!(sent[3][30], 0);
+        assert_eq!(sent[4][30], 1);
     }
 }

@@ -56,6 +56,8 @@ pub struct RawReply {
     pub values: [f32; VALUES],
     /// The index byte.
     pub index: u8,
+    /// The whole datagram (replies that carry text, like the `SQ` name, are read from it).
+    pub bytes: [u8; MESSAGE_LEN],
 }
 
 /// A client of one controller, on a UDP socket bound to an ephemeral local port.
@@ -163,6 +165,7 @@ impl Client {
             chars: message.command(),
             values: message.values(),
             index: message.index(),
+            bytes: reply,
         })
     }
 

@@ -207,10 +207,8 @@ impl Client {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ClientConfig;
     use crate::fake::FakeController;
     use armgate_protocol::client::{MESSAGE_LEN, Message};
-    use std::time::Duration;
 
     /// A fake that echoes every request with reversed characters.
     fn echo() -> FakeController {
@@ -222,14 +220,7 @@ mod tests {
     }
 
     fn client(fake: &FakeController) -> Client {
-        Client::connect_with(
-            fake.addr(),
-            ClientConfig {
-                timeout: Duration::from_secs(1),
-                ..ClientConfig::default()
-            },
-        )
-        .unwrap()
+        fake.client()
     }
 
     fn datagram(chars: &[u8; 2], values: [f32; 7], index: u8) -> Vec<u8> {

@@ -69,6 +69,21 @@ pub enum ClientError {
         /// The time allowed.
         timeout: Duration,
     },
+    /// The controller does not know a request (it answered `ER00`): it is older than this
+    /// client.
+    #[error("the controller is too old for {request}: it answered `{text}`")]
+    TooOld {
+        /// The request, e.g. `SQ (status)`.
+        request: &'static str,
+        /// The controller's answer.
+        text: Text,
+    },
+    /// ON was answered but the drives do not run (faulted, off, or still starting).
+    #[error("the drives did not start: {0}")]
+    NotStarted(String),
+    /// A wait ended because it was interrupted (Ctrl-C); the motion was not stopped.
+    #[error("interrupted")]
+    Interrupted,
     /// An argument cannot be sent (e.g. too many joints, a via slot with bit 7 set).
     #[error("{0}")]
     InvalidArgument(String),
@@ -86,7 +101,9 @@ impl ClientError {
     /// The exit status for the `armgate` tool: 1 if the controller refused or aborted, else 2.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Rejected(_) | Self::Aborted(_) => 1,
+            Self::Rejected(_) | Self::Aborted(_) | Self::TooOld { .. } | Self::NotStarted(_) => 1,
+            // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
+            Self::Interrupted => 130,
             _ => 2,
         }
     }

@@ -74,6 +74,18 @@ impl FakeController {
         self.addr
     }
 
+    /// A client of the fake that waits long enough (1 s) never to resend on a loaded machine.
+    pub fn client(&self) -> crate::Client {
+        crate::Client::connect_with(
+            self.addr,
+            crate::ClientConfig {
+                timeout: Duration::from_secs(1),
+                ..crate::ClientConfig::default()
+            },
+        )
+        .unwrap()
+    }
+
     /// The datagrams received so far.
     pub fn received(&self) -> Vec<Vec<u8>> {
         self.received.lock().unwrap().clone()

@@ -26,6 +26,8 @@
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
 //! * [`wait`]: polling until a pose or joint target is reached.
 //! * [`runfile`]: TOML via-point sequences.
+//! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name);
+//!   [`Client::start_drives`] and [`Client::wait_motion_ended`] poll it.
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
@@ -33,13 +35,17 @@ pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;
+mod drives;
 mod error;
 #[cfg(test)]
 mod fake;
+mod hints;
+pub mod interrupt;
 pub mod matching;
 pub mod plot;
 mod pose;
 pub mod runfile;
+pub mod status;
 pub mod teleop;
 pub mod wait;
 
@@ -49,7 +55,9 @@ pub use client::{
     RawReply,
 };
 pub use commands::NO_READING;
+pub use drives::DrivesOn;
 pub use error::ClientError;
 pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
+pub use status::{DriveStatus, Motion, Status};
 pub use wait::{Progress, WaitOptions};

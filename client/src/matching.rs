@@ -44,6 +44,8 @@ impl Expect {
         match &self.chars {
             b"jV" | b"VP" => index & !BANK_2 == self.index & !BANK_2,
             b"jP" | b"TM" => index & BANK_2 == self.index & BANK_2,
+            // The status request: index 0 the numbers, index 1 the name.
+            b"SQ" => index == self.index,
             _ => true,
         }
     }

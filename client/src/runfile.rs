@@ -273,8 +273,24 @@ mod tests {
     }
 
     #[test]
-    fn the_example_rectangle_parses() {
+    fn the_example_rectangles_parse() {
         let run = RunFile::parse(include_str!("../examples/rectangle.toml"), 6).unwrap();
+        let RunFile::Cartesian(points) = run else {
+            panic!("{run:?}")
+        };
+        let corners: Vec<[f64; 3]> = points.iter().map(|p| p.xyz).collect();
+        assert_eq!(
+            corners,
+            [
+                [0.0, 0.2, 0.8],
+                [0.1, 0.2, 0.8],
+                [0.1, 0.2, 0.7],
+                [-0.1, 0.2, 0.7],
+                [-0.1, 0.2, 0.8],
+                [0.0, 0.2, 0.8]
+            ]
+        );
+        let run = RunFile::parse(include_str!("../examples/rectangle-e8.toml"), 6).unwrap();
         let RunFile::Cartesian(points) = run else {
             panic!("{run:?}")
         };

@@ -10,7 +10,9 @@
 //!   `WN22`, `WN27`, drive faults `ER3x`; see [`matching::ends_motion`]);
 //! * with [`ClientError::Stalled`] when the arm has not moved for [`WaitOptions::stall`]
 //!   (held short of the target without a motion-ending notice, e.g. clamped at a joint limit);
-//! * with [`ClientError::WaitTimeout`] after [`WaitOptions::timeout`].
+//! * with [`ClientError::WaitTimeout`] after [`WaitOptions::timeout`];
+//! * with [`ClientError::Interrupted`] when [`WaitOptions::interrupt`] is set (Ctrl-C); the
+//!   motion goes on unless the caller stops it.
 //!
 //! Notices that arrive during a wait are handed to the progress callback (and not left in
 //! the client's queue).
@@ -19,6 +21,7 @@ use std::time::{Duration, Instant};
 
 use armgate_protocol::client::Text;
 
+use crate::interrupt::Interrupt;
 use crate::matching;
 use crate::{Client, ClientError, Pose};
 
@@ -38,6 +41,8 @@ pub struct WaitOptions {
     pub poll: Duration,
     /// Give up if the arm has not moved for this long (`None`: never).
     pub stall: Option<Duration>,
+    /// End the wait when this flag is set (checked at every poll).
+    pub interrupt: Option<Interrupt>,
 }
 
 impl Default for WaitOptions {
@@ -51,6 +56,7 @@ impl Default for WaitOptions {
             timeout: Duration::from_secs(60),
             poll: Duration::from_millis(50),
             stall: Some(Duration::from_secs(3)),
+            interrupt: None,
         }
     }
 }
@@ -260,6 +266,9 @@ impl Client {
             if let Some(text) = notices.iter().find(|t| matching::ends_motion(t)) {
                 return Err(ClientError::Aborted(*text));
             }
+            if options.interrupt.as_ref().is_some_and(Interrupt::is_set) {
+                return Err(ClientError::Interrupted);
+            }
             if let Some(stall) = options.stall
                 && now - last_move > stall
             {
@@ -433,6 +442,30 @@ mod tests {
         ));
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0, 0.0, 0.005]);
         c.wait_until_pose(&goal, &options(), |_| {}).unwrap();
+    }
+
+    #[test]
+    fn an_interrupt_ends_the_wait_and_leaves_the_arm_alone() {
+        let fake = arm(0.0, 0.1, None);
+        let mut c = client(&fake);
+        c.begin().unwrap();
+        let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0; 3]);
+        let mut opts = options();
+        let flag = Interrupt::new();
+        opts.interrupt = Some(flag.clone());
+        let mut polls = 0;
+        let err = c
+            .wait_until_pose(&goal, &opts, |_| {
+                polls += 1;
+                if polls == 3 {
+                    flag.set();
+                }
+            })
+            .unwrap_err();
+        assert!(matches!(err, ClientError::Interrupted), "{err:?}");
+        assert_eq!(polls, 3);
+        // Nothing but PS polls was sent: stopping is the caller's decision.
+        assert!(fake.received()[1..].iter().all(|d| &d[..2] == b"PS"));
     }
 
     #[test]

@@ -105,3 +105,31 @@ fn help_explains_the_commands() {
         assert!(help.contains(word), "{word}: {help}");
     }
 }
+
+#[test]
+fn a_closed_output_pipe_ends_quietly() {
+    let (addr, thread) = fake(1, |request| vec![echo(request)]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_armgate"))
+        .args(["--addr", &addr, "--timeout", "1s", "send", "CM", "2"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reader goes away before anything is written.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    thread.join().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("Broken pipe"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}
+
+#[test]
+fn a_zero_timeout_is_refused() {
+    let out = Command::new(env!("CARGO_BIN_EXE_armgate"))
+        .args(["--timeout", "0", "pose"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("the timeout must be longer than 0"));
+}

@@ -3,13 +3,15 @@
 //! It runs the same core as the firmware: the control tick at the robot's period, and the
 //! 31-byte UDP command protocol. Only bytes and time are handled here.
 
+mod args;
 mod backend;
 mod log;
 mod socketcan;
+mod status;
 mod udp;
 
 use std::io::IsTerminal;
-use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, UdpSocket};
+use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -43,8 +45,9 @@ struct Args {
     /// UDP address to listen on for client commands.
     #[arg(long, default_value = "127.0.0.1:7031")]
     listen: SocketAddr,
-    /// Networks allowed to send commands, e.g. 192.168.1.0/24 (repeatable). Default: loopback
-    /// only (127.0.0.0/8 and ::1). Datagrams from elsewhere are dropped and counted.
+    /// Networks allowed to send commands besides loopback (127.0.0.0/8 and ::1, always
+    /// allowed), e.g. 192.168.1.0/24 (repeatable). Datagrams from elsewhere are dropped and
+    /// counted.
     #[arg(long = "allow", value_name = "NETWORK")]
     allow: Vec<Network>,
     /// Where set-points go: `sim` = one simulated Elmo Whistle per drive of the robot file on
@@ -55,7 +58,8 @@ struct Args {
     /// With --can off: how the simulated joints follow the commands.
     #[arg(long, value_enum, default_value_t = ArmKind::Ideal)]
     arm: ArmKind,
-    /// Starting joint positions, comma-separated (default: the drives' home positions).
+    /// Starting joint positions, comma-separated, within the joint limits (default: the drives'
+    /// home positions).
     #[arg(
         long,
         value_delimiter = ',',
@@ -66,8 +70,8 @@ struct Args {
     /// Write CSV logs (commands, replies, warnings, state) into this directory.
     #[arg(long, value_name = "DIR")]
     log_dir: Option<PathBuf>,
-    /// Exit after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_name = "SECONDS")]
+    /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
+    #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
     /// No status line on the terminal.
     #[arg(long)]
@@ -114,10 +118,14 @@ fn main() -> ExitCode {
 
 fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let n = config.dof();
-    let home = config.home();
-    let start = Chain::new(config)
-        .check(args.start.as_deref().unwrap_or(&home))
-        .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
+    let start = args::start_joints(config, args.start.as_deref()).map_err(|e| {
+        let what = if args.start.is_some() {
+            "--start"
+        } else {
+            "home"
+        };
+        format!("{what}: {e}")
+    })?;
     let drives = Backend::open(&args.can, config, &start, || {
         arm_model(args.arm, config, start)
     })?;
@@ -126,14 +134,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         return replay_exchange(config, drives, replay);
     }
     let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives);
-    let allow = if args.allow.is_empty() {
-        vec![
-            Network::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 8),
-            Network::new(IpAddr::V6(Ipv6Addr::LOCALHOST), 128),
-        ]
-    } else {
-        args.allow.clone()
-    };
+    let allow = args::allow_list(&args.allow);
     let logger = match &args.log_dir {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
         None => Logger::disabled(),
@@ -144,6 +145,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", args.listen))?;
     let running = Arc::new(AtomicBool::new(true));
     let stop = running.clone();
+    // Ctrl-C, and SIGTERM as well (the `termination` feature): the logs are flushed either way.
     ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
     let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
@@ -200,7 +202,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         }
         if status && now >= next_status {
             next_status = now + Duration::from_millis(250);
-            eprint!("\r{}\x1b[K", status_line(&cycle, &stats, &logger));
+            eprint!("\r{}\x1b[K", status::line(&cycle, &stats, &logger));
         }
     }
     if status {
@@ -210,14 +212,8 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     logger.finish().map_err(|e| format!("log: {e}"))?;
     let counters = cycle.counters();
     eprintln!(
-        "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns ({} ticks skipped), {} tick errors, {} log records dropped",
-        stats.received,
-        stats.refused_sources,
-        counters.notices,
-        counters.late_ticks,
-        counters.skipped_ticks,
-        counters.tick_errors,
-        dropped
+        "armgate-sim: stopped; {}",
+        status::summary(&stats, status::snapshot(&cycle).refused, &counters, dropped)
     );
     if let Some(summary) = cycle.drives().socketcan_summary() {
         eprintln!("armgate-sim: {summary}");
@@ -277,30 +273,6 @@ fn arm_model(kind: ArmKind, config: &ValidRobot, start: Joints) -> ArmModel {
     }
 }
 
-fn status_line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) -> String {
-    let ctrl = cycle.handler().controller();
-    let pose = ctrl
-        .measured()
-        .map(|(_, p)| {
-            let [x, y, z]: [f64; 3] = p.translation.vector.into();
-            format!("x {x:+.4} y {y:+.4} z {z:+.4}")
-        })
-        .unwrap_or_default();
-    let state = if ctrl.is_moving() {
-        "moving"
-    } else {
-        "holding"
-    };
-    format!(
-        "mode {:<9} {state:<7} {pose} | rx {} refused {} warnings {} log dropped {}",
-        ctrl.mode().name(),
-        stats.received,
-        stats.refused_sources,
-        cycle.counters().notices,
-        logger.dropped()
-    )
-}
-
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
 fn print_home(config: &ValidRobot) {
     let chain = Chain::new(config);
@@ -318,7 +290,11 @@ fn print_home(config: &ValidRobot) {
         chain.dof(),
         config.control_period
     );
-    println!("home joints: {home:.4?}");
+    let joints: Vec<String> = home.iter().map(|q| format!("{q:.4}")).collect();
+    println!(
+        "home joints (rad; m for prismatic joints): {}",
+        joints.join(" ")
+    );
     println!("tool position (m):           {x:.4} {y:.4} {z:.4}");
     println!("tool quaternion (x y z w):   {qx:.4} {qy:.4} {qz:.4} {qw:.4}");
     println!("tool RPY (rad):              {roll:.4} {pitch:.4} {yaw:.4}");

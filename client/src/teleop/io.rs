@@ -1,6 +1,6 @@
 //! The keyboard client's I/O thread: it owns the [`Client`], performs the [`Action`]s the keys
-//! produce, polls PS, jP and TM between them, and reports [`Event`]s. The UI never waits for
-//! the network.
+//! produce, polls SQ, PS, jP and TM between them, and reports [`Event`]s. The UI never waits
+//! for the network.
 
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::thread::JoinHandle;
@@ -42,13 +42,14 @@ fn run(
     events: &Sender<Event>,
 ) {
     let mut next_poll = Instant::now();
+    let mut with_status = true;
     loop {
         let wait = next_poll.saturating_duration_since(Instant::now());
         let reports = match actions.recv_timeout(wait) {
             Ok(action) => perform(&mut client, action),
             Err(RecvTimeoutError::Timeout) => {
                 next_poll = Instant::now() + poll;
-                read_state(&mut client, joints)
+                read_state(&mut client, joints, &mut with_status)
             }
             Err(RecvTimeoutError::Disconnected) => return,
         };
@@ -69,23 +70,53 @@ fn failure(what: &str, error: ClientError) -> Event {
     }
 }
 
-/// PS, jP, TM; stops at the first failure so that an absent controller costs one timeout.
-fn read_state(client: &mut Client, joints: usize) -> Vec<Event> {
-    let mut events = Vec::with_capacity(3);
+/// The event for a failed poll: the ER text, or no reply.
+fn poll_failure(what: &str, error: ClientError) -> Event {
+    match error {
+        ClientError::Rejected(text) => Event::Text(text),
+        other => Event::NoReply(format!("{what}: {other}")),
+    }
+}
+
+/// The event for a failed motion request: the refusal, or a status line.
+fn move_failure(what: &str, error: ClientError) -> Event {
+    match error {
+        ClientError::Rejected(text) => Event::Refused(text),
+        other => Event::Status(format!("{what}: {other}")),
+    }
+}
+
+/// SQ (while the controller knows it), PS, jP, TM; stops at the first failure so that an
+/// absent controller costs one timeout.
+fn read_state(client: &mut Client, joints: usize, with_status: &mut bool) -> Vec<Event> {
+    let mut events = Vec::with_capacity(4);
+    if *with_status {
+        match client.status() {
+            Ok(status) => events.push(Event::Controller(status)),
+            Err(e @ ClientError::TooOld { .. }) => {
+                *with_status = false;
+                events.push(Event::Status(format!("{e}: mode and drives unknown")));
+            }
+            Err(e) => return vec![poll_failure("SQ", e)],
+        }
+    }
     match client.pose() {
         Ok(pose) => events.push(Event::Pose(pose)),
-        Err(e) => return vec![failure("PS", e)],
+        Err(e) => {
+            events.push(poll_failure("PS", e));
+            return events;
+        }
     }
     match client.joints(joints) {
         Ok(q) => events.push(Event::Joints(q)),
         Err(e) => {
-            events.push(failure("jP", e));
+            events.push(poll_failure("jP", e));
             return events;
         }
     }
     match client.temperatures(joints) {
         Ok(t) => events.push(Event::Temperatures(t)),
-        Err(e) => events.push(failure("TM", e)),
+        Err(e) => events.push(poll_failure("TM", e)),
     }
     events
 }
@@ -108,7 +139,7 @@ fn begin_or_restart(
 /// Performs one action.
 pub fn perform(client: &mut Client, action: Action) -> Vec<Event> {
     let status = |restarted: bool, what: &str| {
-        Event::Status(if restarted {
+        Event::Started(if restarted {
             format!("{what} (was refused: sent ST and retried)")
         } else {
             what.to_owned()
@@ -117,20 +148,20 @@ pub fn perform(client: &mut Client, action: Action) -> Vec<Event> {
     match action {
         Action::MoveCartesian { xyz, rpy } => {
             if let Err(e) = client.goal_rpy(xyz, rpy, 0.0) {
-                return vec![failure("GT", e)];
+                return vec![move_failure("GT", e)];
             }
             match begin_or_restart(client, Client::begin) {
                 Ok(restarted) => vec![status(restarted, "sent GT + BG")],
-                Err(e) => vec![failure("BG", e)],
+                Err(e) => vec![move_failure("BG", e)],
             }
         }
         Action::MoveJoints(q) => {
             if let Err(e) = client.joint_goal(&q) {
-                return vec![failure("jG", e)];
+                return vec![move_failure("jG", e)];
             }
             match begin_or_restart(client, Client::joint_begin) {
                 Ok(restarted) => vec![status(restarted, "sent jG + jB")],
-                Err(e) => vec![failure("jB", e)],
+                Err(e) => vec![move_failure("jB", e)],
             }
         }
         Action::SetMode(mode) => match client.set_mode(mode) {
@@ -203,13 +234,13 @@ mod tests {
         assert_eq!(sent(&fake), ["GT", "BG", "ST", "BG"]);
         assert_eq!(
             events,
-            [Event::Status(
+            [Event::Started(
                 "sent GT + BG (was refused: sent ST and retried)".into()
             )]
         );
         let events = perform(&mut c, Action::MoveJoints(vec![0.0; 6]));
         assert_eq!(sent(&fake)[4..], ["jG", "jB"]);
-        assert_eq!(events, [Event::Status("sent jG + jB".into())]);
+        assert_eq!(events, [Event::Started("sent jG + jB".into())]);
     }
 
     #[test]
@@ -232,7 +263,7 @@ mod tests {
             },
         );
         assert_eq!(sent(&fake), ["GT", "BG", "ST", "BG"]);
-        assert!(matches!(&events[..], [Event::Text(t)] if t.as_str() == "ER20 Cmd BG rejected"));
+        assert!(matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER20 Cmd BG rejected"));
     }
 
     #[test]
@@ -240,6 +271,10 @@ mod tests {
         let fake = FakeController::spawn(|d| {
             let mut out = vec![];
             let reply = match &d[..2] {
+                b"SQ" => {
+                    let numbers = [2.0, 2.0, 0.0, 6.0, 0.0, 0.0, 1.0];
+                    return vec![crate::status::tests::status_reply(d, numbers, "r")];
+                }
                 b"PS" => {
                     out.push(text("WN12 Joint limit."));
                     let mut r = Reply::null(Command::Pose);
@@ -287,7 +322,21 @@ mod tests {
     fn an_absent_controller_is_a_status_line() {
         let fake = FakeController::spawn(|_| vec![]);
         let mut c = client_with(&fake, Duration::from_millis(50));
-        let events = read_state(&mut c, 6);
-        assert!(matches!(&events[..], [Event::Status(s)] if s.starts_with("PS: no reply")));
+        let mut with_status = true;
+        let events = read_state(&mut c, 6, &mut with_status);
+        assert!(matches!(&events[..], [Event::NoReply(s)] if s.starts_with("SQ: no reply")));
+        // A controller without SQ is polled without it.
+        let old = FakeController::spawn(|d| match &d[..2] {
+            b"SQ" => vec![text("ER00 Cmd SQ not understood")],
+            _ => vec![],
+        });
+        let mut c = client_with(&old, Duration::from_millis(50));
+        let mut fresh = true;
+        let events = read_state(&mut c, 6, &mut fresh);
+        assert!(!fresh);
+        assert!(
+            matches!(&events[..], [Event::Status(s), Event::NoReply(p)] if s.contains("too old") && p.starts_with("PS: no reply")),
+            "{events:?}"
+        );
     }
 }

@@ -21,8 +21,15 @@
 //! values; Enter sends them (`--live`: every key press sends). If BG (jB) is refused, typically
 //! because a motion is still running, the client sends ST and then BG (jB) once more.
 //!
-//! The mode is unknown until the first `m` (the protocol cannot read it); `m` from an unknown
+//! The header shows the robot, mode, drives and motion from the status request (SQ); with a
+//! controller too old for it the mode is unknown until the first `m`, and `m` from an unknown
 //! mode selects joint mode.
+//!
+//! The desired pose and joints follow the measured ones until a key changes them, and again
+//! whenever the arm moves for another reason (this client's motion ended, the mode changed,
+//! another client moved it): a key press moves the arm by one step from where it is, never
+//! back to old values. Readings older than a second are marked in the Current column, a
+//! refused goal in the Desired column; an ER/WN line is shown for 10 s.
 //!
 //! Structure: [`state`] holds the screen's data and the key handling (no I/O), [`render`] draws
 //! it (a pure function), [`io`] is the thread that owns the socket and polls PS/jP/TM at
@@ -90,6 +97,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     let mut terminal = ratatui::try_init()?;
     let _restore = Restore;
     while !state.quit {
+        state.at(std::time::Instant::now());
         while let Ok(event) = io.events.try_recv() {
             state.apply(event);
         }

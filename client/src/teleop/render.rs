@@ -1,7 +1,7 @@
 //! Drawing the keyboard client's screen: a pure function of [`TeleopState`].
 //!
 //! ```text
-//!  armgate teleop  127.0.0.1:7031   mode cartesian   keys: Cartesian, send on Enter
+//!  armgate teleop  127.0.0.1:7031  ranger-mk1  mode cartesian  drives running  holding   keys: Cartesian, send on Enter
 //! ┌────────────────────────────────────────────────────────────────────────┐
 //! │Current Pose     Desired Pose     Joints           Temp(C)              │
 //! │x      0.5000    x      0.5010    j1     -1.5838   T1      35.0         │
@@ -22,6 +22,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Paragraph, Row, Table};
 
 use super::state::{TeleopState, Variant};
+use crate::status::Name;
 use crate::{NO_READING, Pose};
 
 /// The labels of the seven pose values.
@@ -95,9 +96,16 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
         Variant::Joint => "joint",
     };
     let send = if state.live { "every key" } else { "Enter" };
+    let controller = state
+        .controller
+        .as_ref()
+        .map_or(String::new(), |c| format!(" {}", c.name));
+    let drives = state.controller.as_ref().map_or(String::new(), |c| {
+        format!("  drives {}  {}", c.drives_text(), c.motion.name())
+    });
     frame.render_widget(
         Line::from(format!(
-            " armgate teleop  {}   mode {mode}   keys: {keys}, send on {send}",
+            " armgate teleop  {}{controller}  mode {mode}{drives}   keys: {keys}, send on {send}",
             state.addr
         ))
         .style(Style::new().add_modifier(Modifier::BOLD)),
@@ -123,8 +131,7 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
         scale_line,
     );
     let text = state
-        .last_text
-        .as_ref()
+        .recent_text()
         .map_or("none", |t| t.as_str())
         .to_owned();
     frame.render_widget(Line::from(format!(" ER/WN: {text}")), text_line);
@@ -190,12 +197,30 @@ fn table(state: &TeleopState, rows: usize) -> Table<'static> {
         cells.push(temp_cell(k));
         Row::new(cells)
     });
-    let mut header = vec!["Current Pose", "Desired Pose", "Joints"];
+    // Old readings and refused goals are marked in the column titles.
+    let current_title = match state.stale() {
+        None => "Current Pose".to_owned(),
+        Some(_) if state.no_reply => "Current (no reply)".to_owned(),
+        Some(Some(age)) if age.as_secs() < 100 => {
+            format!("Current ({:.0} s old)", age.as_secs_f64())
+        }
+        Some(Some(_)) => "Current (stale)".to_owned(),
+        Some(None) => "Current (none yet)".to_owned(),
+    };
+    let desired_title = |what: &str| match state.refused {
+        Some(_) => format!("{what} (refused)"),
+        None => format!("Desired {what}"),
+    };
+    let mut header = vec![current_title, desired_title("Pose"), "Joints".to_owned()];
     if joint_keys {
-        header.push("Desired Joints");
+        header.push(desired_title("Joints"));
     }
-    header.push("Temp(C)");
-    let widths = vec![Constraint::Length(16); header.len()];
+    header.push("Temp(C)".to_owned());
+    // The pose columns are wider, for the marks in their titles.
+    let mut widths = vec![Constraint::Length(16); header.len()];
+    for w in widths.iter_mut().take(2) {
+        *w = Constraint::Length(18);
+    }
     Table::new(body, widths)
         .header(Row::new(header).style(Style::new().add_modifier(Modifier::BOLD)))
         .column_spacing(2)
@@ -241,6 +266,40 @@ mod tests {
         )));
         s.scale = 4.0;
         s
+    }
+
+    #[test]
+    fn the_header_shows_the_controller_state_and_old_things_are_marked() {
+        let mut s = state();
+        s.apply(Event::Controller(crate::Status {
+            mode: Mode::Joint,
+            drives: crate::DriveStatus::Faulted,
+            fault: 31,
+            joints: 6,
+            motion: crate::Motion::Holding,
+            refused: 0,
+            uptime: 1.0,
+            name: "ranger-mk1".into(),
+        }));
+        let text = screen(&s);
+        assert!(
+            text.contains("ranger-mk1  mode joint  drives faulted (ER31)  holding"),
+            "{text}"
+        );
+        assert!(text.contains("Current Pose"), "{text}");
+        // Eleven seconds later without a reading: stale, and the ER line has expired.
+        s.at(s.now + std::time::Duration::from_secs(11));
+        let text = screen(&s);
+        assert!(text.contains("Current (11 s old)"), "{text}");
+        assert!(text.contains("ER/WN: none"), "{text}");
+        s.apply(Event::NoReply("PS: no reply".into()));
+        assert!(screen(&s).contains("Current (no reply)"));
+        s.apply(Event::Refused(crate::fake::parsed_text(
+            "ER25 Cmd GT outside workspace",
+        )));
+        let text = screen(&s);
+        assert!(text.contains("Pose (refused)"), "{text}");
+        assert!(text.contains("ER25 Cmd GT outside workspace"), "{text}");
     }
 
     #[test]

@@ -1,5 +1,13 @@
 //! The keyboard client's state and its key handling, free of any terminal or socket.
+//!
+//! The desired pose and joints follow the measured ones unless the keys changed them
+//! ([`Edit`]). An edit is dropped, and the desired values follow again, whenever the arm moves
+//! for a reason other than this client's own motion: another client, a mode switch, a motion
+//! that ended. So a key press always changes the measured state by one step and nothing else.
 
+use std::time::{Duration, Instant};
+
+use crate::status::{Motion, Status};
 use crate::{Mode, Pose, Text, next_mode};
 
 /// The base Cartesian step per key press (m), multiplied by the scale.
@@ -10,6 +18,35 @@ pub const BASE_JOINT_STEP: f64 = 0.01;
 
 /// The smallest and largest scale.
 pub const SCALE_RANGE: (f64, f64) = (1.0 / 64.0, 1024.0);
+
+/// Readings older than this are shown as stale.
+pub const STALE: Duration = Duration::from_secs(1);
+
+/// An ER/WN line is shown this long.
+pub const TEXT_SHOWN: Duration = Duration::from_secs(10);
+
+/// A change of the measured position beyond this (m) is a motion.
+const MOVED: f64 = 0.0005;
+
+/// A change of the measured orientation or of a joint beyond this (rad) is a motion.
+const MOVED_ANGLE: f64 = 0.001;
+
+/// Without the status request: the own motion has ended after this many polls without motion.
+const STILL_POLLS: u32 = 5;
+
+/// A change below this (m or rad) is no motion at all.
+const STILL: f64 = 1e-5;
+
+/// Whose the desired values are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Edit {
+    /// Nobody's: they follow the measured values.
+    Following,
+    /// Changed by the keys, not sent yet.
+    Unsent,
+    /// Sent: this client's motion goes there.
+    Sent,
+}
 
 /// A key, as the teleop understands it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,6 +113,14 @@ pub enum Event {
     ModeFailed,
     /// What was sent, or what failed locally (e.g. a timeout).
     Status(String),
+    /// The controller's state (SQ).
+    Controller(Status),
+    /// A motion request was accepted: this client's motion runs.
+    Started(String),
+    /// A motion request was refused (the reason is the text).
+    Refused(Text),
+    /// A poll had no answer (the reason is the text).
+    NoReply(String),
 }
 
 /// Everything the screen shows.
@@ -109,10 +154,30 @@ pub struct TeleopState {
     pub mode_pending: Option<Mode>,
     /// The latest ER/WN text.
     pub last_text: Option<Text>,
+    /// When it came.
+    pub text_at: Option<Instant>,
     /// The latest status line.
     pub status: String,
     /// Set by q / Esc.
     pub quit: bool,
+    /// Whose the desired pose is.
+    pub pose_edit: Edit,
+    /// Whose the desired joints are.
+    pub joints_edit: Edit,
+    /// A motion this client started is running.
+    pub own_motion: bool,
+    /// The controller's last status (none from a controller without SQ).
+    pub controller: Option<Status>,
+    /// The last move request was refused with this text: the desired values are not reachable.
+    pub refused: Option<Text>,
+    /// The time of the last reading (PS).
+    pub read_at: Option<Instant>,
+    /// The last poll got no answer.
+    pub no_reply: bool,
+    /// The clock the state is drawn at (set with [`at`](Self::at)).
+    pub now: Instant,
+    /// Polls without motion, while the own motion runs (without SQ).
+    still_polls: u32,
 }
 
 impl TeleopState {
@@ -133,9 +198,121 @@ impl TeleopState {
             mode: None,
             mode_pending: None,
             last_text: None,
+            text_at: None,
             status: String::from("waiting for the controller"),
             quit: false,
+            pose_edit: Edit::Following,
+            joints_edit: Edit::Following,
+            own_motion: false,
+            controller: None,
+            refused: None,
+            read_at: None,
+            no_reply: false,
+            now: Instant::now(),
+            still_polls: 0,
         }
+    }
+
+    /// Sets the clock: what is stale and which texts have expired is judged at `now`.
+    pub fn at(&mut self, now: Instant) {
+        self.now = now;
+    }
+
+    /// How old the readings are, if they are stale (or never came).
+    pub fn stale(&self) -> Option<Option<Duration>> {
+        match self.read_at {
+            None => Some(None),
+            Some(t) => {
+                let age = self.now.saturating_duration_since(t);
+                (age > STALE || self.no_reply).then_some(Some(age))
+            }
+        }
+    }
+
+    /// The ER/WN text, while it is recent.
+    pub fn recent_text(&self) -> Option<&Text> {
+        match self.text_at {
+            Some(t) if self.now.saturating_duration_since(t) < TEXT_SHOWN => {
+                self.last_text.as_ref()
+            }
+            _ => None,
+        }
+    }
+
+    /// This client's motion has ended: what it sent gives way to the measured values.
+    fn motion_ended(&mut self) {
+        self.own_motion = false;
+        if self.pose_edit == Edit::Sent {
+            self.pose_edit = Edit::Following;
+            self.desired = self.current;
+        }
+        if self.joints_edit == Edit::Sent {
+            self.joints_edit = Edit::Following;
+            self.desired_joints.clone_from(&self.joints);
+        }
+    }
+
+    /// The arm moved, or will, for a reason other than this client's motion: edits are void.
+    fn moved_elsewhere(&mut self, why: &str) {
+        if self.pose_edit != Edit::Following || self.joints_edit != Edit::Following {
+            self.status = format!("{why}: desired <- current");
+        }
+        self.own_motion = false;
+        self.pose_edit = Edit::Following;
+        self.joints_edit = Edit::Following;
+        self.desired = self.current;
+        self.desired_joints.clone_from(&self.joints);
+        self.refused = None;
+    }
+
+    fn pose_measured(&mut self, pose: Pose) {
+        let change = |c: &Pose| (c.distance(&pose), c.angle_to(&pose));
+        let (distance, angle) = self.current.as_ref().map_or((0.0, 0.0), change);
+        let moved = distance > MOVED || angle > MOVED_ANGLE;
+        let still = distance <= STILL && angle <= STILL;
+        self.current = Some(pose);
+        self.read_at = Some(self.now);
+        self.no_reply = false;
+        self.still_polls = if still { self.still_polls + 1 } else { 0 };
+        if self.own_motion && self.controller.is_none() && self.still_polls >= STILL_POLLS {
+            self.motion_ended();
+        }
+        if moved && !self.own_motion && self.pose_edit != Edit::Sent {
+            self.moved_elsewhere("the arm moved");
+        }
+        if self.pose_edit == Edit::Following || self.desired.is_none() {
+            self.desired = Some(pose);
+        }
+    }
+
+    fn joints_measured(&mut self, q: Vec<f64>) {
+        let moved = self.joints.len() == q.len()
+            && self
+                .joints
+                .iter()
+                .zip(&q)
+                .any(|(a, b)| (a - b).abs() > MOVED_ANGLE);
+        let follow = self.joints_edit == Edit::Following || self.desired_joints.len() != q.len();
+        self.joints = q;
+        if moved && !self.own_motion && self.joints_edit != Edit::Sent {
+            self.moved_elsewhere("the arm moved");
+        } else if follow {
+            self.desired_joints.clone_from(&self.joints);
+        }
+    }
+
+    fn controller_state(&mut self, status: Status) {
+        let mode_changed = self.mode.is_some_and(|m| m != status.mode);
+        self.mode = Some(status.mode);
+        if self.own_motion && status.motion == Motion::Holding {
+            self.motion_ended();
+        } else if !self.own_motion && status.motion != Motion::Holding {
+            self.moved_elsewhere("another motion runs");
+        }
+        if mode_changed {
+            self.moved_elsewhere("the mode changed");
+        }
+        self.controller = Some(status);
     }
 
     /// The Cartesian step (m).
@@ -155,27 +332,48 @@ impl TeleopState {
                 if self.current.is_none() {
                     self.status = String::from("connected");
                 }
-                self.current = Some(pose);
-                if self.desired.is_none() {
-                    self.desired = Some(pose);
-                }
+                self.pose_measured(pose);
             }
-            Event::Joints(q) => {
-                if self.desired_joints.len() != q.len() {
-                    self.desired_joints.clone_from(&q);
-                }
-                self.joints = q;
-            }
+            Event::Joints(q) => self.joints_measured(q),
             Event::Temperatures(t) => self.temperatures = t,
-            Event::Text(text) => self.last_text = Some(text),
+            Event::Text(text) => self.show_text(text),
             Event::Mode(mode) => {
+                let changed = self.mode != Some(mode);
                 self.mode = Some(mode);
                 self.mode_pending = None;
+                if changed {
+                    self.moved_elsewhere("the mode changed");
+                }
                 self.status = format!("mode {}", mode.name());
             }
             Event::ModeFailed => self.mode_pending = None,
             Event::Status(status) => self.status = status,
+            Event::Controller(status) => self.controller_state(status),
+            Event::Started(status) => {
+                self.own_motion = true;
+                self.still_polls = 0;
+                self.refused = None;
+                self.status = status;
+            }
+            Event::Refused(text) => {
+                for edit in [&mut self.pose_edit, &mut self.joints_edit] {
+                    if *edit == Edit::Sent {
+                        *edit = Edit::Unsent;
+                    }
+                }
+                self.refused = Some(text);
+                self.show_text(text);
+            }
+            Event::NoReply(status) => {
+                self.no_reply = true;
+                self.status = status;
+            }
         }
+    }
+
+    fn show_text(&mut self, text: Text) {
+        self.last_text = Some(text);
+        self.text_at = Some(self.now);
     }
 
     /// Handles one key; returns the requests to send, if any.
@@ -196,6 +394,9 @@ impl TeleopState {
             Key::Char(' ') => {
                 self.desired = self.current;
                 self.desired_joints.clone_from(&self.joints);
+                self.pose_edit = Edit::Following;
+                self.joints_edit = Edit::Following;
+                self.refused = None;
                 self.status = String::from("desired <- current");
                 None
             }
@@ -242,6 +443,7 @@ impl TeleopState {
         if let Some(v) = desired.xyz.get_mut(axis) {
             *v += sign * step;
         }
+        self.pose_edit = Edit::Unsent;
         self.edited()
     }
 
@@ -272,6 +474,7 @@ impl TeleopState {
             return None;
         };
         *q += sign * step;
+        self.joints_edit = Edit::Unsent;
         self.edited()
     }
 
@@ -290,6 +493,7 @@ impl TeleopState {
                 };
                 // Keep the current orientation.
                 desired.quaternion = current.quaternion;
+                self.pose_edit = Edit::Sent;
                 Some(Action::MoveCartesian {
                     xyz: desired.xyz,
                     rpy: current.rpy(),
@@ -300,6 +504,7 @@ impl TeleopState {
                     self.status = String::from("no joints from the controller yet");
                     return None;
                 }
+                self.joints_edit = Edit::Sent;
                 Some(Action::MoveJoints(self.desired_joints.clone()))
             }
         }
@@ -330,17 +535,17 @@ mod tests {
     }
 
     #[test]
-    fn first_replies_initialise_the_desired_values() {
+    fn untouched_desired_values_follow_the_measured_ones() {
         let mut s = TeleopState::new("a", 6, false);
         assert_eq!(s.handle_key(Key::Right), None);
         assert_eq!(s.status, "no pose from the controller yet");
         s.apply(Event::Pose(pose(0.5, 0.2, 0.1)));
         assert_eq!(s.desired, Some(pose(0.5, 0.2, 0.1)));
         s.apply(Event::Pose(pose(0.6, 0.2, 0.1)));
-        assert_eq!(s.desired, Some(pose(0.5, 0.2, 0.1)));
+        assert_eq!(s.desired, Some(pose(0.6, 0.2, 0.1)));
         s.apply(Event::Joints(vec![1.0; 6]));
         s.apply(Event::Joints(vec![2.0; 6]));
-        assert_eq!(s.desired_joints, [1.0; 6]);
+        assert_eq!(s.desired_joints, [2.0; 6]);
     }
 
     #[test]
@@ -486,6 +691,149 @@ mod tests {
         assert_eq!(s.mode, Some(Mode::Cartesian));
     }
 
+    fn status(mode: Mode, motion: Motion) -> Status {
+        Status {
+            mode,
+            drives: crate::DriveStatus::Running,
+            fault: 0,
+            joints: 6,
+            motion,
+            refused: 0,
+            uptime: 1.0,
+            name: "ranger-mk1".into(),
+        }
+    }
+
+    /// A six-joint arm in Cartesian mode, with the status request.
+    fn six(mode: Mode) -> TeleopState {
+        let mut s = TeleopState::new("127.0.0.1:7031", 6, false);
+        s.apply(Event::Controller(status(mode, Motion::Holding)));
+        s.apply(Event::Pose(pose(0.0, 0.2, 0.8)));
+        s.apply(Event::Joints(vec![1.57, 0.0, 1.57, 0.0, 1.57, 0.0]));
+        s
+    }
+
+    fn measure(s: &mut TeleopState, xyz: [f64; 3], q: [f64; 6], motion: Option<Motion>) {
+        if let Some(motion) = motion {
+            let mode = s.mode.unwrap_or(Mode::Off);
+            s.apply(Event::Controller(status(mode, motion)));
+        }
+        s.apply(Event::Pose(pose(xyz[0], xyz[1], xyz[2])));
+        s.apply(Event::Joints(q.to_vec()));
+    }
+
+    #[test]
+    fn after_a_cartesian_move_a_joint_key_moves_that_joint_only() {
+        let mut s = six(Mode::Cartesian);
+        s.handle_key(Key::Right);
+        assert!(matches!(
+            s.handle_key(Key::Enter),
+            Some(Action::MoveCartesian { .. })
+        ));
+        s.apply(Event::Started("sent GT + BG".into()));
+        // The move runs: the desired pose stays the goal, the joints follow.
+        let moving = [1.56, 0.01, 1.58, 0.0, 1.56, 0.02];
+        measure(
+            &mut s,
+            [0.0005, 0.2, 0.8],
+            moving,
+            Some(Motion::CartesianMove),
+        );
+        assert!(close(s.desired.unwrap().xyz, [0.001, 0.2, 0.8]));
+        assert_eq!(s.desired_joints, moving);
+        let end = [1.55, 0.02, 1.59, 0.0, 1.55, 0.03];
+        measure(&mut s, [0.001, 0.2, 0.8], end, Some(Motion::Holding));
+        assert!(!s.own_motion);
+        assert_eq!(s.pose_edit, Edit::Following);
+        // Joint mode (the mode switch), joint keys, j2 one step: only j2 differs.
+        s.apply(Event::Mode(Mode::Joint));
+        s.handle_key(Key::Char('j'));
+        s.handle_key(Key::Char('2'));
+        s.handle_key(Key::Right);
+        let Some(Action::MoveJoints(q)) = s.handle_key(Key::Enter) else {
+            panic!()
+        };
+        let mut expected = end.to_vec();
+        expected[1] += BASE_JOINT_STEP;
+        assert_eq!(q, expected);
+    }
+
+    #[test]
+    fn after_another_clients_move_one_key_is_one_step_from_where_the_arm_is() {
+        let mut s = six(Mode::Cartesian);
+        // An edit not sent yet ...
+        s.handle_key(Key::Up);
+        s.handle_key(Key::Up);
+        assert_eq!(s.pose_edit, Edit::Unsent);
+        // ... then another client moves the arm far away.
+        let q = [1.0, 0.3, 1.2, 0.0, 1.2, 0.0];
+        measure(&mut s, [0.1, 0.3, 0.7], q, Some(Motion::CartesianMove));
+        assert_eq!(s.pose_edit, Edit::Following);
+        assert!(s.status.contains("desired <- current"), "{}", s.status);
+        measure(&mut s, [0.2, 0.3, 0.7], q, Some(Motion::Holding));
+        s.handle_key(Key::Right);
+        let Some(Action::MoveCartesian { xyz, .. }) = s.handle_key(Key::Enter) else {
+            panic!()
+        };
+        assert!(close(xyz, [0.201, 0.3, 0.7]), "{xyz:?}");
+    }
+
+    #[test]
+    fn without_the_status_request_motion_is_seen_in_the_readings() {
+        let mut s = ready(false);
+        s.handle_key(Key::Up);
+        // Another client moves the arm: the edit is void.
+        s.apply(Event::Pose(pose(0.4, 0.2, 0.1)));
+        assert_eq!(s.desired, Some(pose(0.4, 0.2, 0.1)));
+        // Own motion: the goal stays while the arm moves, until it has been still a while.
+        s.handle_key(Key::Right);
+        s.handle_key(Key::Enter);
+        s.apply(Event::Started("sent GT + BG".into()));
+        s.apply(Event::Pose(pose(0.4005, 0.2, 0.1)));
+        s.apply(Event::Pose(pose(0.4009, 0.2, 0.1)));
+        assert!(close(s.desired.unwrap().xyz, [0.401, 0.2, 0.1]));
+        for _ in 0..STILL_POLLS {
+            assert!(s.own_motion);
+            s.apply(Event::Pose(pose(0.4009, 0.2, 0.1)));
+        }
+        assert!(!s.own_motion);
+        assert_eq!(s.desired, Some(pose(0.4009, 0.2, 0.1)));
+    }
+
+    #[test]
+    fn edits_made_while_the_own_motion_runs_are_kept() {
+        let mut s = six(Mode::Cartesian);
+        s.handle_key(Key::Right);
+        s.handle_key(Key::Enter);
+        s.apply(Event::Started("sent GT + BG".into()));
+        let q = [1.57, 0.0, 1.57, 0.0, 1.57, 0.0];
+        measure(&mut s, [0.0005, 0.2, 0.8], q, Some(Motion::CartesianMove));
+        s.handle_key(Key::PageUp);
+        measure(&mut s, [0.001, 0.2, 0.8], q, Some(Motion::Holding));
+        assert_eq!(s.pose_edit, Edit::Unsent);
+        assert!(close(s.desired.unwrap().xyz, [0.001, 0.2, 0.801]));
+    }
+
+    #[test]
+    fn a_mode_switch_drops_edits_and_a_refusal_marks_the_goal() {
+        let mut s = six(Mode::Cartesian);
+        s.handle_key(Key::Up);
+        s.apply(Event::Controller(status(Mode::Joint, Motion::Holding)));
+        assert_eq!(s.pose_edit, Edit::Following);
+        assert_eq!(s.desired, s.current);
+        s.handle_key(Key::Char('j'));
+        s.handle_key(Key::Right);
+        s.handle_key(Key::Enter);
+        let text = crate::fake::parsed_text("ER26 Cmd jG j1 > 4.713");
+        s.apply(Event::Refused(text));
+        assert_eq!(s.refused, Some(text));
+        assert_eq!(s.joints_edit, Edit::Unsent);
+        assert_eq!(s.recent_text(), Some(&text));
+        s.handle_key(Key::Char(' '));
+        assert_eq!(s.refused, None);
+        assert_eq!(s.desired_joints, s.joints);
+    }
+
     #[test]
     fn q_and_esc_quit() {
         for key in [Key::Char('q'), Key::Esc] {
@@ -501,6 +849,9 @@ mod tests {
         let text = crate::fake::parsed_text("WN12 Joint limit.");
         s.apply(Event::Text(text));
         assert_eq!(s.last_text, Some(text));
+        assert_eq!(s.recent_text(), Some(&text));
+        s.at(s.now + TEXT_SHOWN);
+        assert_eq!(s.recent_text(), None);
         s.apply(Event::Status("sent GT + BG".into()));
         assert_eq!(s.status, "sent GT + BG");
     }

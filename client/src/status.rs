@@ -1,0 +1,224 @@
+//! The status request `SQ` (docs/protocol.md, "Status"): mode, drive state, drive fault, joint
+//! count, motion, refusals, uptime and the robot's name.
+//!
+//! Two requests: index 0 answers the numbers in f0..f6, index 1 the robot's name as ASCII in
+//! bytes 2..30, NUL-padded. A controller older than the request answers
+//! `ER00 Cmd SQ not understood`, which [`Client::status`] turns into
+//! [`ClientError::TooOld`].
+
+use std::fmt;
+
+use armgate_protocol::client::{
+    Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName, STATUS_INDEX, StatusReport, VALUES,
+};
+pub use armgate_protocol::client::{DriveStatus, Motion};
+
+use crate::{Client, ClientError, Mode, matching};
+
+/// How a drive state or a motion is shown.
+pub trait Name {
+    /// `running`, `Cartesian move`, ...
+    fn name(self) -> &'static str;
+}
+
+impl Name for DriveStatus {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Starting => "starting",
+            Self::Running => "running",
+            Self::Stopping => "stopping",
+            Self::Faulted => "faulted",
+        }
+    }
+}
+
+impl Name for Motion {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Holding => "holding",
+            Self::JointMove => "joint move",
+            Self::CartesianMove => "Cartesian move",
+            Self::JointSequence => "joint sequence",
+            Self::CartesianSequence => "Cartesian sequence",
+        }
+    }
+}
+
+/// The controller's state, as the two `SQ` replies report it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    /// The control mode.
+    pub mode: Mode,
+    /// The drives.
+    pub drives: DriveStatus,
+    /// The `NN` of the drive fault `ER3x` (0: none).
+    pub fault: u8,
+    /// The arm's number of joints.
+    pub joints: usize,
+    /// What moves the arm.
+    pub motion: Motion,
+    /// How many requests were refused since the controller started.
+    pub refused: u64,
+    /// Seconds since the controller started.
+    pub uptime: f64,
+    /// The robot's name (from its robot file).
+    pub name: String,
+}
+
+impl Status {
+    /// Decodes the numbers reply (index 0) and the name reply's bytes (index 1).
+    pub fn decode(values: &[f32; VALUES], name: &[u8; MESSAGE_LEN]) -> Result<Self, ClientError> {
+        let reply = Reply {
+            command: Command::Status,
+            values: *values,
+            index: STATUS_INDEX,
+        };
+        let bad = |what: &str| ClientError::InvalidArgument(format!("the status reply has {what}"));
+        let report = StatusReport::from_reply(&reply)
+            .ok_or_else(|| bad(&format!("bad values {values:?}")))?;
+        let name = Message::new_checked(&name[..])
+            .ok()
+            .and_then(|m| RobotName::parse(&m))
+            .ok_or_else(|| bad("no name"))?;
+        let joints = usize::from(report.joints);
+        if !(1..=crate::banks::MAX_JOINTS).contains(&joints) {
+            return Err(bad(&format!("{joints} joints")));
+        }
+        Ok(Self {
+            mode: report.mode,
+            drives: report.drives,
+            fault: report.fault,
+            joints,
+            motion: report.motion,
+            refused: u64::from(report.refused),
+            uptime: f64::from(report.uptime),
+            name: name.as_str().to_owned(),
+        })
+    }
+
+    /// The drive state with its fault: `running`, `faulted (ER31)`.
+    pub fn drives_text(&self) -> String {
+        if self.fault != 0 {
+            format!("{} (ER{:02})", self.drives.name(), self.fault)
+        } else {
+            self.drives.name().to_owned()
+        }
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "robot      {} ({} joints)", self.name, self.joints)?;
+        writeln!(f, "mode       {} ({})", self.mode.name(), self.mode.value())?;
+        writeln!(f, "drives     {}", self.drives_text())?;
+        writeln!(f, "motion     {}", self.motion.name())?;
+        writeln!(f, "refused    {} requests", self.refused)?;
+        write!(f, "uptime     {:.1} s", self.uptime)
+    }
+}
+
+impl Client {
+    /// `SQ`: the controller's status (two requests). A controller that does not know the
+    /// request is [`ClientError::TooOld`].
+    pub fn status(&mut self) -> Result<Status, ClientError> {
+        let numbers = self.status_part(STATUS_INDEX)?;
+        let name = self.status_part(NAME_INDEX)?;
+        Status::decode(&numbers.values, &name.bytes)
+    }
+
+    fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {
+        // Raw: the name reply carries text where the floats would be.
+        match self.send_raw(Command::Status.chars(), [0.0; VALUES], index) {
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(0) => {
+                Err(ClientError::TooOld {
+                    request: "SQ (status)",
+                    text,
+                })
+            }
+            other => other,
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::fake::{FakeController, text};
+
+    /// The two replies of a controller in `mode`, drives `drives`, `joints` joints, `name`.
+    pub(crate) fn status_reply(request: &[u8], values: [f32; 7], name: &str) -> Vec<u8> {
+        let mut reply = vec![0; MESSAGE_LEN];
+        reply[..2].copy_from_slice(b"QS");
+        reply[30] = request[30];
+        if request[30] == NAME_INDEX {
+            reply[2..2 + name.len()].copy_from_slice(name.as_bytes());
+        } else {
+            for (k, v) in values.iter().enumerate() {
+                reply[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        reply
+    }
+
+    fn client(fake: &FakeController) -> Client {
+        fake.client()
+    }
+
+    #[test]
+    fn both_replies_are_decoded() {
+        let fake = FakeController::spawn(|d| {
+            vec![status_reply(
+                d,
+                [2.0, 4.0, 31.0, 8.0, 3.0, 17.0, 12.5],
+                "ranger-mk2",
+            )]
+        });
+        let s = client(&fake).status().unwrap();
+        assert_eq!(
+            s,
+            Status {
+                mode: Mode::Cartesian,
+                drives: DriveStatus::Faulted,
+                fault: 31,
+                joints: 8,
+                motion: Motion::JointSequence,
+                refused: 17,
+                uptime: 12.5,
+                name: "ranger-mk2".into(),
+            }
+        );
+        assert_eq!(s.drives_text(), "faulted (ER31)");
+        let sent = fake.received();
+        assert_eq!(sent.len(), 2);
+        assert_eq!((&sent[0][..2], sent[0][30]), (&b"SQ"[..], 0));
+        assert_eq!((&sent[1][..2], sent[1][30]), (&b"SQ"[..], 1));
+        assert!(s.to_string().contains("drives     faulted (ER31)"));
+    }
+
+    #[test]
+    fn an_old_controller_is_too_old() {
+        let fake = FakeController::spawn(|_| vec![text("ER00 Cmd SQ not understood")]);
+        let err = client(&fake).status().unwrap_err();
+        assert!(
+            err.to_string().contains("too old"),
+            "{err}: the controller's text is kept"
+        );
+        assert!(matches!(err, ClientError::TooOld { .. }));
+    }
+
+    #[test]
+    fn nonsense_values_are_errors() {
+        let name = [0; MESSAGE_LEN];
+        for values in [
+            [7.0, 2.0, 0.0, 6.0, 0.0, 0.0, 1.0],
+            [1.0, 9.0, 0.0, 6.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 9.0, 0.0, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 6.0, 0.5, 0.0, 1.0],
+            [1.0, 2.0, 0.0, 6.0, 0.0, f32::NAN, 1.0],
+        ] {
+            assert!(Status::decode(&values, &name).is_err(), "{values:?}");
+        }
+    }
+}

@@ -1,0 +1,153 @@
+#!/usr/bin/env bash
+# Runs the README's examples against armgate-sim, in the README's order, and fails if any of
+# them fails: the quick start (the simulator and the client commands) and every line of the
+# client section's example block. The commands are read from README.md itself, so they cannot
+# drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
+# ranger-mk1's 3 cm/s).
+#
+# Not run: `cargo test` (CI's own step), the nightly fuzzer, and `armgate teleop` (it needs a
+# terminal; tests cover it at the state level).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+readme=README.md
+target=${CARGO_TARGET_DIR:-target}
+# One package per call, as `cargo run -p ...` in the README builds them (features unify per
+# call), so that the README's commands find them built.
+cargo build -q -p armgate-sim
+cargo build -q -p armgate-client
+
+# `armgate` as the README writes it: the binary just built.
+shim=$(mktemp -d)
+sim_pid=
+cleanup() {
+    if [[ -n $sim_pid ]] && kill -0 "$sim_pid" 2>/dev/null; then
+        kill "$sim_pid" 2>/dev/null || true
+    fi
+    rm -rf "$shim"
+}
+trap cleanup EXIT
+ln -s "$(realpath "$target/debug/armgate")" "$shim/armgate"
+export PATH="$shim:$PATH"
+
+# The non-empty lines of the ```sh blocks under the heading `## $1`, comments removed.
+examples() {
+    awk -v want="## $1" '
+        /^## / { section = $0 }
+        /^```sh$/ { inside = (section == want); next }
+        /^```/ { inside = 0; next }
+        inside {
+            sub(/[ \t]+#.*$/, ""); sub(/^#.*$/, "")
+            if (NF) print
+        }' "$readme"
+}
+
+failures=0
+run() {
+    local cmd=$1 started status
+    printf '\n$ %s\n' "$cmd"
+    started=$(date +%s%N)
+    set +e
+    timeout 300 bash -c "$cmd"
+    status=$?
+    set -e
+    local tenths=$((($(date +%s%N) - started) / 100000000))
+    printf '(exit %s, %d.%d s)\n' "$status" $((tenths / 10)) $((tenths % 10))
+    if [[ $status -ne 0 ]]; then
+        echo "FAILED: $cmd" >&2
+        failures=$((failures + 1))
+    fi
+}
+
+quick=$(examples "Quick start")
+client=$(examples 'Client: `armgate`')
+[[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
+
+# The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
+# itself by the binary, so $! is the simulator).
+sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
+log=$shim/sim.log
+echo "\$ $sim --listen 127.0.0.1:0"
+bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
+sim_pid=$!
+for _ in $(seq 600); do
+    grep -q 'udp://' "$log" && break
+    kill -0 "$sim_pid" 2>/dev/null || { cat "$log" >&2; exit 1; }
+    sleep 0.1
+done
+if ! grep -q 'udp://' "$log"; then
+    echo "armgate-sim did not start within 60 s:" >&2
+    cat "$log" >&2
+    exit 1
+fi
+ARMGATE_ADDR=$(grep -o 'udp://[^,]*' "$log" | head -1 | cut -c7-)
+export ARMGATE_ADDR
+echo "armgate-sim listens on $ARMGATE_ADDR"
+
+while IFS= read -r line; do
+    case $line in
+        *armgate-sim*) ;;                                    # started above
+        "cargo test"*) echo "skipped: $line (a CI step of its own)" ;;
+        *"cargo +nightly"*) echo "skipped: $line (needs nightly)" ;;
+        *teleop*) echo "skipped: $line (needs a terminal)" ;;
+        *) run "$line" ;;
+    esac
+done <<<"$quick"
+
+# Client lines may hold several commands separated by `;`; each runs on its own.
+while IFS= read -r line; do
+    IFS=';' read -ra commands <<<"$line"
+    for cmd in "${commands[@]}"; do
+        cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
+        case $cmd in
+            *teleop*) echo "skipped: $cmd (needs a terminal)" ;;
+            *) run "$cmd" ;;
+        esac
+    done
+done <<<"$client"
+
+# Ctrl-C during a wait sends ST: the arm stops and holds. (A background job of a script
+# ignores SIGINT until armgate installs its handler, as it does before its first request.)
+echo
+echo '$ armgate mode joint; armgate jmove 1.5708 0 1.5708 0 1.5708 0, Ctrl-C after 2 s'
+sleep 0.5 # a controller without SQ cannot say when the drives run after `armgate on`
+armgate mode joint >/dev/null
+armgate jmove 1.5708 0 1.5708 0 1.5708 0 >"$shim/jmove.out" 2>&1 &
+jmove_pid=$!
+sleep 2
+kill -INT "$jmove_pid" || true
+set +e
+wait "$jmove_pid"
+status=$?
+set -e
+tail -n 2 "$shim/jmove.out"
+sleep 1 # the stop decelerates, and the drives follow a few points behind
+before=$(armgate --joints 6 joints)
+sleep 1
+after=$(armgate --joints 6 joints)
+if [[ $status -ne 130 ]] || ! grep -q 'sent ST' "$shim/jmove.out" || [[ $before != "$after" ]]; then
+    echo "FAILED: Ctrl-C did not stop the arm (exit $status)" >&2
+    printf '%s\n---\n%s\n' "$before" "$after" >&2
+    failures=$((failures + 1))
+else
+    echo "(exit 130; the arm holds)"
+fi
+
+# The simulator ends cleanly on SIGTERM, with its summary.
+kill -TERM "$sim_pid"
+set +e
+wait "$sim_pid"
+status=$?
+set -e
+sim_pid=
+tail -n 1 "$log"
+if [[ $status -ne 0 ]]; then
+    echo "FAILED: armgate-sim exited with $status on SIGTERM" >&2
+    failures=$((failures + 1))
+fi
+
+if [[ $failures -ne 0 ]]; then
+    echo "$failures README example(s) failed" >&2
+    exit 1
+fi
+echo "all README examples ran"
