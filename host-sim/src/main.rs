@@ -5,6 +5,7 @@
 
 mod backend;
 mod log;
+mod pcap;
 mod socketcan;
 
 use std::io::IsTerminal;
@@ -62,6 +63,10 @@ struct Args {
     /// Write CSV logs (commands, replies, warnings, state) into this directory.
     #[arg(long, value_name = "DIR")]
     log_dir: Option<PathBuf>,
+    /// Capture the client's UDP datagrams and every CAN frame into this pcapng file (for
+    /// Wireshark with tools/wireshark/armgate.lua).
+    #[arg(long, value_name = "FILE")]
+    pcap: Option<PathBuf>,
     /// Exit after this many seconds (default: run until Ctrl-C).
     #[arg(long, value_name = "SECONDS")]
     duration: Option<f64>,
@@ -135,7 +140,14 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
         None => Logger::disabled(),
     };
+    let capture = match &args.pcap {
+        Some(path) => {
+            Some(pcap::Capture::start(path).map_err(|e| format!("{}: {e}", path.display()))?)
+        }
+        None => None,
+    };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    let local = socket.local_addr().map_err(|e| e.to_string())?;
     socket
         .set_nonblocking(true)
         .map_err(|e| format!("{}: {e}", args.listen))?;
@@ -186,6 +198,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
                 if let Some(to) = last_sender {
                     // A lost warning is no reason to stop the arm; UDP gives no guarantee anyway.
                     let _ = socket.send_to(&text.to_bytes(), to);
+                    pcap::udp(local, to, &text.to_bytes());
                 }
             }
             if logger.enabled() {
@@ -229,6 +242,7 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         stats.received += 1;
         last_sender = Some(from);
         let datagram = buf.get(..len).unwrap_or(&[]);
+        pcap::udp(from, local, datagram);
         let t = (Instant::now() - epoch).as_secs_f64();
         logger.log(Record::Command {
             t,
@@ -239,12 +253,22 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         socket
             .send_to(&reply, from)
             .map_err(|e| format!("udp send to {from}: {e}"))?;
+        pcap::udp(local, from, &reply);
     }
     if status {
         eprintln!();
     }
     let dropped = logger.dropped();
     logger.finish().map_err(|e| format!("log: {e}"))?;
+    if let (Some(capture), Some(path)) = (capture, &args.pcap) {
+        let (written, lost) = capture
+            .finish()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        eprintln!(
+            "armgate-sim: {}: {written} packets captured, {lost} dropped (queue full)",
+            path.display()
+        );
+    }
     eprintln!(
         "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns, {} log records dropped",
         stats.received, stats.refused_sources, stats.notices, stats.overruns, dropped
