@@ -21,7 +21,7 @@ from .errors import (
     WaitTimeout,
 )
 from .pose import Pose, PoseLike, as_pose
-from .status import Mode, Status
+from .status import Mode, Motion, Status
 
 DEFAULT_PORT = 7031
 """The controller's UDP port (``armgate-sim`` listens on 127.0.0.1:7031)."""
@@ -103,6 +103,7 @@ class Arm:
         self.wait_options = wait_options
         self.on_notice = on_notice
         self._joints = joints
+        self._has_status: Optional[bool] = None
         if joints is not None:
             _check_count(joints)
         self._notices: Deque[ControllerMessage] = collections.deque(maxlen=NOTICE_CAPACITY)
@@ -157,6 +158,7 @@ class Arm:
             try:
                 self._joints = self.get_status().joint_count
             except ControllerTooOld:
+                self._has_status = False
                 self._joints = self._count_from_temperatures()
             _check_count(self._joints)
         return self._joints
@@ -190,9 +192,15 @@ class Arm:
         """``ST``: stops every motion and sequence; the arm holds its commanded position."""
         self.request("ST")
 
-    def recalibrate(self, q: Sequence[float]) -> None:
-        """``RC``: the arm's current position becomes the joint angles ``q`` (mode off only)."""
+    def recalibrate(self, q: Sequence[float], wait: bool = True) -> None:
+        """``RC``: the arm's current position becomes the joint angles ``q`` (mode off only).
+
+        The controller measures the joints a cycle or two later; with ``wait`` this returns once
+        ``get_joints()`` reads ``q``, so that the next request starts from there."""
+        q = self._check_joints(q)
         self._write_banks("RC", q, 0, 0.0)
+        if wait:
+            self.wait_for_joints([q], replace(self.wait_options, timeout=2.0, stall=None))
 
     def move_l(
         self, pose: PoseLike, time: Optional[float] = None, wait: bool = True
@@ -202,8 +210,8 @@ class Arm:
 
         With ``time`` (s) the move takes at least that long (``GT``), else as short as the
         limits allow (``GL``); then ``BG``. With ``wait`` the tool pose is polled until it is
-        reached (returned), and a notice that ends the motion (``ER21``, ``WN22``, ``ER3x``) is
-        raised."""
+        reached and the motion has ended (the pose is returned), and a notice that ends the
+        motion (``ER21``, ``WN22``, ``ER3x``) is raised."""
         goal = as_pose(pose)
         if time is None:
             self.request("GL", goal.xyz + goal.quaternion)
@@ -219,7 +227,7 @@ class Arm:
     ) -> Optional[List[float]]:
         """A joint move to ``q`` in joint mode: ``jG`` + ``jB``, or with ``time`` (s) a one-point
         joint sequence (``jC``, ``jV``, ``jE``) that takes at least that long. With ``wait`` the
-        joints are polled until they are reached (returned)."""
+        joints are polled until they are reached and the motion has ended (returned)."""
         q = self._check_joints(q)
         if time is None:
             self._write_banks("jG", q, 0, 0.0)
@@ -239,7 +247,7 @@ class Arm:
         sequence, in Cartesian mode: ``VC``, ``VP`` per point, ``VE``) or a list of joint values
         (a joint sequence, in joint mode: ``jC``, ``jV``, ``jE``), reached no faster than its
         ``time`` (s). At most 20 points. With ``wait`` the arm is polled until it has passed
-        every point and reached the last (returned)."""
+        every point, reached the last and the sequence has ended (returned)."""
         if not points:
             raise ValueError("no via points")
         cartesian = isinstance(points[0][0], Pose)
@@ -316,7 +324,7 @@ class Arm:
                     break
                 target += 1
             if arrived:
-                return current
+                return self._settle(current, started, options, read, moved)
             for notice in notices:
                 if notice.ends_motion:
                     raise notice
@@ -339,6 +347,28 @@ class Arm:
                 )
             previous = current
             _time.sleep(options.poll)
+
+    def _settle(self, current, started: float, options: WaitOptions, read, moved):  # type: ignore[no-untyped-def]
+        """After arrival within the tolerance the generator may still be finishing its profile
+        (and refuses the next motion until it has): waits until the status reports no motion,
+        or, from a controller without the status request, until two polls read the same."""
+        while _time.monotonic() - started <= options.timeout:
+            if self._has_status is not False:
+                try:
+                    if self.get_status().motion == Motion.IDLE:
+                        return read()
+                except ControllerTooOld:
+                    self._has_status = False
+                    continue
+            else:
+                _time.sleep(options.poll)
+                latest = read()
+                if not moved(current, latest):
+                    return latest
+                current = latest
+                continue
+            _time.sleep(options.poll)
+        return current
 
     def _options(self, requested: float) -> WaitOptions:
         # As the Rust tool: 30 s plus the requested duration, unless set otherwise.

@@ -18,14 +18,6 @@ def close(a, b, tol=1e-3):  # type: ignore[no-untyped-def]
     return len(a) == len(b) and all(abs(x - y) <= tol for x, y in zip(a, b))
 
 
-def eventually(check, seconds=2.0):  # type: ignore[no-untyped-def]
-    """Polls ``check()`` until it is true (measurements are a control cycle or two old)."""
-    deadline = time.monotonic() + seconds
-    while not check():
-        assert time.monotonic() < deadline, "not within the time allowed"
-        time.sleep(0.02)
-
-
 def test_pose_and_joints_at_home_match_the_simulator(mk1) -> None:  # type: ignore[no-untyped-def]
     home = mk1.home()
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
@@ -65,7 +57,7 @@ def test_refusals_raise_typed_exceptions(mk1) -> None:  # type: ignore[no-untype
 def test_recalibrate_then_a_cartesian_move_arrives(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         arm.recalibrate(COMFORTABLE)
-        eventually(lambda: close(arm.get_joints(), COMFORTABLE, 1e-4))
+        assert close(arm.get_joints(), COMFORTABLE, 1e-4)
         assert arm.set_mode("cartesian") == armgate.Mode.CARTESIAN
         start = arm.get_tcp_pose()
         goal = armgate.Pose.from_rpy(start.x, start.y, start.z - 0.02, *start.rpy)
@@ -74,6 +66,9 @@ def test_recalibrate_then_a_cartesian_move_arrives(mk1) -> None:  # type: ignore
         assert reached.distance(goal) <= 0.001
         assert reached.angle_to(goal) <= 0.01
         assert close(arm.get_tcp_pose().rpy, start.rpy, 0.01)
+        # The move has ended when move_l returns: the next one is not refused as "moving".
+        back = arm.move_l(start)
+        assert back is not None and back.distance(start) <= 0.001
 
 
 def test_joint_moves_arrive(mk1) -> None:  # type: ignore[no-untyped-def]
@@ -149,7 +144,7 @@ def test_an_eight_joint_arm_uses_both_banks(mk2) -> None:  # type: ignore[no-unt
         assert close(arm.get_joints(), mk2.home()["joints"])
         q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]
         arm.recalibrate(q)
-        eventually(lambda: close(arm.get_joints(), q, 1e-4))
+        assert close(arm.get_joints(), q, 1e-4)
         assert len(arm.get_temperatures()) == 8
         arm.set_mode("joint")
         q[6] += 0.04
