@@ -124,3 +124,84 @@ def test_can_traffic_is_decoded(tshark: str, capture: dict) -> None:
     assert ["127", "0x05"] in heartbeats
     replies = fields(tshark, capture, 'armgate_can.kind == "reply"', "armgate_can.mnemonic")
     assert {"PX", "UM", "MO"} <= {r[0] for r in replies}
+
+
+# -- frames the simulator does not send on its own: faults, SYNC, floats, the status reply ----
+
+
+def _block(kind: int, body: bytes) -> bytes:
+    body += b"\0" * (-len(body) % 4)
+    return struct.pack("<II", kind, len(body) + 12) + body + struct.pack("<I", len(body) + 12)
+
+
+def _pcapng(packets: List[tuple]) -> bytes:
+    """A pcapng file: interface 0 raw IP (LINKTYPE_RAW), 1 SocketCAN; ``packets`` are
+    ``(interface, bytes)``."""
+    out = _block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1))
+    out += _block(1, struct.pack("<HHI", 101, 0, 0)) + _block(1, struct.pack("<HHI", 227, 0, 0))
+    for k, (interface, data) in enumerate(packets):
+        out += _block(6, struct.pack("<IIIII", interface, 0, k, len(data), len(data)) + data)
+    return out
+
+
+def _udp(src_port: int, dst_port: int, payload: bytes) -> tuple:
+    udp = struct.pack(">HHHH", src_port, dst_port, 8 + len(payload), 0) + payload
+    ip = struct.pack(">BBHHHBBH4s4s", 0x45, 0, 20 + len(udp), 0, 0x4000, 64, 17, 0,
+                     bytes([127, 0, 0, 1]), bytes([127, 0, 0, 1]))
+    return (0, ip + udp)
+
+
+def _can(can_id: int, data: bytes) -> tuple:
+    return (1, struct.pack(">IB3x", can_id, len(data)) + data.ljust(8, b"\0"))
+
+
+@pytest.fixture(scope="module")
+def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    status = wire_reply("QS", [2, 4, 33, 8, 0, 3, 12.5], 0)
+    name = b"QS" + b"ranger-mk2".ljust(28, b"\0") + b"\x01"
+    packets = [
+        _udp(7031, 40000, status),                                       # 1
+        _udp(7031, 40000, name),                                         # 2
+        _udp(7031, 40000, b"WN27 Via point missed.".ljust(31, b"\0")),   # 3
+        _can(0x085, bytes([0x00, 0xFF, 0x81, 0x08, 0x05, 0x00, 0x03, 0x00])),  # 4 EMCY underflow
+        _can(0x082, bytes([0x30, 0x81, 0x11, 0, 0, 0, 0, 0])),           # 5 EMCY heartbeat lost
+        _can(0x080, b""),                                                # 6 SYNC
+        _can(0x2E6, b"QP\x03\x40\x15\0\0\0"),                            # 7 error reply, EC 21
+        _can(0x366, b"TC\0\x80" + struct.pack("<f", 1.5)),               # 8 float set
+        _can(0x5E6, b"\x80\x16\x10\x01" + struct.pack("<I", 0x06090011)),  # 9 SDO abort
+        _can(0x000, b"\x81\x00"),                                        # 10 NMT reset node, all
+    ]
+    path = tmp_path_factory.mktemp("crafted") / "crafted.pcapng"
+    path.write_bytes(_pcapng(packets))
+    return {"path": path, "port": 7031}
+
+
+def wire_reply(chars: str, values: List[float], index: int) -> bytes:
+    return armgate.wire.encode(chars, values, index)
+
+
+def test_the_status_reply_is_decoded(tshark: str, crafted: dict) -> None:
+    rows = fields(tshark, crafted, "frame.number <= 2", "armgate.command", "armgate.status.drives",
+                  "armgate.status.fault", "armgate.status.joints", "armgate.status.uptime",
+                  "armgate.status.name")
+    assert rows[0][:5] == ["QS", "4", "33", "8", "12.5"]
+    assert rows[1][0] == "QS" and rows[1][5] == "ranger-mk2"
+    text = fields(tshark, crafted, "frame.number == 3", "armgate.severity", "armgate.code")
+    assert text == [["warning", "27"]]
+
+
+def test_emergencies_and_other_frames_are_decoded(tshark: str, crafted: dict) -> None:
+    def row(n: int, *names: str) -> List[str]:
+        return fields(tshark, crafted, f"frame.number == {n}", *names)[0]
+
+    node, code, meaning = row(4, "armgate_can.node", "armgate_can.emcy.code",
+                              "armgate_can.emcy.meaning")
+    assert (node, code) == ("5", "0xff00")
+    assert "underflow" in meaning and "ER33" in meaning
+    assert "ER36" in row(5, "armgate_can.emcy.meaning")[0]
+    assert row(6, "armgate_can.service") == ["SYNC"]
+    assert row(7, "armgate_can.node", "armgate_can.kind", "armgate_can.error_code") == [
+        "102", "error reply", "21"]
+    assert row(8, "armgate_can.mnemonic", "armgate_can.float") == ["TC", "1.5"]
+    assert row(9, "armgate_can.sdo.abort") == ["0x06090011"]
+    assert row(10, "armgate_can.nmt.command", "armgate_can.nmt.node") == ["0x81", "0"]

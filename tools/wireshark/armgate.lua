@@ -204,13 +204,15 @@ local function dissect_status(tree, tvb, index)
     end
     local mode = add(f.status_mode, 0, modes)
     local drives = add(f.status_drives, 1, drive_states)
-    add(f.status_fault, 2)
+    local fault = math.floor(add(f.status_fault, 2) + 0.5)
     add(f.status_joints, 3)
-    add(f.status_motion, 4, motions)
+    local motion = add(f.status_motion, 4, motions)
     add(f.status_refusals, 5)
     add(f.status_uptime, 6)
-    return string.format(" mode=%s drives=%s", modes[math.floor(mode + 0.5)] or mode,
-        drive_states[math.floor(drives + 0.5)] or drives)
+    local info = string.format(" mode=%s drives=%s motion=%s", modes[math.floor(mode + 0.5)] or mode,
+        drive_states[math.floor(drives + 0.5)] or drives, motions[math.floor(motion + 0.5)] or motion)
+    if fault ~= 0 then info = info .. string.format(" fault=ER%02d", fault) end
+    return info
 end
 
 function armgate.dissector(tvb, pinfo, root)
