@@ -293,7 +293,9 @@ class Arm:
         (Euclidean norm within the tolerances)."""
         opts = options or self.wait_options
 
-        def measure(q: List[float], goal: List[float], last: bool):  # type: ignore[no-untyped-def]
+        def measure(
+            q: List[float], goal: List[float], last: bool
+        ) -> Tuple[float, Optional[float], bool]:
             d = math.dist(q, goal)
             return d, None, d <= (opts.tolerance if last else opts.pass_tolerance)
 
@@ -302,10 +304,17 @@ class Arm:
 
         return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
 
-    def _wait(self, goals, options: WaitOptions, read, measure, moved):  # type: ignore[no-untyped-def]
+    def _wait(
+        self,
+        goals: Sequence[T],
+        options: WaitOptions,
+        read: Callable[[], T],
+        measure: Callable[[T, T, bool], Tuple[float, Optional[float], bool]],
+        moved: Callable[[T, T], bool],
+    ) -> T:
         started = _time.monotonic()
         last_move = started
-        previous = None
+        previous: Optional[T] = None
         target = 0
         while True:
             current = read()
@@ -313,7 +322,9 @@ class Arm:
             now = _time.monotonic()
             if previous is None or moved(previous, current):
                 last_move = now
-            distance, angle, arrived = math.inf, None, False
+            distance: float = math.inf
+            angle: Optional[float] = None
+            arrived = False
             while target < len(goals):
                 last = target + 1 == len(goals)
                 distance, angle, reached = measure(current, goals[target], last)
@@ -348,7 +359,14 @@ class Arm:
             previous = current
             _time.sleep(options.poll)
 
-    def _settle(self, current, started: float, options: WaitOptions, read, moved):  # type: ignore[no-untyped-def]
+    def _settle(
+        self,
+        current: T,
+        started: float,
+        options: WaitOptions,
+        read: Callable[[], T],
+        moved: Callable[[T, T], bool],
+    ) -> T:
         """After arrival within the tolerance the generator may still be finishing its profile
         (and refuses the next motion until it has): waits until the status reports no motion,
         or, from a controller without the status request, until two polls read the same."""

@@ -11,7 +11,6 @@ import shutil
 import signal
 import struct
 import subprocess
-from pathlib import Path
 from typing import List
 
 import pytest
