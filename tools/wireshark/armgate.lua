@@ -536,8 +536,15 @@ function can.dissector(tvb, pinfo, root)
     return tvb:len()
 end
 
--- Every standard identifier: the CAN dissector tries "can.id" before its heuristics.
-local can_ids = DissectorTable.get("can.id")
-for id = 0, 0x7FF do
-    can_ids:add(id, can)
+-- Every standard identifier: the CAN dissector tries "can.id" before its heuristics. A
+-- Wireshark without that table gets a heuristic dissector instead.
+local ok, can_ids = pcall(DissectorTable.get, "can.id")
+if ok and can_ids then
+    for id = 0, 0x7FF do
+        can_ids:add(id, can)
+    end
+else
+    can:register_heuristic("can", function(tvb, pinfo, root)
+        return can.dissector(tvb, pinfo, root) > 0
+    end)
 end
