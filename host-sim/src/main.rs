@@ -235,6 +235,8 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
             }
             Err(e) => return Err(format!("udp receive: {e}")),
         };
+        // Captured before the allow-list: a refused client is what one looks for in a capture.
+        pcap::udp(from, local, buf.get(..len).unwrap_or(&[]));
         if !allow.iter().any(|net| net.contains(from.ip())) {
             stats.refused_sources += 1;
             continue;
@@ -242,7 +244,6 @@ fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
         stats.received += 1;
         last_sender = Some(from);
         let datagram = buf.get(..len).unwrap_or(&[]);
-        pcap::udp(from, local, datagram);
         let t = (Instant::now() - epoch).as_secs_f64();
         logger.log(Record::Command {
             t,

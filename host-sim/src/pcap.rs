@@ -69,9 +69,10 @@ struct Queue {
 
 static QUEUE_TO_WRITER: OnceLock<Queue> = OnceLock::new();
 
-/// The running capture; [`finish`](Self::finish) it to flush the file.
+/// The running capture; [`finish`](Self::finish) it to flush the file (dropping it flushes
+/// too, for the early returns of an error).
 pub struct Capture {
-    writer: JoinHandle<io::Result<u64>>,
+    writer: Option<JoinHandle<io::Result<u64>>>,
 }
 
 impl Capture {
@@ -91,22 +92,37 @@ impl Capture {
         let writer = std::thread::Builder::new()
             .name("pcap".into())
             .spawn(move || write_records(out, &receiver))?;
-        Ok(Self { writer })
+        Ok(Self {
+            writer: Some(writer),
+        })
     }
 
     /// Writes what is queued, closes the file, and returns how many records were written and
     /// how many were dropped because the queue was full.
-    pub fn finish(self) -> io::Result<(u64, u64)> {
+    pub fn finish(mut self) -> io::Result<(u64, u64)> {
+        self.stop()
+    }
+
+    fn stop(&mut self) -> io::Result<(u64, u64)> {
+        let Some(writer) = self.writer.take() else {
+            return Ok((0, 0));
+        };
         let dropped = QUEUE_TO_WRITER.get().map_or(0, |q| {
             // A blocking send: the end marker must not be dropped.
             let _ = q.sender.send(Record::Finish);
             q.dropped.load(Ordering::Relaxed)
         });
-        let written = self
-            .writer
+        let written = writer
             .join()
             .map_err(|_| io::Error::other("the pcap writer panicked"))??;
         Ok((written, dropped))
+    }
+}
+
+impl Drop for Capture {
+    fn drop(&mut self) {
+        // Nobody is left to report an error to.
+        let _ = self.stop();
     }
 }
 

@@ -42,7 +42,7 @@ def free_port() -> int:
 class Sim:
     """A running ``armgate-sim``."""
 
-    def __init__(self, robot: str, extra: List[str]) -> None:
+    def __init__(self, robot: str, extra: List[str], ready: bool = True) -> None:
         self.robot = REPO / "robots" / f"{robot}.toml"
         self.port = free_port()
         self.process = subprocess.Popen(
@@ -51,7 +51,10 @@ class Sim:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
         )
-        self.wait_ready()
+        if ready:
+            self.wait_ready()
+        else:
+            time.sleep(1.0)
 
     def wait_ready(self) -> None:
         deadline = time.monotonic() + 20

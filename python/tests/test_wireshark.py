@@ -11,6 +11,7 @@ import shutil
 import signal
 import struct
 import subprocess
+from pathlib import Path
 from typing import List
 
 import pytest
@@ -47,6 +48,19 @@ def capture(tmp_path_factory: pytest.TempPathFactory) -> dict:
     sim.process.send_signal(signal.SIGTERM)
     _, stderr = sim.process.communicate(timeout=20)
     return {"path": path, "port": sim.port, "joints": joints, "stderr": stderr.decode()}
+
+
+def test_datagrams_from_refused_sources_are_captured(tshark: str, tmp_path: Path) -> None:
+    path = tmp_path / "refused.pcapng"
+    # Loopback is not on this allow-list: the request is dropped, but captured.
+    sim = Sim("ranger-mk1", ["--pcap", str(path), "--allow", "10.0.0.0/8"], ready=False)
+    with armgate.Arm("127.0.0.1", port=sim.port, timeout=0.05, retries=0, joints=6) as arm:
+        with pytest.raises(armgate.ReplyTimeout):
+            arm.get_tcp_pose()
+    sim.process.send_signal(signal.SIGTERM)
+    sim.process.communicate(timeout=20)
+    rows = fields(tshark, {"path": path, "port": sim.port}, "armgate", "armgate.command")
+    assert rows == [["PS"]]
 
 
 def fields(tshark: str, capture: dict, display_filter: str, *names: str) -> List[List[str]]:
