@@ -26,7 +26,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use armgate_protocol::can::CanFrame;
 
-/// Records queued for the writer at most (about 100 bytes each).
+/// Records queued for the writer at most (at most 192 bytes each, so about 1.5 MiB).
 const QUEUE: usize = 8192;
 /// The writer flushes after the queue has been empty this long.
 const IDLE_FLUSH: Duration = Duration::from_millis(200);
@@ -371,6 +371,11 @@ fn checksum(parts: &[&[u8]]) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_queue_is_bounded_in_bytes() {
+        assert!(std::mem::size_of::<Record>() <= 192);
+    }
 
     #[test]
     fn ipv4_header_checksum_verifies() {

@@ -420,7 +420,7 @@ class Arm:
                     datagram = self._socket.recv(2 * wire.MESSAGE_LEN)
                 except (BlockingIOError, InterruptedError):
                     return
-                except ConnectionRefusedError:
+                except (ConnectionRefusedError, ConnectionResetError):
                     # An ICMP error left over from an earlier send.
                     continue
                 text = wire.text_of(datagram)
@@ -449,7 +449,7 @@ class Arm:
         for _ in range(attempts):
             try:
                 self._socket.send(datagram)
-            except ConnectionRefusedError:
+            except (ConnectionRefusedError, ConnectionResetError):
                 refused = True
                 continue
             outcome = self._await_reply(chars, index)
@@ -474,7 +474,7 @@ class Arm:
                 datagram = self._socket.recv(2 * wire.MESSAGE_LEN)
             except socket.timeout:
                 return "timeout"
-            except ConnectionRefusedError:
+            except (ConnectionRefusedError, ConnectionResetError):
                 return "refused"
             except InterruptedError:
                 continue
