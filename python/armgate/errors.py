@@ -89,6 +89,14 @@ class ControllerMessage(ArmError):
         self.command = named.group(1) if named else None
 
     @property
+    def detail(self) -> str:
+        """For a text that names a command, what follows it (``ER20 Cmd BG needs mode 2`` ->
+        ``needs mode 2``); else the reason."""
+        if self.command is None:
+            return self.reason
+        return self.reason[len("Cmd XX "):]
+
+    @property
     def is_warning(self) -> bool:
         """``WN`` rather than ``ER``."""
         return self.text.startswith("WN")

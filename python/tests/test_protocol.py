@@ -43,6 +43,8 @@ def test_texts_map_to_classes_with_code_and_reason() -> None:
         e = armgate.ControllerMessage.from_text(t)
         assert type(e) is kind, t
         assert e.text == t and e.code == int(t[2:4]) and e.reason == t[5:]
+    refusal = armgate.ControllerMessage.from_text("ER20 Cmd BG needs mode 2")
+    assert (refusal.command, refusal.detail) == ("BG", "needs mode 2")
     fault = armgate.ControllerMessage.from_text("ER33 J4 PT buffer underflow")
     assert isinstance(fault, armgate.DriveFault) and fault.joint == 4 and fault.ends_motion
     assert not armgate.ControllerMessage.from_text("WN12 Joint limit.").ends_motion
