@@ -137,15 +137,18 @@ class Undersized(ControllerError):
 
 
 class ArmDidNotStop(ControllerError):
-    """``ER10 Arm did not stop``: the answer to ``OF`` when the drives could not be stopped."""
+    """``ER10 Arm ...``: the answer to ``OF`` when the drives could not be stopped (``ER10 Arm
+    did not stop``; newer controllers say why: ``ER10 Arm already off``)."""
 
 
 class ArmDidNotStart(ControllerError):
-    """``ER11 Arm did not start``: the answer to ``ON`` (already running, or a drive silent)."""
+    """``ER11 Arm ...``: the answer to ``ON`` when the drives could not be started (``ER11 Arm
+    did not start``; newer controllers say why: ``ER11 Arm already on``)."""
 
 
 class CommandRejected(ControllerError):
-    """``ER20 Cmd XX rejected``: wrong mode, a motion is running, no goal, not ready."""
+    """``ER20 Cmd XX ...``: wrong mode, a motion is running, no goal, not ready (``rejected``;
+    newer controllers give the reason: ``ER20 Cmd BG needs mode 2``, see :attr:`detail`)."""
 
 
 class WorkspaceLimit(ControllerError):
