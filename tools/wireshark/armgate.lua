@@ -143,7 +143,13 @@ local function add_joints(tree, tvb, count, first, field, unit, with_time)
     for k = 0, count - 1 do
         local range = tvb(2 + 4 * k, 4)
         local v = range:le_float()
-        tree:add_le(field, range, v):set_text(string.format("Joint %d: %.6g %s", first + k, v, unit))
+        local label = string.format("Joint %d: %.6g %s", first + k, v, unit)
+        if field == f.temperature and v == -100 then
+            label = label .. " (no reading yet)"
+        elseif field == f.temperature and v == -1000 then
+            label = label .. " (no such joint)"
+        end
+        tree:add_le(field, range, v):set_text(label)
     end
     if with_time then
         tree:add_le(f.time, tvb(26, 4))
