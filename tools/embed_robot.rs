@@ -12,7 +12,7 @@ fn embed_robot(
     workspace_root: &std::path::Path,
     relative: &str,
     out: &std::path::Path,
-) -> Result<armgate_core::config::RobotConfig, String> {
+) -> Result<armgate_core::config::ValidRobot, String> {
     let path = workspace_root.join(relative);
     println!("cargo:rerun-if-changed={}", path.display());
     let text = std::fs::read_to_string(&path)
@@ -22,7 +22,7 @@ fn embed_robot(
     let settings = armgate_core::drives::DriveSettings::default();
     armgate_core::drives::DriveManager::new(&config, &settings)
         .map_err(|e| format!("{}: the drive manager refuses this robot: {e}", path.display()))?;
-    let bytes = postcard::to_stdvec(&config)
+    let bytes = postcard::to_stdvec(config.config())
         .map_err(|e| format!("{}: cannot serialise with postcard: {e}", path.display()))?;
     std::fs::write(out, bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     Ok(config)

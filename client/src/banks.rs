@@ -1,25 +1,11 @@
-//! Joint vectors on the wire, including the bank rule for arms with 7 or 8 joints
-//! (docs/protocol.md, "Arms with more than six joints").
-//!
-//! * Writes (`jG`, `jV`, `RC`) carry six joints. For more than six, a bank-2 request (index bit 7
-//!   set, joints 7.. in f0..) goes first, then the bank-1 request (joints 1..6) completes the
-//!   vector. For `jV` the slot stays in bits 0–6 of both.
-//! * Reads (`jP`, `TM`) answer joints 1..7 in f0..f6. For more than seven joints, a second read
-//!   with bit 7 set answers joints 7.. in f0.. (so joint 8 is its f1).
+//! Joint vectors of any length as the client sends and reads them, by the protocol's bank rule
+//! (`armgate_protocol::client::banks`, docs/protocol.md "Arms with more than six joints").
 
 use armgate_protocol::client::VALUES;
+pub use armgate_protocol::client::banks::{MAX_JOINTS, READ_JOINTS, WRITE_JOINTS};
+use armgate_protocol::client::banks::{bank_2_index, is_bank_2, read_position, write_values};
 
 use crate::ClientError;
-use crate::matching::BANK2;
-
-/// Joints per write request.
-pub const WRITE_JOINTS: usize = 6;
-
-/// Joints per read reply.
-pub const READ_JOINTS: usize = 7;
-
-/// The most joints an arm may have.
-pub const MAX_JOINTS: usize = armgate_core::MAX_JOINTS;
 
 /// One datagram of a joint write: its index byte and f0..f6.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,26 +32,19 @@ pub fn check_count(n: usize) -> Result<(), ClientError> {
 /// `jV`, 0 otherwise).
 pub fn split(q: &[f64], slot: u8, f6: f32) -> Result<Vec<BankRequest>, ClientError> {
     check_count(q.len())?;
-    if slot & BANK2 != 0 {
+    if is_bank_2(slot) {
         return Err(ClientError::InvalidArgument(format!(
             "via slot {slot}: bit 7 of the index selects the joint bank, slots are 0..=127"
         )));
     }
-    let bank = |joints: &[f64], index: u8| {
-        let mut values = [0.0; VALUES];
-        values
-            .iter_mut()
-            .zip(joints.iter().take(WRITE_JOINTS))
-            .for_each(|(v, q)| *v = *q as f32);
-        if let Some(last) = values.last_mut() {
-            *last = f6;
-        }
-        BankRequest { index, values }
+    let bank = |joints: &[f64], index: u8| BankRequest {
+        index,
+        values: write_values(joints, f6),
     };
     let (lower, upper) = q.split_at(q.len().min(WRITE_JOINTS));
     let mut out = Vec::with_capacity(2);
     if !upper.is_empty() {
-        out.push(bank(upper, slot | BANK2));
+        out.push(bank(upper, bank_2_index(slot)));
     }
     out.push(bank(lower, slot));
     Ok(out)
@@ -77,16 +56,14 @@ pub fn needs_bank2_read(n: usize) -> bool {
 }
 
 /// The `n` joint values of a read: joints 1..7 from the bank-1 reply, joints 8.. from the
-/// bank-2 reply (which starts at joint 7).
+/// bank-2 reply (which starts at joint 7); a joint whose reply is missing ends the list.
 pub fn merge_read(n: usize, bank1: &[f32; VALUES], bank2: Option<&[f32; VALUES]>) -> Vec<f64> {
-    let upper = bank2
-        .into_iter()
-        .flat_map(|b| b.iter().skip(READ_JOINTS - WRITE_JOINTS));
-    bank1
-        .iter()
-        .chain(upper)
-        .take(n)
-        .map(|v| f64::from(*v))
+    (0..n)
+        .map_while(|joint| {
+            let (in_bank_2, at) = read_position(joint)?;
+            let reply = if in_bank_2 { bank2? } else { bank1 };
+            reply.get(at).map(|v| f64::from(*v))
+        })
         .collect()
 }
 

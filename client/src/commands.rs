@@ -1,14 +1,13 @@
 //! Typed helpers: one method per protocol command (docs/protocol.md, "Commands").
 
-use armgate_core::math::Quaternion;
-use armgate_protocol::client::{Command, Reply, Request, VALUES};
+use armgate_protocol::client::{Command, Reply, Request, UNKNOWN_TEMPERATURE, VALUES};
 
 use crate::banks;
-use crate::matching::BANK2;
-use crate::{Client, ClientError, Mode, Pose};
+use crate::{Client, ClientError, Mode, Pose, Quaternion};
+use armgate_protocol::client::banks::BANK_2;
 
 /// The temperature a drive that never answered reports (°C).
-pub const NO_READING: f64 = armgate_core::drives::UNKNOWN_TEMPERATURE;
+pub const NO_READING: f64 = UNKNOWN_TEMPERATURE as f64;
 
 fn request(command: Command, values: [f32; VALUES], index: u8) -> Request {
     Request {
@@ -56,7 +55,10 @@ impl Client {
         banks::check_count(n)?;
         let bank1 = self.request(request(command, [0.0; VALUES], 0))?.values;
         let bank2 = if banks::needs_bank2_read(n) {
-            Some(self.request(request(command, [0.0; VALUES], BANK2))?.values)
+            Some(
+                self.request(request(command, [0.0; VALUES], BANK_2))?
+                    .values,
+            )
         } else {
             None
         };
@@ -146,7 +148,7 @@ impl Client {
         rpy: [f64; 3],
         time: f64,
     ) -> Result<Reply, ClientError> {
-        if slot & BANK2 != 0 {
+        if slot & BANK_2 != 0 {
             return Err(ClientError::InvalidArgument(format!("via slot {slot}")));
         }
         self.request(request(
@@ -299,7 +301,7 @@ mod tests {
             let message = Message::new_checked(request).unwrap();
             let mut reply = Reply::null(Command::JointPosition);
             reply.index = message.index();
-            reply.values = if message.index() & BANK2 == 0 {
+            reply.values = if message.index() & BANK_2 == 0 {
                 [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]
             } else {
                 [7.0, 8.0, 0.0, 0.0, 0.0, 0.0, 0.0]

@@ -41,7 +41,6 @@ pub mod runfile;
 pub mod teleop;
 pub mod wait;
 
-pub use armgate_core::math::Quaternion;
 pub use armgate_protocol::client::{Command, Reply, Request, Text};
 pub use client::{
     Client, ClientConfig, DEFAULT_ADDR, DEFAULT_NOTICE_CAPACITY, DEFAULT_RETRIES, DEFAULT_TIMEOUT,
@@ -49,6 +48,6 @@ pub use client::{
 };
 pub use commands::NO_READING;
 pub use error::ClientError;
-pub use pose::{Mode, Pose};
+pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
 pub use wait::{Progress, WaitOptions};

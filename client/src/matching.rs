@@ -13,10 +13,8 @@
 //! faults `ER3x`, or a refusal of an earlier request). Every other normal reply is stale (the
 //! late answer to an earlier, retried request) and is dropped.
 
+use armgate_protocol::client::banks::BANK_2;
 use armgate_protocol::client::{Message, Notice, Severity, Text};
-
-/// Bit 7 of the index: bank 2 (joints 7..) for joint requests.
-pub const BANK2: u8 = 0x80;
 
 /// What a received datagram is, relative to the request being waited for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,8 +42,8 @@ impl Expect {
     /// Whether a reply's index fits the request's.
     fn index_matches(&self, index: u8) -> bool {
         match &self.chars {
-            b"jV" | b"VP" => index & !BANK2 == self.index & !BANK2,
-            b"jP" | b"TM" => index & BANK2 == self.index & BANK2,
+            b"jV" | b"VP" => index & !BANK_2 == self.index & !BANK_2,
+            b"jP" | b"TM" => index & BANK_2 == self.index & BANK_2,
             _ => true,
         }
     }
@@ -179,14 +177,14 @@ mod tests {
         );
         assert_eq!(expect(b"jV", 4).classify(&vj.to_bytes()), Incoming::Other);
         let mut pj = Reply::null(Command::JointPosition);
-        pj.index = BANK2;
+        pj.index = BANK_2;
         assert_eq!(
-            expect(b"jP", BANK2).classify(&pj.to_bytes()),
+            expect(b"jP", BANK_2).classify(&pj.to_bytes()),
             Incoming::Reply
         );
         assert_eq!(expect(b"jP", 0).classify(&pj.to_bytes()), Incoming::Other);
         // Null replies need not echo anything.
-        assert_eq!(expect(b"jG", BANK2).classify(&text("Gj")), Incoming::Reply);
+        assert_eq!(expect(b"jG", BANK_2).classify(&text("Gj")), Incoming::Reply);
     }
 
     #[test]

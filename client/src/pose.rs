@@ -1,6 +1,62 @@
-//! Tool poses as the protocol carries them, and the control mode.
+//! Tool poses as the protocol carries them.
+//!
+//! The arithmetic is nalgebra's; what is the protocol's own stays here: the quaternion's wire
+//! order (x, y, z, w — nalgebra's constructor takes w first), its sign rule (w ≥ 0) and the
+//! seed's roll/pitch/yaw extraction with its gimbal branch (spec §2.4).
 
-use armgate_core::math::{Quaternion, Rotation};
+use std::f64::consts::FRAC_PI_2;
+
+use nalgebra::{Quaternion as Quat, Rotation3, UnitQuaternion};
+
+pub use armgate_protocol::client::Mode;
+
+/// A quaternion in the protocol's order, scalar last (`GL`, `PS`); not necessarily unit length,
+/// as the wire carries it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quaternion {
+    /// x of the vector part.
+    pub x: f64,
+    /// y of the vector part.
+    pub y: f64,
+    /// z of the vector part.
+    pub z: f64,
+    /// The scalar part.
+    pub w: f64,
+}
+
+impl Quaternion {
+    /// No rotation.
+    pub const IDENTITY: Self = Self::new(0.0, 0.0, 0.0, 1.0);
+
+    /// A quaternion from its components in wire order.
+    pub const fn new(x: f64, y: f64, z: f64, w: f64) -> Self {
+        Self { x, y, z, w }
+    }
+
+    /// The unit quaternion of the same rotation, or `None` for a (near) zero or non-finite one.
+    pub fn normalized(self) -> Option<Self> {
+        self.unit().map(Self::from_unit)
+    }
+
+    /// The rotation, as nalgebra's unit quaternion.
+    fn unit(self) -> Option<UnitQuaternion<f64>> {
+        let q = Quat::new(self.w, self.x, self.y, self.z);
+        let n = q.norm();
+        (n.is_finite() && n >= 1e-12).then(|| UnitQuaternion::new_unchecked(q / n))
+    }
+
+    /// From nalgebra's unit quaternion, with the protocol's sign: w ≥ 0 (for w = 0 the first
+    /// nonzero of z, y, x positive, as the controller answers).
+    fn from_unit(q: UnitQuaternion<f64>) -> Self {
+        let (w, x, y, z) = (q.w, q.i, q.j, q.k);
+        let flip = [w, z, y]
+            .into_iter()
+            .find(|c| *c != 0.0)
+            .map_or(x < 0.0, |c| c < 0.0);
+        let s = if flip { -1.0 } else { 1.0 };
+        Self::new(s * x, s * y, s * z, s * w)
+    }
+}
 
 /// A tool pose: position (m) and orientation as a quaternion in wire order (x, y, z, w).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,23 +82,38 @@ impl Pose {
     pub fn from_xyz_rpy(xyz: [f64; 3], [roll, pitch, yaw]: [f64; 3]) -> Self {
         Self {
             xyz,
-            quaternion: Quaternion::from_rotation(&Rotation::from_rpy(roll, pitch, yaw)),
+            // nalgebra's Euler angles are the same Rz(yaw)·Ry(pitch)·Rx(roll).
+            quaternion: Quaternion::from_unit(UnitQuaternion::from_euler_angles(roll, pitch, yaw)),
         }
     }
 
     /// The orientation as a rotation matrix (the quaternion normalised first, since the wire
     /// carries it as float32; a zero quaternion reads as the identity).
-    pub fn rotation(&self) -> Rotation {
+    pub fn rotation(&self) -> Rotation3<f64> {
         self.quaternion
-            .normalized()
-            .unwrap_or(Quaternion::IDENTITY)
-            .to_rotation()
+            .unit()
+            .unwrap_or_else(UnitQuaternion::identity)
+            .to_rotation_matrix()
     }
 
     /// Roll, pitch, yaw (rad), extracted exactly as spec §2.4 says, including its gimbal branch:
     /// if |r20| > 1 − 1e-6 then yaw = 0, pitch = ∓π/2 and roll = −sgn(r20)·atan2(r01, r11).
+    /// (nalgebra's `euler_angles` treats gimbal lock differently.)
     pub fn rpy(&self) -> [f64; 3] {
-        self.rotation().to_rpy()
+        let r = self.rotation().into_inner();
+        // nalgebra numbers the entries from 1: r00 is m11.
+        let (r00, r01, r10, r11) = (r.m11, r.m12, r.m21, r.m22);
+        let (r20, r21, r22) = (r.m31, r.m32, r.m33);
+        if r20.abs() > 1.0 - 1e-6 {
+            let sign = if r20 < 0.0 { -1.0 } else { 1.0 };
+            [-sign * r01.atan2(r11), -sign * FRAC_PI_2, 0.0]
+        } else {
+            [
+                r21.atan2(r22),
+                (-r20).atan2((r00 * r00 + r10 * r10).sqrt()),
+                r10.atan2(r00),
+            ]
+        }
     }
 
     /// The distance between the positions (m).
@@ -54,64 +125,23 @@ impl Pose {
 
     /// The angle of the rotation between the orientations (rad, in [0, π]).
     pub fn angle_to(&self, other: &Self) -> f64 {
-        let q = |p: &Self| p.quaternion.normalized().unwrap_or(Quaternion::IDENTITY);
-        let (a, b) = (q(self), q(other));
-        let dot = (a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w).abs();
-        2.0 * dot.min(1.0).acos()
+        let q = |p: &Self| p.quaternion.unit().unwrap_or_else(UnitQuaternion::identity);
+        q(self).angle_to(&q(other))
     }
 }
 
-/// The controller's command mode (`CM`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Mode {
-    /// 0: no generator drives the arm.
-    Off,
-    /// 1: joint mode (jB, jE).
-    Joint,
-    /// 2: Cartesian mode (BG, VE).
-    Cartesian,
-}
-
-impl Mode {
-    /// The value sent in f0.
-    pub const fn value(self) -> u8 {
-        match self {
-            Self::Off => 0,
-            Self::Joint => 1,
-            Self::Cartesian => 2,
-        }
-    }
-
-    /// The mode with this value (after rounding), as the `MC` reply carries it.
-    pub fn from_value(value: f32) -> Option<Self> {
-        [Self::Off, Self::Joint, Self::Cartesian]
-            .into_iter()
-            .find(|m| f32::from(m.value()) == value.round())
-    }
-
-    /// The next mode in the cycle off → joint → Cartesian → off.
-    pub const fn next(self) -> Self {
-        match self {
-            Self::Off => Self::Joint,
-            Self::Joint => Self::Cartesian,
-            Self::Cartesian => Self::Off,
-        }
-    }
-
-    /// `off`, `joint` or `cart`.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Off => "off",
-            Self::Joint => "joint",
-            Self::Cartesian => "cart",
-        }
+/// The next mode in the teleop's cycle off → joint → Cartesian → off.
+pub const fn next_mode(mode: Mode) -> Mode {
+    match mode {
+        Mode::Off => Mode::Joint,
+        Mode::Joint => Mode::Cartesian,
+        Mode::Cartesian => Mode::Off,
     }
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use std::f64::consts::FRAC_PI_2;
 
     /// The Fig. 3.3 quaternion of spec §2.4, to full precision (the spec prints 4 decimals).
     pub const GOLDEN_QUATERNION: Quaternion = Quaternion::new(
@@ -172,9 +202,25 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn quaternions_keep_the_wire_sign_rule() {
+        // Half a turn about z: w = 0, so the sign follows z.
+        let pose = Pose::from_xyz_rpy([0.0; 3], [0.0, 0.0, std::f64::consts::PI]);
+        let q = pose.quaternion;
+        assert!(q.w.abs() < 1e-15 && (q.z - 1.0).abs() < 1e-15, "{q:?}");
+        let flipped = Quaternion::new(-q.x, -q.y, -q.z, -q.w)
+            .normalized()
+            .unwrap();
+        assert!(flipped.z > 0.0);
+        assert_eq!(Quaternion::new(0.0, 0.0, 0.0, 0.0).normalized(), None);
+        assert_eq!(Quaternion::new(0.0, 0.0, 0.0, f64::NAN).normalized(), None);
+        let scaled = Quaternion::new(0.0, 0.0, 1.2, 1.6).normalized().unwrap();
+        assert_eq!(scaled, Quaternion::new(0.0, 0.0, 0.6, 0.8));
+    }
+
+    #[test]
     fn modes() {
         assert_eq!(Mode::from_value(1.9), Some(Mode::Cartesian));
         assert_eq!(Mode::from_value(3.0), None);
-        assert_eq!(Mode::Cartesian.next(), Mode::Off);
+        assert_eq!(next_mode(Mode::Cartesian), Mode::Off);
     }
 }

@@ -23,7 +23,7 @@ use std::path::PathBuf;
 mod drive_loop;
 use drive_loop::DriveLoop;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
 use armgate_core::drives::{DriveSettings, VirtualBus};
 use armgate_core::motion::{Mode, Shape};
@@ -48,9 +48,13 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for bitrate in [500_000, 1_000_000] {
         let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
-        let mut config = base.clone();
-        config.drives.can_bitrate = bitrate;
-        config.control_period = fastest.period;
+        let config = base
+            .clone()
+            .edit(|config| {
+                config.drives.can_bitrate = bitrate;
+                config.control_period = fastest.period;
+            })
+            .expect("the fastest period keeps under the default ceiling");
         let r = run(&config, &settings);
         println!(
             "| {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs | {} |",
@@ -101,7 +105,7 @@ struct Outcome {
 }
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
-fn run(config: &RobotConfig, settings: &DriveSettings) -> Outcome {
+fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
     let mut l = DriveLoop::started(config, settings, VirtualBus::for_robot(config));
     let begun: Vec<u64> = l.bus.drives().filter_map(|d| d.stats().begun_at).collect();
     let skew = (begun.iter().max().unwrap() - begun.iter().min().unwrap()) as f64 * 1e-9;

@@ -33,10 +33,14 @@ fn main() {
         ),
     ] {
         let path = format!("{}/../robots/{name}.toml", env!("CARGO_MANIFEST_DIR"));
-        let mut config = load_file(&path).unwrap();
-        for j in config.joints.iter_mut() {
-            j.max_rate = 10.0;
-        }
+        let config = load_file(&path)
+            .unwrap()
+            .edit(|config| {
+                for j in config.joints.iter_mut() {
+                    j.max_rate = 10.0;
+                }
+            })
+            .unwrap();
         let mut ctrl = Controller::new(&config);
         let mut arm = IdealArm::new(Joints::from_slice(&start).unwrap());
         let dt = config.control_period;

@@ -41,7 +41,7 @@ use std::path::PathBuf;
 mod drive_loop;
 use drive_loop::DriveLoop;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
@@ -149,13 +149,16 @@ fn shape_speed(shape: &Shape) -> f64 {
 }
 
 /// The experiment's robot: ranger-mk1 with every joint's rate limit raised.
-fn config() -> RobotConfig {
+fn config() -> ValidRobot {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
-    let mut config = load_file(&path).expect("robot file");
-    for joint in config.joints.iter_mut() {
-        joint.max_rate = JOINT_RATE;
-    }
-    config
+    load_file(&path)
+        .expect("robot file")
+        .edit(|config| {
+            for joint in config.joints.iter_mut() {
+                joint.max_rate = JOINT_RATE;
+            }
+        })
+        .expect("valid with the raised rate")
 }
 
 /// A start pose: how its orientation was chosen, the orientation and the joints.
@@ -194,7 +197,7 @@ fn main() {
     }
 }
 
-fn print_table(config: &RobotConfig, chain: &Chain, rows: &[Experiment], pose: &StartPose) {
+fn print_table(config: &ValidRobot, chain: &Chain, rows: &[Experiment], pose: &StartPose) {
     println!(
         "\nstart orientation {} (tool z axis {:.3?}, rpy {:.4?}), joints {:.4?}\n",
         pose.name,
@@ -270,7 +273,7 @@ fn print_table(config: &RobotConfig, chain: &Chain, rows: &[Experiment], pose: &
 /// Candidate start poses, in order: each orientation solved by global IK from each seed; the
 /// ones whose every shape runs through the controller (ideal arm) with no IK, joint-limit,
 /// rate or workspace event. Prints why the others were passed over.
-fn start_poses(config: &RobotConfig, chain: &Chain, rows: &[Experiment]) -> Vec<StartPose> {
+fn start_poses(config: &ValidRobot, chain: &Chain, rows: &[Experiment]) -> Vec<StartPose> {
     let orientations = [
         (
             "of the comfortable pose (1.5708, 0.6, -0.4, 0.2, 1.8, 0.1)",
@@ -321,7 +324,7 @@ fn start_poses(config: &RobotConfig, chain: &Chain, rows: &[Experiment]) -> Vec<
 /// IK, joint-limit, rate-limit or workspace event and the commands follow the shape within
 /// 1 µm; otherwise why not.
 fn dry_run(
-    config: &RobotConfig,
+    config: &ValidRobot,
     chain: &Chain,
     q0: &Joints,
     shape: &Shape,
@@ -409,7 +412,7 @@ struct Run {
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
 /// The simulated drives' actual positions (joint units), in joint order.
-fn actual(l: &DriveLoop, config: &RobotConfig) -> Joints {
+fn actual(l: &DriveLoop, config: &ValidRobot) -> Joints {
     let mut q = Joints::zeros(config.dof());
     for (v, joint) in q.iter_mut().zip(config.joints.iter()) {
         *v = l
@@ -422,7 +425,7 @@ fn actual(l: &DriveLoop, config: &RobotConfig) -> Joints {
 }
 
 /// Simulated Whistles with their encoders at `q0` and the given speed limit.
-fn virtual_bus(config: &RobotConfig, q0: &Joints, max_speed: f64) -> VirtualBus {
+fn virtual_bus(config: &ValidRobot, q0: &Joints, max_speed: f64) -> VirtualBus {
     let drives = config
         .joints
         .iter()
@@ -436,7 +439,7 @@ fn virtual_bus(config: &RobotConfig, q0: &Joints, max_speed: f64) -> VirtualBus 
     VirtualBus::new(config.drives.can_bitrate, drives)
 }
 
-fn run(config: &RobotConfig, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
+fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
     let bus = virtual_bus(config, q0, drive_speed);
     let mut l = DriveLoop::started(config, &DriveSettings::default(), bus);
     l.ctrl.set_mode(Mode::Cartesian).unwrap();

@@ -2,7 +2,9 @@
 //!
 //! The core is `no_std`, never allocates, never panics on any input (fallible operations return
 //! typed errors) and bounds every loop by a count, so that the host simulation and the
-//! microcontroller compute identical results. It does no I/O: the shells (`firmware`, `host-sim`)
+//! microcontroller compute identical results. "Never panics" is checked at link time for what
+//! runs every cycle and on every datagram: `panic-check/` links the control tick, request
+//! parsing and command handling for the Cortex-M7 with a panic handler that cannot link. It does no I/O: the shells (`firmware`, `host-sim`)
 //! only move bytes and time.
 //!
 //! * [`command`]: the client protocol's commands mapped onto the controller, and the relay of
@@ -23,6 +25,8 @@ pub mod kinematics;
 pub mod math;
 pub mod motion;
 pub mod rng;
+mod saturate;
 
-/// The largest number of joints a robot may have (the seed's Ranger Mark II has 8).
-pub const MAX_JOINTS: usize = 8;
+/// The largest number of joints a robot may have (the seed's Ranger Mark II has 8): as many
+/// as the protocol's joint banks address.
+pub const MAX_JOINTS: usize = armgate_protocol::client::banks::MAX_JOINTS;

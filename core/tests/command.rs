@@ -11,7 +11,7 @@
 mod common;
 
 use armgate_core::command::{ArmModel, CommandHandler, Drives, SimulatedDrives};
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::IdealArm;
 use armgate_core::rng::SplitMix64;
@@ -24,7 +24,7 @@ struct Rig {
 }
 
 impl Rig {
-    fn new(config: &RobotConfig, q0: &[f64]) -> Self {
+    fn new(config: &ValidRobot, q0: &[f64]) -> Self {
         let arm = IdealArm::new(Joints::from_slice(q0).unwrap());
         let mut rig = Self {
             handler: CommandHandler::new(config),
@@ -324,8 +324,9 @@ fn eight_joint_arm_is_commanded_in_two_banks() {
 #[test]
 fn unsolicited_warnings_are_relayed_and_rate_limited() {
     // Bounds that end at x = 0.3 m: turning the base to q1 = 0.5 takes the tool out.
-    let mut config = common::robot("ranger-mk1");
-    config.workspace.bounds[1] = 0.3;
+    let config = common::robot("ranger-mk1")
+        .edit(|config| config.workspace.bounds[1] = 0.3)
+        .unwrap();
     let mut rig = Rig::new(&config, &MK1_READY);
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
     // Joint mode may leave the workspace: reported (ER21), not stopped.

@@ -9,7 +9,7 @@
 
 mod common;
 
-use armgate_core::config::{ConfigReason, LoadError, RobotConfig, parse_toml};
+use armgate_core::config::{ConfigReason, LoadError, RobotConfig, ValidRobot, parse_toml};
 use armgate_core::drives::{DriveManager, DriveSettings};
 
 fn mk1_text() -> String {
@@ -34,10 +34,10 @@ fn every_shipped_robot_loads_and_round_trips_through_postcard() {
     for (name, config) in robots {
         assert_eq!(config.name.as_str(), name, "file name and `name` differ");
         let mut buf = [0u8; 4096];
-        let bytes = postcard::to_slice(&config, &mut buf).unwrap();
+        let bytes = postcard::to_slice(config.config(), &mut buf).unwrap();
         let back: RobotConfig = postcard::from_bytes(bytes).unwrap();
-        assert_eq!(back, config, "{name}");
-        back.validate().unwrap();
+        assert_eq!(&back, config.config(), "{name}");
+        assert_eq!(back.validate().unwrap(), config, "{name}");
     }
 }
 
@@ -69,7 +69,110 @@ fn nan_names_the_field() {
         "robot file: joints[3].d: must be a finite number (not NaN or infinite)"
     );
     let text = mk1_text().replacen("control_period = 0.01944", "control_period = inf", 1);
-    assert!(refusal(&text).contains("control_period: must be a finite number"));
+    assert!(refusal(&text).contains("control_period: must be a whole number"));
+}
+
+#[test]
+fn control_periods_the_shells_cannot_run_are_refused() {
+    // 1e30 s made armgate-sim panic converting it to a Duration; 1e-9 s busy-looped; 0.01 s
+    // is no whole number of 360 µs samples (a PT segment must be); 0.72 ms is too short.
+    for period in [
+        "1e30", "1e-9", "0.0", "-0.01944", "nan", "0.01", "0.00072", "1.0008",
+    ] {
+        let text = mk1_text().replacen(
+            "control_period = 0.01944",
+            &format!("control_period = {period}"),
+            1,
+        );
+        assert_eq!(
+            refusal(&text),
+            "robot file: control_period: must be a whole number of 360 µs drive samples \
+             from 3 to 2777 (1.08 ms to 0.99972 s)",
+            "{period}"
+        );
+    }
+    // The ends of the range are accepted (one drive, so that 1.08 ms fits on the bus).
+    let one_drive = common::robot("ranger-mk1").edit(|c| {
+        for joint in c.joints.iter_mut().skip(1) {
+            joint.drive.node_id = 0;
+        }
+        c.drives.can_bitrate = 1_000_000;
+    });
+    for samples in [3.0, 2777.0] {
+        let robot = one_drive
+            .clone()
+            .unwrap()
+            .edit(|c| c.control_period = samples * 360e-6);
+        assert!(robot.is_ok(), "{samples}: {robot:?}");
+    }
+}
+
+#[test]
+fn home_outside_the_limits_is_refused() {
+    let text = mk1_text().replacen("home = 0.0", "home = -1.0", 1);
+    assert_eq!(
+        refusal(&text),
+        "robot file: joints[1].drive.home: home must lie within the joint's min and max"
+    );
+}
+
+#[test]
+fn a_drive_schedule_over_the_bus_ceiling_is_refused() {
+    // Eight drives at 125 kbit/s every 19.44 ms: 4000 bits of streaming + the heartbeat in
+    // 2430 bit times, 165.1 %.
+    let mk2 = common::robot("ranger-mk2");
+    let slow = mk2.clone().edit(|c| c.drives.can_bitrate = 125_000);
+    let e = slow.unwrap_err();
+    assert_eq!(e.field, "control_period");
+    assert_eq!(e.reason, ConfigReason::BusOverloaded { percent: 166 });
+    assert_eq!(
+        e.to_string(),
+        "control_period: worst-case CAN bus load 166 % exceeds drives.max_bus_load; \
+         lengthen the period or raise the bit rate"
+    );
+    // At 500 kbit/s the same schedule takes 41.3 %: refused under a 40 % ceiling only.
+    assert!(mk2.clone().edit(|c| c.drives.max_bus_load = 0.42).is_ok());
+    let e = mk2
+        .clone()
+        .edit(|c| c.drives.max_bus_load = 0.41)
+        .unwrap_err();
+    assert_eq!(e.reason, ConfigReason::BusOverloaded { percent: 42 });
+    // The ceiling is a fraction of the bus.
+    for ceiling in [0.0, 1.5, f64::NAN] {
+        let e = mk2
+            .clone()
+            .edit(|c| c.drives.max_bus_load = ceiling)
+            .unwrap_err();
+        assert_eq!(
+            (e.field, e.reason),
+            ("drives.max_bus_load", ConfigReason::NotAFraction)
+        );
+    }
+    // Joints without a drive put nothing on the bus.
+    let hybrid = common::robot("hybrid").edit(|c| c.drives.can_bitrate = 125_000);
+    assert!(hybrid.is_ok());
+}
+
+#[test]
+fn only_validation_makes_a_valid_robot() {
+    // The round trip through the plain description validates again, with the same result.
+    let robot = common::robot("ranger-mk1");
+    let again = ValidRobot::try_from(robot.clone().into_config()).unwrap();
+    assert_eq!(again, robot);
+    // An edit that breaks a rule gives the error, not a robot.
+    let e = robot.edit(|c| c.joints[0].max = -5.0).unwrap_err();
+    assert_eq!(
+        (e.joint, e.field, e.reason),
+        (Some(0), "min", ConfigReason::MinAboveMax)
+    );
+}
+
+#[test]
+fn every_documented_field_is_read() {
+    // `ik.divergence_margin` was documented and validated but never read: it is gone (the
+    // controller's reach check is stricter than the seed's divergence guard it described).
+    let text = mk1_text().replacen("[drives]", "[ik]\ndivergence_margin = 1e-4\n\n[drives]", 1);
+    assert!(refusal(&text).contains("divergence_margin"));
 }
 
 #[test]
@@ -104,9 +207,9 @@ fn wrong_joint_counts_are_refused() {
 
 #[test]
 fn empty_joint_list_is_refused_by_validation() {
-    let mut config = common::robot("ranger-mk1");
-    config.joints.clear();
-    let e = config.validate().unwrap_err();
+    let e = common::robot("ranger-mk1")
+        .edit(|config| config.joints.clear())
+        .unwrap_err();
     assert_eq!((e.field, e.reason), ("joints", ConfigReason::NoJoints));
 }
 

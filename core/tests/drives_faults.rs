@@ -11,7 +11,7 @@
 
 mod drives_rig;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::drives::{
     BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState, SimWhistle, VirtualBus,
     WhistleConfig,
@@ -24,14 +24,16 @@ use drives_rig::{Rig, robot};
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
-fn mk1_fast() -> RobotConfig {
-    let mut config = robot("ranger-mk1");
-    for joint in config.joints.iter_mut() {
-        joint.max_velocity = 0.4;
-        joint.max_acceleration = 1.0;
-        joint.max_rate = 2.0;
-    }
-    config
+fn mk1_fast() -> ValidRobot {
+    robot("ranger-mk1")
+        .edit(|config| {
+            for joint in config.joints.iter_mut() {
+                joint.max_velocity = 0.4;
+                joint.max_acceleration = 1.0;
+                joint.max_rate = 2.0;
+            }
+        })
+        .unwrap()
 }
 
 /// A rig streaming a joint move, and the last command the manager took.

@@ -11,7 +11,7 @@
 
 mod drives_rig;
 
-use armgate_core::config::{JointType, RobotConfig};
+use armgate_core::config::{JointType, ValidRobot};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
 use armgate_core::drives::streaming::{FlowError, PtStream, Query, Schedule};
 use armgate_core::drives::{
@@ -355,17 +355,24 @@ fn load_model_counts_worst_case_frames() {
 #[test]
 fn setup_refuses_what_it_cannot_run() {
     let settings = DriveSettings::default();
-    let mut config = robot("ranger-mk1");
-    config.drives.unit_mode = 2;
+    let config = robot("ranger-mk1")
+        .edit(|config| config.drives.unit_mode = 2)
+        .unwrap();
     assert_eq!(
         DriveManager::new(&config, &settings).err(),
         Some(SetupError::UnsupportedUnitMode(2))
     );
-    let mut config = robot("ranger-mk1");
-    config.control_period = 0.01;
+    // The robot file refuses periods the drives cannot run; a heartbeat far faster than the
+    // one validation assumed overloads the bus.
+    let eight_drives = robot("ranger-mk2");
+    let chatty = DriveSettings {
+        heartbeat_period: 1e-4,
+        heartbeat_timeout: 0.3,
+        ..settings
+    };
     assert_eq!(
-        DriveManager::new(&config, &settings).err(),
-        Some(SetupError::PeriodNotWholeSamples)
+        DriveManager::new(&eight_drives, &chatty).err(),
+        Some(SetupError::BusOverloaded)
     );
     let config = robot("ranger-mk1");
     let bad = [
@@ -405,12 +412,14 @@ fn setup_refuses_what_it_cannot_run() {
 // ---------------------------------------------------------------- the start, frame by frame
 
 /// ranger-mk1 with a drive on joint 1 only.
-fn one_drive() -> RobotConfig {
-    let mut config = robot("ranger-mk1");
-    for joint in config.joints.iter_mut().skip(1) {
-        joint.drive.node_id = 0;
-    }
-    config
+fn one_drive() -> ValidRobot {
+    robot("ranger-mk1")
+        .edit(|config| {
+            for joint in config.joints.iter_mut().skip(1) {
+                joint.drive.node_id = 0;
+            }
+        })
+        .unwrap()
 }
 
 fn answer(command: Mnemonic, index: u8, value: i32) -> CanFrame {

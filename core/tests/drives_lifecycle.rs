@@ -12,7 +12,7 @@ mod drives_rig;
 
 use std::collections::BTreeSet;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::drives::{
     DriveFault, DriveSettings, DriveState, LifecycleError, UNKNOWN_TEMPERATURE,
 };
@@ -25,16 +25,18 @@ use drives_rig::{Rig, robot};
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
 /// ranger-mk1 with generator limits that make the motion worth streaming.
-fn mk1_fast() -> RobotConfig {
-    let mut config = robot("ranger-mk1");
-    config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
-    config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
-    for joint in config.joints.iter_mut() {
-        joint.max_velocity = 0.4;
-        joint.max_acceleration = 1.0;
-        joint.max_rate = 2.0;
-    }
-    config
+fn mk1_fast() -> ValidRobot {
+    robot("ranger-mk1")
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            for joint in config.joints.iter_mut() {
+                joint.max_velocity = 0.4;
+                joint.max_acceleration = 1.0;
+                joint.max_rate = 2.0;
+            }
+        })
+        .unwrap()
 }
 
 /// Interpreter frames per node in `rig.sent`.
@@ -156,11 +158,14 @@ fn mk1_streams_a_minute_of_joint_and_cartesian_motion() {
 
 #[test]
 fn mk2_streams_a_minute_to_eight_drives() {
-    let mut config = robot("ranger-mk2");
-    for joint in config.joints.iter_mut() {
-        joint.max_velocity = 0.4;
-        joint.max_rate = 2.0;
-    }
+    let config = robot("ranger-mk2")
+        .edit(|config| {
+            for joint in config.joints.iter_mut() {
+                joint.max_velocity = 0.4;
+                joint.max_rate = 2.0;
+            }
+        })
+        .unwrap();
     let mut rig = Rig::new(config);
     rig.start();
     rig.ctrl.set_mode(Mode::Joint).unwrap();
@@ -350,8 +355,9 @@ fn joints_without_a_drive_mirror_the_command() {
     assert_eq!(rig.manager.state(), DriveState::Stopped);
 
     // A mixed arm: joint 3 without a drive mirrors, the others stream.
-    let mut config = mk1_fast();
-    config.joints[2].drive.node_id = 0;
+    let config = mk1_fast()
+        .edit(|config| config.joints[2].drive.node_id = 0)
+        .unwrap();
     let mut rig = Rig::new(config);
     assert_eq!(rig.manager.measured()[2], 1.5708); // home until commanded
     rig.start();
@@ -370,8 +376,9 @@ fn joints_without_a_drive_mirror_the_command() {
 fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
     // A fast loop (8.64 ms) and clocks 0.1 % fast or slow: the segment boundaries slide a
     // full period every 1000 cycles, so a minute holds several slips per drive.
-    let mut config = mk1_fast();
-    config.control_period = 24.0 * 360e-6;
+    let config = mk1_fast()
+        .edit(|config| config.control_period = 24.0 * 360e-6)
+        .unwrap();
     let mut rig = Rig::with(config.clone(), DriveSettings::default(), |bus| {
         let drives: Vec<_> = config
             .joints

@@ -9,7 +9,7 @@
 
 mod common;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{
@@ -27,7 +27,7 @@ struct Rig {
 }
 
 impl Rig {
-    fn new(config: &RobotConfig, q0: &[f64]) -> Self {
+    fn new(config: &ValidRobot, q0: &[f64]) -> Self {
         let mut rig = Self {
             ctrl: Controller::new(config),
             arm: IdealArm::new(Joints::from_slice(q0).unwrap()),
@@ -70,14 +70,16 @@ const MK1_HOME: [f64; 6] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0];
 /// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
-fn mk1_fast() -> RobotConfig {
-    let mut config = common::robot("ranger-mk1");
-    config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
-    config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
-    for j in config.joints.iter_mut() {
-        j.max_rate = 2.0;
-    }
-    config
+fn mk1_fast() -> ValidRobot {
+    common::robot("ranger-mk1")
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            config.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            for j in config.joints.iter_mut() {
+                j.max_rate = 2.0;
+            }
+        })
+        .unwrap()
 }
 
 #[test]
@@ -379,7 +381,7 @@ fn joint_limiter_clamps_range_and_rate_and_reports() {
 fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     // Two poses on an arc about the base axis; a box around the chord's midpoint blocks the
     // straight Cartesian path and contains the arc's midpoint.
-    let mut config = mk1_fast();
+    let config = mk1_fast();
     let chain = Chain::new(&config);
     let q_a = MK1_READY;
     let mut q_b = MK1_READY;
@@ -389,18 +391,19 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let (pa, pb) = (chain.forward(&q_a).unwrap(), chain.forward(&q_b).unwrap());
     let m = (pa.pos + pb.pos) * 0.5;
     let half = 0.05;
-    config.workspace.boxes.clear();
-    config
-        .workspace
-        .boxes
-        .push([
-            m.x - half,
-            m.x + half,
-            m.y - half,
-            m.y + half,
-            m.z - half,
-            m.z + half,
-        ])
+    let box_around_m = [
+        m.x - half,
+        m.x + half,
+        m.y - half,
+        m.y + half,
+        m.z - half,
+        m.z + half,
+    ];
+    let config = config
+        .edit(|config| {
+            config.workspace.boxes.clear();
+            config.workspace.boxes.push(box_around_m).unwrap();
+        })
         .unwrap();
     let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
     assert!(in_box(chain.forward(&q_mid).unwrap().pos));

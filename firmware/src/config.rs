@@ -4,7 +4,7 @@
 //! postcard; here the bytes are decoded and validated again (the decoded values must pass the
 //! same checks on the microcontroller as on the host).
 
-use armgate_core::config::{ConfigError, RobotConfig};
+use armgate_core::config::{ConfigError, RobotConfig, ValidRobot};
 
 /// The postcard serialisation of the robot description, written by `build.rs`.
 static ROBOT_POSTCARD: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/robot.postcard"));
@@ -34,10 +34,9 @@ impl defmt::Format for LoadError {
 }
 
 /// Decodes and validates the embedded robot description.
-pub fn load() -> Result<RobotConfig, LoadError> {
+pub fn load() -> Result<ValidRobot, LoadError> {
     let config: RobotConfig = postcard::from_bytes(ROBOT_POSTCARD).map_err(LoadError::Decode)?;
-    config.validate().map_err(LoadError::Invalid)?;
-    Ok(config)
+    config.validate().map_err(LoadError::Invalid)
 }
 
 /// Size of the embedded description in bytes (for the boot log).

@@ -21,7 +21,7 @@
 //! period late restarts the schedule (the core never catches up by running ticks back to back).
 
 use armgate_core::command::{CommandHandler, NOTICE_CAPACITY};
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use embassy_net::IpEndpoint;
 use embassy_stm32::peripherals::IWDG1;
 use embassy_stm32::wdg::IndependentWatchdog;
@@ -39,7 +39,7 @@ const WATCHDOG_PERIODS: u32 = 4;
 const MIN_WATCHDOG_TIMEOUT: Duration = Duration::from_millis(100);
 
 /// The control period of `robot` as an embassy duration (whole microseconds, at least 1 µs).
-pub fn period(robot: &RobotConfig) -> Duration {
+pub fn period(robot: &ValidRobot) -> Duration {
     // The period is validated finite and positive; the cast saturates for absurd values.
     let micros = libm::round(robot.control_period * 1e6) as u64;
     Duration::from_micros(micros.max(1))
@@ -96,7 +96,7 @@ impl Interval {
 /// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
 #[embassy_executor::task]
 pub async fn run(
-    robot: &'static RobotConfig,
+    robot: &'static ValidRobot,
     mut drives: BoardDrives,
     mut watchdog: IndependentWatchdog<'static, IWDG1>,
 ) {

@@ -12,7 +12,7 @@
 //! the order of `armgate-sim`'s drive backend. The manager is started at power-up, as the
 //! seed auto-started its robot component.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::drives::{DriveManager, DriveSettings};
 use armgate_core::kinematics::Joints;
 use embassy_stm32::Peri;
@@ -20,7 +20,7 @@ use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
 
 #[cfg(not(feature = "sim-drives"))]
 mod bus {
-    use armgate_core::config::RobotConfig;
+    use armgate_core::config::ValidRobot;
     use embassy_stm32::Peri;
     use embassy_stm32::peripherals::{FDCAN1, PD0, PD1};
 
@@ -28,7 +28,7 @@ mod bus {
 
     /// FDCAN1 at the robot's bit rate.
     pub fn open(
-        robot: &RobotConfig,
+        robot: &ValidRobot,
         peri: Peri<'static, FDCAN1>,
         rx: Peri<'static, PD0>,
         tx: Peri<'static, PD1>,
@@ -46,7 +46,7 @@ mod bus {
 
 #[cfg(feature = "sim-drives")]
 mod bus {
-    use armgate_core::config::RobotConfig;
+    use armgate_core::config::ValidRobot;
     use armgate_core::drives::{BusState, CanBus, TxError, VirtualBus};
     use armgate_protocol::can::CanFrame;
     use embassy_stm32::Peri;
@@ -74,7 +74,7 @@ mod bus {
 
     /// Simulated Whistles at their home positions; FDCAN1 and its pins stay unused.
     pub fn open(
-        robot: &RobotConfig,
+        robot: &ValidRobot,
         _peri: Peri<'static, FDCAN1>,
         _rx: Peri<'static, PD0>,
         _tx: Peri<'static, PD1>,
@@ -131,7 +131,7 @@ impl BoardDrives {
 /// Opens the bus and starts the drive manager. Panics (before the watchdog runs) if the drive
 /// manager refuses the robot, which `build.rs` already rules out for the embedded robot.
 pub fn new(
-    robot: &RobotConfig,
+    robot: &ValidRobot,
     can: Peri<'static, FDCAN1>,
     rx: Peri<'static, PD0>,
     tx: Peri<'static, PD1>,

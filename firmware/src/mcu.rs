@@ -1,6 +1,6 @@
 //! Start-up: clocks, the embedded robot, the watchdog, Ethernet, the executors and their tasks.
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use embassy_executor::{Executor, InterruptExecutor};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
@@ -20,7 +20,7 @@ static CONTROL_EXECUTOR: InterruptExecutor = InterruptExecutor::new();
 /// The thread-mode executor: network stack, UDP server, status line.
 static THREAD_EXECUTOR: StaticCell<Executor> = StaticCell::new();
 /// The robot description, decoded once at boot and shared by every task.
-static ROBOT: StaticCell<RobotConfig> = StaticCell::new();
+static ROBOT: StaticCell<ValidRobot> = StaticCell::new();
 
 /// The control executor's interrupt: polls its tasks when one of them is woken.
 // `unsafe` is required: `on_interrupt` must only be called from the executor's own interrupt
@@ -51,7 +51,7 @@ fn main() -> ! {
         .apb4fzr1()
         .modify(|w| w.set_iwdg1(true));
 
-    let robot: &'static RobotConfig = match config::load() {
+    let robot: &'static ValidRobot = match config::load() {
         Ok(robot) => ROBOT.init(robot),
         // Unrecoverable: build.rs validated this very description, so only a core change since
         // the build can get here. Halt with the reason rather than run an unknown arm (the

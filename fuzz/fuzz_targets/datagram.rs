@@ -28,7 +28,7 @@
 use std::sync::OnceLock;
 
 use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::motion::IdealArm;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
@@ -55,7 +55,7 @@ struct Start {
 fn start() -> &'static Start {
     static START: OnceLock<Start> = OnceLock::new();
     START.get_or_init(|| {
-        let config: RobotConfig = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
+        let config: ValidRobot = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
         let home = config.home();
         let mut handler = CommandHandler::new(&config);
         let mut drives = SimulatedDrives::new(ArmModel::Ideal(IdealArm::new(home)));

@@ -4,7 +4,7 @@
 use std::str::FromStr;
 
 use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
 use armgate_protocol::can::CanFrame;
@@ -64,7 +64,7 @@ impl Backend {
     /// component, CAN drives are started at once.
     pub fn open(
         choice: &CanChoice,
-        config: &RobotConfig,
+        config: &ValidRobot,
         start: &Joints,
         arm: impl FnOnce() -> ArmModel,
     ) -> Result<Self, String> {

@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use armgate_core::command::{ArmModel, CommandHandler, Network};
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Quaternion;
 use armgate_core::motion::{IdealArm, RateLimitedArm};
@@ -118,7 +118,7 @@ struct Stats {
     overruns: u64,
 }
 
-fn run(args: &Args, config: &RobotConfig) -> Result<(), String> {
+fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let n = config.dof();
     let home = config.home();
     let start = Chain::new(config)
@@ -296,7 +296,7 @@ fn bind(addr: SocketAddr) -> std::io::Result<UdpSocket> {
     Ok(socket.into())
 }
 
-fn arm_model(kind: ArmKind, config: &RobotConfig, start: Joints) -> ArmModel {
+fn arm_model(kind: ArmKind, config: &ValidRobot, start: Joints) -> ArmModel {
     match kind {
         ArmKind::Ideal => ArmModel::Ideal(IdealArm::new(start)),
         ArmKind::RateLimited => ArmModel::RateLimited(RateLimitedArm::new(
@@ -332,7 +332,7 @@ fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> Stri
 }
 
 /// Prints the tool pose at the drives' home angles, as the PS reply and the client show it.
-fn print_home(config: &RobotConfig) {
+fn print_home(config: &ValidRobot) {
     let chain = Chain::new(config);
     let home = config.home();
     let (Ok(tool), Ok(w)) = (chain.forward(&home), chain.manipulability(&home)) else {

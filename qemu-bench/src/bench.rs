@@ -8,7 +8,7 @@
 
 use core::hint::black_box;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Frame;
 use armgate_core::rng::SplitMix64;
@@ -61,8 +61,9 @@ pub fn run(counter: &Counter) -> bool {
     );
     let mut ok = true;
     for (name, bytes) in ROBOTS {
-        match postcard::from_bytes::<RobotConfig>(bytes) {
-            Ok(config) if config.validate().is_ok() => {
+        let config = postcard::from_bytes::<RobotConfig>(bytes).ok();
+        match config.map(RobotConfig::validate) {
+            Some(Ok(config)) => {
                 let results = measure_robot(&config);
                 print_rows(name, &results, counter);
                 ok &= results.errors == 0;
@@ -79,7 +80,7 @@ pub fn run(counter: &Counter) -> bool {
     ok
 }
 
-fn measure_robot(config: &RobotConfig) -> Results {
+fn measure_robot(config: &ValidRobot) -> Results {
     let chain = Chain::new(config);
     let n = chain.dof();
     let mut results = Results::default();

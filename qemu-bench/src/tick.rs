@@ -29,7 +29,7 @@
 use core::f64::consts::FRAC_PI_2;
 
 use armgate_core::command::CommandHandler;
-use armgate_core::config::RobotConfig;
+use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
 use armgate_core::kinematics::{Chain, Joints, KinematicsError};
 use armgate_core::math::{Frame, Rotation, Vec3};
@@ -75,7 +75,7 @@ const STACK_DEPTH: usize = 32 * 1024;
 /// The firmware's control state with `sim-drives`: a handler, the drive manager, the virtual
 /// bus with a simulated Whistle per drive, and the time of the next tick.
 struct Session<'a> {
-    config: &'a RobotConfig,
+    config: &'a ValidRobot,
     handler: CommandHandler,
     manager: DriveManager,
     bus: VirtualBus,
@@ -86,7 +86,7 @@ impl<'a> Session<'a> {
     /// The drives at `start` (or at their home positions), started (the firmware starts the
     /// drive manager at power-up) and streaming, after one more tick (so that the arm's pose is
     /// measured).
-    fn new(config: &'a RobotConfig, start: Option<&[f64]>) -> Result<Self, &'static str> {
+    fn new(config: &'a ValidRobot, start: Option<&[f64]>) -> Result<Self, &'static str> {
         let q = start_joints(config, start)?;
         let mut manager = DriveManager::new(config, &DriveSettings::default())
             .map_err(|_| "the drive manager refused the robot")?;
@@ -228,7 +228,7 @@ impl<'a> Session<'a> {
 }
 
 /// The joints at `start`, or at the drives' home positions.
-fn start_joints(config: &RobotConfig, start: Option<&[f64]>) -> Result<Joints, &'static str> {
+fn start_joints(config: &ValidRobot, start: Option<&[f64]>) -> Result<Joints, &'static str> {
     match start {
         Some(start) => Joints::from_slice(start)
             .filter(|q| q.len() == config.dof())
@@ -299,7 +299,7 @@ pub fn run(counter: &Counter) -> bool {
             .iter()
             .find(|(n, _)| *n == name)
             .and_then(|(_, bytes)| postcard::from_bytes::<RobotConfig>(bytes).ok())
-            .filter(|c| c.validate().is_ok());
+            .and_then(|c| c.validate().ok());
         let Some(config) = config else {
             hprintln!("{}: not embedded, or does not decode", name);
             ok = false;
@@ -315,7 +315,7 @@ pub fn run(counter: &Counter) -> bool {
 
 fn measure_robot(
     name: &str,
-    config: &RobotConfig,
+    config: &ValidRobot,
     start: &[f64],
     counter: &Counter,
 ) -> Result<(), &'static str> {
@@ -471,7 +471,7 @@ fn measure_robot(
 }
 
 /// Pass 1: the whole tick, one window per tick, during the move and then holding; the requests.
-fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'static str> {
+fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'static str> {
     let mut session = Session::new(config, start)?;
     let (requests, _, _) = session.start_move()?;
     let mut moving = Timing::default();
@@ -506,7 +506,7 @@ fn whole_ticks(config: &RobotConfig, start: Option<&[f64]>) -> Result<Whole, &'s
 }
 
 /// Pass 2: every step of the tick in a window of its own, and the replicas.
-fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static str> {
+fn breakdown(config: &ValidRobot, start: &[f64]) -> Result<Breakdown, &'static str> {
     let chain = Chain::new(config);
     let limiter = JointLimiter::new(config);
     let workspace = Workspace::new(&config.workspace);
@@ -588,7 +588,7 @@ fn breakdown(config: &RobotConfig, start: &[f64]) -> Result<Breakdown, &'static 
 }
 
 /// Pass 3: the stack the requests and ticks of the move need, below this function's frame.
-fn stack_high_water(config: &RobotConfig, start: &[f64]) -> Result<usize, &'static str> {
+fn stack_high_water(config: &ValidRobot, start: &[f64]) -> Result<usize, &'static str> {
     // The session (with the ≈ 24 KB virtual bus, a static in the firmware) and the drives'
     // start before the painting: only the control work is measured.
     let mut session = Session::new(config, Some(start))?;

@@ -1,7 +1,7 @@
 //! Drawing the keyboard client's screen: a pure function of [`TeleopState`].
 //!
 //! ```text
-//!  armgate teleop  127.0.0.1:7031   mode cart   keys: Cartesian, send on Enter
+//!  armgate teleop  127.0.0.1:7031   mode cartesian   keys: Cartesian, send on Enter
 //! ┌────────────────────────────────────────────────────────────────────────┐
 //! │Current Pose     Desired Pose     Joints           Temp(C)              │
 //! │x      0.5000    x      0.5010    j1     -1.5838   T1      35.0         │

@@ -1,6 +1,6 @@
 //! The keyboard client's state and its key handling, free of any terminal or socket.
 
-use crate::{Mode, Pose, Text};
+use crate::{Mode, Pose, Text, next_mode};
 
 /// The base Cartesian step per key press (m), multiplied by the scale.
 pub const BASE_STEP: f64 = 0.001;
@@ -205,14 +205,14 @@ impl TeleopState {
                     Variant::Joint => Variant::Cartesian,
                 };
                 self.status = match self.variant {
-                    Variant::Cartesian => "Cartesian keys (needs mode cart)",
+                    Variant::Cartesian => "Cartesian keys (needs mode cartesian)",
                     Variant::Joint => "joint keys (needs mode joint)",
                 }
                 .to_owned();
                 None
             }
             Key::Char('m') => {
-                let next = self.mode_pending.or(self.mode).unwrap_or(Mode::Off).next();
+                let next = next_mode(self.mode_pending.or(self.mode).unwrap_or(Mode::Off));
                 self.mode_pending = Some(next);
                 Some(Action::SetMode(next))
             }
@@ -309,7 +309,7 @@ impl TeleopState {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use armgate_core::math::Quaternion;
+    use crate::Quaternion;
 
     fn pose(x: f64, y: f64, z: f64) -> Pose {
         Pose {

@@ -1,7 +1,7 @@
 //! The control loop of the drive examples: a controller, the drive manager and a virtual bus
 //! of simulated Whistles, stepped as the firmware steps them (receive → step → transmit).
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::drives::{DriveManager, DriveSettings, DriveState, VirtualBus};
 use armgate_core::motion::{Controller, StepOutput};
 
@@ -20,7 +20,7 @@ pub struct DriveLoop {
 impl DriveLoop {
     /// Starts the drives on `bus` and ticks until they stream and the flow control has
     /// settled (20 more ticks).
-    pub fn started(config: &RobotConfig, settings: &DriveSettings, bus: VirtualBus) -> Self {
+    pub fn started(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus) -> Self {
         let mut l = Self {
             bus,
             manager: DriveManager::new(config, settings).unwrap(),

@@ -1,17 +1,14 @@
-//! Joint banks: how six-value joint requests command arms with seven or eight joints.
-//!
-//! Bit 7 of the index byte selects bank 2 (joints 7..), bits 0–6 keep their meaning (the
-//! via-point slot). A bank-2 request stages the upper joints; the next bank-1 request of the
-//! same kind (and slot) completes the vector with them. See docs/protocol.md.
+//! The controller's side of the joint banks (the wire rules are in
+//! `armgate_protocol::client::banks`): a bank-2 request stages the upper joints; the next
+//! bank-1 request of the same kind (and slot) completes the vector with them. See
+//! docs/protocol.md.
+
+pub(super) use armgate_protocol::client::banks::{BANK_2, WRITE_JOINTS as BANK_LEN};
 
 use crate::MAX_JOINTS;
 use crate::kinematics::Joints;
 use crate::motion::VIA_SLOTS;
 
-/// Index-byte flag of bank 2.
-pub(super) const BANK_2: u8 = 0x80;
-/// Joints per bank (the values a joint request carries).
-pub(super) const BANK_LEN: usize = 6;
 /// Joints 7 and 8.
 const UPPER: usize = MAX_JOINTS - BANK_LEN;
 

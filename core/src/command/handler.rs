@@ -1,21 +1,17 @@
 //! The command handler: one client datagram in, one reply out.
 
+use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
-    Command, MESSAGE_LEN, Message, Notice, Reply, Request, Text, VALUES,
+    Command, MESSAGE_LEN, Message, NO_JOINT_TEMPERATURE, Notice, Reply, Request, Text, VALUES,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
 use super::relay::NoticeRelay;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{Frame, Quaternion, Rotation, Vec3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
-
-/// Joint values a normal reply carries (f0..f6).
-const REPLY_JOINTS: usize = VALUES;
-/// Padding of unused temperature slots in a TM reply (spec §2.5).
-const NO_TEMPERATURE: f32 = -1000.0;
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -39,7 +35,7 @@ pub struct CommandHandler {
 
 impl CommandHandler {
     /// A handler for a validated robot description.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         Self {
             controller: Controller::new(config),
             goal: None,
@@ -124,15 +120,10 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::ChangeMode => {
-                let mode = match libm::floor(v[0] + 0.5) {
-                    0.0 => Mode::Off,
-                    1.0 => Mode::Joint,
-                    2.0 => Mode::Cartesian,
-                    // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
-                    _ => return Err(Notice::BadNumber(cmd)),
-                };
+                // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
+                let mode = Mode::from_value(req.values[0]).ok_or(Notice::BadNumber(cmd))?;
                 self.controller.set_mode(mode).map_err(refused)?;
-                Ok(values_reply(cmd, &[mode as u8 as f64], 0))
+                Ok(values_reply(cmd, &[f64::from(mode.value())], 0))
             }
             Command::GoalQuaternion => {
                 let [x, y, z, qx, qy, qz, qw] = v;
@@ -202,8 +193,9 @@ impl CommandHandler {
                         .set_joint_via(slot, &q, duration)
                         .map_err(refused)?;
                 }
-                let mut values = [0.0; VALUES];
-                values[..BANK_LEN].copy_from_slice(joints);
+                // The echo: the joints as sent (`joints` is `v`'s first BANK_LEN values), then
+                // the clamped duration. No slice copy that could panic on a length mismatch.
+                let mut values = v;
                 values[BANK_LEN] = duration;
                 Ok(values_reply(cmd, &values, req.index))
             }
@@ -248,7 +240,7 @@ impl CommandHandler {
             }
             Command::Temperature => {
                 let t = drives.temperatures();
-                Ok(joint_reply(cmd, &t, bank_2, n, NO_TEMPERATURE))
+                Ok(joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE))
             }
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();
@@ -348,7 +340,7 @@ fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Rep
     for (o, v) in values
         .iter_mut()
         .zip(q.iter().take(n).skip(skip))
-        .take(REPLY_JOINTS)
+        .take(READ_JOINTS)
     {
         *o = *v as f32;
     }

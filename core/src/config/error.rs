@@ -36,6 +36,20 @@ pub enum ConfigReason {
     UnsupportedBitRate,
     /// The unit mode is not 1 (torque), 2 (speed) or 5 (position).
     UnsupportedUnitMode,
+    /// The control period is not a whole number of 360 µs drive samples from 3 to 2777
+    /// (1.08 ms to 0.99972 s).
+    ControlPeriod,
+    /// A joint's home (its position at zero encoder counts, and the start pose) lies outside
+    /// its limits.
+    HomeOutsideLimits,
+    /// The drives' worst-case streaming traffic would take this much of the bus (per cent,
+    /// rounded up), more than `drives.max_bus_load`.
+    BusOverloaded {
+        /// The worst-case load, per cent.
+        percent: u16,
+    },
+    /// A fraction must be greater than 0 and at most 1.
+    NotAFraction,
 }
 
 impl ConfigError {
@@ -69,6 +83,19 @@ impl fmt::Display for ConfigReason {
             Self::ZeroCounts => "counts per revolution must be nonzero for a joint with a drive",
             Self::UnsupportedBitRate => "bit rate must be 125000, 250000, 500000 or 1000000",
             Self::UnsupportedUnitMode => "unit mode must be 1 (torque), 2 (speed) or 5 (position)",
+            Self::ControlPeriod => {
+                "must be a whole number of 360 µs drive samples from 3 to 2777 \
+                 (1.08 ms to 0.99972 s)"
+            }
+            Self::HomeOutsideLimits => "home must lie within the joint's min and max",
+            Self::BusOverloaded { percent } => {
+                return write!(
+                    f,
+                    "worst-case CAN bus load {percent} % exceeds drives.max_bus_load; \
+                     lengthen the period or raise the bit rate"
+                );
+            }
+            Self::NotAFraction => "must be greater than 0 and at most 1",
         })
     }
 }

@@ -3,17 +3,21 @@
 //! On the host the description is read from a TOML file (`robots/*.toml`, feature `std`); the
 //! firmware embeds the same structure serialised with postcard. The field names of the TOML file
 //! are the field names of these structures; `docs/robot-file.md` documents them.
+//! [`RobotConfig::validate`] turns a description into a [`ValidRobot`], the only form the
+//! controller, the chain and the drive manager accept.
 
 mod bounded;
 mod error;
 mod robot;
 #[cfg(feature = "std")]
 mod toml_file;
+mod valid;
 
 pub use error::{ConfigError, ConfigReason};
 pub use robot::{
     CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType, MAX_BOXES,
-    MAX_NAME_LEN, RobotConfig, ToolConfig, WorkspaceConfig,
+    MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig, ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};
+pub use valid::ValidRobot;

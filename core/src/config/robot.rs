@@ -4,13 +4,21 @@ use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
 use super::error::{ConfigError, ConfigReason};
+use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
+use crate::drives::load::{DEFAULT_CEILING, LoadModel};
+use crate::drives::{DriveSettings, whole_samples};
 use crate::kinematics::Joints;
 
 /// Longest robot name, in bytes.
 pub const MAX_NAME_LEN: usize = 32;
 /// Most workspace exclusion boxes a description may hold.
 pub const MAX_BOXES: usize = 16;
+/// The shortest control period, in 360 µs drive samples (1.08 ms): below 1 ms a tick cannot
+/// finish in time and the shells would spin.
+pub const MIN_PERIOD_SAMPLES: u16 = 3;
+/// The longest control period, in 360 µs drive samples (0.99972 s): the longest under 1 s.
+pub const MAX_PERIOD_SAMPLES: u16 = 2777;
 
 /// A complete robot description: geometry, limits, drives, workspace and control period.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -18,7 +26,8 @@ pub const MAX_BOXES: usize = 16;
 pub struct RobotConfig {
     /// Short name of the arm, e.g. `ranger-mk1`.
     pub name: String<MAX_NAME_LEN>,
-    /// Kinematic control period in seconds (the seed: 0.01944 s = 54 × 360 µs).
+    /// Kinematic control period in seconds (the seed: 0.01944 s = 54 × 360 µs): a whole number
+    /// of 360 µs drive samples, [`MIN_PERIOD_SAMPLES`] to [`MAX_PERIOD_SAMPLES`].
     pub control_period: f64,
     /// The joints from the base outwards (1..=8).
     #[serde(deserialize_with = "super::bounded::deserialize")]
@@ -101,6 +110,14 @@ pub struct DrivesConfig {
     pub can_bitrate: u32,
     /// Elmo unit mode: 5 = position (the only mode the seed used), 2 = speed, 1 = torque.
     pub unit_mode: u8,
+    /// The largest fraction of the bus the drives' worst-case streaming traffic may take
+    /// (0 < x ≤ 1; default 0.7, [`DEFAULT_CEILING`]).
+    #[serde(default = "default_ceiling")]
+    pub max_bus_load: f64,
+}
+
+fn default_ceiling() -> f64 {
+    DEFAULT_CEILING
 }
 
 /// The tool frame relative to the last link frame:
@@ -156,9 +173,6 @@ pub struct IkConfig {
     pub tracking_iterations: u16,
     /// Total iteration budget of one global solve, over all restarts.
     pub global_iterations: u16,
-    /// Divergence guard margin (m + rad): a solution worse than the current pose by more than
-    /// this is rejected (the seed: 1e-4).
-    pub divergence_margin: f64,
 }
 
 impl Default for IkConfig {
@@ -167,7 +181,6 @@ impl Default for IkConfig {
             tolerance: 1e-9,
             tracking_iterations: 20,
             global_iterations: 2000,
-            divergence_margin: 1e-4,
         }
     }
 }
@@ -192,14 +205,26 @@ impl RobotConfig {
         q
     }
 
-    /// Checks every value, so that nothing downstream has to: finite numbers, positive limits,
-    /// `min ≤ max`, valid node ids, bit rate and unit mode, well-formed boxes.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    /// Checks every value, so that nothing downstream has to, and returns the description as
+    /// the one type the controller, the chain and the drive manager accept: finite numbers,
+    /// positive limits, `min ≤ home ≤ max`, a control period of whole drive samples in range,
+    /// valid node ids, bit rate and unit mode, a bus load under `drives.max_bus_load`,
+    /// well-formed boxes.
+    pub fn validate(self) -> Result<ValidRobot, ConfigError> {
+        self.check()?;
+        Ok(ValidRobot::checked(self))
+    }
+
+    fn check(&self) -> Result<(), ConfigError> {
         let top = |field, reason| ConfigError::top(field, reason);
         if self.name.is_empty() {
             return Err(top("name", ConfigReason::Empty));
         }
-        positive(self.control_period).map_err(|r| top("control_period", r))?;
+        let samples = whole_samples(self.control_period)
+            .filter(|n| (MIN_PERIOD_SAMPLES..=MAX_PERIOD_SAMPLES).contains(n));
+        if samples.is_none() {
+            return Err(top("control_period", ConfigReason::ControlPeriod));
+        }
         if self.joints.is_empty() {
             return Err(top("joints", ConfigReason::NoJoints));
         }
@@ -224,6 +249,7 @@ impl RobotConfig {
         }
         self.tool.validate().map_err(|(f, r)| top(f, r))?;
         self.drives.validate().map_err(|(f, r)| top(f, r))?;
+        self.check_bus_load()?;
         for (v, a) in self
             .cartesian
             .max_velocity
@@ -238,6 +264,22 @@ impl RobotConfig {
             check_box(b).map_err(|r| top("workspace.boxes", r))?;
         }
         self.ik.validate().map_err(|(f, r)| top(f, r))
+    }
+
+    /// The drives' worst-case streaming load (drives/load.rs, with the default heartbeat) must
+    /// stay at or under `drives.max_bus_load`.
+    fn check_bus_load(&self) -> Result<(), ConfigError> {
+        let model = LoadModel::new(self, &DriveSettings::default());
+        let load = model.load(self.control_period, self.drives.can_bitrate);
+        if load <= self.drives.max_bus_load {
+            return Ok(());
+        }
+        // A float-to-integer `as` saturates (and gives 0 for NaN): it cannot fail.
+        let percent = libm::ceil(load * 100.0) as u16;
+        Err(ConfigError::top(
+            "control_period",
+            ConfigReason::BusOverloaded { percent },
+        ))
     }
 }
 
@@ -261,6 +303,9 @@ impl JointConfig {
         positive(self.max_acceleration).map_err(|r| ("max_acceleration", r))?;
         positive(self.max_rate).map_err(|r| ("max_rate", r))?;
         finite(self.drive.home).map_err(|r| ("drive.home", r))?;
+        if !(self.min..=self.max).contains(&self.drive.home) {
+            return Err(("drive.home", ConfigReason::HomeOutsideLimits));
+        }
         if self.drive.node_id > 127 {
             return Err(("drive.node_id", ConfigReason::NodeIdOutOfRange));
         }
@@ -295,6 +340,9 @@ impl DrivesConfig {
         if !matches!(self.unit_mode, 1 | 2 | 5) {
             return Err(("drives.unit_mode", ConfigReason::UnsupportedUnitMode));
         }
+        if !(self.max_bus_load > 0.0 && self.max_bus_load <= 1.0) {
+            return Err(("drives.max_bus_load", ConfigReason::NotAFraction));
+        }
         Ok(())
     }
 }
@@ -308,7 +356,7 @@ impl IkConfig {
         if self.global_iterations == 0 {
             return Err(("ik.global_iterations", ConfigReason::NotPositive));
         }
-        finite(self.divergence_margin).map_err(|r| ("ik.divergence_margin", r))
+        Ok(())
     }
 }
 

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{ConfigError, RobotConfig};
+use super::{ConfigError, RobotConfig, ValidRobot};
 
 /// Why a robot file could not be loaded.
 #[derive(Debug)]
@@ -29,14 +29,13 @@ impl std::fmt::Display for LoadError {
 impl std::error::Error for LoadError {}
 
 /// Parses and validates a robot description from TOML text.
-pub fn parse_toml(text: &str) -> Result<RobotConfig, LoadError> {
+pub fn parse_toml(text: &str) -> Result<ValidRobot, LoadError> {
     let config: RobotConfig = toml::from_str(text).map_err(|e| LoadError::Syntax(Box::new(e)))?;
-    config.validate().map_err(LoadError::Invalid)?;
-    Ok(config)
+    config.validate().map_err(LoadError::Invalid)
 }
 
 /// Reads, parses and validates a robot file.
-pub fn load_file(path: impl AsRef<Path>) -> Result<RobotConfig, LoadError> {
+pub fn load_file(path: impl AsRef<Path>) -> Result<ValidRobot, LoadError> {
     let text = std::fs::read_to_string(path).map_err(LoadError::Io)?;
     parse_toml(&text)
 }

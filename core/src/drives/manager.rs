@@ -17,7 +17,7 @@ use super::state::{DriveState, Phase};
 use super::streaming::{FlowError, PtStream, Query, Schedule};
 use super::units::JointUnits;
 use crate::MAX_JOINTS;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -25,8 +25,8 @@ use crate::motion::Refusal;
 /// are two per drive, so this is far more than a healthy bus delivers.
 const MAX_FRAMES_PER_CALL: usize = 128;
 
-/// The temperature reported for a drive never heard from (spec §6.9).
-pub const UNKNOWN_TEMPERATURE: f64 = -100.0;
+/// The temperature reported for a drive never heard from (spec §6.9): the wire's sentinel.
+pub const UNKNOWN_TEMPERATURE: f64 = armgate_protocol::client::UNKNOWN_TEMPERATURE as f64;
 
 /// Why `start` or `stop` was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,7 +87,7 @@ pub struct DriveManager {
 
 impl DriveManager {
     /// A manager for `config`'s drives, idle until [`start`](Self::start).
-    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Result<Self, SetupError> {
+    pub fn new(config: &ValidRobot, settings: &DriveSettings) -> Result<Self, SetupError> {
         let timing = Timing::new(config, settings)?;
         let mut joints = Vec::new();
         for joint in &config.joints {
@@ -447,7 +447,8 @@ impl DriveManager {
             self.stats.commands_rejected = self.stats.commands_rejected.saturating_add(1);
             return;
         }
-        for ((joint, &value), counts) in self.joints.iter_mut().zip(q.iter()).zip(counts) {
+        // `&counts`: dropping heapless's by-value iterator has a panic path.
+        for ((joint, &value), &counts) in self.joints.iter_mut().zip(q.iter()).zip(&counts) {
             match joint {
                 Joint::Pretend { position } => *position = value,
                 Joint::Real(drive) => drive.target = counts,
@@ -656,9 +657,10 @@ impl DriveManager {
 /// Sends the frames of `drive`'s current start step; the step now waits for their answers.
 fn send_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'_, B>) {
     drive.awaiting.clear();
-    for frame in drive.step.frames(ctx) {
-        out.request(drive, &frame);
-        let _ = drive.awaiting.push(frame);
+    // By reference: dropping heapless's by-value iterator has a panic path.
+    for frame in &drive.step.frames(ctx) {
+        out.request(drive, frame);
+        let _ = drive.awaiting.push(*frame);
     }
     drive.step_sent = true;
 }

@@ -34,6 +34,7 @@ pub use bus::{BusState, CanBus, TxError};
 pub use emergency::{DriveEmergency, REASON_UNDERFLOW};
 pub use fault::{BusFault, DriveFault};
 pub use manager::{DriveManager, DriveStats, LifecycleError, UNKNOWN_TEMPERATURE};
+pub(crate) use settings::whole_samples;
 pub use settings::{DriveSettings, POSITION_MODE, SAMPLE_TIME, SetupError};
 pub use sim_whistle::{SimWhistle, WhistleConfig, WhistleFaults, WhistleStats};
 pub use state::{DriveState, STOP_HOLD_CYCLES};

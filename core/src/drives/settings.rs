@@ -3,12 +3,22 @@
 
 use armgate_protocol::can::NodeId;
 
+use super::load::LoadModel;
 use super::streaming::Schedule;
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
 /// number of these (`MP[4]`).
 pub const SAMPLE_TIME: f64 = 360e-6;
+
+/// The number of 360 µs drive samples in `period` seconds, if it is a whole number that fits a
+/// `u16` (to 1e-3 of a sample: periods are written in decimal).
+pub(crate) fn whole_samples(period: f64) -> Option<u16> {
+    let samples = libm::round(period / SAMPLE_TIME);
+    let whole = libm::fabs(period / SAMPLE_TIME - samples) < 1e-3;
+    // Checked to fit, so the cast is exact.
+    (whole && (1.0..=f64::from(u16::MAX)).contains(&samples)).then_some(samples as u16)
+}
 
 /// The only unit mode the manager streams to: position (PT motion).
 pub const POSITION_MODE: i32 = 5;
@@ -71,6 +81,9 @@ pub enum SetupError {
     BadTiming,
     /// A joint's drive has a node id above 127 or no counts per revolution.
     BadDrive,
+    /// With this heartbeat period the drives' worst-case traffic exceeds the robot's
+    /// `drives.max_bus_load` (validation checked it with the default heartbeat).
+    BusOverloaded,
 }
 
 impl core::fmt::Display for SetupError {
@@ -87,6 +100,7 @@ impl core::fmt::Display for SetupError {
             Self::ControllerNode => f.write_str("controller node id invalid or a drive's"),
             Self::BadTiming => f.write_str("bad timeout, settle time or schedule"),
             Self::BadDrive => f.write_str("bad drive node id or counts per revolution"),
+            Self::BusOverloaded => f.write_str("worst-case bus load exceeds drives.max_bus_load"),
         }
     }
 }
@@ -112,15 +126,17 @@ pub(crate) struct Timing {
 
 impl Timing {
     /// Checks `settings` against `config` and derives the counts.
-    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Result<Self, SetupError> {
+    pub fn new(config: &ValidRobot, settings: &DriveSettings) -> Result<Self, SetupError> {
         if config.drives.unit_mode != POSITION_MODE as u8 {
             return Err(SetupError::UnsupportedUnitMode(config.drives.unit_mode));
         }
         let period = config.control_period;
-        let samples = libm::round(period / SAMPLE_TIME);
-        let whole = libm::fabs(period / SAMPLE_TIME - samples) < 1e-3;
-        if !whole || !(1.0..=f64::from(u16::MAX)).contains(&samples) {
-            return Err(SetupError::PeriodNotWholeSamples);
+        // Validation refuses any other period; kept as the manager's own precondition.
+        let samples = whole_samples(period).ok_or(SetupError::PeriodNotWholeSamples)?;
+        let load = LoadModel::new(config, settings).load(period, config.drives.can_bitrate);
+        let fits = load <= config.drives.max_bus_load; // false for NaN too
+        if !fits {
+            return Err(SetupError::BusOverloaded);
         }
         if !(6..=64).contains(&settings.ring_len) {
             return Err(SetupError::RingSize);
@@ -144,8 +160,7 @@ impl Timing {
                 .ok_or(SetupError::BadTiming)
         };
         Ok(Self {
-            // Both checked above to fit.
-            samples_per_point: samples as u16,
+            samples_per_point: samples,
             // At least two cycles: a reply to a request sent in one cycle is read in the next.
             reply_timeout: cycles(settings.reply_timeout)?.max(2),
             nmt_settle: cycles(settings.nmt_settle)?,

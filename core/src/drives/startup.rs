@@ -122,7 +122,13 @@ impl StartStep {
             Self::Begin => &[Some(query(Mnemonic::BG))],
             Self::SettleUnitMode(_) | Self::Ready => &[],
         };
-        frames.iter().flatten().copied().collect()
+        // Pushed one by one: heapless's `collect` would panic on overflow (none here: at most
+        // two per step).
+        let mut out = Vec::new();
+        for frame in frames.iter().flatten() {
+            let _ = out.push(*frame);
+        }
+        out
     }
 
     /// The step after this one, given the unit mode the drive reported; `Err(found)` if the

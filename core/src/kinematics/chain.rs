@@ -4,7 +4,7 @@ use super::jacobian::Jacobian;
 use super::joints::Joints;
 use super::linalg;
 use crate::MAX_JOINTS;
-use crate::config::{JointType, RobotConfig};
+use crate::config::{JointType, RobotConfig, ValidRobot};
 use crate::math::{Frame, Rotation, Vec3};
 
 /// Why a kinematics call was refused.
@@ -56,8 +56,8 @@ pub(super) struct Axes {
 }
 
 impl Chain {
-    /// Builds the chain of a (validated) robot description.
-    pub fn new(config: &RobotConfig) -> Self {
+    /// Builds the chain of a validated robot description.
+    pub fn new(config: &ValidRobot) -> Self {
         let mut chain = Self {
             links: [Link::default(); MAX_JOINTS],
             n: config.joints.len().min(MAX_JOINTS),
@@ -178,7 +178,9 @@ impl Chain {
         } else {
             linalg::determinant(&j.gram(), self.n)
         };
-        Ok(libm::sqrt(det.max(0.0)))
+        // NaN-safe by construction: only a positive determinant has a root (`det.max(0.0)`
+        // relied on `max` dropping NaN).
+        Ok(if det > 0.0 { libm::sqrt(det) } else { 0.0 })
     }
 
     /// Forward kinematics: walks the chain, showing each joint frame's rotation and origin to

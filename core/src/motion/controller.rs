@@ -7,7 +7,7 @@ use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
-use crate::config::{IkConfig, RobotConfig};
+use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::Frame;
 
@@ -43,28 +43,8 @@ enum Tracking {
     Unreachable,
 }
 
-/// The control mode (the seed's switch: off / joint / Cartesian).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// No command: the drives hold their last set-point.
-    #[default]
-    Off,
-    /// The joint generator and joint sequences drive the arm.
-    Joint,
-    /// The Cartesian generator, shapes and Cartesian sequences drive the arm through the IK.
-    Cartesian,
-}
-
-impl Mode {
-    /// The mode's lower-case name, as the status lines show it.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Off => "off",
-            Self::Joint => "joint",
-            Self::Cartesian => "cartesian",
-        }
-    }
-}
+/// The control mode: a rule of the wire (`CM`), defined once in the protocol crate.
+pub use armgate_protocol::client::Mode;
 
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,7 +97,7 @@ pub struct Controller {
 
 impl Controller {
     /// A controller for a validated robot description, in mode off.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         let n = config.dof();
         let v_max = config.per_joint(|j| j.max_velocity);
         let a_max = config.per_joint(|j| j.max_acceleration);
@@ -266,7 +246,11 @@ impl Controller {
             return Tracking::Unreachable;
         };
         let s = result.solution();
-        if s.position_error > REACH_TOLERANCE || s.orientation_error > REACH_TOLERANCE {
+        // Written so that a NaN error (or solution) fails: it is not reached.
+        let reached = s.position_error <= REACH_TOLERANCE
+            && s.orientation_error <= REACH_TOLERANCE
+            && s.q.is_finite();
+        if !reached {
             return Tracking::Unreachable;
         }
         match self.limiter.rate_ratio(&s.q, seed) {

@@ -1,7 +1,8 @@
 //! The joint limiter (spec §5.1): the last guard before a set-point reaches the drives.
 
-use crate::config::RobotConfig;
+use crate::config::ValidRobot;
 use crate::kinematics::Joints;
+use crate::saturate::saturate;
 
 /// Clamps each joint set-point to its range and its step to `max_rate · period`.
 #[derive(Clone, Debug)]
@@ -24,7 +25,7 @@ pub struct Limited {
 
 impl JointLimiter {
     /// The limiter of a robot.
-    pub fn new(config: &RobotConfig) -> Self {
+    pub fn new(config: &ValidRobot) -> Self {
         Self {
             min: config.per_joint(|j| j.min),
             max: config.per_joint(|j| j.max),
@@ -33,12 +34,16 @@ impl JointLimiter {
     }
 
     /// How far moving from `previous` to `q` in one tick exceeds the rate limits: the largest
-    /// ratio of a joint's step to its allowed step (≤ 1 means within every limit).
+    /// ratio of a joint's step to its allowed step (≤ 1 means within every limit). A step that
+    /// is not a number (NaN or infinite values) gives infinity, never a ratio that passes.
     pub fn rate_ratio(&self, q: &Joints, previous: &Joints) -> f64 {
         q.iter()
             .zip(previous.iter())
             .zip(self.max_step.iter())
-            .map(|((a, b), step)| libm::fabs(a - b) / step)
+            .map(|((a, b), step)| {
+                let ratio = libm::fabs(a - b) / step;
+                if ratio.is_nan() { f64::INFINITY } else { ratio }
+            })
             .fold(0.0, f64::max)
     }
 
@@ -46,6 +51,11 @@ impl JointLimiter {
     /// A request exactly at a limit is not a violation (the seed raised its event there on
     /// every tick, spec §9 item 26); the seed ignored the rate in position mode (§9 item 27),
     /// here it is enforced.
+    ///
+    /// The output is finite whenever `previous` is (the controller's previous command, or the
+    /// measured joints, which are checked): a NaN or infinite request holds the joint at its
+    /// previous value and counts as a position clamp, so it never reaches the drives' unit
+    /// conversion. Every test is written so that NaN fails it.
     pub fn limit(&self, request: &Joints, previous: &Joints) -> Limited {
         let mut out = Limited {
             q: *request,
@@ -58,12 +68,18 @@ impl JointLimiter {
             .zip(self.max.iter())
             .zip(self.max_step.iter());
         for ((v, prev), ((lo, hi), step)) in out.q.iter_mut().zip(previous.iter()).zip(bounds) {
-            if *v < *lo || *v > *hi {
+            if !v.is_finite() {
                 out.position_clamped = true;
-                *v = v.clamp(*lo, *hi);
+                *v = *prev;
             }
-            let limited = v.clamp(prev - step, prev + step);
-            if limited != *v {
+            let within_range = *lo <= *v && *v <= *hi;
+            if !within_range {
+                out.position_clamped = true;
+                *v = saturate(*v, *lo, *hi);
+            }
+            let limited = saturate(*v, prev - step, prev + step);
+            let within_rate = limited == *v;
+            if !within_rate {
                 out.rate_clamped = true;
                 *v = limited;
             }

@@ -1,6 +1,7 @@
 //! Simulated arms: what the drives would report for a stream of joint commands.
 
 use crate::kinematics::Joints;
+use crate::saturate::limit_step;
 
 /// An arm that reaches every command instantly (the seed's `SimArm` in position mode).
 #[derive(Clone, Debug)]
@@ -58,6 +59,9 @@ impl RateLimitedArm {
         if let Some(c) = command.filter(|c| c.len() == self.q.len() && c.is_finite()) {
             self.target = *c;
         }
+        if !(dt > 0.0 && dt.is_finite()) {
+            return; // no time passes
+        }
         let limits = self.v_max.iter().zip(self.a_max.iter());
         let state = self
             .q
@@ -72,7 +76,7 @@ impl RateLimitedArm {
             let brake =
                 0.5 * (libm::sqrt(9.0 * dv * dv + 8.0 * a_max * libm::fabs(error)) - 3.0 * dv);
             let wanted = libm::copysign(brake.min(*v_max), error);
-            *v += (wanted - *v).clamp(-dv, dv);
+            *v += limit_step(wanted - *v, dv);
             *q += *v * dt;
         }
     }

@@ -12,7 +12,7 @@
 
 use std::f64::consts::PI;
 
-use armgate_core::config::RobotConfig;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{Frame, Rotation, Vec3};
 use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
@@ -65,14 +65,17 @@ pub struct RectangleRun {
 
 /// The experiment's settings: v_max 0.05 m/s, a_max 0.10 m/s² on translation (spec §8.2 E8),
 /// no rate limit in the way (the seed enforced none in position mode).
-pub fn rectangle_config(mut config: RobotConfig) -> RobotConfig {
-    config.cartesian.max_velocity = [0.05, 0.05, 0.05, 0.1, 0.1, 0.1];
-    config.cartesian.max_acceleration = [0.10, 0.10, 0.10, 0.2, 0.2, 0.2];
-    for j in config.joints.iter_mut() {
-        j.max_rate = 100.0;
-    }
-    config.workspace.boxes.clear();
+pub fn rectangle_config(config: ValidRobot) -> ValidRobot {
     config
+        .edit(|config| {
+            config.cartesian.max_velocity = [0.05, 0.05, 0.05, 0.1, 0.1, 0.1];
+            config.cartesian.max_acceleration = [0.10, 0.10, 0.10, 0.2, 0.2, 0.2];
+            for j in config.joints.iter_mut() {
+                j.max_rate = 100.0;
+            }
+            config.workspace.boxes.clear();
+        })
+        .unwrap()
 }
 
 /// Candidate "level" tool orientations (roll, pitch, yaw); the first that the arm reaches at
@@ -92,7 +95,7 @@ fn corner(rot: Rotation, p: [f64; 3]) -> Frame {
 
 /// Runs the rectangle as a Cartesian via-point sequence and measures the kinematic error: the
 /// distance from the tool to the line through the previous and the next waypoint, every tick.
-pub fn run_rectangle(config: &RobotConfig) -> RectangleRun {
+pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
     let chain = Chain::new(config);
     let mid = chain.mid_range();
     let (rpy, start) = LEVEL_ORIENTATIONS
@@ -196,9 +199,11 @@ pub const UNREACHABLE: [f64; 3] = [-0.5, 4.0, 0.7];
 /// E7: ranger-mk1, with its deployed generator limits, runs a short sequence whose last point is
 /// out of reach. The workspace bounds are widened so that the goal reaches the generator, as in
 /// the thesis's simulation.
-pub fn run_divergence(config: &RobotConfig) -> DivergenceRun {
-    let mut config = config.clone();
-    config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0];
+pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
+    let config = config
+        .clone()
+        .edit(|config| config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0])
+        .unwrap();
     let chain = Chain::new(&config);
     let start = Joints::from_slice(&[1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]).unwrap();
     let mut ctrl = Controller::new(&config);

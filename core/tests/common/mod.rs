@@ -5,7 +5,7 @@ pub mod experiments;
 
 use std::path::PathBuf;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Chain;
 use armgate_core::rng::SplitMix64;
 
@@ -15,13 +15,13 @@ pub fn robots_dir() -> PathBuf {
 }
 
 /// Loads `robots/<name>.toml`.
-pub fn robot(name: &str) -> RobotConfig {
+pub fn robot(name: &str) -> ValidRobot {
     let path = robots_dir().join(format!("{name}.toml"));
     load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// Every shipped robot file, by name.
-pub fn all_robots() -> Vec<(String, RobotConfig)> {
+pub fn all_robots() -> Vec<(String, ValidRobot)> {
     let mut names: Vec<_> = std::fs::read_dir(robots_dir())
         .unwrap()
         .filter_map(|e| {

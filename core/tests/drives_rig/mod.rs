@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use std::collections::VecDeque;
 
-use armgate_core::config::{RobotConfig, load_file};
+use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::{
     BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
 };
@@ -15,13 +15,13 @@ use armgate_core::motion::{Controller, StepOutput};
 use armgate_protocol::can::CanFrame;
 
 /// Loads `robots/<name>.toml`.
-pub fn robot(name: &str) -> RobotConfig {
+pub fn robot(name: &str) -> ValidRobot {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../robots/{name}.toml"));
     load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 pub struct Rig {
-    pub config: RobotConfig,
+    pub config: ValidRobot,
     pub manager: DriveManager,
     pub bus: VirtualBus,
     pub ctrl: Controller,
@@ -34,13 +34,13 @@ pub struct Rig {
 }
 
 impl Rig {
-    pub fn new(config: RobotConfig) -> Self {
+    pub fn new(config: ValidRobot) -> Self {
         Self::with(config, DriveSettings::default(), |_| {})
     }
 
     /// A rig whose bus is adjusted by `tweak` before anything runs.
     pub fn with(
-        config: RobotConfig,
+        config: ValidRobot,
         settings: DriveSettings,
         tweak: impl FnOnce(&mut VirtualBus),
     ) -> Self {

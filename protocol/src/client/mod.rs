@@ -24,19 +24,26 @@
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts.
 //! * [`Error`]: why a datagram is not a request (or reply).
+//! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
+//!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
 
+pub mod banks;
 mod command;
 mod error;
 mod message;
+mod mode;
 mod notice;
 mod reply;
 mod request;
+mod temperature;
 mod text;
 
 pub use command::Command;
 pub use error::Error;
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
+pub use mode::Mode;
 pub use notice::Notice;
 pub use reply::Reply;
 pub use request::Request;
+pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};

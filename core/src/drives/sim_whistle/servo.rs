@@ -1,5 +1,7 @@
 //! The simulated drive's motor side: a speed limit, a position-servo lag and a temperature.
 
+use crate::saturate::limit_step;
+
 /// Degrees Celsius above ambient that a joint running at its speed limit settles at.
 const HEATING_AT_FULL_SPEED: f64 = 15.0;
 /// Thermal time constant (s).
@@ -47,11 +49,15 @@ impl Servo {
     }
 
     /// One sample of `dt` seconds towards `reference` (`None`: motor off, the shaft stays).
+    /// A `dt` that is not a positive number is no time at all: nothing changes.
     pub fn sample(&mut self, reference: Option<f64>, dt: f64) {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return;
+        }
         let before = self.position;
         if let Some(reference) = reference {
             let step = self.max_speed * dt;
-            self.limited += (reference - self.limited).clamp(-step, step);
+            self.limited += limit_step(reference - self.limited, step);
             self.position += (self.limited - self.position) * self.follow;
         } else {
             self.limited = self.position;

@@ -8,9 +8,9 @@
 //! after it was written. [`TARGET_LEAD`] keeps every point exactly there. (The seed kept five
 //! points queued, ≈ 97 ms at 51 Hz, and backtracked on stop, §9 item 36.)
 //!
-//! Points are numbered by a sequence number `n` (1, 2, …) that lives in slot
-//! `(n − 1) mod ring + 1`. The drive's read index, asked for every few cycles right after that
-//! cycle's point, gives the lead `newest − r`:
+//! Point `n` (1, 2, …) lives in slot `(n − 1) mod ring + 1`; only the slot of the newest point
+//! is kept, so nothing wraps however long the stream runs. The drive's read index, asked for
+//! every few cycles right after that cycle's point, gives the lead `newest − r` (mod ring):
 //!
 //! * 3: on target.
 //! * 4: the drive fell one segment behind the controller (its clock is slower): the next point
@@ -24,6 +24,8 @@
 //! With equal clocks the lead stays at 3 after the start; clock drift costs one skip or one
 //! insertion each time the drive's segment boundaries slide a full period relative to the
 //! control cycle (e.g. every 100 s at 100 Hz for a 100 ppm difference).
+
+use core::num::NonZeroU32;
 
 use armgate_protocol::can::interpreter::Index;
 use heapless::Vec;
@@ -56,10 +58,15 @@ enum Correction {
 }
 
 /// The writer side of one drive's PT ring.
+///
+/// Points are tracked by their slot, not by an ever-growing sequence number: a `u32` counter
+/// wraps after 2³² points (≈ 251 days at 198 Hz), and since 2³² is no multiple of the ring
+/// length the point after the wrap would land in the wrong slot, skipping one. Every quantity
+/// below is a slot or a difference of slots modulo the ring, so there is nothing to wrap.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PtStream {
-    ring: u16,
-    /// Sequence number of the newest point written.
+    ring: NonZeroU32,
+    /// Slot (0-based, `< ring`) of the newest point written.
     newest: u32,
     /// Its value (counts).
     newest_value: i32,
@@ -71,11 +78,13 @@ pub struct PtStream {
 }
 
 impl PtStream {
-    /// A ring of `ring` slots whose first [`FILLED_POINTS`] slots hold `position`.
+    /// A ring of `ring` slots (at least one) whose first [`FILLED_POINTS`] slots hold
+    /// `position`.
     pub fn new(ring: u16, position: i32) -> Self {
+        let ring = NonZeroU32::new(u32::from(ring)).unwrap_or(NonZeroU32::MIN);
         Self {
-            ring: ring.max(1),
-            newest: u32::from(FILLED_POINTS),
+            ring,
+            newest: (u32::from(FILLED_POINTS) + ring.get() - 1) % ring,
             newest_value: position,
             correction: Correction::None,
             asked_at: None,
@@ -83,11 +92,10 @@ impl PtStream {
         }
     }
 
-    /// The slot (1..=ring) of point `n`.
-    fn slot(&self, n: u32) -> Index {
-        let slot = n.saturating_sub(1) % u32::from(self.ring) + 1;
-        // ring ≤ u16::MAX, so the slot fits.
-        Index::new(slot as u16).unwrap_or_default()
+    /// The ring slot (1..=ring, the drive's `QP` index) of the newest point.
+    fn newest_index(&self) -> Index {
+        // newest < ring ≤ u16::MAX, so newest + 1 fits.
+        Index::new(u16::try_from(self.newest + 1).unwrap_or(u16::MAX)).unwrap_or_default()
     }
 
     /// This cycle's writes towards `target` (counts): (slot, value) pairs, none when a point is
@@ -95,9 +103,10 @@ impl PtStream {
     pub fn points(&mut self, target: i32) -> Vec<(Index, i32), 2> {
         let mut points = Vec::new();
         let mut push = |stream: &mut Self, value: i32| {
-            stream.newest += 1;
+            // newest < ring, so newest + 1 ≤ u16::MAX cannot overflow.
+            stream.newest = (stream.newest + 1) % stream.ring;
             stream.newest_value = value;
-            let _ = points.push((stream.slot(stream.newest), value));
+            let _ = points.push((stream.newest_index(), value));
         };
         match core::mem::replace(&mut self.correction, Correction::None) {
             Correction::Skip => {}
@@ -123,15 +132,20 @@ impl PtStream {
         let Some(asked_at) = self.asked_at.take() else {
             return Ok(()); // not asked for: an answer to someone else's query
         };
-        let ring = i64::from(self.ring);
-        if !(1..=ring).contains(&i64::from(reported)) {
-            return Err(FlowError::Overrun);
-        }
-        // The sequence number ≡ `reported` nearest to where the drive should be.
-        let expected = i64::from(asked_at) - i64::from(TARGET_LEAD);
-        let expected_slot = (expected - 1).rem_euclid(ring) + 1;
-        let offset = (i64::from(reported) - expected_slot + ring / 2).rem_euclid(ring) - ring / 2;
-        let lead = i64::from(asked_at) - (expected + offset);
+        let ring = self.ring;
+        let reported = match u32::try_from(reported) {
+            Ok(slot @ 1..) if slot <= ring.get() => slot - 1,
+            _ => return Err(FlowError::Overrun),
+        };
+        // Where the drive should be: TARGET_LEAD slots behind the newest point when asked.
+        let lead_slots = TARGET_LEAD % ring;
+        let expected = (asked_at + ring.get() - lead_slots) % ring;
+        // How far the drive is ahead of that, taken in -ring/2 .. ring/2. All terms are below
+        // the ring length (≤ u16::MAX), so the sums cannot overflow.
+        let half = ring.get() / 2;
+        let shifted = (reported + ring.get() - expected + half) % ring;
+        let ahead = i64::from(shifted) - i64::from(half);
+        let lead = i64::from(TARGET_LEAD) - ahead;
         self.lead = u32::try_from(lead).ok();
         self.correction = match lead {
             ..=1 => return Err(FlowError::Underflow),
@@ -146,5 +160,81 @@ impl PtStream {
     /// The lead at the last read-index answer.
     pub fn lead(&self) -> Option<u32> {
         self.lead
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The slots of the points written from now on, `count` cycles, answering each read-index
+    /// query as a drive exactly `lead` points behind would.
+    fn slots(stream: &mut PtStream, count: usize, lead: u32, ring: u32) -> std::vec::Vec<u16> {
+        let mut out = std::vec::Vec::new();
+        for _ in 0..count {
+            out.extend(stream.points(7).iter().map(|(slot, _)| slot.get()));
+            stream.asked();
+            let newest = stream.newest;
+            let reported = (newest + ring * 4 - lead) % ring + 1;
+            stream.read_index(reported as i32).unwrap();
+        }
+        out
+    }
+
+    #[test]
+    fn slots_run_round_the_ring_without_a_gap() {
+        // Far more points than the ring holds, so it wraps many times; every point goes to the
+        // slot after the previous one, 1 after 6.
+        let mut stream = PtStream::new(6, 0);
+        let written = slots(&mut stream, 40, TARGET_LEAD, 6);
+        assert_eq!(written.first(), Some(&5)); // QP[1..=4] were filled
+        for pair in written.windows(2) {
+            if let [a, b] = pair {
+                assert_eq!(*b, *a % 6 + 1, "{written:?}");
+            }
+        }
+        assert_eq!(stream.lead(), Some(TARGET_LEAD));
+    }
+
+    #[test]
+    fn corrections_across_the_ring_end_keep_the_slots_consistent() {
+        // A drive one behind (lead 4) makes the next point skip; one ahead (lead 2) makes two
+        // points, a midpoint first. Both exercised right at the ring's end (slot 6 → 1).
+        let mut stream = PtStream::new(6, 0);
+        assert_eq!(slots(&mut stream, 2, TARGET_LEAD, 6), [5, 6]);
+        stream.asked();
+        stream.read_index(2).unwrap(); // newest 6, drive at 2: lead 4
+        assert_eq!(stream.lead(), Some(4));
+        assert!(stream.points(9).is_empty());
+        stream.asked();
+        stream.read_index(4).unwrap(); // newest 6, drive at 4: lead 2
+        assert_eq!(stream.lead(), Some(2));
+        let two: std::vec::Vec<_> = stream
+            .points(10)
+            .iter()
+            .map(|(s, v)| (s.get(), *v))
+            .collect();
+        assert_eq!(two, [(1, 8), (2, 10)]);
+        assert_eq!(slots(&mut stream, 5, TARGET_LEAD, 6), [3, 4, 5, 6, 1]);
+    }
+
+    #[test]
+    fn answers_outside_the_ring_or_the_lead_window_stop_the_stream() {
+        let mut stream = PtStream::new(6, 0);
+        let _ = stream.points(0); // newest: slot 5
+        for (reported, error) in [
+            (0, FlowError::Overrun),
+            (7, FlowError::Overrun),
+            (-1, FlowError::Overrun),
+            (5, FlowError::Overrun),   // lead 0 ≡ 6: taken as 6
+            (4, FlowError::Underflow), // lead 1
+            (6, FlowError::Overrun),   // lead 5
+        ] {
+            stream.asked();
+            assert_eq!(stream.read_index(reported), Err(error), "{reported}");
+        }
+        stream.asked();
+        assert_eq!(stream.read_index(2), Ok(()));
+        assert_eq!(stream.lead(), Some(3));
     }
 }
