@@ -7,13 +7,18 @@
 //! * tracking: seeded at the target configuration + uniform ±0.1 rad (m for prismatic joints).
 //!
 //! Success: position error < 1e-5 m, orientation error < 1e-5 rad and all joints within limits.
+//!
+//! A second table times global solves of unreachable targets (10 m from the base, random
+//! orientation): every one spends the whole `ik.global_iterations` budget, so its maximum is
+//! the worst case of a global solve.
 #![allow(missing_docs, clippy::indexing_slicing, clippy::unwrap_used)]
 
 use std::time::Instant;
 
+use armgate_core::config::IkConfig;
 use armgate_core::config::load_file;
 use armgate_core::kinematics::{Chain, IkResult};
-use armgate_core::math::Frame;
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::rng::SplitMix64;
 
 const SEED: u64 = 0x1C0FFEE;
@@ -44,8 +49,10 @@ impl Stats {
 fn success(chain: &Chain, target: &Frame, result: &IkResult) -> bool {
     let s = result.solution();
     let reached = chain.forward(&s.q).unwrap();
-    let d = reached.diff(target);
-    d.linear.norm() < 1e-5 && d.angular.norm() < 1e-5 && chain.within_limits(&s.q)
+    let d = math::diff(&reached, target);
+    d.fixed_rows::<3>(0).norm() < 1e-5
+        && d.fixed_rows::<3>(3).norm() < 1e-5
+        && chain.within_limits(&s.q)
 }
 
 fn main() {
@@ -60,6 +67,7 @@ fn main() {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     files.sort();
+    let mut unreachable = Vec::new();
     println!("{samples} samples per robot and mode, seed {SEED:#x}");
     println!(
         "| robot              | mode     | success% | mean µs   | median µs | p99 µs    | iters  |"
@@ -108,5 +116,48 @@ fn main() {
         let name = config.name.as_str();
         global.row(name, "global");
         tracking.row(name, "tracking");
+        unreachable.push((
+            config.name.to_string(),
+            ik.global_iterations,
+            worst_case(&chain, &ik),
+        ));
     }
+    println!();
+    println!("global IK on unreachable targets, {UNREACHABLE_SAMPLES} samples per robot");
+    println!("| robot              | budget | iterations | mean µs   | max µs    |");
+    println!("|--------------------|--------|------------|-----------|-----------|");
+    for (name, budget, (iterations, mean, max)) in unreachable {
+        println!("| {name:<18} | {budget:>6} | {iterations:>10} | {mean:>9.2} | {max:>9.2} |");
+    }
+}
+
+const UNREACHABLE_SAMPLES: usize = 200;
+
+/// Global solves of unreachable targets: (largest iteration count, mean µs, max µs).
+fn worst_case(chain: &Chain, ik: &IkConfig) -> (u32, f64, f64) {
+    let mut rng = SplitMix64::new(SEED);
+    let mid = chain.mid_range();
+    let (mut iterations, mut total, mut max) = (0, 0.0, 0.0f64);
+    for k in 0..UNREACHABLE_SAMPLES {
+        let direction = Vector3::new(
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+        )
+        .normalize();
+        let turn = Vector3::new(
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+        );
+        let target = Frame::from_parts((direction * 10.0).into(), Rotation3::new(turn));
+        let t0 = Instant::now();
+        let r = chain.solve_global(&target, &mid, ik, k as u64).unwrap();
+        let micros = t0.elapsed().as_secs_f64() * 1e6;
+        assert!(!r.is_converged());
+        iterations = iterations.max(r.solution().iterations);
+        total += micros;
+        max = max.max(micros);
+    }
+    (iterations, total / UNREACHABLE_SAMPLES as f64, max)
 }

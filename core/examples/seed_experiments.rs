@@ -17,7 +17,7 @@ fn main() {
     );
     println!(
         "  ours: final tool {:.4?} m, {:.4} m from the goal; shoulder→tool {:.4} m of {:.4} m reach",
-        d.final_position.to_array(),
+        d.final_position.as_slice(),
         d.final_distance,
         d.extension.0,
         d.extension.1

@@ -44,7 +44,7 @@ use drive_loop::DriveLoop;
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
 use armgate_core::kinematics::{Chain, IkResult, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
 
 /// The start pose's position (m): the sinusoids' centre (spec §4.5), and the circles' start.
@@ -164,7 +164,7 @@ fn config() -> ValidRobot {
 /// A start pose: how its orientation was chosen, the orientation and the joints.
 struct StartPose {
     name: &'static str,
-    rot: Rotation,
+    rot: Rotation3<f64>,
     q: Joints,
 }
 
@@ -201,8 +201,8 @@ fn print_table(config: &ValidRobot, chain: &Chain, rows: &[Experiment], pose: &S
     println!(
         "\nstart orientation {} (tool z axis {:.3?}, rpy {:.4?}), joints {:.4?}\n",
         pose.name,
-        (pose.rot * Vec3::Z).to_array(),
-        pose.rot.to_rpy(),
+        (pose.rot * Vector3::z()).as_slice(),
+        math::rpy(&pose.rot),
         &pose.q[..]
     );
     println!(
@@ -277,17 +277,20 @@ fn start_poses(config: &ValidRobot, chain: &Chain, rows: &[Experiment]) -> Vec<S
     let orientations = [
         (
             "of the comfortable pose (1.5708, 0.6, -0.4, 0.2, 1.8, 0.1)",
-            chain.forward(&COMFORT).unwrap().rot,
+            chain.forward(&COMFORT).unwrap().rotation,
         ),
         (
             "level, tool pointing forward (+y)",
-            Rotation::from_rpy(0.0, PI / 2.0, PI / 2.0),
+            Rotation3::from_euler_angles(0.0, PI / 2.0, PI / 2.0),
         ),
-        ("tool pointing down", Rotation::from_rpy(PI, 0.0, 0.0)),
+        (
+            "tool pointing down",
+            Rotation3::from_euler_angles(PI, 0.0, 0.0),
+        ),
     ];
     let mut found = Vec::new();
     for (name, rot) in orientations {
-        let target = Frame::new(rot, Vec3::from_array(START));
+        let target = Frame::from_parts(Vector3::from(START).into(), rot);
         let mut tried: Vec<Joints> = Vec::new();
         for seed in IK_SEEDS {
             let Ok(IkResult::Converged(s)) = chain.solve_global(&target, &seed, &config.ik, 1)
@@ -335,7 +338,7 @@ fn dry_run(
     ctrl.step(0.0, &arm.measured()).unwrap();
     ctrl.set_mode(Mode::Cartesian)
         .map_err(|e| format!("{e:?}"))?;
-    let origin = ctrl.cartesian_setpoint().pos;
+    let origin = ctrl.cartesian_setpoint().translation.vector;
     ctrl.start_shape(*shape).map_err(|e| format!("{e:?}"))?;
     let end = CYCLES * shape_period(shape);
     let mut finishing = false;
@@ -373,7 +376,7 @@ fn dry_run(
         for ((p, a), b) in peak.iter_mut().zip(q.iter()).zip(before.iter()) {
             *p = p.max((a - b).abs() / period);
         }
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         let d = (p - ideal(origin, shape, t, end)).norm();
         if d > 1e-6 {
             return Err(format!("off the path by {d:.2e} m at {t:.2} s"));
@@ -391,7 +394,7 @@ fn dry_run(
 
 /// The ideal shape point at phase `s`, held at the start before the shape begins and after it
 /// ends.
-fn ideal(origin: Vec3, shape: &Shape, s: f64, end: f64) -> Vec3 {
+fn ideal(origin: Vector3<f64>, shape: &Shape, s: f64, end: f64) -> Vector3<f64> {
     origin + shape.offset(s.clamp(0.0, end))
 }
 
@@ -443,7 +446,7 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
     let bus = virtual_bus(config, q0, drive_speed);
     let mut l = DriveLoop::started(config, &DriveSettings::default(), bus);
     l.ctrl.set_mode(Mode::Cartesian).unwrap();
-    let origin = l.ctrl.cartesian_setpoint().pos;
+    let origin = l.ctrl.cartesian_setpoint().translation.vector;
     l.ctrl.start_shape(*shape).unwrap();
 
     let period = config.control_period;
@@ -454,7 +457,14 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
     let (mut cmd_sum, mut cmd_max, mut cmd_n) = (0.0, 0.0f64, 0usize);
     let mut peak = Joints::zeros(config.dof());
     // (time since the start, FK of the drives' actual joints)
-    let mut samples = vec![(0.0, chain.forward(&actual(&l, config)).unwrap().pos)];
+    let mut samples = vec![(
+        0.0,
+        chain
+            .forward(&actual(&l, config))
+            .unwrap()
+            .translation
+            .vector,
+    )];
     let mut finishing = false;
     let mut k = 0usize;
     while k as f64 * period <= end + 1.0 {
@@ -466,12 +476,21 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
             notes.push(format!("event at {t:.2} s: {e:?}"));
         }
         if t <= end {
-            samples.push((t, chain.forward(&actual(&l, config)).unwrap().pos));
+            samples.push((
+                t,
+                chain
+                    .forward(&actual(&l, config))
+                    .unwrap()
+                    .translation
+                    .vector,
+            ));
         }
         let command = out.command.expect("Cartesian mode commands every tick");
         // Command k is the shape at phase k · period.
         let phase = k as f64 * period;
-        let d = (chain.forward(&command).unwrap().pos - ideal(origin, shape, phase, end)).norm();
+        let d = (chain.forward(&command).unwrap().translation.vector
+            - ideal(origin, shape, phase, end))
+        .norm();
         cmd_sum += d;
         cmd_max = cmd_max.max(d);
         cmd_n += 1;
@@ -513,7 +532,10 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
 
 /// The constant delay τ minimising Σ |p_i − ideal(t_i − τ)|², and the mean and sample standard
 /// deviation (spec §8.1) of the distances at that delay.
-fn fit_delay(samples: &[(f64, Vec3)], ideal: impl Fn(f64) -> Vec3) -> (f64, f64, f64) {
+fn fit_delay(
+    samples: &[(f64, Vector3<f64>)],
+    ideal: impl Fn(f64) -> Vector3<f64>,
+) -> (f64, f64, f64) {
     let cost = |tau: f64| -> f64 {
         samples
             .iter()

@@ -11,20 +11,20 @@
 mod common;
 
 use armgate_core::kinematics::Chain;
-use armgate_core::math::Quaternion;
+use armgate_core::math::{self, Quaternion};
 
 #[test]
 fn fig_3_3_pose_matches_the_seed_screenshot() {
     let chain = Chain::new(&common::robot("ranger-mk1"));
     let q = [-1.5838, 2.0360, 1.3499, -0.2471, 1.2428, -0.0595];
     let f = chain.forward(&q).unwrap();
-    let quat = Quaternion::from_rotation(&f.rot);
-    let rpy = f.rot.to_rpy();
+    let quat = Quaternion::from_rotation(&f.rotation);
+    let rpy = math::rpy(&f.rotation);
     let close = |got: &[f64], want: &[f64]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 2e-4);
     assert!(
-        close(&f.pos.to_array(), &[-0.0543, 0.5242, 0.2138]),
+        close(f.translation.vector.as_slice(), &[-0.0543, 0.5242, 0.2138]),
         "{:?}",
-        f.pos
+        f.translation.vector
     );
     assert!(
         close(&quat.to_array(), &[-0.5266, 0.4212, 0.5767, 0.4612]),
@@ -39,12 +39,12 @@ fn home_pose_matches_the_spec() {
     let f = chain
         .forward(&[1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0])
         .unwrap();
-    let quat = Quaternion::from_rotation(&f.rot).to_array();
+    let quat = Quaternion::from_rotation(&f.rotation).to_array();
     let want_p = [0.0, 0.0200, 0.6660];
     let want_q = [0.0, 0.0, -0.70711, 0.70711];
     assert!(
-        f.pos
-            .to_array()
+        f.translation
+            .vector
             .iter()
             .zip(want_p)
             .all(|(g, w)| (g - w).abs() < 1e-4)

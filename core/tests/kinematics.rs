@@ -13,7 +13,7 @@ mod common;
 use armgate_core::MAX_JOINTS;
 use armgate_core::config::IkConfig;
 use armgate_core::kinematics::{Chain, IkError, IkResult, KinematicsError, diverges};
-use armgate_core::math::{Frame, Rotation, Twist, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, SVector, Twist, Vector3};
 use armgate_core::rng::SplitMix64;
 
 #[test]
@@ -29,10 +29,10 @@ fn jacobian_matches_finite_differences() {
             for i in 0..chain.dof() {
                 let mut qh = q.clone();
                 qh[i] += h;
-                let d = f0.diff(&chain.forward(&qh).unwrap());
-                let numeric = d.to_array().map(|v| v / h);
-                let analytic = j.column(i).unwrap();
-                for (a, b) in analytic.iter().zip(numeric) {
+                let d = math::diff(&f0, &chain.forward(&qh).unwrap());
+                let numeric = d / h;
+                let analytic = j.column(i);
+                for (a, b) in analytic.iter().zip(numeric.iter()) {
                     assert!(
                         (a - b).abs() < 1e-5,
                         "{name} joint {i}: {analytic:?} vs {numeric:?}"
@@ -49,19 +49,22 @@ fn link_frames_end_at_the_tool() {
     for (name, config) in common::all_robots() {
         let chain = Chain::new(&config);
         let q = common::random_q(&chain, &mut rng);
-        let mut links = [Frame::IDENTITY; MAX_JOINTS];
+        let mut links = [Frame::identity(); MAX_JOINTS];
         let tool = chain.link_frames(&q, &mut links).unwrap();
         assert_eq!(tool, chain.forward(&q).unwrap(), "{name}");
         // Frame {i} is the DH product of the first i joints.
         let last = links[chain.dof() - 1];
         let t = &config.tool;
-        let tool_offset = Frame::dh(t.a, t.alpha, t.d, t.theta)
-            * Frame::new(
-                Rotation::from_rpy(t.rpy[0], t.rpy[1], t.rpy[2]),
-                Vec3::from_array(t.xyz),
+        let tool_offset = math::dh(t.a, t.alpha, t.d, t.theta)
+            * Frame::from_parts(
+                Vector3::from(t.xyz).into(),
+                Rotation3::from_euler_angles(t.rpy[0], t.rpy[1], t.rpy[2]),
             );
         let rebuilt = last * tool_offset;
-        assert!((rebuilt.pos - tool.pos).norm() < 1e-12, "{name}");
+        assert!(
+            (rebuilt.translation.vector - tool.translation.vector).norm() < 1e-12,
+            "{name}"
+        );
     }
 }
 
@@ -81,12 +84,13 @@ fn tracking_ik_round_trips_within_limits() {
             assert!(chain.within_limits(&s.q), "{name}: {:?}", s.q);
             if let IkResult::Converged(s) = result {
                 converged += 1;
-                let reached = chain.forward(&s.q).unwrap().diff(&target);
+                let reached = math::diff(&chain.forward(&s.q).unwrap(), &target);
                 assert!(
-                    reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9,
+                    reached.fixed_rows::<3>(0).norm() < 1e-9
+                        && reached.fixed_rows::<3>(3).norm() < 1e-9,
                     "{name}"
                 );
-                assert_eq!(s.position_error, reached.linear.norm());
+                assert_eq!(s.position_error, reached.fixed_rows::<3>(0).norm());
             }
         }
         assert!(converged >= trials - 1, "{name}: {converged}/{trials}");
@@ -130,7 +134,7 @@ fn global_ik_is_deterministic() {
 fn unreachable_target_reports_best_effort_within_budget() {
     let config = common::robot("ranger-mk1");
     let chain = Chain::new(&config);
-    let target = Frame::new(Rotation::IDENTITY, Vec3::new(-0.5, 4.0, 0.7));
+    let target = Frame::from_parts(Vector3::new(-0.5, 4.0, 0.7).into(), Rotation3::identity());
     let ik = IkConfig {
         global_iterations: 300,
         ..config.ik
@@ -183,7 +187,7 @@ fn nan_inf_and_huge_inputs_are_errors_not_panics() {
             Err(IkError::NonFiniteSeed)
         );
         let mut t = target;
-        t.pos.y = bad;
+        t.translation.vector.y = bad;
         assert_eq!(
             chain.solve_global(&t, &good, &config.ik, 0),
             Err(IkError::NonFiniteTarget)
@@ -205,7 +209,10 @@ fn nan_inf_and_huge_inputs_are_errors_not_panics() {
     // Huge but finite: far outside the limits and the workspace.
     let huge = [1e300, -1e300, 1e300, 1e300, -1e300, 1e300];
     assert!(chain.forward(&huge).is_ok());
-    let far = Frame::new(Rotation::IDENTITY, Vec3::new(1e300, -1e300, 1e300));
+    let far = Frame::from_parts(
+        Vector3::new(1e300, -1e300, 1e300).into(),
+        Rotation3::identity(),
+    );
     let r = chain.solve_global(&far, &huge, &config.ik, 0).unwrap();
     assert!(!r.is_converged() && chain.within_limits(&r.solution().q));
     let r = chain.solve_tracking(&far, &huge, &config.ik).unwrap();
@@ -214,11 +221,17 @@ fn nan_inf_and_huge_inputs_are_errors_not_panics() {
 
 #[test]
 fn divergence_guard_rejects_only_worse_solutions() {
-    let target = Frame::new(Rotation::IDENTITY, Vec3::new(1.0, 0.0, 0.0));
-    let current = Frame::new(Rotation::IDENTITY, Vec3::new(0.9, 0.0, 0.0));
-    let better = Frame::new(Rotation::IDENTITY, Vec3::new(0.95, 0.0, 0.0));
-    let slightly_worse = Frame::new(Rotation::IDENTITY, Vec3::new(0.89995, 0.0, 0.0));
-    let worse = Frame::new(Rotation::rot_z(0.01), Vec3::new(0.9, 0.0, 0.0));
+    let target = Frame::from_parts(Vector3::new(1.0, 0.0, 0.0).into(), Rotation3::identity());
+    let current = Frame::from_parts(Vector3::new(0.9, 0.0, 0.0).into(), Rotation3::identity());
+    let better = Frame::from_parts(Vector3::new(0.95, 0.0, 0.0).into(), Rotation3::identity());
+    let slightly_worse = Frame::from_parts(
+        Vector3::new(0.89995, 0.0, 0.0).into(),
+        Rotation3::identity(),
+    );
+    let worse = Frame::from_parts(
+        Vector3::new(0.9, 0.0, 0.0).into(),
+        Rotation3::from_axis_angle(&Vector3::z_axis(), 0.01),
+    );
     assert!(!diverges(&target, &better, &current, 1e-4));
     assert!(!diverges(&target, &slightly_worse, &current, 1e-4));
     assert!(diverges(&target, &worse, &current, 1e-4));
@@ -235,17 +248,17 @@ fn joint_rates_reproduce_the_twist() {
             if chain.manipulability(&q).unwrap() < 1e-3 || chain.dof() < 6 {
                 continue;
             }
-            let twist = Twist::from_array([0.01, -0.02, 0.005, 0.02, 0.0, -0.01]);
+            let twist = Twist::new(0.01, -0.02, 0.005, 0.02, 0.0, -0.01);
             let rates = chain.joint_rates(&q, &twist, 0.0, None).unwrap();
-            let got = j.twist(&rates).to_array();
-            for (g, w) in got.iter().zip(twist.to_array()) {
+            let got = j * SVector::from(*rates.as_array());
+            for (g, w) in got.iter().zip(twist.iter()) {
                 assert!((g - w).abs() < 1e-6, "{name}: {got:?}");
             }
             // A null-space preference changes the joint rates, not the twist.
             let pull: Vec<f64> = (0..chain.dof()).map(|i| 0.1 * (i as f64 - 2.0)).collect();
             let biased = chain.joint_rates(&q, &twist, 0.0, Some(&pull)).unwrap();
-            let got = j.twist(&biased).to_array();
-            for (g, w) in got.iter().zip(twist.to_array()) {
+            let got = j * SVector::from(*biased.as_array());
+            for (g, w) in got.iter().zip(twist.iter()) {
                 assert!((g - w).abs() < 1e-6, "{name}: {got:?}");
             }
             if chain.dof() > 6 {
@@ -287,14 +300,14 @@ fn fk_matches_kdl_fixtures() {
             let f = chain.forward(&v[..n]).unwrap();
             let want_p = &v[n..n + 3];
             let want_r = &v[n + 3..];
-            for (got, want) in f.pos.to_array().iter().zip(want_p) {
+            for (got, want) in f.translation.vector.iter().zip(want_p) {
                 assert!(
                     (got - want).abs() < 1e-12,
                     "{name} position at {:?}",
                     &v[..n]
                 );
             }
-            let rows_got: Vec<f64> = f.rot.to_rows().iter().flatten().copied().collect();
+            let rows_got: Vec<f64> = f.rotation.matrix().transpose().iter().copied().collect();
             for (got, want) in rows_got.iter().zip(want_r) {
                 assert!(
                     (got - want).abs() < 1e-12,

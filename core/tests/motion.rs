@@ -11,7 +11,7 @@ mod common;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
     CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode, RateLimitedArm,
     Refusal, Shape, StepOutput, Trapezoid,
@@ -146,29 +146,38 @@ fn trapezoid_never_exceeds_its_limits_on_random_moves() {
 fn cartesian_path_is_straight_and_orientation_turns_monotonically_about_a_fixed_axis() {
     let v = [0.1, 0.05, 0.2, 0.3, 0.2, 0.1];
     let a = [0.2, 0.1, 0.3, 0.5, 0.4, 0.3];
-    let start = Frame::new(Rotation::from_rpy(0.1, -0.2, 0.3), Vec3::new(0.4, 0.1, 0.5));
-    let goal = Frame::new(Rotation::from_rpy(-0.5, 0.4, 1.2), Vec3::new(0.1, 0.3, 0.2));
+    let start = Frame::from_parts(
+        Vector3::new(0.4, 0.1, 0.5).into(),
+        Rotation3::from_euler_angles(0.1, -0.2, 0.3),
+    );
+    let goal = Frame::from_parts(
+        Vector3::new(0.1, 0.3, 0.2).into(),
+        Rotation3::from_euler_angles(-0.5, 0.4, 1.2),
+    );
     let mut generator = CartesianGenerator::new(start, v, a);
     let duration = generator.move_to(goal, 0.0).unwrap();
-    let axis = start.diff(&goal).angular;
+    let axis = math::diff(&start, &goal).fixed_rows::<3>(3).into_owned();
     let axis = axis * (1.0 / axis.norm());
-    let line = goal.pos - start.pos;
+    let line = goal.translation.vector - start.translation.vector;
     let mut prev_angle = f64::INFINITY;
-    let mut prev_pos = start.pos;
+    let mut prev_pos = start.translation.vector;
     let dt = 0.002;
     for k in 1..=((duration / dt) as usize + 2) {
         let (sp, finished) = generator.advance_to(k as f64 * dt);
         // On the line through start and goal.
-        let off = (sp.pos - start.pos).cross(line).norm() / line.norm();
+        let off = (sp.translation.vector - start.translation.vector)
+            .cross(&line)
+            .norm()
+            / line.norm();
         assert!(off < 1e-12, "{off} m off the line");
-        for (i, d) in (sp.pos - prev_pos).to_array().iter().enumerate() {
+        for (i, d) in (sp.translation.vector - prev_pos).iter().enumerate() {
             assert!((d / dt).abs() <= v[i] * (1.0 + 1e-9), "axis {i} too fast");
         }
-        prev_pos = sp.pos;
+        prev_pos = sp.translation.vector;
         // Turning about the fixed axis, monotonically towards the goal.
-        let turned = start.diff(&sp).angular;
-        assert!(turned.cross(axis).norm() < 1e-9, "axis drifted");
-        let angle = sp.diff(&goal).angular.norm();
+        let turned = math::diff(&start, &sp).fixed_rows::<3>(3).into_owned();
+        assert!(turned.cross(&axis).norm() < 1e-9, "axis drifted");
+        let angle = math::diff(&sp, &goal).fixed_rows::<3>(3).norm();
         assert!(angle <= prev_angle + 1e-12, "orientation went back");
         prev_angle = angle;
         if finished {
@@ -185,9 +194,9 @@ fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
     let mut rig = Rig::new(&config, &MK1_READY);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let start = rig.pose();
-    let goal = Frame::new(
-        Rotation::rot_z(0.2) * start.rot,
-        start.pos + Vec3::new(0.05, -0.08, 0.1),
+    let goal = Frame::from_parts(
+        (start.translation.vector + Vector3::new(0.05, -0.08, 0.1)).into(),
+        Rotation3::from_axis_angle(&Vector3::z_axis(), 0.2) * start.rotation,
     );
     rig.ctrl.move_cartesian(goal, 2.0).unwrap();
     let outs = rig.settle(2000);
@@ -196,9 +205,9 @@ fn cartesian_move_reaches_the_goal_through_ik_to_1e9() {
         outs.iter()
             .all(|o| !o.events.ik_divergence && !o.events.rate_limit)
     );
-    let reached = rig.pose().diff(&goal);
+    let reached = math::diff(&rig.pose(), &goal);
     assert!(
-        reached.linear.norm() < 1e-9 && reached.angular.norm() < 1e-9,
+        reached.fixed_rows::<3>(0).norm() < 1e-9 && reached.fixed_rows::<3>(3).norm() < 1e-9,
         "{reached:?}"
     );
 }
@@ -246,13 +255,13 @@ fn refusals_say_why() {
     rig.ctrl.stop();
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let mut bad = pose;
-    bad.pos.x = f64::NAN;
+    bad.translation.vector.x = f64::NAN;
     assert_eq!(
         rig.ctrl.move_cartesian(bad, 0.0),
         Err(Refusal::InvalidNumber)
     );
     // Inside the column around the base.
-    let inside = Frame::new(pose.rot, Vec3::new(0.0, 0.0, 0.2));
+    let inside = Frame::from_parts(Vector3::new(0.0, 0.0, 0.2).into(), pose.rotation);
     assert_eq!(
         rig.ctrl.move_cartesian(inside, 0.0),
         Err(Refusal::OutsideWorkspace)
@@ -327,21 +336,25 @@ fn cartesian_sequence_visits_every_point() {
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let start = rig.pose();
     let corners = [
-        Vec3::new(0.05, 0.0, 0.0),
-        Vec3::new(0.05, 0.0, 0.05),
-        Vec3::new(0.0, 0.0, 0.05),
-        Vec3::ZERO,
+        Vector3::new(0.05, 0.0, 0.0),
+        Vector3::new(0.05, 0.0, 0.05),
+        Vector3::new(0.0, 0.0, 0.05),
+        Vector3::zeros(),
     ];
     for (k, c) in corners.iter().enumerate() {
         rig.ctrl
-            .set_cartesian_via(k, Frame::new(start.rot, start.pos + *c), 0.0)
+            .set_cartesian_via(
+                k,
+                Frame::from_parts((start.translation.vector + *c).into(), start.rotation),
+                0.0,
+            )
             .unwrap();
     }
     rig.ctrl.start_cartesian_sequence().unwrap();
     let mut hits = 0;
     for _ in 0..20_000 {
         let out = rig.tick();
-        let p = rig.pose().pos - start.pos;
+        let p = rig.pose().translation.vector - start.translation.vector;
         if corners.get(hits).is_some_and(|c| (p - *c).norm() < 1e-9) {
             hits += 1;
         }
@@ -389,7 +402,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let mut q_mid = MK1_READY;
     q_mid[0] += 0.25;
     let (pa, pb) = (chain.forward(&q_a).unwrap(), chain.forward(&q_b).unwrap());
-    let m = (pa.pos + pb.pos) * 0.5;
+    let m = (pa.translation.vector + pb.translation.vector) * 0.5;
     let half = 0.05;
     let box_around_m = [
         m.x - half,
@@ -405,8 +418,8 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
             config.workspace.boxes.push(box_around_m).unwrap();
         })
         .unwrap();
-    let in_box = |p: Vec3| (p - m).to_array().iter().all(|c| c.abs() < half);
-    assert!(in_box(chain.forward(&q_mid).unwrap().pos));
+    let in_box = |p: Vector3<f64>| (p - m).iter().all(|c| c.abs() < half);
+    assert!(in_box(chain.forward(&q_mid).unwrap().translation.vector));
 
     // Cartesian: the move is aborted at the wall; no set-point inside ever reaches the IK.
     let mut rig = Rig::new(&config, &q_a);
@@ -414,10 +427,16 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
     let outs = rig.settle(20_000);
     assert!(outs.iter().any(|o| o.events.workspace_limit));
-    assert!(outs.iter().all(|o| !in_box(o.setpoint.unwrap().pos)));
-    assert!(!in_box(rig.pose().pos) && (rig.pose().pos - pb.pos).norm() > 0.05);
+    assert!(
+        outs.iter()
+            .all(|o| !in_box(o.setpoint.unwrap().translation.vector))
+    );
+    assert!(
+        !in_box(rig.pose().translation.vector)
+            && (rig.pose().translation.vector - pb.translation.vector).norm() > 0.05
+    );
     // A goal inside the box is refused outright.
-    let inside = Frame::new(pa.rot, m);
+    let inside = Frame::from_parts(m.into(), pa.rotation);
     assert_eq!(
         rig.ctrl.move_cartesian(inside, 0.0),
         Err(Refusal::OutsideWorkspace)
@@ -490,7 +509,10 @@ fn mode_transitions_never_jump() {
     );
     check(&out);
     let pose = rig.pose();
-    let goal_pose = Frame::new(pose.rot, pose.pos + Vec3::new(0.0, -0.1, -0.05));
+    let goal_pose = Frame::from_parts(
+        (pose.translation.vector + Vector3::new(0.0, -0.1, -0.05)).into(),
+        pose.rotation,
+    );
     rig.ctrl.move_cartesian(goal_pose, 0.0).unwrap();
     for _ in 0..60 {
         check(&rig.tick());
@@ -528,16 +550,19 @@ fn shapes_trace_their_path_and_end_where_they_started() {
             axis_j: 2,
         })
         .unwrap();
-    let centre = start.pos - Vec3::X * radius;
+    let centre = start.translation.vector - Vector3::x() * radius;
     let mut finish_requested = false;
     let mut ended = false;
     for k in 0..2000 {
         let out = rig.tick();
         let sp = out.setpoint.unwrap();
-        assert!(((sp.pos - centre).norm() - radius).abs() < 1e-12);
-        assert!((sp.pos.y - start.pos.y).abs() < 1e-12, "left the x-z plane");
+        assert!(((sp.translation.vector - centre).norm() - radius).abs() < 1e-12);
+        assert!(
+            (sp.translation.vector.y - start.translation.vector.y).abs() < 1e-12,
+            "left the x-z plane"
+        );
         assert!(!out.events.ik_divergence);
-        let reached = (rig.pose().pos - sp.pos).norm();
+        let reached = (rig.pose().translation.vector - sp.translation.vector).norm();
         assert!(reached < 1e-9, "commanded path error {reached}");
         if k == 100 {
             rig.ctrl.finish_shape().unwrap();
@@ -550,7 +575,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
     }
     assert!(finish_requested && ended);
     assert!(
-        (rig.pose().pos - start.pos).norm() < 1e-9,
+        (rig.pose().translation.vector - start.translation.vector).norm() < 1e-9,
         "did not end at the start"
     );
     // A sinusoid along z, stopped at its next centre crossing.
@@ -564,7 +589,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
     let mut peak: f64 = 0.0;
     for k in 0..2000 {
         let out = rig.tick();
-        let off = out.setpoint.unwrap().pos - start.pos;
+        let off = out.setpoint.unwrap().translation.vector - start.translation.vector;
         assert!(off.x.abs() < 1e-12 && off.y.abs() < 1e-12);
         peak = peak.max(off.z.abs());
         if k == 120 {
@@ -575,7 +600,7 @@ fn shapes_trace_their_path_and_end_where_they_started() {
         }
     }
     assert!((peak - 0.04).abs() < 1e-4);
-    assert!((rig.pose().pos - start.pos).norm() < 1e-9);
+    assert!((rig.pose().translation.vector - start.translation.vector).norm() < 1e-9);
 }
 
 #[test]

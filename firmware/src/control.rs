@@ -78,7 +78,9 @@ impl Interval {
         Status {
             mode: controller.mode(),
             moving: controller.is_moving(),
-            position: controller.measured().map(|(_, pose)| pose.pos.to_array()),
+            position: controller
+                .measured()
+                .map(|(_, pose)| pose.translation.vector.into()),
             ticks: self.ticks,
             overruns: self.overruns,
             tick_errors: self.tick_errors,

@@ -203,8 +203,8 @@ fn state_header(n: usize) -> String {
 fn write_pose(f: &mut impl Write, pose: Option<&Frame>) -> std::io::Result<()> {
     match pose {
         Some(p) => {
-            let [x, y, z] = p.pos.to_array();
-            let [a, b, c, d] = Quaternion::from_rotation(&p.rot).to_array();
+            let [x, y, z]: [f64; 3] = p.translation.vector.into();
+            let [a, b, c, d] = Quaternion::from_rotation(&p.rotation).to_array();
             write!(f, ",{x:.9},{y:.9},{z:.9},{a:.9},{b:.9},{c:.9},{d:.9}")
         }
         None => write!(f, ",,,,,,,"),

@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use armgate_core::command::{ArmModel, CommandHandler, Network};
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::Quaternion;
+use armgate_core::math::{self, Quaternion};
 use armgate_core::motion::{IdealArm, RateLimitedArm};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
@@ -312,7 +312,7 @@ fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> Stri
     let pose = ctrl
         .measured()
         .map(|(_, p)| {
-            let [x, y, z] = p.pos.to_array();
+            let [x, y, z]: [f64; 3] = p.translation.vector.into();
             format!("x {x:+.4} y {y:+.4} z {z:+.4}")
         })
         .unwrap_or_default();
@@ -339,9 +339,9 @@ fn print_home(config: &ValidRobot) {
         eprintln!("armgate-sim: home pose outside the model");
         return;
     };
-    let [x, y, z] = tool.pos.to_array();
-    let [qx, qy, qz, qw] = Quaternion::from_rotation(&tool.rot).to_array();
-    let [roll, pitch, yaw] = tool.rot.to_rpy();
+    let [x, y, z]: [f64; 3] = tool.translation.vector.into();
+    let [qx, qy, qz, qw] = Quaternion::from_rotation(&tool.rotation).to_array();
+    let [roll, pitch, yaw] = math::rpy(&tool.rotation);
     println!(
         "{}: {} joints, control period {} s",
         config.name,

@@ -10,7 +10,7 @@ use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::kinematics::{Chain, Joints};
-use armgate_core::math::Frame;
+use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -31,9 +31,13 @@ const SUCCESS_TOLERANCE: f64 = 1e-5;
 #[derive(Default)]
 struct Results {
     sincos: Timing,
+    sqrt: Timing,
     forward: Timing,
     jacobian: Timing,
+    joint_rates: Timing,
     tracking: Timing,
+    unreachable: Timing,
+    unreachable_iterations: u32,
     iterations: u64,
     successes: u32,
     errors: u32,
@@ -94,11 +98,18 @@ fn measure_robot(config: &ValidRobot) -> Results {
         let angle = q.first().copied().unwrap_or(0.0);
         let (ticks, _) = measure(|| libm::sincos(black_box(angle)));
         results.sincos.add(ticks);
+        // libm's software sqrt: the M7's VSQRT.F64 is out of reach without `unsafe` asm.
+        let (ticks, _) = measure(|| libm::sqrt(black_box(angle.abs() + 0.5)));
+        results.sqrt.add(ticks);
 
         let (ticks, target) = measure(|| chain.forward(black_box(&q)));
         results.forward.add(ticks);
         let (ticks, jacobian) = measure(|| chain.jacobian(black_box(&q)));
         results.jacobian.add(ticks);
+        // Joint rates = FK + J + one damped least-squares solve (the IK's step kernel).
+        let twist = Twist::new(0.01, -0.02, 0.005, 0.02, 0.0, -0.01);
+        let (ticks, _) = measure(|| chain.joint_rates(black_box(&q), &twist, 0.01, None));
+        results.joint_rates.add(ticks);
         let (Ok(target), Ok(_)) = (target, jacobian) else {
             results.errors += 1;
             continue;
@@ -122,14 +133,35 @@ fn measure_robot(config: &ValidRobot) -> Results {
             Err(_) => results.errors += 1,
         }
     }
+    // The worst case of a global solve: a target 10 m out is never reached, so every solve
+    // spends the whole budget (`ik.global_iterations` Newton steps).
+    for k in 0..UNREACHABLE_SAMPLES {
+        let target = Frame::from_parts(
+            Vector3::new(10.0, -0.5 * k as f64, 0.3).into(),
+            Rotation3::identity(),
+        );
+        let seed = chain.mid_range();
+        let (ticks, solved) =
+            measure(|| chain.solve_global(&target, black_box(&seed), &config.ik, k));
+        results.unreachable.add(ticks);
+        match solved {
+            Ok(result) if !result.is_converged() => {
+                results.unreachable_iterations = result.solution().iterations;
+            }
+            _ => results.errors += 1,
+        }
+    }
     results
 }
 
+/// Global solves of unreachable targets per robot (each runs the whole budget).
+const UNREACHABLE_SAMPLES: u64 = 3;
+
 fn succeeded(chain: &Chain, target: &Frame, q: &Joints) -> bool {
     chain.forward(q).is_ok_and(|reached| {
-        let d = reached.diff(target);
-        d.linear.norm() < SUCCESS_TOLERANCE
-            && d.angular.norm() < SUCCESS_TOLERANCE
+        let d = math::diff(&reached, target);
+        d.fixed_rows::<3>(0).norm() < SUCCESS_TOLERANCE
+            && d.fixed_rows::<3>(3).norm() < SUCCESS_TOLERANCE
             && chain.within_limits(q)
     })
 }
@@ -146,8 +178,10 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         );
     };
     row("libm::sincos", &results.sincos);
+    row("libm::sqrt", &results.sqrt);
     row("forward (FK)", &results.forward);
     row("jacobian (FK + J)", &results.jacobian);
+    row("joint_rates (+DLS)", &results.joint_rates);
     let (mean, max) = results.tracking.instructions(counter);
     let calls = f64::from(results.tracking.calls.max(1));
     hprintln!(
@@ -158,6 +192,15 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         max,
         results.iterations as f64 / calls,
         100.0 * f64::from(results.successes) / calls
+    );
+    let (mean, max) = results.unreachable.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15} |         - |",
+        name,
+        "global unreachable",
+        mean,
+        max,
+        results.unreachable_iterations
     );
     if results.errors > 0 {
         hprintln!("{}: {} calls refused", name, results.errors);

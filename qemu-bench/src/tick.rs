@@ -32,7 +32,7 @@ use armgate_core::command::CommandHandler;
 use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
 use armgate_core::kinematics::{Chain, Joints, KinematicsError};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
     CartesianGenerator, Controller, JointLimiter, Mode, StepOutput, Workspace,
 };
@@ -198,8 +198,8 @@ impl<'a> Session<'a> {
             .controller()
             .measured()
             .ok_or("no measured pose")?;
-        let [x, y, z] = start.pos.to_array();
-        let [roll, pitch, yaw] = start.rot.to_rpy();
+        let [x, y, z]: [f64; 3] = start.translation.vector.into();
+        let [roll, pitch, yaw] = math::rpy(&start.rotation);
         let goal = [
             x + OFFSET[0],
             y + OFFSET[1],
@@ -218,7 +218,10 @@ impl<'a> Session<'a> {
         let store = self.request(Command::GoalRpy, goal, b"TG")?;
         let begin = self.request(Command::Begin, [0.0; VALUES], b"GB")?;
         let [x, y, z, roll, pitch, yaw, _] = goal.map(f64::from);
-        let goal = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+        let goal = Frame::from_parts(
+            Vector3::new(x, y, z).into(),
+            Rotation3::from_euler_angles(roll, pitch, yaw),
+        );
         Ok(([mode, store, begin], start, goal))
     }
 
@@ -568,7 +571,10 @@ fn breakdown(config: &ValidRobot, start: &[f64]) -> Result<Breakdown, &'static s
         if replica.command != out.command || out.setpoint != Some(setpoint) {
             parts.mismatches += 1;
         }
-        let (ticks, _) = measure(|| workspace.allows(pose.pos) && workspace.allows(setpoint.pos));
+        let (ticks, _) = measure(|| {
+            workspace.allows(&pose.translation.vector)
+                && workspace.allows(&setpoint.translation.vector)
+        });
         parts.workspace.add(ticks);
         // The set-point the tick's IK solved for, from the tick's seed.
         let target = out.setpoint.unwrap_or(setpoint);

@@ -10,7 +10,7 @@ use super::drives::Drives;
 use super::relay::NoticeRelay;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
-use crate::math::{Frame, Quaternion, Rotation, Vec3};
+use crate::math::{self, Frame, Quaternion, Rotation3, Vector3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
@@ -130,7 +130,7 @@ impl CommandHandler {
                 let q = Quaternion::new(qx, qy, qz, qw)
                     .normalized()
                     .ok_or(Notice::BadNumber(cmd))?;
-                let goal = Frame::new(q.to_rotation(), Vec3::new(x, y, z));
+                let goal = Frame::from_parts(Vector3::new(x, y, z).into(), q.to_rotation());
                 self.controller
                     .check_cartesian_goal(&goal)
                     .map_err(refused)?;
@@ -141,7 +141,8 @@ impl CommandHandler {
             Command::GoalRpy => {
                 let [x, y, z, roll, pitch, yaw, t] = v;
                 let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
-                let goal = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+                let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
+                let goal = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
                 self.controller
                     .check_cartesian_goal(&goal)
                     .map_err(refused)?;
@@ -215,8 +216,8 @@ impl CommandHandler {
             }
             Command::Pose => {
                 let (_, pose) = self.controller.measured().ok_or(Notice::Rejected(cmd))?;
-                let [x, y, z] = pose.pos.to_array();
-                let [a, b, c, d] = Quaternion::from_rotation(&pose.rot).to_array();
+                let [x, y, z]: [f64; 3] = pose.translation.vector.into();
+                let [a, b, c, d] = Quaternion::from_rotation(&pose.rotation).to_array();
                 Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
             }
             Command::Recalibrate => {
@@ -259,11 +260,12 @@ impl CommandHandler {
                 }
                 let [x, y, z, roll, pitch, yaw, t] = v;
                 let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
-                let pose = Frame::new(Rotation::from_rpy(roll, pitch, yaw), Vec3::new(x, y, z));
+                let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
+                let pose = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
                 self.controller
                     .set_cartesian_via(slot, pose, duration)
                     .map_err(refused)?;
-                let [r, p, w] = pose.rot.to_rpy();
+                let [r, p, w] = math::rpy(&pose.rotation);
                 Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
             }
         }

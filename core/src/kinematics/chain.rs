@@ -1,11 +1,12 @@
 //! The kinematic chain: forward kinematics, link frames, Jacobian, manipulability.
 
+use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
+
 use super::jacobian::Jacobian;
 use super::joints::Joints;
-use super::linalg;
 use crate::MAX_JOINTS;
 use crate::config::{JointType, RobotConfig, ValidRobot};
-use crate::math::{Frame, Rotation, Vec3};
+use crate::math::{self, Frame};
 
 /// Why a kinematics call was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,8 +52,8 @@ pub struct Chain {
 /// coordinates: all the Jacobian needs. Kept by the solver across iterations, not rebuilt.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Axes {
-    pub(super) z: [Vec3; MAX_JOINTS],
-    pub(super) origin: [Vec3; MAX_JOINTS],
+    pub(super) z: [Vector3<f64>; MAX_JOINTS],
+    pub(super) origin: [Vector3<f64>; MAX_JOINTS],
 }
 
 impl Chain {
@@ -124,20 +125,35 @@ impl Chain {
 
     /// Checks a joint vector's length and values.
     pub fn check(&self, q: &[f64]) -> Result<Joints, KinematicsError> {
-        if q.len() != self.n {
-            return Err(KinematicsError::WrongJointCount);
-        }
-        let joints = Joints::from_slice(q).ok_or(KinematicsError::WrongJointCount)?;
-        if !joints.is_finite() {
-            return Err(KinematicsError::NonFiniteJoints);
+        let values = self.checked(q)?;
+        let mut joints = Joints::zeros(self.n);
+        for (j, v) in joints.iter_mut().zip(values) {
+            *j = v;
         }
         Ok(joints)
     }
 
+    /// [`check`](Self::check) into the fixed array the walk reads (entries past `n` zero).
+    /// Returning the bare array, not a `Joints` through `Option` and `Result`, spares the
+    /// Cortex-M7 several unaligned 72-byte copies per call.
+    fn checked(&self, q: &[f64]) -> Result<[f64; MAX_JOINTS], KinematicsError> {
+        if q.len() != self.n {
+            return Err(KinematicsError::WrongJointCount);
+        }
+        let mut values = [0.0; MAX_JOINTS];
+        for (x, v) in values.iter_mut().zip(q) {
+            if !v.is_finite() {
+                return Err(KinematicsError::NonFiniteJoints);
+            }
+            *x = *v;
+        }
+        Ok(values)
+    }
+
     /// The tool frame in the base frame.
     pub fn forward(&self, q: &[f64]) -> Result<Frame, KinematicsError> {
-        let q = self.check(q)?;
-        Ok(self.pose(&q))
+        let q = self.checked(q)?;
+        Ok(self.walk(&q, |_, _, _| {}))
     }
 
     /// The tool frame for joints that [`check`](Self::check) returned (not checked again).
@@ -151,21 +167,22 @@ impl Chain {
         q: &[f64],
         links: &mut [Frame; MAX_JOINTS],
     ) -> Result<Frame, KinematicsError> {
-        let q = self.check(q)?;
-        Ok(self.walk(q.as_array(), |i, rot, pos| {
+        let q = self.checked(q)?;
+        Ok(self.walk(&q, |i, rot, pos| {
             if let Some(link) = links.get_mut(i) {
-                *link = Frame::new(*rot, pos);
+                let rot = Matrix3::from_columns(&rot.map(|c| *c));
+                *link = Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot));
             }
         }))
     }
 
     /// The geometric Jacobian at the tool origin, base coordinates.
     pub fn jacobian(&self, q: &[f64]) -> Result<Jacobian, KinematicsError> {
-        let q = self.check(q)?;
+        let q = self.checked(q)?;
         let mut axes = Axes::default();
-        let tool = self.tool_and_axes(q.as_array(), &mut axes);
-        let mut j = Jacobian::zero(self.n);
-        self.jacobian_into(&axes, tool.pos, &mut j);
+        let tool = self.tool_and_axes(&q, &mut axes);
+        let mut j = Jacobian::zeros();
+        self.jacobian_into(&axes, &tool.translation.vector, &mut j);
         Ok(j)
     }
 
@@ -174,9 +191,14 @@ impl Chain {
     pub fn manipulability(&self, q: &[f64]) -> Result<f64, KinematicsError> {
         let j = self.jacobian(q)?;
         let det = if self.n >= 6 {
-            linalg::determinant6(&j.outer_gram())
+            let outer: Matrix6<f64> = j * j.transpose();
+            outer.determinant()
         } else {
-            linalg::determinant(&j.gram(), self.n)
+            // JᵀJ with ones on the diagonal of the unused (zero) columns: the determinant of
+            // its leading n×n block.
+            let unused =
+                SVector::<f64, MAX_JOINTS>::from_fn(|i, _| f64::from(u8::from(i >= self.n)));
+            (j.tr_mul(&j) + SMatrix::from_diagonal(&unused)).determinant()
         };
         // NaN-safe by construction: only a positive determinant has a root (`det.max(0.0)`
         // relied on `max` dropping NaN).
@@ -187,9 +209,14 @@ impl Chain {
     /// `visit`, and returns the tool frame. `q` must hold valid values in its first `n` entries.
     /// One walk serves FK, link frames and the solvers, which differ only in what they keep.
     #[inline(always)]
-    fn walk(&self, q: &[f64; MAX_JOINTS], mut visit: impl FnMut(usize, &Rotation, Vec3)) -> Frame {
-        let mut rot = Rotation::IDENTITY;
-        let mut pos = Vec3::ZERO;
+    fn walk(
+        &self,
+        q: &[f64; MAX_JOINTS],
+        mut visit: impl FnMut(usize, [&Vector3<f64>; 3], Vector3<f64>),
+    ) -> Frame {
+        // The rotation is kept as its three columns (the joint frame's axes).
+        let [mut x, mut y, mut z] = [Vector3::x(), Vector3::y(), Vector3::z()];
+        let mut pos = Vector3::zeros();
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
@@ -197,39 +224,43 @@ impl Chain {
                 (link.theta + qi, link.d)
             };
             let (st, ct) = libm::sincos(theta);
-            let [x, y, z] = rot.cols;
             // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
-            let z1 = z * link.cos_alpha - y * link.sin_alpha;
+            z = z * link.cos_alpha - y * link.sin_alpha;
             // RotZ(θ) · TransZ(d)
-            rot = Rotation::from_cols(x * ct + y1 * st, y1 * ct - x * st, z1);
-            pos += z1 * d;
-            visit(i, &rot, pos);
+            pos += z * d;
+            (x, y) = (x * ct + y1 * st, y1 * ct - x * st);
+            visit(i, [&x, &y, &z], pos);
         }
-        Frame::new(rot, pos) * self.tool
+        let rot = Matrix3::from_columns(&[x, y, z]);
+        Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot)) * self.tool
     }
 
     /// The tool frame, with every joint's axis and origin written to `axes`.
     pub(super) fn tool_and_axes(&self, q: &[f64; MAX_JOINTS], axes: &mut Axes) -> Frame {
-        self.walk(q, |i, rot, pos| {
+        self.walk(q, |i, [_, _, axis], pos| {
             if let (Some(z), Some(o)) = (axes.z.get_mut(i), axes.origin.get_mut(i)) {
-                *z = rot.cols[2];
+                *z = *axis;
                 *o = pos;
             }
         })
     }
 
     /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
-    pub(super) fn jacobian_into(&self, axes: &Axes, tip: Vec3, j: &mut Jacobian) {
+    pub(super) fn jacobian_into(&self, axes: &Axes, tip: &Vector3<f64>, j: &mut Jacobian) {
         let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
-        for (col, ((axis, origin), link)) in j.cols.iter_mut().zip(joints).take(self.n) {
-            *col = if link.prismatic {
-                [axis.x, axis.y, axis.z, 0.0, 0.0, 0.0]
+        // Column-major storage: each chunk of six is one column.
+        let columns = j.as_mut_slice().chunks_exact_mut(6);
+        for (col, ((axis, origin), link)) in columns.zip(joints).take(self.n) {
+            let (linear, angular) = if link.prismatic {
+                (*axis, Vector3::zeros())
             } else {
-                let v = axis.cross(tip - *origin);
-                [v.x, v.y, v.z, axis.x, axis.y, axis.z]
+                (axis.cross(&(tip - origin)), *axis)
             };
+            for (c, v) in col.iter_mut().zip(linear.iter().chain(angular.iter())) {
+                *c = *v;
+            }
         }
     }
 
@@ -243,9 +274,9 @@ impl Chain {
 fn tool_frame(config: &RobotConfig) -> Frame {
     let t = &config.tool;
     let [roll, pitch, yaw] = t.rpy;
-    Frame::dh(t.a, t.alpha, t.d, t.theta)
-        * Frame::new(
-            Rotation::from_rpy(roll, pitch, yaw),
-            Vec3::from_array(t.xyz),
+    math::dh(t.a, t.alpha, t.d, t.theta)
+        * Frame::from_parts(
+            Vector3::from(t.xyz).into(),
+            Rotation3::from_euler_angles(roll, pitch, yaw),
         )
 }

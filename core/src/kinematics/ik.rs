@@ -1,6 +1,7 @@
 //! Inverse position kinematics: damped least squares with joint limits as an active set.
 //!
-//! Each iteration solves `(JᵀJ + λI) Δq = Jᵀe` for the pose error `e` (position error and
+//! Each iteration takes the damped least-squares step `Δq = (JᵀJ + λI)⁻¹Jᵀe = Jᵀ(JJᵀ + λI)⁻¹e`
+//! (solved as the 6×6 system, whatever the joint count) for the pose error `e` (position error and
 //! rotation vector, base frame). The damping `λ = ½|e|² + λ_min` (Sugihara's error-damped
 //! Levenberg–Marquardt) takes cautious steps far from the goal or near a singularity and
 //! becomes a Newton step close to the solution, so convergence to 1e-9 is quadratic there.
@@ -10,16 +11,19 @@
 //! solver stalls. Here a joint that sits at a limit and whose step points outwards is *locked*
 //! for that iteration (its column is removed and the step re-solved), so the other joints take
 //! over; a joint that crosses a limit is stopped at it. The global solver also wraps revolute
-//! joints by 2π where the range allows, and restarts from deterministic random seeds.
+//! joints by 2π where the range allows, and restarts from deterministic random seeds, early
+//! when an attempt stops making progress.
+
+use nalgebra::Vector6;
 
 use super::chain::{Axes, Chain};
-use super::jacobian::Jacobian;
+use super::jacobian::{Jacobian, JointVector, damped_least_squares};
 use super::joints::Joints;
-use super::linalg;
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
-use crate::math::Frame;
+use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
+use crate::saturate::saturate;
 
 /// Damping floor: keeps every system positive definite, small enough that steps near the
 /// solution are Newton steps.
@@ -28,6 +32,8 @@ const LAMBDA_MIN: f64 = 1e-9;
 const AT_LIMIT: f64 = 1e-12;
 /// Iterations of one global attempt before it restarts from a new random seed.
 const ATTEMPT_ITERATIONS: u16 = 30;
+/// A global attempt must halve its error every this many steps, or it is abandoned.
+const PROGRESS_WINDOW: u32 = 5;
 /// Steps smaller than this (∞-norm) without convergence mean a local minimum.
 const STALL_STEP: f64 = 1e-10;
 
@@ -36,7 +42,7 @@ const STALL_STEP: f64 = 1e-10;
 pub struct IkSolution {
     /// Joint values, always within the joint limits.
     pub q: Joints,
-    /// Newton iterations used (over all restarts for the global solver).
+    /// Newton iterations run (over all attempts), whichever pose was best.
     pub iterations: u32,
     /// Distance from the target position (m).
     pub position_error: f64,
@@ -92,7 +98,7 @@ impl core::fmt::Display for IkError {
 /// than the current pose by more than `margin` (metric: metres + radians). A diverging solution
 /// must not be commanded; the arm holds instead.
 pub fn diverges(target: &Frame, solved: &Frame, current: &Frame, margin: f64) -> bool {
-    target.dist(solved) - target.dist(current) > margin
+    math::dist(target, solved) - math::dist(target, current) > margin
 }
 
 /// The result of one descent from one starting point.
@@ -108,8 +114,11 @@ enum Bounds {
 }
 
 struct Descent {
+    /// The best pose visited; its `iterations` is this descent's `steps`.
     best: IkSolution,
     converged: bool,
+    /// Newton steps actually taken (the budget this descent spent).
+    steps: u32,
 }
 
 impl Chain {
@@ -130,8 +139,9 @@ impl Chain {
     ) -> Result<IkResult, IkError> {
         let q = self.prepare(target, seed)?;
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
-        let free = self.descend(target, q, iterations, tolerance, Bounds::Free);
-        let mut used = free.best.iterations;
+        let no_hook = &mut || {};
+        let free = self.descend(target, q, iterations, tolerance, Bounds::Free, no_hook);
+        let mut used = free.steps;
         if free.converged {
             if self.within_limits(&free.best.q) {
                 return Ok(IkResult::Converged(free.best));
@@ -140,15 +150,22 @@ impl Chain {
             // branches mirror each other about the joint value there, so the solution
             // reflected about the limit seeds the bounded descent well.
             let mirrored = self.reflected_into_limits(&free.best.q);
-            let retry = self.descend(target, mirrored, iterations, tolerance, Bounds::Enforced);
-            used += retry.best.iterations;
+            let retry = self.descend(
+                target,
+                mirrored,
+                iterations,
+                tolerance,
+                Bounds::Enforced,
+                no_hook,
+            );
+            used += retry.steps;
             if retry.converged {
                 let mut best = retry.best;
                 best.iterations = used;
                 return Ok(IkResult::Converged(best));
             }
         }
-        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced);
+        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced, no_hook);
         bounded.best.iterations += used;
         Ok(bounded.into_result())
     }
@@ -163,6 +180,19 @@ impl Chain {
         config: &IkConfig,
         rng_seed: u64,
     ) -> Result<IkResult, IkError> {
+        self.solve_global_counted(target, seed, config, rng_seed, &mut || {})
+    }
+
+    /// [`solve_global`](Self::solve_global), calling `on_step` once per Newton step taken, so a
+    /// test can count the budget spent independently of the reported `iterations`.
+    fn solve_global_counted(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+        rng_seed: u64,
+        on_step: &mut impl FnMut(),
+    ) -> Result<IkResult, IkError> {
         let start = self.prepare(target, seed)?;
         let mut q = start;
         let mut rng = SplitMix64::new(rng_seed);
@@ -172,9 +202,19 @@ impl Chain {
         // Each attempt spends at least one iteration, so this bound is never the binding one.
         for _ in 0..config.global_iterations {
             let limit = budget.min(ATTEMPT_ITERATIONS);
-            let descent = self.descend(target, q, limit, config.tolerance, Bounds::Wrapping);
-            used += descent.best.iterations;
-            budget = budget.saturating_sub(descent.best.iterations.max(1) as u16);
+            let descent = self.descend(
+                target,
+                q,
+                limit,
+                config.tolerance,
+                Bounds::Wrapping,
+                on_step,
+            );
+            used += descent.steps;
+            // The steps actually taken (at most `limit`), not the index of the best pose: the
+            // budget bounds the work. An attempt takes at least one step unless it converged.
+            let spent = u16::try_from(descent.steps).unwrap_or(u16::MAX).max(1);
+            budget = budget.saturating_sub(spent);
             let mut found = descent.best;
             found.iterations = used;
             if descent.converged {
@@ -190,8 +230,15 @@ impl Chain {
         }
         // Only a zero budget leaves no attempt: then the answer is the (clamped) seed itself.
         let mut best = best.unwrap_or_else(|| {
-            self.descend(target, start, 0, config.tolerance, Bounds::Wrapping)
-                .best
+            self.descend(
+                target,
+                start,
+                0,
+                config.tolerance,
+                Bounds::Wrapping,
+                on_step,
+            )
+            .best
         });
         best.iterations = used;
         Ok(IkResult::NotConverged(best))
@@ -209,14 +256,14 @@ impl Chain {
             } else {
                 *v
             };
-            *o = reflected.clamp(*lo, *hi);
+            *o = saturate(reflected, *lo, *hi);
         }
         out
     }
 
     /// Validates the inputs and returns the seed clamped into the limits.
     fn prepare(&self, target: &Frame, seed: &[f64]) -> Result<[f64; MAX_JOINTS], IkError> {
-        if !target.is_finite() {
+        if !math::is_finite(target) {
             return Err(IkError::NonFiniteTarget);
         }
         if seed.len() != self.dof() {
@@ -228,7 +275,7 @@ impl Chain {
             if !s.is_finite() {
                 return Err(IkError::NonFiniteSeed);
             }
-            *v = s.clamp(*lo, *hi);
+            *v = saturate(*s, *lo, *hi);
         }
         Ok(q)
     }
@@ -261,53 +308,66 @@ impl Chain {
         iterations: u16,
         tolerance: f64,
         bounds: Bounds,
+        on_step: &mut impl FnMut(),
     ) -> Descent {
-        let n = self.dof();
-        let mut best = IkSolution {
-            q: Joints::zeros(n),
-            iterations: 0,
+        // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
+        // the end: moving it every iteration cost the Cortex-M7 more than the step's maths.
+        let mut best = Pose {
+            q,
             position_error: f64::INFINITY,
             orientation_error: f64::INFINITY,
         };
         // Reused across iterations: on the Cortex-M7 rebuilding them costs more than the maths.
         let mut axes = Axes::default();
-        let mut jacobian = Jacobian::zero(n);
+        let mut jacobian = Jacobian::zeros();
+        let mut steps = 0;
+        let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
             let tool = self.tool_and_axes(&q, &mut axes);
-            let e = tool.diff(target);
-            let solution = IkSolution {
-                q: joints_of(&q, n),
-                iterations: it,
-                position_error: e.linear.norm(),
-                orientation_error: e.angular.norm(),
+            let e = math::diff(&tool, target);
+            let pose = Pose {
+                q,
+                position_error: e.fixed_rows::<3>(0).norm(),
+                orientation_error: e.fixed_rows::<3>(3).norm(),
             };
             // The first evaluation always counts: with a huge target every score is infinite.
-            if it == 0 || score(&solution) < score(&best) {
-                best = solution;
+            if it == 0 || pose.score() < best.score() {
+                best = pose;
             }
-            if solution.position_error < tolerance && solution.orientation_error < tolerance {
+            if pose.position_error < tolerance && pose.orientation_error < tolerance {
                 return Descent {
-                    best: solution,
+                    best: pose.solution(self.dof(), steps),
                     converged: true,
+                    steps,
                 };
             }
             if it == u32::from(iterations) {
                 break;
             }
-            let e = e.to_array();
-            let energy = 0.5 * e.iter().map(|v| v * v).sum::<f64>();
-            self.jacobian_into(&axes, tool.pos, &mut jacobian);
+            let energy = 0.5 * e.norm_squared();
+            self.jacobian_into(&axes, &tool.translation.vector, &mut jacobian);
             let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q, bounds);
-            let largest = step.iter().fold(0.0f64, |m, v| m.max(libm::fabs(*v)));
+            steps += 1;
+            on_step();
             self.apply(&mut q, &step, bounds);
-            if largest < STALL_STEP {
-                best.iterations = it + 1;
+            if step.amax() < STALL_STEP {
                 break;
+            }
+            // A global attempt that has not halved its error in the last PROGRESS_WINDOW
+            // steps is in a local minimum or pinned on a limit: a new seed is a better use
+            // of the budget.
+            if bounds == Bounds::Wrapping && steps % PROGRESS_WINDOW == 0 {
+                let now = best.score();
+                if now > 0.5 * checkpoint {
+                    break;
+                }
+                checkpoint = now;
             }
         }
         Descent {
-            best,
+            best: best.solution(self.dof(), steps),
             converged: false,
+            steps,
         }
     }
 
@@ -321,34 +381,30 @@ impl Chain {
     fn step(
         &self,
         j: &Jacobian,
-        e: &[f64; 6],
+        e: &Vector6<f64>,
         lambda: f64,
         q: &[f64; MAX_JOINTS],
         bounds: Bounds,
-    ) -> [f64; MAX_JOINTS] {
+    ) -> JointVector {
         let n = self.dof();
-        let gradient = j.transpose_mul(e);
         let (min, max) = self.limits();
         let pushes_out = |qi: f64, lo: f64, hi: f64, push: f64| {
             (qi >= hi - AT_LIMIT && push > 0.0) || (qi <= lo + AT_LIMIT && push < 0.0)
         };
         let mut locked = [false; MAX_JOINTS];
-        let mut a = [[0.0; MAX_JOINTS]; MAX_JOINTS];
-        let mut dq = [0.0; MAX_JOINTS];
+        let mut dq = JointVector::zeros();
         // Every pass changes the locked set; 2n + 2 passes bound even an add/drop cycle.
         for _ in 0..2 * n + 2 {
-            j.damped_gram_into(lambda, &locked, &mut a);
-            for ((d, g), lock) in dq.iter_mut().zip(&gradient).zip(&locked) {
-                *d = if *lock { 0.0 } else { *g };
-            }
-            if !linalg::cholesky_solve(&mut a, &mut dq, n) {
-                return [0.0; MAX_JOINTS];
-            }
+            // A locked joint is a zeroed column of the Jacobian.
+            let Some(solved) = damped_least_squares(j, n, e, lambda, &locked) else {
+                return JointVector::zeros();
+            };
+            dq = solved;
             if bounds == Bounds::Free {
                 break;
             }
             let mut changed = false;
-            let joints = q.iter().zip(&dq).zip(min.iter().zip(max)).take(n);
+            let joints = q.iter().zip(dq.iter()).zip(min.iter().zip(max)).take(n);
             for (((qi, di), (lo, hi)), lock) in joints.zip(locked.iter_mut()) {
                 if !*lock && pushes_out(*qi, *lo, *hi, *di) {
                     *lock = true;
@@ -356,12 +412,12 @@ impl Chain {
                 }
             }
             if !changed && locked.iter().any(|l| *l) {
-                let mut residual = *e;
-                for (r, m) in residual.iter_mut().zip(j.twist(&dq).to_array()) {
-                    *r -= m;
-                }
-                let multiplier = j.transpose_mul(&residual);
-                let joints = q.iter().zip(&multiplier).zip(min.iter().zip(max)).take(n);
+                let multiplier = j.tr_mul(&(e - j * dq));
+                let joints = q
+                    .iter()
+                    .zip(multiplier.iter())
+                    .zip(min.iter().zip(max))
+                    .take(n);
                 for (((qi, mi), (lo, hi)), lock) in joints.zip(locked.iter_mut()) {
                     if *lock && !pushes_out(*qi, *lo, *hi, *mi) {
                         *lock = false;
@@ -378,10 +434,14 @@ impl Chain {
 
     /// `q += dq`; with bounds, revolute joints wrapped by 2π into range when allowed, then
     /// clamped.
-    fn apply(&self, q: &mut [f64; MAX_JOINTS], dq: &[f64; MAX_JOINTS], bounds: Bounds) {
+    fn apply(&self, q: &mut [f64; MAX_JOINTS], dq: &JointVector, bounds: Bounds) {
         const TAU: f64 = core::f64::consts::TAU;
         let (min, max) = self.limits();
-        let joints = q.iter_mut().zip(dq).zip(min.iter().zip(max)).enumerate();
+        let joints = q
+            .iter_mut()
+            .zip(dq.iter())
+            .zip(min.iter().zip(max))
+            .enumerate();
         for (i, ((qi, di), (lo, hi))) in joints.take(self.dof()) {
             let mut v = *qi + di;
             if bounds == Bounds::Free {
@@ -395,7 +455,7 @@ impl Chain {
                     v = wrapped;
                 }
             }
-            *qi = v.clamp(*lo, *hi);
+            *qi = saturate(v, *lo, *hi);
         }
     }
 }
@@ -415,8 +475,101 @@ fn score(s: &IkSolution) -> f64 {
     s.position_error + s.orientation_error
 }
 
-fn joints_of(q: &[f64; MAX_JOINTS], n: usize) -> Joints {
-    let mut joints = Joints::zeros(n);
-    joints.copy_from_slice(q.get(..n).unwrap_or(&[]));
-    joints
+/// A pose visited by a descent: joint values and their errors.
+#[derive(Clone, Copy)]
+struct Pose {
+    q: [f64; MAX_JOINTS],
+    position_error: f64,
+    orientation_error: f64,
+}
+
+impl Pose {
+    /// The seed's mixed metric: metres plus radians.
+    fn score(&self) -> f64 {
+        self.position_error + self.orientation_error
+    }
+
+    /// The solution of `n` joints reached after `steps` Newton steps.
+    fn solution(&self, n: usize, steps: u32) -> IkSolution {
+        let mut q = Joints::zeros(n);
+        for (j, v) in q.iter_mut().zip(self.q) {
+            *j = v;
+        }
+        IkSolution {
+            q,
+            iterations: steps,
+            position_error: self.position_error,
+            orientation_error: self.orientation_error,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::math::{Rotation3, Vector3};
+
+    fn ranger() -> (Chain, IkConfig) {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
+        let config = crate::config::load_file(path).unwrap();
+        (Chain::new(&config), config.ik)
+    }
+
+    /// The budget bounds the Newton steps actually taken, counted by the solver's step hook
+    /// rather than read back from the reported `iterations`.
+    #[test]
+    fn global_budget_bounds_the_steps_taken() {
+        let (chain, ik) = ranger();
+        for budget in [1, 29, 30, 31, 300] {
+            let ik = IkConfig {
+                global_iterations: budget,
+                ..ik
+            };
+            for k in 0..20u32 {
+                // 4 m out: beyond the ~1.5 m reach, so every attempt runs until it stalls or
+                // exhausts its share and the whole budget is spent.
+                let turn = Vector3::new(0.1 * f64::from(k), -0.3, 0.7);
+                let target =
+                    Frame::from_parts(Vector3::new(-0.5, 4.0, 0.7).into(), Rotation3::new(turn));
+                let mut steps = 0u32;
+                let result = chain
+                    .solve_global_counted(
+                        &target,
+                        &chain.mid_range(),
+                        &ik,
+                        u64::from(k),
+                        &mut || steps += 1,
+                    )
+                    .unwrap();
+                assert!(!result.is_converged());
+                assert_eq!(steps, u32::from(budget), "budget {budget}, seed {k}");
+                assert_eq!(result.solution().iterations, steps);
+            }
+        }
+    }
+
+    /// A converged global solve reports the steps of every attempt, not just the last one's.
+    #[test]
+    fn global_iterations_count_every_attempt() {
+        let (chain, ik) = ranger();
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for k in 0..200 {
+            let q: Joints = {
+                let mut q = chain.mid_range();
+                for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
+                    *v = rng.uniform(*lo, *hi);
+                }
+                q
+            };
+            let target = chain.forward(&q).unwrap();
+            let mut steps = 0u32;
+            let result = chain
+                .solve_global_counted(&target, &chain.mid_range(), &ik, k, &mut || steps += 1)
+                .unwrap();
+            assert_eq!(result.solution().iterations, steps);
+            assert!(steps <= u32::from(ik.global_iterations));
+        }
+    }
 }

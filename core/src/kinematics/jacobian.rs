@@ -1,104 +1,39 @@
-//! The geometric Jacobian.
+//! The geometric Jacobian and the damped least-squares solve on it.
+
+use nalgebra::{Cholesky, Matrix6, SMatrix, SVector, Vector6};
 
 use crate::MAX_JOINTS;
-use crate::math::Twist;
 
-/// A 6×n geometric Jacobian in base coordinates, reference point at the tool origin.
-/// Column j maps joint j's rate to the tool twist `[vx, vy, vz, wx, wy, wz]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Jacobian {
-    pub(super) cols: [[f64; 6]; MAX_JOINTS],
-    pub(super) n: usize,
-}
+/// A 6×[`MAX_JOINTS`] geometric Jacobian in base coordinates, reference point at the tool
+/// origin. Column j maps joint j's rate to the tool twist `[vx, vy, vz, wx, wy, wz]`; the
+/// columns past the chain's last joint are zero.
+pub type Jacobian = SMatrix<f64, 6, MAX_JOINTS>;
 
-impl Jacobian {
-    /// An all-zero Jacobian of `n` columns.
-    pub(super) fn zero(n: usize) -> Self {
-        Self {
-            cols: [[0.0; 6]; MAX_JOINTS],
-            n: n.min(MAX_JOINTS),
-        }
+/// Joint-space vectors of the solvers (entries past the last joint are zero).
+pub(super) type JointVector = SVector<f64, MAX_JOINTS>;
+
+/// Damped least squares `Δq = Jᵀ (J Jᵀ + λI)⁻¹ e`, which equals `(JᵀJ + λI)⁻¹ Jᵀ e` but is
+/// always a 6×6 solve, whatever the joint count. The columns of `locked` joints count as zero,
+/// so their entries of `Δq` are zero, and so do the columns from `n` on (joints the chain does
+/// not have), which are skipped. `None` if the system is not positive definite (λ ≤ 0 or a
+/// non-finite Jacobian).
+pub(super) fn damped_least_squares(
+    j: &Jacobian,
+    n: usize,
+    e: &Vector6<f64>,
+    lambda: f64,
+    locked: &[bool; MAX_JOINTS],
+) -> Option<JointVector> {
+    // Only the lower triangle is built: the rank-one updates and the Cholesky read no more.
+    let mut a = Matrix6::from_diagonal_element(lambda);
+    let columns = j.column_iter().zip(locked).take(n);
+    for (column, _) in columns.filter(|(_, l)| !**l) {
+        a.syger(1.0, &column, &column, 1.0);
     }
-
-    /// Number of columns (joints).
-    pub fn dof(&self) -> usize {
-        self.n
+    let y = Cholesky::new(a)?.solve(e);
+    let mut dq = j.tr_mul(&y);
+    for (d, _) in dq.iter_mut().zip(locked).filter(|(_, l)| **l) {
+        *d = 0.0;
     }
-
-    /// Column `j`, or `None` past the last joint.
-    pub fn column(&self, j: usize) -> Option<&[f64; 6]> {
-        self.cols.get(..self.n)?.get(j)
-    }
-
-    /// The twist produced by joint rates `qd` (extra entries ignored): `J · q̇`.
-    pub fn twist(&self, qd: &[f64]) -> Twist {
-        let mut t = [0.0; 6];
-        for (col, rate) in self.cols.iter().take(self.n).zip(qd) {
-            for (ti, ci) in t.iter_mut().zip(col) {
-                *ti += ci * rate;
-            }
-        }
-        Twist::from_array(t)
-    }
-
-    /// `Jᵀ · e` for a 6-vector `e`.
-    pub(super) fn transpose_mul(&self, e: &[f64; 6]) -> [f64; MAX_JOINTS] {
-        let mut g = [0.0; MAX_JOINTS];
-        for (gi, col) in g.iter_mut().zip(self.cols.iter().take(self.n)) {
-            *gi = dot6(col, e);
-        }
-        g
-    }
-
-    /// The full n×n Gram matrix `Jᵀ · J`.
-    pub(super) fn gram(&self) -> [[f64; MAX_JOINTS]; MAX_JOINTS] {
-        let mut a = [[0.0; MAX_JOINTS]; MAX_JOINTS];
-        self.damped_gram_into(0.0, &[false; MAX_JOINTS], &mut a);
-        for i in 0..self.n {
-            for j in 0..i {
-                let v = a.get(i).and_then(|row| row.get(j)).copied().unwrap_or(0.0);
-                if let Some(x) = a.get_mut(j).and_then(|row| row.get_mut(i)) {
-                    *x = v;
-                }
-            }
-        }
-        a
-    }
-
-    /// The lower triangle of `JᵀJ + λI` with the rows and columns of `locked` joints removed
-    /// (only their λ stays on the diagonal), written into the leading n×n block of `a`.
-    pub(super) fn damped_gram_into(
-        &self,
-        lambda: f64,
-        locked: &[bool; MAX_JOINTS],
-        a: &mut [[f64; MAX_JOINTS]; MAX_JOINTS],
-    ) {
-        let columns = self.cols.iter().zip(locked).take(self.n);
-        for ((row, (ci, li)), i) in a.iter_mut().zip(columns).zip(0..) {
-            let others = self.cols.iter().zip(locked).take(i + 1);
-            for ((x, (cj, lj)), j) in row.iter_mut().zip(others).zip(0..) {
-                let product = if *li || *lj { 0.0 } else { dot6(ci, cj) };
-                *x = if i == j { product + lambda } else { product };
-            }
-        }
-    }
-}
-
-impl Jacobian {
-    /// The 6×6 matrix `J · Jᵀ`.
-    pub(super) fn outer_gram(&self) -> [[f64; 6]; 6] {
-        let mut a = [[0.0; 6]; 6];
-        for col in self.cols.iter().take(self.n) {
-            for (row, ci) in a.iter_mut().zip(col) {
-                for (x, cj) in row.iter_mut().zip(col) {
-                    *x += ci * cj;
-                }
-            }
-        }
-        a
-    }
-}
-
-fn dot6(a: &[f64; 6], b: &[f64; 6]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+    Some(dq)
 }

@@ -11,7 +11,6 @@ mod chain;
 mod ik;
 mod jacobian;
 mod joints;
-mod linalg;
 mod velocity;
 
 pub use chain::{Chain, KinematicsError};

@@ -1,16 +1,22 @@
-//! Small fixed-size geometry: 3-vectors, rotations, rigid frames and the orientation
-//! conventions of the client protocol (spec §2.4).
+//! Geometry on nalgebra's fixed-size types, plus the conventions of the client protocol
+//! (spec §2.4) where they differ from nalgebra's.
 //!
-//! Hand-written rather than a general matrix library: every type is a few `f64`s, every
-//! operation is branch-light straight-line code, which keeps the per-tick cost on the
-//! Cortex-M7 predictable.
+//! * [`Frame`]: a rigid transform, nalgebra's isometry with a rotation *matrix* (forward
+//!   kinematics and the Jacobian read the matrix columns directly); [`Twist`]: a 6-vector
+//!   `[vx, vy, vz, wx, wy, wz]`.
+//! * RPY: `Rotation3::from_euler_angles(roll, pitch, yaw)` is the seed's `Rz · Ry · Rx`; only
+//!   the extraction differs, in the seed's gimbal-lock branch ([`rpy`]).
+//! * The log map: nalgebra's `scaled_axis` returns zero at half turns (the KDL defect of spec
+//!   §9 item 4) and loses precision below 1e-8 rad (it takes `acos` of the trace), so
+//!   [`rotation_vector`] keeps the robust one the IK needs.
+//! * Quaternions on the wire are (x, y, z, w) with w ≥ 0 ([`Quaternion`]); nalgebra's
+//!   constructor takes w first and leaves the sign free.
 
 mod frame;
 mod quaternion;
 mod rotation;
-mod vec3;
 
-pub use frame::{Frame, Twist};
+pub use frame::{Frame, Twist, dh, diff, dist, is_finite};
+pub use nalgebra::{Rotation3, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
 pub use quaternion::Quaternion;
-pub use rotation::Rotation;
-pub use vec3::Vec3;
+pub use rotation::{rotation_vector, rpy};

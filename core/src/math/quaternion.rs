@@ -1,9 +1,10 @@
-//! Unit quaternions in the wire order of the client protocol: (x, y, z, w), scalar last.
+//! Quaternions as the client protocol carries them: (x, y, z, w), scalar last, w ≥ 0.
 
-use super::{Rotation, Vec3};
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
-/// A quaternion (x, y, z, w) = (k·sin(θ/2), cos(θ/2)) for a rotation by θ about unit axis k
-/// (Craig's Euler parameters ε1..ε4, Hamilton convention).
+/// A quaternion in wire order (x, y, z, w) = (k·sin(θ/2), cos(θ/2)) for a rotation by θ about
+/// unit axis k (Craig's Euler parameters ε1..ε4, Hamilton convention). Converts to and from
+/// nalgebra, whose constructor takes w first and whose sign is free.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quaternion {
     /// ε1 = kx·sin(θ/2).
@@ -30,61 +31,35 @@ impl Quaternion {
         [self.x, self.y, self.z, self.w]
     }
 
+    /// The vector part (x, y, z).
+    pub fn vector(self) -> Vector3<f64> {
+        Vector3::new(self.x, self.y, self.z)
+    }
+
     /// This quaternion scaled to unit norm, or `None` if its norm is zero or not finite (the
     /// seed divided by the norm unchecked and produced NaN poses, spec §9 item 11).
     pub fn normalized(self) -> Option<Self> {
-        let n = libm::sqrt(self.x * self.x + self.y * self.y + self.z * self.z + self.w * self.w);
+        let q = self.to_nalgebra().into_inner();
+        let n = q.norm();
         if !n.is_finite() || n < 1e-12 {
             return None;
         }
-        let s = 1.0 / n;
-        Some(Self::new(self.x * s, self.y * s, self.z * s, self.w * s))
+        Some(Self::from_nalgebra(&(q / n)))
     }
 
     /// The rotation matrix of a unit quaternion (spec §2.4).
-    pub fn to_rotation(self) -> Rotation {
-        let Self { x, y, z, w } = self;
-        Rotation::from_rows([
-            [
-                w * w + x * x - y * y - z * z,
-                2.0 * (x * y - w * z),
-                2.0 * (x * z + w * y),
-            ],
-            [
-                2.0 * (x * y + w * z),
-                w * w - x * x + y * y - z * z,
-                2.0 * (y * z - w * x),
-            ],
-            [
-                2.0 * (x * z - w * y),
-                2.0 * (y * z + w * x),
-                w * w - x * x - y * y + z * z,
-            ],
-        ])
+    pub fn to_rotation(self) -> Rotation3<f64> {
+        self.to_nalgebra().to_rotation_matrix()
     }
 
     /// The quaternion of a rotation, with the scalar part `w ≥ 0` as the seed's PS reply has it.
     ///
-    /// Uses Shepperd's method (largest of the four squared components), so it is accurate for
-    /// every rotation; the seed's axis–angle path divided by zero for half turns about axes in
-    /// the x–y plane (spec §9 item 4). For a half turn (w = 0) the sign makes the first nonzero
-    /// of z, y, x positive, which matches the seed where the seed is defined.
-    pub fn from_rotation(r: &Rotation) -> Self {
-        let [[r00, r01, r02], [r10, r11, r12], [r20, r21, r22]] = r.to_rows();
-        let tr = r00 + r11 + r22;
-        let q = if tr >= r00 && tr >= r11 && tr >= r22 {
-            let s = 2.0 * libm::sqrt(1.0 + tr);
-            Self::new((r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s)
-        } else if r00 >= r11 && r00 >= r22 {
-            let s = 2.0 * libm::sqrt(1.0 + r00 - r11 - r22);
-            Self::new(0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s)
-        } else if r11 >= r22 {
-            let s = 2.0 * libm::sqrt(1.0 + r11 - r00 - r22);
-            Self::new((r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s)
-        } else {
-            let s = 2.0 * libm::sqrt(1.0 + r22 - r00 - r11);
-            Self::new((r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s)
-        };
+    /// nalgebra's conversion is Shepperd's method (largest of the four squared components), so
+    /// it is accurate for every rotation; the seed's axis–angle path divided by zero for half
+    /// turns about axes in the x–y plane (spec §9 item 4). For a half turn (w = 0) the sign
+    /// makes the first nonzero of z, y, x positive, which matches the seed where it is defined.
+    pub fn from_rotation(r: &Rotation3<f64>) -> Self {
+        let q = Self::from_nalgebra(&UnitQuaternion::from_rotation_matrix(r));
         let flip = if q.w != 0.0 {
             q.w < 0.0
         } else if q.z != 0.0 {
@@ -101,8 +76,13 @@ impl Quaternion {
         }
     }
 
-    /// The vector part (x, y, z).
-    pub fn vector(self) -> Vec3 {
-        Vec3::new(self.x, self.y, self.z)
+    /// nalgebra's quaternion with the same components, taken as unit (not normalised).
+    fn to_nalgebra(self) -> UnitQuaternion<f64> {
+        let q = nalgebra::Quaternion::new(self.w, self.x, self.y, self.z);
+        UnitQuaternion::new_unchecked(q)
+    }
+
+    fn from_nalgebra(q: &nalgebra::Quaternion<f64>) -> Self {
+        Self::new(q.i, q.j, q.k, q.w)
     }
 }

@@ -3,7 +3,7 @@
 use super::Refusal;
 use super::shape::Shape;
 use super::straight_line::StraightLine;
-use crate::math::{Frame, Rotation, Vec3};
+use crate::math::{self, Frame, Rotation3, Vector3};
 
 /// Rest-to-rest Cartesian moves: the tool origin moves along the straight segment to the goal,
 /// the orientation turns about the fixed axis of the relative rotation, both synchronised to
@@ -65,8 +65,9 @@ impl Motion {
                 let mut r = [0.0; 3];
                 translation.point(t, &mut p);
                 rotation.point(t, &mut r);
-                let turn = Rotation::from_rotation_vector(Vec3::from_array(r));
-                (Frame::new(turn * start.rot, Vec3::from_array(p)), false)
+                let turn = Rotation3::new(Vector3::from(r));
+                let pose = Frame::from_parts(Vector3::from(p).into(), turn * start.rotation);
+                (pose, false)
             }
             Self::Shape {
                 shape,
@@ -77,7 +78,9 @@ impl Motion {
                 if end_time.is_some_and(|end| t >= end) {
                     return (start, true);
                 }
-                (Frame::new(start.rot, start.pos + shape.offset(t)), false)
+                let mut pose = start;
+                pose.translation.vector += shape.offset(t);
+                (pose, false)
             }
         }
     }
@@ -107,13 +110,18 @@ impl CartesianGenerator {
             return Err(Refusal::Busy);
         }
         let start = self.setpoint;
-        let delta = start.diff(&goal);
+        let delta = math::diff(&start, &goal);
         let [vl @ .., _, _, _] = self.v_max;
         let [al @ .., _, _, _] = self.a_max;
         let [_, _, _, va @ ..] = self.v_max;
         let [_, _, _, aa @ ..] = self.a_max;
-        let translation = StraightLine::plan(&start.pos.to_array(), &goal.pos.to_array(), &vl, &al);
-        let rotation = StraightLine::plan(&[0.0; 3], &delta.angular.to_array(), &va, &aa);
+        let (from, to): ([f64; 3], [f64; 3]) = (
+            start.translation.vector.into(),
+            goal.translation.vector.into(),
+        );
+        let translation = StraightLine::plan(&from, &to, &vl, &al);
+        let [_, _, _, angular @ ..]: [f64; 6] = delta.into();
+        let rotation = StraightLine::plan(&[0.0; 3], &angular, &va, &aa);
         let duration = translation
             .duration()
             .max(rotation.duration())

@@ -9,7 +9,7 @@ use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
-use crate::math::Frame;
+use crate::math::{self, Frame};
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -110,7 +110,7 @@ impl Controller {
             mode: Mode::Off,
             joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max),
             cartesian_generator: CartesianGenerator::new(
-                Frame::IDENTITY,
+                Frame::identity(),
                 cartesian.max_velocity,
                 cartesian.max_acceleration,
             ),
@@ -134,7 +134,7 @@ impl Controller {
         let f_m = self.chain.pose(&q_m);
         self.measured = Some((q_m, f_m));
         let mut events = Events {
-            workspace_limit: !self.workspace.allows(f_m.pos),
+            workspace_limit: !self.workspace.allows(&f_m.translation.vector),
             ..Events::default()
         };
         let (request, setpoint) = match self.mode {
@@ -196,7 +196,9 @@ impl Controller {
         events: &mut Events,
     ) -> (Joints, Frame) {
         let leg_done = !self.cartesian_generator.is_moving();
-        let step = self.cartesian_sequence.poll(leg_done, |p| p.dist(f_m));
+        let step = self
+            .cartesian_sequence
+            .poll(leg_done, |p| math::dist(p, f_m));
         if let SequenceStep::MoveTo(via) = step {
             let _ = self
                 .cartesian_generator
@@ -211,7 +213,7 @@ impl Controller {
             let t = t0 + self.period * scale;
             let sample = self.cartesian_generator.sample(t);
             let (setpoint, finished) = sample;
-            if events.workspace_limit || !self.workspace.allows(setpoint.pos) {
+            if events.workspace_limit || !self.workspace.allows(&setpoint.translation.vector) {
                 // An illegal set-point never reaches the IK: abort and hold the commanded pose.
                 events.workspace_limit = true;
                 return (seed, self.abort_cartesian_motion(&seed, f_m, events));
@@ -416,7 +418,7 @@ impl Controller {
         }
         let arm_inside = self
             .measured
-            .is_some_and(|(_, pose)| self.workspace.allows(pose.pos));
+            .is_some_and(|(_, pose)| self.workspace.allows(&pose.translation.vector));
         if !arm_inside {
             return Err(Refusal::OutsideWorkspace);
         }
@@ -455,10 +457,10 @@ impl Controller {
 
     /// Checks a Cartesian goal without moving: finite, and its position inside the workspace.
     pub fn check_cartesian_goal(&self, goal: &Frame) -> Result<(), Refusal> {
-        if !goal.is_finite() {
+        if !math::is_finite(goal) {
             return Err(Refusal::InvalidNumber);
         }
-        if !self.workspace.allows(goal.pos) {
+        if !self.workspace.allows(&goal.translation.vector) {
             return Err(Refusal::OutsideWorkspace);
         }
         Ok(())

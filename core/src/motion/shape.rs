@@ -4,7 +4,7 @@
 use core::f64::consts::TAU;
 
 use super::Refusal;
-use crate::math::Vec3;
+use crate::math::Vector3;
 
 /// A periodic path relative to the pose where it starts; the orientation is held.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,7 +59,7 @@ impl Shape {
     }
 
     /// Offset from the start point at time `t` since the start.
-    pub fn offset(&self, t: f64) -> Vec3 {
+    pub fn offset(&self, t: f64) -> Vector3<f64> {
         match *self {
             Self::Circle {
                 radius,
@@ -93,10 +93,10 @@ fn positive(v: f64) -> bool {
     v.is_finite() && v > 0.0
 }
 
-fn unit(axis: u8) -> Vec3 {
+fn unit(axis: u8) -> Vector3<f64> {
     match axis {
-        0 => Vec3::X,
-        1 => Vec3::Y,
-        _ => Vec3::Z,
+        0 => Vector3::x(),
+        1 => Vector3::y(),
+        _ => Vector3::z(),
     }
 }

@@ -3,7 +3,7 @@
 use heapless::Vec;
 
 use crate::config::{MAX_BOXES, WorkspaceConfig};
-use crate::math::Vec3;
+use crate::math::Vector3;
 
 /// Where the tool origin may be: inside the bounds (inclusive) and not strictly inside any
 /// exclusion box. Only the position is checked; the orientation is free.
@@ -23,7 +23,7 @@ impl Workspace {
     }
 
     /// True if the tool origin may be at `p`.
-    pub fn allows(&self, p: Vec3) -> bool {
+    pub fn allows(&self, p: &Vector3<f64>) -> bool {
         let [x0, x1, y0, y1, z0, z1] = self.bounds;
         let within = x0 <= p.x && p.x <= x1 && y0 <= p.y && p.y <= y1 && z0 <= p.z && p.z <= z1;
         within

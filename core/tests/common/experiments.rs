@@ -14,7 +14,7 @@ use std::f64::consts::PI;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
-use armgate_core::math::{Frame, Rotation, Vec3};
+use armgate_core::math::{Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
 
 /// The rectangle of E8/E9 (m), closed: the last point is the first.
@@ -89,8 +89,8 @@ const LEVEL_ORIENTATIONS: [[f64; 3]; 6] = [
     [-PI / 2.0, 0.0, 0.0],
 ];
 
-fn corner(rot: Rotation, p: [f64; 3]) -> Frame {
-    Frame::new(rot, Vec3::from_array(p))
+fn corner(rot: Rotation3<f64>, p: [f64; 3]) -> Frame {
+    Frame::from_parts(Vector3::from(p).into(), rot)
 }
 
 /// Runs the rectangle as a Cartesian via-point sequence and measures the kinematic error: the
@@ -101,7 +101,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
     let (rpy, start) = LEVEL_ORIENTATIONS
         .iter()
         .find_map(|rpy| {
-            let rot = Rotation::from_rpy(rpy[0], rpy[1], rpy[2]);
+            let rot = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
             let mut first = None;
             for (k, p) in RECTANGLE.iter().enumerate() {
                 match chain
@@ -115,7 +115,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
             Some((*rpy, first?))
         })
         .expect("no level orientation reaches every corner");
-    let rot = Rotation::from_rpy(rpy[0], rpy[1], rpy[2]);
+    let rot = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
 
     let mut ctrl = Controller::new(config);
     let mut arm = IdealArm::new(start);
@@ -145,12 +145,12 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
         let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         let (a, b) = (
-            Vec3::from_array(RECTANGLE[leg]),
-            Vec3::from_array(RECTANGLE[leg + 1]),
+            Vector3::from(RECTANGLE[leg]),
+            Vector3::from(RECTANGLE[leg + 1]),
         );
-        let e = (p - a).cross(b - a).norm() / (b - a).norm();
+        let e = (p - a).cross(&(b - a)).norm() / (b - a).norm();
         sum += e;
         count += 1;
         if e > run.max_error {
@@ -178,7 +178,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
 #[derive(Debug)]
 pub struct DivergenceRun {
     /// Tool position at the end (m).
-    pub final_position: Vec3,
+    pub final_position: Vector3<f64>,
     /// Distance from the unreachable goal at the end (m).
     pub final_distance: f64,
     /// Largest increase of the distance to the goal between two ticks during the last leg (m).
@@ -214,18 +214,18 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
     ctrl.set_mode(Mode::Cartesian).unwrap();
     let home = chain.forward(&start).unwrap();
     let waypoints = [
-        home.pos + Vec3::new(0.1, 0.0, 0.0),
-        home.pos + Vec3::new(0.1, 0.1, -0.1),
-        Vec3::from_array(UNREACHABLE),
+        home.translation.vector + Vector3::new(0.1, 0.0, 0.0),
+        home.translation.vector + Vector3::new(0.1, 0.1, -0.1),
+        Vector3::from(UNREACHABLE),
     ];
     for (k, p) in waypoints.iter().enumerate() {
-        ctrl.set_cartesian_via(k, Frame::new(home.rot, *p), 0.0)
+        ctrl.set_cartesian_via(k, Frame::from_parts((*p).into(), home.rotation), 0.0)
             .unwrap();
     }
     ctrl.start_cartesian_sequence().unwrap();
-    let goal = Vec3::from_array(UNREACHABLE);
+    let goal = Vector3::from(UNREACHABLE);
     let mut run = DivergenceRun {
-        final_position: Vec3::ZERO,
+        final_position: Vector3::zeros(),
         final_distance: 0.0,
         worst_retreat: 0.0,
         total_retreat: 0.0,
@@ -241,7 +241,7 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
         let (out, q, step) = tick(&mut ctrl, &mut arm, now);
         run.max_joint_step = run.max_joint_step.max(step);
         run.divergence_ticks += usize::from(out.events.ik_divergence);
-        let p = chain.forward(&q).unwrap().pos;
+        let p = chain.forward(&q).unwrap().translation.vector;
         last_leg |= (p - waypoints[1]).norm() < 1e-6;
         let distance = (p - goal).norm();
         if last_leg {
@@ -255,9 +255,9 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
             break;
         }
     }
-    let mut links = [Frame::IDENTITY; armgate_core::MAX_JOINTS];
+    let mut links = [Frame::identity(); armgate_core::MAX_JOINTS];
     chain.link_frames(&arm.measured(), &mut links).unwrap();
-    let shoulder = links[1].pos;
+    let shoulder = links[1].translation.vector;
     let j = &config.joints;
     let reach =
         (j[2].a.powi(2) + 0.0).sqrt() + (j[3].a.powi(2) + j[3].d.powi(2)).sqrt() + config.tool.d;
