@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Writes the seed corpus of the `datagram` fuzz target to seeds/datagram/.
 
-Input format (see fuzz_targets/datagram.rs): chunks of one header byte (bits 0-5: datagram
-length, bits 6-7: ticks after it, 0/1/8/64) followed by the datagram. The poses are the
+Input format (see fuzz_targets/datagram.rs): chunks of one header byte (bits 0-1: ticks after
+it, 0/1/8/64; bit 2 clear: a datagram; bits 3-7: its length) followed by the datagram. (Bit 2
+set makes a chunk a CAN frame; the seeds are datagrams.) The poses are the
 ranger-mk1 home pose (drives' home angles) and small moves from it.
 """
 import os
@@ -11,7 +12,7 @@ import struct
 HOME_XYZ = (0.0, 0.02, 0.666)
 HOME_RPY = (0.0, 0.0, -1.5707963)
 HOME_Q = (1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0)
-TICKS = {0: 0x00, 1: 0x40, 8: 0x80, 64: 0xC0}
+TICKS = {0: 0, 1: 1, 8: 2, 64: 3}
 
 
 def dgram(cmd, values=(), index=0):
@@ -20,8 +21,8 @@ def dgram(cmd, values=(), index=0):
 
 
 def chunk(data, ticks=0):
-    assert len(data) <= 40
-    return bytes([len(data) | TICKS[ticks]]) + data
+    assert len(data) <= 31
+    return bytes([(len(data) << 3) | TICKS[ticks]]) + data
 
 
 def moved(xyz, dx=0.0, dy=0.0, dz=0.0):

@@ -19,9 +19,9 @@
 
 use std::path::PathBuf;
 
-#[path = "common/drive_loop.rs"]
-mod drive_loop;
-use drive_loop::DriveLoop;
+#[path = "../tests/drives_rig/mod.rs"]
+mod drives_rig;
+use drives_rig::Rig;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
@@ -106,31 +106,35 @@ struct Outcome {
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
 fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
-    let mut l = DriveLoop::started(config, settings, VirtualBus::for_robot(config));
-    let begun: Vec<u64> = l.bus.drives().filter_map(|d| d.stats().begun_at).collect();
+    let mut l = Rig::started(config, settings, VirtualBus::for_robot(config));
+    let begun: Vec<u64> = l
+        .bus()
+        .drives()
+        .filter_map(|d| d.stats().begun_at)
+        .collect();
     let skew = (begun.iter().max().unwrap() - begun.iter().min().unwrap()) as f64 * 1e-9;
-    l.bus.reset_stats();
-    let start = l.now();
-    l.ctrl.set_mode(Mode::Joint).unwrap();
-    l.ctrl.move_joints(&READY, 0.0).unwrap();
+    l.bus_mut().reset_stats();
+    let start = l.now;
+    l.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    l.ctrl_mut().move_joints(&READY, 0.0).unwrap();
     let mut leads = std::collections::BTreeSet::new();
     let mut circle_started = false;
     let mut write_delay_max: f64 = 0.0;
-    while l.now() - start < RUN_SECONDS {
-        let step_time = l.now();
+    while l.now - start < RUN_SECONDS {
+        let step_time = l.now;
         l.tick();
         // The points sent at the last step have been written by now: how long after it.
-        for drive in l.bus.drives() {
+        for drive in l.bus().drives() {
             let written = drive.table().last_write().unwrap() as f64 * 1e-9;
             write_delay_max = write_delay_max.max(written - step_time);
         }
-        assert!(l.manager.is_operational(), "{:?}", l.manager.fault());
-        (0..6).filter_map(|j| l.manager.lead(j)).for_each(|lead| {
+        assert!(l.manager().is_operational(), "{:?}", l.manager().fault());
+        (0..6).filter_map(|j| l.manager().lead(j)).for_each(|lead| {
             leads.insert(lead);
         });
-        if !l.ctrl.is_moving() && !circle_started && l.now() - start > 1.0 {
-            l.ctrl.set_mode(Mode::Cartesian).unwrap();
-            l.ctrl
+        if !l.ctrl().is_moving() && !circle_started && l.now - start > 1.0 {
+            l.ctrl_mut().set_mode(Mode::Cartesian).unwrap();
+            l.ctrl_mut()
                 .start_shape(Shape::Circle {
                     radius: 0.1,
                     period: 10.0,
@@ -141,9 +145,9 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
             circle_started = true;
         }
     }
-    let stats = l.bus.stats();
+    let stats = l.bus().stats();
     let latency_max = l
-        .bus
+        .bus()
         .drives()
         .map(|d| d.stats().latency.max_ns)
         .max()
@@ -156,7 +160,7 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
         latency_max,
         write_delay_max,
         skew,
-        underflows: l.bus.drives().map(|d| d.stats().underflows).sum(),
+        underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
     }
 }
 

@@ -37,9 +37,9 @@
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-#[path = "common/drive_loop.rs"]
-mod drive_loop;
-use drive_loop::DriveLoop;
+#[path = "../tests/drives_rig/mod.rs"]
+mod drives_rig;
+use drives_rig::Rig;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
@@ -415,11 +415,11 @@ struct Run {
 
 /// The control loop: bus, drive manager and controller, stepped once per period.
 /// The simulated drives' actual positions (joint units), in joint order.
-fn actual(l: &DriveLoop, config: &ValidRobot) -> Joints {
+fn actual(l: &Rig, config: &ValidRobot) -> Joints {
     let mut q = Joints::zeros(config.dof());
     for (v, joint) in q.iter_mut().zip(config.joints.iter()) {
         *v = l
-            .bus
+            .bus()
             .drive(joint.drive.node_id)
             .expect("a drive per joint")
             .joint_position();
@@ -444,16 +444,16 @@ fn virtual_bus(config: &ValidRobot, q0: &Joints, max_speed: f64) -> VirtualBus {
 
 fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_speed: f64) -> Run {
     let bus = virtual_bus(config, q0, drive_speed);
-    let mut l = DriveLoop::started(config, &DriveSettings::default(), bus);
-    l.ctrl.set_mode(Mode::Cartesian).unwrap();
-    let origin = l.ctrl.cartesian_setpoint().translation.vector;
-    l.ctrl.start_shape(*shape).unwrap();
+    let mut l = Rig::started(config, &DriveSettings::default(), bus);
+    l.ctrl_mut().set_mode(Mode::Cartesian).unwrap();
+    let origin = l.ctrl().cartesian_setpoint().translation.vector;
+    l.ctrl_mut().start_shape(*shape).unwrap();
 
     let period = config.control_period;
     let end = CYCLES * shape_period(shape);
-    let t_start = l.now();
+    let t_start = l.now;
     let mut notes = Vec::new();
-    let mut previous = l.manager.measured();
+    let mut previous = l.manager().measured();
     let (mut cmd_sum, mut cmd_max, mut cmd_n) = (0.0, 0.0f64, 0usize);
     let mut peak = Joints::zeros(config.dof());
     // (time since the start, FK of the drives' actual joints)
@@ -470,7 +470,7 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
     while k as f64 * period <= end + 1.0 {
         k += 1;
         let out = l.tick();
-        let t = l.now() - t_start;
+        let t = l.now - t_start;
         let e = out.events;
         if e.ik_divergence || e.joint_limit || e.rate_limit || e.workspace_limit {
             notes.push(format!("event at {t:.2} s: {e:?}"));
@@ -499,20 +499,20 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
         }
         previous = command;
         if !finishing && phase >= end - shape_period(shape) / 4.0 {
-            l.ctrl.finish_shape().unwrap();
+            l.ctrl_mut().finish_shape().unwrap();
             finishing = true;
         }
-        if finishing && !l.ctrl.is_moving() && t > end {
+        if finishing && !l.ctrl().is_moving() && t > end {
             break;
         }
     }
-    if l.ctrl.is_moving() {
+    if l.ctrl().is_moving() {
         notes.push("shape still running after 8 cycles".into());
     }
-    if !l.manager.is_operational() {
-        notes.push(format!("drives not operational: {:?}", l.manager.fault()));
+    if !l.manager().is_operational() {
+        notes.push(format!("drives not operational: {:?}", l.manager().fault()));
     }
-    let stats = l.manager.stats();
+    let stats = l.manager().stats();
     if stats.commands_rejected > 0 {
         notes.push(format!("{} commands rejected", stats.commands_rejected));
     }
@@ -524,8 +524,8 @@ fn run(config: &ValidRobot, chain: &Chain, q0: &Joints, shape: &Shape, drive_spe
         delay,
         track_mean,
         track_s,
-        underflows: l.bus.drives().map(|d| d.stats().underflows).sum(),
-        overruns: l.bus.drives().map(|d| d.stats().overflows).sum(),
+        underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
+        overruns: l.bus().drives().map(|d| d.stats().overflows).sum(),
         notes,
     }
 }

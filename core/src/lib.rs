@@ -9,6 +9,7 @@
 //!
 //! * [`command`]: the client protocol's commands mapped onto the controller, and the relay of
 //!   unsolicited warnings.
+//! * [`cycle`]: the control tick every shell runs: requests, drives, control step, notices.
 //! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
@@ -20,6 +21,7 @@
 
 pub mod command;
 pub mod config;
+pub mod cycle;
 pub mod drives;
 pub mod kinematics;
 pub mod math;

@@ -9,17 +9,20 @@
 #![allow(clippy::approx_constant)]
 
 mod common;
+mod drives_rig;
 
-use armgate_core::command::{ArmModel, CommandHandler, Drives, SimulatedDrives};
+use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
 use armgate_core::config::ValidRobot;
+use armgate_core::cycle::Cycle;
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::IdealArm;
 use armgate_core::rng::SplitMix64;
 
+/// The core's cycle with a simulated arm; requests answered between ticks, notices kept with
+/// the tick's time.
 struct Rig {
-    handler: CommandHandler,
-    drives: SimulatedDrives,
-    period: f64,
+    cycle: Cycle<SimulatedDrives, ()>,
+    client: drives_rig::Client,
     now: f64,
 }
 
@@ -27,9 +30,8 @@ impl Rig {
     fn new(config: &ValidRobot, q0: &[f64]) -> Self {
         let arm = IdealArm::new(Joints::from_slice(q0).unwrap());
         let mut rig = Self {
-            handler: CommandHandler::new(config),
-            drives: SimulatedDrives::new(ArmModel::Ideal(arm)),
-            period: config.control_period,
+            cycle: Cycle::new(config, SimulatedDrives::new(ArmModel::Ideal(arm))),
+            client: drives_rig::Client::default(),
             now: 0.0,
         };
         rig.tick();
@@ -37,16 +39,14 @@ impl Rig {
     }
 
     fn tick(&mut self) {
-        self.now += self.period;
-        let out = self
-            .handler
-            .tick(self.now, &self.drives.measured(), &self.drives)
-            .unwrap();
-        self.drives.apply(out.command.as_ref(), self.period);
+        let due = self.cycle.next_due_us();
+        let outcome = self.cycle.tick(due, &mut self.client);
+        outcome.step.unwrap();
+        self.now = outcome.time;
     }
 
     fn send(&mut self, datagram: &[u8]) -> [u8; 31] {
-        self.handler.handle(datagram, &mut self.drives)
+        self.cycle.answer(datagram, ())
     }
 
     fn request(&mut self, cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
@@ -340,8 +340,8 @@ fn unsolicited_warnings_are_relayed_and_rate_limited() {
     let mut texts = Vec::new();
     for _ in 0..3000 {
         rig.tick();
-        while let Some(t) = rig.handler.next_notice() {
-            texts.push((rig.now, t.as_str().to_string()));
+        for notice in rig.client.notices.drain(..) {
+            texts.push((rig.now, text_of(&notice.payload().try_into().unwrap())));
         }
     }
     let er21: Vec<f64> = texts
@@ -381,5 +381,5 @@ fn random_datagrams_never_panic_and_ps_still_answers() {
     rig.request("ON", [0.0; 7], 0);
     rig.tick();
     assert_eq!(&rig.request("PS", [0.0; 7], 0)[..2], b"SP");
-    assert!(rig.drives.temperatures().len() == 6);
+    assert!(rig.cycle.drives().temperatures().len() == 6);
 }

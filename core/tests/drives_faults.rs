@@ -40,8 +40,8 @@ fn mk1_fast() -> ValidRobot {
 fn moving() -> (Rig, Joints) {
     let mut rig = Rig::new(mk1_fast());
     rig.start();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
     let mut accepted = None;
     for _ in 0..40 {
         accepted = rig.tick_accepted().or(accepted);
@@ -65,16 +65,16 @@ fn fault_case(
         if let Some(command) = rig.tick_accepted() {
             accepted = command;
         }
-        if rig.manager.state() == DriveState::Faulted {
+        if rig.manager().state() == DriveState::Faulted {
             break;
         }
     }
-    assert_eq!(rig.manager.state(), DriveState::Faulted);
-    assert_eq!(rig.manager.fault(), Some(expected));
-    assert_eq!(rig.manager.fault().unwrap().text().as_str(), text);
-    assert!(!rig.manager.is_operational());
+    assert_eq!(rig.manager().state(), DriveState::Faulted);
+    assert_eq!(rig.manager().fault(), Some(expected));
+    assert_eq!(rig.manager().fault().unwrap().text().as_str(), text);
+    assert!(!rig.manager().is_operational());
     // The hold point is the last command taken: never zeros, never an older point.
-    let held = rig.manager.commanded();
+    let held = rig.manager().commanded();
     for (h, a) in held.iter().zip(accepted.iter()) {
         assert!((h - a).abs() < 1e-5, "holding {h}, last command {a}");
     }
@@ -83,7 +83,7 @@ fn fault_case(
     let settled = rig.drive_positions();
     rig.ticks(30);
     assert_eq!(rig.drive_positions(), settled);
-    for (joint, (drive, position)) in rig.bus.drives().zip(&settled).enumerate() {
+    for (joint, (drive, position)) in rig.bus().drives().zip(&settled).enumerate() {
         assert!(!drive.pt_running(), "{:?} still runs PT", drive.node());
         if holding(drive.node().get()) {
             let error = (position - held[joint]).abs();
@@ -97,15 +97,19 @@ fn fault_case(
     }
     // Cleared and started again (ON), everything streams.
     clear(&mut rig);
-    rig.ctrl.stop();
-    rig.ctrl.set_mode(Mode::Off).unwrap();
+    rig.ctrl_mut().stop();
+    rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     rig.start();
-    assert_eq!(rig.manager.fault(), None);
-    rig.bus.reset_stats();
+    assert_eq!(rig.manager().fault(), None);
+    rig.bus_mut().reset_stats();
     rig.ticks(20);
-    assert!(rig.manager.is_operational(), "{:?}", rig.manager.fault());
     assert!(
-        rig.bus
+        rig.manager().is_operational(),
+        "{:?}",
+        rig.manager().fault()
+    );
+    assert!(
+        rig.bus()
             .drives()
             .all(|d| d.stats().underflows == 0 && d.pt_running())
     );
@@ -118,19 +122,19 @@ fn all(_: u8) -> bool {
 #[test]
 fn a_silent_drive() {
     fault_case(
-        |rig| rig.bus.drive_mut(103).unwrap().faults.silent = true,
+        |rig| rig.bus_mut().drive_mut(103).unwrap().faults.silent = true,
         DriveFault::NotAnswering { joint: 2 },
         "ER30 J3 drive not answering",
         // It still hears the hold points and the stop.
         all,
-        |rig| rig.bus.drive_mut(103).unwrap().faults.silent = false,
+        |rig| rig.bus_mut().drive_mut(103).unwrap().faults.silent = false,
     );
 }
 
 #[test]
 fn an_error_reply() {
     fault_case(
-        |rig| rig.bus.drive_mut(102).unwrap().faults.error_on = Some(Mnemonic::QP),
+        |rig| rig.bus_mut().drive_mut(102).unwrap().faults.error_on = Some(Mnemonic::QP),
         DriveFault::ErrorReply {
             joint: 1,
             command: Mnemonic::QP,
@@ -139,7 +143,7 @@ fn an_error_reply() {
         "ER31 J2 QP error code 99",
         // Drive 102 refused its points: it ran dry and stopped where it was.
         |node| node != 102,
-        |rig| rig.bus.drive_mut(102).unwrap().faults.error_on = None,
+        |rig| rig.bus_mut().drive_mut(102).unwrap().faults.error_on = None,
     );
 }
 
@@ -152,7 +156,7 @@ fn an_emergency() {
     };
     fault_case(
         |rig| {
-            let drive = rig.bus.drive_mut(104).unwrap();
+            let drive = rig.bus_mut().drive_mut(104).unwrap();
             drive.inject(DriveEmergency::Other(emcy));
         },
         DriveFault::Emergency { joint: 3, emcy },
@@ -165,37 +169,49 @@ fn an_emergency() {
 #[test]
 fn a_buffer_underflow() {
     fault_case(
-        |rig| rig.bus.drive_mut(105).unwrap().faults.drop_every_command = 3,
+        |rig| {
+            rig.bus_mut()
+                .drive_mut(105)
+                .unwrap()
+                .faults
+                .drop_every_command = 3
+        },
         DriveFault::Underflow { joint: 4 },
         "ER33 J5 PT buffer underflow",
         // Drive 105 lost a point and stopped on the last it had.
         |node| node != 105,
-        |rig| rig.bus.drive_mut(105).unwrap().faults.drop_every_command = 0,
+        |rig| {
+            rig.bus_mut()
+                .drive_mut(105)
+                .unwrap()
+                .faults
+                .drop_every_command = 0
+        },
     );
 }
 
 #[test]
 fn a_buffer_overrun() {
     fault_case(
-        |rig| rig.bus.drive_mut(106).unwrap().faults.stall = true,
+        |rig| rig.bus_mut().drive_mut(106).unwrap().faults.stall = true,
         DriveFault::Overrun { joint: 5 },
         "ER34 J6 PT buffer overrun",
         // Drive 106 stopped taking points where it stalled.
         |node| node != 106,
-        |rig| rig.bus.drive_mut(106).unwrap().faults.stall = false,
+        |rig| rig.bus_mut().drive_mut(106).unwrap().faults.stall = false,
     );
 }
 
 #[test]
 fn bus_off() {
     fault_case(
-        |rig| rig.bus.set_bus_off(true),
+        |rig| rig.bus_mut().set_bus_off(true),
         DriveFault::Bus(BusFault::BusOff),
         "ER35 CAN bus off",
         // Nothing reaches the drives: they run dry and stop by themselves, then miss the
         // heartbeat.
         |_| false,
-        |rig| rig.bus.set_bus_off(false),
+        |rig| rig.bus_mut().set_bus_off(false),
     );
 }
 
@@ -203,7 +219,7 @@ fn bus_off() {
 fn a_drive_that_lost_the_heartbeat() {
     fault_case(
         |rig| {
-            let drive = rig.bus.drive_mut(101).unwrap();
+            let drive = rig.bus_mut().drive_mut(101).unwrap();
             drive.inject(DriveEmergency::HeartbeatLost);
         },
         DriveFault::HeartbeatLost { joint: 0 },
@@ -223,37 +239,53 @@ fn a_drive_stuck_in_another_unit_mode() {
         drive.faults.stuck_unit_mode = true;
         *bus.drive_mut(104).unwrap() = drive;
     });
-    rig.manager.start().unwrap();
-    rig.until(100, |r| r.manager.state() == DriveState::Faulted);
-    let fault = rig.manager.fault().unwrap();
+    rig.manager_mut().start().unwrap();
+    rig.until(100, |r| r.manager().state() == DriveState::Faulted);
+    let fault = rig.manager().fault().unwrap();
     assert_eq!(fault, DriveFault::WrongUnitMode { joint: 3, found: 2 });
     assert_eq!(fault.text().as_str(), "ER37 J4 unit mode 2 not 5");
     // No drive began motion.
-    assert!(rig.bus.drives().all(|d| d.stats().begun_at.is_none()));
+    assert!(rig.bus().drives().all(|d| d.stats().begun_at.is_none()));
 }
 
 #[test]
 fn warnings_do_not_stop_the_arm() {
     let (mut rig, _) = moving();
     for node in [101, 102] {
-        let drive = rig.bus.drive_mut(node).unwrap();
+        let drive = rig.bus_mut().drive_mut(node).unwrap();
         drive.inject(DriveEmergency::DigitalHall);
         drive.inject(DriveEmergency::QueueLow { write: 1, read: 1 });
         drive.inject(DriveEmergency::ErrorReset);
     }
     rig.ticks(5);
-    assert!(rig.manager.is_operational());
-    let stats = rig.manager.stats();
+    assert!(rig.manager().is_operational());
+    let stats = rig.manager().stats();
     assert_eq!((stats.hall_warnings, stats.queue_low_warnings), (2, 2));
     // An occasional lost answer is not a silent drive.
-    rig.bus.drive_mut(103).unwrap().faults.drop_every_reply = 5;
+    rig.bus_mut()
+        .drive_mut(103)
+        .unwrap()
+        .faults
+        .drop_every_reply = 5;
     rig.ticks(300);
-    assert!(rig.manager.is_operational(), "{:?}", rig.manager.fault());
+    assert!(
+        rig.manager().is_operational(),
+        "{:?}",
+        rig.manager().fault()
+    );
     // Late answers (within the timeout) neither.
-    rig.bus.drive_mut(103).unwrap().faults.drop_every_reply = 0;
-    rig.bus.drive_mut(104).unwrap().faults.reply_delay = 0.03;
+    rig.bus_mut()
+        .drive_mut(103)
+        .unwrap()
+        .faults
+        .drop_every_reply = 0;
+    rig.bus_mut().drive_mut(104).unwrap().faults.reply_delay = 0.03;
     rig.ticks(100);
-    assert!(rig.manager.is_operational(), "{:?}", rig.manager.fault());
+    assert!(
+        rig.manager().is_operational(),
+        "{:?}",
+        rig.manager().fault()
+    );
 }
 
 /// The two-frame rule, measured: three interpreter commands back to back reach one drive

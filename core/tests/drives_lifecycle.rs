@@ -39,10 +39,10 @@ fn mk1_fast() -> ValidRobot {
         .unwrap()
 }
 
-/// Interpreter frames per node in `rig.sent`.
+/// Interpreter frames per node in `rig.sent()`.
 fn frames_per_drive(rig: &Rig) -> Vec<usize> {
     let mut counts = std::collections::BTreeMap::new();
-    for frame in &rig.sent {
+    for frame in rig.sent() {
         if let Ok((node, _)) = Request::parse(frame) {
             *counts.entry(node.get()).or_insert(0) += 1;
         }
@@ -54,12 +54,12 @@ fn frames_per_drive(rig: &Rig) -> Vec<usize> {
 /// interpreter frames per drive per cycle.
 fn check_healthy(rig: &Rig) {
     assert!(
-        rig.manager.is_operational(),
+        rig.manager().is_operational(),
         "fault {:?}",
-        rig.manager.fault()
+        rig.manager().fault()
     );
     assert!(frames_per_drive(rig).iter().all(|&n| n <= 2));
-    for drive in rig.bus.drives() {
+    for drive in rig.bus().drives() {
         let stats = drive.stats();
         assert_eq!(
             (stats.underflows, stats.overflows, stats.commands_lost),
@@ -86,15 +86,15 @@ fn stream_for_a_minute(
         motion(rig, rig.now - start);
         rig.tick();
         check_healthy(rig);
-        leads.extend((0..dof).filter_map(|j| rig.manager.lead(j)));
+        leads.extend((0..dof).filter_map(|j| rig.manager().lead(j)));
         // The drives follow the commands a few periods late (three of buffering, one or two
         // of measurement age — a drive reading its read index skips its position — and a few
         // ms of servo lag): the measurement lies within the range of the commands of two to
         // six cycles ago (seven with `extra_lag`).
-        history.push(rig.manager.commanded());
+        history.push(rig.manager().commanded());
         let recent = history.iter().rev().skip(2).take(5 + extra_lag);
         if history.len() > 7 + extra_lag {
-            let measured = rig.manager.measured();
+            let measured = rig.manager().measured();
             for j in 0..dof {
                 let (lo, hi) = recent.clone().fold((f64::MAX, f64::MIN), |(lo, hi), c| {
                     (lo.min(c[j]), hi.max(c[j]))
@@ -117,43 +117,43 @@ fn mk1_streams_a_minute_of_joint_and_cartesian_motion() {
     rig.ticks(3);
     // All drives began within a few frame times of each other (report the skew).
     let begun: Vec<u64> = rig
-        .bus
+        .bus()
         .drives()
         .map(|d| d.stats().begun_at.unwrap())
         .collect();
     let skew = begun.iter().max().unwrap() - begun.iter().min().unwrap();
     println!("BG skew over 6 drives at 500 kbit/s: {} µs", skew / 1000);
     assert!(skew < 2_000_000);
-    rig.bus.reset_stats();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
+    rig.bus_mut().reset_stats();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
     let mut shape_started = false;
     let leads = stream_for_a_minute(&mut rig, 0, |rig, t| {
-        if !shape_started && !rig.ctrl.is_moving() && t > 1.0 {
-            rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+        if !shape_started && !rig.ctrl().is_moving() && t > 1.0 {
+            rig.ctrl_mut().set_mode(Mode::Cartesian).unwrap();
             let circle = Shape::Circle {
                 radius: 0.1,
                 period: 8.0,
                 axis_i: 0,
                 axis_j: 2,
             };
-            rig.ctrl.start_shape(circle).unwrap();
+            rig.ctrl_mut().start_shape(circle).unwrap();
             shape_started = true;
         }
     });
     assert!(shape_started);
     assert_eq!(leads, BTreeSet::from([3]));
-    let stats = rig.manager.stats();
+    let stats = rig.manager().stats();
     assert_eq!((stats.points_skipped, stats.points_inserted), (0, 0));
     // Every point reached at most three periods after it was written.
-    for drive in rig.bus.drives() {
+    for drive in rig.bus().drives() {
         let latency = drive.stats().latency;
         assert!(latency.points > 3000);
         let periods = latency.max_ns as f64 * 1e-9 / rig.period;
         assert!(periods <= 3.0, "{:?}: {periods} periods", drive.node());
     }
     // The stream moved the arm (a circle of 10 cm needs more than a few mrad).
-    assert!(rig.manager.measured()[1] - 0.0 > 0.3);
+    assert!(rig.manager().measured()[1] - 0.0 > 0.3);
 }
 
 #[test]
@@ -168,7 +168,7 @@ fn mk2_streams_a_minute_to_eight_drives() {
         .unwrap();
     let mut rig = Rig::new(config);
     rig.start();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let goals = [
         [0.3, 0.4, -0.5, 0.6, -0.2, 0.3, 0.5, -0.4],
         [-0.2, -0.3, 0.4, -0.5, 0.3, -0.4, -0.2, 0.6],
@@ -176,8 +176,8 @@ fn mk2_streams_a_minute_to_eight_drives() {
     ];
     let mut next = 0;
     let leads = stream_for_a_minute(&mut rig, 0, |rig, _| {
-        if !rig.ctrl.is_moving() {
-            rig.ctrl
+        if !rig.ctrl().is_moving() {
+            rig.ctrl_mut()
                 .move_joints(&goals[next % goals.len()], 0.0)
                 .unwrap();
             next += 1;
@@ -185,28 +185,28 @@ fn mk2_streams_a_minute_to_eight_drives() {
     });
     assert!(next >= 6, "only {next} moves");
     assert_eq!(leads, BTreeSet::from([3]));
-    assert_eq!(rig.bus.drives().count(), 8);
-    assert!(rig.bus.drives().all(|d| d.pt_running()));
+    assert_eq!(rig.bus().drives().count(), 8);
+    assert!(rig.bus().drives().all(|d| d.pt_running()));
 }
 
 #[test]
 fn stop_holds_the_last_command_and_start_resumes_without_a_jump() {
     let mut rig = Rig::new(mk1_fast());
     rig.start();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
     rig.ticks(60); // moving
     let accepted = rig.tick_accepted().unwrap();
-    rig.manager.stop().unwrap();
-    assert_eq!(rig.manager.stop(), Err(LifecycleError::NotRunning));
-    rig.until(20, |r| r.manager.state() == DriveState::Stopped);
-    assert_eq!(rig.manager.fault(), None);
-    assert!(!rig.manager.is_operational());
+    rig.manager_mut().stop().unwrap();
+    assert_eq!(rig.manager_mut().stop(), Err(LifecycleError::NotRunning));
+    rig.until(20, |r| r.manager().state() == DriveState::Stopped);
+    assert_eq!(rig.manager().fault(), None);
+    assert!(!rig.manager().is_operational());
     // The drives finished the queued points and hold the last command taken (to a count),
     // not some earlier point (the seed backtracked, spec §9 item 36).
     rig.ticks(10);
-    assert!(rig.bus.drives().all(|d| !d.pt_running()));
-    let held = rig.manager.commanded();
+    assert!(rig.bus().drives().all(|d| !d.pt_running()));
+    let held = rig.manager().commanded();
     for (a, h) in accepted.iter().zip(held.iter()) {
         assert!((a - h).abs() < 1e-5, "held {h}, last command {a}");
     }
@@ -219,8 +219,8 @@ fn stop_holds_the_last_command_and_start_resumes_without_a_jump() {
         assert!((p - h).abs() < 2e-5);
     }
     // ON again: the stream resumes where the arm is, nothing jumps.
-    rig.ctrl.stop();
-    rig.ctrl.set_mode(Mode::Off).unwrap();
+    rig.ctrl_mut().stop();
+    rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     let before = rig.drive_positions();
     rig.start();
     rig.ticks(30);
@@ -258,27 +258,27 @@ fn speed_mode(drive: armgate_core::drives::SimWhistle) -> armgate_core::drives::
 fn temperatures_are_unknown_until_heard_then_rise_with_effort() {
     let mut rig = Rig::new(mk1_fast());
     assert!(
-        rig.manager
+        rig.manager()
             .temperatures()
             .iter()
             .all(|&t| t == UNKNOWN_TEMPERATURE)
     );
-    assert_eq!(rig.manager.temperatures().len(), 6);
+    assert_eq!(rig.manager().temperatures().len(), 6);
     rig.start();
     // Every drive reads its temperature once per 100 cycles.
     rig.ticks(110);
-    let cold = rig.manager.temperatures();
+    let cold = rig.manager().temperatures();
     assert!(cold.iter().all(|&t| t == 25.0), "{cold:?}");
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let far = [0.0, 1.5, -1.5, 2.0, 0.9, 2.0];
     for _ in 0..4 {
-        rig.ctrl.move_joints(&far, 0.0).unwrap();
-        rig.until(3000, |r| !r.ctrl.is_moving());
-        rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
-        rig.until(3000, |r| !r.ctrl.is_moving());
+        rig.ctrl_mut().move_joints(&far, 0.0).unwrap();
+        rig.until(3000, |r| !r.ctrl().is_moving());
+        rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
+        rig.until(3000, |r| !r.ctrl().is_moving());
     }
     rig.ticks(110);
-    let warm = rig.manager.temperatures();
+    let warm = rig.manager().temperatures();
     assert!(warm.iter().zip(cold.iter()).any(|(w, c)| w > c), "{warm:?}");
 }
 
@@ -286,41 +286,50 @@ fn temperatures_are_unknown_until_heard_then_rise_with_effort() {
 fn recalibration_moves_the_reading_not_the_arm() {
     let mut rig = Rig::new(mk1_fast());
     // Before any position is read, there is nothing to recalibrate.
-    assert_eq!(rig.manager.recalibrate(&MK1_READY), Err(Refusal::NotReady));
+    assert_eq!(
+        rig.manager_mut().recalibrate(&MK1_READY),
+        Err(Refusal::NotReady)
+    );
     rig.start();
     rig.ticks(5);
     assert_eq!(
-        rig.manager.recalibrate(&MK1_READY[..5]),
+        rig.manager_mut().recalibrate(&MK1_READY[..5]),
         Err(Refusal::WrongJointCount)
     );
     let mut nan = MK1_READY;
     nan[2] = f64::NAN;
-    assert_eq!(rig.manager.recalibrate(&nan), Err(Refusal::InvalidNumber));
+    assert_eq!(
+        rig.manager_mut().recalibrate(&nan),
+        Err(Refusal::InvalidNumber)
+    );
     // Refused while commands stream.
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     rig.tick();
-    assert_eq!(rig.manager.recalibrate(&MK1_READY), Err(Refusal::Busy));
+    assert_eq!(
+        rig.manager_mut().recalibrate(&MK1_READY),
+        Err(Refusal::Busy)
+    );
     // In mode off (commands None) it is taken: the reading jumps, the drives stay.
-    rig.ctrl.set_mode(Mode::Off).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     rig.tick();
-    let counts: Vec<i32> = rig.bus.drives().map(|d| d.position()).collect();
-    rig.manager.recalibrate(&MK1_READY).unwrap();
-    let measured = rig.manager.measured();
+    let counts: Vec<i32> = rig.bus().drives().map(|d| d.position()).collect();
+    rig.manager_mut().recalibrate(&MK1_READY).unwrap();
+    let measured = rig.manager().measured();
     for (m, r) in measured.iter().zip(MK1_READY) {
         assert!((m - r).abs() < 1e-12, "{m} vs {r}");
     }
     rig.ticks(20);
-    let after: Vec<i32> = rig.bus.drives().map(|d| d.position()).collect();
+    let after: Vec<i32> = rig.bus().drives().map(|d| d.position()).collect();
     assert_eq!(after, counts);
     // A move from the new reading now moves the arm relative to it.
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let mut goal = MK1_READY;
     goal[0] += 0.05;
-    rig.ctrl.move_joints(&goal, 0.0).unwrap();
-    rig.until(2000, |r| !r.ctrl.is_moving());
+    rig.ctrl_mut().move_joints(&goal, 0.0).unwrap();
+    rig.until(2000, |r| !r.ctrl().is_moving());
     rig.ticks(10);
-    assert!((rig.manager.measured()[0] - goal[0]).abs() < 1e-5);
-    let moved = rig.bus.drives().next().unwrap().position() - counts[0];
+    assert!((rig.manager().measured()[0] - goal[0]).abs() < 1e-5);
+    let moved = rig.bus().drives().next().unwrap().position() - counts[0];
     assert!((f64::from(moved) - 0.05 * 817_741.0 / std::f64::consts::TAU).abs() < 2.0);
 }
 
@@ -329,47 +338,47 @@ fn joints_without_a_drive_mirror_the_command() {
     // Every joint pretend (the hybrid robot): no bus traffic at all.
     let config = robot("hybrid");
     let mut rig = Rig::new(config.clone());
-    rig.manager.start().unwrap();
-    assert!(rig.manager.is_operational());
+    rig.manager_mut().start().unwrap();
+    assert!(rig.manager().is_operational());
     rig.tick();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    let mut goal: Vec<f64> = rig.manager.measured().to_vec();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    let mut goal: Vec<f64> = rig.manager().measured().to_vec();
     goal[0] += 0.05;
     goal[3] -= 0.1;
-    rig.ctrl.move_joints(&goal, 0.0).unwrap();
+    rig.ctrl_mut().move_joints(&goal, 0.0).unwrap();
     for _ in 0..400 {
         let out = rig.tick();
-        assert!(rig.sent.is_empty());
+        assert!(rig.sent().is_empty());
         if let Some(command) = out.command {
-            assert_eq!(rig.manager.measured(), command);
+            assert_eq!(rig.manager().measured(), command);
         }
     }
-    assert!((rig.manager.measured()[0] - goal[0]).abs() < 1e-9);
+    assert!((rig.manager().measured()[0] - goal[0]).abs() < 1e-9);
     assert!(
-        rig.manager
+        rig.manager()
             .temperatures()
             .iter()
             .all(|&t| t == UNKNOWN_TEMPERATURE)
     );
-    rig.manager.stop().unwrap();
-    assert_eq!(rig.manager.state(), DriveState::Stopped);
+    rig.manager_mut().stop().unwrap();
+    assert_eq!(rig.manager().state(), DriveState::Stopped);
 
     // A mixed arm: joint 3 without a drive mirrors, the others stream.
     let config = mk1_fast()
         .edit(|config| config.joints[2].drive.node_id = 0)
         .unwrap();
     let mut rig = Rig::new(config);
-    assert_eq!(rig.manager.measured()[2], 1.5708); // home until commanded
+    assert_eq!(rig.manager().measured()[2], 1.5708); // home until commanded
     rig.start();
-    assert_eq!(rig.bus.drives().count(), 5);
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
-    rig.until(3000, |r| !r.ctrl.is_moving());
+    assert_eq!(rig.bus().drives().count(), 5);
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
+    rig.until(3000, |r| !r.ctrl().is_moving());
     rig.ticks(10);
     check_healthy(&rig);
-    assert_eq!(rig.manager.measured()[2], MK1_READY[2]);
-    assert_eq!(rig.manager.temperatures()[2], UNKNOWN_TEMPERATURE);
-    assert!((rig.manager.measured()[4] - MK1_READY[4]).abs() < 1e-5);
+    assert_eq!(rig.manager().measured()[2], MK1_READY[2]);
+    assert_eq!(rig.manager().temperatures()[2], UNKNOWN_TEMPERATURE);
+    assert!((rig.manager().measured()[4] - MK1_READY[4]).abs() < 1e-5);
 }
 
 #[test]
@@ -393,18 +402,18 @@ fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
         *bus = armgate_core::drives::VirtualBus::new(500_000, drives);
     });
     rig.start();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let goals = [MK1_READY, [1.0, 0.2, 0.3, -0.5, 1.2, 0.8]];
     let mut next = 0;
-    rig.bus.reset_stats();
+    rig.bus_mut().reset_stats();
     // A lead of 4 while a slip passes delays the motion one more period.
     let leads = stream_for_a_minute(&mut rig, 1, |rig, _| {
-        if !rig.ctrl.is_moving() {
-            rig.ctrl.move_joints(&goals[next % 2], 0.0).unwrap();
+        if !rig.ctrl().is_moving() {
+            rig.ctrl_mut().move_joints(&goals[next % 2], 0.0).unwrap();
             next += 1;
         }
     });
-    let stats = rig.manager.stats();
+    let stats = rig.manager().stats();
     println!("clock drift: {stats:?}, leads {leads:?}");
     // Fast drives needed points inserted, slow ones points skipped.
     assert!(
@@ -412,7 +421,7 @@ fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
         "{stats:?}"
     );
     assert!(leads.iter().all(|l| (2..=4).contains(l)));
-    for drive in rig.bus.drives() {
+    for drive in rig.bus().drives() {
         let periods = drive.stats().latency.max_ns as f64 * 1e-9 / rig.period;
         assert!(periods <= 4.0, "{:?}: {periods}", drive.node());
     }
@@ -422,40 +431,45 @@ fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
 fn drives_stop_by_themselves_when_the_controller_dies() {
     let mut rig = Rig::new(mk1_fast());
     rig.start();
-    rig.ctrl.set_mode(Mode::Joint).unwrap();
-    rig.ctrl.move_joints(&MK1_READY, 0.0).unwrap();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
     rig.ticks(50);
-    assert!(rig.bus.drives().all(|d| d.pt_running()));
+    assert!(rig.bus().drives().all(|d| d.pt_running()));
     // The controller stops: no more points, no more heartbeats. The drives underflow first
     // (within three segments), then miss the heartbeat (300 ms after the last, which went out
     // at most 100 ms before) and go pre-operational.
     let died = rig.now;
-    rig.bus.advance(died + 0.1).unwrap();
-    assert!(rig.bus.drives().all(|d| !d.pt_running()));
+    rig.bus_mut().advance(died + 0.1).unwrap();
+    assert!(rig.bus().drives().all(|d| !d.pt_running()));
     assert!(
-        rig.bus
+        rig.bus()
             .drives()
             .all(|d| d.nmt_state() == NmtState::Operational)
     );
-    rig.bus.advance(died + 0.45).unwrap();
-    for drive in rig.bus.drives() {
+    rig.bus_mut().advance(died + 0.45).unwrap();
+    for drive in rig.bus().drives() {
         assert_eq!(drive.nmt_state(), NmtState::PreOperational);
         assert_eq!(drive.stats().heartbeat_timeouts, 1);
     }
-    // A controller that comes back sees the drives' emergencies.
-    rig.now = died + 0.45;
-    rig.tick();
+    // A controller that comes back (its shell 0.45 s late: the cycle catches up, the first
+    // tick at once) sees the drives' emergencies.
+    let back = ((died + 0.45) * 1e6) as u64;
+    rig.tick_at(back);
     assert!(matches!(
-        rig.manager.fault(),
+        rig.manager().fault(),
         Some(DriveFault::Underflow { .. } | DriveFault::HeartbeatLost { .. })
     ));
-    assert!(!rig.manager.is_operational());
+    assert!(!rig.manager().is_operational());
+    // The rest of the catch-up runs back to back.
+    while rig.cycle.next_due_us() <= back {
+        rig.tick_at(back);
+    }
     // ON brings everything back (NMT start first).
-    rig.until(20, |r| r.manager.state() == DriveState::Faulted);
-    rig.ctrl.stop();
-    rig.ctrl.set_mode(Mode::Off).unwrap();
+    rig.until(20, |r| r.manager().state() == DriveState::Faulted);
+    rig.ctrl_mut().stop();
+    rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     rig.start();
-    rig.bus.reset_stats();
+    rig.bus_mut().reset_stats();
     rig.ticks(20);
     check_healthy(&rig);
 }

@@ -1,35 +1,26 @@
-//! The control task: the core's tick at the robot's control period, on the high-priority
+//! The control task: the core's [`Cycle`] at the robot's control period, on the high-priority
 //! interrupt executor.
 //!
-//! It owns the core's state — the [`CommandHandler`] and the drives (the CANopen drive manager
-//! and its bus, [`BoardDrives`]) — and does what `armgate-sim` does with them, with the
-//! queues of [`crate::link`] in place of a socket (one difference: a tick the core refuses,
-//! because the measurement does not fit the arm, makes `armgate-sim` exit with the reason,
-//! while the board holds and counts it in the status line). Each tick:
-//!
-//! 1. handles every request waiting in [`REQUESTS`] (at most [`REQUEST_QUEUE`]) with
-//!    [`CommandHandler::handle`] and queues each reply to its sender;
-//! 2. the drive manager takes what the bus received ([`BoardDrives::receive`]), runs
-//!    [`CommandHandler::tick`] on the measured joints, and the manager queues the cycle's
-//!    frames ([`BoardDrives::transmit`]: set-points, queries, heartbeat; never waits on the bus);
-//! 3. queues the unsolicited notices to the last sender;
-//! 4. feeds the independent watchdog. Nothing else feeds it: if a tick does not finish within
-//!    [`watchdog_timeout`], the board resets.
-//!
-//! The core's clock is the tick's scheduled time since start-up, as in `armgate-sim`: the core
-//! computes the same results on the host and on the board. A tick that starts more than one
-//! period late restarts the schedule (the core never catches up by running ticks back to back).
+//! It owns the cycle — the command handler and the drives ([`BoardDrives`]: the CANopen drive
+//! manager on its bus) — and is a thin shell around it, as `armgate-sim` is: it waits for the
+//! next tick on the schedule, runs [`Cycle::tick`] with the queues of [`crate::link`] as the
+//! client port ([`QueueLink`]), and feeds the independent watchdog. Nothing else feeds it: if
+//! a tick does not finish within [`watchdog_timeout`], the board resets. The policy — late
+//! ticks, requests per tick, notices, bus-off — is the core's, described in
+//! `armgate_core::cycle` and docs/architecture.md.
 
-use armgate_core::command::{CommandHandler, NOTICE_CAPACITY};
 use armgate_core::config::ValidRobot;
+use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
 use embassy_net::IpEndpoint;
-use embassy_stm32::peripherals::IWDG1;
-use embassy_stm32::wdg::IndependentWatchdog;
 use embassy_time::{Duration, Instant, Timer};
 
+use crate::board::Watchdog;
 use crate::drives::BoardDrives;
-use crate::link::{COUNTERS, Datagram, OUTGOING, REQUEST_QUEUE, REQUESTS, count};
+use crate::link::{COUNTERS, OUTGOING, REQUESTS, count};
 use crate::telemetry::{STATUS, Status};
+
+/// The cycle as the board runs it.
+type BoardCycle = Cycle<BoardDrives, IpEndpoint>;
 
 /// Interval between two status snapshots.
 const REPORT_INTERVAL: Duration = Duration::from_secs(1);
@@ -56,9 +47,6 @@ pub fn watchdog_timeout(period: Duration) -> Duration {
 #[derive(Default)]
 struct Interval {
     ticks: u32,
-    overruns: u32,
-    tick_errors: u32,
-    requests: u32,
     compute_total_us: u64,
     compute_max_us: u64,
     wake_latency_max_us: u64,
@@ -72,9 +60,11 @@ impl Interval {
         self.wake_latency_max_us = self.wake_latency_max_us.max(latency.as_micros());
     }
 
-    fn status(&self, handler: &CommandHandler, drives: &BoardDrives) -> Status {
-        let controller = handler.controller();
+    fn status(&self, cycle: &BoardCycle) -> Status {
+        let controller = cycle.handler().controller();
+        let counters = cycle.counters();
         let saturate = |v: u64| u32::try_from(v).unwrap_or(u32::MAX);
+        let manager = cycle.drives().manager();
         Status {
             mode: controller.mode(),
             moving: controller.is_moving(),
@@ -82,26 +72,23 @@ impl Interval {
                 .measured()
                 .map(|(_, pose)| pose.translation.vector.into()),
             ticks: self.ticks,
-            overruns: self.overruns,
-            tick_errors: self.tick_errors,
-            requests: self.requests,
+            overruns: saturate(counters.late_ticks + counters.skipped_ticks),
+            tick_errors: saturate(counters.tick_errors),
+            requests: saturate(counters.requests),
+            notices_unaddressed: saturate(counters.notices_unaddressed),
             compute_mean_us: saturate(self.compute_total_us / u64::from(self.ticks.max(1))),
             compute_max_us: saturate(self.compute_max_us),
             wake_latency_max_us: saturate(self.wake_latency_max_us),
-            relay_dropped: handler.dropped_notices(),
-            drives: drives.manager().state(),
-            fault: drives.manager().fault().map(|f| f.text()),
+            relay_dropped: cycle.handler().dropped_notices(),
+            drives: manager.state(),
+            fault: manager.fault().map(|f| f.text()),
         }
     }
 }
 
 /// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
 #[embassy_executor::task]
-pub async fn run(
-    robot: &'static ValidRobot,
-    mut drives: BoardDrives,
-    mut watchdog: IndependentWatchdog<'static, IWDG1>,
-) {
+pub async fn run(robot: &'static ValidRobot, drives: BoardDrives, mut watchdog: Watchdog) {
     let period = period(robot);
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",
@@ -110,86 +97,40 @@ pub async fn run(
         period.as_micros(),
         watchdog_timeout(period).as_millis()
     );
-    let mut handler = CommandHandler::new(robot);
-    let mut last_sender: Option<IpEndpoint> = None;
+    let mut cycle = BoardCycle::new(robot, drives);
     let mut interval = Interval::default();
     let epoch = Instant::now();
-    let mut scheduled = epoch;
     let mut next_report = epoch + REPORT_INTERVAL;
     watchdog.unleash();
     loop {
+        let scheduled = epoch + Duration::from_micros(cycle.next_due_us());
         Timer::at(scheduled).await;
         let begin = Instant::now();
-        let now = (scheduled - epoch).as_micros() as f64 * 1e-6;
-
-        interval.requests += handle_requests(&mut handler, &mut drives, &mut last_sender);
-        if !drives.receive(now) {
-            // The simulated bus stalled (`sim-drives`): the manager's timeouts will fault.
-            interval.tick_errors += 1;
-        }
-        match handler.tick(now, &drives.measured(), drives.manager()) {
-            Ok(out) => drives.transmit(now, out.command.as_ref()),
-            Err(_) => {
-                // The measurement does not fit the arm: hold, and say so in the status line.
-                interval.tick_errors += 1;
-                drives.transmit(now, None);
-            }
-        }
-        send_notices(&mut handler, last_sender);
+        cycle.tick((begin - epoch).as_micros(), &mut QueueLink);
         watchdog.pet();
-
         let end = Instant::now();
-        interval.add(begin - scheduled, end - begin);
-        scheduled += period;
-        if scheduled < end {
-            interval.overruns += 1;
-            scheduled = end + period;
-        }
+        interval.add(begin.saturating_duration_since(scheduled), end - begin);
         if begin >= next_report {
-            STATUS.signal(interval.status(&handler, &drives));
+            STATUS.signal(interval.status(&cycle));
             interval = Interval::default();
             next_report += REPORT_INTERVAL;
         }
     }
 }
 
-/// Handles the waiting requests (at most [`REQUEST_QUEUE`]: later ones wait for the next tick,
-/// so a tick's work stays bounded) and queues their replies; returns how many it handled.
-fn handle_requests(
-    handler: &mut CommandHandler,
-    drives: &mut BoardDrives,
-    last_sender: &mut Option<IpEndpoint>,
-) -> u32 {
-    let mut handled = 0;
-    for _ in 0..REQUEST_QUEUE {
-        let Ok(request) = REQUESTS.try_receive() else {
-            break;
-        };
-        let reply = handler.handle(request.payload(), drives.manager_mut());
-        *last_sender = Some(request.peer);
-        post(Datagram::new(&reply, request.peer));
-        handled += 1;
-    }
-    handled
-}
+/// The queues of [`crate::link`] as the cycle's client port.
+struct QueueLink;
 
-/// Queues the core's unsolicited notices to the last sender (at most as many as its relay
-/// holds, which [`OUTGOING_QUEUE`](crate::link::OUTGOING_QUEUE) has room for).
-fn send_notices(handler: &mut CommandHandler, last_sender: Option<IpEndpoint>) {
-    for _ in 0..NOTICE_CAPACITY {
-        let Some(text) = handler.next_notice() else {
-            break;
-        };
-        match last_sender {
-            Some(peer) => post(Datagram::new(&text.to_bytes(), peer)),
-            None => count(&COUNTERS.notices_unaddressed),
-        }
+impl Link<IpEndpoint> for QueueLink {
+    fn receive(&mut self) -> Option<Datagram<IpEndpoint>> {
+        REQUESTS.try_receive().ok()
     }
-}
 
-/// Queues one datagram for the UDP server, or counts it as dropped.
-fn post(datagram: Datagram) {
-    if OUTGOING.try_send(datagram).is_err() {
-        count(&COUNTERS.outgoing_full);
+    /// A full queue drops the datagram and counts it.
+    fn send(&mut self, datagram: &Datagram<IpEndpoint>, _kind: Outgoing) -> Result<(), Dropped> {
+        OUTGOING.try_send(*datagram).map_err(|_| {
+            count(&COUNTERS.outgoing_full);
+            Dropped
+        })
     }
 }

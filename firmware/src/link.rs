@@ -11,7 +11,7 @@
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use armgate_core::command::NOTICE_CAPACITY;
-use armgate_protocol::client::MESSAGE_LEN;
+use armgate_core::cycle::REQUESTS_PER_TICK;
 use embassy_net::IpEndpoint;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
@@ -20,45 +20,14 @@ use embassy_sync::channel::Channel;
 /// client resends after 200 ms), so one client has at most one request in flight; 8 leave room
 /// for a few clients and for bursts. The socket buffers another [`crate::net::SOCKET_PACKETS`]
 /// datagrams before the queue.
-pub const REQUEST_QUEUE: usize = 8;
+pub const REQUEST_QUEUE: usize = REQUESTS_PER_TICK;
 /// Replies and notices waiting to be sent: one tick produces at most one reply per queued
 /// request and at most the notices the core's relay holds, and the UDP server empties the
 /// queue between two ticks.
 pub const OUTGOING_QUEUE: usize = REQUEST_QUEUE + NOTICE_CAPACITY;
 
 /// A datagram of the client protocol and the peer it came from or goes to.
-#[derive(Clone, Copy)]
-pub struct Datagram {
-    /// The first bytes of the datagram (a request longer than 31 bytes is cut: the protocol
-    /// reads 31 at most).
-    bytes: [u8; MESSAGE_LEN],
-    /// How many of `bytes` are valid.
-    len: u8,
-    /// Source of a request, destination of a reply or notice.
-    pub peer: IpEndpoint,
-}
-
-impl Datagram {
-    /// The first (at most 31) bytes of `payload`, from or to `peer`.
-    pub fn new(payload: &[u8], peer: IpEndpoint) -> Self {
-        let mut bytes = [0; MESSAGE_LEN];
-        let len = payload.len().min(MESSAGE_LEN);
-        for (b, p) in bytes.iter_mut().zip(payload) {
-            *b = *p;
-        }
-        Self {
-            bytes,
-            // `len` ≤ 31.
-            len: len as u8,
-            peer,
-        }
-    }
-
-    /// The valid bytes.
-    pub fn payload(&self) -> &[u8] {
-        self.bytes.get(..usize::from(self.len)).unwrap_or_default()
-    }
-}
+pub type Datagram = armgate_core::cycle::Datagram<IpEndpoint>;
 
 /// Requests from allowed sources, in arrival order.
 pub static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
@@ -75,8 +44,6 @@ pub struct Counters {
     pub requests_full: AtomicU32,
     /// Replies and notices dropped because [`OUTGOING`] was full.
     pub outgoing_full: AtomicU32,
-    /// Notices not sent because no client had sent anything yet.
-    pub notices_unaddressed: AtomicU32,
     /// Datagrams the network stack refused to send (no route, not bound).
     pub send_errors: AtomicU32,
 }
@@ -88,7 +55,6 @@ impl Counters {
             foreign: AtomicU32::new(0),
             requests_full: AtomicU32::new(0),
             outgoing_full: AtomicU32::new(0),
-            notices_unaddressed: AtomicU32::new(0),
             send_errors: AtomicU32::new(0),
         }
     }

@@ -15,31 +15,37 @@
 //! with simulated Whistles inside the firmware.
 //! The robot description ([`config`], `ROBOT=robots/....toml`) and the network settings
 //! ([`settings`], `ARMGATE_*`) are embedded at build time.
-//! On the host this crate compiles to an empty `main`, so that `cargo clippy --workspace
-//! --all-targets` works without the thumb target.
+//! On Linux the same tasks run on embassy's std executor ([`host`]): embassy-net over a TAP
+//! device instead of the Ethernet MAC, the simulated bus instead of FDCAN1, no watchdog
+//! (tools/firmware-e2e.sh; docs/firmware.md).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(all(target_os = "none", not(feature = "sim-drives")))]
 mod can;
 #[cfg(target_os = "none")]
 mod clocks;
-#[cfg(target_os = "none")]
 mod config;
-#[cfg(target_os = "none")]
 mod control;
-#[cfg(target_os = "none")]
 mod drives;
 #[cfg(target_os = "none")]
+mod eth;
+#[cfg(not(target_os = "none"))]
+mod host;
 mod link;
 #[cfg(target_os = "none")]
 mod mcu;
-#[cfg(target_os = "none")]
 mod net;
-#[cfg(target_os = "none")]
 mod settings;
-#[cfg(target_os = "none")]
 mod telemetry;
 
-/// Host builds: nothing to run (the firmware only makes sense on the microcontroller).
+/// The board's peripherals behind the seams the tasks use (network driver, watchdog).
 #[cfg(not(target_os = "none"))]
-fn main() {}
+use host as board;
+#[cfg(target_os = "none")]
+use mcu as board;
+
+/// On the host: the same tasks on embassy's std executor, over a TAP device.
+#[cfg(not(target_os = "none"))]
+fn main() {
+    host::main()
+}

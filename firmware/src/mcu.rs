@@ -8,7 +8,12 @@ use embassy_stm32::wdg::IndependentWatchdog;
 use static_cell::StaticCell;
 use {defmt_rtt as _, panic_probe as _};
 
-use crate::{clocks, config, control, drives, net, telemetry};
+use crate::{clocks, config, control, drives, eth, net, telemetry};
+
+/// The network driver of this board.
+pub type NetDevice = eth::Device;
+/// The watchdog the control task feeds.
+pub type Watchdog = IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG1>;
 
 /// Priority of the control executor's interrupt. The control task preempts the thread executor
 /// (networking, status); the FDCAN interrupt (P5, `can.rs`) and the short hardware handlers,
@@ -61,7 +66,7 @@ fn main() -> ! {
 
     // The control task first: from here on the watchdog runs and only the control task feeds
     // it; the control task preempts everything below.
-    let drives = drives::new(robot, p.FDCAN1, p.PD0, p.PD1);
+    let drives = drives::new(robot, drives::bus::open(robot, p.FDCAN1, p.PD0, p.PD1));
     defmt::info!("drives: {}", drives::describe());
     let timeout = control::watchdog_timeout(control::period(robot));
     let timeout_us = u32::try_from(timeout.as_micros()).unwrap_or(u32::MAX);
@@ -73,8 +78,9 @@ fn main() -> ! {
         Err(e) => defmt::panic!("cannot spawn the control task: {}", e),
     }
 
-    let (stack, runner) = net::init(
-        net::Pins {
+    let uid = embassy_stm32::uid::uid();
+    let device = eth::init(
+        eth::Pins {
             eth: p.ETH,
             sma: p.ETH_SMA,
             ref_clk: p.PA1,
@@ -87,8 +93,9 @@ fn main() -> ! {
             txd0: p.PG13,
             txd1: p.PB13,
         },
-        &embassy_stm32::uid::uid(),
+        net::mac_address(&uid),
     );
+    let (stack, runner) = net::stack(device, &uid);
 
     let executor = THREAD_EXECUTOR.init(Executor::new());
     executor.run(|spawner| {

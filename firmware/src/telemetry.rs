@@ -11,7 +11,7 @@ use embassy_net::Stack;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
 
-#[cfg(not(feature = "sim-drives"))]
+#[cfg(all(target_os = "none", not(feature = "sim-drives")))]
 use crate::can::CAN_COUNTERS;
 use crate::link::{COUNTERS, read};
 
@@ -26,13 +26,15 @@ pub struct Status {
     pub position: Option<[f64; 3]>,
     /// Ticks in the interval.
     pub ticks: u32,
-    /// Ticks that started more than one period late (the schedule was reset).
+    /// Ticks run a period or more late, or skipped, since boot (the cycle's policy).
     pub overruns: u32,
-    /// Ticks whose measurement the core refused (the arm held).
+    /// Ticks whose measurement the core refused (the arm held), since boot.
     pub tick_errors: u32,
-    /// Requests handled in the interval.
+    /// Requests handled since boot.
     pub requests: u32,
-    /// Compute time per tick (requests, tick, command, notices), mean and maximum (µs).
+    /// Notices dropped because no client had sent a request yet, since boot.
+    pub notices_unaddressed: u32,
+    /// Compute time per tick (the whole cycle tick), mean and maximum (µs).
     pub compute_mean_us: u32,
     /// See `compute_mean_us`.
     pub compute_max_us: u32,
@@ -56,7 +58,7 @@ pub async fn run(stack: Stack<'static>) {
         let s = STATUS.wait().await;
         let [x, y, z] = s.position.unwrap_or([f64::NAN; 3]);
         let fault = s.fault.as_ref().map_or("no fault", Text::as_str);
-        #[cfg(not(feature = "sim-drives"))]
+        #[cfg(all(target_os = "none", not(feature = "sim-drives")))]
         defmt::info!(
             "can: {} bus errors, {} foreign frames, {} bus-off recoveries",
             read(&CAN_COUNTERS.bus_errors),
@@ -84,7 +86,7 @@ pub async fn run(stack: Stack<'static>) {
             read(&COUNTERS.foreign),
             read(&COUNTERS.requests_full),
             read(&COUNTERS.outgoing_full),
-            read(&COUNTERS.notices_unaddressed),
+            s.notices_unaddressed,
             read(&COUNTERS.send_errors),
             s.relay_dropped,
         );

@@ -1,123 +1,187 @@
-//! Fuzz target: client datagrams through the protocol parser and the core's command handling,
-//! with control ticks in between so that the motions they start actually run.
+//! Fuzz target: client datagrams and CAN frames through the core's control cycle — the
+//! protocol parser, the command handling, the drive manager and the CAN frame parsing — with
+//! control ticks in between so that the motions they start actually run.
 //!
-//! Input format (every byte string is valid): a sequence of chunks, each
+//! Input format (every byte string is valid): a sequence of chunks, each one header byte `h`:
 //!
-//! * one header byte `h`: bits 0–5 are the datagram length (0..=40; 41..=63 mean 31), bits 6–7
-//!   the number of control ticks run after the datagram: 0, 1, 8 or 64;
-//! * then the datagram, `len` bytes (fewer if the input ends first).
+//! * bits 0–1: the control ticks run after the chunk: 0, 1, 8 or 64;
+//! * bit 2 clear: a **datagram** of `h >> 3` bytes (0..=31; fewer if the input ends first),
+//!   queued for the cycle (at most 8 are answered per tick, in order);
+//! * bit 2 set: a **CAN frame** the drive manager receives as if from the bus: bits 3–6 are the
+//!   data length (capped at 8), then two bytes of identifier (little-endian, 11 bits), then
+//!   the data.
 //!
-//! Every input starts from the same fresh state: a [`CommandHandler`] for
-//! `robots/ranger-mk1.toml`, simulated drives with an ideal arm at the drives' home angles, and
-//! one tick already run (so that the handler has a measurement). At most [`MAX_TICKS`] ticks run
-//! per input.
+//! Every input starts from the same state: the [`Cycle`] of `robots/ranger-mk1.toml` with the
+//! drive manager on a virtual bus of simulated Whistles at their home angles, the drives
+//! started and streaming. At most [`MAX_TICKS`] ticks run per input; at the end, ticks run
+//! until every datagram is answered.
 //!
 //! Checked, for every datagram:
 //!
 //! * `Message::new_checked`, `Request::parse`, `Reply::parse` and `Text::parse` on the raw bytes
 //!   do not panic; a parsed request re-encodes to the same bytes.
-//! * `CommandHandler::handle` returns 31 bytes that are either a [`Reply`] to the request's own
-//!   command (reply characters reversed, finite values, index 0 or the request's) or one of the
-//!   `ER` texts the protocol defines for that request (exact bytes: NUL-terminated, zero-filled).
-//!   A datagram that is not a request gets exactly `ER00`/`ER01`.
+//! * its answer is 31 bytes that are either a [`Reply`] to the request's own command (reply
+//!   characters reversed, finite values, index 0 or the request's) or one of the `ER` texts
+//!   the protocol defines for that request (exact bytes: NUL-terminated, zero-filled). A
+//!   datagram that is not a request gets exactly `ER00`/`ER01`.
 //!
-//! and for every tick: `tick` never fails, every joint command is finite and within the joint
-//! limits, and every unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27`.
+//! and for every tick: every joint command is finite and within the joint limits, and every
+//! unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27` or a drive fault `ER3x`.
 #![no_main]
 
+use std::collections::VecDeque;
 use std::sync::OnceLock;
 
-use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::motion::IdealArm;
+use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
+use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
 };
 use libfuzzer_sys::fuzz_target;
 
-/// Ticks run after a datagram, by header bits 6–7.
+/// Ticks run after a chunk, by header bits 0–1.
 const TICKS: [u32; 4] = [0, 1, 8, 64];
-/// Ticks per input at most (the initial tick excluded), to keep each run short.
-const MAX_TICKS: u32 = 512;
-/// Longest datagram a header can ask for.
-const MAX_DATAGRAM: usize = 40;
+/// Ticks per input at most (before the final ones that answer what waits).
+const MAX_TICKS: u32 = 256;
+/// Ticks the drives may take to start.
+const START_TICKS: u32 = 200;
 
 /// The robot file, relative to the fuzz crate.
 const ROBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
 
-/// The state every input starts from.
-struct Start {
-    handler: CommandHandler,
-    drives: SimulatedDrives,
-    period: f64,
+/// The virtual bus, plus frames the fuzzer makes the manager receive first.
+#[derive(Clone)]
+struct FuzzBus {
+    bus: VirtualBus,
+    injected: VecDeque<CanFrame>,
 }
 
-fn start() -> &'static Start {
-    static START: OnceLock<Start> = OnceLock::new();
+impl CanBus for FuzzBus {
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
+        self.bus.try_transmit(frame)
+    }
+
+    fn try_receive(&mut self) -> Option<CanFrame> {
+        self.injected.pop_front().or_else(|| self.bus.try_receive())
+    }
+
+    fn state(&self) -> BusState {
+        self.bus.state()
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        self.bus.advance_to(now)
+    }
+}
+
+type FuzzCycle = Cycle<CanDrives<FuzzBus>, ()>;
+
+/// The client: datagrams waiting, and the answers checked as they come.
+#[derive(Default)]
+struct Client {
+    waiting: VecDeque<Datagram<()>>,
+    /// Requests sent and not yet answered, with what the parsers made of them.
+    unanswered: VecDeque<(Vec<u8>, Result<Request, Notice>)>,
+}
+
+impl Link<()> for Client {
+    fn receive(&mut self) -> Option<Datagram<()>> {
+        self.waiting.pop_front()
+    }
+
+    fn send(&mut self, datagram: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
+        let bytes: [u8; MESSAGE_LEN] = datagram.payload().try_into().expect("31 bytes");
+        match kind {
+            Outgoing::Reply => {
+                let (request, expected) = self.unanswered.pop_front().expect("a reply to nothing");
+                check_reply(&request, expected, &bytes);
+            }
+            Outgoing::Notice => check_notice(&bytes),
+        }
+        Ok(())
+    }
+}
+
+fn start() -> &'static FuzzCycle {
+    static START: OnceLock<FuzzCycle> = OnceLock::new();
     START.get_or_init(|| {
         let config: ValidRobot = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
-        let home = config.home();
-        let mut handler = CommandHandler::new(&config);
-        let mut drives = SimulatedDrives::new(ArmModel::Ideal(IdealArm::new(home)));
-        let period = config.control_period;
-        let out = handler
-            .tick(0.0, &drives.measured(), &drives)
-            .expect("first tick");
-        drives.apply(out.command.as_ref(), period);
-        while handler.next_notice().is_some() {}
-        Start {
-            handler,
-            drives,
-            period,
+        let bus = FuzzBus {
+            bus: VirtualBus::for_robot(&config),
+            injected: VecDeque::new(),
+        };
+        let drives = CanDrives::started(&config, &DriveSettings::default(), bus).expect("drives");
+        let mut cycle = Cycle::new(&config, drives);
+        let mut client = Client::default();
+        for _ in 0..START_TICKS {
+            if cycle.drives().manager().is_operational() {
+                break;
+            }
+            tick(&mut cycle, &mut client);
         }
+        assert!(cycle.drives().manager().is_operational(), "the drives did not start");
+        cycle
     })
 }
 
+/// One tick on time, its command checked.
+fn tick(cycle: &mut FuzzCycle, client: &mut Client) {
+    let due = cycle.next_due_us();
+    let outcome = cycle.tick(due, client);
+    if let Ok(out) = &outcome.step
+        && let Some(cmd) = &out.command
+    {
+        assert!(cmd.is_finite(), "t {}: non-finite command {cmd:?}", outcome.time);
+        assert!(
+            cycle.handler().controller().chain().within_limits(cmd),
+            "t {}: command beyond the joint limits {cmd:?}",
+            outcome.time
+        );
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
-    let start = start();
-    let mut handler = start.handler.clone();
-    let mut drives = start.drives.clone();
-    let period = start.period;
+    let mut cycle = start().clone();
+    let mut client = Client::default();
     let mut ticks = 0u32;
     let mut rest = data;
     while let Some((&header, tail)) = rest.split_first() {
-        let len = match usize::from(header & 0x3F) {
-            n if n > MAX_DATAGRAM => MESSAGE_LEN,
-            n => n,
-        };
-        let (datagram, tail) = tail.split_at(len.min(tail.len()));
         rest = tail;
-
-        let expected = check_parsers(datagram);
-        let reply = handler.handle(datagram, &mut drives);
-        check_reply(datagram, expected, &reply);
-
-        for _ in 0..TICKS[usize::from(header >> 6)] {
+        if header & 0b100 == 0 {
+            let len = usize::from(header >> 3);
+            let (datagram, tail) = rest.split_at(len.min(rest.len()));
+            rest = tail;
+            let expected = check_parsers(datagram);
+            client.unanswered.push_back((datagram.to_vec(), expected));
+            client.waiting.push_back(Datagram::new(datagram, ()));
+        } else {
+            let len = usize::from((header >> 3) & 0x0F).min(8);
+            let (frame, tail) = rest.split_at((2 + len).min(rest.len()));
+            rest = tail;
+            if let [lo, hi, data @ ..] = frame {
+                let id = u16::from_le_bytes([*lo, *hi]) & 0x7FF;
+                if let Ok(frame) = CanFrame::new(id, data) {
+                    cycle.drives_mut().bus_mut().injected.push_back(frame);
+                }
+            }
+        }
+        for _ in 0..TICKS[usize::from(header & 0b11)] {
             if ticks >= MAX_TICKS {
                 break;
             }
             ticks += 1;
-            let t = f64::from(ticks) * period;
-            let measured = drives.measured();
-            let out = handler
-                .tick(t, &measured, &drives)
-                .unwrap_or_else(|e| panic!("tick {ticks} failed: {e:?}; measured {measured:?}"));
-            if let Some(cmd) = &out.command {
-                assert!(cmd.is_finite(), "tick {ticks}: non-finite command {cmd:?}");
-                assert!(
-                    handler.controller().chain().within_limits(cmd),
-                    "tick {ticks}: command beyond the joint limits {cmd:?}"
-                );
-            }
-            drives.apply(out.command.as_ref(), period);
-            while let Some(text) = handler.next_notice() {
-                check_notice(&text);
-            }
+            tick(&mut cycle, &mut client);
         }
     }
+    // Answer what still waits (8 per tick).
+    for _ in 0..client.waiting.len().div_ceil(8) + 1 {
+        tick(&mut cycle, &mut client);
+    }
+    assert!(client.unanswered.is_empty(), "requests left unanswered");
 });
 
-/// The protocol parsers on the raw datagram: no panics, and a request round-trips.
 fn check_parsers(datagram: &[u8]) -> Result<Request, Notice> {
     let message = match Message::new_checked(datagram) {
         Ok(message) => message,
@@ -199,10 +263,13 @@ fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[u8; 
     );
 }
 
-/// An unsolicited notice from the relay.
-fn check_notice(text: &Text) {
-    let bytes = text.to_bytes();
-    check_text_bytes(&bytes);
+/// An unsolicited notice from the relay: a motion warning, or a drive fault (`ER3x`).
+fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
+    check_text_bytes(bytes);
+    if bytes.starts_with(b"ER3") {
+        return;
+    }
+    let text = Text::parse(&Message::new_checked(&bytes[..]).expect("31 bytes")).expect("a text");
     let allowed = [
         Notice::JointLimit,
         Notice::WorkspaceLimit,
@@ -210,7 +277,7 @@ fn check_notice(text: &Text) {
         Notice::ViaPointMissed,
     ];
     assert!(
-        allowed.iter().any(|n| n.text() == *text),
+        allowed.iter().any(|n| n.text() == text),
         "unexpected unsolicited text {:?}",
         text.as_str()
     );

@@ -5,9 +5,11 @@ use std::str::FromStr;
 
 use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
 use armgate_core::config::ValidRobot;
-use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, TxError, VirtualBus};
+use armgate_core::cycle::{CanDrives, DriveSide};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
 use armgate_protocol::can::CanFrame;
+use armgate_protocol::client::Text;
 
 use crate::socketcan::{self, SocketCan};
 
@@ -37,18 +39,12 @@ impl FromStr for CanChoice {
     }
 }
 
-/// The drives behind the controller.
+/// The drives behind the controller: one [`DriveSide`] chosen at run time.
 pub enum Backend {
     /// A simulated arm, no bus.
-    Direct {
-        drives: Box<SimulatedDrives>,
-        period: f64,
-    },
+    Direct(Box<SimulatedDrives>),
     /// The drive manager on a bus.
-    Can {
-        manager: Box<DriveManager>,
-        bus: Bus,
-    },
+    Can(Box<CanDrives<Bus>>),
 }
 
 /// The bus under the drive manager.
@@ -69,82 +65,101 @@ impl Backend {
         arm: impl FnOnce() -> ArmModel,
     ) -> Result<Self, String> {
         let bus = match choice {
-            CanChoice::Off => {
-                return Ok(Self::Direct {
-                    drives: Box::new(SimulatedDrives::new(arm())),
-                    period: config.control_period,
-                });
-            }
+            CanChoice::Off => return Ok(Self::Direct(Box::new(SimulatedDrives::new(arm())))),
             CanChoice::Sim => Bus::Virtual(Box::new(VirtualBus::for_robot_at(config, start))),
             CanChoice::SocketCan(iface) => {
                 Bus::Socket(SocketCan::open(iface).map_err(|e| socketcan::explain(iface, &e))?)
             }
         };
-        let mut manager = DriveManager::new(config, &DriveSettings::default())
+        let drives = CanDrives::started(config, &DriveSettings::default(), bus)
             .map_err(|e| format!("drives: {e} (try --can off)"))?;
-        manager
-            .start()
-            .map_err(|e| format!("drives: cannot start: {e:?}"))?;
-        Ok(Self::Can {
-            manager: Box::new(manager),
-            bus,
-        })
+        Ok(Self::Can(Box::new(drives)))
     }
 
     /// A short description for the start-up line.
     pub fn describe(&self) -> &'static str {
         match self {
-            Self::Direct { .. } => "simulated arm, no bus",
-            Self::Can { bus, .. } => match bus {
+            Self::Direct(_) => "simulated arm, no bus",
+            Self::Can(drives) => match drives.bus() {
                 Bus::Virtual(_) => "simulated Whistles on a virtual CAN bus",
                 Bus::Socket(_) => "SocketCAN",
             },
         }
     }
 
-    /// Runs the bus up to time `t` and takes the drives' answers (before the control step).
-    pub fn receive(&mut self, t: f64) -> Result<(), String> {
-        if let Self::Can { manager, bus } = self {
-            if let Bus::Virtual(virtual_bus) = bus {
-                virtual_bus
-                    .advance(t)
-                    .map_err(|e| format!("virtual CAN bus: {e:?}"))?;
-            }
-            manager.receive(bus);
-        }
-        Ok(())
+    /// What the SocketCAN adapter ignored or could not do, for the exit summary.
+    pub fn socketcan_summary(&self) -> Option<String> {
+        let Self::Can(drives) = self else {
+            return None;
+        };
+        let Bus::Socket(socket) = drives.bus() else {
+            return None;
+        };
+        let c = socket.counters();
+        Some(format!(
+            "SocketCAN: {} extended/remote frames ignored, {} error frames ignored, {} bus-offs, {} frames refused by a full transmit queue, {} other socket errors",
+            c.foreign_frames, c.error_frames, c.bus_offs, c.queue_full, c.socket_errors
+        ))
     }
 
-    /// Sends this tick's command (after the control step).
-    pub fn transmit(&mut self, t: f64, command: Option<&Joints>) {
+    /// The one in use, as a [`DriveSide`].
+    fn side(&self) -> &dyn DriveSide {
         match self {
-            Self::Direct { drives, period } => drives.apply(command, *period),
-            Self::Can { manager, bus } => manager.transmit(t, command, bus),
-        }
-    }
-
-    /// The measured joints.
-    pub fn measured(&self) -> Joints {
-        match self {
-            Self::Direct { drives, .. } => drives.measured(),
-            Self::Can { manager, .. } => manager.measured(),
-        }
-    }
-
-    /// The drives as the command handler sees them.
-    pub fn drives(&self) -> &dyn Drives {
-        match self {
-            Self::Direct { drives, .. } => drives.as_ref(),
-            Self::Can { manager, .. } => manager.as_ref(),
+            Self::Direct(drives) => drives.as_ref(),
+            Self::Can(drives) => drives.as_ref(),
         }
     }
 
     /// The same, mutable.
-    pub fn drives_mut(&mut self) -> &mut dyn Drives {
+    fn side_mut(&mut self) -> &mut dyn DriveSide {
         match self {
-            Self::Direct { drives, .. } => drives.as_mut(),
-            Self::Can { manager, .. } => manager.as_mut(),
+            Self::Direct(drives) => drives.as_mut(),
+            Self::Can(drives) => drives.as_mut(),
         }
+    }
+}
+
+impl Drives for Backend {
+    fn start(&mut self) -> bool {
+        self.side_mut().start()
+    }
+
+    fn stop(&mut self) -> bool {
+        self.side_mut().stop()
+    }
+
+    fn recalibrate(&mut self, q: &[f64]) -> bool {
+        self.side_mut().recalibrate(q)
+    }
+
+    fn temperatures(&self) -> Joints {
+        self.side().temperatures()
+    }
+
+    fn is_operational(&self) -> bool {
+        self.side().is_operational()
+    }
+
+    fn fault(&self) -> Option<Text> {
+        self.side().fault()
+    }
+
+    fn has_fault(&self) -> bool {
+        self.side().has_fault()
+    }
+}
+
+impl DriveSide for Backend {
+    fn receive(&mut self, now: f64) -> bool {
+        self.side_mut().receive(now)
+    }
+
+    fn measured(&self) -> Joints {
+        self.side().measured()
+    }
+
+    fn transmit(&mut self, now: f64, elapsed: f64, command: Option<&Joints>) {
+        self.side_mut().transmit(now, elapsed, command);
     }
 }
 
@@ -172,6 +187,20 @@ impl CanBus for Bus {
         match self {
             Self::Virtual(bus) => bus.state(),
             Self::Socket(bus) => bus.state(),
+        }
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        match self {
+            Self::Virtual(bus) => bus.advance_to(now),
+            Self::Socket(bus) => bus.advance_to(now),
+        }
+    }
+
+    fn recover(&mut self) {
+        match self {
+            Self::Virtual(bus) => bus.recover(),
+            Self::Socket(bus) => bus.recover(),
         }
     }
 }

@@ -7,6 +7,7 @@ mod backend;
 mod log;
 mod pcap;
 mod socketcan;
+mod udp;
 
 use std::io::IsTerminal;
 use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, UdpSocket};
@@ -16,14 +17,17 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use armgate_core::command::{ArmModel, CommandHandler, Network};
+use armgate_core::command::{ArmModel, Network};
 use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::cycle::replay::{self, Replay};
+use armgate_core::cycle::{Cycle, DriveSide};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
 use armgate_core::motion::{IdealArm, RateLimitedArm};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
+use udp::{Stats, UdpLink};
 
 /// Run the armgate arm controller on this computer, with a simulated arm.
 ///
@@ -76,6 +80,10 @@ struct Args {
     /// Print the arm's pose at its home position and exit.
     #[arg(long)]
     print_home: bool,
+    /// Replay a recorded exchange (docs/architecture.md) on a virtual clock for this many ticks
+    /// instead of serving UDP, and print the transcript: what the firmware on Linux must match.
+    #[arg(long, value_names = ["FILE", "TICKS"], num_args = 2, hide = true)]
+    replay: Option<Vec<String>>,
 }
 
 /// The simulated arm's dynamics.
@@ -109,25 +117,20 @@ fn main() -> ExitCode {
     }
 }
 
-/// Counters shown in the status line and at exit.
-#[derive(Debug, Default)]
-struct Stats {
-    received: u64,
-    refused_sources: u64,
-    notices: u64,
-    overruns: u64,
-}
-
 fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let n = config.dof();
     let home = config.home();
     let start = Chain::new(config)
         .check(args.start.as_deref().unwrap_or(&home))
         .map_err(|e| format!("--start: {e} (the robot has {n} joints)"))?;
-    let mut drives = Backend::open(&args.can, config, &start, || {
+    let drives = Backend::open(&args.can, config, &start, || {
         arm_model(args.arm, config, start)
     })?;
-    let mut handler = CommandHandler::new(config);
+    let describe = drives.describe();
+    if let Some(replay) = &args.replay {
+        return replay_exchange(config, drives, replay);
+    }
+    let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives);
     let allow = if args.allow.is_empty() {
         vec![
             Network::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 8),
@@ -157,104 +160,61 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
     let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
     eprintln!(
-        "armgate-sim: {} ({n} joints, {:.2} ms period, drives: {}) on udp://{}, allowing {}",
+        "armgate-sim: {} ({n} joints, {:.2} ms period, drives: {describe}) on udp://{}, allowing {}",
         config.name,
         config.control_period * 1e3,
-        drives.describe(),
         socket.local_addr().map_err(|e| e.to_string())?,
         allowed.join(", ")
     );
 
     let status = !args.quiet && std::io::stderr().is_terminal();
-    let period = Duration::from_secs_f64(config.control_period);
     let epoch = Instant::now();
-    let mut next_tick = epoch;
     let mut next_status = epoch;
-    let mut last_sender: Option<SocketAddr> = None;
     let mut stats = Stats::default();
-    let mut buf = [0u8; 64];
     while running.load(Ordering::SeqCst) {
         let now = Instant::now();
-        if args
-            .duration
-            .is_some_and(|d| (now - epoch).as_secs_f64() >= d)
-        {
+        let elapsed = now - epoch;
+        if args.duration.is_some_and(|d| elapsed.as_secs_f64() >= d) {
             break;
         }
-        if now >= next_tick {
-            // Time inside the core is the scheduled tick time: deterministic, not wall-clock.
-            let t = (next_tick - epoch).as_secs_f64();
-            drives.receive(t)?;
-            let out = handler
-                .tick(t, &drives.measured(), drives.drives())
-                .map_err(|e| format!("control tick: {e}"))?;
-            drives.transmit(t, out.command.as_ref());
-            while let Some(text) = handler.next_notice() {
-                stats.notices += 1;
-                logger.log(Record::Warning {
-                    t,
-                    text: text.as_str().to_string(),
-                });
-                if let Some(to) = last_sender {
-                    // A lost warning is no reason to stop the arm; UDP gives no guarantee anyway.
-                    let _ = socket.send_to(&text.to_bytes(), to);
-                    pcap::udp(local, to, &text.to_bytes());
-                }
-            }
-            if logger.enabled() {
-                logger.log(Record::Tick(Box::new(Tick {
-                    t,
-                    mode: handler.controller().mode().name(),
-                    pose: out.measured_pose,
-                    joints: drives.measured(),
-                    command: out.command,
-                    setpoint: out.setpoint,
-                })));
-            }
-            // Simulated time stays strictly periodic: after a late tick the next ones run back
-            // to back (each one PT point for the drives) rather than skipping points, unless
-            // the loop is hopelessly behind.
-            next_tick += period;
-            if now > next_tick + period * MAX_CATCH_UP {
-                stats.overruns += 1;
-                next_tick = now + period;
-            }
-            if status && now >= next_status {
-                next_status = now + Duration::from_millis(250);
-                eprint!("\r{}\x1b[K", status_line(&handler, &stats, &logger));
-            }
+        let due = Duration::from_micros(cycle.next_due_us());
+        if elapsed < due {
+            // A sleep is precise; socket timeouts are rounded to the kernel's tick.
+            std::thread::sleep(due - elapsed);
             continue;
         }
-        let (len, from) = match socket.recv_from(&mut buf) {
-            Ok(received) => received,
-            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
-                // Socket timeouts are rounded to the kernel's tick (several ms); a sleep is
-                // precise. Replies wait at most POLL_INTERVAL.
-                std::thread::sleep((next_tick - now).min(POLL_INTERVAL));
-                continue;
-            }
-            Err(e) => return Err(format!("udp receive: {e}")),
+        // The cycle's policy (docs/architecture.md): requests are answered at the start of
+        // the next tick, late ticks are caught up back to back, the core's time is the
+        // schedule's.
+        let mut link = UdpLink {
+            socket: &socket,
+            local,
+            allow: &allow,
+            logger: &logger,
+            stats: &mut stats,
+            time: elapsed.as_secs_f64(),
+            error: None,
         };
-        // Captured before the allow-list: a refused client is what one looks for in a capture.
-        pcap::udp(from, local, buf.get(..len).unwrap_or(&[]));
-        if !allow.iter().any(|net| net.contains(from.ip())) {
-            stats.refused_sources += 1;
-            continue;
+        let outcome = cycle.tick(micros(elapsed), &mut link);
+        if let Some(error) = link.error {
+            return Err(error);
         }
-        stats.received += 1;
-        last_sender = Some(from);
-        let datagram = buf.get(..len).unwrap_or(&[]);
-        let t = (Instant::now() - epoch).as_secs_f64();
-        logger.log(Record::Command {
-            t,
-            datagram: datagram.to_vec(),
-        });
-        let reply = handler.handle(datagram, drives.drives_mut());
-        logger.log(Record::Reply { t, datagram: reply });
-        socket
-            .send_to(&reply, from)
-            .map_err(|e| format!("udp send to {from}: {e}"))?;
-        pcap::udp(local, from, &reply);
+        if logger.enabled()
+            && let Ok(out) = outcome.step
+        {
+            logger.log(Record::Tick(Box::new(Tick {
+                t: outcome.time,
+                mode: cycle.handler().controller().mode().name(),
+                pose: out.measured_pose,
+                joints: cycle.drives().measured(),
+                command: out.command,
+                setpoint: out.setpoint,
+            })));
+        }
+        if status && now >= next_status {
+            next_status = now + Duration::from_millis(250);
+            eprint!("\r{}\x1b[K", status_line(&cycle, &stats, &logger));
+        }
     }
     if status {
         eprintln!();
@@ -270,17 +230,49 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             path.display()
         );
     }
+    let counters = cycle.counters();
     eprintln!(
-        "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns, {} log records dropped",
-        stats.received, stats.refused_sources, stats.notices, stats.overruns, dropped
+        "armgate-sim: stopped; {} datagrams handled, {} from sources not allowed (dropped), {} warnings sent, {} tick overruns ({} ticks skipped), {} tick errors, {} log records dropped",
+        stats.received,
+        stats.refused_sources,
+        counters.notices,
+        counters.late_ticks,
+        counters.skipped_ticks,
+        counters.tick_errors,
+        dropped
     );
+    if let Some(summary) = cycle.drives().socketcan_summary() {
+        eprintln!("armgate-sim: {summary}");
+    }
     Ok(())
 }
 
-/// Longest wait for a datagram between two checks of the tick clock.
-const POLL_INTERVAL: Duration = Duration::from_micros(500);
-/// Late ticks are caught up back to back while the loop is at most this many periods behind.
-const MAX_CATCH_UP: u32 = 50;
+/// `--replay FILE TICKS`: the cycle as `run` builds it, on the recorded exchange.
+fn replay_exchange(config: &ValidRobot, drives: Backend, replay: &[String]) -> Result<(), String> {
+    let [file, ticks] = replay else {
+        return Err("--replay takes FILE TICKS".into());
+    };
+    let ticks: u64 = ticks
+        .parse()
+        .map_err(|e| format!("--replay {ticks}: {e}"))?;
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{file}: {e}"))?;
+    let recording = Replay::parse(&text).map_err(|e| format!("{file}: {e}"))?;
+    let mut cycle: Cycle<Backend, ()> = Cycle::new(config, drives);
+    let transcript = recording.run(&mut cycle, ticks, |drives| match drives {
+        Backend::Can(can) => match can.bus() {
+            backend::Bus::Virtual(bus) => replay::can_drives(can.manager(), bus),
+            backend::Bus::Socket(_) => "SocketCAN".into(),
+        },
+        Backend::Direct(_) => "simulated arm".into(),
+    });
+    print!("{transcript}");
+    Ok(())
+}
+
+/// Whole microseconds of `d` (saturating).
+fn micros(d: Duration) -> u64 {
+    u64::try_from(d.as_micros()).unwrap_or(u64::MAX)
+}
 
 /// Receive buffer asked of the kernel: about 4,000 queued datagrams, so that a burst from a
 /// client is not dropped while a tick runs (the kernel caps it at `net.core.rmem_max`).
@@ -307,8 +299,8 @@ fn arm_model(kind: ArmKind, config: &ValidRobot, start: Joints) -> ArmModel {
     }
 }
 
-fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> String {
-    let ctrl = handler.controller();
+fn status_line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) -> String {
+    let ctrl = cycle.handler().controller();
     let pose = ctrl
         .measured()
         .map(|(_, p)| {
@@ -326,7 +318,7 @@ fn status_line(handler: &CommandHandler, stats: &Stats, logger: &Logger) -> Stri
         ctrl.mode().name(),
         stats.received,
         stats.refused_sources,
-        stats.notices,
+        cycle.counters().notices,
         logger.dropped()
     )
 }

@@ -1,153 +1,180 @@
-//! Linux SocketCAN as the drive manager's [`CanBus`]: a raw CAN socket on an interface such as
-//! `can0` (for example a PCAN-USB adapter through the kernel's `peak_usb` driver) or `vcan0`.
+//! Linux SocketCAN as the drive manager's [`CanBus`], through the `socketcan` crate: a raw CAN
+//! socket on an interface such as `can0` (for example a PCAN-USB adapter through the kernel's
+//! `peak_usb` driver) or `vcan0`.
 //!
-//! The few system calls are made through `libc`; the frame and address layouts are the kernel's
-//! (`linux/can.h`), declared here so that nothing depends on libc's private padding fields.
-// System calls on a file descriptor this module owns; every buffer passed is a local of the
-// exact size given.
-#![allow(unsafe_code)]
+//! What it does with what the kernel hands over ([`classify`]):
+//!
+//! * standard-identifier data frames go to the drive manager;
+//! * extended-identifier and remote frames are ignored and counted (the drive protocol uses
+//!   neither; an extended frame whose low 11 bits look like a drive's reply is not one);
+//! * error frames: bus-off latches [`BusState::BusOff`] until the client's `ON`
+//!   ([`CanBus::recover`]); the others are counted.
+//!
+//! Every socket call's error is handled: a full transmit queue (`ENOBUFS`, `EAGAIN`: Linux CAN
+//! interfaces default to `txqueuelen` 10, less than one cycle of a 6-drive arm) is
+//! [`TxError::QueueFull`], which the drive manager turns into the fault `ER35 CAN send queue
+//! full` (it stops the drives; nothing is lost silently); `ENETDOWN` is bus-off; any other
+//! error is counted and reported as a full queue.
 
-use std::ffi::CString;
-use std::io;
-use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
+use std::io::{self, ErrorKind};
 
 use armgate_core::drives::{BusState, CanBus, TxError};
 use armgate_protocol::can::CanFrame;
+use socketcan::{CanSocket, EmbeddedFrame, Frame, Socket, SocketOptions, StandardId};
 
-/// `struct can_frame` (classic CAN, 16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Default)]
-struct RawFrame {
-    can_id: u32,
-    len: u8,
-    pad: u8,
-    res0: u8,
-    len8_dlc: u8,
-    data: [u8; 8],
+/// Frames read per [`CanBus::try_receive`] call at most while skipping frames of no interest.
+const MAX_SKIPPED: usize = 64;
+
+/// What the adapter ignored or could not do, since it was opened.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Extended-identifier and remote frames received (ignored).
+    pub foreign_frames: u64,
+    /// Error frames received other than bus-off (ignored).
+    pub error_frames: u64,
+    /// Bus-off reports (error frames or `ENETDOWN`).
+    pub bus_offs: u64,
+    /// Frames refused because the transmit queue was full (each one a drive fault).
+    pub queue_full: u64,
+    /// Other failed reads and writes.
+    pub socket_errors: u64,
 }
 
-/// `struct sockaddr_can` (24 bytes on Linux).
-#[repr(C)]
-struct SockAddrCan {
-    family: libc::sa_family_t,
-    ifindex: libc::c_int,
-    addr: [u8; 16],
+/// A received frame, sorted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Received {
+    /// A standard data frame: for the drive manager.
+    Data(CanFrame),
+    /// An extended or remote frame: not for us.
+    Foreign,
+    /// An error frame reporting bus-off.
+    BusOff,
+    /// Another error frame.
+    Error,
+}
+
+/// Sorts one frame from the socket.
+pub fn classify(frame: &socketcan::CanFrame) -> Received {
+    match frame {
+        socketcan::CanFrame::Data(data) if !data.is_extended() => {
+            let id = u16::try_from(data.raw_id()).unwrap_or(u16::MAX);
+            CanFrame::new(id, data.data()).map_or(Received::Foreign, Received::Data)
+        }
+        socketcan::CanFrame::Data(_) | socketcan::CanFrame::Remote(_) => Received::Foreign,
+        socketcan::CanFrame::Error(error) if error.error_bits() & libc::CAN_ERR_BUSOFF != 0 => {
+            Received::BusOff
+        }
+        socketcan::CanFrame::Error(_) => Received::Error,
+    }
+}
+
+/// The adapter's state apart from the socket: the bus-off latch and the counters.
+#[derive(Debug, Default)]
+struct Tally {
+    bus_off: bool,
+    counters: Counters,
+}
+
+impl Tally {
+    /// Takes one sorted frame into account; the frame for the drive manager, if it is one.
+    fn take(&mut self, received: Received) -> Option<CanFrame> {
+        match received {
+            Received::Data(frame) => return Some(frame),
+            Received::Foreign => self.counters.foreign_frames += 1,
+            Received::BusOff => self.went_bus_off(),
+            Received::Error => self.counters.error_frames += 1,
+        }
+        None
+    }
+
+    fn went_bus_off(&mut self) {
+        if !self.bus_off {
+            self.counters.bus_offs += 1;
+        }
+        self.bus_off = true;
+    }
 }
 
 /// A raw CAN socket bound to one interface, non-blocking.
 pub struct SocketCan {
-    fd: OwnedFd,
-    bus_off: bool,
+    socket: CanSocket,
+    tally: Tally,
 }
 
 impl SocketCan {
     /// Opens interface `name`. Fails with `EAFNOSUPPORT` where the kernel has no CAN support
     /// and `ENODEV` where the interface does not exist.
     pub fn open(name: &str) -> io::Result<Self> {
-        let fd = unsafe {
-            libc::socket(
-                libc::PF_CAN,
-                libc::SOCK_RAW | libc::SOCK_NONBLOCK,
-                libc::CAN_RAW,
-            )
-        };
-        if fd < 0 {
-            return Err(io::Error::last_os_error());
-        }
-        let fd = unsafe { OwnedFd::from_raw_fd(fd) };
-        let c_name = CString::new(name).map_err(|_| io::Error::from_raw_os_error(libc::ENODEV))?;
-        let index = unsafe { libc::if_nametoindex(c_name.as_ptr()) };
-        if index == 0 {
-            return Err(io::Error::from_raw_os_error(libc::ENODEV));
-        }
-        // Ask for bus-off error frames, so that `state` can report it.
-        let filter: u32 = libc::CAN_ERR_BUSOFF;
-        unsafe {
-            libc::setsockopt(
-                fd.as_raw_fd(),
-                libc::SOL_CAN_RAW,
-                libc::CAN_RAW_ERR_FILTER,
-                (&raw const filter).cast(),
-                size_of::<u32>() as libc::socklen_t,
-            )
-        };
-        let addr = SockAddrCan {
-            family: libc::AF_CAN as libc::sa_family_t,
-            ifindex: index as libc::c_int,
-            addr: [0; 16],
-        };
-        let bound = unsafe {
-            libc::bind(
-                fd.as_raw_fd(),
-                (&raw const addr).cast(),
-                size_of::<SockAddrCan>() as libc::socklen_t,
-            )
-        };
-        if bound < 0 {
-            return Err(io::Error::last_os_error());
-        }
-        Ok(Self { fd, bus_off: false })
+        let socket = CanSocket::open(name)?;
+        socket.set_nonblocking(true)?;
+        // Bus-off and restart reports arrive as error frames.
+        socket.set_error_filter(libc::CAN_ERR_BUSOFF | libc::CAN_ERR_RESTARTED)?;
+        Ok(Self {
+            socket,
+            tally: Tally::default(),
+        })
+    }
+
+    /// What was ignored or failed so far.
+    pub fn counters(&self) -> Counters {
+        self.tally.counters
     }
 }
 
 impl CanBus for SocketCan {
     fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
-        if self.bus_off {
+        if self.tally.bus_off {
             return Err(TxError::BusOff);
         }
-        let mut raw = RawFrame {
-            can_id: u32::from(frame.id()),
-            len: frame.dlc(),
-            ..RawFrame::default()
-        };
-        raw.data = *frame.raw_data();
-        let n = unsafe {
-            libc::write(
-                self.fd.as_raw_fd(),
-                (&raw const raw).cast(),
-                size_of::<RawFrame>(),
-            )
-        };
-        if n == size_of::<RawFrame>() as isize {
-            return Ok(());
-        }
-        match io::Error::last_os_error().raw_os_error() {
-            Some(libc::ENETDOWN) => {
-                self.bus_off = true;
+        let id = StandardId::new(frame.id()).ok_or(TxError::QueueFull)?;
+        let frame = socketcan::CanFrame::new(id, frame.data()).ok_or(TxError::QueueFull)?;
+        match self.socket.write_frame(&frame) {
+            Ok(()) => Ok(()),
+            Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
+                self.tally.went_bus_off();
                 Err(TxError::BusOff)
             }
-            _ => Err(TxError::QueueFull),
+            Err(e) => {
+                if e.kind() == ErrorKind::WouldBlock || e.raw_os_error() == Some(libc::ENOBUFS) {
+                    self.tally.counters.queue_full += 1;
+                } else {
+                    self.tally.counters.socket_errors += 1;
+                }
+                Err(TxError::QueueFull)
+            }
         }
     }
 
     fn try_receive(&mut self) -> Option<CanFrame> {
-        // Bounded: a socket delivers at most what the bus carried since the last cycle, and
-        // error frames are skipped a bounded number of times.
-        for _ in 0..64 {
-            let mut raw = RawFrame::default();
-            let n = unsafe {
-                libc::read(
-                    self.fd.as_raw_fd(),
-                    (&raw mut raw).cast(),
-                    size_of::<RawFrame>(),
-                )
-            };
-            if n != size_of::<RawFrame>() as isize {
-                return None;
+        for _ in 0..MAX_SKIPPED {
+            match self.socket.read_frame() {
+                Ok(frame) => {
+                    if let Some(frame) = self.tally.take(classify(&frame)) {
+                        return Some(frame);
+                    }
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return None,
+                Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
+                    self.tally.went_bus_off();
+                    return None;
+                }
+                Err(_) => {
+                    self.tally.counters.socket_errors += 1;
+                    return None;
+                }
             }
-            if raw.can_id & libc::CAN_ERR_FLAG != 0 {
-                self.bus_off |= raw.can_id & libc::CAN_ERR_BUSOFF != 0;
-                continue;
-            }
-            let id = u16::try_from(raw.can_id & libc::CAN_SFF_MASK).ok()?;
-            let data = raw.data.get(..usize::from(raw.len.min(8)))?;
-            return CanFrame::new(id, data).ok();
         }
         None
     }
 
     fn state(&self) -> BusState {
-        BusState::from_bus_off(self.bus_off)
+        BusState::from_bus_off(self.tally.bus_off)
+    }
+
+    /// The latch is cleared; if the interface is still off (no `restart-ms` configured, see
+    /// the README), the next frame finds out.
+    fn recover(&mut self) {
+        self.tally.bus_off = false;
     }
 }
 
@@ -164,5 +191,92 @@ pub fn explain(name: &str, error: &io::Error) -> String {
              `ip link add dev vcan0 type vcan && ip link set up vcan0`"
         ),
         _ => format!("cannot open SocketCAN interface {name}: {error}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use socketcan::{CanErrorFrame, CanRemoteFrame, ExtendedId, Id};
+
+    use super::*;
+
+    fn data(id: impl Into<Id>, bytes: &[u8]) -> socketcan::CanFrame {
+        socketcan::CanFrame::new(id, bytes).unwrap()
+    }
+
+    #[test]
+    fn only_standard_data_frames_reach_the_drive_manager() {
+        // Node 1's SDO reply (0x581) and interpreter reply (0x281), and look-alikes.
+        let reply = StandardId::new(0x281).unwrap();
+        let stream = [
+            data(reply, &[0x50, 0x58, 0, 0, 0x10, 0, 0, 0]),
+            // Extended: its low 11 bits are 0x281, but it is not node 1's reply.
+            data(ExtendedId::new(0x1000_0281).unwrap(), &[1, 2, 3]),
+            data(ExtendedId::new(0x281).unwrap(), &[1]),
+            socketcan::CanFrame::Remote(CanRemoteFrame::new_remote(reply, 8).unwrap()),
+            socketcan::CanFrame::Error(
+                CanErrorFrame::new_error(libc::CAN_ERR_BUSOFF, &[]).unwrap(),
+            ),
+            socketcan::CanFrame::Error(
+                CanErrorFrame::new_error(libc::CAN_ERR_RESTARTED, &[]).unwrap(),
+            ),
+            data(
+                StandardId::new(0x581).unwrap(),
+                &[0x60, 0x17, 0x10, 0, 0, 0, 0, 0],
+            ),
+        ];
+        let sorted: Vec<Received> = stream.iter().map(classify).collect();
+        assert_eq!(
+            sorted,
+            [
+                Received::Data(CanFrame::new(0x281, &[0x50, 0x58, 0, 0, 0x10, 0, 0, 0]).unwrap()),
+                Received::Foreign,
+                Received::Foreign,
+                Received::Foreign,
+                Received::BusOff,
+                Received::Error,
+                Received::Data(CanFrame::new(0x581, &[0x60, 0x17, 0x10, 0, 0, 0, 0, 0]).unwrap()),
+            ]
+        );
+    }
+
+    #[test]
+    fn ignored_frames_are_counted_and_bus_off_latches_until_recovered() {
+        let mut tally = Tally::default();
+        let frame = CanFrame::new(0x701, &[5]).unwrap();
+        let stream = [
+            Received::Foreign,
+            Received::Error,
+            Received::BusOff,
+            Received::Data(frame),
+            Received::BusOff,
+            Received::Foreign,
+        ];
+        let taken: Vec<CanFrame> = stream.into_iter().filter_map(|r| tally.take(r)).collect();
+        assert_eq!(taken, [frame]);
+        assert_eq!(
+            tally.counters,
+            Counters {
+                foreign_frames: 2,
+                error_frames: 1,
+                bus_offs: 1,
+                ..Counters::default()
+            }
+        );
+        assert!(tally.bus_off);
+    }
+
+    #[test]
+    fn opening_without_kernel_support_or_interface_explains_what_to_do() {
+        // This kernel may have no CAN support (EAFNOSUPPORT); either way the error says why.
+        let Err(error) = SocketCan::open("armgate-no-such-can") else {
+            panic!("an interface that does not exist opened");
+        };
+        let text = explain("armgate-no-such-can", &error);
+        assert!(text.contains("armgate-no-such-can"), "{text}");
+        assert!(
+            text.contains("no CAN support") || text.contains("no such network interface"),
+            "{text}"
+        );
     }
 }

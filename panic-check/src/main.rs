@@ -1,7 +1,7 @@
 //! Link-time proof that no panic path survives optimisation in what the firmware runs every
-//! cycle and on every datagram: the control tick (drive manager receive, command handler tick
-//! with the controller, IK and limiter, drive manager transmit), request parsing and command
-//! handling.
+//! cycle and on every datagram: the control cycle `Cycle::tick` (drive manager receive, command
+//! handler tick with the controller, IK and limiter, drive manager transmit, request handling,
+//! notices) and request parsing.
 //!
 //! The technique of the `panic-never` crate: the panic handler calls a function that exists
 //! nowhere, so the release build (LTO, as the firmware's) links only if the optimiser removed

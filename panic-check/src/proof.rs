@@ -3,12 +3,12 @@
 
 use core::hint::black_box;
 
-use armgate_core::command::CommandHandler;
 use armgate_core::config::{
     CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType, RobotConfig,
     ToolConfig, ValidRobot, WorkspaceConfig,
 };
-use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, TxError};
+use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Message, Request};
 
@@ -80,32 +80,41 @@ fn robot() -> Option<ValidRobot> {
     black_box(config).validate().ok()
 }
 
-/// Everything under proof, once per loop: the firmware's control cycle and one datagram.
-/// `_start` is the linker's default entry, the root from which it keeps code.
+/// The client side, opaque: any datagram of any length may be waiting, any send may fail.
+struct OpaqueLink;
+
+impl Link<()> for OpaqueLink {
+    fn receive(&mut self) -> Option<Datagram<()>> {
+        let datagram: [u8; 64] = black_box([0; 64]);
+        let bytes = datagram.get(..black_box(31)).unwrap_or(&[]);
+        black_box(true).then(|| Datagram::new(bytes, ()))
+    }
+
+    fn send(&mut self, datagram: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
+        black_box((datagram, kind));
+        black_box(Ok(()))
+    }
+}
+
+/// Everything under proof, once per loop: the firmware's control cycle (`Cycle::tick`: the
+/// drive manager, the command handler's tick and requests, notices) at an arbitrary clock, and
+/// one datagram through the parser. `_start` is the linker's default entry, the root from which
+/// it keeps code.
 #[allow(unsafe_code)]
 #[unsafe(no_mangle)]
 pub extern "C" fn _start() -> ! {
     let Some(robot) = robot() else { halt() };
-    let mut handler = CommandHandler::new(&robot);
-    let Ok(mut manager) = DriveManager::new(&robot, &DriveSettings::default()) else {
+    let Ok(drives) = CanDrives::started(&robot, &DriveSettings::default(), OpaqueBus) else {
         halt()
     };
-    let mut bus = OpaqueBus;
-    let mut now = 0.0;
+    let mut cycle: Cycle<_, ()> = Cycle::new(&robot, drives);
+    let mut link = OpaqueLink;
     loop {
-        now += robot.control_period;
-        // The control cycle.
-        manager.receive(&mut bus);
-        let measured = manager.measured();
-        if let Ok(out) = handler.tick(black_box(now), &measured, &manager) {
-            manager.transmit(now, out.command.as_ref(), &mut bus);
-        }
-        black_box(handler.next_notice());
-        // A datagram of any length and content.
+        black_box(cycle.tick(black_box(0), &mut link).time);
+        // A datagram of any length and content through the parser.
         let datagram: [u8; 64] = black_box([0; 64]);
         let bytes = datagram.get(..black_box(31)).unwrap_or(&[]);
         let _ = black_box(Message::new_checked(bytes).and_then(|m| Request::parse(&m)));
-        black_box(handler.handle(bytes, &mut manager));
     }
 }
 

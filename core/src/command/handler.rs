@@ -50,6 +50,12 @@ impl CommandHandler {
         &self.controller
     }
 
+    /// The controller, mutable: for test rigs and benches that command it directly instead of
+    /// through client requests.
+    pub fn controller_mut(&mut self) -> &mut Controller {
+        &mut self.controller
+    }
+
     /// One control tick (see [`Controller::step`]); its events feed the warning relay.
     /// While the drives take no commands (starting, stopped, or stopped by a fault, when they
     /// hold their last point) the controller holds the measured position, so motion resumes

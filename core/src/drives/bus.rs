@@ -14,6 +14,40 @@ pub trait CanBus {
 
     /// The controller's fault-confinement state.
     fn state(&self) -> BusState;
+
+    /// Brings the bus up to time `now` (s) before the cycle reads it; false if that failed.
+    /// Hardware runs by itself (the default); a simulated bus runs its drives here.
+    fn advance_to(&mut self, _now: f64) -> bool {
+        true
+    }
+
+    /// Asks a bus-off controller to rejoin the bus (the client's `ON`): a controller that
+    /// latches bus-off clears the latch; one still off goes bus-off again on the next frame.
+    /// Controllers that recover by themselves need nothing (the default).
+    fn recover(&mut self) {}
+}
+
+/// A bus borrowed for good (the firmware keeps its simulated bus in a static).
+impl<B: CanBus + ?Sized> CanBus for &mut B {
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
+        (**self).try_transmit(frame)
+    }
+
+    fn try_receive(&mut self) -> Option<CanFrame> {
+        (**self).try_receive()
+    }
+
+    fn state(&self) -> BusState {
+        (**self).state()
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        (**self).advance_to(now)
+    }
+
+    fn recover(&mut self) {
+        (**self).recover();
+    }
 }
 
 /// The CAN fault-confinement state of the controller (ISO 11898-1).

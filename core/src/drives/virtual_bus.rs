@@ -55,6 +55,9 @@ pub struct BusStats {
     pub elapsed_ns: u64,
     /// Frames lost because the controller's receive FIFO was full.
     pub inbox_overruns: u64,
+    /// A hash (FNV-1a) of every frame on the wire, in order: identifier and data. Two runs
+    /// that put the same frames on the bus have the same digest (the differential test).
+    pub digest: u64,
 }
 
 impl BusStats {
@@ -74,6 +77,18 @@ fn fraction(bits: u64, elapsed_ns: u64, bitrate: u32) -> f64 {
         return 0.0;
     }
     bits as f64 / (elapsed_ns as f64 * 1e-9 * f64::from(bitrate))
+}
+
+/// `hash` extended by `frame`'s identifier and data (FNV-1a).
+fn digest(hash: u64, frame: &CanFrame) -> u64 {
+    frame
+        .id()
+        .to_le_bytes()
+        .iter()
+        .chain(frame.data())
+        .fold(hash, |h, b| {
+            (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3)
+        })
 }
 
 /// `advance` gave up: more events than any sensible interval holds (a drive producing frames
@@ -248,6 +263,7 @@ impl VirtualBus {
             let bits = exact_bits_on_wire(&pending.frame);
             self.stats.frames += 1;
             self.stats.bits += u64::from(bits);
+            self.stats.digest = digest(self.stats.digest, &pending.frame);
             self.stats.worst_case_bits += u64::from(bits_on_wire(&pending.frame));
             self.wire = Some((pending, now + u64::from(bits) * self.bit_ns));
         }
@@ -294,6 +310,11 @@ impl CanBus for VirtualBus {
 
     fn try_receive(&mut self) -> Option<CanFrame> {
         self.inbox.pop_front()
+    }
+
+    /// Runs the simulated drives and the bus up to `now`.
+    fn advance_to(&mut self, now: f64) -> bool {
+        self.advance(now).is_ok()
     }
 
     fn state(&self) -> BusState {

@@ -1,5 +1,5 @@
-//! A controller, the drive manager and a virtual bus with simulated Whistles, stepped together
-//! as the firmware's control loop steps them.
+//! The core's control cycle on a virtual bus with simulated Whistles (the firmware's
+//! `sim-drives` build without the network), for the drive tests and the drive examples.
 #![allow(dead_code, clippy::unwrap_used, clippy::panic)]
 
 use std::path::PathBuf;
@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::collections::VecDeque;
 
 use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{
     BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
 };
@@ -20,17 +21,18 @@ pub fn robot(name: &str) -> ValidRobot {
     load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// The core's control cycle with the drive manager on a virtual bus of simulated Whistles,
+/// ticked on time: the firmware's `sim-drives` build without the network.
 pub struct Rig {
     pub config: ValidRobot,
-    pub manager: DriveManager,
-    pub bus: VirtualBus,
-    pub ctrl: Controller,
+    pub cycle: Cycle<CanDrives<Recorder>, ()>,
     pub period: f64,
+    /// Time of the last tick (s; read only).
     pub now: f64,
     /// The last command the controller produced.
     pub last_command: Option<Joints>,
-    /// The frames the manager sent in the last tick.
-    pub sent: Vec<CanFrame>,
+    /// What the client would have received.
+    pub client: Client,
 }
 
 impl Rig {
@@ -38,7 +40,8 @@ impl Rig {
         Self::with(config, DriveSettings::default(), |_| {})
     }
 
-    /// A rig whose bus is adjusted by `tweak` before anything runs.
+    /// A rig whose bus is adjusted by `tweak` before anything runs; the drives idle until
+    /// [`start`](Self::start).
     pub fn with(
         config: ValidRobot,
         settings: DriveSettings,
@@ -46,35 +49,55 @@ impl Rig {
     ) -> Self {
         let mut bus = VirtualBus::for_robot(&config);
         tweak(&mut bus);
+        Self::on(config, &settings, bus)
+    }
+
+    /// A rig on `bus`, the drives idle.
+    pub fn on(config: ValidRobot, settings: &DriveSettings, bus: VirtualBus) -> Self {
+        let drives = CanDrives::idle(
+            &config,
+            settings,
+            Recorder {
+                bus,
+                sent: Vec::new(),
+            },
+        )
+        .unwrap();
         Self {
-            manager: DriveManager::new(&config, &settings).unwrap(),
-            ctrl: Controller::new(&config),
+            cycle: Cycle::new(&config, drives),
             period: config.control_period,
-            config,
-            bus,
             now: 0.0,
+            config,
             last_command: None,
-            sent: Vec::new(),
+            client: Client::default(),
         }
     }
 
-    /// One control cycle: the bus runs up to now, the manager takes the answers, the
-    /// controller steps on the measurement, the manager sends the command.
+    /// A rig on `bus` with the drives started and streaming, and the flow control settled
+    /// (20 more ticks).
+    pub fn started(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus) -> Self {
+        let mut rig = Self::on(config.clone(), settings, bus);
+        rig.start();
+        rig.ticks(20);
+        rig
+    }
+
+    /// One control cycle, on time: the bus runs up to the tick's time, the manager takes the
+    /// answers, the controller steps on the measurement, the manager sends the command.
     pub fn tick(&mut self) -> StepOutput {
-        self.now += self.period;
-        self.bus.advance(self.now).unwrap();
-        self.manager.receive(&mut self.bus);
-        let out = self.ctrl.step(self.now, &self.manager.measured()).unwrap();
+        let due = self.cycle.next_due_us();
+        self.tick_at(due)
+    }
+
+    /// The same, with the shell's clock at `now_us` (late: the cycle catches up or skips).
+    pub fn tick_at(&mut self, now_us: u64) -> StepOutput {
+        self.cycle.drives_mut().bus_mut().sent.clear();
+        let outcome = self.cycle.tick(now_us, &mut self.client);
+        self.now = outcome.time;
+        let out = outcome.step.unwrap();
         if out.command.is_some() {
             self.last_command = out.command;
         }
-        let mut recorder = Recorder {
-            bus: &mut self.bus,
-            sent: Vec::new(),
-        };
-        self.manager
-            .transmit(self.now, out.command.as_ref(), &mut recorder);
-        self.sent = recorder.sent;
         out
     }
 
@@ -99,40 +122,88 @@ impl Rig {
 
     /// Starts the drives and ticks until they stream; the ticks it took.
     pub fn start(&mut self) -> usize {
-        self.manager.start().unwrap();
-        let ticks = self.until(200, |r| r.manager.state() != DriveState::Starting);
+        self.manager_mut().start().unwrap();
+        let ticks = self.until(200, |r| r.manager().state() != DriveState::Starting);
         assert_eq!(
-            self.manager.state(),
+            self.manager().state(),
             DriveState::Operational,
             "fault: {:?}",
-            self.manager.fault()
+            self.manager().fault()
         );
         ticks
     }
 
+    pub fn ctrl(&self) -> &Controller {
+        self.cycle.handler().controller()
+    }
+
+    pub fn ctrl_mut(&mut self) -> &mut Controller {
+        self.cycle.handler_mut().controller_mut()
+    }
+
+    pub fn manager(&self) -> &DriveManager {
+        self.cycle.drives().manager()
+    }
+
+    pub fn manager_mut(&mut self) -> &mut DriveManager {
+        self.cycle.drives_mut().manager_mut()
+    }
+
+    pub fn bus(&self) -> &VirtualBus {
+        &self.cycle.drives().bus().bus
+    }
+
+    pub fn bus_mut(&mut self) -> &mut VirtualBus {
+        &mut self.cycle.drives_mut().bus_mut().bus
+    }
+
+    /// The frames the manager sent in the last tick.
+    pub fn sent(&self) -> &[CanFrame] {
+        &self.cycle.drives().bus().sent
+    }
+
     /// The simulated drives' positions in joint units (joints with a drive only).
     pub fn drive_positions(&self) -> Vec<f64> {
-        self.bus.drives().map(|d| d.joint_position()).collect()
+        self.bus().drives().map(|d| d.joint_position()).collect()
     }
-}
 
-/// A rig that also remembers the last command the manager took.
-impl Rig {
     /// Like [`tick`](Self::tick), returning the command if the manager took it (it was
     /// still streaming after the call).
-    pub fn tick_accepted(&mut self) -> Option<armgate_core::kinematics::Joints> {
+    pub fn tick_accepted(&mut self) -> Option<Joints> {
         let out = self.tick();
-        out.command.filter(|_| self.manager.is_operational())
+        out.command.filter(|_| self.manager().is_operational())
     }
 }
 
-/// Forwards to a bus and records what was sent.
-pub struct Recorder<'a, B: CanBus> {
-    pub bus: &'a mut B,
+/// The client side of a rig: requests queued by the test, replies and notices kept.
+#[derive(Default)]
+pub struct Client {
+    pub requests: VecDeque<Datagram<()>>,
+    pub replies: Vec<Datagram<()>>,
+    pub notices: Vec<Datagram<()>>,
+}
+
+impl Link<()> for Client {
+    fn receive(&mut self) -> Option<Datagram<()>> {
+        self.requests.pop_front()
+    }
+
+    fn send(&mut self, datagram: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
+        match kind {
+            Outgoing::Reply => self.replies.push(*datagram),
+            Outgoing::Notice => self.notices.push(*datagram),
+        }
+        Ok(())
+    }
+}
+
+/// The virtual bus, recording what the manager sends.
+pub struct Recorder {
+    pub bus: VirtualBus,
     pub sent: Vec<CanFrame>,
 }
 
-impl<B: CanBus> CanBus for Recorder<'_, B> {
+impl CanBus for Recorder {
     fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
         self.bus.try_transmit(frame)?;
         self.sent.push(*frame);
@@ -145,6 +216,10 @@ impl<B: CanBus> CanBus for Recorder<'_, B> {
 
     fn state(&self) -> BusState {
         self.bus.state()
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        self.bus.advance_to(now)
     }
 }
 

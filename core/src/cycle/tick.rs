@@ -1,0 +1,192 @@
+//! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
+
+use super::counters::bump;
+use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing};
+use crate::command::{CommandHandler, NOTICE_CAPACITY};
+use crate::config::ValidRobot;
+use crate::kinematics::KinematicsError;
+use crate::motion::StepOutput;
+use armgate_protocol::client::MESSAGE_LEN;
+use core::num::NonZeroU64;
+
+/// Client requests handled per tick at most; more wait for the next tick. A client waits for
+/// each reply, so this leaves room for several clients and for bursts, and bounds the tick.
+pub const REQUESTS_PER_TICK: usize = 8;
+
+/// A tick at most this many periods late is still run (the shell calls back to back until it
+/// has caught up); later ones are skipped.
+pub const MAX_CATCH_UP: u64 = 50;
+
+/// What one tick did, for the shell's log and status line.
+#[derive(Clone, Debug)]
+pub struct TickOutcome {
+    /// The tick's time on the schedule (s since the cycle started).
+    pub time: f64,
+    /// Ticks skipped before this one because the call came more than [`MAX_CATCH_UP`]
+    /// periods late (usually 0).
+    pub skipped: u64,
+    /// The control step's result (an error made the drives hold).
+    pub step: Result<StepOutput, KinematicsError>,
+}
+
+/// The command handler and the drives, ticked on a fixed schedule.
+///
+/// `P` is the shell's peer address (a socket address, an embassy endpoint).
+#[derive(Clone, Debug)]
+pub struct Cycle<D, P> {
+    handler: CommandHandler,
+    drives: D,
+    /// The control period (s), and in whole microseconds for the shell's clock.
+    period: f64,
+    period_us: NonZeroU64,
+    /// Index of the next tick on the schedule.
+    next: u64,
+    /// Time of the previous tick (s).
+    previous: Option<f64>,
+    last_sender: Option<P>,
+    counters: CycleCounters,
+}
+
+impl<D: DriveSide, P: Copy> Cycle<D, P> {
+    /// A cycle for a validated robot description with `drives`, before its first tick.
+    pub fn new(config: &ValidRobot, drives: D) -> Self {
+        // The period is validated finite and positive; the cast saturates for absurd values.
+        let period_us = libm::round(config.control_period * 1e6) as u64;
+        Self {
+            handler: CommandHandler::new(config),
+            drives,
+            period: config.control_period,
+            period_us: NonZeroU64::new(period_us).unwrap_or(NonZeroU64::MIN),
+            next: 0,
+            previous: None,
+            last_sender: None,
+            counters: CycleCounters::default(),
+        }
+    }
+
+    /// When the next tick is due on the shell's clock (µs since the cycle started).
+    pub fn next_due_us(&self) -> u64 {
+        self.next.saturating_mul(self.period_us.get())
+    }
+
+    /// The control period in whole microseconds (at least 1).
+    pub fn period_us(&self) -> u64 {
+        self.period_us.get()
+    }
+
+    /// Runs the next tick on the schedule; `now_us` is the shell's clock (µs since the cycle
+    /// started). Called early, the tick runs at its scheduled time all the same. Called a whole
+    /// period or more late, it still runs (and is counted): the shell calls again at once until
+    /// [`next_due_us`](Self::next_due_us) is ahead of its clock. More than [`MAX_CATCH_UP`]
+    /// periods late, the missed ticks are skipped.
+    pub fn tick(&mut self, now_us: u64, link: &mut impl Link<P>) -> TickOutcome {
+        let due = self.next_due_us();
+        let behind = now_us.saturating_sub(due) / self.period_us;
+        let mut skipped = 0;
+        if behind > MAX_CATCH_UP {
+            skipped = behind;
+            self.counters.skipped_ticks = self.counters.skipped_ticks.saturating_add(skipped);
+            self.next = self.next.saturating_add(skipped);
+        } else if behind > 0 {
+            bump(&mut self.counters.late_ticks);
+        }
+        let time = self.next as f64 * self.period;
+        let elapsed = self.previous.map_or(self.period, |t| time - t);
+        self.next = self.next.saturating_add(1);
+        self.previous = Some(time);
+        bump(&mut self.counters.ticks);
+
+        if !self.drives.receive(time) {
+            bump(&mut self.counters.tick_errors);
+        }
+        let step = self
+            .handler
+            .tick(time, &self.drives.measured(), &self.drives);
+        let command = step.as_ref().map(|out| out.command.as_ref());
+        if command.is_err() {
+            bump(&mut self.counters.tick_errors);
+        }
+        self.drives.transmit(time, elapsed, command.ok().flatten());
+        self.handle_requests(link);
+        self.send_notices(link);
+        TickOutcome {
+            time,
+            skipped,
+            step,
+        }
+    }
+
+    /// The command handler (the controller's mode, pose, motion).
+    pub fn handler(&self) -> &CommandHandler {
+        &self.handler
+    }
+
+    /// The command handler, mutable (test rigs and benches that command the controller
+    /// directly).
+    pub fn handler_mut(&mut self) -> &mut CommandHandler {
+        &mut self.handler
+    }
+
+    /// The drives.
+    pub fn drives(&self) -> &D {
+        &self.drives
+    }
+
+    /// The drives, mutable.
+    pub fn drives_mut(&mut self) -> &mut D {
+        &mut self.drives
+    }
+
+    /// What the cycle counted.
+    pub fn counters(&self) -> CycleCounters {
+        self.counters
+    }
+
+    /// The client that sent the last request: where notices go.
+    pub fn last_sender(&self) -> Option<P> {
+        self.last_sender
+    }
+
+    /// Answers one request from `peer` (who then gets the notices). [`tick`](Self::tick)
+    /// calls it for the requests its link delivers; protocol tests call it between ticks.
+    pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
+        bump(&mut self.counters.requests);
+        self.last_sender = Some(peer);
+        self.handler.handle(datagram, &mut self.drives)
+    }
+
+    fn handle_requests(&mut self, link: &mut impl Link<P>) {
+        for _ in 0..REQUESTS_PER_TICK {
+            let Some(request) = link.receive() else {
+                break;
+            };
+            let reply = self.answer(request.payload(), request.peer);
+            self.send(link, Datagram::new(&reply, request.peer), Outgoing::Reply);
+        }
+    }
+
+    fn send_notices(&mut self, link: &mut impl Link<P>) {
+        for _ in 0..NOTICE_CAPACITY {
+            let Some(text) = self.handler.next_notice() else {
+                break;
+            };
+            match self.last_sender {
+                Some(peer) => {
+                    bump(&mut self.counters.notices);
+                    self.send(
+                        link,
+                        Datagram::new(&text.to_bytes(), peer),
+                        Outgoing::Notice,
+                    );
+                }
+                None => bump(&mut self.counters.notices_unaddressed),
+            }
+        }
+    }
+
+    fn send(&mut self, link: &mut impl Link<P>, datagram: Datagram<P>, kind: Outgoing) {
+        if link.send(&datagram, kind).is_err() {
+            bump(&mut self.counters.send_dropped);
+        }
+    }
+}
