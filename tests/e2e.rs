@@ -191,15 +191,21 @@ impl Sim {
         }
     }
 
-    /// Sends a motion start (BG, VE, jB, jE) until it is accepted: `ER20` means the previous
-    /// motion is still finishing its last ticks, or the drives are still starting.
+    /// Sends a motion start (BG, VE, jB, jE) until it is accepted: `busy` means the previous
+    /// motion is still finishing its last ticks; the drives may still be starting.
     fn start_motion(&self, cmd: &str) {
-        self.retry_while(cmd, &format!("ER20 Cmd {cmd} rejected"));
+        self.retry_while(
+            cmd,
+            &[
+                &format!("ER20 Cmd {cmd} busy"),
+                &format!("ER20 Cmd {cmd} drives starting"),
+            ],
+        );
     }
 
     /// Sends `cmd` (a null request) until it gets its null reply, as long as the answer is
-    /// `refusal`.
-    fn retry_while(&self, cmd: &str, refusal: &str) {
+    /// one of `refusals`.
+    fn retry_while(&self, cmd: &str, refusals: &[&str]) {
         let started = Instant::now();
         loop {
             match self.request(cmd, [0.0; 7], 0) {
@@ -208,7 +214,7 @@ impl Sim {
                     assert_eq!((chars, v), ([b[1], b[0]], [0.0; 7]), "{cmd} null reply");
                     return;
                 }
-                Answer::Text(t) if t == refusal => {
+                Answer::Text(t) if refusals.contains(&t.as_str()) => {
                     assert!(
                         started.elapsed() < Duration::from_secs(5),
                         "{cmd} never accepted"
@@ -322,8 +328,12 @@ fn a_full_session_over_udp() {
     // The simulated drives start at power-up; OF stops them, and ON is accepted once they
     // have stopped (ER11 while they are still stopping).
     sim.null("OF");
-    assert_eq!(sim.text("OF", [0.0; 7], 0), "ER10 Arm did not stop");
-    sim.retry_while("ON", "ER11 Arm did not start");
+    let again = sim.text("OF", [0.0; 7], 0);
+    assert!(
+        again == "ER10 Arm already stopping" || again == "ER10 Arm already off",
+        "{again}"
+    );
+    sim.retry_while("ON", &["ER11 Arm still stopping"]);
     let ps = sim.ok("PS", [0.0; 7], 0);
     let quaternion_norm: f32 = ps[3..].iter().map(|v| v * v).sum();
     assert!(
@@ -424,7 +434,9 @@ fn a_full_session_over_udp() {
     assert!(mt[..6].iter().all(|t| *t > -100.0));
     sim.null("VC");
     sim.null("jC");
-    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE needs mode 2");
+    sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE no via point 0");
 }
 
 #[test]
@@ -489,35 +501,38 @@ fn bad_input_gets_its_documented_reply_and_the_controller_keeps_answering() {
     assert_eq!(sim.text("jV", q, 255), "ER24 Cmd jV bad index");
     // BG with no goal; Cartesian commands in joint mode and the reverse.
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
-    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG no goal");
     sim.ok("jG", q, 0);
-    assert_eq!(sim.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
-    assert_eq!(sim.text("jE", [0.0; 7], 0), "ER20 Cmd jE rejected");
+    assert_eq!(sim.text("jB", [0.0; 7], 0), "ER20 Cmd jB needs mode 1");
+    assert_eq!(sim.text("jE", [0.0; 7], 0), "ER20 Cmd jE needs mode 1");
     sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
     sim.ok("GT", [0.3, 0.5, 0.9, 0.0, 0.0, 0.0, 0.0], 0);
-    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
-    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG needs mode 2");
+    assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE needs mode 2");
     assert_eq!(
         sim.text("jG", [1.5708, 0.0, 1.5708, 0.0, 0.0, 0.0, 0.0], 0),
-        "ER26 Cmd jG beyond joint limit"
+        "ER26 Cmd jG j5 < 0.785"
     );
 
-    // An out-of-reach goal (inside the bounds, 1.8 m out): accepted; the arm stops at the
-    // edge of its reach and warns WN22.
+    // An out-of-reach goal (inside the bounds, 1.8 m out) is refused up front, with where
+    // along the line the arm would lose it; the arm does not move.
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
     let ps = sim.ok("PS", [0.0; 7], 0);
     sim.ok("GL", [1.8, 0.0, 0.6, ps[3], ps[4], ps[5], ps[6]], 0);
-    sim.start_motion("BG");
-    let start = Instant::now();
-    let mut warned = false;
-    while start.elapsed() < Duration::from_secs(30) && !warned {
-        let mut buf = [0u8; 64];
-        if let Ok(31) = sim.socket.recv(&mut buf) {
-            warned = decode(&buf) == Answer::Text("WN22 Inv Kin Divergence.".into());
+    let refusal = loop {
+        match sim.request("BG", [0.0; 7], 0) {
+            Answer::Text(t) if t == "ER20 Cmd BG drives starting" => {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            Answer::Text(t) => break t,
+            other => panic!("BG to an unreachable goal: {other:?}"),
         }
-    }
-    assert!(warned, "no WN22 for an unreachable goal");
-    sim.null("ST");
+    };
+    assert!(
+        refusal.starts_with("ER25 Cmd BG unreachable at ") || refusal.starts_with("ER26 Cmd BG j"),
+        "{refusal}"
+    );
+    assert_eq!(&sim.ok("PS", [0.0; 7], 0)[..3], &ps[..3]);
 
     // A burst of 1000 datagrams, read as they come back: every one answered.
     let receiver = sim.socket.try_clone().unwrap();
@@ -576,4 +591,129 @@ fn datagrams_from_outside_the_allow_list_are_dropped_and_counted() {
     assert!(status.success());
     let summary = sim.stderr_rest();
     assert!(summary.contains("5 from sources not allowed"), "{summary}");
+}
+
+/// `SQ` index 0: mode, drive state, fault, joints, motion, refused, uptime.
+fn status(sim: &Sim) -> [f32; 7] {
+    match sim.request("SQ", [0.0; 7], 0) {
+        Answer::Reply(chars, v, 0) if &chars == b"QS" => v,
+        other => panic!("SQ: {other:?}"),
+    }
+}
+
+/// Polls `SQ` until the drive state (f1) is `state`.
+fn wait_drives(sim: &Sim, state: f32) -> [f32; 7] {
+    let started = Instant::now();
+    loop {
+        let s = status(sim);
+        if s[1] == state {
+            return s;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "drives never reached state {state}: {s:?}"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
+    // Default: simulated Whistles on a virtual bus, which boot for about 0.2 s after start.
+    let sim = Sim::start("ranger-mk1");
+    // Right after start, while the drives boot: the move is refused for that reason, and ON
+    // is accepted (the drives are already starting), not refused as if it had failed.
+    let gt = [0.3, 0.5, 0.9, 0.0, 0.0, 0.0, 0.0];
+    sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    sim.ok("GT", gt, 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG drives starting");
+    sim.null("ON");
+    let s = status(&sim);
+    assert_eq!(s[..5], [2.0, 1.0, 0.0, 6.0, 0.0], "{s:?}");
+    assert_eq!(s[5], 1.0, "one refusal so far");
+    assert!((0.0..1.0).contains(&s[6]), "uptime {}", s[6]);
+    let s = wait_drives(&sim, 2.0);
+    assert_eq!(s[2], 0.0);
+    assert_eq!(sim.text("ON", [0.0; 7], 0), "ER11 Arm already on");
+
+    // The README's former examples from home: the move's straight line needs joint 3 beyond
+    // its maximum 3 % of the way, refused before the arm moves; the joint goal is below
+    // joint 5's minimum.
+    sim.ok("GT", [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 5.0], 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER26 Cmd BG j3 > 1.600 at 3%");
+    assert_eq!(
+        sim.text("jG", [0.0, 0.5, 1.0, 0.0, 0.3, 0.0, 0.0], 0),
+        "ER26 Cmd jG j5 < 0.785"
+    );
+    assert_eq!(status(&sim)[4], 0.0, "nothing moves");
+    sim.ok("GT", gt, 0);
+
+    // The robot's name, at index 1; any other index is refused.
+    sim.socket.send(&datagram("SQ", [0.0; 7], 1)).unwrap();
+    let mut buf = [0u8; 64];
+    assert_eq!(sim.socket.recv(&mut buf).unwrap(), 31);
+    let mut name = [0u8; 31];
+    name[..12].copy_from_slice(b"QSranger-mk1");
+    name[30] = 1;
+    assert_eq!(buf[..31], name);
+    assert_eq!(sim.text("SQ", [0.0; 7], 2), "ER24 Cmd SQ bad index");
+
+    // jP/TM bank 2 on a six-joint arm (docs/protocol.md).
+    assert_eq!(sim.text("jP", [0.0; 7], 0x80), "ER24 Cmd jP bad index");
+    assert_eq!(sim.text("TM", [0.0; 7], 0x80), "ER24 Cmd TM bad index");
+
+    // Wrong mode, then RC right after `ST; CM 0` while the drives still execute the last
+    // set-points: "drives settling", and accepted a tick later.
+    let jp = sim.ok("jP", [0.0; 7], 0);
+    let here = with_joints(&jp[..6], 0.0);
+    sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG needs mode 2");
+    assert_eq!(sim.text("RC", here, 0), "ER20 Cmd RC needs mode 0");
+    let mut settling = false;
+    for _ in 0..10 {
+        sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+        std::thread::sleep(Duration::from_millis(50));
+        sim.null("ST");
+        sim.ok("CM", [0.0; 7], 0);
+        match sim.request("RC", here, 0) {
+            Answer::Text(t) if t == "ER20 Cmd RC drives settling" => {
+                settling = true;
+                break;
+            }
+            // A tick came between CM and RC: the drives had settled already.
+            Answer::Reply(chars, ..) if &chars == b"CR" => {}
+            other => panic!("RC after mode off: {other:?}"),
+        }
+    }
+    assert!(settling, "RC never caught the drives settling");
+    std::thread::sleep(Duration::from_millis(50));
+    assert_eq!(
+        sim.request("RC", here, 0),
+        Answer::Reply(*b"CR", [0.0; 7], 0)
+    );
+
+    // After OF: stopping, then off; ON while stopping says so.
+    sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
+    sim.null("OF");
+    let bg = sim.text("BG", [0.0; 7], 0);
+    assert!(
+        bg == "ER20 Cmd BG drives stopping" || bg == "ER20 Cmd BG drives off",
+        "{bg}"
+    );
+    let on = sim.text("ON", [0.0; 7], 0);
+    assert!(
+        on == "ER11 Arm still stopping" || on == "ER11 Arm did not start",
+        "{on}"
+    );
+    let s = wait_drives(&sim, 0.0);
+    assert_eq!(s[0], 2.0);
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG drives off");
+    assert_eq!(sim.text("OF", [0.0; 7], 0), "ER10 Arm already off");
+    let refused = status(&sim)[5];
+    assert!(refused >= 11.0, "refused {refused}");
+    sim.null("ON");
+    wait_drives(&sim, 2.0);
+    sim.start_motion("BG");
+    assert_eq!(status(&sim)[4], 2.0, "a Cartesian move runs");
+    assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
 }

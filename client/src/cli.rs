@@ -40,6 +40,8 @@ Examples:
   armgate send XY                            shows the controller's ER00 text
   armgate --joints 8 joints                  an 8-joint arm (two jP requests)
   armgate teleop                             keyboard client (Fig. 3.3 of the thesis)
+  armgate calibrate plan --robot robots/ur5.toml --poses 50
+                                             poses to measure for kinematic calibration
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
 WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file.
@@ -206,6 +208,15 @@ pub enum Cmd {
         #[arg(long, default_value_t = 10.0)]
         rate: f64,
     },
+    /// Kinematic calibration: runs `armgate-calibrate` with these arguments (its `--help`
+    /// explains them; docs/calibration.md). Needs no controller.
+    #[command(disable_help_flag = true)]
+    Calibrate {
+        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml` or
+        /// `plan --robot R.toml --poses 50`.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
 }
 
 /// The modes, as typed.
@@ -309,6 +320,9 @@ fn parse_joints(s: &str) -> Result<usize, String> {
 /// Runs the command line (parsed from the process's arguments) and returns the exit status.
 pub fn main() -> u8 {
     let cli = Cli::parse();
+    if let Cmd::Calibrate { args } = &cli.command {
+        return crate::calibrate::run(args);
+    }
     let mut out = std::io::stdout().lock();
     match run(&cli, &mut out) {
         Ok(()) => 0,
@@ -499,7 +513,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             Ok(())
         }
         // Handled in `run`, which hands the client over.
-        Cmd::Teleop { .. } => Ok(()),
+        Cmd::Teleop { .. } | Cmd::Calibrate { .. } => Ok(()),
     }
 }
 

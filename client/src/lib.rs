@@ -29,6 +29,7 @@
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client.
 
 pub mod banks;
+pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;

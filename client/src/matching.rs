@@ -128,7 +128,7 @@ pub fn ends_motion(text: &Text) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use armgate_protocol::client::{Command, MESSAGE_LEN, Notice, Reply};
+    use armgate_protocol::client::{Command, DriveStatus, MESSAGE_LEN, Notice, Reply};
 
     fn text(s: &str) -> [u8; MESSAGE_LEN] {
         let mut b = [0; MESSAGE_LEN];
@@ -203,15 +203,23 @@ mod tests {
             Incoming::Notice(_)
         ));
         assert!(matches!(
-            expect(b"ON", 0).classify(&Notice::ArmDidNotStart.text().to_bytes()),
+            expect(b"ON", 0).classify(
+                &Notice::ArmDidNotStart(DriveStatus::Running)
+                    .text()
+                    .to_bytes()
+            ),
             Incoming::Rejected(_)
         ));
         assert!(matches!(
-            expect(b"OF", 0).classify(&Notice::ArmDidNotStop.text().to_bytes()),
+            expect(b"OF", 0).classify(&Notice::ArmDidNotStop(DriveStatus::Off).text().to_bytes()),
             Incoming::Rejected(_)
         ));
         assert!(matches!(
-            expect(b"PS", 0).classify(&Notice::ArmDidNotStart.text().to_bytes()),
+            expect(b"PS", 0).classify(
+                &Notice::ArmDidNotStart(DriveStatus::Running)
+                    .text()
+                    .to_bytes()
+            ),
             Incoming::Notice(_)
         ));
     }

@@ -111,7 +111,7 @@ fn worked_examples_cm_bg_and_vp() {
     assert_eq!(rig.send(&cm2), mc2);
     rig.tick();
     // BG before any goal is rejected, zero-filled.
-    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG no goal");
     // A reachable goal 5 cm from the current pose, then BG → `47 42` + 29 zeros.
     let ps = floats(&rig.request("PS", [0.0; 7], 0));
     let reply = rig.request(
@@ -126,7 +126,7 @@ fn worked_examples_cm_bg_and_vp() {
     assert_eq!(bg, gb);
     // While moving, BG is rejected.
     rig.tick();
-    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
     // VP via point 3 = (0.5, −0.2, 0.4), yaw −1.5708, T = 2 (spec §2.9).
     let vp: [u8; 31] = [
         0x56, 0x50, 0x00, 0x00, 0x00, 0x3F, 0xCD, 0xCC, 0x4C, 0xBE, 0xCD, 0xCC, 0xCC, 0x3E, 0, 0,
@@ -160,10 +160,10 @@ fn fixed_seed_defects_vc_rc_and_stale_bytes() {
     // Angles outside the joint limits are refused (joint 5's range is [0.785, 3.926]).
     let mut outside = values;
     outside[4] = 0.0;
-    assert_eq!(rig.text("RC", outside, 0), "ER26 Cmd RC beyond joint limit");
+    assert_eq!(rig.text("RC", outside, 0), "ER26 Cmd RC j5 < 0.785");
     // RC outside mode 0 is refused.
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
-    assert_eq!(rig.text("RC", values, 0), "ER20 Cmd RC rejected");
+    assert_eq!(rig.text("RC", values, 0), "ER20 Cmd RC needs mode 0");
     // jG's f6 is zero, not stale.
     let mut jg = [0.0f32; 7];
     jg[..6].copy_from_slice(&[1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]);
@@ -251,7 +251,7 @@ fn bad_numbers_indices_and_goals_get_their_texts() {
     // Joint 5 below its 0.785 limit.
     assert_eq!(
         rig.text("jG", [1.5708, 0.6, -0.4, 0.2, 0.0, 0.1, 0.0], 0),
-        "ER26 Cmd jG beyond joint limit"
+        "ER26 Cmd jG j5 < 0.785"
     );
     // A negative duration is clamped.
     assert_eq!(
@@ -266,23 +266,23 @@ fn commands_in_the_wrong_mode_are_rejected() {
     let q = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1, 0.0];
     assert_eq!(&rig.request("jG", q, 0)[..2], b"Gj");
     rig.request("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
-    assert_eq!(rig.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
-    assert_eq!(rig.text("jE", [0.0; 7], 0), "ER20 Cmd jE rejected");
+    assert_eq!(rig.text("jB", [0.0; 7], 0), "ER20 Cmd jB needs mode 1");
+    assert_eq!(rig.text("jE", [0.0; 7], 0), "ER20 Cmd jE needs mode 1");
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
-    assert_eq!(rig.text("VE", [0.0; 7], 0), "ER20 Cmd VE rejected");
+    assert_eq!(rig.text("VE", [0.0; 7], 0), "ER20 Cmd VE needs mode 2");
     rig.request("GT", [0.5, 0.6, 1.0, 0.0, 0.0, 0.0, 0.0], 0);
-    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG rejected");
+    assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG needs mode 2");
     // jB needs a jG first (the seed drove every joint to 0, spec §9 item 8).
     let mut fresh = mk1();
     fresh.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
-    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB no goal");
     // Motion is refused while the drives are off, and ON/OF report their state.
     assert_eq!(&fresh.request("OF", [0.0; 7], 0)[..2], b"FO");
-    assert_eq!(fresh.text("OF", [0.0; 7], 0), "ER10 Arm did not stop");
+    assert_eq!(fresh.text("OF", [0.0; 7], 0), "ER10 Arm already off");
     fresh.request("jG", q, 0);
-    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB rejected");
+    assert_eq!(fresh.text("jB", [0.0; 7], 0), "ER20 Cmd jB drives off");
     assert_eq!(&fresh.request("ON", [0.0; 7], 0)[..2], b"NO");
-    assert_eq!(fresh.text("ON", [0.0; 7], 0), "ER11 Arm did not start");
+    assert_eq!(fresh.text("ON", [0.0; 7], 0), "ER11 Arm already on");
     assert_eq!(&fresh.request("jB", [0.0; 7], 0)[..2], b"Bj");
 }
 
@@ -363,7 +363,7 @@ fn random_datagrams_never_panic_and_ps_still_answers() {
     let mut rng = SplitMix64::new(99);
     let commands = [
         "BG", "CM", "GL", "GT", "jB", "jC", "jE", "jG", "jP", "jR", "jV", "ON", "OF", "PS", "RC",
-        "ST", "TM", "VC", "VE", "VP",
+        "SQ", "ST", "TM", "VC", "VE", "VP",
     ];
     for k in 0..20_000 {
         let len = (rng.next_u64() % 40) as usize;
@@ -382,4 +382,21 @@ fn random_datagrams_never_panic_and_ps_still_answers() {
     rig.tick();
     assert_eq!(&rig.request("PS", [0.0; 7], 0)[..2], b"SP");
     assert!(rig.cycle.drives().temperatures().len() == 6);
+}
+
+#[test]
+fn bank_2_reads_are_refused_on_a_six_joint_arm() {
+    // docs/protocol.md: "On a six-joint arm, bit 7 is refused."
+    let mut rig = mk1();
+    for (cmd, text) in [
+        ("jP", b"ER24 Cmd jP bad index"),
+        ("TM", b"ER24 Cmd TM bad index"),
+    ] {
+        let mut expected = [0u8; 31];
+        expected[..21].copy_from_slice(text);
+        assert_eq!(rig.request(cmd, [0.0; 7], 0x80), expected);
+    }
+    // Bank 1 still answers, index 0.
+    let pj = rig.request("jP", [0.0; 7], 0);
+    assert_eq!((&pj[..2], pj[30]), (&b"Pj"[..], 0));
 }

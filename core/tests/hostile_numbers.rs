@@ -17,6 +17,7 @@ use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Joints, KinematicsError};
 use armgate_core::motion::{Controller, IdealArm, JointLimiter, Mode, RateLimitedArm, Refusal};
 use armgate_protocol::client::Command;
+use armgate_protocol::client::{JointBound, PathPoint};
 
 const HOSTILE: [f64; 5] = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e308, -1e308];
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
@@ -95,12 +96,16 @@ fn joint_requests_refuse_hostile_goals_and_durations() {
     for joint in 0..6 {
         for value in HOSTILE {
             let goal = with(&MK1_READY, joint, value);
+            let mut ctrl = controller(Mode::Joint);
             let expected = if value.is_finite() {
-                Refusal::OutsideJointLimits
+                // ±1e308: beyond the maximum or the minimum, named.
+                let above = value > 0.0;
+                let chain = ctrl.chain();
+                let limit = if above { chain.max() } else { chain.min() }[joint];
+                Refusal::OutsideJointLimits(JointBound::new(joint, above, limit, PathPoint::Goal))
             } else {
                 Refusal::InvalidNumber
             };
-            let mut ctrl = controller(Mode::Joint);
             assert_eq!(ctrl.move_joints(&goal, 1.0), Err(expected), "{value}");
             assert_eq!(ctrl.set_joint_via(0, &goal, 1.0), Err(expected));
             assert_eq!(ctrl.check_joint_goal(&goal), Err(expected));

@@ -17,6 +17,7 @@ use armgate_core::motion::{
     Refusal, Shape, StepOutput, Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
+use armgate_protocol::client::{JointBound, PathPoint};
 
 /// A controller and an ideal arm, stepped together at the robot's period.
 struct Rig {
@@ -241,7 +242,12 @@ fn refusals_say_why() {
     beyond[4] = 0.0; // joint 5 range is [0.785, 3.926]
     assert_eq!(
         rig.ctrl.move_joints(&beyond, 0.0),
-        Err(Refusal::OutsideJointLimits)
+        Err(Refusal::OutsideJointLimits(JointBound::new(
+            4,
+            false,
+            0.785,
+            PathPoint::Goal
+        )))
     );
     assert_eq!(rig.ctrl.start_joint_sequence(), Err(Refusal::NoGoal));
     let mut target = MK1_READY;
@@ -421,7 +427,16 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     let in_box = |p: Vector3<f64>| (p - m).iter().all(|c| c.abs() < half);
     assert!(in_box(chain.forward(&q_mid).unwrap().translation.vector));
 
-    // Cartesian: the move is aborted at the wall; no set-point inside ever reaches the IK.
+    // Cartesian: the move is refused up front, with where the line enters the box.
+    let mut rig = Rig::new(&config, &q_a);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    match rig.ctrl.move_cartesian(pb, 0.0) {
+        Err(Refusal::CrossesBox(percent)) => assert!((20..50).contains(&percent), "{percent}"),
+        other => panic!("{other:?}"),
+    }
+    // Without the check, the move is aborted at the wall; no set-point inside ever reaches
+    // the IK.
+    let config = config.edit(|c| c.ik.check_lines = false).unwrap();
     let mut rig = Rig::new(&config, &q_a);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
@@ -452,7 +467,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     assert_eq!(
         rig.ctrl.move_cartesian(pa, 0.0),
-        Err(Refusal::OutsideWorkspace)
+        Err(Refusal::ArmOutsideWorkspace)
     );
     rig.ctrl.set_mode(Mode::Joint).unwrap();
     rig.ctrl.move_joints(&q_a, 0.0).unwrap();
@@ -637,4 +652,156 @@ fn rate_limited_arm_follows_a_stream_without_restarting_from_rest() {
         "overshoot {}",
         max_q - target[0]
     );
+}
+
+#[test]
+fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
+    // `armgate move 0.5 0.2 0.1 0 0 0 --time 5` from ranger-mk1's home: the straight line
+    // needs joint 3 beyond its 1.600 maximum 3 % of the way (the seed's arm stopped there
+    // after 3.9 s with WN22).
+    let config = common::robot("ranger-mk1");
+    let goal = at(
+        Rotation3::from_euler_angles(0.0, 0.0, 0.0),
+        Vector3::new(0.5, 0.2, 0.1),
+    );
+    let mut rig = Rig::new(&config, &MK1_HOME);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
+    assert_eq!(
+        rig.ctrl.move_cartesian(goal, 5.0),
+        Err(Refusal::OutsideJointLimits(j3_max))
+    );
+    assert!(!rig.ctrl.is_moving());
+    // Without the check the move starts, and stalls with joint 3 on that limit.
+    let config = config.edit(|c| c.ik.check_lines = false).unwrap();
+    let mut rig = Rig::new(&config, &MK1_HOME);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    rig.ctrl.move_cartesian(goal, 5.0).unwrap();
+    let outs = rig.settle(5_000);
+    assert!(outs.iter().any(|o| o.events.ik_divergence));
+    assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
+    assert!((rig.pose().translation.vector - goal.translation.vector).norm() > 0.5);
+}
+
+#[test]
+fn lines_beyond_reach_or_through_boxes_are_refused_with_where() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let here = rig.pose();
+    // 1.8 m out, inside the bounds: lost part of the way there.
+    let far = at(here.rotation, Vector3::new(1.8, 0.0, 0.6));
+    match rig.ctrl.move_cartesian(far, 0.0) {
+        Err(Refusal::Unreachable(PathPoint::Along(p))) => assert!((1..100).contains(&p)),
+        Err(Refusal::OutsideJointLimits(JointBound { at, .. })) => {
+            assert!(matches!(at, PathPoint::Along(_)), "{at:?}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Straight through the column around the base to the other side (midpoint at z = 0.15).
+    let p = here.translation.vector;
+    let across = at(here.rotation, Vector3::new(-p.x, -p.y, 0.3 - p.z));
+    assert!(matches!(
+        rig.ctrl.move_cartesian(across, 0.0),
+        Err(Refusal::CrossesBox(_))
+    ));
+    // A reachable goal 5 cm up is accepted and reached.
+    let up = at(
+        here.rotation,
+        here.translation.vector + Vector3::new(0.0, 0.0, 0.05),
+    );
+    rig.ctrl.move_cartesian(up, 0.0).unwrap();
+    let outs = rig.settle(5_000);
+    assert!(outs.iter().all(|o| !o.events.ik_divergence));
+    assert!((rig.pose().translation.vector - up.translation.vector).norm() < 1e-6);
+}
+
+#[test]
+fn a_sequence_is_refused_if_any_leg_cannot_be_followed() {
+    let config = mk1_fast();
+    let mut rig = Rig::new(&config, &MK1_READY);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let here = rig.pose();
+    let near = |dx, dz| {
+        at(
+            here.rotation,
+            here.translation.vector + Vector3::new(dx, 0.0, dz),
+        )
+    };
+    rig.ctrl.set_cartesian_via(0, near(0.05, 0.0), 0.0).unwrap();
+    rig.ctrl
+        .set_cartesian_via(1, near(0.05, 0.05), 0.0)
+        .unwrap();
+    // The third leg goes 1.8 m out.
+    let far = at(here.rotation, Vector3::new(1.8, 0.0, 0.6));
+    rig.ctrl.set_cartesian_via(2, far, 0.0).unwrap();
+    let refusal = rig.ctrl.start_cartesian_sequence().unwrap_err();
+    assert!(
+        matches!(
+            refusal,
+            Refusal::Unreachable(_) | Refusal::OutsideJointLimits(_)
+        ),
+        "{refusal:?}"
+    );
+    assert!(!rig.ctrl.is_moving());
+    // Fixed, it runs.
+    rig.ctrl.set_cartesian_via(2, near(0.0, 0.05), 0.0).unwrap();
+    rig.ctrl.start_cartesian_sequence().unwrap();
+    let outs = rig.settle(20_000);
+    assert!(outs.iter().any(|o| o.events.sequence_finished));
+}
+
+#[test]
+fn accepted_random_lines_complete_and_refused_ones_do_not() {
+    // Fixed seed: random goals up to 40 cm from random configurations of ranger-mk1. The
+    // check's verdict must match a run without it (reach_bench prints the rate on every arm).
+    let config = mk1_fast();
+    let chain = Chain::new(&config);
+    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
+    let mut rng = SplitMix64::new(16);
+    let (mut accepted, mut refused) = (0, 0);
+    while accepted + refused < 40 {
+        let q: Vec<f64> = chain
+            .min()
+            .iter()
+            .zip(chain.max())
+            .map(|(lo, hi)| rng.uniform(*lo, *hi))
+            .collect();
+        let start = chain.forward(&q).unwrap();
+        let dir = Vector3::new(
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+            rng.uniform(-1.0, 1.0),
+        );
+        let goal = at(
+            start.rotation,
+            start.translation.vector + dir * (rng.uniform(0.02, 0.4) / dir.norm()),
+        );
+        let mut rig = Rig::new(&config, &q);
+        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+        let verdict = rig.ctrl.move_cartesian(goal, 0.0);
+        if matches!(
+            verdict,
+            Err(Refusal::OutsideWorkspace | Refusal::ArmOutsideWorkspace | Refusal::CrossesBox(_))
+        ) {
+            continue;
+        }
+        let mut run = Rig::new(&unchecked, &q);
+        run.ctrl.set_mode(Mode::Cartesian).unwrap();
+        run.ctrl.move_cartesian(goal, 0.0).unwrap();
+        run.settle(20_000);
+        let reached = (run.pose().translation.vector - goal.translation.vector).norm() < 1e-6;
+        assert_eq!(verdict.is_ok(), reached, "{q:?} → {goal:?}: {verdict:?}");
+        if reached {
+            accepted += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert!(accepted >= 5 && refused >= 5, "{accepted} / {refused}");
+}
+
+/// The frame with this rotation and position.
+fn at(rotation: Rotation3<f64>, position: Vector3<f64>) -> Frame {
+    Frame::from_parts(position.into(), rotation)
 }

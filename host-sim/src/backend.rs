@@ -8,8 +8,9 @@ use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{CanDrives, DriveSide};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
 use armgate_core::kinematics::Joints;
+use armgate_core::motion::Refusal;
 use armgate_protocol::can::CanFrame;
-use armgate_protocol::client::Text;
+use armgate_protocol::client::{DriveStatus, Text};
 
 use crate::socketcan::{self, SocketCan};
 
@@ -128,7 +129,7 @@ impl Drives for Backend {
         self.side_mut().stop()
     }
 
-    fn recalibrate(&mut self, q: &[f64]) -> bool {
+    fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
         self.side_mut().recalibrate(q)
     }
 
@@ -138,6 +139,14 @@ impl Drives for Backend {
 
     fn is_operational(&self) -> bool {
         self.side().is_operational()
+    }
+
+    fn status(&self) -> DriveStatus {
+        self.side().status()
+    }
+
+    fn fault_code(&self) -> Option<u8> {
+        self.side().fault_code()
     }
 
     fn fault(&self) -> Option<Text> {

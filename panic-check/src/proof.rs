@@ -4,8 +4,8 @@
 use core::hint::black_box;
 
 use armgate_core::config::{
-    CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType, RobotConfig,
-    ToolConfig, ValidRobot, WorkspaceConfig,
+    BaseConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType,
+    RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
 };
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
@@ -42,6 +42,7 @@ fn robot() -> Option<ValidRobot> {
         a: 0.0,
         d: 0.25,
         theta: 0.0,
+        beta: 0.0,
         min: -3.0,
         max: 3.0,
         max_velocity: 0.5,
@@ -62,6 +63,7 @@ fn robot() -> Option<ValidRobot> {
         control_period: 54.0 * 360e-6,
         joints,
         tool: ToolConfig::default(),
+        base: BaseConfig::default(),
         drives: DrivesConfig {
             can_bitrate: 500_000,
             unit_mode: 5,

@@ -16,7 +16,8 @@
 //! | 30     | index, unsigned                                           |
 //!
 //! A reply carries the request's characters reversed (`GT` → `TG`). Errors and warnings are
-//! instead an ASCII text from byte 0 (`ER20 Cmd BG rejected`), NUL-terminated and zero-filled.
+//! instead an ASCII text from byte 0 (`ER20 Cmd BG busy`: code, command, reason),
+//! NUL-terminated and zero-filled.
 //!
 //! # CAN frames ([`can`])
 //!

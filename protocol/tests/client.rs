@@ -3,7 +3,8 @@
 #![allow(clippy::unwrap_used)]
 
 use armgate_protocol::client::{
-    Command, Error, MESSAGE_LEN, Message, Notice, Reply, Request, Severity, Text,
+    Command, DriveStatus, Error, JointBound, MESSAGE_LEN, Message, Notice, PathPoint, Rejection,
+    Reply, Request, Severity, Text,
 };
 
 /// `GT` to x = 0.5, y = 0.2, z = 0.1 m, roll = pitch = yaw = 0, T = 5 s (spec §2.9).
@@ -152,7 +153,10 @@ fn unknown_commands_are_named() {
 
 #[test]
 fn texts_are_zero_filled_over_stale_bytes() {
-    for notice in [Notice::Rejected(Command::Begin), Notice::JointLimit] {
+    for notice in [
+        Notice::Rejected(Command::Begin, Rejection::Busy),
+        Notice::JointLimit,
+    ] {
         let mut buffer = [0xFF; MESSAGE_LEN];
         let mut message = Message::new_checked(&mut buffer[..]).unwrap();
         notice.text().emit(&mut message);
@@ -273,4 +277,26 @@ fn random_datagrams_never_panic() {
             }
         }
     }
+}
+
+#[test]
+fn refusals_carry_their_reason_after_the_seed_prefix() {
+    let starting = Notice::Rejected(Command::Begin, Rejection::Drives(DriveStatus::Starting));
+    assert_eq!(
+        starting.text().to_bytes(),
+        padded(b"ER20 Cmd BG drives starting")
+    );
+    let j5 = Notice::BeyondJointLimit(
+        Command::JointGoal,
+        JointBound::new(4, false, 0.785, PathPoint::Goal),
+    );
+    assert_eq!(j5.text().to_bytes(), padded(b"ER26 Cmd jG j5 < 0.785"));
+    // The longest reason still fits, NUL included.
+    let longest = Notice::BeyondJointLimit(
+        Command::ViaExecute,
+        JointBound::new(7, false, -2.35, PathPoint::Along(99)),
+    );
+    let bytes = longest.text().to_bytes();
+    assert_eq!(bytes, padded(b"ER26 Cmd VE j8 < -2.350 at 99%"));
+    assert_eq!(bytes[30], 0);
 }

@@ -5,12 +5,18 @@
 //! frame as the target, and the seed `q + uniform(−0.1, 0.1)` per joint; so the first
 //! [`SAMPLES`] targets and seeds are the host benchmark's first ones. Success means position and
 //! orientation errors below 1e-5 (m, rad) and all joints within limits, as there.
+//!
+//! The up-front check of a Cartesian move (`Controller::move_cartesian`, which follows the
+//! straight line to the goal by tracking IK before starting) is measured on the first
+//! [`LINE_CHECKS`] configurations, each with a goal 2–60 cm and up to 1 rad away (drawn from a
+//! generator of its own, distributed as in `core/examples/reach_bench.rs`).
 
 use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
+use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -26,6 +32,10 @@ const SAMPLES: u32 = 200;
 const PERTURBATION: f64 = 0.1;
 /// Success threshold on position (m) and orientation (rad) error.
 const SUCCESS_TOLERANCE: f64 = 1e-5;
+/// Cartesian move checks per robot.
+const LINE_CHECKS: u32 = 50;
+/// Seed of the move goals.
+const LINE_SEED: u64 = 0x5EED_0016;
 
 /// Everything measured on one robot.
 #[derive(Default)]
@@ -36,6 +46,8 @@ struct Results {
     jacobian: Timing,
     joint_rates: Timing,
     tracking: Timing,
+    line_check: Timing,
+    lines_refused: u32,
     unreachable: Timing,
     unreachable_iterations: u32,
     iterations: u64,
@@ -89,7 +101,8 @@ fn measure_robot(config: &ValidRobot) -> Results {
     let n = chain.dof();
     let mut results = Results::default();
     let mut rng = SplitMix64::new(SEED);
-    for _ in 0..SAMPLES {
+    let mut goals = SplitMix64::new(LINE_SEED);
+    for sample in 0..SAMPLES {
         let mut q = Joints::zeros(n);
         for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
             *v = rng.uniform(*lo, *hi);
@@ -114,6 +127,10 @@ fn measure_robot(config: &ValidRobot) -> Results {
             results.errors += 1;
             continue;
         };
+
+        if sample < LINE_CHECKS {
+            check_line(config, &q, &target, &mut goals, &mut results);
+        }
 
         let mut seed = q;
         for v in seed.iter_mut() {
@@ -154,6 +171,40 @@ fn measure_robot(config: &ValidRobot) -> Results {
     results
 }
 
+/// One up-front check of a Cartesian move from `q` (tool at `start`) to a random goal.
+fn check_line(
+    config: &ValidRobot,
+    q: &Joints,
+    start: &Frame,
+    goals: &mut SplitMix64,
+    results: &mut Results,
+) {
+    let mut ctrl = Controller::new(config);
+    if ctrl.step(0.0, q).is_err() || ctrl.set_mode(Mode::Cartesian).is_err() {
+        results.errors += 1;
+        return;
+    }
+    let dir = random_direction(goals);
+    let length = 0.02 + 0.58 * goals.next_f64();
+    let turn = random_direction(goals);
+    let goal = Frame::from_parts(
+        (start.translation.vector + dir * (length / dir.norm())).into(),
+        Rotation3::new(turn * goals.next_f64()) * start.rotation,
+    );
+    let (ticks, verdict) = measure(|| black_box(&mut ctrl).move_cartesian(black_box(goal), 0.0));
+    results.line_check.add(ticks);
+    results.lines_refused += u32::from(verdict.is_err());
+}
+
+/// A vector with components uniform in −0.5..0.5.
+fn random_direction(rng: &mut SplitMix64) -> Vector3<f64> {
+    Vector3::new(
+        rng.next_f64() - 0.5,
+        rng.next_f64() - 0.5,
+        rng.next_f64() - 0.5,
+    )
+}
+
 /// Global solves of unreachable targets per robot (each runs the whole budget).
 const UNREACHABLE_SAMPLES: u64 = 3;
 
@@ -192,6 +243,15 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         max,
         results.iterations as f64 / calls,
         100.0 * f64::from(results.successes) / calls
+    );
+    let (mean, max) = results.line_check.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - | {:>6.1} refused |",
+        name,
+        "Cartesian line check",
+        mean,
+        max,
+        100.0 * f64::from(results.lines_refused) / f64::from(results.line_check.calls.max(1))
     );
     let (mean, max) = results.unreachable.instructions(counter);
     hprintln!(

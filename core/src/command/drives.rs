@@ -1,8 +1,9 @@
 //! What the command handler needs from the drives.
 
-use armgate_protocol::client::Text;
+use armgate_protocol::client::{DriveStatus, Text};
 
 use crate::kinematics::Joints;
+use crate::motion::Refusal;
 
 /// The drive side of the arm as the client commands see it (ON, OF, RC, TM): the CAN drive
 /// manager on the board, or a simulated arm.
@@ -14,12 +15,20 @@ pub trait Drives {
     fn start(&mut self) -> bool;
     /// Stops the drives; false if they were not running.
     fn stop(&mut self) -> bool;
-    /// Declares the current joint positions to be `q` (one value per joint); false if refused.
-    fn recalibrate(&mut self, q: &[f64]) -> bool;
+    /// Declares the current joint positions to be `q` (one value per joint). Refused with
+    /// [`Refusal::Busy`] while set-points still move the joints (or the drives start or
+    /// stop), [`Refusal::NotReady`] before every position has been read.
+    fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal>;
     /// Drive temperatures (°C), one per joint; −100 until a drive has reported.
     fn temperatures(&self) -> Joints;
     /// True while set-points reach the joints; motion requests are refused otherwise.
-    fn is_operational(&self) -> bool;
+    fn is_operational(&self) -> bool {
+        self.status() == DriveStatus::Running
+    }
+    /// The drives' state, as the status request reports it.
+    fn status(&self) -> DriveStatus;
+    /// The current fault's `ER` code (30..=39), if any.
+    fn fault_code(&self) -> Option<u8>;
     /// The text of the current drive fault, if any (sent once to the client when it appears).
     fn fault(&self) -> Option<Text>;
     /// Whether there is a drive fault: what the handler asks every tick, so an implementation

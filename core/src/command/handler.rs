@@ -2,12 +2,14 @@
 
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
-    Command, MESSAGE_LEN, Message, NO_JOINT_TEMPERATURE, Notice, Reply, Request, Text, VALUES,
+    Command, DriveStatus, MESSAGE_LEN, Message, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice,
+    Rejection, Reply, Request, RobotName, STATUS_INDEX, Text, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
 use super::relay::NoticeRelay;
+use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{self, Frame, Quaternion, Rotation3, Vector3};
@@ -18,10 +20,12 @@ use crate::motion::{Controller, Mode, Refusal, StepOutput};
 ///
 /// Semantics are the ones the seed intended (spec §2.8): BG/jB/VE/jE are refused with `ER20`
 /// when there is no goal, in the wrong mode, while something moves or while the drives are not
-/// operational. Its defects are fixed (spec §9): VC answers `CV` and RC `CR`; NaN/Inf values and
-/// zero quaternions are refused (`ER23`) instead of poisoning state; via indices ≥ 20 are
-/// refused (`ER24`); jB needs a prior jG; VP no longer overwrites the BG goal; negative
-/// durations are clamped to 0.
+/// operational. Every refusal names its reason after `ERnn Cmd XX` (docs/protocol.md), and
+/// Cartesian moves are refused up front when the arm cannot follow the line to the goal. Its
+/// defects are fixed (spec §9): VC answers `CV` and RC `CR`; NaN/Inf values and zero
+/// quaternions are refused (`ER23`) instead of poisoning state; via indices ≥ 20 are refused
+/// (`ER24`), and so are bank-2 `jP`/`TM` on six joints; jB needs a prior jG; VP no longer
+/// overwrites the BG goal; negative durations are clamped to 0.
 #[derive(Clone, Debug)]
 pub struct CommandHandler {
     controller: Controller,
@@ -31,6 +35,12 @@ pub struct CommandHandler {
     joint_goal: Option<Joints>,
     banks: Banks,
     relay: NoticeRelay,
+    /// The robot's name, for the status request.
+    name: RobotName,
+    /// Requests answered with an `ER` text so far.
+    refused: u32,
+    /// Time of the last tick (s).
+    now: f64,
 }
 
 impl CommandHandler {
@@ -42,6 +52,22 @@ impl CommandHandler {
             joint_goal: None,
             banks: Banks::default(),
             relay: NoticeRelay::default(),
+            name: RobotName::new(&config.name),
+            refused: 0,
+            now: 0.0,
+        }
+    }
+
+    /// What the controller and the drives are doing (what `SQ` reports).
+    pub fn status(&self, drives: &(impl Drives + ?Sized)) -> Status {
+        Status {
+            mode: self.controller.mode(),
+            drives: drives.status(),
+            fault: drives.fault_code(),
+            joints: self.controller.chain().dof(),
+            motion: self.controller.motion(),
+            refused: self.refused,
+            uptime: self.now,
         }
     }
 
@@ -68,6 +94,7 @@ impl CommandHandler {
         drives: &(impl Drives + ?Sized),
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
+        self.now = now;
         let out = self.controller.step(now, measured)?;
         if !drives.is_operational() {
             self.controller.release();
@@ -95,12 +122,28 @@ impl CommandHandler {
     ) -> [u8; MESSAGE_LEN] {
         let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
         let reply = match request {
-            Ok(request) => self.execute(&request, drives),
+            Ok(request) => self.answer(&request, drives),
             Err(e) => Err(Notice::from(e)),
         };
         match reply {
-            Ok(reply) => reply.to_bytes(),
-            Err(notice) => notice.text().to_bytes(),
+            Ok(bytes) => bytes,
+            Err(notice) => {
+                self.refused = self.refused.saturating_add(1);
+                notice.text().to_bytes()
+            }
+        }
+    }
+
+    /// The reply datagram to a request: the name reply to `SQ` index 1 is the one that is not
+    /// seven floats.
+    fn answer(
+        &mut self,
+        req: &Request,
+        drives: &mut (impl Drives + ?Sized),
+    ) -> Result<[u8; MESSAGE_LEN], Notice> {
+        match (req.command, req.index) {
+            (Command::Status, NAME_INDEX) => Ok(self.name.to_bytes()),
+            _ => self.execute(req, drives).map(|reply| reply.to_bytes()),
         }
     }
 
@@ -118,7 +161,8 @@ impl CommandHandler {
         let n = self.controller.chain().dof();
         match cmd {
             Command::Begin => {
-                let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd))?;
+                let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller
                     .move_cartesian(goal, duration)
@@ -156,7 +200,10 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
             }
             Command::JointBegin => {
-                let goal = self.joint_goal.ok_or(Notice::Rejected(cmd))?;
+                let goal = self
+                    .joint_goal
+                    .ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller.move_joints(&goal, 0.0).map_err(refused)?;
                 Ok(null)
@@ -166,6 +213,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::JointExecute => {
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller.start_joint_sequence().map_err(refused)?;
                 Ok(null)
@@ -182,8 +230,8 @@ impl CommandHandler {
                 Ok(values_reply(cmd, joints, req.index & BANK_2))
             }
             Command::JointPosition => {
-                let (q, _) = self.controller.measured().ok_or(Notice::Rejected(cmd))?;
-                Ok(joint_reply(cmd, &q, bank_2, n, 0.0))
+                let (q, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
+                joint_reply(cmd, &q, bank_2, n, 0.0)
             }
             Command::JointReset | Command::Stop => {
                 self.controller.stop();
@@ -207,21 +255,25 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::On => {
+                // Already starting (e.g. at power-up): ON asks for what is under way.
+                if drives.status() == DriveStatus::Starting {
+                    return Ok(null);
+                }
                 if !drives.start() {
-                    return Err(Notice::ArmDidNotStart);
+                    return Err(Notice::ArmDidNotStart(drives.status()));
                 }
                 self.controller.stop();
                 Ok(null)
             }
             Command::Off => {
                 if !drives.stop() {
-                    return Err(Notice::ArmDidNotStop);
+                    return Err(Notice::ArmDidNotStop(drives.status()));
                 }
                 self.controller.stop();
                 Ok(null)
             }
             Command::Pose => {
-                let (_, pose) = self.controller.measured().ok_or(Notice::Rejected(cmd))?;
+                let (_, pose) = self.controller.measured().ok_or(no_measurement(cmd))?;
                 let [x, y, z]: [f64; 3] = pose.translation.vector.into();
                 let [a, b, c, d] = Quaternion::from_rotation(&pose.rotation).to_array();
                 Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
@@ -233,27 +285,30 @@ impl CommandHandler {
                     return Ok(values_reply(cmd, joints, BANK_2));
                 }
                 // Only with the arm off: the measured angles jump (spec §6.8).
-                if self.controller.mode() != Mode::Off {
-                    return Err(Notice::Rejected(cmd));
-                }
+                self.in_mode(cmd)?;
                 let q = self.complete(BankKey::Recalibrate, joints, cmd)?;
                 // Declaring the arm outside its range would make the measured pose illegal
                 // and the limiter ease commands back from there (the seed did not check).
                 let q = self.controller.check_joint_goal(&q).map_err(refused)?;
-                if !drives.recalibrate(&q) {
-                    return Err(Notice::Rejected(cmd));
-                }
+                drives
+                    .recalibrate(&q)
+                    .map_err(|r| recalibration_refused(r, drives.status()))?;
                 Ok(null)
             }
+            Command::Status => match req.index {
+                STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                _ => Err(Notice::BadIndex(cmd)),
+            },
             Command::Temperature => {
                 let t = drives.temperatures();
-                Ok(joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE))
+                joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE)
             }
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();
                 Ok(null)
             }
             Command::ViaExecute => {
+                self.in_mode(cmd)?;
                 operational(drives, cmd)?;
                 self.controller
                     .start_cartesian_sequence()
@@ -277,6 +332,15 @@ impl CommandHandler {
         }
     }
 
+    /// A wrong mode is reported before the drives' state: it outlasts it.
+    fn in_mode(&self, cmd: Command) -> Result<(), Notice> {
+        if self.controller.mode() == required_mode(cmd) {
+            Ok(())
+        } else {
+            Err(refusal_notice(cmd, Refusal::WrongMode))
+        }
+    }
+
     fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {
         let n = self.controller.chain().dof();
         self.banks
@@ -292,24 +356,61 @@ impl CommandHandler {
     }
 }
 
-/// The client text for a refused request.
+/// The client text for a refused request, with its reason.
 fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
+    let rejected = |why| Notice::Rejected(cmd, why);
+    let workspace = |why| Notice::OutsideWorkspace(cmd, why);
     match refusal {
         Refusal::InvalidNumber | Refusal::WrongJointCount => Notice::BadNumber(cmd),
         Refusal::IndexOutOfRange => Notice::BadIndex(cmd),
-        Refusal::OutsideWorkspace => Notice::OutsideWorkspace(cmd),
-        Refusal::OutsideJointLimits => Notice::BeyondJointLimit(cmd),
-        Refusal::NoGoal | Refusal::WrongMode | Refusal::Busy | Refusal::NotReady => {
-            Notice::Rejected(cmd)
-        }
+        Refusal::OutsideWorkspace => workspace(WorkspaceReason::Goal),
+        Refusal::CrossesBox(percent) => workspace(WorkspaceReason::CrossesBox(percent)),
+        Refusal::Unreachable(at) => workspace(WorkspaceReason::Unreachable(at)),
+        Refusal::ArmOutsideWorkspace => workspace(WorkspaceReason::ArmOutside),
+        Refusal::OutsideJointLimits(bound) => Notice::BeyondJointLimit(cmd, bound),
+        Refusal::NoGoal => rejected(match cmd {
+            Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,
+            _ => Rejection::NoGoal,
+        }),
+        Refusal::WrongMode => rejected(Rejection::NeedsMode(required_mode(cmd))),
+        Refusal::Busy => rejected(Rejection::Busy),
+        Refusal::NotReady => rejected(Rejection::NoMeasurement),
     }
 }
 
+/// The mode a motion request needs (RC: off).
+fn required_mode(cmd: Command) -> Mode {
+    match cmd {
+        Command::Begin | Command::ViaExecute => Mode::Cartesian,
+        Command::JointBegin | Command::JointExecute => Mode::Joint,
+        _ => Mode::Off,
+    }
+}
+
+fn no_measurement(cmd: Command) -> Notice {
+    Notice::Rejected(cmd, Rejection::NoMeasurement)
+}
+
+/// Motion needs running drives; otherwise the reason is their state, or their fault.
 fn operational(drives: &(impl Drives + ?Sized), cmd: Command) -> Result<(), Notice> {
-    if drives.is_operational() {
-        Ok(())
-    } else {
-        Err(Notice::Rejected(cmd))
+    let why = match (drives.status(), drives.fault_code()) {
+        (DriveStatus::Running, _) => return Ok(()),
+        (_, Some(code)) => Rejection::DriveFault(code),
+        (status, None) => Rejection::Drives(status),
+    };
+    Err(Notice::Rejected(cmd, why))
+}
+
+/// Why the drives refused `RC`: busy means starting, stopping, or still executing the last
+/// set-points after the mode was switched off (settling).
+fn recalibration_refused(refusal: Refusal, status: DriveStatus) -> Notice {
+    let cmd = Command::Recalibrate;
+    match (refusal, status) {
+        (Refusal::Busy, DriveStatus::Starting | DriveStatus::Stopping) => {
+            Notice::Rejected(cmd, Rejection::Drives(status))
+        }
+        (Refusal::Busy, _) => Notice::Rejected(cmd, Rejection::DrivesSettling),
+        (other, _) => refusal_notice(cmd, other),
     }
 }
 
@@ -341,8 +442,12 @@ fn values_reply(cmd: Command, values: &[f64], index: u8) -> Reply {
     }
 }
 
-/// jP/TM: joints 1–7 in f0..f6, or joints 7.. for bank 2; unused slots hold `pad`.
-fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Reply {
+/// jP/TM: joints 1–7 in f0..f6, or joints 7.. for bank 2 (refused on an arm without them,
+/// as docs/protocol.md says); unused slots hold `pad`.
+fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Result<Reply, Notice> {
+    if bank_2 && n <= BANK_LEN {
+        return Err(Notice::BadIndex(cmd));
+    }
     let skip = if bank_2 { BANK_LEN } else { 0 };
     let mut values = [pad; VALUES];
     for (o, v) in values
@@ -352,9 +457,9 @@ fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Rep
     {
         *o = *v as f32;
     }
-    Reply {
+    Ok(Reply {
         command: cmd,
         values,
         index: if bank_2 { BANK_2 } else { 0 },
-    }
+    })
 }

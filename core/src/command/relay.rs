@@ -131,7 +131,7 @@ mod tests {
     #[test]
     fn a_fault_is_reported_once_per_appearance() {
         let mut relay = NoticeRelay::default();
-        let fault = Notice::ArmDidNotStart.text();
+        let fault = Notice::ArmDidNotStart(armgate_protocol::client::DriveStatus::Off).text();
         let mut formatted = 0;
         for _ in 0..10 {
             relay.observe_fault(true, || {

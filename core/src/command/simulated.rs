@@ -1,10 +1,10 @@
 //! Drives without a bus: a simulated arm behind the [`Drives`] interface.
 
-use armgate_protocol::client::Text;
+use armgate_protocol::client::{DriveStatus, Text};
 
 use super::Drives;
 use crate::kinematics::Joints;
-use crate::motion::{IdealArm, RateLimitedArm};
+use crate::motion::{IdealArm, RateLimitedArm, Refusal};
 
 /// Temperature the simulated drives report (°C).
 const SIMULATED_TEMPERATURE: f64 = 30.0;
@@ -82,15 +82,18 @@ impl Drives for SimulatedDrives {
         core::mem::replace(&mut self.running, false)
     }
 
-    fn recalibrate(&mut self, q: &[f64]) -> bool {
+    fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
         let current = self.measured();
-        if q.len() != current.len() || !q.iter().all(|v| v.is_finite()) {
-            return false;
+        if q.len() != current.len() {
+            return Err(Refusal::WrongJointCount);
+        }
+        if !q.iter().all(|v| v.is_finite()) {
+            return Err(Refusal::InvalidNumber);
         }
         for ((o, target), now) in self.offset.iter_mut().zip(q).zip(current.iter()) {
             *o += target - now;
         }
-        true
+        Ok(())
     }
 
     fn temperatures(&self) -> Joints {
@@ -99,11 +102,19 @@ impl Drives for SimulatedDrives {
         t
     }
 
-    fn is_operational(&self) -> bool {
-        self.running
+    fn status(&self) -> DriveStatus {
+        if self.running {
+            DriveStatus::Running
+        } else {
+            DriveStatus::Off
+        }
     }
 
     fn fault(&self) -> Option<Text> {
+        None
+    }
+
+    fn fault_code(&self) -> Option<u8> {
         None
     }
 }

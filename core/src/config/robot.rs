@@ -35,6 +35,9 @@ pub struct RobotConfig {
     /// The fixed transform from the last link frame to the tool frame.
     #[serde(default)]
     pub tool: ToolConfig,
+    /// Where the base frame {0} lies in the world (measurement) frame; absent = identity.
+    #[serde(default)]
+    pub base: BaseConfig,
     /// Bus-wide drive settings.
     pub drives: DrivesConfig,
     /// Cartesian generator limits (the seed's `trajgen.cpf`).
@@ -75,6 +78,11 @@ pub struct JointConfig {
     pub d: f64,
     /// θ_i: angle about this z axis (rad); added to q for a revolute joint.
     pub theta: f64,
+    /// β_{i-1}: Hayati's extra rotation about the y axis after `TransX(a)` (rad, default 0).
+    /// Only kinematic calibration sets it: it models a small misalignment of nearly parallel
+    /// consecutive axes, where the DH `d` would jump (`docs/calibration.md`).
+    #[serde(default)]
+    pub beta: f64,
     /// Lower joint limit (rad or m).
     pub min: f64,
     /// Upper joint limit (rad or m).
@@ -142,6 +150,18 @@ pub struct ToolConfig {
     pub rpy: [f64; 3],
 }
 
+/// The base frame {0} in the world frame: `Trans(xyz) · RPY(rpy)`. Every field defaults to zero,
+/// so an absent `[base]` puts the base at the world origin. Kinematic calibration fits it to the
+/// frame of the measuring instrument.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BaseConfig {
+    /// Origin of {0} in the world frame (m).
+    pub xyz: [f64; 3],
+    /// Orientation of {0}: roll, pitch, yaw (rad), `Rz·Ry·Rx`.
+    pub rpy: [f64; 3],
+}
+
 /// Per-axis Cartesian generator limits for (x, y, z, rx, ry, rz).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -173,6 +193,10 @@ pub struct IkConfig {
     pub tracking_iterations: u16,
     /// Total iteration budget of one global solve, over all restarts.
     pub global_iterations: u16,
+    /// Check the straight line of every Cartesian move (BG, each VE leg) before starting it,
+    /// and refuse a move the arm cannot follow (`ER25`/`ER26` with where along the line).
+    /// False: the seed's behaviour, the arm moves until the IK fails, then holds (`WN22`).
+    pub check_lines: bool,
 }
 
 impl Default for IkConfig {
@@ -181,6 +205,7 @@ impl Default for IkConfig {
             tolerance: 1e-9,
             tracking_iterations: 20,
             global_iterations: 2000,
+            check_lines: true,
         }
     }
 }
@@ -248,6 +273,10 @@ impl RobotConfig {
             }
         }
         self.tool.validate().map_err(|(f, r)| top(f, r))?;
+        let base = self.base.xyz.iter().chain(&self.base.rpy);
+        if base.clone().any(|v| !v.is_finite()) {
+            return Err(top("base", ConfigReason::NotFinite));
+        }
         self.drives.validate().map_err(|(f, r)| top(f, r))?;
         self.check_bus_load()?;
         for (v, a) in self
@@ -290,6 +319,7 @@ impl JointConfig {
             ("a", self.a),
             ("d", self.d),
             ("theta", self.theta),
+            ("beta", self.beta),
         ];
         for (field, value) in geometry {
             finite(value).map_err(|r| (field, r))?;

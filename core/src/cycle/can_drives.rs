@@ -1,12 +1,13 @@
 //! The CANopen drive manager on its bus, as one [`DriveSide`].
 
-use armgate_protocol::client::Text;
+use armgate_protocol::client::{DriveStatus, Text};
 
 use super::DriveSide;
 use crate::command::Drives;
 use crate::config::ValidRobot;
 use crate::drives::{CanBus, DriveManager, DriveSettings, SetupError};
 use crate::kinematics::Joints;
+use crate::motion::Refusal;
 
 /// The drive manager and the bus it talks through.
 #[derive(Clone, Debug)]
@@ -77,7 +78,7 @@ impl<B: CanBus> Drives for CanDrives<B> {
         Drives::stop(&mut self.manager)
     }
 
-    fn recalibrate(&mut self, q: &[f64]) -> bool {
+    fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
         Drives::recalibrate(&mut self.manager, q)
     }
 
@@ -87,6 +88,14 @@ impl<B: CanBus> Drives for CanDrives<B> {
 
     fn is_operational(&self) -> bool {
         self.manager.is_operational()
+    }
+
+    fn status(&self) -> DriveStatus {
+        Drives::status(&self.manager)
+    }
+
+    fn fault_code(&self) -> Option<u8> {
+        Drives::fault_code(&self.manager)
     }
 
     fn fault(&self) -> Option<Text> {

@@ -1,10 +1,12 @@
 //! The drive manager as the client's command handler sees it (ON, OF, RC, TM, faults).
 
-use armgate_protocol::client::Text;
+use armgate_protocol::client::{DriveStatus, Text};
 
 use super::manager::DriveManager;
+use super::state::DriveState;
 use crate::command::Drives;
 use crate::kinematics::Joints;
+use crate::motion::Refusal;
 
 /// `start` and `stop` only begin the transition: a start that later fails shows as a fault
 /// (its `ER3x` text), and motion stays refused until [`Drives::is_operational`].
@@ -17,8 +19,8 @@ impl Drives for DriveManager {
         DriveManager::stop(self).is_ok()
     }
 
-    fn recalibrate(&mut self, q: &[f64]) -> bool {
-        DriveManager::recalibrate(self, q).is_ok()
+    fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
+        DriveManager::recalibrate(self, q)
     }
 
     fn temperatures(&self) -> Joints {
@@ -27,6 +29,20 @@ impl Drives for DriveManager {
 
     fn is_operational(&self) -> bool {
         DriveManager::is_operational(self)
+    }
+
+    fn status(&self) -> DriveStatus {
+        match self.state() {
+            DriveState::Idle | DriveState::Stopped => DriveStatus::Off,
+            DriveState::Starting => DriveStatus::Starting,
+            DriveState::Operational => DriveStatus::Running,
+            DriveState::Stopping => DriveStatus::Stopping,
+            DriveState::Faulted => DriveStatus::Faulted,
+        }
+    }
+
+    fn fault_code(&self) -> Option<u8> {
+        DriveManager::fault(self).map(|fault| fault.code())
     }
 
     fn fault(&self) -> Option<Text> {

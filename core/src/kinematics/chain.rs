@@ -33,6 +33,9 @@ struct Link {
     prismatic: bool,
     cos_alpha: f64,
     sin_alpha: f64,
+    tilted: bool,
+    cos_beta: f64,
+    sin_beta: f64,
     a: f64,
     d: f64,
     theta: f64,
@@ -43,6 +46,7 @@ struct Link {
 pub struct Chain {
     links: [Link; MAX_JOINTS],
     n: usize,
+    base: Frame,
     tool: Frame,
     min: [f64; MAX_JOINTS],
     max: [f64; MAX_JOINTS],
@@ -62,6 +66,7 @@ impl Chain {
         let mut chain = Self {
             links: [Link::default(); MAX_JOINTS],
             n: config.joints.len().min(MAX_JOINTS),
+            base: base_frame(config),
             tool: tool_frame(config),
             min: [0.0; MAX_JOINTS],
             max: [0.0; MAX_JOINTS],
@@ -72,10 +77,14 @@ impl Chain {
             .zip(chain.min.iter_mut().zip(chain.max.iter_mut()));
         for (joint, (link, (min, max))) in config.joints.iter().zip(slots) {
             let (sin_alpha, cos_alpha) = libm::sincos(joint.alpha);
+            let (sin_beta, cos_beta) = libm::sincos(joint.beta);
             *link = Link {
                 prismatic: joint.kind == JointType::Prismatic,
                 cos_alpha,
                 sin_alpha,
+                tilted: joint.beta != 0.0,
+                cos_beta,
+                sin_beta,
                 a: joint.a,
                 d: joint.d,
                 theta: joint.theta,
@@ -214,9 +223,15 @@ impl Chain {
         q: &[f64; MAX_JOINTS],
         mut visit: impl FnMut(usize, [&Vector3<f64>; 3], Vector3<f64>),
     ) -> Frame {
-        // The rotation is kept as its three columns (the joint frame's axes).
-        let [mut x, mut y, mut z] = [Vector3::x(), Vector3::y(), Vector3::z()];
-        let mut pos = Vector3::zeros();
+        // The rotation is kept as its three columns (the joint frame's axes), starting from the
+        // base frame's (the identity unless the file places the base).
+        let b = self.base.rotation.matrix();
+        let [mut x, mut y, mut z] = [
+            Vector3::new(b.m11, b.m21, b.m31),
+            Vector3::new(b.m12, b.m22, b.m32),
+            Vector3::new(b.m13, b.m23, b.m33),
+        ];
+        let mut pos = self.base.translation.vector;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
@@ -228,6 +243,14 @@ impl Chain {
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;
             z = z * link.cos_alpha - y * link.sin_alpha;
+            // RotY(β), Hayati's calibration angle: x, z turn about y (skipped when β = 0, as in
+            // every uncalibrated file, to keep the tick's cost).
+            if link.tilted {
+                (x, z) = (
+                    x * link.cos_beta - z * link.sin_beta,
+                    x * link.sin_beta + z * link.cos_beta,
+                );
+            }
             // RotZ(θ) · TransZ(d)
             pos += z * d;
             (x, y) = (x * ct + y1 * st, y1 * ct - x * st);
@@ -268,6 +291,15 @@ impl Chain {
     pub(super) fn limits(&self) -> (&[f64; MAX_JOINTS], &[f64; MAX_JOINTS]) {
         (&self.min, &self.max)
     }
+}
+
+/// `Trans(xyz) · RPY(rpy)` of the robot's base in the world.
+fn base_frame(config: &RobotConfig) -> Frame {
+    let [roll, pitch, yaw] = config.base.rpy;
+    Frame::from_parts(
+        Vector3::from(config.base.xyz).into(),
+        Rotation3::from_euler_angles(roll, pitch, yaw),
+    )
 }
 
 /// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)` of the robot's tool.

@@ -3,6 +3,7 @@
 use super::cartesian_generator::CartesianGenerator;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
+use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::workspace::Workspace;
@@ -10,6 +11,7 @@ use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::{self, Frame};
+use armgate_protocol::client::Motion;
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -312,10 +314,36 @@ impl Controller {
 
     /// Moves the tool to `goal` (base frame) in at least `min_duration` seconds (negative: as
     /// fast as the limits allow). Cartesian mode only.
+    /// The straight line to the goal is checked first (docs/protocol.md): a move the arm cannot
+    /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
+        if let Some(mut reach) = self.reach() {
+            let (start, seed) = self.cartesian_start();
+            reach.line(&start, &goal, &seed)?;
+        }
         self.cartesian_generator
             .move_to(goal, min_duration.max(0.0))
+    }
+
+    /// The pose a Cartesian motion starts from and the joints commanded there.
+    fn cartesian_start(&self) -> (Frame, Joints) {
+        let seed = self
+            .command
+            .or(self.measured.map(|(q, _)| q))
+            .unwrap_or_else(|| self.chain.mid_range());
+        (self.cartesian_generator.setpoint(), seed)
+    }
+
+    /// The up-front check of Cartesian lines (`None` if the robot file turned it off).
+    fn reach(&self) -> Option<Reach<'_>> {
+        self.ik.check_lines.then_some(Reach {
+            chain: &self.chain,
+            ik: &self.ik,
+            workspace: &self.workspace,
+            tolerance: REACH_TOLERANCE,
+            iterations_left: check_iterations(self.period),
+        })
     }
 
     /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
@@ -383,8 +411,16 @@ impl Controller {
     }
 
     /// Runs the Cartesian via points 0, 1, … up to the first empty slot. Cartesian mode only.
+    /// Every leg's straight line is checked first, as for a move.
     pub fn start_cartesian_sequence(&mut self) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        if let Some(mut reach) = self.reach() {
+            let (mut from, mut q) = self.cartesian_start();
+            for via in self.cartesian_sequence.ready() {
+                q = reach.line(&from, &via.point, &q)?;
+                from = via.point;
+            }
+        }
         let first = self.cartesian_sequence.start()?;
         self.cartesian_generator
             .move_to(first.point, first.min_duration)
@@ -420,7 +456,7 @@ impl Controller {
             .measured
             .is_some_and(|(_, pose)| self.workspace.allows(&pose.translation.vector));
         if !arm_inside {
-            return Err(Refusal::OutsideWorkspace);
+            return Err(Refusal::ArmOutsideWorkspace);
         }
         Ok(())
     }
@@ -449,8 +485,8 @@ impl Controller {
             KinematicsError::WrongJointCount => Refusal::WrongJointCount,
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
-        if !self.chain.within_limits(&goal) {
-            return Err(Refusal::OutsideJointLimits);
+        if let Some(bound) = joint_beyond_limit(&self.chain, &goal) {
+            return Err(Refusal::OutsideJointLimits(bound));
         }
         Ok(goal)
     }
@@ -479,6 +515,18 @@ impl Controller {
             Mode::Cartesian => {
                 self.cartesian_generator.is_moving() || self.cartesian_sequence.is_running()
             }
+        }
+    }
+
+    /// What the arm is doing: which kind of motion runs in the active mode.
+    pub fn motion(&self) -> Motion {
+        match self.mode {
+            Mode::Off => Motion::Holding,
+            Mode::Joint if self.joint_sequence.is_running() => Motion::JointSequence,
+            Mode::Joint if self.joint_generator.is_moving() => Motion::JointMove,
+            Mode::Cartesian if self.cartesian_sequence.is_running() => Motion::CartesianSequence,
+            Mode::Cartesian if self.cartesian_generator.is_moving() => Motion::CartesianMove,
+            Mode::Joint | Mode::Cartesian => Motion::Holding,
         }
     }
 

@@ -1,5 +1,7 @@
 //! Why a motion request was refused.
 
+use armgate_protocol::client::{JointBound, PathPoint};
+
 /// Why the controller refused a request; the command handler maps each to an `ER` reply.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Refusal {
@@ -13,11 +15,18 @@ pub enum Refusal {
     InvalidNumber,
     /// The joint vector does not have one value per joint.
     WrongJointCount,
-    /// A joint goal lies outside the joint limits.
-    OutsideJointLimits,
-    /// A Cartesian goal lies outside the workspace bounds or inside an exclusion box, or the
-    /// arm itself is in a forbidden region (drive it out in joint mode).
+    /// A joint goal, or a point on the way to a Cartesian goal, lies beyond this joint limit.
+    OutsideJointLimits(JointBound),
+    /// A Cartesian goal lies outside the workspace bounds or inside an exclusion box.
     OutsideWorkspace,
+    /// The straight line to a Cartesian goal enters an exclusion box at this percentage of
+    /// the way.
+    CrossesBox(u8),
+    /// No joint configuration within the limits follows the straight line to a Cartesian goal
+    /// from the current one at this point (out of reach, or a singularity).
+    Unreachable(PathPoint),
+    /// The arm itself is in a forbidden region (drive it out in joint mode).
+    ArmOutsideWorkspace,
     /// A via-point index is not below the number of slots.
     IndexOutOfRange,
     /// The controller has not yet received a measurement.
@@ -26,16 +35,24 @@ pub enum Refusal {
 
 impl core::fmt::Display for Refusal {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            Self::NoGoal => "no goal or via point 0",
-            Self::WrongMode => "wrong control mode",
-            Self::Busy => "a motion or sequence is running",
-            Self::InvalidNumber => "invalid number",
-            Self::WrongJointCount => "wrong number of joint values",
-            Self::OutsideJointLimits => "goal outside the joint limits",
-            Self::OutsideWorkspace => "outside the workspace",
-            Self::IndexOutOfRange => "via-point index out of range",
-            Self::NotReady => "no measurement yet",
-        })
+        match self {
+            Self::NoGoal => f.write_str("no goal or via point 0"),
+            Self::WrongMode => f.write_str("wrong control mode"),
+            Self::Busy => f.write_str("a motion or sequence is running"),
+            Self::InvalidNumber => f.write_str("invalid number"),
+            Self::WrongJointCount => f.write_str("wrong number of joint values"),
+            Self::OutsideJointLimits(bound) => write!(f, "beyond a joint limit: {bound}"),
+            Self::OutsideWorkspace => f.write_str("outside the workspace"),
+            Self::CrossesBox(percent) => {
+                write!(f, "the line enters an exclusion box at {percent}%")
+            }
+            Self::Unreachable(PathPoint::Goal) => f.write_str("goal out of reach"),
+            Self::Unreachable(PathPoint::Along(percent)) => {
+                write!(f, "out of reach at {percent}% of the line")
+            }
+            Self::ArmOutsideWorkspace => f.write_str("the arm is outside the workspace"),
+            Self::IndexOutOfRange => f.write_str("via-point index out of range"),
+            Self::NotReady => f.write_str("no measurement yet"),
+        }
     }
 }

@@ -109,6 +109,11 @@ impl<P: Copy> Sequence<P> {
         Ok(first)
     }
 
+    /// The via points a [`start`](Self::start) would run: slots 0.. up to the first empty one.
+    pub fn ready(&self) -> impl Iterator<Item = &ViaPoint<P>> {
+        self.slots.iter().map_while(Option::as_ref)
+    }
+
     /// Stops the sequence at once (the generator is stopped separately).
     pub fn halt(&mut self) {
         self.run = None;

@@ -31,4 +31,67 @@ impl Workspace {
                 x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
             })
     }
+
+    /// Where the segment from `a` to `b` first enters an exclusion box (strictly inside), as
+    /// a fraction 0..=1 of the way; `None` if it never does. (The bounds need no such check:
+    /// a segment between two points inside a box stays inside it.)
+    pub fn first_box_crossing(&self, a: &Vector3<f64>, b: &Vector3<f64>) -> Option<f64> {
+        self.boxes
+            .iter()
+            .filter_map(|bx| segment_enters(bx, a, b))
+            .reduce(f64::min)
+    }
+}
+
+/// The fraction of the way from `a` to `b` at which the segment enters the open box `bx`
+/// (slab method), if it does.
+fn segment_enters(
+    &[x0, x1, y0, y1, z0, z1]: &[f64; 6],
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+) -> Option<f64> {
+    let (mut enter, mut leave) = (0.0f64, 1.0f64);
+    let axes = [(a.x, b.x, x0, x1), (a.y, b.y, y0, y1), (a.z, b.z, z0, z1)];
+    for (from, to, lo, hi) in axes {
+        let d = to - from;
+        if d == 0.0 {
+            if !(lo < from && from < hi) {
+                return None;
+            }
+            continue;
+        }
+        let (t0, t1) = ((lo - from) / d, (hi - from) / d);
+        enter = enter.max(t0.min(t1));
+        leave = leave.min(t0.max(t1));
+    }
+    // Open box: touching a face or an edge is not entering.
+    (enter < leave).then_some(enter)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_enter_open_boxes_only_through_their_inside() {
+        let unit = [0.0, 1.0, 0.0, 1.0, 0.0, 1.0];
+        let p = |x, y, z| Vector3::new(x, y, z);
+        let t = segment_enters(&unit, &p(-1.0, 0.5, 0.5), &p(3.0, 0.5, 0.5));
+        assert_eq!(t, Some(0.25));
+        // Along a face, past a corner, short of the box, reversed.
+        assert_eq!(
+            segment_enters(&unit, &p(-1.0, 0.0, 0.5), &p(2.0, 0.0, 0.5)),
+            None
+        );
+        assert_eq!(
+            segment_enters(&unit, &p(-1.0, 1.0, 0.0), &p(1.0, -1.0, 0.0)),
+            None
+        );
+        assert_eq!(
+            segment_enters(&unit, &p(-2.0, 0.5, 0.5), &p(-1.0, 0.5, 0.5)),
+            None
+        );
+        let t = segment_enters(&unit, &p(2.0, 0.9, 0.1), &p(0.5, 0.9, 0.1));
+        assert!(t.is_some_and(|t| (t - 2.0 / 3.0).abs() < 1e-12), "{t:?}");
+    }
 }

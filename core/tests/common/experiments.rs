@@ -197,12 +197,16 @@ pub struct DivergenceRun {
 pub const UNREACHABLE: [f64; 3] = [-0.5, 4.0, 0.7];
 
 /// E7: ranger-mk1, with its deployed generator limits, runs a short sequence whose last point is
-/// out of reach. The workspace bounds are widened so that the goal reaches the generator, as in
-/// the thesis's simulation.
+/// out of reach. The workspace bounds are widened so that the goal reaches the generator, and the
+/// up-front line check is off (it refuses the sequence, see `ik.check_lines`), as in the
+/// thesis's simulation.
 pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
     let config = config
         .clone()
-        .edit(|config| config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0])
+        .edit(|config| {
+            config.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0];
+            config.ik.check_lines = false;
+        })
         .unwrap();
     let chain = Chain::new(&config);
     let start = Joints::from_slice(&[1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]).unwrap();

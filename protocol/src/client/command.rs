@@ -34,6 +34,8 @@ pub enum Command {
     Pose,
     /// `RC`: recalibrate: the current joint angles are f0..f5.
     Recalibrate,
+    /// `SQ`: report the status (index 0) or the robot's name (index 1).
+    Status,
     /// `ST`: stop all motion.
     Stop,
     /// `TM`: read the drive temperatures.
@@ -49,7 +51,7 @@ pub enum Command {
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 20] = [
+    pub const ALL: [Self; 21] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
@@ -65,6 +67,7 @@ impl Command {
         Self::Off,
         Self::Pose,
         Self::Recalibrate,
+        Self::Status,
         Self::Stop,
         Self::Temperature,
         Self::ViaClear,
@@ -90,6 +93,7 @@ impl Command {
             Self::Off => b"OF",
             Self::Pose => b"PS",
             Self::Recalibrate => b"RC",
+            Self::Status => b"SQ",
             Self::Stop => b"ST",
             Self::Temperature => b"TM",
             Self::ViaClear => b"VC",
@@ -136,5 +140,7 @@ mod tests {
         assert_eq!(Command::from_chars(*b"GB"), None);
         assert_eq!(Command::from_reply_chars(*b"GB"), Some(Command::Begin));
         assert_eq!(Command::from_reply_chars(*b"CV"), Some(Command::ViaClear));
+        assert_eq!(Command::from_chars(*b"SQ"), Some(Command::Status));
+        assert_eq!(Command::from_reply_chars(*b"QS"), Some(Command::Status));
     }
 }

@@ -22,7 +22,9 @@
 //! * [`Message`]: the length-checked view of a datagram, with field accessors.
 //! * [`Command`]: the request command pairs.
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
-//! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts.
+//! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
+//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
+//! * [`StatusReport`] and [`RobotName`]: the replies to the status request `SQ`.
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
@@ -33,8 +35,10 @@ mod error;
 mod message;
 mod mode;
 mod notice;
+mod reason;
 mod reply;
 mod request;
+mod status;
 mod temperature;
 mod text;
 
@@ -43,7 +47,9 @@ pub use error::Error;
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;
+pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
+pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};

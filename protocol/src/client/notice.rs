@@ -2,7 +2,7 @@
 
 use core::fmt::{self, Write as _};
 
-use super::{Command, Error, Severity, Text};
+use super::{Command, DriveStatus, Error, JointBound, Rejection, Severity, Text, WorkspaceReason};
 
 /// A fixed error or warning. Add a variant (with its [`code`](Self::code), severity and body) for
 /// every new text, so that the codes stay in one place.
@@ -13,12 +13,14 @@ pub enum Notice {
     NotUnderstood([u8; 2]),
     /// `ER01 Msg XX undersized.`: a datagram shorter than 30 bytes.
     Undersized([u8; 2]),
-    /// `ER10 Arm did not stop`.
-    ArmDidNotStop,
-    /// `ER11 Arm did not start`.
-    ArmDidNotStart,
-    /// `ER20 Cmd XX rejected`.
-    Rejected(Command),
+    /// `ER10 Arm …`: `OF` refused, the drives being in this state (`already off`,
+    /// `already stopping`, `stopped by fault`).
+    ArmDidNotStop(DriveStatus),
+    /// `ER11 Arm …`: `ON` refused, the drives being in this state (`already on`,
+    /// `still stopping`).
+    ArmDidNotStart(DriveStatus),
+    /// `ER20 Cmd XX <reason>`: the request cannot be carried out now (e.g. `ER20 Cmd BG busy`).
+    Rejected(Command, Rejection),
     /// `ER21 Work space limit.`
     WorkspaceLimit,
     /// `WN12 Joint limit.`
@@ -29,10 +31,11 @@ pub enum Notice {
     BadNumber(Command),
     /// `ER24 Cmd XX bad index`: a via slot ≥ 20, or a joint bank the arm does not have.
     BadIndex(Command),
-    /// `ER25 Cmd XX outside workspace`: a goal outside the bounds or inside an exclusion box.
-    OutsideWorkspace(Command),
-    /// `ER26 Cmd XX beyond joint limit`: a joint goal outside the joint limits.
-    BeyondJointLimit(Command),
+    /// `ER25 Cmd XX <reason>`: a Cartesian goal outside the workspace or out of reach.
+    OutsideWorkspace(Command, WorkspaceReason),
+    /// `ER26 Cmd XX jN < min` / `jN > max`: a joint goal, or the way to a Cartesian goal,
+    /// beyond a joint limit.
+    BeyondJointLimit(Command, JointBound),
     /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
     ViaPointMissed,
 }
@@ -51,21 +54,21 @@ impl Notice {
         match self {
             Self::NotUnderstood(_) => 0,
             Self::Undersized(_) => 1,
-            Self::ArmDidNotStop => 10,
-            Self::ArmDidNotStart => 11,
-            Self::Rejected(_) => 20,
+            Self::ArmDidNotStop(_) => 10,
+            Self::ArmDidNotStart(_) => 11,
+            Self::Rejected(..) => 20,
             Self::WorkspaceLimit => 21,
             Self::JointLimit => 12,
             Self::IkDivergence => 22,
             Self::BadNumber(_) => 23,
             Self::BadIndex(_) => 24,
-            Self::OutsideWorkspace(_) => 25,
-            Self::BeyondJointLimit(_) => 26,
+            Self::OutsideWorkspace(..) => 25,
+            Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
         }
     }
 
-    /// The full text, e.g. `ER20 Cmd BG rejected`.
+    /// The full text, e.g. `ER20 Cmd BG busy`.
     pub fn text(self) -> Text {
         Text::new(self.severity(), self.code(), Body(self))
     }
@@ -94,16 +97,26 @@ impl fmt::Display for Body {
         match self.0 {
             Notice::NotUnderstood(c) => write!(f, "Cmd {} not understood", Pair(c)),
             Notice::Undersized(c) => write!(f, "Msg {} undersized.", Pair(c)),
-            Notice::ArmDidNotStop => f.write_str("Arm did not stop"),
-            Notice::ArmDidNotStart => f.write_str("Arm did not start"),
-            Notice::Rejected(command) => write!(f, "Cmd {} rejected", Pair(command.chars())),
+            Notice::ArmDidNotStop(state) => f.write_str(match state {
+                DriveStatus::Off => "Arm already off",
+                DriveStatus::Stopping => "Arm already stopping",
+                DriveStatus::Faulted => "Arm stopped by fault",
+                DriveStatus::Starting | DriveStatus::Running => "Arm did not stop",
+            }),
+            Notice::ArmDidNotStart(state) => f.write_str(match state {
+                DriveStatus::Running => "Arm already on",
+                DriveStatus::Starting => "Arm already starting",
+                DriveStatus::Stopping => "Arm still stopping",
+                DriveStatus::Off | DriveStatus::Faulted => "Arm did not start",
+            }),
+            Notice::Rejected(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::WorkspaceLimit => f.write_str("Work space limit."),
             Notice::JointLimit => f.write_str("Joint limit."),
             Notice::IkDivergence => f.write_str("Inv Kin Divergence."),
             Notice::BadNumber(c) => write!(f, "Cmd {} bad number", Pair(c.chars())),
             Notice::BadIndex(c) => write!(f, "Cmd {} bad index", Pair(c.chars())),
-            Notice::OutsideWorkspace(c) => write!(f, "Cmd {} outside workspace", Pair(c.chars())),
-            Notice::BeyondJointLimit(c) => write!(f, "Cmd {} beyond joint limit", Pair(c.chars())),
+            Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
+            Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
         }
     }
@@ -121,15 +134,72 @@ impl fmt::Display for Pair {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::PathPoint;
 
     #[test]
     fn texts_are_exact() {
         let cases = [
             (Notice::NotUnderstood(*b"XY"), "ER00 Cmd XY not understood"),
             (Notice::Undersized(*b"B?"), "ER01 Msg B? undersized."),
-            (Notice::ArmDidNotStop, "ER10 Arm did not stop"),
-            (Notice::ArmDidNotStart, "ER11 Arm did not start"),
-            (Notice::Rejected(Command::JointVia), "ER20 Cmd jV rejected"),
+            (
+                Notice::ArmDidNotStop(DriveStatus::Off),
+                "ER10 Arm already off",
+            ),
+            (
+                Notice::ArmDidNotStop(DriveStatus::Stopping),
+                "ER10 Arm already stopping",
+            ),
+            (
+                Notice::ArmDidNotStop(DriveStatus::Faulted),
+                "ER10 Arm stopped by fault",
+            ),
+            (
+                Notice::ArmDidNotStart(DriveStatus::Running),
+                "ER11 Arm already on",
+            ),
+            (
+                Notice::ArmDidNotStart(DriveStatus::Stopping),
+                "ER11 Arm still stopping",
+            ),
+            (
+                Notice::Rejected(Command::Begin, Rejection::Drives(DriveStatus::Starting)),
+                "ER20 Cmd BG drives starting",
+            ),
+            (
+                Notice::Rejected(Command::Begin, Rejection::Drives(DriveStatus::Off)),
+                "ER20 Cmd BG drives off",
+            ),
+            (
+                Notice::Rejected(Command::ViaExecute, Rejection::DriveFault(33)),
+                "ER20 Cmd VE drive fault 33",
+            ),
+            (
+                Notice::Rejected(Command::Recalibrate, Rejection::DrivesSettling),
+                "ER20 Cmd RC drives settling",
+            ),
+            (
+                Notice::Rejected(
+                    Command::Recalibrate,
+                    Rejection::NeedsMode(crate::client::Mode::Off),
+                ),
+                "ER20 Cmd RC needs mode 0",
+            ),
+            (
+                Notice::Rejected(Command::JointVia, Rejection::Busy),
+                "ER20 Cmd jV busy",
+            ),
+            (
+                Notice::Rejected(Command::JointBegin, Rejection::NoGoal),
+                "ER20 Cmd jB no goal",
+            ),
+            (
+                Notice::Rejected(Command::JointExecute, Rejection::NoViaPoint),
+                "ER20 Cmd jE no via point 0",
+            ),
+            (
+                Notice::Rejected(Command::Pose, Rejection::NoMeasurement),
+                "ER20 Cmd PS no measurement",
+            ),
             (Notice::WorkspaceLimit, "ER21 Work space limit."),
             (Notice::JointLimit, "WN12 Joint limit."),
             (Notice::IkDivergence, "WN22 Inv Kin Divergence."),
@@ -139,16 +209,49 @@ mod tests {
             ),
             (Notice::BadIndex(Command::ViaPoint), "ER24 Cmd VP bad index"),
             (
-                Notice::OutsideWorkspace(Command::GoalRpy),
+                Notice::OutsideWorkspace(Command::GoalRpy, WorkspaceReason::Goal),
                 "ER25 Cmd GT outside workspace",
             ),
             (
-                Notice::BeyondJointLimit(Command::JointGoal),
-                "ER26 Cmd jG beyond joint limit",
+                Notice::OutsideWorkspace(Command::Begin, WorkspaceReason::CrossesBox(40)),
+                "ER25 Cmd BG crosses box at 40%",
+            ),
+            (
+                Notice::OutsideWorkspace(
+                    Command::Begin,
+                    WorkspaceReason::Unreachable(PathPoint::Along(99)),
+                ),
+                "ER25 Cmd BG unreachable at 99%",
+            ),
+            (
+                Notice::OutsideWorkspace(
+                    Command::ViaExecute,
+                    WorkspaceReason::Unreachable(PathPoint::Goal),
+                ),
+                "ER25 Cmd VE unreachable",
+            ),
+            (
+                Notice::OutsideWorkspace(Command::Begin, WorkspaceReason::ArmOutside),
+                "ER25 Cmd BG arm outside",
+            ),
+            (
+                Notice::BeyondJointLimit(
+                    Command::JointGoal,
+                    JointBound::new(4, false, 0.785, PathPoint::Goal),
+                ),
+                "ER26 Cmd jG j5 < 0.785",
+            ),
+            (
+                Notice::BeyondJointLimit(
+                    Command::Begin,
+                    JointBound::new(2, true, 1.6, PathPoint::Along(12)),
+                ),
+                "ER26 Cmd BG j3 > 1.600 at 12%",
             ),
             (Notice::ViaPointMissed, "WN27 Via point missed."),
         ];
         for (notice, expected) in cases {
+            assert!(expected.len() <= super::super::TEXT_CAPACITY, "{expected}");
             assert_eq!(notice.text().as_str(), expected);
             assert_eq!(notice.to_string(), expected);
         }

@@ -1,0 +1,182 @@
+//! The command handler over the drive manager and simulated Whistles on a virtual bus: what
+//! refusals and the status request `SQ` say while the drives start, run, fault and stop
+//! (docs/protocol.md).
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+// The seed deployed rounded angles such as 1.5708.
+#![allow(clippy::approx_constant)]
+
+mod common;
+
+use armgate_core::command::{CommandHandler, DriveStatus, Drives, Motion};
+use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
+use armgate_core::motion::Mode;
+
+struct Rig {
+    handler: CommandHandler,
+    manager: DriveManager,
+    bus: VirtualBus,
+    period: f64,
+    now: f64,
+    notices: Vec<String>,
+}
+
+impl Rig {
+    /// ranger-mk1 at home, its drives just told to start (as at power-up), one tick done.
+    fn new() -> Self {
+        let config = common::robot("ranger-mk1");
+        let mut manager = DriveManager::new(&config, &DriveSettings::default()).unwrap();
+        manager.start().unwrap();
+        let mut rig = Self {
+            handler: CommandHandler::new(&config),
+            manager,
+            bus: VirtualBus::for_robot(&config),
+            period: config.control_period,
+            now: 0.0,
+            notices: Vec::new(),
+        };
+        rig.tick();
+        rig
+    }
+
+    /// One cycle as the firmware and armgate-sim run it; the first at t = 0.
+    fn tick(&mut self) {
+        self.bus.advance(self.now).unwrap();
+        self.manager.receive(&mut self.bus);
+        let out = self
+            .handler
+            .tick(self.now, &self.manager.measured(), &self.manager)
+            .unwrap();
+        self.manager
+            .transmit(self.now, out.command.as_ref(), &mut self.bus);
+        while let Some(text) = self.handler.next_notice() {
+            self.notices.push(text.as_str().to_owned());
+        }
+        self.now += self.period;
+    }
+
+    fn ticks_until(&mut self, done: impl Fn(&Self) -> bool) {
+        for _ in 0..1000 {
+            if done(self) {
+                return;
+            }
+            self.tick();
+        }
+        panic!("never happened; drives {:?}", self.manager.status());
+    }
+
+    fn request(&mut self, cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
+        let mut d = [0u8; 31];
+        d[..2].copy_from_slice(cmd.as_bytes());
+        for (k, v) in values.iter().enumerate() {
+            d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+        }
+        d[30] = index;
+        self.handler.handle(&d, &mut self.manager)
+    }
+
+    fn text(&mut self, cmd: &str, values: [f32; 7]) -> String {
+        let reply = self.request(cmd, values, 0);
+        let end = reply.iter().position(|b| *b == 0).unwrap();
+        String::from_utf8(reply[..end].to_vec()).unwrap()
+    }
+
+    fn status(&mut self) -> [f32; 7] {
+        let reply = self.request("SQ", [0.0; 7], 0);
+        assert_eq!((&reply[..2], reply[30]), (&b"QS"[..], 0));
+        core::array::from_fn(|k| {
+            f32::from_le_bytes(reply[2 + 4 * k..6 + 4 * k].try_into().unwrap())
+        })
+    }
+}
+
+const CARTESIAN: [f32; 7] = [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+/// A goal 5 cm above ranger-mk1's home pose, same orientation (yaw −π/2), at least 1 s.
+const UP: [f32; 7] = [0.0, 0.02, 0.716, 0.0, 0.0, -1.5708, 1.0];
+
+#[test]
+fn sq_reports_booting_drives_in_literal_bytes() {
+    let mut rig = Rig::new();
+    // Mode 0, drives starting (1), no fault, 6 joints, holding, 0 refused, 0 s.
+    let mut expected = [0u8; 31];
+    expected[..2].copy_from_slice(b"QS");
+    expected[6..10].copy_from_slice(&[0x00, 0x00, 0x80, 0x3F]); // f1 = 1.0
+    expected[14..18].copy_from_slice(&[0x00, 0x00, 0xC0, 0x40]); // f3 = 6.0
+    assert_eq!(rig.request("SQ", [0.0; 7], 0), expected);
+    let mut name = [0u8; 31];
+    name[..12].copy_from_slice(b"QSranger-mk1");
+    name[30] = 1;
+    assert_eq!(rig.request("SQ", [0.0; 7], 1), name);
+    let mut bad = [0u8; 31];
+    bad[..21].copy_from_slice(b"ER24 Cmd SQ bad index");
+    assert_eq!(rig.request("SQ", [0.0; 7], 7), bad);
+    // The refusal counted, and the snapshot a shell reads agrees with the wire.
+    let status = rig.handler.status(&rig.manager);
+    assert_eq!(
+        (status.mode, status.drives, status.fault, status.joints),
+        (Mode::Off, DriveStatus::Starting, None, 6)
+    );
+    assert_eq!((status.motion, status.refused), (Motion::Holding, 1));
+    assert_eq!(rig.status()[5], 1.0);
+}
+
+#[test]
+fn refusals_follow_the_drives_through_start_fault_and_stop() {
+    let mut rig = Rig::new();
+    assert_eq!(&rig.request("CM", CARTESIAN, 0)[..2], b"MC");
+    assert_eq!(&rig.request("GT", UP, 0)[..2], b"TG");
+    // Booting: BG says why, ON is accepted (already starting), OF could stop it.
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives starting");
+    assert_eq!(&rig.request("ON", [0.0; 7], 0)[..2], b"NO");
+    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    assert_eq!(rig.status()[..3], [2.0, 2.0, 0.0]);
+    assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm already on");
+
+    // A drive stops answering: ER30 once, then every motion request names the fault.
+    rig.bus.drive_mut(103).unwrap().faults.silent = true;
+    rig.ticks_until(|r| r.manager.status() == DriveStatus::Faulted);
+    assert_eq!(rig.notices, ["ER30 J3 drive not answering"]);
+    assert_eq!(rig.status()[1..3], [4.0, 30.0]);
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drive fault 30");
+    assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm stopped by fault");
+
+    // ON clears the fault; once running, the move is accepted and SQ shows it.
+    rig.bus.drive_mut(103).unwrap().faults.silent = false;
+    assert_eq!(&rig.request("ON", [0.0; 7], 0)[..2], b"NO");
+    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    assert_eq!(rig.status()[2], 0.0);
+    assert_eq!(&rig.request("BG", [0.0; 7], 0)[..2], b"GB");
+    rig.tick();
+    assert_eq!(rig.status()[4], 2.0, "a Cartesian move runs");
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
+
+    // OF: stopping, then off.
+    assert_eq!(&rig.request("OF", [0.0; 7], 0)[..2], b"FO");
+    assert_eq!(rig.status()[1], 3.0);
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives stopping");
+    assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm still stopping");
+    assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm already stopping");
+    rig.ticks_until(|r| r.manager.status() == DriveStatus::Off);
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives off");
+    assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm already off");
+}
+
+#[test]
+fn recalibration_waits_until_the_drives_settle_after_mode_off() {
+    let mut rig = Rig::new();
+    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    let here: [f32; 7] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0, 0.0];
+    assert_eq!(&rig.request("CM", CARTESIAN, 0)[..2], b"MC");
+    rig.tick();
+    assert_eq!(rig.text("RC", here), "ER20 Cmd RC needs mode 0");
+    assert_eq!(&rig.request("ST", [0.0; 7], 0)[..2], b"TS");
+    assert_eq!(&rig.request("CM", [0.0; 7], 0)[..2], b"MC");
+    // The last tick still streamed a set-point.
+    assert_eq!(rig.text("RC", here), "ER20 Cmd RC drives settling");
+    rig.tick();
+    assert_eq!(&rig.request("RC", here, 0)[..2], b"CR");
+}

@@ -1,0 +1,237 @@
+//! Why a request was refused: the typed reasons that follow `ERnn Cmd XX` in a refusal text.
+//!
+//! Every text must fit [`TEXT_CAPACITY`](super::TEXT_CAPACITY) = 30 characters, and the
+//! `ERnn Cmd XX ` prefix takes 12, so the wording is compact (docs/protocol.md lists them all).
+
+use core::fmt;
+
+use super::Mode;
+
+/// The drives' state, as a status reply (`QS` f1) and refusals report it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DriveStatus {
+    /// Never started, or stopped on request (`OF`).
+    Off = 0,
+    /// Being brought up after `ON` (or at power-up).
+    Starting = 1,
+    /// Set-points reach the joints: motion is possible. (A simulated arm without drives is
+    /// running while it is on.)
+    Running = 2,
+    /// Coming to rest after `OF` or a fault.
+    Stopping = 3,
+    /// Stopped by a drive fault (its `ER3x` code is reported alongside).
+    Faulted = 4,
+}
+
+impl DriveStatus {
+    /// Every state, by code.
+    pub const ALL: [Self; 5] = [
+        Self::Off,
+        Self::Starting,
+        Self::Running,
+        Self::Stopping,
+        Self::Faulted,
+    ];
+
+    /// The state with this code.
+    pub fn from_code(code: u8) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| *s as u8 == code)
+    }
+}
+
+/// Why a request was refused with `ER20`: the text after `ER20 Cmd XX `.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Rejection {
+    /// `busy`: a motion or sequence is running (send `ST` first).
+    Busy,
+    /// `drives starting` / `drives off` / `drives stopping`: the drives take no set-points in
+    /// this state (never [`DriveStatus::Running`] or [`DriveStatus::Faulted`]).
+    Drives(DriveStatus),
+    /// `drive fault NN`: the drives were stopped by the fault `ERNN` (send `ON` to restart).
+    DriveFault(u8),
+    /// `drives settling`: `RC` while the drives still execute the last set-points (the mode was
+    /// just switched off); retry a few ticks later.
+    DrivesSettling,
+    /// `needs mode N`: the request needs control mode N (0 off, 1 joint, 2 Cartesian).
+    NeedsMode(Mode),
+    /// `no goal`: `BG` without a `GL`/`GT`, `jB` without a `jG`.
+    NoGoal,
+    /// `no via point 0`: `VE`/`jE` with via slot 0 empty.
+    NoViaPoint,
+    /// `no measurement`: the controller has not measured the joints yet.
+    NoMeasurement,
+}
+
+impl fmt::Display for Rejection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Busy => f.write_str("busy"),
+            Self::Drives(DriveStatus::Off) => f.write_str("drives off"),
+            Self::Drives(DriveStatus::Starting) => f.write_str("drives starting"),
+            Self::Drives(DriveStatus::Running) => f.write_str("drives on"),
+            Self::Drives(DriveStatus::Stopping) => f.write_str("drives stopping"),
+            Self::Drives(DriveStatus::Faulted) => f.write_str("drive fault"),
+            Self::DriveFault(code) => write!(f, "drive fault {code:02}"),
+            Self::DrivesSettling => f.write_str("drives settling"),
+            Self::NeedsMode(mode) => write!(f, "needs mode {}", mode.value()),
+            Self::NoGoal => f.write_str("no goal"),
+            Self::NoViaPoint => f.write_str("no via point 0"),
+            Self::NoMeasurement => f.write_str("no measurement"),
+        }
+    }
+}
+
+/// Where along a Cartesian move a problem lies: the goal itself, or a point on the straight
+/// line to it, in percent of the way (1..=99).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PathPoint {
+    /// The goal (or the via point) itself.
+    Goal,
+    /// This percentage of the way there.
+    Along(u8),
+}
+
+impl PathPoint {
+    /// The point at `fraction` (0..1) of the way; 1 and beyond is the goal, and a point short
+    /// of the goal never rounds up to 100 %.
+    pub fn at(fraction: f64) -> Self {
+        if fraction >= 1.0 {
+            return Self::Goal;
+        }
+        // Saturating float-to-int casts: NaN and negatives become 0.
+        Self::Along((fraction * 100.0) as u8).min_one()
+    }
+
+    fn min_one(self) -> Self {
+        match self {
+            Self::Along(0) => Self::Along(1),
+            Self::Along(p) if p > 99 => Self::Along(99),
+            other => other,
+        }
+    }
+}
+
+/// ` at NN%` after a path point, nothing after the goal.
+struct At(PathPoint);
+
+impl fmt::Display for At {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            PathPoint::Goal => Ok(()),
+            PathPoint::Along(percent) => write!(f, " at {percent}%"),
+        }
+    }
+}
+
+/// Why a Cartesian goal is refused with `ER25`: the text after `ER25 Cmd XX `.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WorkspaceReason {
+    /// `outside workspace`: the goal lies outside the bounds or inside an exclusion box.
+    Goal,
+    /// `crosses box at NN%`: the straight line to the goal crosses an exclusion box.
+    CrossesBox(u8),
+    /// `unreachable` / `unreachable at NN%`: no joint configuration within the limits reaches
+    /// that pose continuously from the current one (beyond the arm's reach, or a singularity).
+    Unreachable(PathPoint),
+    /// `arm outside`: the arm itself is outside the workspace (drive it back in joint mode).
+    ArmOutside,
+}
+
+impl fmt::Display for WorkspaceReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Goal => f.write_str("outside workspace"),
+            Self::CrossesBox(percent) => write!(f, "crosses box at {percent}%"),
+            Self::Unreachable(at) => write!(f, "unreachable{}", At(at)),
+            Self::ArmOutside => f.write_str("arm outside"),
+        }
+    }
+}
+
+/// Which joint limit a request would cross (`ER26`): `j5 < 0.785` (below its minimum),
+/// `j3 > 1.600 at 40%` (above its maximum, on the way to a Cartesian goal).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct JointBound {
+    /// The joint, numbered from 1.
+    pub joint: u8,
+    /// True for the maximum, false for the minimum.
+    pub above_max: bool,
+    /// The limit in thousandths of a radian (or millimetres), as the text shows it.
+    pub limit_milli: i32,
+    /// Where on a Cartesian move; [`PathPoint::Goal`] for joint goals.
+    pub at: PathPoint,
+}
+
+impl JointBound {
+    /// The bound of joint `index` (0-based) at `limit` (rad or m), rounded to thousandths.
+    pub fn new(index: usize, above_max: bool, limit: f64, at: PathPoint) -> Self {
+        // Saturating casts: a joint index beyond 255 or a huge limit cannot occur in a valid
+        // robot file, and would only print a clipped number.
+        Self {
+            joint: u8::try_from(index.saturating_add(1)).unwrap_or(u8::MAX),
+            above_max,
+            limit_milli: round_half_away(limit * 1000.0) as i32,
+            at,
+        }
+    }
+}
+
+/// Rounds half away from zero without `std` (the cast then saturates).
+fn round_half_away(x: f64) -> f64 {
+    if x >= 0.0 { x + 0.5 } else { x - 0.5 }
+}
+
+impl fmt::Display for JointBound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let sign = if self.limit_milli < 0 { "-" } else { "" };
+        let magnitude = self.limit_milli.unsigned_abs();
+        write!(
+            f,
+            "j{} {} {sign}{}.{:03}{}",
+            self.joint,
+            if self.above_max { '>' } else { '<' },
+            magnitude / 1000,
+            magnitude % 1000,
+            At(self.at)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn path_points_never_round_to_the_goal() {
+        assert_eq!(PathPoint::at(1.0), PathPoint::Goal);
+        assert_eq!(PathPoint::at(0.999), PathPoint::Along(99));
+        assert_eq!(PathPoint::at(0.404), PathPoint::Along(40));
+        assert_eq!(PathPoint::at(0.001), PathPoint::Along(1));
+        assert_eq!(PathPoint::at(f64::NAN), PathPoint::Along(1));
+    }
+
+    #[test]
+    fn joint_bounds_print_joint_side_limit_and_place() {
+        let min = JointBound::new(4, false, 0.785, PathPoint::Goal);
+        assert_eq!(min.to_string(), "j5 < 0.785");
+        let max = JointBound::new(2, true, 1.6, PathPoint::Along(40));
+        assert_eq!(max.to_string(), "j3 > 1.600 at 40%");
+        let negative = JointBound::new(0, false, -0.0004, PathPoint::Goal);
+        assert_eq!(negative.to_string(), "j1 < 0.000");
+        let negative = JointBound::new(7, false, -2.3504, PathPoint::Along(99));
+        assert_eq!(negative.to_string(), "j8 < -2.350 at 99%");
+    }
+
+    #[test]
+    fn drive_status_codes_round_trip() {
+        for s in DriveStatus::ALL {
+            assert_eq!(DriveStatus::from_code(s as u8), Some(s));
+        }
+        assert_eq!(DriveStatus::from_code(5), None);
+    }
+}
