@@ -174,17 +174,22 @@ impl DriveSide for Backend {
 
 impl CanBus for Bus {
     fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
-        match self {
+        let sent = match self {
             Self::Virtual(bus) => bus.try_transmit(frame),
             Self::Socket(bus) => bus.try_transmit(frame),
+        };
+        if sent.is_ok() {
+            crate::pcap::can(frame);
         }
+        sent
     }
 
     fn try_receive(&mut self) -> Option<CanFrame> {
-        match self {
+        let frame = match self {
             Self::Virtual(bus) => bus.try_receive(),
             Self::Socket(bus) => bus.try_receive(),
-        }
+        };
+        frame.inspect(crate::pcap::can)
     }
 
     fn state(&self) -> BusState {

@@ -6,6 +6,7 @@
 mod args;
 mod backend;
 mod log;
+mod pcap;
 mod socketcan;
 mod status;
 mod udp;
@@ -70,6 +71,10 @@ struct Args {
     /// Write CSV logs (commands, replies, warnings, state) into this directory.
     #[arg(long, value_name = "DIR")]
     log_dir: Option<PathBuf>,
+    /// Capture the client's UDP datagrams and every CAN frame into this pcapng file (for
+    /// Wireshark with tools/wireshark/armgate.lua).
+    #[arg(long, value_name = "FILE")]
+    pcap: Option<PathBuf>,
     /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
@@ -139,7 +144,14 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
         None => Logger::disabled(),
     };
+    let capture = match &args.pcap {
+        Some(path) => {
+            Some(pcap::Capture::start(path).map_err(|e| format!("{}: {e}", path.display()))?)
+        }
+        None => None,
+    };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    let local = socket.local_addr().map_err(|e| e.to_string())?;
     socket
         .set_nonblocking(true)
         .map_err(|e| format!("{}: {e}", args.listen))?;
@@ -178,6 +190,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         // schedule's.
         let mut link = UdpLink {
             socket: &socket,
+            local,
             allow: &allow,
             logger: &logger,
             stats: &mut stats,
@@ -210,6 +223,15 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     }
     let dropped = logger.dropped();
     logger.finish().map_err(|e| format!("log: {e}"))?;
+    if let (Some(capture), Some(path)) = (capture, &args.pcap) {
+        let (written, lost) = capture
+            .finish()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        eprintln!(
+            "armgate-sim: {}: {written} packets captured, {lost} dropped (queue full)",
+            path.display()
+        );
+    }
     let counters = cycle.counters();
     eprintln!(
         "armgate-sim: stopped; {}",

@@ -25,6 +25,8 @@ pub struct Stats {
 pub struct UdpLink<'a> {
     /// The socket (non-blocking).
     pub socket: &'a UdpSocket,
+    /// Its local address, for the capture (`--pcap`).
+    pub local: SocketAddr,
     /// Who may command the arm.
     pub allow: &'a [Network],
     /// The CSV logs.
@@ -49,6 +51,9 @@ impl Link<SocketAddr> for UdpLink<'_> {
                     return None;
                 }
             };
+            // Captured before the allow-list: a refused client is what one looks for in a
+            // capture.
+            crate::pcap::udp(from, self.local, buf.get(..len).unwrap_or(&[]));
             if !self.allow.iter().any(|net| net.contains(from.ip())) {
                 self.stats.refused_sources += 1;
                 continue;
@@ -87,9 +92,10 @@ impl Link<SocketAddr> for UdpLink<'_> {
         self.logger.log(record);
         // A lost datagram is no reason to stop the arm; UDP gives no guarantee anyway. The
         // cycle counts it.
-        self.socket
-            .send_to(bytes, datagram.peer)
-            .map(drop)
-            .map_err(|_| Dropped)
+        let sent = self.socket.send_to(bytes, datagram.peer);
+        if sent.is_ok() {
+            crate::pcap::udp(self.local, datagram.peer, bytes);
+        }
+        sent.map(drop).map_err(|_| Dropped)
     }
 }

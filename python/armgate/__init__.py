@@ -1,0 +1,86 @@
+"""armgate: a Python client for the armgate arm controller.
+
+    import armgate
+
+    with armgate.Arm("127.0.0.1", port=7031) as arm:
+        arm.set_mode("cartesian")
+        pose = arm.get_tcp_pose()
+        arm.move_l(armgate.Pose.from_rpy(pose.x, pose.y, pose.z + 0.05, *pose.rpy), time=2.0)
+
+Standard library only. See README.md and docs/protocol.md of the armgate repository.
+"""
+
+from .client import (
+    DEFAULT_PORT,
+    DEFAULT_RETRIES,
+    DEFAULT_TIMEOUT,
+    NO_READING,
+    Arm,
+    WaitOptions,
+)
+from .errors import (
+    ArmDidNotStart,
+    ArmDidNotStop,
+    ArmError,
+    BadIndex,
+    BadNumber,
+    BeyondJointLimit,
+    CommandRejected,
+    ControllerError,
+    ControllerMessage,
+    ControllerTooOld,
+    ControllerUnreachable,
+    ControllerWarning,
+    DriveFault,
+    IkDivergence,
+    JointLimitWarning,
+    NotUnderstood,
+    OutsideWorkspace,
+    ReplyTimeout,
+    Stalled,
+    Undersized,
+    ViaPointMissed,
+    WaitFailed,
+    WaitTimeout,
+    WorkspaceLimit,
+)
+from .pose import Pose
+from .status import DriveState, Mode, Motion, Status
+
+__all__ = [
+    "DEFAULT_PORT",
+    "DEFAULT_RETRIES",
+    "DEFAULT_TIMEOUT",
+    "NO_READING",
+    "Arm",
+    "ArmDidNotStart",
+    "ArmDidNotStop",
+    "ArmError",
+    "BadIndex",
+    "BadNumber",
+    "BeyondJointLimit",
+    "CommandRejected",
+    "ControllerError",
+    "ControllerMessage",
+    "ControllerTooOld",
+    "ControllerUnreachable",
+    "ControllerWarning",
+    "DriveFault",
+    "DriveState",
+    "IkDivergence",
+    "JointLimitWarning",
+    "Mode",
+    "Motion",
+    "NotUnderstood",
+    "OutsideWorkspace",
+    "Pose",
+    "ReplyTimeout",
+    "Stalled",
+    "Status",
+    "Undersized",
+    "ViaPointMissed",
+    "WaitFailed",
+    "WaitOptions",
+    "WaitTimeout",
+    "WorkspaceLimit",
+]

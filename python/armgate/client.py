@@ -1,0 +1,529 @@
+"""The :class:`Arm`: one controller, one request at a time, with timeouts and retries."""
+
+from __future__ import annotations
+
+import collections
+import logging
+import math
+import socket
+import time as _time
+from dataclasses import dataclass, replace
+from typing import Callable, Deque, List, Optional, Sequence, Tuple, TypeVar, Union
+
+from . import wire
+from .errors import (
+    ControllerMessage,
+    ControllerTooOld,
+    ControllerUnreachable,
+    NotUnderstood,
+    ReplyTimeout,
+    Stalled,
+    WaitTimeout,
+)
+from .pose import Pose, PoseLike, as_pose
+from .status import Mode, Motion, Status
+
+DEFAULT_PORT = 7031
+"""The controller's UDP port (``armgate-sim`` listens on 127.0.0.1:7031)."""
+DEFAULT_TIMEOUT = 0.2
+"""Seconds to wait for the reply after each send."""
+DEFAULT_RETRIES = 3
+"""How many times a request is re-sent after a send timed out (at most 1 + 3 sends)."""
+NOTICE_CAPACITY = 64
+"""Unsolicited notices kept until :meth:`Arm.take_notices` (the oldest is dropped first)."""
+NO_READING = -100.0
+"""The temperature a drive that has not been heard from reports (read as None)."""
+
+WRITE_JOINTS = 6
+"""Joints per write request (``jG``, ``jV``, ``RC``)."""
+READ_JOINTS = 7
+"""Joints per read reply (``jP``, ``TM``)."""
+MAX_JOINTS = 8
+
+log = logging.getLogger("armgate")
+
+T = TypeVar("T")
+NoticeCallback = Callable[[ControllerMessage], None]
+
+
+@dataclass(frozen=True)
+class WaitOptions:
+    """How a wait decides that a target is reached, and when it gives up (the Rust client's
+    defaults)."""
+
+    tolerance: float = 0.001
+    """The last target is reached within this distance (m for poses, rad or m for joints)."""
+    angle_tolerance: float = 0.01
+    """... and, for poses, within this angle (rad)."""
+    pass_tolerance: float = 0.01
+    """An intermediate via point counts as passed within this distance (the arm does not dwell
+    there, so a 20 Hz poll may never see it within ``tolerance``)."""
+    timeout: float = 60.0
+    """Give up after this many seconds."""
+    poll: float = 0.05
+    """The polling period (s)."""
+    stall: Optional[float] = 3.0
+    """Give up if the arm has not moved for this long (s); None: never."""
+
+
+_STILL = 1e-6
+
+
+class Arm:
+    """A client of one armgate controller.
+
+    ``Arm("127.0.0.1", port=7031)`` opens a UDP socket; nothing is sent until a request. Every
+    request waits ``timeout`` seconds for its reply and is re-sent up to ``retries`` times. A
+    refusal (``ER`` text naming the request) raises its :class:`~armgate.ControllerMessage`
+    subclass at once, without retrying. Unsolicited ``ER``/``WN`` texts that arrive meanwhile go
+    to ``on_notice`` (default: logged on the ``armgate`` logger) and are kept for
+    :meth:`take_notices`.
+
+    ``joints``: the arm's joint count; by default it is asked of the controller (``SQ``) or, on
+    a controller without the status request, read off the ``TM`` reply.
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        retries: int = DEFAULT_RETRIES,
+        joints: Optional[int] = None,
+        on_notice: Optional[NoticeCallback] = None,
+        wait_options: WaitOptions = WaitOptions(),
+    ) -> None:
+        info = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)[0]
+        self._socket = socket.socket(info[0], socket.SOCK_DGRAM)
+        # A connected socket receives only the controller's datagrams.
+        self._socket.connect(info[4])
+        self.timeout = timeout
+        self.retries = retries
+        self.wait_options = wait_options
+        self.on_notice = on_notice
+        self._joints = joints
+        self._has_status: Optional[bool] = None
+        if joints is not None:
+            _check_count(joints)
+        self._notices: Deque[ControllerMessage] = collections.deque(maxlen=NOTICE_CAPACITY)
+        self.stale_replies = 0
+        """Normal replies that answered no outstanding request (late answers to retries)."""
+
+    # -- connection ------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Closes the socket."""
+        self._socket.close()
+
+    def __enter__(self) -> "Arm":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- reading ---------------------------------------------------------------------------
+
+    def get_tcp_pose(self) -> Pose:
+        """``PS``: the measured tool pose (position in m, quaternion x, y, z, w; ``.rpy`` gives
+        roll, pitch, yaw)."""
+        return Pose(*self.request("PS").values)
+
+    def get_joints(self) -> List[float]:
+        """``jP``: the measured joints (rad, or m for prismatic joints); for more than seven
+        joints a second ``jP`` with index 0x80 reads joints 7.. (bank 2)."""
+        return self._read_banks("jP", self.joint_count)
+
+    def get_temperatures(self) -> List[Optional[float]]:
+        """``TM``: the drive temperatures (deg C), None for a drive not heard from yet."""
+        return [None if t == NO_READING else t for t in self._read_banks("TM", self.joint_count)]
+
+    def get_status(self) -> Status:
+        """``SQ``: mode, drive state and fault, joint count, motion, refusals, uptime, name.
+
+        Raises :class:`~armgate.ControllerTooOld` if the controller does not know ``SQ``."""
+        try:
+            numbers = self.request("SQ", index=0)
+            named = self._exchange("SQ", wire.encode("SQ", (), 1), 1)
+        except NotUnderstood as e:
+            raise ControllerTooOld(
+                f"the controller does not know the status request SQ ({e.text}); update it"
+            ) from e
+        return Status.from_replies(numbers.values, named[2:30])
+
+    @property
+    def joint_count(self) -> int:
+        """The arm's joint count (asked once, see the class description)."""
+        if self._joints is None:
+            try:
+                self._joints = self.get_status().joint_count
+            except ControllerTooOld:
+                self._has_status = False
+                self._joints = self._count_from_temperatures()
+            _check_count(self._joints)
+        return self._joints
+
+    def _count_from_temperatures(self) -> int:
+        # TM answers joints 1..7 and fills the rest with -1000.
+        values = self.request("TM").values
+        count = sum(1 for v in values if v != -1000.0)
+        if count == READ_JOINTS and self.request("TM", index=wire.BANK2).values[1] != -1000.0:
+            count = MAX_JOINTS
+        return count
+
+    # -- commanding ------------------------------------------------------------------------
+
+    def set_mode(self, mode: Union[Mode, int, str]) -> Mode:
+        """``CM``: the command mode (``Mode.CARTESIAN``, ``1``, ``"joint"``); returns the mode
+        the controller reports."""
+        value = Mode.parse(mode) if not isinstance(mode, int) else mode
+        reply = self.request("CM", (float(value),))
+        return Mode(int(round(reply.values[0])))
+
+    def on(self) -> None:
+        """``ON``: starts the drives; clears a drive fault (``ArmDidNotStart`` if refused)."""
+        self.request("ON")
+
+    def off(self) -> None:
+        """``OF``: stops the drives (``ArmDidNotStop`` if refused)."""
+        self.request("OF")
+
+    def stop(self) -> None:
+        """``ST``: stops every motion and sequence; the arm holds its commanded position."""
+        self.request("ST")
+
+    def recalibrate(self, q: Sequence[float], wait: bool = True) -> None:
+        """``RC``: the arm's current position becomes the joint angles ``q`` (mode off only).
+
+        The controller measures the joints a cycle or two later; with ``wait`` this returns once
+        ``get_joints()`` reads ``q``, so that the next request starts from there."""
+        q = self._check_joints(q)
+        self._write_banks("RC", q, 0, 0.0)
+        if wait:
+            self.wait_for_joints([q], replace(self.wait_options, timeout=2.0, stall=None))
+
+    def move_l(
+        self, pose: PoseLike, time: Optional[float] = None, wait: bool = True
+    ) -> Optional[Pose]:
+        """A Cartesian move of the tool to ``pose`` (a :class:`Pose`, or x, y, z, roll, pitch,
+        yaw) in Cartesian mode.
+
+        With ``time`` (s) the move takes at least that long (``GT``), else as short as the
+        limits allow (``GL``); then ``BG``. With ``wait`` the tool pose is polled until it is
+        reached and the motion has ended (the pose is returned), and a notice that ends the
+        motion (``ER21``, ``WN22``, ``ER3x``) is raised."""
+        goal = as_pose(pose)
+        if time is None:
+            self.request("GL", goal.xyz + goal.quaternion)
+        else:
+            self.request("GT", goal.xyz + goal.rpy + (float(time),))
+        self.request("BG")
+        if not wait:
+            return None
+        return self.wait_for_poses([goal], self._options(time or 0.0))
+
+    def move_j(
+        self, q: Sequence[float], time: Optional[float] = None, wait: bool = True
+    ) -> Optional[List[float]]:
+        """A joint move to ``q`` in joint mode: ``jG`` + ``jB``, or with ``time`` (s) a one-point
+        joint sequence (``jC``, ``jV``, ``jE``) that takes at least that long. With ``wait`` the
+        joints are polled until they are reached and the motion has ended (returned)."""
+        q = self._check_joints(q)
+        if time is None:
+            self._write_banks("jG", q, 0, 0.0)
+            self.request("jB")
+        else:
+            self.request("jC")
+            self._write_banks("jV", q, 0, float(time))
+            self.request("jE")
+        if not wait:
+            return None
+        return self.wait_for_joints([q], self._options(time or 0.0))
+
+    def run_via(
+        self, points: Sequence[Tuple[Union[Pose, Sequence[float]], float]], wait: bool = True
+    ) -> Union[Pose, List[float], None]:
+        """Runs via points ``[(target, time), ...]``: each target a :class:`Pose` (a Cartesian
+        sequence, in Cartesian mode: ``VC``, ``VP`` per point, ``VE``) or a list of joint values
+        (a joint sequence, in joint mode: ``jC``, ``jV``, ``jE``), reached no faster than its
+        ``time`` (s). At most 20 points. With ``wait`` the arm is polled until it has passed
+        every point, reached the last and the sequence has ended (returned)."""
+        if not points:
+            raise ValueError("no via points")
+        cartesian = isinstance(points[0][0], Pose)
+        if any(isinstance(target, Pose) != cartesian for target, _ in points):
+            raise ValueError("via points are all poses or all joint vectors")
+        total = sum(float(t) for _, t in points)
+        if cartesian:
+            goals = [as_pose(target) for target, _ in points]
+            self.request("VC")
+            for slot, (goal, (_, t)) in enumerate(zip(goals, points)):
+                self.request("VP", goal.xyz + goal.rpy + (float(t),), index=slot)
+            self.request("VE")
+            return self.wait_for_poses(goals, self._options(total)) if wait else None
+        qs = [self._check_joints(target) for target, _ in points]  # type: ignore[arg-type]
+        self.request("jC")
+        for slot, (q, (_, t)) in enumerate(zip(qs, points)):
+            self._write_banks("jV", q, slot, float(t))
+        self.request("jE")
+        return self.wait_for_joints(qs, self._options(total)) if wait else None
+
+    # -- waiting ---------------------------------------------------------------------------
+
+    def wait_for_poses(self, goals: Sequence[Pose], options: Optional[WaitOptions] = None) -> Pose:
+        """Polls ``PS`` until the tool has passed ``goals`` in order (each but the last within
+        ``pass_tolerance``) and reached the last one."""
+        opts = options or self.wait_options
+
+        def measure(pose: Pose, goal: Pose, last: bool) -> Tuple[float, Optional[float], bool]:
+            d, a = pose.distance(goal), pose.angle_to(goal)
+            if last:
+                return d, a, d <= opts.tolerance and a <= opts.angle_tolerance
+            return d, a, d <= opts.pass_tolerance
+
+        def moved(a: Pose, b: Pose) -> bool:
+            return a.distance(b) > _STILL or a.angle_to(b) > _STILL
+
+        return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
+
+    def wait_for_joints(
+        self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
+    ) -> List[float]:
+        """Polls ``jP`` until the joints have passed ``goals`` in order and reached the last
+        (Euclidean norm within the tolerances)."""
+        opts = options or self.wait_options
+
+        def measure(
+            q: List[float], goal: List[float], last: bool
+        ) -> Tuple[float, Optional[float], bool]:
+            d = math.dist(q, goal)
+            return d, None, d <= (opts.tolerance if last else opts.pass_tolerance)
+
+        def moved(a: List[float], b: List[float]) -> bool:
+            return any(abs(x - y) > _STILL for x, y in zip(a, b))
+
+        return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
+
+    def _wait(
+        self,
+        goals: Sequence[T],
+        options: WaitOptions,
+        read: Callable[[], T],
+        measure: Callable[[T, T, bool], Tuple[float, Optional[float], bool]],
+        moved: Callable[[T, T], bool],
+    ) -> T:
+        started = _time.monotonic()
+        last_move = started
+        previous: Optional[T] = None
+        target = 0
+        while True:
+            current = read()
+            notices = self.take_notices()
+            now = _time.monotonic()
+            if previous is None or moved(previous, current):
+                last_move = now
+            distance: float = math.inf
+            angle: Optional[float] = None
+            arrived = False
+            while target < len(goals):
+                last = target + 1 == len(goals)
+                distance, angle, reached = measure(current, goals[target], last)
+                if not reached:
+                    break
+                if last:
+                    arrived = True
+                    break
+                target += 1
+            if arrived:
+                return self._settle(current, started, options, read, moved)
+            for notice in notices:
+                if notice.ends_motion:
+                    raise notice
+            remaining = f"{distance * 1e3:.1f} mm" if angle is not None else f"{distance:.4f}"
+            if options.stall is not None and now - last_move > options.stall:
+                raise Stalled(
+                    f"the arm stopped {remaining} from target {target + 1} "
+                    f"(no motion for {options.stall} s)",
+                    target,
+                    distance,
+                    angle,
+                )
+            if now - started > options.timeout:
+                raise WaitTimeout(
+                    f"target {target + 1} not reached within {options.timeout} s "
+                    f"(still {remaining} from it)",
+                    target,
+                    distance,
+                    angle,
+                )
+            previous = current
+            _time.sleep(options.poll)
+
+    def _settle(
+        self,
+        current: T,
+        started: float,
+        options: WaitOptions,
+        read: Callable[[], T],
+        moved: Callable[[T, T], bool],
+    ) -> T:
+        """After arrival within the tolerance the generator may still be finishing its profile
+        (and refuses the next motion until it has): waits until the status reports no motion,
+        or, from a controller without the status request, until two polls read the same."""
+        while _time.monotonic() - started <= options.timeout:
+            if self._has_status is not False:
+                try:
+                    if self.get_status().motion == Motion.IDLE:
+                        return read()
+                except ControllerTooOld:
+                    self._has_status = False
+                    continue
+            else:
+                _time.sleep(options.poll)
+                latest = read()
+                if not moved(current, latest):
+                    return latest
+                current = latest
+                continue
+            _time.sleep(options.poll)
+        return current
+
+    def _options(self, requested: float) -> WaitOptions:
+        # As the Rust tool: 30 s plus the requested duration, unless set otherwise.
+        if self.wait_options.timeout != WaitOptions.timeout:
+            return self.wait_options
+        return replace(self.wait_options, timeout=30.0 + requested)
+
+    # -- notices ---------------------------------------------------------------------------
+
+    def take_notices(self) -> List[ControllerMessage]:
+        """Removes and returns the unsolicited notices received so far, oldest first (reading
+        whatever is waiting on the socket first)."""
+        self._drain()
+        notices = list(self._notices)
+        self._notices.clear()
+        return notices
+
+    def _notice(self, text: str) -> None:
+        notice = ControllerMessage.from_text(text)
+        self._notices.append(notice)
+        if self.on_notice is not None:
+            self.on_notice(notice)
+        else:
+            log.warning("controller: %s", text)
+
+    def _drain(self) -> None:
+        self._socket.setblocking(False)
+        try:
+            while True:
+                try:
+                    datagram = self._socket.recv(2 * wire.MESSAGE_LEN)
+                except (BlockingIOError, InterruptedError):
+                    return
+                except (ConnectionRefusedError, ConnectionResetError):
+                    # An ICMP error left over from an earlier send.
+                    continue
+                text = wire.text_of(datagram)
+                if text is not None:
+                    self._notice(text)
+                else:
+                    self.stale_replies += 1
+        finally:
+            self._socket.setblocking(True)
+
+    # -- requests --------------------------------------------------------------------------
+
+    def request(self, chars: str, values: Sequence[float] = (), index: int = 0) -> wire.Message:
+        """Sends any request and returns its reply; raises the typed exception of an ``ER``
+        text that answers it, :class:`~armgate.ReplyTimeout` if every attempt timed out."""
+        datagram = self._exchange(chars, wire.encode(chars, values, index), index)
+        message = wire.decode(datagram)
+        assert message is not None  # _exchange returns only 31-byte replies
+        return message
+
+    def _exchange(self, chars: str, datagram: bytes, index: int) -> bytes:
+        # Whatever arrived before this request cannot be its reply.
+        self._drain()
+        attempts = self.retries + 1
+        refused = False
+        for _ in range(attempts):
+            try:
+                self._socket.send(datagram)
+            except (ConnectionRefusedError, ConnectionResetError):
+                refused = True
+                continue
+            outcome = self._await_reply(chars, index)
+            if isinstance(outcome, bytes):
+                return outcome
+            refused = outcome == "refused"
+        if refused:
+            raise ControllerUnreachable(
+                f"nothing listens at {self._socket.getpeername()} (connection refused); "
+                "is the controller running?"
+            )
+        raise ReplyTimeout(chars, attempts, self.timeout)
+
+    def _await_reply(self, chars: str, index: int) -> Union[bytes, str]:
+        deadline = _time.monotonic() + self.timeout
+        while True:
+            left = deadline - _time.monotonic()
+            if left <= 0:
+                return "timeout"
+            self._socket.settimeout(left)
+            try:
+                datagram = self._socket.recv(2 * wire.MESSAGE_LEN)
+            except socket.timeout:
+                return "timeout"
+            except (ConnectionRefusedError, ConnectionResetError):
+                return "refused"
+            except InterruptedError:
+                continue
+            finally:
+                self._socket.settimeout(None)
+            kind, text = wire.classify(chars, index, datagram)
+            if kind == wire.REPLY:
+                return datagram[: wire.MESSAGE_LEN]
+            if kind == wire.REJECTED:
+                assert text is not None
+                raise ControllerMessage.from_text(text)
+            if kind == wire.NOTICE:
+                assert text is not None
+                self._notice(text)
+            else:
+                self.stale_replies += 1
+
+    # -- joint banks -----------------------------------------------------------------------
+
+    def _check_joints(self, q: Sequence[float]) -> List[float]:
+        values = [float(v) for v in q]
+        if len(values) != self.joint_count:
+            raise ValueError(f"{len(values)} joint values, but the arm has {self.joint_count}")
+        return values
+
+    def _read_banks(self, chars: str, n: int) -> List[float]:
+        """Joints 1..7 from the bank-1 reply, joints 8.. from the bank-2 reply (which starts at
+        joint 7)."""
+        values = list(self.request(chars).values)
+        if n > READ_JOINTS:
+            upper = self.request(chars, index=wire.BANK2).values
+            values += upper[READ_JOINTS - WRITE_JOINTS :]
+        return values[:n]
+
+    def _write_banks(self, chars: str, q: Sequence[float], slot: int, f6: float) -> None:
+        """Writes a joint vector: for more than six joints bank 2 (joints 7.., index bit 7)
+        first, then bank 1 (joints 1..6), which completes the vector (docs/protocol.md)."""
+        _check_count(len(q))
+        if not 0 <= slot < wire.BANK2:
+            raise ValueError(f"via slot {slot}: slots are 0..127 (bit 7 selects the bank)")
+
+        def bank(joints: Sequence[float]) -> List[float]:
+            return list(joints) + [0.0] * (WRITE_JOINTS - len(joints)) + [f6]
+
+        if len(q) > WRITE_JOINTS:
+            self.request(chars, bank(q[WRITE_JOINTS:]), slot | wire.BANK2)
+        self.request(chars, bank(q[:WRITE_JOINTS]), slot)
+
+
+def _check_count(n: int) -> None:
+    if not 1 <= n <= MAX_JOINTS:
+        raise ValueError(f"{n} joints: an arm has 1 to {MAX_JOINTS} joints")

@@ -1,0 +1,214 @@
+"""Exceptions: one class per ``ER``/``WN`` code of docs/protocol.md and docs/drives.md, and the
+client's own failures (no reply, a wait that did not arrive).
+
+Every controller text becomes a :class:`ControllerMessage` subclass with the code, the whole
+text and the reason after the prefix::
+
+    try:
+        arm.move_l(pose)
+    except armgate.CommandRejected as e:     # ER20
+        print(e.code, e.text, e.command)     # 20 'ER20 Cmd BG rejected' 'BG'
+    except armgate.ControllerMessage as e:   # any other ER/WN
+        ...
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Dict, Optional, Type
+
+
+class ArmError(Exception):
+    """Everything this package raises."""
+
+
+class ReplyTimeout(ArmError, TimeoutError):
+    """No reply arrived: every attempt (the first send and each retry) timed out."""
+
+    def __init__(self, command: str, attempts: int, timeout: float) -> None:
+        super().__init__(
+            f"no reply to {command} after {attempts} attempt(s) of {timeout * 1e3:.0f} ms each"
+        )
+        self.command = command
+        self.attempts = attempts
+        self.timeout = timeout
+
+
+class ControllerUnreachable(ArmError, ConnectionError):
+    """The operating system reported the controller's port as closed (ICMP port unreachable)."""
+
+
+class ControllerTooOld(ArmError):
+    """The controller does not know a request this client sent (it answered ``ER00``)."""
+
+
+class WaitFailed(ArmError):
+    """A wait for the arm ended without reaching the target."""
+
+    def __init__(self, message: str, target: int, distance: float, angle: Optional[float]):
+        super().__init__(message)
+        self.target = target
+        """The 0-based number of the target not reached."""
+        self.distance = distance
+        """The remaining distance (m for poses, rad or m for joints)."""
+        self.angle = angle
+        """For poses: the remaining angle (rad)."""
+
+
+class Stalled(WaitFailed):
+    """The arm stopped moving before it reached the target (no motion-ending notice came)."""
+
+
+class WaitTimeout(WaitFailed, TimeoutError):
+    """A wait ran out of time."""
+
+
+class ControllerMessage(ArmError):
+    """An ``ER``/``WN`` text from the controller.
+
+    Raised when it answers a request (a refusal), or when it ends a motion a ``move_*`` waits
+    for; otherwise handed to the ``on_notice`` callback.
+    """
+
+    code: int
+    """The two-digit code (``ER20`` -> 20); -1 if the text has none."""
+    text: str
+    """The whole text, e.g. ``ER20 Cmd BG rejected``."""
+    reason: str
+    """The text after the prefix and code, e.g. ``Cmd BG rejected``."""
+    command: Optional[str]
+    """The request's characters that the text names (``BG``), if it names one."""
+
+    def __init__(self, text: str) -> None:
+        super().__init__(text)
+        self.text = text
+        code = text[2:4]
+        self.code = int(code) if code.isdigit() else -1
+        self.reason = text[5:] if len(text) > 4 else ""
+        named = re.match(r"(?:Cmd|Msg) (..)", self.reason)
+        self.command = named.group(1) if named else None
+
+    @property
+    def detail(self) -> str:
+        """For a text that names a command, what follows it (``ER20 Cmd BG needs mode 2`` ->
+        ``needs mode 2``); else the reason."""
+        if self.command is None:
+            return self.reason
+        return self.reason[len("Cmd XX "):]
+
+    @property
+    def is_warning(self) -> bool:
+        """``WN`` rather than ``ER``."""
+        return self.text.startswith("WN")
+
+    @property
+    def ends_motion(self) -> bool:
+        """Whether a running motion will not complete: ``ER21`` (workspace limit), ``WN22`` (IK
+        divergence), ``WN27`` (via point missed) and drive faults ``ER30``..``ER39``."""
+        if self.is_warning:
+            return self.code in (22, 27)
+        return self.code == 21 or 30 <= self.code <= 39
+
+    @classmethod
+    def from_text(cls, text: str) -> "ControllerMessage":
+        """The exception of the class for this text's prefix and code."""
+        code = text[2:4]
+        number = int(code) if code.isdigit() else -1
+        kind = _WARNINGS if text.startswith("WN") else _ERRORS
+        if text.startswith("ER") and 30 <= number <= 39:
+            return DriveFault(text)
+        return kind.get(number, ControllerWarning if kind is _WARNINGS else ControllerError)(text)
+
+
+class ControllerError(ControllerMessage):
+    """An ``ER`` text."""
+
+
+class ControllerWarning(ControllerMessage):
+    """A ``WN`` text."""
+
+
+class NotUnderstood(ControllerError):
+    """``ER00 Cmd XX not understood``: unknown command characters."""
+
+
+class Undersized(ControllerError):
+    """``ER01 Msg XX undersized.``: a datagram shorter than 30 bytes."""
+
+
+class ArmDidNotStop(ControllerError):
+    """``ER10 Arm ...``: the answer to ``OF`` when the drives could not be stopped (``ER10 Arm
+    did not stop``; newer controllers say why: ``ER10 Arm already off``)."""
+
+
+class ArmDidNotStart(ControllerError):
+    """``ER11 Arm ...``: the answer to ``ON`` when the drives could not be started (``ER11 Arm
+    did not start``; newer controllers say why: ``ER11 Arm already on``)."""
+
+
+class CommandRejected(ControllerError):
+    """``ER20 Cmd XX ...``: wrong mode, a motion is running, no goal, not ready (``rejected``;
+    newer controllers give the reason: ``ER20 Cmd BG needs mode 2``, see :attr:`detail`)."""
+
+
+class WorkspaceLimit(ControllerError):
+    """``ER21 Work space limit.``: a set-point or the arm left the workspace (ends a motion)."""
+
+
+class BadNumber(ControllerError):
+    """``ER23 Cmd XX bad number``: NaN/Inf, a zero quaternion, an invalid mode."""
+
+
+class BadIndex(ControllerError):
+    """``ER24 Cmd XX bad index``: via slot >= 20, or joint bank misuse."""
+
+
+class OutsideWorkspace(ControllerError):
+    """``ER25 Cmd XX outside workspace``: a goal or via point outside the bounds or in a box."""
+
+
+class BeyondJointLimit(ControllerError):
+    """``ER26 Cmd XX beyond joint limit``: a joint goal, via point or recalibration outside the
+    joint limits."""
+
+
+class DriveFault(ControllerError):
+    """``ER30``..``ER39``: a drive fault (docs/drives.md), e.g. ``ER33 J4 PT buffer underflow``."""
+
+    @property
+    def joint(self) -> Optional[int]:
+        """The joint (from 1) the fault names, if it names one."""
+        named = re.match(r"J(\d+) ", self.reason)
+        return int(named.group(1)) if named else None
+
+
+class JointLimitWarning(ControllerWarning):
+    """``WN12 Joint limit.``: a joint set-point was clamped (the motion goes on)."""
+
+
+class IkDivergence(ControllerWarning):
+    """``WN22 Inv Kin Divergence.``: the IK could not track the set-point; the arm holds."""
+
+
+class ViaPointMissed(ControllerWarning):
+    """``WN27 Via point missed.``: a sequence stopped."""
+
+
+_ERRORS: Dict[int, Type[ControllerMessage]] = {
+    0: NotUnderstood,
+    1: Undersized,
+    10: ArmDidNotStop,
+    11: ArmDidNotStart,
+    20: CommandRejected,
+    21: WorkspaceLimit,
+    23: BadNumber,
+    24: BadIndex,
+    25: OutsideWorkspace,
+    26: BeyondJointLimit,
+}
+
+_WARNINGS: Dict[int, Type[ControllerMessage]] = {
+    12: JointLimitWarning,
+    22: IkDivergence,
+    27: ViaPointMissed,
+}

@@ -1,0 +1,92 @@
+"""The controller's mode and its status report (``SQ`` -> ``QS``)."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Sequence, Union
+
+
+class Mode(enum.IntEnum):
+    """The command mode (``CM``)."""
+
+    OFF = 0
+    """No generator drives the arm."""
+    JOINT = 1
+    """Joint moves and joint sequences (``jB``, ``jE``)."""
+    CARTESIAN = 2
+    """Cartesian moves and sequences (``BG``, ``VE``)."""
+
+    @classmethod
+    def parse(cls, mode: Union["Mode", int, str]) -> "Mode":
+        """A mode from a :class:`Mode`, its number or its name (``"cartesian"``, ``"cart"``)."""
+        if isinstance(mode, str):
+            names = {"off": cls.OFF, "joint": cls.JOINT, "cartesian": cls.CARTESIAN}
+            names["cart"] = cls.CARTESIAN
+            try:
+                return names[mode.lower()]
+            except KeyError:
+                raise ValueError(f"mode {mode!r}: expected off, joint or cartesian") from None
+        return cls(mode)
+
+
+class DriveState(enum.IntEnum):
+    """The drives' state (status field f1)."""
+
+    OFF = 0
+    STARTING = 1
+    RUNNING = 2
+    STOPPING = 3
+    FAULTED = 4
+
+
+class Motion(enum.IntEnum):
+    """What the arm is doing (status field f4)."""
+
+    IDLE = 0
+    JOINT_MOVE = 1
+    CARTESIAN_MOVE = 2
+    JOINT_SEQUENCE = 3
+    CARTESIAN_SEQUENCE = 4
+
+
+def _enum(kind, value: float):  # type: ignore[no-untyped-def]
+    """The member of ``kind`` for ``value``, or the rounded number if it is not one."""
+    number = int(round(value))
+    try:
+        return kind(number)
+    except ValueError:
+        return number
+
+
+@dataclass(frozen=True)
+class Status:
+    """The controller's status report."""
+
+    mode: Mode
+    drive_state: DriveState
+    drive_fault: int
+    """The code NN of the drive fault ``ER3N`` in force, 0 for none."""
+    joint_count: int
+    motion: Motion
+    refusals: int
+    """How many requests were refused since the controller started."""
+    uptime: float
+    """Seconds since the controller started."""
+    name: str
+    """The robot's name from its robot file."""
+
+    @classmethod
+    def from_replies(cls, values: Sequence[float], name: bytes) -> "Status":
+        """The status from the index-0 reply's values and the index-1 reply's bytes 2..30."""
+        f = list(values)
+        return cls(
+            mode=_enum(Mode, f[0]),
+            drive_state=_enum(DriveState, f[1]),
+            drive_fault=int(round(f[2])),
+            joint_count=int(round(f[3])),
+            motion=_enum(Motion, f[4]),
+            refusals=int(round(f[5])),
+            uptime=float(f[6]),
+            name=name.split(b"\0", 1)[0].decode("ascii", "replace"),
+        )

@@ -1,0 +1,178 @@
+"""The client against the real armgate-sim (simulated Whistles on a virtual CAN bus)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+
+import armgate
+
+# A comfortable, non-singular pose of ranger-mk1 (docs/drives.md, tracking experiments). The
+# home pose is at a wrist singularity, where Cartesian moves diverge.
+COMFORTABLE = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1]
+
+
+def close(a, b, tol=1e-3):  # type: ignore[no-untyped-def]
+    return len(a) == len(b) and all(abs(x - y) <= tol for x, y in zip(a, b))
+
+
+def wait_running(arm: armgate.Arm) -> None:
+    deadline = time.monotonic() + 5
+    try:
+        while arm.get_status().drive_state != armgate.DriveState.RUNNING:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+    except armgate.ControllerTooOld:
+        time.sleep(1.0)  # the start takes 12 cycles, 0.23 s at 51 Hz
+
+
+def test_pose_and_joints_at_home_match_the_simulator(mk1) -> None:  # type: ignore[no-untyped-def]
+    home = mk1.home()
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        pose = arm.get_tcp_pose()
+        assert close(pose.xyz, home["xyz"])
+        assert close(pose.quaternion, home["quaternion"])
+        assert close(pose.rpy, home["rpy"])
+        assert arm.joint_count == 6
+        assert close(arm.get_joints(), home["joints"])
+
+
+def test_refusals_raise_typed_exceptions(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        with pytest.raises(armgate.CommandRejected) as rejected:
+            arm.request("BG")  # mode off
+        # "ER20 Cmd BG rejected", or with the refusal's reason ("ER20 Cmd BG needs mode 2").
+        assert rejected.value.code == 20 and rejected.value.text.startswith("ER20 Cmd BG ")
+        assert rejected.value.command == "BG"
+        assert rejected.value.reason == rejected.value.text[5:]
+        assert rejected.value.detail == rejected.value.text[12:]
+        with pytest.raises(armgate.BadNumber) as bad:
+            arm.set_mode(7)
+        assert bad.value.code == 23
+        with pytest.raises(armgate.NotUnderstood) as unknown:
+            arm.request("XX")
+        assert unknown.value.text == "ER00 Cmd XX not understood"
+        assert unknown.value.code == 0
+        with pytest.raises(armgate.BadIndex):
+            arm.request("VP", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 1.0], index=25)
+        with pytest.raises(armgate.BeyondJointLimit) as beyond:
+            arm.recalibrate([0.0, 5.0, 0.0, 0.0, 1.5, 0.0])
+        assert beyond.value.text.startswith("ER26 Cmd RC ")
+        # All refusals are typed, and all are ArmErrors.
+        assert isinstance(beyond.value, armgate.ControllerError)
+        assert isinstance(beyond.value, armgate.ArmError)
+        assert arm.take_notices() == []
+
+
+def test_recalibrate_then_a_cartesian_move_arrives(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.recalibrate(COMFORTABLE)
+        assert close(arm.get_joints(), COMFORTABLE, 1e-4)
+        assert arm.set_mode("cartesian") == armgate.Mode.CARTESIAN
+        start = arm.get_tcp_pose()
+        goal = armgate.Pose.from_rpy(start.x, start.y, start.z - 0.02, *start.rpy)
+        reached = arm.move_l(goal, time=1.0)
+        assert reached is not None
+        assert reached.distance(goal) <= 0.001
+        assert reached.angle_to(goal) <= 0.01
+        assert close(arm.get_tcp_pose().rpy, start.rpy, 0.01)
+        # The move has ended when move_l returns: the next one is not refused as "moving".
+        back = arm.move_l(start)
+        assert back is not None and back.distance(start) <= 0.001
+
+
+def test_joint_moves_arrive(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        assert arm.set_mode(armgate.Mode.JOINT) == armgate.Mode.JOINT
+        q = arm.get_joints()
+        q[0] += 0.05
+        reached = arm.move_j(q)
+        assert reached is not None and math.dist(reached, q) <= 0.001
+        # With a duration: a one-point joint sequence.
+        q[5] -= 0.05
+        started = time.monotonic()
+        reached = arm.move_j(q, time=1.0)
+        assert reached is not None and math.dist(reached, q) <= 0.001
+        assert time.monotonic() - started >= 0.9
+
+
+def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.set_mode("joint")
+        q0 = arm.get_joints()
+        a = [q0[0] + 0.03] + q0[1:]
+        b = [q0[0] + 0.06] + q0[1:]
+        reached = arm.run_via([(a, 0.5), (b, 0.5)])
+        assert isinstance(reached, list) and math.dist(reached, b) <= 0.001
+
+
+def test_temperatures_of_every_drive(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        temperatures = arm.get_temperatures()
+        assert len(temperatures) == 6
+        # The simulated Whistle starts at 25 degC; a drive not read yet has no reading.
+        assert all(t is None or 24.0 <= t <= 45.0 for t in temperatures)
+
+
+def test_off_and_on_and_their_refusals(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.off()
+        with pytest.raises(armgate.ArmDidNotStop) as stop:
+            arm.off()
+        assert stop.value.text.startswith("ER10 ")
+        # The drives take a few cycles to stop; ON is refused until they have.
+        deadline = time.monotonic() + 5
+        while True:
+            try:
+                arm.on()
+                break
+            except armgate.ArmDidNotStart:
+                assert time.monotonic() < deadline
+                time.sleep(0.05)
+        # ON while starting asks for what is under way (or, on an older controller, is
+        # refused); once the drives run it is refused.
+        wait_running(arm)
+        with pytest.raises(armgate.ArmDidNotStart):
+            arm.on()
+
+
+def test_status_or_a_clear_error_from_an_older_controller(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        try:
+            status = arm.get_status()
+        except armgate.ControllerTooOld as e:
+            assert "SQ" in str(e)
+            return
+        assert status.name == "ranger-mk1"
+        assert status.joint_count == 6
+        assert status.mode == armgate.Mode.OFF
+        assert status.motion == armgate.Motion.IDLE
+        assert status.drive_fault == 0
+        assert status.uptime > 0
+
+
+def test_an_eight_joint_arm_uses_both_banks(mk2) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk2.port) as arm:
+        assert arm.joint_count == 8
+        assert close(arm.get_joints(), mk2.home()["joints"])
+        q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]
+        arm.recalibrate(q)
+        assert close(arm.get_joints(), q, 1e-4)
+        assert len(arm.get_temperatures()) == 8
+        arm.set_mode("joint")
+        q[6] += 0.04
+        q[7] -= 0.04
+        reached = arm.move_j(q)
+        assert reached is not None and close(reached, q, 1e-3)
+        with pytest.raises(ValueError):
+            arm.move_j(q[:6])
+
+
+def test_nothing_listening_is_reported(sim_factory) -> None:  # type: ignore[no-untyped-def]
+    from conftest import free_port
+
+    with armgate.Arm("127.0.0.1", port=free_port(), timeout=0.05) as arm:
+        with pytest.raises((armgate.ControllerUnreachable, armgate.ReplyTimeout)):
+            arm.get_tcp_pose()
