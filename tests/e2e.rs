@@ -603,7 +603,7 @@ fn datagrams_from_outside_the_allow_list_are_dropped_and_counted() {
         eprintln!("skipped for the firmware: --allow and --duration are armgate-sim's");
         return;
     }
-    // Loopback plus 10.0.0.0/8; the datagrams come from this machine's own network address.
+    // Loopback plus 198.51.100.0/24 (documentation range); the datagrams come from this machine's own network address.
     let Some(own) = non_loopback_address() else {
         eprintln!("skipped: this machine has no address besides loopback");
         return;
@@ -614,7 +614,7 @@ fn datagrams_from_outside_the_allow_list_are_dropped_and_counted() {
             "--listen",
             "0.0.0.0:0",
             "--allow",
-            "10.0.0.0/8",
+            "198.51.100.0/24",
             "--duration",
             "2",
         ],

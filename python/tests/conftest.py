@@ -89,15 +89,14 @@ class Sim:
             [str(sim_binary()), "--robot", str(self.robot), "--print-home"],
             capture_output=True, text=True, check=True,
         ).stdout
-        numbers = lambda line: [float(v) for v in re.findall(r"-?\d+\.\d+", line)]  # noqa: E731
-        lines = {line.split(":")[0].strip(): line for line in out.splitlines()}
-        joints_line = lines["home joints"]
-        count = int(re.search(r"len: (\d+)", joints_line).group(1))
+        numbers = lambda line: [float(v) for v in re.findall(r"-?\d+\.\d+", line.split(":", 1)[1])]  # noqa: E731
+        # "home joints (rad; m for prismatic joints): ..." -> key "home joints".
+        lines = {line.split(":")[0].split("(")[0].strip(): line for line in out.splitlines()}
         return {
-            "joints": numbers(joints_line)[:count],
-            "xyz": numbers(lines["tool position (m)"]),
-            "quaternion": numbers(lines["tool quaternion (x y z w)"]),
-            "rpy": numbers(lines["tool RPY (rad)"]),
+            "joints": numbers(lines["home joints"]),
+            "xyz": numbers(lines["tool position"]),
+            "quaternion": numbers(lines["tool quaternion"]),
+            "rpy": numbers(lines["tool RPY"]),
         }
 
     def stop(self) -> None:
