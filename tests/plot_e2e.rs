@@ -37,6 +37,9 @@ fn a_logged_session_plots_with_its_moves_and_mode_changes() {
         .to_owned();
 
     let mut arm = Client::connect(addr.as_str()).unwrap();
+    // A few ticks in mode off first: the cycle handles a request in the tick it arrives for,
+    // so a CM sent before the first tick would leave no "off" row in the log.
+    std::thread::sleep(std::time::Duration::from_millis(200));
     arm.set_mode(Mode::Joint).unwrap();
     let mut q = arm.joints(6).unwrap();
     q[0] += 0.1;
