@@ -5,8 +5,9 @@
 # drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
 # ranger-mk1's 3 cm/s).
 #
-# Not run: `cargo test` (CI's own step), the nightly fuzzer, and `armgate teleop` (it needs a
-# terminal; tests cover it at the state level).
+# Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
+# terminal; tests cover it at the state level) and `armgate plot` (it needs the logs of a
+# `--log-dir` session; tests/plot_e2e.rs makes one and plots it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -101,6 +102,7 @@ while IFS= read -r line; do
         cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
         case $cmd in
             *teleop*) echo "skipped: $cmd (needs a terminal)" ;;
+            "armgate plot"*) echo "skipped: $cmd (needs a --log-dir session: tests/plot_e2e.rs runs one and plots it)" ;;
             *) run "$cmd" ;;
         esac
     done
