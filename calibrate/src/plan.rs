@@ -63,17 +63,12 @@ pub fn random_poses(
         if poses.len() == count {
             break;
         }
-        let q: Vec<f64> = chain
-            .min()
-            .iter()
-            .zip(chain.max())
-            .map(|(lo, hi)| rng.uniform(*lo, *hi))
-            .collect();
+        let q = chain.random_joints(&mut rng);
         if chain
             .forward(&q)
             .is_ok_and(|tool| workspace.allows(&tool.translation.vector))
         {
-            poses.push(q);
+            poses.push(q.to_vec());
         }
     }
     if poses.len() < count {

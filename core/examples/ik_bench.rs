@@ -92,12 +92,7 @@ fn main() {
         };
         let mid = chain.mid_range();
         for k in 0..samples {
-            let q: Vec<f64> = chain
-                .min()
-                .iter()
-                .zip(chain.max())
-                .map(|(lo, hi)| rng.uniform(*lo, *hi))
-                .collect();
+            let q = chain.random_joints(&mut rng);
             let target = chain.forward(&q).unwrap();
 
             let t0 = Instant::now();

@@ -40,7 +40,7 @@ fn the_base_frame_moves_every_pose() {
     let (a, b) = (Chain::new(&plain), Chain::new(&placed));
     let mut rng = SplitMix64::new(7);
     for _ in 0..20 {
-        let q = common::random_q(&a, &mut rng);
+        let q = a.random_joints(&mut rng);
         let expected = base * a.forward(&q).unwrap();
         assert!(math::dist(&b.forward(&q).unwrap(), &expected) < 1e-12);
     }
@@ -54,9 +54,9 @@ fn beta_turns_about_y_after_a() {
     let chain = Chain::new(&config);
     let mut rng = SplitMix64::new(8);
     for _ in 0..20 {
-        let q = common::random_q(&chain, &mut rng);
+        let q = chain.random_joints(&mut rng);
         let mut expected = Frame::identity();
-        for (j, qi) in config.joints.iter().zip(&q) {
+        for (j, qi) in config.joints.iter().zip(q.iter()) {
             let x = Frame::from_parts(
                 Vector3::new(j.a, 0.0, 0.0).into(),
                 Rotation3::from_euler_angles(j.alpha, 0.0, 0.0),

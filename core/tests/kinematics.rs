@@ -22,12 +22,12 @@ fn jacobian_matches_finite_differences() {
     for (name, config) in common::all_robots() {
         let chain = Chain::new(&config);
         for _ in 0..20 {
-            let q = common::random_q(&chain, &mut rng);
+            let q = chain.random_joints(&mut rng);
             let j = chain.jacobian(&q).unwrap();
             let f0 = chain.forward(&q).unwrap();
             let h = 1e-7;
             for i in 0..chain.dof() {
-                let mut qh = q.clone();
+                let mut qh = q;
                 qh[i] += h;
                 let d = math::diff(&f0, &chain.forward(&qh).unwrap());
                 let numeric = d / h;
@@ -48,7 +48,7 @@ fn link_frames_end_at_the_tool() {
     let mut rng = SplitMix64::new(2);
     for (name, config) in common::all_robots() {
         let chain = Chain::new(&config);
-        let q = common::random_q(&chain, &mut rng);
+        let q = chain.random_joints(&mut rng);
         let mut links = [Frame::identity(); MAX_JOINTS];
         let tool = chain.link_frames(&q, &mut links).unwrap();
         assert_eq!(tool, chain.forward(&q).unwrap(), "{name}");
@@ -76,7 +76,7 @@ fn tracking_ik_round_trips_within_limits() {
         let mut converged = 0;
         let trials = 300;
         for _ in 0..trials {
-            let q = common::random_q(&chain, &mut rng);
+            let q = chain.random_joints(&mut rng);
             let target = chain.forward(&q).unwrap();
             let seed: Vec<f64> = q.iter().map(|v| v + rng.uniform(-0.1, 0.1)).collect();
             let result = chain.solve_tracking(&target, &seed, &config.ik).unwrap();
@@ -106,7 +106,7 @@ fn global_ik_round_trips_from_mid_range() {
         let trials = 200;
         let mut converged = 0;
         for k in 0..trials {
-            let q = common::random_q(&chain, &mut rng);
+            let q = chain.random_joints(&mut rng);
             let target = chain.forward(&q).unwrap();
             let result = chain.solve_global(&target, &mid, &config.ik, k).unwrap();
             assert!(chain.within_limits(&result.solution().q), "{name}");
@@ -243,7 +243,7 @@ fn joint_rates_reproduce_the_twist() {
     for (name, config) in common::all_robots() {
         let chain = Chain::new(&config);
         for _ in 0..20 {
-            let q = common::random_q(&chain, &mut rng);
+            let q = chain.random_joints(&mut rng);
             let j = chain.jacobian(&q).unwrap();
             if chain.manipulability(&q).unwrap() < 1e-3 || chain.dof() < 6 {
                 continue;

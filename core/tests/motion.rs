@@ -761,12 +761,7 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
     let mut rng = SplitMix64::new(16);
     let (mut accepted, mut refused) = (0, 0);
     while accepted + refused < 40 {
-        let q: Vec<f64> = chain
-            .min()
-            .iter()
-            .zip(chain.max())
-            .map(|(lo, hi)| rng.uniform(*lo, *hi))
-            .collect();
+        let q = chain.random_joints(&mut rng);
         let start = chain.forward(&q).unwrap();
         let dir = Vector3::new(
             rng.uniform(-1.0, 1.0),

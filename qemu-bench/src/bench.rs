@@ -100,15 +100,11 @@ pub fn run(counter: &Counter) -> bool {
 
 fn measure_robot(config: &ValidRobot) -> Results {
     let chain = Chain::new(config);
-    let n = chain.dof();
     let mut results = Results::default();
     let mut rng = SplitMix64::new(SEED);
     let mut goals = SplitMix64::new(LINE_SEED);
     for sample in 0..SAMPLES {
-        let mut q = Joints::zeros(n);
-        for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
-            *v = rng.uniform(*lo, *hi);
-        }
+        let q = chain.random_joints(&mut rng);
 
         let angle = q.first().copied().unwrap_or(0.0);
         let (ticks, _) = measure(|| libm::sincos(black_box(angle)));

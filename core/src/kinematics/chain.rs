@@ -7,6 +7,7 @@ use super::joints::Joints;
 use crate::MAX_JOINTS;
 use crate::config::{JointType, RobotConfig, ValidRobot};
 use crate::math::{self, Frame};
+use crate::rng::SplitMix64;
 
 /// Why a kinematics call was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -113,6 +114,16 @@ impl Chain {
     /// True if joint `i` is prismatic.
     pub fn is_prismatic(&self, i: usize) -> bool {
         self.links.get(i).is_some_and(|l| l.prismatic)
+    }
+
+    /// A configuration drawn uniformly within the joint limits: test poses, benchmarks and
+    /// calibration plans.
+    pub fn random_joints(&self, rng: &mut SplitMix64) -> Joints {
+        let mut q = Joints::zeros(self.n);
+        for (v, (lo, hi)) in q.iter_mut().zip(self.min().iter().zip(self.max())) {
+            *v = rng.uniform(*lo, *hi);
+        }
+        q
     }
 
     /// The middle of every joint range.

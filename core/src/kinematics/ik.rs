@@ -556,13 +556,7 @@ mod tests {
         let (chain, ik) = ranger();
         let mut rng = crate::rng::SplitMix64::new(3);
         for k in 0..200 {
-            let q: Joints = {
-                let mut q = chain.mid_range();
-                for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
-                    *v = rng.uniform(*lo, *hi);
-                }
-                q
-            };
+            let q = chain.random_joints(&mut rng);
             let target = chain.forward(&q).unwrap();
             let mut steps = 0u32;
             let result = chain

@@ -6,8 +6,6 @@ pub mod experiments;
 use std::path::PathBuf;
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::kinematics::Chain;
-use armgate_core::rng::SplitMix64;
 
 /// The workspace's `robots/` folder.
 pub fn robots_dir() -> PathBuf {
@@ -32,14 +30,4 @@ pub fn all_robots() -> Vec<(String, ValidRobot)> {
         .collect();
     names.sort();
     names.into_iter().map(|n| (n.clone(), robot(&n))).collect()
-}
-
-/// A configuration drawn uniformly within the joint limits.
-pub fn random_q(chain: &Chain, rng: &mut SplitMix64) -> Vec<f64> {
-    chain
-        .min()
-        .iter()
-        .zip(chain.max())
-        .map(|(lo, hi)| rng.uniform(*lo, *hi))
-        .collect()
 }
