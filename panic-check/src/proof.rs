@@ -4,8 +4,8 @@
 use core::hint::black_box;
 
 use armgate_core::config::{
-    BaseConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType,
-    RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
+    JointType, RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
 };
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
@@ -78,6 +78,7 @@ fn robot() -> Option<ValidRobot> {
             boxes: heapless::Vec::new(),
         },
         ik: IkConfig::default(),
+        blend: BlendConfig::default(),
     };
     black_box(config).validate().ok()
 }

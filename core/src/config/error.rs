@@ -50,6 +50,8 @@ pub enum ConfigReason {
     },
     /// A fraction must be greater than 0 and at most 1.
     NotAFraction,
+    /// A number must be zero or more.
+    Negative,
 }
 
 impl ConfigError {
@@ -77,6 +79,7 @@ impl fmt::Display for ConfigReason {
             Self::NoJoints => "a robot needs at least one joint",
             Self::NotFinite => "must be a finite number (not NaN or infinite)",
             Self::NotPositive => "must be greater than zero",
+            Self::Negative => "must be zero or more",
             Self::MinAboveMax => "minimum is greater than maximum",
             Self::NodeIdOutOfRange => "node id must be 0 (no drive) or 1..=127",
             Self::DuplicateNodeId => "node id is used by an earlier joint",

@@ -15,9 +15,9 @@ mod valid;
 
 pub use error::{ConfigError, ConfigReason};
 pub use robot::{
-    BaseConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType,
-    MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig, ToolConfig,
-    WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
+    JointType, MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig,
+    ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};

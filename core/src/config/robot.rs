@@ -47,6 +47,9 @@ pub struct RobotConfig {
     /// Inverse-kinematics tuning; defaults suit every shipped arm.
     #[serde(default)]
     pub ik: IkConfig,
+    /// Default blend tolerances of via points; absent = 0, stop at every via point (the seed).
+    #[serde(default)]
+    pub blend: BlendConfig,
 }
 
 /// Whether a joint turns (revolute) or slides (prismatic).
@@ -183,6 +186,19 @@ pub struct WorkspaceConfig {
     pub boxes: Vec<[f64; 6], MAX_BOXES>,
 }
 
+/// How closely a via-point sequence passes its intermediate via points (docs/motion.md,
+/// "Blended via points"): within this distance of a via point the sequence blends into the
+/// next leg without stopping. 0 stops at every via point and checks that it was reached, as
+/// the seed did. A slot's own tolerance (`VT`, `jT`) overrides the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BlendConfig {
+    /// Cartesian via points: m + rad (the via-point distance, spec §4.4), ≥ 0.
+    pub cartesian: f64,
+    /// Joint via points: Euclidean over the joints, rad (m for prismatic joints), ≥ 0.
+    pub joint: f64,
+}
+
 /// Inverse-kinematics tuning.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -292,7 +308,9 @@ impl RobotConfig {
         for b in &self.workspace.boxes {
             check_box(b).map_err(|r| top("workspace.boxes", r))?;
         }
-        self.ik.validate().map_err(|(f, r)| top(f, r))
+        self.ik.validate().map_err(|(f, r)| top(f, r))?;
+        not_negative(self.blend.cartesian).map_err(|r| top("blend.cartesian", r))?;
+        not_negative(self.blend.joint).map_err(|r| top("blend.joint", r))
     }
 
     /// The drives' worst-case streaming load (drives/load.rs, with the default heartbeat) must
@@ -386,6 +404,15 @@ impl IkConfig {
         if self.global_iterations == 0 {
             return Err(("ik.global_iterations", ConfigReason::NotPositive));
         }
+        Ok(())
+    }
+}
+
+fn not_negative(v: f64) -> Result<(), ConfigReason> {
+    finite(v)?;
+    if v < 0.0 {
+        Err(ConfigReason::Negative)
+    } else {
         Ok(())
     }
 }

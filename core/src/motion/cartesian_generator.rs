@@ -1,6 +1,7 @@
 //! The Cartesian trajectory generator (spec §4.2) and the shape sources in its place (§4.5).
 
 use super::Refusal;
+use super::blend::{self, Axes, Blended, LegChain, acceleration_budget, blend_start, quicker};
 use super::shape::Shape;
 use super::straight_line::StraightLine;
 use crate::math::{self, Frame, Rotation3, Vector3};
@@ -18,19 +19,83 @@ pub struct CartesianGenerator {
     motion: Option<Motion>,
 }
 
+/// One straight Cartesian leg: the tool origin along the segment, the orientation about the
+/// fixed axis of the relative rotation, both stretched to the leg's duration.
+#[derive(Clone, Copy, Debug)]
+struct Leg {
+    start: Frame,
+    goal: Frame,
+    translation: StraightLine,
+    /// A path from the zero rotation vector to the relative rotation's vector.
+    rotation: StraightLine,
+    duration: f64,
+}
+
+impl blend::Leg for Leg {
+    fn duration(&self) -> f64 {
+        self.duration
+    }
+}
+
+impl Leg {
+    /// The minimum-time leg from `start` to `goal` lasting at least `min_duration`, within the
+    /// per-component limits.
+    fn plan(
+        start: Frame,
+        goal: Frame,
+        min_duration: f64,
+        v_max: &[f64; 6],
+        a_max: &[f64; 6],
+    ) -> Self {
+        let delta = math::diff(&start, &goal);
+        let [vl @ .., _, _, _] = *v_max;
+        let [al @ .., _, _, _] = *a_max;
+        let [_, _, _, va @ ..] = *v_max;
+        let [_, _, _, aa @ ..] = *a_max;
+        let (from, to): ([f64; 3], [f64; 3]) = (
+            start.translation.vector.into(),
+            goal.translation.vector.into(),
+        );
+        let translation = StraightLine::plan(&from, &to, &vl, &al);
+        let [_, _, _, angular @ ..]: [f64; 6] = delta.into();
+        let rotation = StraightLine::plan(&[0.0; 3], &angular, &va, &aa);
+        let duration = translation
+            .duration()
+            .max(rotation.duration())
+            .max(min_duration);
+        Self {
+            start,
+            goal,
+            translation: translation.stretched(duration),
+            rotation: rotation.stretched(duration),
+            duration,
+        }
+    }
+
+    /// The pose at leg time `t` (the goal from the end on).
+    fn pose(&self, t: f64) -> Frame {
+        if t >= self.duration {
+            return self.goal;
+        }
+        let mut p = [0.0; 3];
+        let mut r = [0.0; 3];
+        self.translation.point(t, &mut p);
+        self.rotation.point(t, &mut r);
+        let turn = Rotation3::new(Vector3::from(r));
+        Frame::from_parts(Vector3::from(p).into(), turn * self.start.rotation)
+    }
+
+    fn is_stuck(&self) -> bool {
+        self.translation.is_stuck() || self.rotation.is_stuck()
+    }
+}
+
 // Unboxed on purpose: no heap, and only one motion exists at a time.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug)]
 enum Motion {
-    Move {
-        start: Frame,
-        goal: Frame,
-        translation: StraightLine,
-        /// A path from the zero rotation vector to the relative rotation's vector.
-        rotation: StraightLine,
-        elapsed: f64,
-        duration: f64,
-    },
+    /// Straight legs, blended into one another (one leg unless a sequence blends).
+    Move(LegChain<Leg>),
     Shape {
         shape: Shape,
         start: Frame,
@@ -43,30 +108,30 @@ enum Motion {
 impl Motion {
     fn elapsed(&self) -> f64 {
         match self {
-            Self::Move { elapsed, .. } | Self::Shape { elapsed, .. } => *elapsed,
+            Self::Move(chain) => chain.elapsed(),
+            Self::Shape { elapsed, .. } => *elapsed,
         }
     }
 
     /// The set-point at motion time `t`, and whether the motion has ended by then.
     fn sample(&self, t: f64) -> (Frame, bool) {
         match *self {
-            Self::Move {
-                start,
-                goal,
-                translation,
-                rotation,
-                duration,
-                ..
-            } => {
-                if t >= duration {
-                    return (goal, true);
+            Self::Move(ref chain) => {
+                if chain.ended_at(t) {
+                    return (chain.leg().goal, true);
                 }
-                let mut p = [0.0; 3];
-                let mut r = [0.0; 3];
-                translation.point(t, &mut p);
-                rotation.point(t, &mut r);
-                let turn = Rotation3::new(Vector3::from(r));
-                let pose = Frame::from_parts(Vector3::from(p).into(), turn * start.rotation);
+                let Blended {
+                    lead: (leg, t_lead),
+                    residual,
+                } = chain.at(t);
+                let mut pose = leg.pose(t_lead);
+                if let Some((tail, t_tail)) = residual {
+                    // The way the finishing leg still has to go, added on.
+                    let rest = tail.pose(t_tail);
+                    pose.translation.vector +=
+                        rest.translation.vector - tail.goal.translation.vector;
+                    pose.rotation = rest.rotation * tail.goal.rotation.inverse() * pose.rotation;
+                }
                 (pose, false)
             }
             Self::Shape {
@@ -109,32 +174,65 @@ impl CartesianGenerator {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let start = self.setpoint;
-        let delta = math::diff(&start, &goal);
-        let [vl @ .., _, _, _] = self.v_max;
-        let [al @ .., _, _, _] = self.a_max;
-        let [_, _, _, va @ ..] = self.v_max;
-        let [_, _, _, aa @ ..] = self.a_max;
-        let (from, to): ([f64; 3], [f64; 3]) = (
-            start.translation.vector.into(),
-            goal.translation.vector.into(),
+        let leg = Leg::plan(self.setpoint, goal, min_duration, &self.v_max, &self.a_max);
+        self.motion = Some(Motion::Move(LegChain::new(leg)));
+        Ok(leg.duration)
+    }
+
+    /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
+    /// ends and blends with it, passing its goal within `tolerance` (m + rad, the via-point
+    /// metric) without stopping (see `blend.rs`). Where the limits allow no overlap it starts
+    /// when the running move ends. Refused unless a move runs with nothing queued.
+    pub fn blend_into(
+        &mut self,
+        goal: Frame,
+        min_duration: f64,
+        tolerance: f64,
+    ) -> Result<(), Refusal> {
+        let Some(Motion::Move(chain)) = &mut self.motion else {
+            return Err(Refusal::NoGoal);
+        };
+        if !chain.accepts_next() {
+            return Err(Refusal::Busy);
+        }
+        let current = *chain.leg();
+        let full = Leg::plan(current.goal, goal, min_duration, &self.v_max, &self.a_max);
+        let ([vl @ .., _, _, _], [_, _, _, va @ ..]) = (self.v_max, self.v_max);
+        let ([al @ .., _, _, _], [_, _, _, aa @ ..]) = (self.a_max, self.a_max);
+        let (mut linear, mut angular) = ([0.0; 3], [0.0; 3]);
+        acceleration_budget(&current.translation, &al, &mut linear);
+        acceleration_budget(&current.rotation, &aa, &mut angular);
+        let [l0, l1, l2] = linear;
+        let [r0, r1, r2] = angular;
+        let budget = [l0, l1, l2, r0, r1, r2];
+        let next = Leg::plan(current.goal, goal, min_duration, &self.v_max, &budget);
+        let axes = [
+            Axes {
+                current: &current.translation,
+                next: &next.translation,
+                v_max: &vl,
+            },
+            Axes {
+                current: &current.rotation,
+                next: &next.rotation,
+                v_max: &va,
+            },
+        ];
+        let start = blend_start(
+            &axes,
+            current.duration,
+            next.duration,
+            tolerance,
+            chain.elapsed(),
         );
-        let translation = StraightLine::plan(&from, &to, &vl, &al);
-        let [_, _, _, angular @ ..]: [f64; 6] = delta.into();
-        let rotation = StraightLine::plan(&[0.0; 3], &angular, &va, &aa);
-        let duration = translation
-            .duration()
-            .max(rotation.duration())
-            .max(min_duration);
-        self.motion = Some(Motion::Move {
-            start,
-            goal,
-            translation: translation.stretched(duration),
-            rotation: rotation.stretched(duration),
-            elapsed: 0.0,
-            duration,
-        });
-        Ok(duration)
+        let budgeted = (!next.is_stuck()).then_some((next, start));
+        let (leg, start) = quicker(current.duration, full, budgeted);
+        chain.queue(leg, start)
+    }
+
+    /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).
+    pub fn accepts_blend(&self) -> bool {
+        matches!(&self.motion, Some(Motion::Move(chain)) if chain.accepts_next())
     }
 
     /// Starts `shape` at the current set-point. Refused while moving.
@@ -190,7 +288,8 @@ impl CartesianGenerator {
             return;
         };
         match motion {
-            Motion::Move { elapsed, .. } | Motion::Shape { elapsed, .. } => *elapsed = t,
+            Motion::Move(chain) => chain.commit(t),
+            Motion::Shape { elapsed, .. } => *elapsed = t,
         }
         if ended {
             self.hold(setpoint);

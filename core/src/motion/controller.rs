@@ -116,8 +116,8 @@ impl Controller {
                 cartesian.max_velocity,
                 cartesian.max_acceleration,
             ),
-            joint_sequence: Sequence::new(JOINT_TOLERANCES),
-            cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES),
+            joint_sequence: Sequence::new(JOINT_TOLERANCES, config.blend.joint),
+            cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES, config.blend.cartesian),
             command: None,
             measured: None,
             period: config.control_period,
@@ -178,6 +178,14 @@ impl Controller {
             let _ = self.joint_generator.move_to(via.point, via.min_duration);
         }
         note_sequence(step, events);
+        // A blend stays within the joint limits: its path lies within the tolerance of the via
+        // point, which is kept below the via point's distance to the nearest limit.
+        let (chain, generator) = (&self.chain, &mut self.joint_generator);
+        self.joint_sequence.hand_over(
+            generator.accepts_blend(),
+            |q| limit_margin(chain, q),
+            |via, tolerance| generator.blend_into(via.point, via.min_duration, tolerance),
+        );
         let (setpoint, finished) = self.joint_generator.advance(self.period);
         events.motion_finished |= finished && !self.joint_sequence.is_running();
         setpoint
@@ -207,6 +215,14 @@ impl Controller {
                 .move_to(via.point, via.min_duration);
         }
         note_sequence(step, events);
+        // A blend's set-points stay within the tolerance of the via point, kept below its
+        // distance to the workspace's edges and boxes.
+        let (workspace, generator) = (&self.workspace, &mut self.cartesian_generator);
+        self.cartesian_sequence.hand_over(
+            generator.accepts_blend(),
+            |pose| workspace.margin(&pose.translation.vector),
+            |via, tolerance| generator.blend_into(via.point, via.min_duration, tolerance),
+        );
 
         let seed = self.command.unwrap_or(*q_m);
         let t0 = self.cartesian_generator.elapsed();
@@ -400,6 +416,28 @@ impl Controller {
         self.joint_sequence.set(index, via)
     }
 
+    /// Sets the blend tolerance of Cartesian via point `index` (0..20; m + rad, ≥ 0; `None`:
+    /// the robot file's default) and returns the one now in effect there.
+    pub fn set_cartesian_blend(
+        &mut self,
+        index: usize,
+        tolerance: Option<f64>,
+    ) -> Result<f64, Refusal> {
+        self.cartesian_sequence.set_blend(index, tolerance)?;
+        self.cartesian_sequence.blend(index)
+    }
+
+    /// Sets the blend tolerance of joint via point `index` (0..20; rad, ≥ 0; `None`: the robot
+    /// file's default) and returns the one now in effect there.
+    pub fn set_joint_blend(
+        &mut self,
+        index: usize,
+        tolerance: Option<f64>,
+    ) -> Result<f64, Refusal> {
+        self.joint_sequence.set_blend(index, tolerance)?;
+        self.joint_sequence.blend(index)
+    }
+
     /// Empties the Cartesian via-point slots.
     pub fn clear_cartesian_via(&mut self) {
         self.cartesian_sequence.clear();
@@ -557,6 +595,15 @@ fn note_sequence<P>(step: SequenceStep<P>, events: &mut Events) {
         SequenceStep::Aborted => events.sequence_aborted = true,
         SequenceStep::Wait | SequenceStep::MoveTo(_) => {}
     }
+}
+
+/// How far `q` lies inside the joint limits: its distance to the nearest one (0 if outside).
+fn limit_margin(chain: &Chain, q: &Joints) -> f64 {
+    q.iter()
+        .zip(chain.min().iter().zip(chain.max()))
+        .map(|(v, (lo, hi))| (v - lo).min(hi - v))
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0)
 }
 
 /// Euclidean distance between joint vectors (the joint sequence's reach metric).

@@ -1,28 +1,56 @@
 //! The joint-space trajectory generator (spec §4.3).
 
 use super::Refusal;
+use super::blend::{self, Axes, Blended, LegChain, acceleration_budget, blend_start, quicker};
 use super::straight_line::StraightLine;
 use crate::kinematics::Joints;
 
 /// Rest-to-rest joint moves along a straight line in joint space, synchronised so that all
 /// joints finish together. Starts from its own set-point (the commanded state), so starting a
-/// move never jumps.
+/// move never jumps. A via-point sequence may blend the next move into the running one
+/// ([`blend_into`](Self::blend_into)).
 #[derive(Clone, Debug)]
 pub struct JointGenerator {
     setpoint: Joints,
     v_max: Joints,
     a_max: Joints,
-    motion: Option<Motion>,
+    motion: Option<LegChain<Leg>>,
 }
 
+/// One straight move in joint space.
 #[derive(Clone, Copy, Debug)]
-struct Motion {
+struct Leg {
     line: StraightLine,
     goal: Joints,
-    /// Motion time reached so far (s).
-    elapsed: f64,
     /// Can exceed the line's duration: a zero-length move still lasts `min_duration`.
     duration: f64,
+}
+
+impl blend::Leg for Leg {
+    fn duration(&self) -> f64 {
+        self.duration
+    }
+}
+
+impl Leg {
+    fn plan(start: &Joints, goal: Joints, min_duration: f64, v_max: &[f64], a_max: &[f64]) -> Self {
+        let line = StraightLine::plan(start, &goal, v_max, a_max);
+        let duration = line.duration().max(min_duration);
+        Self {
+            line: line.stretched(duration),
+            goal,
+            duration,
+        }
+    }
+
+    /// The joints at leg time `t` (the goal from the end on), written to `out`.
+    fn point(&self, t: f64, out: &mut Joints) {
+        if t >= self.duration {
+            *out = self.goal;
+        } else {
+            self.line.point(t, out);
+        }
+    }
 }
 
 impl JointGenerator {
@@ -48,30 +76,85 @@ impl JointGenerator {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let line = StraightLine::plan(&self.setpoint, &goal, &self.v_max, &self.a_max);
-        let duration = line.duration().max(min_duration);
-        self.motion = Some(Motion {
-            line: line.stretched(duration),
-            goal,
-            elapsed: 0.0,
-            duration,
-        });
-        Ok(duration)
+        let leg = Leg::plan(&self.setpoint, goal, min_duration, &self.v_max, &self.a_max);
+        self.motion = Some(LegChain::new(leg));
+        Ok(leg.duration)
+    }
+
+    /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
+    /// ends and blends with it, passing its goal within `tolerance` (Euclidean, rad or m)
+    /// without stopping (see `blend.rs`). Where the limits allow no overlap it starts when the
+    /// running move ends. Refused unless a move runs with nothing queued.
+    pub fn blend_into(
+        &mut self,
+        goal: Joints,
+        min_duration: f64,
+        tolerance: f64,
+    ) -> Result<(), Refusal> {
+        let Some(chain) = &mut self.motion else {
+            return Err(Refusal::NoGoal);
+        };
+        if !chain.accepts_next() {
+            return Err(Refusal::Busy);
+        }
+        let current = *chain.leg();
+        let full = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &self.a_max);
+        let mut budget = self.a_max;
+        acceleration_budget(&current.line, &self.a_max, &mut budget);
+        let next = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &budget);
+        let axes = [Axes {
+            current: &current.line,
+            next: &next.line,
+            v_max: &self.v_max,
+        }];
+        let start = blend_start(
+            &axes,
+            current.duration,
+            next.duration,
+            tolerance,
+            chain.elapsed(),
+        );
+        let budgeted = (!next.line.is_stuck()).then_some((next, start));
+        let (leg, start) = quicker(current.duration, full, budgeted);
+        chain.queue(leg, start)
+    }
+
+    /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).
+    pub fn accepts_blend(&self) -> bool {
+        self.motion.as_ref().is_some_and(LegChain::accepts_next)
     }
 
     /// Advances the motion by `dt` seconds and returns the set-point. At the end of a move the
     /// set-point is exactly the goal and the generator holds it; the flag is true on that tick.
     pub fn advance(&mut self, dt: f64) -> (Joints, bool) {
-        let Some(m) = &mut self.motion else {
+        let Some(chain) = &mut self.motion else {
             return (self.setpoint, false);
         };
-        m.elapsed += dt;
-        if m.elapsed >= m.duration {
-            let goal = m.goal;
+        let t = chain.elapsed() + dt;
+        if chain.ended_at(t) {
+            let goal = chain.leg().goal;
             self.hold(goal);
             return (self.setpoint, true);
         }
-        m.line.point(m.elapsed, &mut self.setpoint);
+        let Blended {
+            lead: (leg, t_lead),
+            residual,
+        } = chain.at(t);
+        leg.point(t_lead, &mut self.setpoint);
+        if let Some((tail, t_tail)) = residual {
+            // The way the finishing move still has to go, added on.
+            let mut rest = tail.goal;
+            tail.point(t_tail, &mut rest);
+            for ((q, r), g) in self
+                .setpoint
+                .iter_mut()
+                .zip(rest.iter())
+                .zip(tail.goal.iter())
+            {
+                *q += r - g;
+            }
+        }
+        chain.commit(t);
         (self.setpoint, false)
     }
 

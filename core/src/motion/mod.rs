@@ -8,6 +8,7 @@
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
 //! * [`IdealArm`], [`RateLimitedArm`]: simulated arms.
 
+mod blend;
 mod cartesian_generator;
 mod controller;
 mod events;

@@ -42,30 +42,60 @@ pub struct Tolerances {
 /// Twenty via-point slots and the state of a running sequence.
 ///
 /// A sequence runs the contiguous ready slots from 0 up to the first empty one. Starting it
-/// copies those points, so slots may be rewritten while it runs without affecting it.
+/// copies those points and their blend tolerances, so slots may be rewritten while it runs
+/// without affecting it.
+///
+/// Each slot has a blend tolerance (a default, or its own): a via point with a tolerance
+/// above 0 is passed within it without stopping, the next leg blended in by the generator
+/// ([`hand_over`](Self::hand_over)); with 0 the arm stops there and the reach check runs.
 #[derive(Clone, Debug)]
 pub struct Sequence<P> {
     slots: [Option<ViaPoint<P>>; VIA_SLOTS],
     tolerances: Tolerances,
+    /// The blend tolerance of slots without their own.
+    default_blend: f64,
+    /// Slots' own blend tolerances.
+    blends: [Option<f64>; VIA_SLOTS],
     run: Option<Run<P>>,
 }
 
 #[derive(Clone, Debug)]
 struct Run<P> {
     points: [Option<ViaPoint<P>>; VIA_SLOTS],
+    /// The blend tolerance at each point.
+    blends: [f64; VIA_SLOTS],
     /// Index of the leg's target that is running or just completed.
     current: usize,
     failed_checks: u32,
 }
 
 impl<P: Copy> Sequence<P> {
-    /// Empty slots.
-    pub fn new(tolerances: Tolerances) -> Self {
+    /// Empty slots, blending with `default_blend` (≥ 0; 0 stops at every via point).
+    pub fn new(tolerances: Tolerances, default_blend: f64) -> Self {
         Self {
             slots: [None; VIA_SLOTS],
             tolerances,
+            default_blend,
+            blends: [None; VIA_SLOTS],
             run: None,
         }
+    }
+
+    /// Sets the blend tolerance of slot `index` (`None`: the default again). Refused unless
+    /// finite and ≥ 0.
+    pub fn set_blend(&mut self, index: usize, tolerance: Option<f64>) -> Result<(), Refusal> {
+        if tolerance.is_some_and(|t| !(t.is_finite() && t >= 0.0)) {
+            return Err(Refusal::InvalidNumber);
+        }
+        let slot = self.blends.get_mut(index).ok_or(Refusal::IndexOutOfRange)?;
+        *slot = tolerance;
+        Ok(())
+    }
+
+    /// The blend tolerance in effect for slot `index`.
+    pub fn blend(&self, index: usize) -> Result<f64, Refusal> {
+        let own = self.blends.get(index).ok_or(Refusal::IndexOutOfRange)?;
+        Ok(own.unwrap_or(self.default_blend))
     }
 
     /// Stores via point `index` (the seed wrote out of bounds for indices ≥ 128, spec §9 item
@@ -76,9 +106,10 @@ impl<P: Copy> Sequence<P> {
         Ok(())
     }
 
-    /// Empties every slot.
+    /// Empties every slot and forgets the slots' own blend tolerances.
     pub fn clear(&mut self) {
         self.slots = [None; VIA_SLOTS];
+        self.blends = [None; VIA_SLOTS];
     }
 
     /// Starts the sequence; returns the first leg to command.
@@ -101,8 +132,13 @@ impl<P: Copy> Sequence<P> {
         {
             *dst = *src;
         }
+        let mut blends = [self.default_blend; VIA_SLOTS];
+        for (dst, own) in blends.iter_mut().zip(&self.blends) {
+            *dst = own.unwrap_or(self.default_blend);
+        }
         self.run = Some(Run {
             points,
+            blends,
             current: 0,
             failed_checks: 0,
         });
@@ -122,6 +158,34 @@ impl<P: Copy> Sequence<P> {
     /// True while a sequence runs.
     pub fn is_running(&self) -> bool {
         self.run.is_some()
+    }
+
+    /// Blends the next leg into the running one if the via point it runs to has a blend
+    /// tolerance: `blend(next via point, tolerance)` queues it in the generator, with the
+    /// tolerance limited to `margin(via point)` (how far the path may stray there, e.g. to a
+    /// joint or workspace limit). Call while the leg's generator runs and `ready` says it
+    /// accepts a next leg. The blended via point is not reach-checked: the arm only passes it.
+    pub fn hand_over(
+        &mut self,
+        ready: bool,
+        margin: impl FnOnce(&P) -> f64,
+        blend: impl FnOnce(ViaPoint<P>, f64) -> Result<(), Refusal>,
+    ) {
+        let Some(run) = &mut self.run else {
+            return;
+        };
+        let (Some(Some(corner)), Some(Some(next)), Some(tolerance)) = (
+            run.points.get(run.current),
+            run.points.get(run.current + 1),
+            run.blends.get(run.current),
+        ) else {
+            return;
+        };
+        let tolerance = tolerance.min(margin(&corner.point));
+        if ready && tolerance > 0.0 && blend(*next, tolerance).is_ok() {
+            run.current += 1;
+            run.failed_checks = 0;
+        }
     }
 
     /// Steps the sequence once the leg's generator is idle: checks how far the arm is from the

@@ -93,6 +93,27 @@ impl StraightLine {
     pub fn speed(&self, t: f64) -> f64 {
         self.profile.velocity(t)
     }
+
+    /// Distance travelled along the segment by time `t`.
+    pub fn progress(&self, t: f64) -> f64 {
+        self.profile.position(t)
+    }
+
+    /// The unit direction, one entry per axis (zeros for a zero-length move).
+    pub fn direction(&self) -> &[f64] {
+        self.direction.get(..self.n).unwrap_or(&[])
+    }
+
+    /// True if the limits allow no motion along a segment of nonzero length (a zero limit on
+    /// an axis it moves along): the profile would jump to the goal.
+    pub fn is_stuck(&self) -> bool {
+        self.length() > 0.0 && !(self.profile.duration() > 0.0)
+    }
+
+    /// The largest path acceleration of the (stretched) profile.
+    pub fn peak_acceleration(&self) -> f64 {
+        self.profile.peak_acceleration()
+    }
 }
 
 #[cfg(test)]

@@ -32,6 +32,26 @@ impl Workspace {
             })
     }
 
+    /// How far `p` may move in any direction and stay allowed: its distance to the nearest face
+    /// of the bounds or exclusion box (0 if not allowed; never NaN).
+    pub fn margin(&self, p: &Vector3<f64>) -> f64 {
+        if !self.allows(p) {
+            return 0.0;
+        }
+        let [x0, x1, y0, y1, z0, z1] = self.bounds;
+        let inside = [p.x - x0, x1 - p.x, p.y - y0, y1 - p.y, p.z - z0, z1 - p.z]
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        self.boxes
+            .iter()
+            .map(|&[x0, x1, y0, y1, z0, z1]| {
+                let gap = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
+                let (dx, dy, dz) = (gap(p.x, x0, x1), gap(p.y, y0, y1), gap(p.z, z0, z1));
+                libm::sqrt(dx * dx + dy * dy + dz * dz)
+            })
+            .fold(inside, f64::min)
+    }
+
     /// Where the segment from `a` to `b` first enters an exclusion box (strictly inside), as
     /// a fraction 0..=1 of the way; `None` if it never does. (The bounds need no such check:
     /// a segment between two points inside a box stays inside it.)

@@ -1,0 +1,329 @@
+//! Blending consecutive straight legs through a via point without stopping.
+//!
+//! The seed stops at every via point (spec §4.4). A blend starts the next leg before the
+//! current one has ended and *superposes* them: while both run, the set-point is the next
+//! leg's point plus the way the current leg still has to go (its point minus its goal). Both
+//! legs are rest-to-rest profiles, so the sum is continuous in position and velocity (and in
+//! acceleration when the profiles are), and it is exactly the current leg before the overlap
+//! and exactly the next leg after it.
+//!
+//! The overlap starts at the earliest time `t_s` on the current leg's clock at which
+//!
+//! * the current leg's remaining way and the next leg's way by the current leg's end are each
+//!   at most half the tolerance, so every set-point of the overlap lies within the tolerance
+//!   of the via point (triangle inequality);
+//! * per axis, the current leg's speed at `t_s` plus the next leg's speed at the end of the
+//!   overlap stays within the axis's velocity limit. The overlap lies in the second half of
+//!   the current leg and the first half of the next (symmetric profiles: slowing down and
+//!   speeding up respectively), so those two speeds bound the sum throughout.
+//!
+//! Every condition only gets easier as `t_s` grows and all hold at the current leg's end, so
+//! `t_s` is found by bisection with a fixed number of steps. Accelerations cannot be traded
+//! against `t_s`: the next leg is instead planned within what the current leg's acceleration
+//! leaves of each axis's limit ([`acceleration_budget`]).
+
+use super::Refusal;
+use super::straight_line::StraightLine;
+
+/// Bisection steps for the blend start: 2⁻⁶⁰ of the leg's duration.
+const BISECTION_STEPS: usize = 60;
+
+/// A leg of a blended chain: anything with a duration.
+pub(crate) trait Leg: Copy {
+    /// Duration of the leg (s).
+    fn duration(&self) -> f64;
+}
+
+/// Which legs make the set-point at some time.
+pub(crate) struct Blended<'a, L> {
+    /// The leg whose point is the set-point, and the time on its clock.
+    pub lead: (&'a L, f64),
+    /// A leg still finishing, and the time on its clock: its remaining way (its point minus
+    /// its goal) is added to the lead's point.
+    pub residual: Option<(&'a L, f64)>,
+}
+
+/// The running leg, the one it blends out of and the one it will blend into.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LegChain<L> {
+    leg: L,
+    /// Time on the running leg's clock (s).
+    elapsed: f64,
+    /// The previous leg and the time on its clock when this one started.
+    tail: Option<(L, f64)>,
+    /// The next leg and the time on this leg's clock at which it starts.
+    next: Option<(L, f64)>,
+}
+
+impl<L: Leg> LegChain<L> {
+    /// A chain of one leg, at its start.
+    pub fn new(leg: L) -> Self {
+        Self {
+            leg,
+            elapsed: 0.0,
+            tail: None,
+            next: None,
+        }
+    }
+
+    /// The running leg.
+    pub fn leg(&self) -> &L {
+        &self.leg
+    }
+
+    /// Time reached on the running leg's clock.
+    pub fn elapsed(&self) -> f64 {
+        self.elapsed
+    }
+
+    /// True if a next leg may be queued: none is queued yet.
+    pub fn accepts_next(&self) -> bool {
+        self.next.is_none()
+    }
+
+    /// Queues `next` to start at `start` on the running leg's clock (not before now, nor after
+    /// the running leg's end).
+    pub fn queue(&mut self, next: L, start: f64) -> Result<(), Refusal> {
+        if self.next.is_some() {
+            return Err(Refusal::Busy);
+        }
+        let start = start.max(self.elapsed).min(self.leg.duration());
+        self.next = Some((next, start));
+        Ok(())
+    }
+
+    /// The legs that make the set-point at time `t` on the running leg's clock.
+    pub fn at(&self, t: f64) -> Blended<'_, L> {
+        if let Some((next, start)) = &self.next
+            && t >= *start
+        {
+            return Blended {
+                lead: (next, t - start),
+                residual: Some((&self.leg, t)),
+            };
+        }
+        Blended {
+            lead: (&self.leg, t),
+            residual: self
+                .tail
+                .as_ref()
+                .map(|(tail, offset)| (tail, t + offset))
+                .filter(|(tail, time)| *time < tail.duration()),
+        }
+    }
+
+    /// True if the whole chain has ended by time `t` (the tail always ends before the leg).
+    pub fn ended_at(&self, t: f64) -> bool {
+        self.next.is_none() && t >= self.leg.duration()
+    }
+
+    /// Advances to time `t` on the running leg's clock, switching to the next leg once it has
+    /// started.
+    pub fn commit(&mut self, t: f64) {
+        self.elapsed = t;
+        if let Some((next, start)) = self.next
+            && t >= start
+        {
+            self.tail = Some((self.leg, start));
+            self.leg = next;
+            self.elapsed = t - start;
+            self.next = None;
+        }
+        if self
+            .tail
+            .is_some_and(|(tail, offset)| self.elapsed + offset >= tail.duration())
+        {
+            self.tail = None;
+        }
+    }
+}
+
+/// One group of axes of a blend: the same straight line of the current and of the next leg
+/// (e.g. the translation) and the axes' velocity limits.
+pub(crate) struct Axes<'a> {
+    /// The current leg's line, stretched to its leg's duration.
+    pub current: &'a StraightLine,
+    /// The next leg's line, stretched to its leg's duration.
+    pub next: &'a StraightLine,
+    /// Velocity limit per axis.
+    pub v_max: &'a [f64],
+}
+
+/// The time on the current leg's clock (of `current_duration`) at which the next leg (of
+/// `next_duration`) may start so that the blend stays within `tolerance` of the via point and
+/// within the velocity limits (see the module doc); not before `not_before`. The current leg's
+/// end (no overlap) if the tolerance is 0 or not a number.
+pub(crate) fn blend_start(
+    axes: &[Axes<'_>],
+    current_duration: f64,
+    next_duration: f64,
+    tolerance: f64,
+    not_before: f64,
+) -> f64 {
+    let end = current_duration;
+    let fits = |t: f64| {
+        let overlap = end - t;
+        let (mut remaining, mut travelled) = (0.0, 0.0);
+        let mut fast = false;
+        for group in axes {
+            remaining += group.current.length() - group.current.progress(t);
+            travelled += group.next.progress(overlap);
+            let (v_current, v_next) = (group.current.speed(t), group.next.speed(overlap));
+            fast |= group
+                .current
+                .direction()
+                .iter()
+                .zip(group.next.direction())
+                .zip(group.v_max)
+                .any(|((a, b), v)| v_current * libm::fabs(*a) + v_next * libm::fabs(*b) > *v);
+        }
+        !fast && remaining <= tolerance / 2.0 && travelled <= tolerance / 2.0
+    };
+    let earliest = (end / 2.0).max(end - next_duration / 2.0).max(not_before);
+    if !(tolerance > 0.0) || !(earliest < end) {
+        return end;
+    }
+    if fits(earliest) {
+        return earliest;
+    }
+    // `fits` is false at `lo` and true at `hi` (at the end both legs are at the via point and
+    // at rest).
+    let (mut lo, mut hi) = (earliest, end);
+    for _ in 0..BISECTION_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if fits(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
+/// The next leg and when it starts on the current leg's clock: the one planned within the
+/// acceleration budget, starting at `start`, if it is possible and ends earlier than the
+/// `full` leg started at the current leg's end (a tight budget can make a blend slower than a
+/// stop); otherwise that.
+pub(crate) fn quicker<L: Leg>(
+    current_duration: f64,
+    full: L,
+    budgeted: Option<(L, f64)>,
+) -> (L, f64) {
+    match budgeted {
+        Some((leg, start)) if start + leg.duration() < current_duration + full.duration() => {
+            (leg, start)
+        }
+        _ => (full, current_duration),
+    }
+}
+
+/// What the current leg's acceleration leaves of each axis's limit `a_max`, written to
+/// `budget`: the next leg planned within it keeps the sum of both legs' accelerations within
+/// `a_max` while they overlap.
+pub(crate) fn acceleration_budget(current: &StraightLine, a_max: &[f64], budget: &mut [f64]) {
+    let peak = current.peak_acceleration();
+    for ((b, a), d) in budget.iter_mut().zip(a_max).zip(current.direction()) {
+        *b = (a - peak * libm::fabs(*d)).max(0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    struct Span(f64);
+
+    impl Leg for Span {
+        fn duration(&self) -> f64 {
+            self.0
+        }
+    }
+
+    #[test]
+    fn a_chain_switches_legs_at_the_start_of_the_next_and_drops_the_finished_tail() {
+        let mut chain = LegChain::new(Span(2.0));
+        chain.queue(Span(3.0), 1.5).unwrap();
+        assert_eq!(chain.queue(Span(1.0), 1.8), Err(Refusal::Busy));
+        let before = chain.at(1.0);
+        assert_eq!((before.lead.0, before.lead.1), (&Span(2.0), 1.0));
+        assert!(before.residual.is_none());
+        let during = chain.at(1.75);
+        assert_eq!((during.lead.0, during.lead.1), (&Span(3.0), 0.25));
+        assert_eq!(
+            during.residual.map(|(l, t)| (*l, t)),
+            Some((Span(2.0), 1.75))
+        );
+        chain.commit(1.75);
+        assert_eq!(chain.leg(), &Span(3.0));
+        assert_eq!(chain.elapsed(), 0.25);
+        assert!(chain.accepts_next());
+        assert_eq!(chain.at(0.4).residual.map(|(_, t)| t), Some(1.9));
+        chain.commit(0.5);
+        assert!(chain.at(0.6).residual.is_none());
+        assert!(!chain.ended_at(2.9));
+        assert!(chain.ended_at(3.0));
+    }
+
+    #[test]
+    fn a_queued_leg_never_starts_after_the_running_one_ends() {
+        let mut chain = LegChain::new(Span(1.0));
+        chain.queue(Span(1.0), 7.0).unwrap();
+        assert!(!chain.ended_at(1.0));
+        assert_eq!(chain.at(1.0).lead.1, 0.0);
+    }
+
+    /// Two unit legs at right angles (x then y), 1 m/s, 1 m/s².
+    fn corner() -> (StraightLine, StraightLine) {
+        let limits = [1.0, 1.0];
+        (
+            StraightLine::plan(&[0.0, 0.0], &[1.0, 0.0], &limits, &limits),
+            StraightLine::plan(&[1.0, 0.0], &[1.0, 1.0], &limits, &limits),
+        )
+    }
+
+    #[test]
+    fn the_blend_starts_where_the_remaining_way_is_half_the_tolerance() {
+        let (a, b) = corner();
+        let axes = [Axes {
+            current: &a,
+            next: &b,
+            v_max: &[1.0, 1.0],
+        }];
+        // A triangle profile of 2 s: the last 0.1 m take √0.2 s.
+        let start = blend_start(&axes, a.duration(), b.duration(), 0.2, 0.0);
+        assert!((start - (2.0 - 0.2f64.sqrt())).abs() < 1e-12, "{start}");
+        assert_eq!(blend_start(&axes, 2.0, 2.0, 0.0, 0.0), 2.0);
+        assert_eq!(blend_start(&axes, 2.0, 2.0, f64::NAN, 0.0), 2.0);
+        // A huge tolerance: from halfway, where speeds (1 + 0 at the start of the overlap)
+        // fit the limit.
+        assert_eq!(blend_start(&axes, 2.0, 2.0, 10.0, 0.0), 1.0);
+        assert_eq!(blend_start(&axes, 2.0, 2.0, 10.0, 1.5), 1.5);
+    }
+
+    #[test]
+    fn a_blend_along_one_axis_keeps_the_summed_speed_within_the_limit() {
+        // x then further along x: speeds add on the same axis.
+        let limits = [1.0];
+        let a = StraightLine::plan(&[0.0], &[4.0], &limits, &limits);
+        let b = StraightLine::plan(&[4.0], &[8.0], &limits, &limits);
+        let axes = [Axes {
+            current: &a,
+            next: &b,
+            v_max: &limits,
+        }];
+        let start = blend_start(&axes, a.duration(), b.duration(), 10.0, 0.0);
+        let overlap = a.duration() - start;
+        assert!(a.speed(start) + b.speed(overlap) <= 1.0 + 1e-12);
+        // Both at 1 m/s² on x: the speeds sum to 2·(5 − t) ≤ 1 from t = 4.5 s.
+        assert!((overlap - 0.5).abs() < 1e-12, "{overlap}");
+    }
+
+    #[test]
+    fn the_budget_is_what_the_current_leg_leaves() {
+        let (a, _) = corner();
+        let mut budget = [0.0; 2];
+        acceleration_budget(&a, &[1.0, 2.0], &mut budget);
+        assert_eq!(budget, [0.0, 2.0]);
+    }
+}
