@@ -5,15 +5,20 @@
     missing_docs,
     clippy::unwrap_used,
     clippy::panic,
-    clippy::indexing_slicing
+    clippy::indexing_slicing,
+    clippy::approx_constant
 )]
 
 mod common;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
+use armgate_core::math::Vector3;
 use armgate_core::motion::{Controller, IdealArm, Mode};
-use common::experiments::{rectangle_config, run_rectangle};
+use armgate_core::rng::SplitMix64;
+use common::experiments::{
+    RECTANGLE, RectangleRun, blended, corner_passes, rectangle_config, run_rectangle,
+};
 
 /// FNV-1a over the bits of every value: a fingerprint of a whole set-point trace.
 fn fingerprint(values: impl IntoIterator<Item = f64>) -> u64 {
@@ -27,24 +32,45 @@ fn fingerprint(values: impl IntoIterator<Item = f64>) -> u64 {
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
+/// The four via points of the joint sequence on ranger-mk1 (the third with T = 3 s).
+fn joint_points() -> Vec<([f64; 6], f64)> {
+    (0..4)
+        .map(|k| {
+            let mut q = MK1_READY;
+            q[0] += if k % 2 == 0 { 0.3 } else { -0.1 } * (k + 1) as f64;
+            q[2] -= 0.2 * (k + 1) as f64;
+            q[4] += 0.1 * k as f64;
+            (q, if k == 2 { 3.0 } else { 0.0 })
+        })
+        .collect()
+}
+
 /// A joint sequence of four points on ranger-mk1 with an ideal arm: every joint command.
 fn joint_sequence_commands(config: &ValidRobot) -> Vec<Joints> {
+    run_joint_sequence(config, &joint_points(), &[])
+}
+
+/// Runs `points` (joints, minimum duration) as a joint sequence from MK1_READY with the slots'
+/// own blend tolerances `blends` (slot, tolerance); every joint command until it finishes.
+fn run_joint_sequence(
+    config: &ValidRobot,
+    points: &[([f64; 6], f64)],
+    blends: &[(usize, f64)],
+) -> Vec<Joints> {
     let mut ctrl = Controller::new(config);
     let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
     let period = config.control_period;
     let mut now = 0.0;
     ctrl.step(now, &arm.measured()).unwrap();
     ctrl.set_mode(Mode::Joint).unwrap();
-    for k in 0..4 {
-        let mut q = MK1_READY;
-        q[0] += if k % 2 == 0 { 0.3 } else { -0.1 } * (k + 1) as f64;
-        q[2] -= 0.2 * (k + 1) as f64;
-        q[4] += 0.1 * k as f64;
-        ctrl.set_joint_via(k, &q, if k == 2 { 3.0 } else { 0.0 })
-            .unwrap();
+    for (k, (q, t)) in points.iter().enumerate() {
+        ctrl.set_joint_via(k, q, *t).unwrap();
+    }
+    for (k, tolerance) in blends {
+        assert_eq!(ctrl.set_joint_blend(*k, Some(*tolerance)), Ok(*tolerance));
     }
     ctrl.start_joint_sequence().unwrap();
-    let mut commands = Vec::new();
+    let mut commands = vec![arm.measured()];
     for _ in 0..100_000 {
         now += period;
         let out = ctrl.step(now, &arm.measured()).unwrap();
@@ -73,7 +99,7 @@ fn tolerance_zero_reproduces_the_unblended_set_points_bit_for_bit() {
     );
     let joints = joint_sequence_commands(&common::robot("ranger-mk1"));
     let joint_print = fingerprint(
-        joints
+        joints[1..]
             .iter()
             .flat_map(|q| q.iter().copied().collect::<Vec<_>>()),
     );
@@ -84,4 +110,306 @@ fn tolerance_zero_reproduces_the_unblended_set_points_bit_for_bit() {
     );
     assert_eq!(e8_print, E8_FINGERPRINT);
     assert_eq!(joint_print, JOINT_FINGERPRINT);
+}
+
+/// Per-axis checks on set-points sampled every `dt`: speed (first difference) within `v_max`,
+/// acceleration (second difference) within `a_max`: the velocity is continuous and the limits
+/// hold, whatever happens at the via points. Returns the lowest speed (norm over the axes)
+/// around any of `corners`: within `radius` of one (0 where the motion stops there).
+fn check_limits(
+    samples: &[Vec<f64>],
+    dt: f64,
+    v_max: &[f64],
+    a_max: &[f64],
+    corners: &[&[f64]],
+    radius: f64,
+) -> f64 {
+    let speeds: Vec<Vec<f64>> = samples
+        .windows(2)
+        .map(|w| w[1].iter().zip(&w[0]).map(|(b, a)| (b - a) / dt).collect())
+        .collect();
+    for (k, v) in speeds.iter().enumerate() {
+        for (axis, (s, limit)) in v.iter().zip(v_max).enumerate() {
+            assert!(
+                s.abs() <= limit * (1.0 + 1e-9),
+                "tick {k} axis {axis}: speed {s} > {limit}"
+            );
+        }
+    }
+    for (k, w) in speeds.windows(2).enumerate() {
+        for (axis, ((b, a), limit)) in w[1].iter().zip(&w[0]).zip(a_max).enumerate() {
+            let acc = (b - a) / dt;
+            assert!(
+                acc.abs() <= limit * (1.0 + 1e-6),
+                "tick {k} axis {axis}: acceleration {acc} > {limit}"
+            );
+        }
+    }
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    samples
+        .iter()
+        .zip(&speeds)
+        .filter(|(p, _)| {
+            corners.iter().any(|c| {
+                norm(
+                    &p.iter()
+                        .zip(c.iter())
+                        .map(|(a, b)| a - b)
+                        .collect::<Vec<_>>(),
+                ) <= radius
+            })
+        })
+        .map(|(_, v)| norm(v))
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn setpoints(run: &RectangleRun) -> Vec<Vec<f64>> {
+    run.trace
+        .iter()
+        .map(|t| t.setpoint.iter().copied().collect())
+        .collect()
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let d = b - a;
+    let s = ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+    (p - (a + d * s)).norm()
+}
+
+#[test]
+fn e8_blended_passes_each_corner_within_the_tolerance_without_stopping_and_within_the_limits() {
+    let config = rectangle_config(common::robot("hybrid"));
+    let stopping = run_rectangle(&config);
+    let corners: Vec<Vector3<f64>> = RECTANGLE.iter().map(|p| Vector3::from(*p)).collect();
+    let inner_corners: Vec<&[f64]> = RECTANGLE[1..4].iter().map(|c| &c[..]).collect();
+    for tolerance in [0.002, 0.01, 0.05] {
+        let run = run_rectangle(&blended(config.clone(), tolerance));
+        // Each corner's overlap lasts √(tolerance / a_max) (the last half tolerance of a
+        // deceleration at 0.1 m/s²): three corners.
+        let saved = stopping.duration - run.duration;
+        assert!(
+            saved > 2.5 * (tolerance / 0.1f64).sqrt(),
+            "{tolerance}: saved {saved} s"
+        );
+        for (k, pass) in corner_passes(&run).into_iter().enumerate() {
+            // Corners are cut, but by no more than the tolerance.
+            assert!(
+                pass <= tolerance + 1e-9,
+                "{tolerance}: corner {k} passed at {pass}"
+            );
+            assert!(
+                pass > tolerance / 10.0,
+                "{tolerance}: corner {k} not cut: {pass}"
+            );
+        }
+        // Every set-point is on the rectangle or within the tolerance of a corner.
+        for tick in &run.trace {
+            let p = tick.setpoint;
+            let on_edge = corners
+                .windows(2)
+                .map(|w| segment_distance(&p, &w[0], &w[1]))
+                .fold(f64::INFINITY, f64::min);
+            let near_corner = corners
+                .iter()
+                .map(|c| (p - c).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                on_edge < 1e-12 || near_corner <= tolerance + 1e-12,
+                "{tolerance}: {p:?} at t = {} strays",
+                tick.t
+            );
+        }
+        let [v_max @ .., _, _, _] = config.cartesian.max_velocity;
+        let [a_max @ .., _, _, _] = config.cartesian.max_acceleration;
+        let slowest = check_limits(
+            &setpoints(&run),
+            config.control_period,
+            &v_max,
+            &a_max,
+            &inner_corners,
+            tolerance,
+        );
+        println!("{tolerance}: slowest {slowest}");
+        assert!(
+            slowest > 0.01,
+            "{tolerance}: stops on the way ({slowest} m/s)"
+        );
+        assert_eq!(run.divergence_ticks, 0);
+    }
+    // The unblended rectangle stops at each corner.
+    let [v_max @ .., _, _, _] = config.cartesian.max_velocity;
+    let [a_max @ .., _, _, _] = config.cartesian.max_acceleration;
+    let slowest = check_limits(
+        &setpoints(&stopping),
+        config.control_period,
+        &v_max,
+        &a_max,
+        &inner_corners,
+        0.002,
+    );
+    assert!(slowest < a_max[0] * config.control_period, "{slowest}");
+}
+
+/// Checks a blended joint run: ends exactly at the last point, passes every intermediate
+/// point within `tolerance[k]`, and keeps the joint generator's limits.
+fn check_joint_run(
+    config: &ValidRobot,
+    points: &[([f64; 6], f64)],
+    commands: &[Joints],
+    tolerance: &[f64],
+) -> f64 {
+    assert_eq!(&commands.last().unwrap()[..], &points.last().unwrap().0[..]);
+    for ((q, _), tol) in points.iter().zip(tolerance) {
+        let pass = commands
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .zip(q)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(pass <= tol + 1e-12, "passed {q:?} at {pass} > {tol}");
+    }
+    let samples: Vec<Vec<f64>> = commands.iter().map(|q| q.to_vec()).collect();
+    let v_max = config.per_joint(|j| j.max_velocity);
+    let a_max = config.per_joint(|j| j.max_acceleration);
+    let inner: Vec<&[f64]> = points[..points.len() - 1]
+        .iter()
+        .map(|(q, _)| &q[..])
+        .collect();
+    let radius = tolerance.iter().copied().fold(0.001, f64::max);
+    check_limits(
+        &samples,
+        config.control_period,
+        &v_max,
+        &a_max,
+        &inner,
+        radius,
+    )
+}
+
+/// A sweep on ranger-mk1 whose consecutive legs never reverse a joint.
+fn sweep_points() -> Vec<([f64; 6], f64)> {
+    let steps = [
+        [0.3, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, -0.3, 0.0, 0.2, 0.0],
+        [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.1, 0.0, -0.2, 0.0, 0.1, 0.0],
+    ];
+    let mut q = MK1_READY;
+    steps
+        .iter()
+        .map(|step| {
+            q.iter_mut().zip(step).for_each(|(v, d)| *v += d);
+            (q, 0.0)
+        })
+        .collect()
+}
+
+#[test]
+fn joint_sequence_blends_within_the_tolerance_and_the_limits() {
+    let config = common::robot("ranger-mk1");
+    let points = sweep_points();
+    let stopping = run_joint_sequence(&config, &points, &[]);
+    let blended = run_joint_sequence(
+        &config.clone().edit(|c| c.blend.joint = 0.05).unwrap(),
+        &points,
+        &[],
+    );
+    assert!(
+        blended.len() + 30 < stopping.len(),
+        "{} vs {} ticks",
+        blended.len(),
+        stopping.len()
+    );
+    let slowest = check_joint_run(&config, &points, &blended, &[0.05, 0.05, 0.05, 0.0]);
+    println!("joint slowest {slowest}");
+    assert!(slowest > 0.03, "stopped on the way ({slowest} rad/s)");
+    // A slot's own 0 overrides the default: the arm stops exactly at point 1.
+    let mixed = run_joint_sequence(
+        &config.clone().edit(|c| c.blend.joint = 0.05).unwrap(),
+        &points,
+        &[(1, 0.0)],
+    );
+    check_joint_run(&config, &points, &mixed, &[0.05, 0.0, 0.05, 0.0]);
+    // And a slot's own tolerance blends without a default.
+    let own = run_joint_sequence(&config, &points, &[(0, 0.02), (2, 0.1)]);
+    let slowest = check_joint_run(&config, &points, &own, &[0.02, 0.0, 0.1, 0.0]);
+    println!("joint slowest with a stop {slowest}");
+    assert!(
+        slowest < 0.015,
+        "does not stop at point 1 ({slowest} rad/s)"
+    );
+}
+
+#[test]
+fn random_joint_sequences_blend_within_the_tolerance_and_the_limits() {
+    let config = common::robot("ranger-mk1");
+    let chain = armgate_core::kinematics::Chain::new(&config);
+    let mut rng = SplitMix64::new(13);
+    for case in 0..40 {
+        let n = 2 + (rng.next_u64() % 5) as usize;
+        let points: Vec<([f64; 6], f64)> = (0..n)
+            .map(|_| {
+                let mut q = MK1_READY;
+                for (v, (lo, hi)) in q.iter_mut().zip(chain.min().iter().zip(chain.max())) {
+                    *v = (*v + rng.uniform(-0.4, 0.4)).clamp(*lo, *hi);
+                }
+                let t = if rng.next_f64() < 0.3 {
+                    rng.uniform(0.0, 4.0)
+                } else {
+                    0.0
+                };
+                (q, t)
+            })
+            .collect();
+        let tolerances: Vec<f64> = (0..n)
+            .map(|k| {
+                if k + 1 < n {
+                    rng.uniform(0.0, 0.2)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let blends: Vec<(usize, f64)> = tolerances.iter().copied().enumerate().collect();
+        let commands = run_joint_sequence(&config, &points, &blends);
+        let _ = case;
+        check_joint_run(&config, &points, &commands, &tolerances);
+    }
+}
+
+#[test]
+fn a_via_point_at_a_joint_limit_is_reached_exactly() {
+    let config = common::robot("ranger-mk1")
+        .edit(|c| c.blend.joint = 0.1)
+        .unwrap();
+    let chain = armgate_core::kinematics::Chain::new(&config);
+    let mut at_limit = MK1_READY;
+    at_limit[1] = chain.max()[1];
+    let mut after = at_limit;
+    after[0] += 0.3;
+    let points = [(at_limit, 0.0), (after, 0.0)];
+    let commands = run_joint_sequence(&config, &points, &[]);
+    check_joint_run(&config, &points, &commands, &[0.0, 0.0]);
+    assert!(commands.iter().all(|q| q[1] <= chain.max()[1]));
+}
+
+#[test]
+#[ignore]
+fn print_e8() {
+    let config = rectangle_config(common::robot("hybrid"));
+    let stopping = run_rectangle(&config);
+    for tolerance in [0.0, 0.002, 0.01, 0.05, 0.1] {
+        let run = run_rectangle(&blended(config.clone(), tolerance));
+        println!(
+            "{tolerance} {} {} {:?}",
+            run.duration,
+            stopping.duration - run.duration,
+            corner_passes(&run)
+        );
+    }
 }

@@ -200,8 +200,18 @@ impl CartesianGenerator {
         let ([vl @ .., _, _, _], [_, _, _, va @ ..]) = (self.v_max, self.v_max);
         let ([al @ .., _, _, _], [_, _, _, aa @ ..]) = (self.a_max, self.a_max);
         let (mut linear, mut angular) = ([0.0; 3], [0.0; 3]);
-        acceleration_budget(&current.translation, &al, &mut linear);
-        acceleration_budget(&current.rotation, &aa, &mut angular);
+        acceleration_budget(
+            &current.translation,
+            full.translation.direction(),
+            &al,
+            &mut linear,
+        );
+        acceleration_budget(
+            &current.rotation,
+            full.rotation.direction(),
+            &aa,
+            &mut angular,
+        );
         let [l0, l1, l2] = linear;
         let [r0, r1, r2] = angular;
         let budget = [l0, l1, l2, r0, r1, r2];

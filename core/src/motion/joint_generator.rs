@@ -100,7 +100,12 @@ impl JointGenerator {
         let current = *chain.leg();
         let full = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &self.a_max);
         let mut budget = self.a_max;
-        acceleration_budget(&current.line, &self.a_max, &mut budget);
+        acceleration_budget(
+            &current.line,
+            full.line.direction(),
+            &self.a_max,
+            &mut budget,
+        );
         let next = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &budget);
         let axes = [Axes {
             current: &current.line,

@@ -107,7 +107,8 @@ impl StraightLine {
     /// True if the limits allow no motion along a segment of nonzero length (a zero limit on
     /// an axis it moves along): the profile would jump to the goal.
     pub fn is_stuck(&self) -> bool {
-        self.length() > 0.0 && !(self.profile.duration() > 0.0)
+        let moves = self.profile.duration() > 0.0;
+        self.length() > 0.0 && !moves
     }
 
     /// The largest path acceleration of the (stretched) profile.

@@ -38,6 +38,8 @@ pub struct TraceTick {
     pub error: f64,
     /// The IK divergence guard fired (WN22).
     pub diverging: bool,
+    /// The Cartesian set-point's position (m; the tool's if none).
+    pub setpoint: Vector3<f64>,
 }
 
 /// One control tick with an ideal arm: the output, the new joints and the largest joint step.
@@ -173,6 +175,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
             tool: p,
             error: e,
             diverging: out.events.ik_divergence,
+            setpoint: out.setpoint.map_or(p, |f| f.translation.vector),
         });
         sum += e;
         count += 1;
@@ -195,6 +198,26 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
     run.duration = now;
     run.last_joints = arm.measured();
     run
+}
+
+/// How closely the tool passes each intermediate corner of the rectangle (m): the smallest
+/// distance over the run, for corners 1, 2, 3.
+pub fn corner_passes(run: &RectangleRun) -> [f64; 3] {
+    let mut passes = [f64::INFINITY; 3];
+    for (pass, corner) in passes.iter_mut().zip(&RECTANGLE[1..4]) {
+        let corner = Vector3::from(*corner);
+        for tick in &run.trace {
+            *pass = pass.min((tick.tool - corner).norm());
+        }
+    }
+    passes
+}
+
+/// The rectangle config with a default Cartesian blend tolerance (m + rad).
+pub fn blended(config: ValidRobot, tolerance: f64) -> ValidRobot {
+    config
+        .edit(|config| config.blend.cartesian = tolerance)
+        .unwrap()
 }
 
 /// Results of the divergence-guard run.
@@ -282,6 +305,7 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
             tool: p,
             error: distance,
             diverging: out.events.ik_divergence,
+            setpoint: out.setpoint.map_or(p, |f| f.translation.vector),
         });
         if last_leg {
             run.worst_retreat = run.worst_retreat.max(distance - prev_distance);
