@@ -413,3 +413,87 @@ fn print_e8() {
         );
     }
 }
+
+/// `VT`/`jT` through the command handler, literal bytes in and out: set, echo, default again,
+/// refusals; then a joint sequence whose slots were given tolerances this way blends.
+#[test]
+fn vt_and_jt_set_per_slot_tolerances_through_the_handler() {
+    use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
+    let config = common::robot("ranger-mk1")
+        .edit(|c| c.blend.cartesian = 0.004)
+        .unwrap();
+    let mut drives = SimulatedDrives::new(ArmModel::Ideal(IdealArm::new(
+        Joints::from_slice(&MK1_READY).unwrap(),
+    )));
+    let mut handler = CommandHandler::new(&config);
+    let period = config.control_period;
+    let mut now = 0.0;
+    let mut tick = |handler: &mut CommandHandler, drives: &mut SimulatedDrives| {
+        now += period;
+        let out = handler.tick(now, &drives.measured(), drives).unwrap();
+        drives.apply(out.command.as_ref(), period);
+        out
+    };
+    tick(&mut handler, &mut drives);
+
+    // VT slot 2 := 0.01: the reply TV echoes what is now in effect.
+    let mut vt = [0u8; 31];
+    vt[..6].copy_from_slice(&[b'V', b'T', 0x0a, 0xd7, 0x23, 0x3c]);
+    vt[30] = 2;
+    let mut tv = vt;
+    tv[..2].copy_from_slice(b"TV");
+    assert_eq!(handler.handle(&vt, &mut drives), tv);
+    // f0 = −1: back to the robot file's 0.004 (0x3b83126f).
+    vt[2..6].copy_from_slice(&(-1.0f32).to_le_bytes());
+    tv[2..6].copy_from_slice(&[0x6f, 0x12, 0x83, 0x3b]);
+    assert_eq!(handler.handle(&vt, &mut drives), tv);
+    // NaN and slot 20 (or the bank bit) are refused.
+    vt[2..6].copy_from_slice(&f32::NAN.to_le_bytes());
+    assert_eq!(&handler.handle(&vt, &mut drives)[..4], b"ER23");
+    vt[2..6].copy_from_slice(&0.01f32.to_le_bytes());
+    for slot in [20, 0x82] {
+        vt[30] = slot;
+        assert_eq!(&handler.handle(&vt, &mut drives)[..4], b"ER24");
+    }
+
+    // A joint sequence with jT on every intermediate slot blends through them.
+    let points = sweep_points();
+    let mut cm = [0u8; 31];
+    cm[..6].copy_from_slice(&[b'C', b'M', 0x00, 0x00, 0x80, 0x3f]); // mode 1
+    assert_eq!(&handler.handle(&cm, &mut drives)[..2], b"MC");
+    for (k, (q, t)) in points.iter().enumerate() {
+        let mut jv = [0u8; 31];
+        jv[..2].copy_from_slice(b"jV");
+        for (i, v) in q.iter().chain([t]).enumerate() {
+            jv[2 + 4 * i..6 + 4 * i].copy_from_slice(&(*v as f32).to_le_bytes());
+        }
+        jv[30] = k as u8;
+        assert_eq!(&handler.handle(&jv, &mut drives)[..2], b"Vj");
+        if k + 1 < points.len() {
+            let mut jt = [0u8; 31];
+            jt[..6].copy_from_slice(&[b'j', b'T', 0xcd, 0xcc, 0x4c, 0x3d]); // 0.05
+            jt[30] = k as u8;
+            let mut tj = jt;
+            tj[..2].copy_from_slice(b"Tj");
+            assert_eq!(handler.handle(&jt, &mut drives), tj);
+        }
+    }
+    let mut je = [0u8; 31];
+    je[..2].copy_from_slice(b"jE");
+    assert_eq!(&handler.handle(&je, &mut drives)[..2], b"Ej");
+    let mut commands = vec![drives.measured()];
+    for _ in 0..10_000 {
+        let out = tick(&mut handler, &mut drives);
+        commands.extend(out.command);
+        if out.events.sequence_finished {
+            break;
+        }
+    }
+    // The commands are f32 round trips of the points: compare within that.
+    let sent: Vec<([f64; 6], f64)> = points
+        .iter()
+        .map(|(q, t)| (q.map(|v| f64::from(v as f32)), *t))
+        .collect();
+    let slowest = check_joint_run(&config, &sent, &commands, &[0.05, 0.05, 0.05, 0.0]);
+    assert!(slowest > 0.03, "stopped on the way ({slowest} rad/s)");
+}

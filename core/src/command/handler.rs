@@ -2,8 +2,8 @@
 
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
-    Command, DriveStatus, MESSAGE_LEN, Message, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice,
-    Rejection, Reply, Request, RobotName, STATUS_INDEX, Text, VALUES, WorkspaceReason,
+    BlendTolerance, Command, DriveStatus, MESSAGE_LEN, Message, NAME_INDEX, NO_JOINT_TEMPERATURE,
+    Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
@@ -314,6 +314,21 @@ impl CommandHandler {
                     .start_cartesian_sequence()
                     .map_err(refused)?;
                 Ok(null)
+            }
+            Command::ViaTolerance | Command::JointViaTolerance => {
+                // The slot is the whole index byte: 20 and above (bank bit included) are
+                // refused with ER24, as for VP.
+                let tolerance = BlendTolerance::parse(req)
+                    .and_then(|t| t.tolerance)
+                    .map(f64::from);
+                let slot = usize::from(req.index);
+                let in_effect = if cmd == Command::ViaTolerance {
+                    self.controller.set_cartesian_blend(slot, tolerance)
+                } else {
+                    self.controller.set_joint_blend(slot, tolerance)
+                }
+                .map_err(refused)?;
+                Ok(values_reply(cmd, &[in_effect], req.index))
             }
             Command::ViaPoint => {
                 if bank_2 {

@@ -26,6 +26,9 @@ pub enum Command {
     JointReset,
     /// `jV`: store joint via point `index`: joints f0..f5, duration f6.
     JointVia,
+    /// `jT`: set the blend tolerance of joint via point `index` to f0 (rad; negative: the
+    /// robot file's default).
+    JointViaTolerance,
     /// `ON`: start the arm.
     On,
     /// `OF`: stop the arm.
@@ -47,11 +50,14 @@ pub enum Command {
     /// `VP`: store Cartesian via point `index`: position f0..f2, roll/pitch/yaw f3..f5,
     /// duration f6.
     ViaPoint,
+    /// `VT`: set the blend tolerance of Cartesian via point `index` to f0 (m + rad; negative:
+    /// the robot file's default).
+    ViaTolerance,
 }
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 21] = [
+    pub const ALL: [Self; 23] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
@@ -63,6 +69,7 @@ impl Command {
         Self::JointPosition,
         Self::JointReset,
         Self::JointVia,
+        Self::JointViaTolerance,
         Self::On,
         Self::Off,
         Self::Pose,
@@ -73,6 +80,7 @@ impl Command {
         Self::ViaClear,
         Self::ViaExecute,
         Self::ViaPoint,
+        Self::ViaTolerance,
     ];
 
     /// The request's two characters.
@@ -89,6 +97,7 @@ impl Command {
             Self::JointPosition => b"jP",
             Self::JointReset => b"jR",
             Self::JointVia => b"jV",
+            Self::JointViaTolerance => b"jT",
             Self::On => b"ON",
             Self::Off => b"OF",
             Self::Pose => b"PS",
@@ -99,6 +108,7 @@ impl Command {
             Self::ViaClear => b"VC",
             Self::ViaExecute => b"VE",
             Self::ViaPoint => b"VP",
+            Self::ViaTolerance => b"VT",
         }
     }
 

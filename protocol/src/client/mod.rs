@@ -28,8 +28,10 @@
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
+//! * [`BlendTolerance`]: the via points' blend tolerances, `VT` and `jT`.
 
 pub mod banks;
+mod blend;
 mod command;
 mod error;
 mod message;
@@ -42,6 +44,7 @@ mod status;
 mod temperature;
 mod text;
 
+pub use blend::{BlendTolerance, ViaKind};
 pub use command::Command;
 pub use error::Error;
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
