@@ -66,9 +66,13 @@ The file holds up to 20 [[cartesian]] entries or up to 20 [[joint]] entries, not
   q = [1.5708, 0.4, 1.2, 0.0, 1.2, 0.0]   # one value per joint
   time = 3.0
 
+  blend = 0.005             # optional, either kind: pass this point within 0.005 (m + rad,
+                            # or rad for joints) without stopping; 0 stops there
+
 The entries go into via slots 0.. in file order and run: VC, VP 0.., VE (needs mode cart)
-or jC, jV 0.., jE (needs mode joint). The first leg starts wherever the arm is. The wait
-follows the points in order and ends within --tolerance of the last one.
+or jC, jV 0.., jE (needs mode joint), with a VT (jT) for each point with a blend; --blend
+gives every other point one (mm, or mrad for joints). The first leg starts wherever the arm
+is. The wait follows the points in order and ends within --tolerance of the last one.
 
 client/examples/rectangle.toml is a 0.2 m x 0.1 m rectangle for the default robot
 (ranger-mk1): (0, 0.2, 0.8) -> (0.1, 0.2, 0.8) -> (0.1, 0.2, 0.7) -> (-0.1, 0.2, 0.7) ->
@@ -209,6 +213,10 @@ pub enum Cmd {
     Run {
         /// The run file.
         file: PathBuf,
+        /// Blend tolerance, mm (joints: mrad), for every point without its own `blend`: the
+        /// sequence passes through them within it without stopping (VT/jT).
+        #[arg(long)]
+        blend: Option<f64>,
         /// Waiting.
         #[command(flatten)]
         wait: WaitArgs,
@@ -285,6 +293,21 @@ impl WaitArgs {
             timeout: self.wait_timeout.unwrap_or(Duration::from_secs(30) + extra),
             interrupt: interrupt.cloned(),
             ..WaitOptions::default()
+        }
+    }
+
+    /// The options of a wait through via points blended within `blend`: an intermediate
+    /// point counts as passed within the blend plus the usual pass tolerance.
+    fn passing(
+        &self,
+        requested: f64,
+        interrupt: Option<&interrupt::Interrupt>,
+        blend: f64,
+    ) -> WaitOptions {
+        let options = self.options(requested, interrupt);
+        WaitOptions {
+            pass_tolerance: options.pass_tolerance + blend,
+            ..options
         }
     }
 
@@ -618,8 +641,16 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
-        Cmd::Run { file, wait } => {
-            let run = RunFile::load(file, joint_count(cli, client)?)?;
+        Cmd::Run { file, blend, wait } => {
+            if let Some(blend) = blend.filter(|b| !(b.is_finite() && *b >= 0.0)) {
+                return Err(CliError::Usage(format!(
+                    "--blend {blend} must be a number of mm (mrad) ≥ 0"
+                )));
+            }
+            let mut run = RunFile::load(file, joint_count(cli, client)?)?;
+            if let Some(blend) = blend {
+                run.set_default_blend(blend * 1e-3);
+            }
             let interrupt = wait.interrupt();
             client.start_run(&run)?;
             writeln!(
@@ -635,7 +666,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 RunFile::Cartesian(points) => {
                     let total = points.iter().map(|p| p.time).sum();
                     let goals = RunFile::poses(points);
-                    let options = wait.options(total, interrupt.as_ref());
+                    let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
                     let pose = client
                         .wait_through_poses(&goals, &options, pose_progress)
                         .map_err(|e| stop_if_interrupted(client, e))?;
@@ -646,7 +677,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 RunFile::Joint(points) => {
                     let total = points.iter().map(|p| p.time).sum();
                     let goals: Vec<Vec<f64>> = points.iter().map(|p| p.q.clone()).collect();
-                    let options = wait.options(total, interrupt.as_ref());
+                    let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
                     let q = client
                         .wait_through_joints(&goals, &options, joint_progress)
                         .map_err(|e| stop_if_interrupted(client, e))?;
@@ -1205,5 +1236,48 @@ mod tests {
         assert_eq!(chars[..6], [b"SQ", b"SQ", b"VC", b"VP", b"VP", b"VE"]);
         assert_eq!(sent[3][30], 0);
         assert_eq!(sent[4][30], 1);
+    }
+
+    #[test]
+    fn run_with_blend_sends_a_tolerance_per_slot() {
+        let fake = FakeController::spawn(|d| {
+            if &d[..2] == b"SQ" {
+                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
+            }
+            let m = Message::new_checked(d).unwrap();
+            let r = Request::parse(&m).unwrap();
+            let mut reply = Reply::null(r.command);
+            reply.index = r.index;
+            reply.values[0] = r.values[0];
+            if r.command == Command::Pose {
+                reply.values = [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0];
+            }
+            vec![reply.to_bytes().to_vec()]
+        });
+        let file = std::env::temp_dir().join(format!("armgate-blend-{}.toml", std::process::id()));
+        std::fs::write(
+            &file,
+            "[[cartesian]]\nxyz = [0.5, 0.2, 0.1]\nrpy = [0, 0, 0]\nblend = 0.01\n\
+             [[cartesian]]\nxyz = [0.5, 0.2, 0.1]\nrpy = [0, 0, 0]\n",
+        )
+        .unwrap();
+        let args = ["run", file.to_str().unwrap(), "--blend", "2"];
+        let (result, _) = run_with(&fake, &args);
+        std::fs::remove_file(&file).unwrap();
+        result.unwrap();
+        let sent = fake.received();
+        let chars: Vec<&[u8]> = sent.iter().map(|d| &d[..2]).collect();
+        assert_eq!(
+            chars[..7],
+            [b"SQ", b"SQ", b"VC", b"VP", b"VT", b"VP", b"VT"]
+        );
+        // Slot 0 keeps its own 0.01 m, slot 1 gets --blend 2 mm, as f0 (f32, little-endian).
+        assert_eq!(sent[4][2..6], 0.01f32.to_le_bytes());
+        assert_eq!(sent[4][30], 0);
+        assert_eq!(sent[6][2..6], 0.002f32.to_le_bytes());
+        assert_eq!(sent[6][30], 1);
+        let (result, _) = run_with(&fake, &["run", "x.toml", "--blend=-1"]);
+        let error = result.unwrap_err().to_string();
+        assert!(error.contains("--blend -1 must be"), "{error}");
     }
 }

@@ -1,6 +1,8 @@
 //! Typed helpers: one method per protocol command (docs/protocol.md, "Commands").
 
-use armgate_protocol::client::{Command, Reply, Request, UNKNOWN_TEMPERATURE, VALUES};
+use armgate_protocol::client::{
+    BlendTolerance, Command, Reply, Request, UNKNOWN_TEMPERATURE, VALUES, ViaKind,
+};
 
 use crate::banks;
 use crate::{Client, ClientError, Mode, Pose, Quaternion};
@@ -162,6 +164,31 @@ impl Client {
     /// than six joints bank 2 is sent first.
     pub fn via_joint(&mut self, slot: u8, q: &[f64], time: f64) -> Result<(), ClientError> {
         self.write_banks(Command::JointVia, q, slot, time as f32)
+    }
+
+    /// `VT` (Cartesian slots, m + rad) or `jT` (joint slots, rad): the blend tolerance of via
+    /// point `slot` (0..19): the sequence passes it within this distance without stopping; 0
+    /// stops there; `None` gives the slot back the robot file's default. Returns the tolerance
+    /// now in effect for the slot. `VC`/`jC` reset every slot to the default.
+    pub fn via_tolerance(
+        &mut self,
+        kind: ViaKind,
+        slot: u8,
+        tolerance: Option<f64>,
+    ) -> Result<f64, ClientError> {
+        if let Some(t) = tolerance.filter(|t| !(t.is_finite() && *t >= 0.0)) {
+            return Err(ClientError::InvalidArgument(format!(
+                "blend tolerance {t} must be a finite number ≥ 0"
+            )));
+        }
+        let request = BlendTolerance {
+            kind,
+            slot,
+            tolerance: tolerance.map(|t| t as f32),
+        }
+        .to_request();
+        let [in_effect, ..] = self.request(request)?.values;
+        Ok(f64::from(in_effect))
     }
 
     /// `VC`: clears the Cartesian via points (answered `CV`).

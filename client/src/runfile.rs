@@ -12,9 +12,11 @@
 //! [[joint]]
 //! q = [0.0, 0.5, 1.0, 0.0, 0.3, 0.0]   # one value per joint (rad, or m if prismatic)
 //! time = 3.0
+//! blend = 0.05            # optional: pass this point within 0.05 without stopping
 //! ```
 //!
-//! Running it sends `VC`, `VP` 0..n−1, `VE` (or `jC`, `jV` 0..n−1, `jE`).
+//! Running it sends `VC`, `VP` 0..n−1, `VE` (or `jC`, `jV` 0..n−1, `jE`), and a `VT` (`jT`)
+//! for every point with a `blend`.
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +24,7 @@ use serde::Deserialize;
 
 use crate::banks::MAX_JOINTS;
 use crate::{Client, ClientError, Pose};
+use armgate_protocol::client::ViaKind;
 
 /// The controller's via slots per sequence.
 pub const VIA_SLOTS: usize = 20;
@@ -37,6 +40,10 @@ pub struct CartesianPoint {
     /// Minimum duration of the leg to this point (s); 0: as fast as the limits allow.
     #[serde(default)]
     pub time: f64,
+    /// Blend tolerance at this point (m + rad): passed within it without stopping (`VT`);
+    /// none: the robot file's default.
+    #[serde(default)]
+    pub blend: Option<f64>,
 }
 
 /// One joint via point.
@@ -48,6 +55,10 @@ pub struct JointPoint {
     /// Minimum duration of the leg to this point (s); 0: as fast as the limits allow.
     #[serde(default)]
     pub time: f64,
+    /// Blend tolerance at this point (rad, Euclidean over the joints): passed within it
+    /// without stopping (`jT`); none: the robot file's default.
+    #[serde(default)]
+    pub blend: Option<f64>,
 }
 
 /// A parsed run file.
@@ -126,7 +137,8 @@ impl RunFile {
             (true, true) => Err(RunFileError::Empty),
             (false, true) => entries("cartesian", raw.cartesian, |p: &CartesianPoint| {
                 check_finite(p.xyz.iter().chain(&p.rpy), "xyz and rpy")?;
-                check_time(p.time)
+                check_time(p.time)?;
+                check_blend(p.blend)
             })
             .map(Self::Cartesian),
             (true, false) => entries("joint", raw.joint, |p: &JointPoint| {
@@ -140,7 +152,8 @@ impl RunFile {
                     return Err(format!("at most {MAX_JOINTS} joints"));
                 }
                 check_finite(p.q.iter(), "q")?;
-                check_time(p.time)
+                check_time(p.time)?;
+                check_blend(p.blend)
             })
             .map(Self::Joint),
         }
@@ -157,6 +170,26 @@ impl RunFile {
     /// Whether there are no via points (never true for a parsed file).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Gives every point without its own `blend` this one (`armgate run --blend`).
+    pub fn set_default_blend(&mut self, tolerance: f64) {
+        let blends: Vec<&mut Option<f64>> = match self {
+            Self::Cartesian(p) => p.iter_mut().map(|p| &mut p.blend).collect(),
+            Self::Joint(p) => p.iter_mut().map(|p| &mut p.blend).collect(),
+        };
+        for blend in blends {
+            blend.get_or_insert(tolerance);
+        }
+    }
+
+    /// The largest blend tolerance of the points (0 if none).
+    pub fn largest_blend(&self) -> f64 {
+        let blends: Vec<Option<f64>> = match self {
+            Self::Cartesian(p) => p.iter().map(|p| p.blend).collect(),
+            Self::Joint(p) => p.iter().map(|p| p.blend).collect(),
+        };
+        blends.into_iter().flatten().fold(0.0, f64::max)
     }
 
     /// The Cartesian points as poses.
@@ -204,6 +237,15 @@ fn check_finite<'a>(mut values: impl Iterator<Item = &'a f64>, what: &str) -> Re
     }
 }
 
+fn check_blend(blend: Option<f64>) -> Result<(), String> {
+    match blend {
+        Some(b) if !(b.is_finite() && b >= 0.0) => {
+            Err(format!("blend {b} must be a finite number ≥ 0"))
+        }
+        _ => Ok(()),
+    }
+}
+
 fn check_time(time: f64) -> Result<(), String> {
     if time.is_finite() && time >= 0.0 {
         Ok(())
@@ -221,6 +263,9 @@ impl Client {
                 self.via_clear()?;
                 for (slot, p) in (0u8..).zip(points) {
                     self.via_cartesian(slot, p.xyz, p.rpy, p.time)?;
+                    if let Some(blend) = p.blend {
+                        self.via_tolerance(ViaKind::Cartesian, slot, Some(blend))?;
+                    }
                 }
                 self.run_sequence()
             }
@@ -228,6 +273,9 @@ impl Client {
                 self.joint_via_clear()?;
                 for (slot, p) in (0u8..).zip(points) {
                     self.via_joint(slot, &p.q, p.time)?;
+                    if let Some(blend) = p.blend {
+                        self.via_tolerance(ViaKind::Joint, slot, Some(blend))?;
+                    }
                 }
                 self.run_joint_sequence()
             }
@@ -267,7 +315,8 @@ mod tests {
             run,
             RunFile::Joint(vec![JointPoint {
                 q: vec![0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7],
-                time: 1.5
+                time: 1.5,
+                blend: None,
             }])
         );
     }
@@ -306,6 +355,27 @@ mod tests {
             ]
         );
         assert!(points.windows(2).all(|w| w[0].rpy == w[1].rpy));
+    }
+
+    #[test]
+    fn blends_parse_and_the_default_fills_the_rest() {
+        let mut run = RunFile::parse(
+            "[[joint]]\nq = [0, 0, 0, 0, 0, 0]\nblend = 0.05\n[[joint]]\nq = [1, 0, 0, 0, 0, 0]\n",
+            6,
+        )
+        .unwrap();
+        assert_eq!(run.largest_blend(), 0.05);
+        run.set_default_blend(0.2);
+        let RunFile::Joint(points) = &run else {
+            panic!("{run:?}")
+        };
+        assert_eq!(
+            points.iter().map(|p| p.blend).collect::<Vec<_>>(),
+            [Some(0.05), Some(0.2)]
+        );
+        assert_eq!(run.largest_blend(), 0.2);
+        let e = error("[[cartesian]]\nxyz = [0, 0, 0]\nrpy = [0, 0, 0]\nblend = -1\n");
+        assert!(e.ends_with("blend -1 must be a finite number ≥ 0"), "{e}");
     }
 
     fn error(text: &str) -> String {
