@@ -50,6 +50,8 @@ pub enum ConfigReason {
     },
     /// A fraction must be greater than 0 and at most 1.
     NotAFraction,
+    /// `[motion] profile = "jerk-limited"` needs this jerk limit.
+    MissingJerkLimit,
 }
 
 impl ConfigError {
@@ -96,6 +98,7 @@ impl fmt::Display for ConfigReason {
                 );
             }
             Self::NotAFraction => "must be greater than 0 and at most 1",
+            Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
         })
     }
 }

@@ -15,6 +15,8 @@ pub struct CartesianGenerator {
     /// x, y, z then rx, ry, rz.
     v_max: [f64; 6],
     a_max: [f64; 6],
+    /// Jerk limits: jerk-limited profiles if set, the seed's trapezoids if not.
+    j_max: Option<[f64; 6]>,
     motion: Option<Motion>,
 }
 
@@ -93,8 +95,15 @@ impl CartesianGenerator {
             setpoint: hold,
             v_max,
             a_max,
+            j_max: None,
             motion: None,
         }
+    }
+
+    /// This generator planning jerk-limited (double-S) moves within per-component jerk limits
+    /// (x, y, z, rx, ry, rz); `None`: the seed's trapezoids.
+    pub fn with_jerk_limits(self, j_max: Option<[f64; 6]>) -> Self {
+        Self { j_max, ..self }
     }
 
     /// Aborts any motion and holds `pose` ("hold here").
@@ -104,7 +113,8 @@ impl CartesianGenerator {
     }
 
     /// Starts a move to `goal` lasting at least `min_duration` s from the current set-point;
-    /// returns the planned duration. Refused while moving.
+    /// returns the planned duration. Refused while moving, or (jerk-limited) if the move's times
+    /// would overflow.
     pub fn move_to(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
@@ -119,9 +129,17 @@ impl CartesianGenerator {
             start.translation.vector.into(),
             goal.translation.vector.into(),
         );
-        let translation = StraightLine::plan(&from, &to, &vl, &al);
+        let (jl, ja) = self
+            .j_max
+            .map(|[x, y, z, rx, ry, rz]| ([x, y, z], [rx, ry, rz]))
+            .unzip();
+        let plan = |from: &[f64], to: &[f64], v: &[f64], a: &[f64], j: Option<[f64; 3]>| {
+            StraightLine::plan_with(from, to, v, a, j.as_ref().map(|j| j.as_slice()))
+                .map_err(|_| Refusal::InvalidNumber)
+        };
+        let translation = plan(&from, &to, &vl, &al, jl)?;
         let [_, _, _, angular @ ..]: [f64; 6] = delta.into();
-        let rotation = StraightLine::plan(&[0.0; 3], &angular, &va, &aa);
+        let rotation = plan(&[0.0; 3], &angular, &va, &aa, ja)?;
         let duration = translation
             .duration()
             .max(rotation.duration())

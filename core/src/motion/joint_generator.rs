@@ -12,6 +12,8 @@ pub struct JointGenerator {
     setpoint: Joints,
     v_max: Joints,
     a_max: Joints,
+    /// Jerk limits: jerk-limited profiles if set, the seed's trapezoids if not.
+    j_max: Option<Joints>,
     motion: Option<Motion>,
 }
 
@@ -32,8 +34,15 @@ impl JointGenerator {
             setpoint: hold,
             v_max,
             a_max,
+            j_max: None,
             motion: None,
         }
+    }
+
+    /// This generator planning jerk-limited (double-S) moves within per-joint jerk limits;
+    /// `None`: the seed's trapezoids.
+    pub fn with_jerk_limits(self, j_max: Option<Joints>) -> Self {
+        Self { j_max, ..self }
     }
 
     /// Aborts any motion and holds `q` ("hold here").
@@ -43,12 +52,20 @@ impl JointGenerator {
     }
 
     /// Starts a move to `goal` lasting at least `min_duration` seconds from the current
-    /// set-point; returns the planned duration. Refused while moving.
+    /// set-point; returns the planned duration. Refused while moving, or (jerk-limited) if the
+    /// move's times would overflow.
     pub fn move_to(&mut self, goal: Joints, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let line = StraightLine::plan(&self.setpoint, &goal, &self.v_max, &self.a_max);
+        let line = StraightLine::plan_with(
+            &self.setpoint,
+            &goal,
+            &self.v_max,
+            &self.a_max,
+            self.j_max.as_deref(),
+        )
+        .map_err(|_| Refusal::InvalidNumber)?;
         let duration = line.duration().max(min_duration);
         self.motion = Some(Motion {
             line: line.stretched(duration),
