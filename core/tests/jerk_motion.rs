@@ -2,6 +2,7 @@
 //! Cartesian moves arrive exactly and their commanded set-points stay within the velocity,
 //! acceleration and jerk limits, which the seed's trapezoids (robots/ranger-mk1.toml) do not.
 #![allow(
+    clippy::approx_constant,
     missing_docs,
     clippy::unwrap_used,
     clippy::panic,
@@ -136,24 +137,22 @@ fn jerk_limited_cartesian_move_arrives_within_every_axis_limit() {
     assert!(reached.norm() < 1e-9, "{reached:?}");
     let dt = config.control_period;
     let limits = &config.cartesian;
-    let jerk = limits.max_jerk.unwrap();
+    let axes = limits
+        .max_velocity
+        .iter()
+        .zip(&limits.max_acceleration)
+        .zip(limits.max_jerk.unwrap());
     let rounding = 8.0 * f64::EPSILON * 2.0 / (dt * dt * dt);
-    for axis in 0..6 {
+    for (axis, ((v_max, a_max), j_max)) in axes.enumerate() {
         // Offsets from the start (x, y, z, then the rotation vector turned so far).
         let x: Vec<f64> = setpoints
             .iter()
             .map(|sp| math::diff(&start, sp)[axis])
             .collect();
         let [v, a, j] = difference_peaks(&x, dt);
-        assert!(
-            within(v, limits.max_velocity[axis], 0.0),
-            "axis {axis}: v {v}"
-        );
-        assert!(
-            within(a, limits.max_acceleration[axis], 1e-12),
-            "axis {axis}: a {a}"
-        );
-        assert!(within(j, jerk[axis], rounding), "axis {axis}: j {j}");
+        assert!(within(v, *v_max, 0.0), "axis {axis}: v {v}");
+        assert!(within(a, *a_max, 1e-12), "axis {axis}: a {a}");
+        assert!(within(j, j_max, rounding), "axis {axis}: j {j}");
     }
 }
 
