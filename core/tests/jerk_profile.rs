@@ -8,7 +8,7 @@
     clippy::indexing_slicing
 )]
 
-use armgate_core::motion::{DoubleS, JerkLimits, ProfileError};
+use armgate_core::motion::{DoubleS, JerkLimits, ProfileError, RandomCase};
 use armgate_core::rng::SplitMix64;
 
 fn close(x: f64, y: f64, tol: f64) -> bool {
@@ -151,35 +151,26 @@ fn bad_inputs_are_typed_errors() {
 /// Relative slack for limits and the final state (the 1e-9).
 const TOL: f64 = 1e-9;
 
-/// Log-uniform in [lo, hi).
-fn log_uniform(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
-    libm::exp(rng.uniform(libm::log(lo), libm::log(hi)))
-}
-
-/// One random case: limits spanning eight decades, a distance of either sign, half of them
-/// stretched to up to three times their minimum time. Panics on any violated property.
+/// One random case ([`RandomCase`]: limits over eight decades, a distance of either sign,
+/// half of them stretched to up to three times their minimum time). Panics on any violated
+/// property.
 fn check_random_case(rng: &mut SplitMix64) {
-    let limits = JerkLimits::new(
-        log_uniform(rng, 1e-3, 1e2),
-        log_uniform(rng, 1e-3, 1e3),
-        log_uniform(rng, 1e-2, 1e5),
-    );
-    let sign = if rng.next_f64() < 0.5 { -1.0 } else { 1.0 };
-    let distance = sign * log_uniform(rng, 1e-6, 1e2);
+    let case = RandomCase::draw(rng);
+    let (distance, limits) = (case.distance, case.limits);
+    let sign = distance.signum();
     let fastest = DoubleS::new(distance, limits, 0.0).unwrap();
-    let stretch = rng.next_f64();
-    let p = if stretch < 0.5 {
-        fastest
-    } else {
-        let requested = fastest.duration() * (1.0 + 4.0 * (stretch - 0.5));
-        let p = fastest.with_duration(requested).unwrap();
+    let p = case.plan().unwrap();
+    let stretched = case.min_duration > 0.0;
+    if stretched {
+        let requested = case.min_duration;
         assert!(
             (p.duration() - requested).abs() <= TOL * requested,
             "{distance} {limits:?}: {} instead of {requested}",
             p.duration()
         );
-        p
-    };
+    } else {
+        assert_eq!(p, fastest);
+    }
     let (v, a, j) = (limits.velocity, limits.acceleration, limits.jerk);
     let t_end = p.duration();
     assert!(t_end >= fastest.duration() * (1.0 - 1e-15));
@@ -190,7 +181,7 @@ fn check_random_case(rng: &mut SplitMix64) {
     let ends = p.phase_ends();
     // Time-optimal: in each half, the cruise reaches v or is absent, and the acceleration
     // phase reaches a or is absent (the minimum-time profile has no slack left).
-    if stretch < 0.5 {
+    if !stretched {
         let cruise = ends[3] - ends[2];
         let constant_acceleration = ends[1] - ends[0];
         assert!(cruise <= TOL * t_end || p.peak_velocity() >= v * (1.0 - TOL));

@@ -29,7 +29,7 @@ pub use controller::{Controller, Mode, StepOutput};
 pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
-pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError};
+pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
 pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iterations};
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};

@@ -7,6 +7,7 @@
 //! * `phases.rs`: the closed-form phase durations: minimum time, and stretched to a longer
 //!   duration for time synchronisation.
 //! * [`ProfileError`] (`error.rs`): why a profile could not be built.
+//! * [`RandomCase`] (`random_case.rs`): the random requests of the tests and benchmarks.
 //!
 //! Usage: `DoubleS::new(distance, limits, min_duration)` plans the profile that lasts
 //! `max(minimum time, min_duration)`. To synchronise several axes, plan each with
@@ -21,8 +22,10 @@ mod double_s;
 mod error;
 mod limits;
 mod phases;
+mod random_case;
 
 pub use double_s::DoubleS;
 pub use error::ProfileError;
 pub use limits::JerkLimits;
 pub use phases::NEWTON_ITERATIONS;
+pub use random_case::RandomCase;
