@@ -56,6 +56,7 @@ HYBRID_Q = [0.3, 0.1, 0.2, 0.5, -0.5, 0.1]  # spec 3.6, Table 4.6
 MK2_Q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8]  # spec 3.6, Table 4.7
 EXTRA_ROWS = {
     "ranger-mk1": [GOLDEN_Q],
+    "ranger-mk1-jerk": [GOLDEN_Q],  # ranger-mk1 with jerk-limited profiles: same geometry
     "hybrid": [HYBRID_Q],
     "ranger-mk2": [MK2_Q],
 }

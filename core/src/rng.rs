@@ -34,4 +34,9 @@ impl SplitMix64 {
     pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next_f64()
     }
+
+    /// Log-uniform in [lo, hi) (`0 < lo < hi`): every decade equally likely.
+    pub fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        libm::exp(self.uniform(libm::log(lo), libm::log(hi)))
+    }
 }

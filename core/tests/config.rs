@@ -9,7 +9,9 @@
 
 mod common;
 
-use armgate_core::config::{ConfigReason, LoadError, RobotConfig, ValidRobot, parse_toml};
+use armgate_core::config::{
+    ConfigReason, LoadError, ProfileKind, RobotConfig, ValidRobot, parse_toml,
+};
 use armgate_core::drives::{DriveManager, DriveSettings};
 
 fn mk1_text() -> String {
@@ -215,10 +217,52 @@ fn empty_joint_list_is_refused_by_validation() {
 
 #[test]
 fn unknown_and_missing_fields_are_refused() {
-    let e = refusal(&mk1_text().replacen("max_rate = 0.2", "max_rate = 0.2\nmax_jerk = 1.0", 1));
-    assert!(e.contains("max_jerk"), "{e}");
+    let e = refusal(&mk1_text().replacen("max_rate = 0.2", "max_rate = 0.2\nmax_snap = 1.0", 1));
+    assert!(e.contains("max_snap"), "{e}");
     let e = refusal(&mk1_text().replacen("control_period = 0.01944", "", 1));
     assert!(e.contains("control_period"), "{e}");
+}
+
+#[test]
+fn jerk_limited_profile_needs_every_jerk_limit() {
+    let jerk_text =
+        || std::fs::read_to_string(common::robots_dir().join("ranger-mk1-jerk.toml")).unwrap();
+    let robot = parse_toml(&jerk_text()).unwrap();
+    assert_eq!(robot.motion.profile, ProfileKind::JerkLimited);
+    assert_eq!(robot.joint_jerk_limits().unwrap()[2], 5.0);
+    assert_eq!(robot.cartesian_jerk_limits().unwrap()[0], 0.02);
+    // The seed's file: trapezoids, no jerk limits needed or used.
+    let seed = parse_toml(&mk1_text()).unwrap();
+    assert_eq!(seed.motion.profile, ProfileKind::Trapezoid);
+    assert_eq!(seed.joint_jerk_limits(), None);
+    assert_eq!(seed.cartesian_jerk_limits(), None);
+    let e = refusal(&jerk_text().replacen(
+        "max_jerk = 5.0 # rad/s³: 0.1 s to full acceleration\n",
+        "",
+        2,
+    ));
+    assert_eq!(
+        e,
+        "robot file: joints[0].max_jerk: is required by [motion] profile = \"jerk-limited\""
+    );
+    let e = refusal(&jerk_text().replacen("max_jerk = [0.02,", "max_jerk = [0.0,", 1));
+    assert_eq!(
+        e,
+        "robot file: cartesian.max_jerk: must be greater than zero"
+    );
+    let e = refusal(&jerk_text().replacen("max_jerk = [0.02, 0.02, 0.02, 0.1, 0.1, 0.1]", "", 1));
+    assert!(
+        e.starts_with("robot file: cartesian.max_jerk: is required"),
+        "{e}"
+    );
+    // A jerk limit is checked even where the trapezoid ignores it.
+    let e = refusal(&mk1_text().replacen("max_rate = 0.2", "max_rate = 0.2\nmax_jerk = -1.0", 1));
+    assert_eq!(
+        e,
+        "robot file: joints[0].max_jerk: must be greater than zero"
+    );
+    let e = refusal(&jerk_text().replacen("\"jerk-limited\"", "\"s-curve\"", 1));
+    assert!(e.contains("s-curve"), "{e}");
 }
 
 #[test]

@@ -5,7 +5,7 @@ use core::hint::black_box;
 
 use armgate_core::config::{
     BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
-    JointType, RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
+    JointType, MotionConfig, RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
 };
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
@@ -48,6 +48,7 @@ fn robot() -> Option<ValidRobot> {
         max_velocity: 0.5,
         max_acceleration: 1.0,
         max_rate: 1.0,
+        max_jerk: None,
         drive: JointDrive {
             node_id: 101,
             counts_per_rev: 1 << 20,
@@ -72,6 +73,7 @@ fn robot() -> Option<ValidRobot> {
         cartesian: CartesianLimits {
             max_velocity: [0.1; 6],
             max_acceleration: [0.1; 6],
+            max_jerk: None,
         },
         workspace: WorkspaceConfig {
             bounds: [-2.0, 2.0, -2.0, 2.0, -2.0, 2.0],
@@ -79,6 +81,7 @@ fn robot() -> Option<ValidRobot> {
         },
         ik: IkConfig::default(),
         blend: BlendConfig::default(),
+        motion: MotionConfig::default(),
     };
     black_box(config).validate().ok()
 }

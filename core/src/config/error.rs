@@ -52,6 +52,8 @@ pub enum ConfigReason {
     NotAFraction,
     /// A number must be zero or more.
     Negative,
+    /// `[motion] profile = "jerk-limited"` needs this jerk limit.
+    MissingJerkLimit,
 }
 
 impl ConfigError {
@@ -99,6 +101,7 @@ impl fmt::Display for ConfigReason {
                 );
             }
             Self::NotAFraction => "must be greater than 0 and at most 1",
+            Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
         })
     }
 }

@@ -8,12 +8,14 @@
 
 mod bounded;
 mod error;
+mod motion;
 mod robot;
 #[cfg(feature = "std")]
 mod toml_file;
 mod valid;
 
 pub use error::{ConfigError, ConfigReason};
+pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{
     BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
     JointType, MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig,

@@ -4,6 +4,7 @@ use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
 use super::error::{ConfigError, ConfigReason};
+use super::motion::{MotionConfig, ProfileKind};
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
 use crate::drives::load::{DEFAULT_CEILING, LoadModel};
@@ -50,6 +51,9 @@ pub struct RobotConfig {
     /// Default blend tolerances of via points; absent = 0, stop at every via point (the seed).
     #[serde(default)]
     pub blend: BlendConfig,
+    /// The generators' velocity profile; absent = the seed's trapezoids.
+    #[serde(default)]
+    pub motion: MotionConfig,
 }
 
 /// Whether a joint turns (revolute) or slides (prismatic).
@@ -96,6 +100,9 @@ pub struct JointConfig {
     pub max_acceleration: f64,
     /// Joint limiter rate limit on set-points (rad/s or m/s; the seed's `MaxRates`).
     pub max_rate: f64,
+    /// Joint generator jerk limit (rad/s³ or m/s³); required by the jerk-limited profile.
+    #[serde(default)]
+    pub max_jerk: Option<f64>,
     /// The servo drive of this joint.
     pub drive: JointDrive,
 }
@@ -173,6 +180,9 @@ pub struct CartesianLimits {
     pub max_velocity: [f64; 6],
     /// m/s² for x, y, z; rad/s² for rx, ry, rz.
     pub max_acceleration: [f64; 6],
+    /// m/s³ for x, y, z; rad/s³ for rx, ry, rz; required by the jerk-limited profile.
+    #[serde(default)]
+    pub max_jerk: Option<[f64; 6]>,
 }
 
 /// Allowed region of the tool position, in the base frame.
@@ -304,6 +314,7 @@ impl RobotConfig {
             positive(*v).map_err(|r| top("cartesian.max_velocity", r))?;
             positive(*a).map_err(|r| top("cartesian.max_acceleration", r))?;
         }
+        self.check_jerk_limits()?;
         check_box(&self.workspace.bounds).map_err(|r| top("workspace.bounds", r))?;
         for b in &self.workspace.boxes {
             check_box(b).map_err(|r| top("workspace.boxes", r))?;
@@ -311,6 +322,42 @@ impl RobotConfig {
         self.ik.validate().map_err(|(f, r)| top(f, r))?;
         not_negative(self.blend.cartesian).map_err(|r| top("blend.cartesian", r))?;
         not_negative(self.blend.joint).map_err(|r| top("blend.joint", r))
+    }
+
+    /// Jerk limits, where given, are finite and positive; the jerk-limited profile needs them
+    /// for every joint and Cartesian component.
+    fn check_jerk_limits(&self) -> Result<(), ConfigError> {
+        let required = self.motion.profile == ProfileKind::JerkLimited;
+        let check = |limit: Option<f64>| match limit {
+            Some(j) => positive(j),
+            None if required => Err(ConfigReason::MissingJerkLimit),
+            None => Ok(()),
+        };
+        for (index, joint) in self.joints.iter().enumerate() {
+            check(joint.max_jerk).map_err(|r| ConfigError::joint(index, "max_jerk", r))?;
+        }
+        match self.cartesian.max_jerk {
+            Some(limits) => limits.iter().try_for_each(|j| positive(*j)),
+            None => check(None),
+        }
+        .map_err(|r| ConfigError::top("cartesian.max_jerk", r))
+    }
+
+    /// Per-joint jerk limits if the robot file chose the jerk-limited profile (validation made
+    /// sure every joint has one).
+    pub fn joint_jerk_limits(&self) -> Option<Joints> {
+        (self.motion.profile == ProfileKind::JerkLimited)
+            .then(|| self.per_joint(|j| j.max_jerk.unwrap_or(f64::INFINITY)))
+    }
+
+    /// Cartesian jerk limits (x, y, z, rx, ry, rz) if the robot file chose the jerk-limited
+    /// profile.
+    pub fn cartesian_jerk_limits(&self) -> Option<[f64; 6]> {
+        if self.motion.profile == ProfileKind::JerkLimited {
+            self.cartesian.max_jerk
+        } else {
+            None
+        }
     }
 
     /// The drives' worst-case streaming load (drives/load.rs, with the default heartbeat) must

@@ -252,6 +252,30 @@ pub(crate) fn acceleration_budget(
     }
 }
 
+/// What the current leg's jerk leaves of each axis's limit `j_max` for a next leg in direction
+/// `next_direction`, written to `budget`. Jerks change sign within both halves of a
+/// jerk-limited profile, so on every axis both legs move along the limit is shared.
+pub(crate) fn jerk_budget(
+    current: &StraightLine,
+    next_direction: &[f64],
+    j_max: &[f64],
+    budget: &mut [f64],
+) {
+    let peak = current.peak_jerk();
+    for (((b, j), d), e) in budget
+        .iter_mut()
+        .zip(j_max)
+        .zip(current.direction())
+        .zip(next_direction)
+    {
+        *b = if *d != 0.0 && *e != 0.0 {
+            (j - peak * libm::fabs(*d)).max(0.0)
+        } else {
+            *j
+        };
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

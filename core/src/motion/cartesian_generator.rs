@@ -1,7 +1,9 @@
 //! The Cartesian trajectory generator (spec §4.2) and the shape sources in its place (§4.5).
 
 use super::Refusal;
-use super::blend::{self, Axes, Blended, LegChain, acceleration_budget, blend_start, quicker};
+use super::blend::{
+    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, quicker,
+};
 use super::shape::Shape;
 use super::straight_line::StraightLine;
 use crate::math::{self, Frame, Rotation3, Vector3};
@@ -16,7 +18,18 @@ pub struct CartesianGenerator {
     /// x, y, z then rx, ry, rz.
     v_max: [f64; 6],
     a_max: [f64; 6],
+    /// Jerk limits: jerk-limited profiles if set, the seed's trapezoids if not.
+    j_max: Option<[f64; 6]>,
     motion: Option<Motion>,
+}
+
+/// Per-component limits (x, y, z, rx, ry, rz): velocity, acceleration, and jerk if the
+/// profiles are jerk-limited.
+#[derive(Clone, Copy, Debug)]
+struct Limits {
+    v: [f64; 6],
+    a: [f64; 6],
+    j: Option<[f64; 6]>,
 }
 
 /// One straight Cartesian leg: the tool origin along the segment, the orientation about the
@@ -39,37 +52,43 @@ impl blend::Leg for Leg {
 
 impl Leg {
     /// The minimum-time leg from `start` to `goal` lasting at least `min_duration`, within the
-    /// per-component limits.
+    /// per-component limits (jerk-limited if `j_max` is given). Refused (jerk-limited) if the
+    /// move's times would overflow.
     fn plan(
         start: Frame,
         goal: Frame,
         min_duration: f64,
-        v_max: &[f64; 6],
-        a_max: &[f64; 6],
-    ) -> Self {
+        limits: &Limits,
+    ) -> Result<Self, Refusal> {
         let delta = math::diff(&start, &goal);
-        let [vl @ .., _, _, _] = *v_max;
-        let [al @ .., _, _, _] = *a_max;
-        let [_, _, _, va @ ..] = *v_max;
-        let [_, _, _, aa @ ..] = *a_max;
+        let ([vl @ .., _, _, _], [_, _, _, va @ ..]) = (limits.v, limits.v);
+        let ([al @ .., _, _, _], [_, _, _, aa @ ..]) = (limits.a, limits.a);
+        let (jl, ja) = limits
+            .j
+            .map(|[x, y, z, rx, ry, rz]| ([x, y, z], [rx, ry, rz]))
+            .unzip();
+        let plan = |from: &[f64], to: &[f64], v: &[f64], a: &[f64], j: Option<[f64; 3]>| {
+            StraightLine::plan_with(from, to, v, a, j.as_ref().map(|j| j.as_slice()))
+                .map_err(|_| Refusal::InvalidNumber)
+        };
         let (from, to): ([f64; 3], [f64; 3]) = (
             start.translation.vector.into(),
             goal.translation.vector.into(),
         );
-        let translation = StraightLine::plan(&from, &to, &vl, &al);
+        let translation = plan(&from, &to, &vl, &al, jl)?;
         let [_, _, _, angular @ ..]: [f64; 6] = delta.into();
-        let rotation = StraightLine::plan(&[0.0; 3], &angular, &va, &aa);
+        let rotation = plan(&[0.0; 3], &angular, &va, &aa, ja)?;
         let duration = translation
             .duration()
             .max(rotation.duration())
             .max(min_duration);
-        Self {
+        Ok(Self {
             start,
             goal,
             translation: translation.stretched(duration),
             rotation: rotation.stretched(duration),
             duration,
-        }
+        })
     }
 
     /// The pose at leg time `t` (the goal from the end on).
@@ -158,8 +177,15 @@ impl CartesianGenerator {
             setpoint: hold,
             v_max,
             a_max,
+            j_max: None,
             motion: None,
         }
+    }
+
+    /// This generator planning jerk-limited (double-S) moves within per-component jerk limits
+    /// (x, y, z, rx, ry, rz); `None`: the seed's trapezoids.
+    pub fn with_jerk_limits(self, j_max: Option<[f64; 6]>) -> Self {
+        Self { j_max, ..self }
     }
 
     /// Aborts any motion and holds `pose` ("hold here").
@@ -169,12 +195,13 @@ impl CartesianGenerator {
     }
 
     /// Starts a move to `goal` lasting at least `min_duration` s from the current set-point;
-    /// returns the planned duration. Refused while moving.
+    /// returns the planned duration. Refused while moving, or (jerk-limited) if the move's times
+    /// would overflow.
     pub fn move_to(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let leg = Leg::plan(self.setpoint, goal, min_duration, &self.v_max, &self.a_max);
+        let leg = Leg::plan(self.setpoint, goal, min_duration, &self.limits())?;
         self.motion = Some(Motion::Move(LegChain::new(leg)));
         Ok(leg.duration)
     }
@@ -189,6 +216,7 @@ impl CartesianGenerator {
         min_duration: f64,
         tolerance: f64,
     ) -> Result<(), Refusal> {
+        let limits = self.limits();
         let Some(Motion::Move(chain)) = &mut self.motion else {
             return Err(Refusal::NoGoal);
         };
@@ -196,48 +224,67 @@ impl CartesianGenerator {
             return Err(Refusal::Busy);
         }
         let current = *chain.leg();
-        let full = Leg::plan(current.goal, goal, min_duration, &self.v_max, &self.a_max);
-        let ([vl @ .., _, _, _], [_, _, _, va @ ..]) = (self.v_max, self.v_max);
-        let ([al @ .., _, _, _], [_, _, _, aa @ ..]) = (self.a_max, self.a_max);
-        let (mut linear, mut angular) = ([0.0; 3], [0.0; 3]);
-        acceleration_budget(
-            &current.translation,
-            full.translation.direction(),
-            &al,
-            &mut linear,
-        );
-        acceleration_budget(
-            &current.rotation,
-            full.rotation.direction(),
-            &aa,
-            &mut angular,
-        );
-        let [l0, l1, l2] = linear;
-        let [r0, r1, r2] = angular;
-        let budget = [l0, l1, l2, r0, r1, r2];
-        let next = Leg::plan(current.goal, goal, min_duration, &self.v_max, &budget);
-        let axes = [
-            Axes {
-                current: &current.translation,
-                next: &next.translation,
-                v_max: &vl,
-            },
-            Axes {
-                current: &current.rotation,
-                next: &next.rotation,
-                v_max: &va,
-            },
-        ];
-        let start = blend_start(
-            &axes,
-            current.duration,
-            next.duration,
-            tolerance,
-            chain.elapsed(),
-        );
-        let budgeted = (!next.is_stuck()).then_some((next, start));
+        let full = Leg::plan(current.goal, goal, min_duration, &limits)?;
+        // What the running leg leaves of the limits, translation and rotation apart.
+        let shared = |limit: &[f64; 6], share: fn(&StraightLine, &[f64], &[f64], &mut [f64])| {
+            let ([l @ .., _, _, _], [_, _, _, r @ ..]) = (*limit, *limit);
+            let (mut linear, mut angular) = ([0.0; 3], [0.0; 3]);
+            share(
+                &current.translation,
+                full.translation.direction(),
+                &l,
+                &mut linear,
+            );
+            share(
+                &current.rotation,
+                full.rotation.direction(),
+                &r,
+                &mut angular,
+            );
+            let ([l0, l1, l2], [r0, r1, r2]) = (linear, angular);
+            [l0, l1, l2, r0, r1, r2]
+        };
+        let budget = Limits {
+            a: shared(&limits.a, acceleration_budget),
+            j: limits.j.map(|j| shared(&j, jerk_budget)),
+            ..limits
+        };
+        let budgeted = Leg::plan(current.goal, goal, min_duration, &budget)
+            .ok()
+            .filter(|next| !next.is_stuck())
+            .map(|next| {
+                let ([vl @ .., _, _, _], [_, _, _, va @ ..]) = (limits.v, limits.v);
+                let axes = [
+                    Axes {
+                        current: &current.translation,
+                        next: &next.translation,
+                        v_max: &vl,
+                    },
+                    Axes {
+                        current: &current.rotation,
+                        next: &next.rotation,
+                        v_max: &va,
+                    },
+                ];
+                let start = blend_start(
+                    &axes,
+                    current.duration,
+                    next.duration,
+                    tolerance,
+                    chain.elapsed(),
+                );
+                (next, start)
+            });
         let (leg, start) = quicker(current.duration, full, budgeted);
         chain.queue(leg, start)
+    }
+
+    fn limits(&self) -> Limits {
+        Limits {
+            v: self.v_max,
+            a: self.a_max,
+            j: self.j_max,
+        }
     }
 
     /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).

@@ -103,6 +103,8 @@ impl Controller {
         let n = config.dof();
         let v_max = config.per_joint(|j| j.max_velocity);
         let a_max = config.per_joint(|j| j.max_acceleration);
+        let j_max = config.joint_jerk_limits();
+        let cartesian_j_max = config.cartesian_jerk_limits();
         let cartesian = &config.cartesian;
         Self {
             chain: Chain::new(config),
@@ -110,12 +112,14 @@ impl Controller {
             limiter: JointLimiter::new(config),
             workspace: Workspace::new(&config.workspace),
             mode: Mode::Off,
-            joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max),
+            joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max)
+                .with_jerk_limits(j_max),
             cartesian_generator: CartesianGenerator::new(
                 Frame::identity(),
                 cartesian.max_velocity,
                 cartesian.max_acceleration,
-            ),
+            )
+            .with_jerk_limits(cartesian_j_max),
             joint_sequence: Sequence::new(JOINT_TOLERANCES, config.blend.joint),
             cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES, config.blend.cartesian),
             command: None,

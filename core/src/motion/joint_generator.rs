@@ -1,7 +1,9 @@
 //! The joint-space trajectory generator (spec §4.3).
 
 use super::Refusal;
-use super::blend::{self, Axes, Blended, LegChain, acceleration_budget, blend_start, quicker};
+use super::blend::{
+    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, quicker,
+};
 use super::straight_line::StraightLine;
 use crate::kinematics::Joints;
 
@@ -14,6 +16,8 @@ pub struct JointGenerator {
     setpoint: Joints,
     v_max: Joints,
     a_max: Joints,
+    /// Jerk limits: jerk-limited profiles if set, the seed's trapezoids if not.
+    j_max: Option<Joints>,
     motion: Option<LegChain<Leg>>,
 }
 
@@ -33,14 +37,22 @@ impl blend::Leg for Leg {
 }
 
 impl Leg {
-    fn plan(start: &Joints, goal: Joints, min_duration: f64, v_max: &[f64], a_max: &[f64]) -> Self {
-        let line = StraightLine::plan(start, &goal, v_max, a_max);
+    /// Refused (jerk-limited) if the move's times would overflow.
+    fn plan(
+        start: &Joints,
+        goal: Joints,
+        min_duration: f64,
+        limits: (&[f64], &[f64], Option<&[f64]>),
+    ) -> Result<Self, Refusal> {
+        let (v_max, a_max, j_max) = limits;
+        let line = StraightLine::plan_with(start, &goal, v_max, a_max, j_max)
+            .map_err(|_| Refusal::InvalidNumber)?;
         let duration = line.duration().max(min_duration);
-        Self {
+        Ok(Self {
             line: line.stretched(duration),
             goal,
             duration,
-        }
+        })
     }
 
     /// The joints at leg time `t` (the goal from the end on), written to `out`.
@@ -60,8 +72,15 @@ impl JointGenerator {
             setpoint: hold,
             v_max,
             a_max,
+            j_max: None,
             motion: None,
         }
+    }
+
+    /// This generator planning jerk-limited (double-S) moves within per-joint jerk limits;
+    /// `None`: the seed's trapezoids.
+    pub fn with_jerk_limits(self, j_max: Option<Joints>) -> Self {
+        Self { j_max, ..self }
     }
 
     /// Aborts any motion and holds `q` ("hold here").
@@ -71,12 +90,14 @@ impl JointGenerator {
     }
 
     /// Starts a move to `goal` lasting at least `min_duration` seconds from the current
-    /// set-point; returns the planned duration. Refused while moving.
+    /// set-point; returns the planned duration. Refused while moving, or (jerk-limited) if the
+    /// move's times would overflow.
     pub fn move_to(&mut self, goal: Joints, min_duration: f64) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let leg = Leg::plan(&self.setpoint, goal, min_duration, &self.v_max, &self.a_max);
+        let limits = (&self.v_max[..], &self.a_max[..], self.j_max.as_deref());
+        let leg = Leg::plan(&self.setpoint, goal, min_duration, limits)?;
         self.motion = Some(LegChain::new(leg));
         Ok(leg.duration)
     }
@@ -98,28 +119,36 @@ impl JointGenerator {
             return Err(Refusal::Busy);
         }
         let current = *chain.leg();
-        let full = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &self.a_max);
-        let mut budget = self.a_max;
-        acceleration_budget(
-            &current.line,
-            full.line.direction(),
-            &self.a_max,
-            &mut budget,
-        );
-        let next = Leg::plan(&current.goal, goal, min_duration, &self.v_max, &budget);
-        let axes = [Axes {
-            current: &current.line,
-            next: &next.line,
-            v_max: &self.v_max,
-        }];
-        let start = blend_start(
-            &axes,
-            current.duration,
-            next.duration,
-            tolerance,
-            chain.elapsed(),
-        );
-        let budgeted = (!next.line.is_stuck()).then_some((next, start));
+        let limits = (&self.v_max[..], &self.a_max[..], self.j_max.as_deref());
+        let full = Leg::plan(&current.goal, goal, min_duration, limits)?;
+        // What the running leg leaves of the limits.
+        let direction = full.line.direction();
+        let mut a_budget = self.a_max;
+        acceleration_budget(&current.line, direction, &self.a_max, &mut a_budget);
+        let j_budget = self.j_max.map(|j_max| {
+            let mut budget = j_max;
+            jerk_budget(&current.line, direction, &j_max, &mut budget);
+            budget
+        });
+        let budget = (&self.v_max[..], &a_budget[..], j_budget.as_deref());
+        let budgeted = Leg::plan(&current.goal, goal, min_duration, budget)
+            .ok()
+            .filter(|next| !next.line.is_stuck())
+            .map(|next| {
+                let axes = [Axes {
+                    current: &current.line,
+                    next: &next.line,
+                    v_max: &self.v_max,
+                }];
+                let start = blend_start(
+                    &axes,
+                    current.duration,
+                    next.duration,
+                    tolerance,
+                    chain.elapsed(),
+                );
+                (next, start)
+            });
         let (leg, start) = quicker(current.duration, full, budgeted);
         chain.queue(leg, start)
     }

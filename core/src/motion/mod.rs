@@ -2,6 +2,7 @@
 //! control step that runs them in a fixed order.
 //!
 //! * [`Trapezoid`], [`StraightLine`]: profiles (spec §4.1).
+//! * [`DoubleS`], [`JerkLimits`]: jerk-limited (double-S) profiles, beyond the seed.
 //! * [`JointGenerator`], [`CartesianGenerator`], [`Shape`]: set-point sources (§4.2, §4.3, §4.5).
 //! * [`Sequence`]: via points (§4.4).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
@@ -14,6 +15,7 @@ mod controller;
 mod events;
 mod joint_generator;
 mod joint_limiter;
+mod profile;
 mod reach;
 mod refusal;
 mod sequence;
@@ -28,6 +30,7 @@ pub use controller::{Controller, Mode, StepOutput};
 pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
+pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
 pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iterations};
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};

@@ -1,0 +1,163 @@
+//! Jerk-limited moves through the whole controller (robots/ranger-mk1-jerk.toml): joint and
+//! Cartesian moves arrive exactly and their commanded set-points stay within the velocity,
+//! acceleration and jerk limits, which the seed's trapezoids (robots/ranger-mk1.toml) do not.
+#![allow(
+    clippy::approx_constant,
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+mod common;
+
+use armgate_core::config::ValidRobot;
+use armgate_core::kinematics::Joints;
+use armgate_core::math::{self, Frame, Rotation3, Vector3};
+use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
+
+/// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
+const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+
+/// Runs `start` on a controller with an ideal arm from `MK1_READY` in `mode` and returns every
+/// tick's output until the motion finished.
+fn run(
+    config: &ValidRobot,
+    mode: Mode,
+    start: impl FnOnce(&mut Controller, Frame),
+) -> Vec<StepOutput> {
+    let mut ctrl = Controller::new(config);
+    let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
+    let period = config.control_period;
+    let mut now = 0.0;
+    let mut tick = |ctrl: &mut Controller, arm: &mut IdealArm| {
+        now += period;
+        let out = ctrl.step(now, &arm.measured()).unwrap();
+        arm.step(out.command.as_ref());
+        out
+    };
+    tick(&mut ctrl, &mut arm);
+    ctrl.set_mode(mode).unwrap();
+    let first = tick(&mut ctrl, &mut arm);
+    start(&mut ctrl, first.measured_pose);
+    let mut outs = vec![first];
+    for _ in 0..5000 {
+        let out = tick(&mut ctrl, &mut arm);
+        outs.push(out);
+        if out.events.motion_finished {
+            return outs;
+        }
+    }
+    panic!("the move never finished");
+}
+
+/// The largest |first, second, third difference| of a sampled signal divided by dt, dt², dt³.
+/// Each is a weighted mean of the velocity, acceleration or jerk over the samples' span (a
+/// B-spline kernel of unit weight), so none can exceed the largest value of its derivative.
+fn difference_peaks(x: &[f64], dt: f64) -> [f64; 3] {
+    let d1: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+    let d2: Vec<f64> = d1.windows(2).map(|w| w[1] - w[0]).collect();
+    let d3: Vec<f64> = d2.windows(2).map(|w| w[1] - w[0]).collect();
+    let peak = |d: &[f64], scale: f64| d.iter().fold(0.0f64, |m, v| m.max(v.abs())) / scale;
+    [peak(&d1, dt), peak(&d2, dt * dt), peak(&d3, dt * dt * dt)]
+}
+
+/// Within `limit` up to 1e-9 relative, plus the rounding of a set-point (1e-15 of its size
+/// divided by dt³ for a third difference).
+fn within(value: f64, limit: f64, rounding: f64) -> bool {
+    value <= limit * (1.0 + 1e-9) + rounding
+}
+
+#[test]
+fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
+    let config = common::robot("ranger-mk1-jerk");
+    let goal = [1.2, 0.9, -0.1, -0.3, 1.5, 0.6];
+    let outs = run(&config, Mode::Joint, |ctrl, _| {
+        ctrl.move_joints(&goal, 0.0).unwrap();
+    });
+    let commands: Vec<Joints> = outs.iter().map(|o| o.command.unwrap()).collect();
+    assert_eq!(commands.last().unwrap()[..], goal[..]);
+    let dt = config.control_period;
+    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
+    for (i, joint) in config.joints.iter().enumerate() {
+        let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
+        let [v, a, j] = difference_peaks(&q, dt);
+        assert!(within(v, joint.max_velocity, 0.0), "joint {i}: v {v}");
+        assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
+        assert!(
+            within(j, joint.max_jerk.unwrap(), rounding),
+            "joint {i}: j {j}"
+        );
+        // Synchronised: every joint has covered the same fraction of its way at every tick.
+        let fraction = |k: usize| (q[k] - MK1_READY[i]) / (goal[i] - MK1_READY[i]);
+        let fraction0 = |k: usize| (commands[k][0] - MK1_READY[0]) / (goal[0] - MK1_READY[0]);
+        assert!((0..q.len()).all(|k| (fraction(k) - fraction0(k)).abs() < 1e-12));
+    }
+    assert!(
+        outs.iter()
+            .all(|o| !o.events.rate_limit && !o.events.joint_limit)
+    );
+
+    // The seed's trapezoid on the same move steps its acceleration: far more than the jerk
+    // limit at this period.
+    let seed = common::robot("ranger-mk1");
+    let outs = run(&seed, Mode::Joint, |ctrl, _| {
+        ctrl.move_joints(&goal, 0.0).unwrap();
+    });
+    let q: Vec<f64> = outs.iter().map(|o| o.command.unwrap()[0]).collect();
+    let [_, _, j] = difference_peaks(&q, dt);
+    assert!(
+        j > 2.0 * config.joints[0].max_jerk.unwrap(),
+        "trapezoid jerk {j}"
+    );
+}
+
+#[test]
+fn jerk_limited_cartesian_move_arrives_within_every_axis_limit() {
+    let config = common::robot("ranger-mk1-jerk");
+    let mut goal = Frame::identity();
+    let mut start = Frame::identity();
+    let outs = run(&config, Mode::Cartesian, |ctrl, pose| {
+        start = pose;
+        goal = Frame::from_parts(
+            (pose.translation.vector + Vector3::new(0.03, -0.05, 0.04)).into(),
+            Rotation3::from_axis_angle(&Vector3::z_axis(), 0.1) * pose.rotation,
+        );
+        ctrl.move_cartesian(goal, 0.0).unwrap();
+    });
+    assert!(
+        outs.iter()
+            .all(|o| !o.events.ik_divergence && !o.events.rate_limit)
+    );
+    let setpoints: Vec<Frame> = outs.iter().filter_map(|o| o.setpoint).collect();
+    assert_eq!(*setpoints.last().unwrap(), goal);
+    // The commanded pose reached through the IK.
+    let last = outs.last().unwrap().command.unwrap();
+    let reached = math::diff(&config_pose(&config, &last), &goal);
+    assert!(reached.norm() < 1e-9, "{reached:?}");
+    let dt = config.control_period;
+    let limits = &config.cartesian;
+    let axes = limits
+        .max_velocity
+        .iter()
+        .zip(&limits.max_acceleration)
+        .zip(limits.max_jerk.unwrap());
+    let rounding = 8.0 * f64::EPSILON * 2.0 / (dt * dt * dt);
+    for (axis, ((v_max, a_max), j_max)) in axes.enumerate() {
+        // Offsets from the start (x, y, z, then the rotation vector turned so far).
+        let x: Vec<f64> = setpoints
+            .iter()
+            .map(|sp| math::diff(&start, sp)[axis])
+            .collect();
+        let [v, a, j] = difference_peaks(&x, dt);
+        assert!(within(v, *v_max, 0.0), "axis {axis}: v {v}");
+        assert!(within(a, *a_max, 1e-12), "axis {axis}: a {a}");
+        assert!(within(j, j_max, rounding), "axis {axis}: j {j}");
+    }
+}
+
+fn config_pose(config: &ValidRobot, q: &Joints) -> Frame {
+    armgate_core::kinematics::Chain::new(config)
+        .forward(q)
+        .unwrap()
+}
