@@ -124,6 +124,19 @@ fn check_limits(
     corners: &[&[f64]],
     radius: f64,
 ) -> f64 {
+    check_limits_with_jerk(samples, dt, [v_max, a_max], None, corners, radius)
+}
+
+/// [`check_limits`], and with `j_max` also the jerk (third difference): the acceleration is
+/// continuous.
+fn check_limits_with_jerk(
+    samples: &[Vec<f64>],
+    dt: f64,
+    [v_max, a_max]: [&[f64]; 2],
+    j_max: Option<&[f64]>,
+    corners: &[&[f64]],
+    radius: f64,
+) -> f64 {
     let speeds: Vec<Vec<f64>> = samples
         .windows(2)
         .map(|w| w[1].iter().zip(&w[0]).map(|(b, a)| (b - a) / dt).collect())
@@ -136,12 +149,25 @@ fn check_limits(
             );
         }
     }
-    for (k, w) in speeds.windows(2).enumerate() {
-        for (axis, ((b, a), limit)) in w[1].iter().zip(&w[0]).zip(a_max).enumerate() {
-            let acc = (b - a) / dt;
+    let accelerations: Vec<Vec<f64>> = speeds
+        .windows(2)
+        .map(|w| w[1].iter().zip(&w[0]).map(|(b, a)| (b - a) / dt).collect())
+        .collect();
+    for (k, acc) in accelerations.iter().enumerate() {
+        for (axis, (acc, limit)) in acc.iter().zip(a_max).enumerate() {
             assert!(
                 acc.abs() <= limit * (1.0 + 1e-6),
                 "tick {k} axis {axis}: acceleration {acc} > {limit}"
+            );
+        }
+    }
+    for (k, w) in accelerations.windows(2).enumerate() {
+        for (axis, ((b, a), limit)) in w[1].iter().zip(&w[0]).zip(j_max.unwrap_or(&[])).enumerate()
+        {
+            let jerk = (b - a) / dt;
+            assert!(
+                jerk.abs() <= limit * (1.0 + 1e-6) + 1e-6,
+                "tick {k} axis {axis}: jerk {jerk} > {limit}"
             );
         }
     }
@@ -249,6 +275,52 @@ fn e8_blended_passes_each_corner_within_the_tolerance_without_stopping_and_withi
         0.002,
     );
     assert!(slowest < a_max[0] * config.control_period, "{slowest}");
+}
+
+#[test]
+fn e8_blended_with_jerk_limited_profiles_keeps_acceleration_continuous() {
+    use armgate_core::config::ProfileKind;
+    let j_max = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+    let config = rectangle_config(common::robot("hybrid"))
+        .edit(|c| {
+            c.motion.profile = ProfileKind::JerkLimited;
+            c.cartesian.max_jerk = Some(j_max);
+            for j in c.joints.iter_mut() {
+                j.max_jerk = Some(5.0);
+            }
+        })
+        .unwrap();
+    let stopping = run_rectangle(&config);
+    let inner_corners: Vec<&[f64]> = RECTANGLE[1..4].iter().map(|c| &c[..]).collect();
+    let [v_max @ .., _, _, _] = config.cartesian.max_velocity;
+    let [a_max @ .., _, _, _] = config.cartesian.max_acceleration;
+    let [j_lin @ .., _, _, _] = j_max;
+    for tolerance in [0.01, 0.05] {
+        let run = run_rectangle(&blended(config.clone(), tolerance));
+        assert!(
+            run.duration < stopping.duration - 0.5,
+            "{tolerance}: {}",
+            run.duration
+        );
+        for (k, pass) in corner_passes(&run).into_iter().enumerate() {
+            assert!(
+                pass <= tolerance + 1e-9,
+                "{tolerance}: corner {k} passed at {pass}"
+            );
+        }
+        let slowest = check_limits_with_jerk(
+            &setpoints(&run),
+            config.control_period,
+            [&v_max, &a_max],
+            Some(&j_lin),
+            &inner_corners,
+            tolerance,
+        );
+        assert!(
+            slowest > 0.005,
+            "{tolerance}: stops on the way ({slowest} m/s)"
+        );
+    }
 }
 
 /// Checks a blended joint run: ends exactly at the last point, passes every intermediate
