@@ -14,8 +14,8 @@ use std::path::Path;
 
 use armgate_plot::{Figure, Marker, MarkerKind, Panel, Series, write_svg};
 use common::experiments::{
-    DivergenceRun, RECTANGLE, RectangleRun, TraceTick, UNREACHABLE, rectangle_config,
-    run_divergence, run_rectangle,
+    DivergenceRun, RECTANGLE, RectangleRun, TraceTick, UNREACHABLE, blended, corner_passes,
+    jerk_limited, off_rectangle, rectangle_config, run_divergence, run_rectangle,
 };
 
 fn main() {
@@ -64,9 +64,51 @@ fn main() {
         );
         rectangles.push((exp, robot, r));
     }
+    print_blends();
     if let Some(dir) = plots {
         plot_approach(&dir, &d);
         plot_rectangles(&dir, &rectangles);
+    }
+}
+
+/// E8 with blended via points (docs/motion.md, "Blended via points"): each profile with a
+/// range of blend tolerances, against the same profile stopping at every corner.
+fn print_blends() {
+    println!();
+    println!("E8 blended: the same rectangle on hybrid, passing corners within a tolerance.");
+    println!("closest pass = the largest over the three inner corners of the path's closest");
+    println!("approach to that corner; off the edges = the largest distance of the path from the");
+    println!("rectangle (how deep the corner is cut).\n");
+    println!(
+        "| profile       | tolerance (mm) | duration (s) | saved (s, %)   | closest pass (mm) | off the edges (mm) |"
+    );
+    println!(
+        "|---------------|----------------|--------------|----------------|-------------------|--------------------|"
+    );
+    let trapezoid = rectangle_config(common::robot("hybrid"));
+    for (profile, config) in [
+        ("trapezoid", trapezoid.clone()),
+        ("jerk-limited", jerk_limited(trapezoid)),
+    ] {
+        let stopping = run_rectangle(&config).duration;
+        for tolerance in [0.0, 0.002, 0.005, 0.01, 0.02, 0.05] {
+            let run = run_rectangle(&blended(config.clone(), tolerance));
+            let pass = corner_passes(&run).into_iter().fold(0.0, f64::max);
+            let off = run
+                .trace
+                .iter()
+                .map(|t| off_rectangle(&t.tool))
+                .fold(0.0, f64::max);
+            let saved = stopping - run.duration;
+            println!(
+                "| {profile:<13} | {:>14.1} | {:>12.2} | {saved:>5.2} ({:>4.1} %) | {:>17.3} | {:>18.3} |",
+                tolerance * 1e3,
+                run.duration,
+                saved / stopping * 100.0,
+                pass * 1e3,
+                off * 1e3
+            );
+        }
     }
 }
 

@@ -17,7 +17,8 @@ use armgate_core::math::Vector3;
 use armgate_core::motion::{Controller, IdealArm, Mode};
 use armgate_core::rng::SplitMix64;
 use common::experiments::{
-    RECTANGLE, RectangleRun, blended, corner_passes, rectangle_config, run_rectangle,
+    RECTANGLE, RECTANGLE_JERK, RectangleRun, blended, corner_passes, jerk_limited, off_rectangle,
+    rectangle_config, run_rectangle,
 };
 
 /// FNV-1a over the bits of every value: a fingerprint of a whole set-point trace.
@@ -196,13 +197,6 @@ fn setpoints(run: &RectangleRun) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Distance from `p` to the segment from `a` to `b`.
-fn segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
-    let d = b - a;
-    let s = ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
-    (p - (a + d * s)).norm()
-}
-
 #[test]
 fn e8_blended_passes_each_corner_within_the_tolerance_without_stopping_and_within_the_limits() {
     let config = rectangle_config(common::robot("hybrid"));
@@ -232,10 +226,7 @@ fn e8_blended_passes_each_corner_within_the_tolerance_without_stopping_and_withi
         // Every set-point is on the rectangle or within the tolerance of a corner.
         for tick in &run.trace {
             let p = tick.setpoint;
-            let on_edge = corners
-                .windows(2)
-                .map(|w| segment_distance(&p, &w[0], &w[1]))
-                .fold(f64::INFINITY, f64::min);
+            let on_edge = off_rectangle(&p);
             let near_corner = corners
                 .iter()
                 .map(|c| (p - c).norm())
@@ -279,22 +270,12 @@ fn e8_blended_passes_each_corner_within_the_tolerance_without_stopping_and_withi
 
 #[test]
 fn e8_blended_with_jerk_limited_profiles_keeps_acceleration_continuous() {
-    use armgate_core::config::ProfileKind;
-    let j_max = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
-    let config = rectangle_config(common::robot("hybrid"))
-        .edit(|c| {
-            c.motion.profile = ProfileKind::JerkLimited;
-            c.cartesian.max_jerk = Some(j_max);
-            for j in c.joints.iter_mut() {
-                j.max_jerk = Some(5.0);
-            }
-        })
-        .unwrap();
+    let config = jerk_limited(rectangle_config(common::robot("hybrid")));
     let stopping = run_rectangle(&config);
     let inner_corners: Vec<&[f64]> = RECTANGLE[1..4].iter().map(|c| &c[..]).collect();
     let [v_max @ .., _, _, _] = config.cartesian.max_velocity;
     let [a_max @ .., _, _, _] = config.cartesian.max_acceleration;
-    let [j_lin @ .., _, _, _] = j_max;
+    let [j_lin @ .., _, _, _] = RECTANGLE_JERK;
     for tolerance in [0.01, 0.05] {
         let run = run_rectangle(&blended(config.clone(), tolerance));
         assert!(
@@ -468,22 +449,6 @@ fn a_via_point_at_a_joint_limit_is_reached_exactly() {
     let commands = run_joint_sequence(&config, &points, &[]);
     check_joint_run(&config, &points, &commands, &[0.0, 0.0]);
     assert!(commands.iter().all(|q| q[1] <= chain.max()[1]));
-}
-
-#[test]
-#[ignore]
-fn print_e8() {
-    let config = rectangle_config(common::robot("hybrid"));
-    let stopping = run_rectangle(&config);
-    for tolerance in [0.0, 0.002, 0.01, 0.05, 0.1] {
-        let run = run_rectangle(&blended(config.clone(), tolerance));
-        println!(
-            "{tolerance} {} {} {:?}",
-            run.duration,
-            stopping.duration - run.duration,
-            corner_passes(&run)
-        );
-    }
 }
 
 /// `VT`/`jT` through the command handler, literal bytes in and out: set, echo, default again,

@@ -9,9 +9,11 @@
 //!
 //! The overlap starts at the earliest time `t_s` on the current leg's clock at which
 //!
-//! * the current leg's remaining way and the next leg's way by the current leg's end are each
-//!   at most half the tolerance, so every set-point of the overlap lies within the tolerance
-//!   of the via point (triangle inequality);
+//! * the current leg's remaining way at `t_s` and the next leg's way by the current leg's end
+//!   are each within the tolerance. Then so is every set-point of the overlap: its distance
+//!   from the via point is at most the sum of the two legs' ways from it (triangle
+//!   inequality), a convex function of time (the current leg is slowing down and the next
+//!   speeding up), so largest at the overlap's ends, where one of the two is zero;
 //! * per axis, the current leg's speed at `t_s` plus the next leg's speed at the end of the
 //!   overlap stays within the axis's velocity limit. The overlap lies in the second half of
 //!   the current leg and the first half of the next (symmetric profiles: slowing down and
@@ -183,7 +185,7 @@ pub(crate) fn blend_start(
                     v_current * libm::fabs(*a) + v_next * libm::fabs(*b) > v * (1.0 + SPEED_SLACK)
                 });
         }
-        !fast && remaining <= tolerance / 2.0 && travelled <= tolerance / 2.0
+        !fast && remaining <= tolerance && travelled <= tolerance
     };
     let earliest = (end / 2.0).max(end - next_duration / 2.0).max(not_before);
     let overlap_possible = tolerance > 0.0 && earliest < end;
@@ -332,7 +334,7 @@ mod tests {
     }
 
     #[test]
-    fn the_blend_starts_where_the_remaining_way_is_half_the_tolerance() {
+    fn the_blend_starts_where_the_remaining_way_is_the_tolerance() {
         let (a, b) = corner();
         let axes = [Axes {
             current: &a,
@@ -340,7 +342,7 @@ mod tests {
             v_max: &[1.0, 1.0],
         }];
         // A triangle profile of 2 s: the last 0.1 m take √0.2 s.
-        let start = blend_start(&axes, a.duration(), b.duration(), 0.2, 0.0);
+        let start = blend_start(&axes, a.duration(), b.duration(), 0.1, 0.0);
         assert!((start - (2.0 - 0.2f64.sqrt())).abs() < 1e-12, "{start}");
         assert_eq!(blend_start(&axes, 2.0, 2.0, 0.0, 0.0), 2.0);
         assert_eq!(blend_start(&axes, 2.0, 2.0, f64::NAN, 0.0), 2.0);

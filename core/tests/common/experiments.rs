@@ -213,10 +213,40 @@ pub fn corner_passes(run: &RectangleRun) -> [f64; 3] {
     passes
 }
 
+/// Distance from `p` to the rectangle's edges (m).
+pub fn off_rectangle(p: &Vector3<f64>) -> f64 {
+    RECTANGLE
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (Vector3::from(w[0]), Vector3::from(w[1]));
+            let d = b - a;
+            let s = ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+            (p - (a + d * s)).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// The rectangle config with a default Cartesian blend tolerance (m + rad).
 pub fn blended(config: ValidRobot, tolerance: f64) -> ValidRobot {
     config
         .edit(|config| config.blend.cartesian = tolerance)
+        .unwrap()
+}
+
+/// Jerk limits for the rectangle with jerk-limited profiles: 0.2 m/s³ on translation (0.5 s
+/// to the 0.1 m/s² limit), 0.5 rad/s³ on rotation, 5 rad/s³ (m/s³) on the joints.
+pub const RECTANGLE_JERK: [f64; 6] = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+
+/// The rectangle config with jerk-limited profiles ([`RECTANGLE_JERK`]).
+pub fn jerk_limited(config: ValidRobot) -> ValidRobot {
+    config
+        .edit(|config| {
+            config.motion.profile = armgate_core::config::ProfileKind::JerkLimited;
+            config.cartesian.max_jerk = Some(RECTANGLE_JERK);
+            for j in config.joints.iter_mut() {
+                j.max_jerk = Some(5.0);
+            }
+        })
         .unwrap()
 }
 
