@@ -1020,3 +1020,115 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     assert_eq!(status(&sim)[4], 2.0, "a Cartesian move runs");
     assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
 }
+
+#[test]
+fn a_blended_joint_sequence_over_udp_passes_its_via_points_without_stopping() {
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    // jT sets a slot's own tolerance and echoes it; a negative value gives back the robot
+    // file's default (0 here); slot 20 is refused.
+    let tj =
+        |value: f32, slot: u8| match sim.request("jT", [value, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], slot)
+        {
+            Answer::Reply(chars, v, index) => {
+                assert_eq!((&chars, index), (b"Tj", slot));
+                v[0]
+            }
+            Answer::Text(t) => t.parse().unwrap_or(f32::NAN),
+        };
+    assert_eq!(tj(0.05, 3), 0.05);
+    assert_eq!(tj(-1.0, 3), 0.0);
+    assert!(tj(0.05, 20).is_nan());
+    // A sweep whose legs never reverse a joint: slot 1 blends within 0.08 rad (its own), the
+    // others within --blend 40 mrad; the last point is stopped at.
+    let ready = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let steps = [
+        [0.15, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, -0.15, 0.0, 0.1, 0.0],
+        [0.1, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.05, 0.0, -0.1, 0.0, 0.05, 0.0],
+    ];
+    let mut q = ready;
+    let points: Vec<[f64; 6]> = steps
+        .iter()
+        .map(|s| {
+            q.iter_mut().zip(s).for_each(|(v, d)| *v += d);
+            q
+        })
+        .collect();
+    let mut file = String::new();
+    for (k, p) in points.iter().enumerate() {
+        file += &format!("[[joint]]\nq = {p:?}\n");
+        if k == 1 {
+            file += "blend = 0.08\n";
+        }
+    }
+    let path = sim._dir.0.join("sweep.toml");
+    std::fs::write(&path, file).unwrap();
+    let (result, out) = armgate(&sim, &["run", path.to_str().unwrap(), "--blend", "40"]);
+    result.unwrap();
+    assert!(out.contains("running 4 via points"), "{out}");
+    if firmware().is_some() {
+        return; // the state log is armgate-sim's
+    }
+    // The commanded joints, every tick, from the state log (flushed within a second).
+    let last = points[3].map(|v| f64::from(v as f32));
+    let logs = sim._dir.0.join("logs").join("state.csv");
+    let started = Instant::now();
+    let commands = loop {
+        let rows = csv_rows(&logs);
+        let commands: Vec<Vec<f64>> = rows[1..]
+            .iter()
+            .filter(|r| !r[15].is_empty())
+            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
+            .collect();
+        let arrived = commands
+            .last()
+            .is_some_and(|c| c.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-6));
+        if arrived {
+            break commands;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "log never shows the last point"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let distance = |c: &[f64], p: &[f64; 6]| {
+        c.iter()
+            .zip(p)
+            .map(|(a, b)| (a - f64::from(*b as f32)).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    for (p, tolerance) in points.iter().zip([0.04, 0.08, 0.04]) {
+        // Passed within the tolerance, never stopped near it: the smallest step between two
+        // ticks within the tolerance of the point is well above a stop's.
+        let near: Vec<usize> = (1..commands.len())
+            .filter(|&k| distance(&commands[k], p) <= tolerance)
+            .collect();
+        assert!(!near.is_empty(), "never within {tolerance} of {p:?}");
+        let closest = near
+            .iter()
+            .map(|&k| distance(&commands[k], p))
+            .fold(f64::INFINITY, f64::min);
+        assert!(closest > 1e-4, "stopped at {p:?}");
+        let slowest = near
+            .iter()
+            .map(|&k| {
+                let (a, b) = (&commands[k], &commands[k - 1]);
+                a.iter()
+                    .zip(b)
+                    .map(|(x, y)| (x - y).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        eprintln!("{p:?}: closest {closest}, slowest step {slowest}");
+        assert!(slowest > 3e-4, "{p:?}: slowest step {slowest} rad");
+    }
+}
