@@ -534,3 +534,141 @@ fn vt_and_jt_set_per_slot_tolerances_through_the_handler() {
     let slowest = check_joint_run(&config, &sent, &commands, &[0.05, 0.05, 0.05, 0.0]);
     assert!(slowest > 0.03, "stopped on the way ({slowest} rad/s)");
 }
+
+/// Runs Cartesian via points (pose, minimum duration) from `q0` with a default tolerance; the
+/// outputs of every tick until the sequence ends, or `None` if the sequence is refused.
+fn run_cartesian_sequence(
+    config: &ValidRobot,
+    q0: &[f64],
+    points: &[(armgate_core::math::Frame, f64)],
+) -> Option<Vec<armgate_core::motion::StepOutput>> {
+    let mut ctrl = Controller::new(config);
+    let mut arm = IdealArm::new(Joints::from_slice(q0).unwrap());
+    let mut now = 0.0;
+    ctrl.step(now, &arm.measured()).unwrap();
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    for (k, (pose, t)) in points.iter().enumerate() {
+        ctrl.set_cartesian_via(k, *pose, *t).unwrap();
+    }
+    ctrl.start_cartesian_sequence().ok()?;
+    let mut outs = Vec::new();
+    for _ in 0..200_000 {
+        now += config.control_period;
+        let out = ctrl.step(now, &arm.measured()).unwrap();
+        arm.step(out.command.as_ref());
+        outs.push(out);
+        if out.events.sequence_finished || out.events.sequence_aborted {
+            return Some(outs);
+        }
+    }
+    panic!("the sequence did not end");
+}
+
+#[test]
+fn random_cartesian_sequences_on_ranger_mk1_blend_within_the_tolerance_and_the_limits() {
+    use armgate_core::math::Frame;
+    let config = common::robot("ranger-mk1")
+        .edit(|c| {
+            c.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            c.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            for j in c.joints.iter_mut() {
+                j.max_rate = 2.0;
+            }
+        })
+        .unwrap();
+    let chain = armgate_core::kinematics::Chain::new(&config);
+    let home = chain.forward(&MK1_READY).unwrap();
+    let mut rng = SplitMix64::new(2026);
+    let mut ran = 0;
+    for case in 0..12 {
+        let n = 2 + (rng.next_u64() % 4) as usize;
+        let tolerance = rng.uniform(0.002, 0.03);
+        let points: Vec<(Frame, f64)> = (0..n)
+            .map(|_| {
+                let offset = Vector3::new(
+                    rng.uniform(-0.08, 0.08),
+                    rng.uniform(-0.08, 0.08),
+                    rng.uniform(-0.08, 0.08),
+                );
+                let mut pose = home;
+                pose.translation.vector += offset;
+                (
+                    pose,
+                    if rng.next_f64() < 0.3 {
+                        rng.uniform(0.0, 3.0)
+                    } else {
+                        0.0
+                    },
+                )
+            })
+            .collect();
+        let config = config
+            .clone()
+            .edit(|c| c.blend.cartesian = tolerance)
+            .unwrap();
+        let Some(outs) = run_cartesian_sequence(&config, &MK1_READY, &points) else {
+            continue;
+        };
+        ran += 1;
+        let last = outs.last().unwrap();
+        assert!(last.events.sequence_finished, "case {case}: aborted");
+        assert!(
+            outs.iter().all(|o| !o.events.ik_divergence),
+            "case {case}: WN22"
+        );
+        let samples: Vec<Vec<f64>> = outs
+            .iter()
+            .map(|o| {
+                o.setpoint
+                    .unwrap()
+                    .translation
+                    .vector
+                    .iter()
+                    .copied()
+                    .collect()
+            })
+            .collect();
+        let corners: Vec<Vec<f64>> = points[..n - 1]
+            .iter()
+            .map(|(p, _)| p.translation.vector.iter().copied().collect())
+            .collect();
+        let corner_refs: Vec<&[f64]> = corners.iter().map(|c| &c[..]).collect();
+        let [v_max @ .., _, _, _] = config.cartesian.max_velocity;
+        let [a_max @ .., _, _, _] = config.cartesian.max_acceleration;
+        check_limits(
+            &samples,
+            config.control_period,
+            &v_max,
+            &a_max,
+            &corner_refs,
+            tolerance,
+        );
+        // Every set-point on a leg's segment or within the tolerance of a via point.
+        let start = home.translation.vector;
+        let mut polyline = vec![start];
+        polyline.extend(points.iter().map(|(p, _)| p.translation.vector));
+        for s in &samples {
+            let p = Vector3::new(s[0], s[1], s[2]);
+            let on_leg = polyline
+                .windows(2)
+                .map(|w| {
+                    let d = w[1] - w[0];
+                    let t = ((p - w[0]).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+                    (p - (w[0] + d * t)).norm()
+                })
+                .fold(f64::INFINITY, f64::min);
+            let near = polyline[1..n]
+                .iter()
+                .map(|c| (p - c).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                on_leg < 1e-9 || near <= tolerance + 1e-9,
+                "case {case}: {p:?} strays ({on_leg}, {near})"
+            );
+        }
+        // Exactly at the last point.
+        let goal = points[n - 1].0.translation.vector;
+        assert_eq!(samples.last().unwrap()[..], *goal.as_slice());
+    }
+    assert!(ran >= 8, "only {ran} of 12 sequences were accepted");
+}
