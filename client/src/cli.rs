@@ -1205,9 +1205,10 @@ mod tests {
         assert_eq!(fake.received()[before..][0][..2], *b"jG");
     }
 
-    #[test]
-    fn run_loads_the_file_into_via_slots() {
-        let fake = FakeController::spawn(|d| {
+    /// A controller in Cartesian mode whose tool sits at (0.5, 0.2, 0.1): replies echo the
+    /// index and f0 (as `TV` does).
+    fn run_controller() -> FakeController {
+        FakeController::spawn(|d| {
             if &d[..2] == b"SQ" {
                 return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
             }
@@ -1215,11 +1216,17 @@ mod tests {
             let r = Request::parse(&m).unwrap();
             let mut reply = Reply::null(r.command);
             reply.index = r.index;
+            reply.values[0] = r.values[0];
             if r.command == Command::Pose {
                 reply.values = [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0];
             }
             vec![reply.to_bytes().to_vec()]
-        });
+        })
+    }
+
+    #[test]
+    fn run_loads_the_file_into_via_slots() {
+        let fake = run_controller();
         let file = std::env::temp_dir().join(format!("armgate-run-{}.toml", std::process::id()));
         std::fs::write(
             &file,
@@ -1240,20 +1247,7 @@ mod tests {
 
     #[test]
     fn run_with_blend_sends_a_tolerance_per_slot() {
-        let fake = FakeController::spawn(|d| {
-            if &d[..2] == b"SQ" {
-                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
-            }
-            let m = Message::new_checked(d).unwrap();
-            let r = Request::parse(&m).unwrap();
-            let mut reply = Reply::null(r.command);
-            reply.index = r.index;
-            reply.values[0] = r.values[0];
-            if r.command == Command::Pose {
-                reply.values = [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0];
-            }
-            vec![reply.to_bytes().to_vec()]
-        });
+        let fake = run_controller();
         let file = std::env::temp_dir().join(format!("armgate-blend-{}.toml", std::process::id()));
         std::fs::write(
             &file,

@@ -240,18 +240,9 @@ pub(crate) fn acceleration_budget(
     budget: &mut [f64],
 ) {
     let peak = current.peak_acceleration();
-    for (((b, a), d), e) in budget
-        .iter_mut()
-        .zip(a_max)
-        .zip(current.direction())
-        .zip(next_direction)
-    {
-        *b = if d * e < 0.0 {
-            (a - peak * libm::fabs(*d)).max(0.0)
-        } else {
-            *a
-        };
-    }
+    share(peak, current, next_direction, a_max, budget, |d, e| {
+        d * e < 0.0
+    });
 }
 
 /// What the current leg's jerk leaves of each axis's limit `j_max` for a next leg in direction
@@ -264,16 +255,31 @@ pub(crate) fn jerk_budget(
     budget: &mut [f64],
 ) {
     let peak = current.peak_jerk();
-    for (((b, j), d), e) in budget
+    share(peak, current, next_direction, j_max, budget, |d, e| {
+        d != 0.0 && e != 0.0
+    });
+}
+
+/// `budget = limit − peak·|d|` on the axes where `shared(d, e)` says the two legs' values add
+/// (d, e: the current and the next leg's direction components), the whole limit elsewhere.
+fn share(
+    peak: f64,
+    current: &StraightLine,
+    next_direction: &[f64],
+    limit: &[f64],
+    budget: &mut [f64],
+    shared: impl Fn(f64, f64) -> bool,
+) {
+    for (((b, l), d), e) in budget
         .iter_mut()
-        .zip(j_max)
+        .zip(limit)
         .zip(current.direction())
         .zip(next_direction)
     {
-        *b = if *d != 0.0 && *e != 0.0 {
-            (j - peak * libm::fabs(*d)).max(0.0)
+        *b = if shared(*d, *e) {
+            (l - peak * libm::fabs(*d)).max(0.0)
         } else {
-            *j
+            *l
         };
     }
 }
@@ -368,6 +374,35 @@ mod tests {
         assert!(a.speed(start) + b.speed(overlap) <= 1.0 + 1e-9);
         // Both at 1 m/s² on x: the speeds sum to 2·(5 − t) ≤ 1 from t = 4.5 s.
         assert!((overlap - 0.5).abs() < 1e-9, "{overlap}");
+    }
+
+    #[test]
+    fn jerk_is_shared_on_every_axis_both_legs_use() {
+        let limits = [1.0, 1.0];
+        let (a, _) = corner();
+        let mut budget = [0.0; 2];
+        // A trapezoid has no jerk limit to share.
+        jerk_budget(&a, &[0.6, 0.8], &[2.0, 2.0], &mut budget);
+        assert_eq!(budget, [2.0, 2.0]);
+        let jerky = StraightLine::plan_jerk_limited(
+            &[0.0, 0.0],
+            &[3.0, 4.0],
+            &limits,
+            &limits,
+            &[1.0, 2.0],
+        )
+        .unwrap();
+        // Path jerk limit min(1/0.6, 2/0.8) = 5/3: 1 on x, 4/3 on y.
+        jerk_budget(&jerky, &[0.0, 1.0], &[2.0, 2.0], &mut budget);
+        assert!(
+            (budget[0] - 2.0).abs() < 1e-12 && (budget[1] - 2.0 / 3.0).abs() < 1e-12,
+            "{budget:?}"
+        );
+        jerk_budget(&jerky, &[-1.0, 0.0], &[2.0, 2.0], &mut budget);
+        assert!(
+            (budget[0] - 1.0).abs() < 1e-12 && budget[1] == 2.0,
+            "{budget:?}"
+        );
     }
 
     #[test]
