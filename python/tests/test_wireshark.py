@@ -46,6 +46,7 @@ def capture(tmp_path_factory: pytest.TempPathFactory) -> dict:
             arm.request("BG")
         joints = arm.get_joints()  # two jP: bank 1 and bank 2
         arm.request("jV", [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 1.5], index=0x83)
+        arm.request("VT", [0.01, 0, 0, 0, 0, 0, 0], index=2)
     sim.process.send_signal(signal.SIGTERM)
     _, stderr = sim.process.communicate(timeout=20)
     return {"path": path, "port": sim.port, "joints": joints, "stderr": stderr.decode()}
@@ -143,6 +144,13 @@ def test_joint_banks_are_decoded(tshark: str, capture: dict) -> None:
     assert [float(v) for v in jv[0][2].split(",")] == pytest.approx([f32(v) for v in
                                                                      (0.1, 0.2, 0.3, 0.4, 0.5, 0.6)])
     assert float(jv[0][3]) == 1.5
+
+
+def test_blend_tolerances_are_decoded(tshark: str, capture: dict) -> None:
+    rows = fields(tshark, capture, 'armgate.command == "VT" || armgate.command == "TV"',
+                  "armgate.command", "armgate.blend", "armgate.slot")
+    assert [(c, s) for c, _, s in rows] == [("VT", "2"), ("TV", "2")]
+    assert [float(b) for _, b, _ in rows] == pytest.approx([0.01, 0.01], abs=1e-9)
 
 
 def test_can_traffic_is_decoded(tshark: str, capture: dict) -> None:

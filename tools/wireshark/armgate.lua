@@ -34,6 +34,7 @@ local commands = {
     jG = "Joint goal",
     jP = "Joint positions",
     jR = "Stop joint motion",
+    jT = "Joint via point blend tolerance",
     jV = "Joint via point",
     ON = "Drives on",
     OF = "Drives off",
@@ -44,6 +45,7 @@ local commands = {
     VC = "Clear Cartesian via points",
     VE = "Run Cartesian via points",
     VP = "Cartesian via point",
+    VT = "Cartesian via point blend tolerance",
     SQ = "Status",
 }
 
@@ -97,6 +99,7 @@ local f = {
     pitch = ProtoField.float("armgate.pitch", "Pitch (rad)"),
     yaw = ProtoField.float("armgate.yaw", "Yaw (rad)"),
     time = ProtoField.float("armgate.time", "Duration (s)"),
+    blend = ProtoField.float("armgate.blend", "Blend tolerance (VT: m + rad, jT: rad; < 0: default)"),
     mode = ProtoField.float("armgate.mode", "Mode"),
     joint = ProtoField.float("armgate.joint", "Joint"),
     temperature = ProtoField.float("armgate.temperature", "Temperature (degC)"),
@@ -135,6 +138,8 @@ local layouts = {
     jG = { req = "joints6", rep = "joints6" },
     RC = { req = "joints6" },
     jV = { req = "joints6t", rep = "joints6t" },
+    VT = { req = { f.blend }, rep = { f.blend } },
+    jT = { req = { f.blend }, rep = { f.blend } },
     jP = { rep = "joints7" },
     TM = { rep = "temps7" },
 }
@@ -261,7 +266,7 @@ function armgate.dissector(tvb, pinfo, root)
         info = info .. summary(tvb, layout)
     end
     local index_item = tree:add(f.index, tvb(30, 1))
-    if base_chars == "jV" or base_chars == "VP" then
+    if base_chars == "jV" or base_chars == "VP" or base_chars == "jT" or base_chars == "VT" then
         index_item:add(f.slot, tvb(30, 1))
         info = info .. string.format(" slot=%d", bit.band(index, 0x7F))
     end
