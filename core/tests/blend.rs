@@ -334,11 +334,13 @@ fn check_joint_run(
         .map(|(q, _)| &q[..])
         .collect();
     let radius = tolerance.iter().copied().fold(0.001, f64::max);
-    check_limits(
+    // Jerk-limited robots: the jerk too (third differences).
+    let j_max = config.joint_jerk_limits();
+    check_limits_with_jerk(
         &samples,
         config.control_period,
-        &v_max,
-        &a_max,
+        [&v_max, &a_max],
+        j_max.as_deref(),
         &inner,
         radius,
     )
@@ -399,10 +401,37 @@ fn joint_sequence_blends_within_the_tolerance_and_the_limits() {
 }
 
 #[test]
+fn jerk_limited_joint_sequences_blend_with_the_jerk_shared_on_common_joints() {
+    let config = common::robot("ranger-mk1-jerk");
+    let points = sweep_points();
+    let stopping = run_joint_sequence(&config, &points, &[]);
+    check_joint_run(&config, &points, &stopping, &[0.0; 4]);
+    let blended = run_joint_sequence(
+        &config.clone().edit(|c| c.blend.joint = 0.05).unwrap(),
+        &points,
+        &[],
+    );
+    assert!(
+        blended.len() + 20 < stopping.len(),
+        "{} vs {} ticks",
+        blended.len(),
+        stopping.len()
+    );
+    let slowest = check_joint_run(&config, &points, &blended, &[0.05, 0.05, 0.05, 0.0]);
+    assert!(slowest > 0.02, "stopped on the way ({slowest} rad/s)");
+    random_joint_sequences(&config, 7);
+}
+
+#[test]
 fn random_joint_sequences_blend_within_the_tolerance_and_the_limits() {
-    let config = common::robot("ranger-mk1");
-    let chain = armgate_core::kinematics::Chain::new(&config);
-    let mut rng = SplitMix64::new(13);
+    random_joint_sequences(&common::robot("ranger-mk1"), 13);
+}
+
+/// 40 random joint sequences (fixed `seed`) from MK1_READY with random per-slot tolerances:
+/// each passes its points within them and keeps the limits.
+fn random_joint_sequences(config: &ValidRobot, seed: u64) {
+    let chain = armgate_core::kinematics::Chain::new(config);
+    let mut rng = SplitMix64::new(seed);
     for case in 0..40 {
         let n = 2 + (rng.next_u64() % 5) as usize;
         let points: Vec<([f64; 6], f64)> = (0..n)
@@ -429,9 +458,9 @@ fn random_joint_sequences_blend_within_the_tolerance_and_the_limits() {
             })
             .collect();
         let blends: Vec<(usize, f64)> = tolerances.iter().copied().enumerate().collect();
-        let commands = run_joint_sequence(&config, &points, &blends);
+        let commands = run_joint_sequence(config, &points, &blends);
         let _ = case;
-        check_joint_run(&config, &points, &commands, &tolerances);
+        check_joint_run(config, &points, &commands, &tolerances);
     }
 }
 

@@ -260,6 +260,17 @@ pub(crate) fn jerk_budget(
     });
 }
 
+/// Jerk limits for a leg (direction `own`) whose end blends into a next leg (direction
+/// `next`), written to `out`: halved on the axes both move along. The next leg is planned
+/// within what this one leaves ([`jerk_budget`]), so each gets half there and their jerks,
+/// which change sign within each half of a jerk-limited profile and so cannot be relied on to
+/// cancel, add up to at most the limit. Axes only one of them moves along keep the whole.
+pub(crate) fn jerk_towards(j_max: &[f64], own: &[f64], next: &[f64], out: &mut [f64]) {
+    for (((o, j), d), e) in out.iter_mut().zip(j_max).zip(own).zip(next) {
+        *o = if *d != 0.0 && *e != 0.0 { 0.5 * j } else { *j };
+    }
+}
+
 /// `budget = limit − peak·|d|` on the axes where `shared(d, e)` says the two legs' values add
 /// (d, e: the current and the next leg's direction components), the whole limit elsewhere.
 fn share(
@@ -403,6 +414,18 @@ mod tests {
             (budget[0] - 1.0).abs() < 1e-12 && budget[1] == 2.0,
             "{budget:?}"
         );
+    }
+
+    #[test]
+    fn a_leg_towards_a_blend_halves_the_jerk_on_shared_axes() {
+        let mut out = [0.0; 3];
+        jerk_towards(
+            &[2.0, 4.0, 6.0],
+            &[0.6, 0.8, 0.0],
+            &[0.0, -1.0, 0.0],
+            &mut out,
+        );
+        assert_eq!(out, [2.0, 2.0, 6.0]);
     }
 
     #[test]

@@ -2,7 +2,8 @@
 
 use super::Refusal;
 use super::blend::{
-    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, quicker,
+    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
+    quicker,
 };
 use super::shape::Shape;
 use super::straight_line::StraightLine;
@@ -89,6 +90,34 @@ impl Leg {
             rotation: rotation.stretched(duration),
             duration,
         })
+    }
+
+    /// [`plan`](Self::plan) for a leg whose end blends into a leg to `then`: jerk-limited, its
+    /// jerk is halved on the components both move along ([`jerk_towards`]).
+    fn plan_towards(
+        start: Frame,
+        goal: Frame,
+        min_duration: f64,
+        limits: &Limits,
+        then: Option<Frame>,
+    ) -> Result<Self, Refusal> {
+        let leg = Self::plan(start, goal, min_duration, limits)?;
+        let (Some(j_max), Some(then)) = (limits.j, then) else {
+            return Ok(leg);
+        };
+        let next = Self::plan(goal, then, 0.0, limits)?;
+        let ([jl @ .., _, _, _], [_, _, _, ja @ ..]) = (j_max, j_max);
+        let (mut linear, mut angular) = ([0.0; 3], [0.0; 3]);
+        let (own, after) = (&leg.translation, &next.translation);
+        jerk_towards(&jl, own.direction(), after.direction(), &mut linear);
+        let (own, after) = (&leg.rotation, &next.rotation);
+        jerk_towards(&ja, own.direction(), after.direction(), &mut angular);
+        let ([l0, l1, l2], [r0, r1, r2]) = (linear, angular);
+        let halved = Limits {
+            j: Some([l0, l1, l2, r0, r1, r2]),
+            ..*limits
+        };
+        Self::plan(start, goal, min_duration, &halved)
     }
 
     /// The pose at leg time `t` (the goal from the end on).
@@ -198,10 +227,22 @@ impl CartesianGenerator {
     /// returns the planned duration. Refused while moving, or (jerk-limited) if the move's times
     /// would overflow.
     pub fn move_to(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
+        self.move_towards(goal, min_duration, None)
+    }
+
+    /// [`move_to`](Self::move_to) for a sequence leg whose end will blend into a leg to `then`:
+    /// with jerk-limited profiles its jerk is halved on the components both legs move along,
+    /// leaving the other half to the next leg ([`blend_into`](Self::blend_into)).
+    pub fn move_towards(
+        &mut self,
+        goal: Frame,
+        min_duration: f64,
+        then: Option<Frame>,
+    ) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let leg = Leg::plan(self.setpoint, goal, min_duration, &self.limits())?;
+        let leg = Leg::plan_towards(self.setpoint, goal, min_duration, &self.limits(), then)?;
         self.motion = Some(Motion::Move(LegChain::new(leg)));
         Ok(leg.duration)
     }
@@ -209,12 +250,15 @@ impl CartesianGenerator {
     /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
     /// ends and blends with it, passing its goal within `tolerance` (m + rad, the via-point
     /// metric) without stopping (see `blend.rs`). Where the limits allow no overlap it starts
-    /// when the running move ends. Refused unless a move runs with nothing queued.
+    /// when the running move ends. `then`: the pose after `goal` if the move blends into a move
+    /// there too (see [`move_towards`](Self::move_towards)). Refused unless a move runs with
+    /// nothing queued.
     pub fn blend_into(
         &mut self,
         goal: Frame,
         min_duration: f64,
         tolerance: f64,
+        then: Option<Frame>,
     ) -> Result<(), Refusal> {
         let limits = self.limits();
         let Some(Motion::Move(chain)) = &mut self.motion else {
@@ -224,7 +268,7 @@ impl CartesianGenerator {
             return Err(Refusal::Busy);
         }
         let current = *chain.leg();
-        let full = Leg::plan(current.goal, goal, min_duration, &limits)?;
+        let full = Leg::plan_towards(current.goal, goal, min_duration, &limits, then)?;
         // What the running leg leaves of the limits, translation and rotation apart.
         let shared = |limit: &[f64; 6], share: fn(&StraightLine, &[f64], &[f64], &mut [f64])| {
             let ([l @ .., _, _, _], [_, _, _, r @ ..]) = (*limit, *limit);
@@ -249,7 +293,7 @@ impl CartesianGenerator {
             j: limits.j.map(|j| shared(&j, jerk_budget)),
             ..limits
         };
-        let budgeted = Leg::plan(current.goal, goal, min_duration, &budget)
+        let budgeted = Leg::plan_towards(current.goal, goal, min_duration, &budget, then)
             .ok()
             .filter(|next| !next.is_stuck())
             .map(|next| {

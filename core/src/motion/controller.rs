@@ -179,7 +179,10 @@ impl Controller {
             .poll(leg_done, |p| joint_distance(p, q_m));
         if let SequenceStep::MoveTo(via) = step {
             // The generator is idle, so the move cannot be refused.
-            let _ = self.joint_generator.move_to(via.point, via.min_duration);
+            let then = self.joint_sequence.towards();
+            let _ = self
+                .joint_generator
+                .move_towards(via.point, via.min_duration, then);
         }
         note_sequence(step, events);
         // A blend stays within the joint limits: its path lies within the tolerance of the via
@@ -188,7 +191,9 @@ impl Controller {
         self.joint_sequence.hand_over(
             generator.accepts_blend(),
             |q| limit_margin(chain, q),
-            |via, tolerance| generator.blend_into(via.point, via.min_duration, tolerance),
+            |via, tolerance, then| {
+                generator.blend_into(via.point, via.min_duration, tolerance, then)
+            },
         );
         let (setpoint, finished) = self.joint_generator.advance(self.period);
         events.motion_finished |= finished && !self.joint_sequence.is_running();
@@ -214,9 +219,10 @@ impl Controller {
             .cartesian_sequence
             .poll(leg_done, |p| math::dist(p, f_m));
         if let SequenceStep::MoveTo(via) = step {
+            let then = self.cartesian_sequence.towards();
             let _ = self
                 .cartesian_generator
-                .move_to(via.point, via.min_duration);
+                .move_towards(via.point, via.min_duration, then);
         }
         note_sequence(step, events);
         // A blend's set-points stay within the tolerance of the via point, kept below its
@@ -225,7 +231,9 @@ impl Controller {
         self.cartesian_sequence.hand_over(
             generator.accepts_blend(),
             |pose| workspace.margin(&pose.translation.vector),
-            |via, tolerance| generator.blend_into(via.point, via.min_duration, tolerance),
+            |via, tolerance, then| {
+                generator.blend_into(via.point, via.min_duration, tolerance, then)
+            },
         );
 
         let seed = self.command.unwrap_or(*q_m);
@@ -464,8 +472,9 @@ impl Controller {
             }
         }
         let first = self.cartesian_sequence.start()?;
+        let then = self.cartesian_sequence.towards();
         self.cartesian_generator
-            .move_to(first.point, first.min_duration)
+            .move_towards(first.point, first.min_duration, then)
             .map(|_| ())
     }
 
@@ -478,8 +487,9 @@ impl Controller {
             return Err(Refusal::Busy);
         }
         let first = self.joint_sequence.start()?;
+        let then = self.joint_sequence.towards();
         self.joint_generator
-            .move_to(first.point, first.min_duration)
+            .move_towards(first.point, first.min_duration, then)
             .map(|_| ())
     }
 

@@ -2,9 +2,11 @@
 
 use super::Refusal;
 use super::blend::{
-    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, quicker,
+    self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
+    quicker,
 };
 use super::straight_line::StraightLine;
+use crate::MAX_JOINTS;
 use crate::kinematics::Joints;
 
 /// Rest-to-rest joint moves along a straight line in joint space, synchronised so that all
@@ -55,6 +57,27 @@ impl Leg {
         })
     }
 
+    /// [`plan`](Self::plan) for a leg whose end blends into a leg to `then`: jerk-limited, its
+    /// jerk is halved on the joints both move ([`jerk_towards`]).
+    fn plan_towards(
+        start: &Joints,
+        goal: Joints,
+        min_duration: f64,
+        limits: (&[f64], &[f64], Option<&[f64]>),
+        then: Option<Joints>,
+    ) -> Result<Self, Refusal> {
+        let leg = Self::plan(start, goal, min_duration, limits)?;
+        let (v_max, a_max, j_max) = limits;
+        let (Some(j_max), Some(then)) = (j_max, then) else {
+            return Ok(leg);
+        };
+        let next = StraightLine::plan(&goal, &then, v_max, a_max);
+        let mut halved = [0.0; MAX_JOINTS];
+        jerk_towards(j_max, leg.line.direction(), next.direction(), &mut halved);
+        let halved = halved.get(..j_max.len()).unwrap_or(j_max);
+        Self::plan(start, goal, min_duration, (v_max, a_max, Some(halved)))
+    }
+
     /// The joints at leg time `t` (the goal from the end on), written to `out`.
     fn point(&self, t: f64, out: &mut Joints) {
         if t >= self.duration {
@@ -93,11 +116,23 @@ impl JointGenerator {
     /// set-point; returns the planned duration. Refused while moving, or (jerk-limited) if the
     /// move's times would overflow.
     pub fn move_to(&mut self, goal: Joints, min_duration: f64) -> Result<f64, Refusal> {
+        self.move_towards(goal, min_duration, None)
+    }
+
+    /// [`move_to`](Self::move_to) for a sequence leg whose end will blend into a leg to `then`:
+    /// with jerk-limited profiles its jerk is halved on the joints both legs move, leaving the
+    /// other half to the next leg ([`blend_into`](Self::blend_into)).
+    pub fn move_towards(
+        &mut self,
+        goal: Joints,
+        min_duration: f64,
+        then: Option<Joints>,
+    ) -> Result<f64, Refusal> {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
         let limits = (&self.v_max[..], &self.a_max[..], self.j_max.as_deref());
-        let leg = Leg::plan(&self.setpoint, goal, min_duration, limits)?;
+        let leg = Leg::plan_towards(&self.setpoint, goal, min_duration, limits, then)?;
         self.motion = Some(LegChain::new(leg));
         Ok(leg.duration)
     }
@@ -105,12 +140,15 @@ impl JointGenerator {
     /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
     /// ends and blends with it, passing its goal within `tolerance` (Euclidean, rad or m)
     /// without stopping (see `blend.rs`). Where the limits allow no overlap it starts when the
-    /// running move ends. Refused unless a move runs with nothing queued.
+    /// running move ends. `then`: the point after `goal` if the move blends into a move there
+    /// too (see [`move_towards`](Self::move_towards)). Refused unless a move runs with nothing
+    /// queued.
     pub fn blend_into(
         &mut self,
         goal: Joints,
         min_duration: f64,
         tolerance: f64,
+        then: Option<Joints>,
     ) -> Result<(), Refusal> {
         let Some(chain) = &mut self.motion else {
             return Err(Refusal::NoGoal);
@@ -120,7 +158,7 @@ impl JointGenerator {
         }
         let current = *chain.leg();
         let limits = (&self.v_max[..], &self.a_max[..], self.j_max.as_deref());
-        let full = Leg::plan(&current.goal, goal, min_duration, limits)?;
+        let full = Leg::plan_towards(&current.goal, goal, min_duration, limits, then)?;
         // What the running leg leaves of the limits.
         let direction = full.line.direction();
         let mut a_budget = self.a_max;
@@ -131,7 +169,7 @@ impl JointGenerator {
             budget
         });
         let budget = (&self.v_max[..], &a_budget[..], j_budget.as_deref());
-        let budgeted = Leg::plan(&current.goal, goal, min_duration, budget)
+        let budgeted = Leg::plan_towards(&current.goal, goal, min_duration, budget, then)
             .ok()
             .filter(|next| !next.line.is_stuck())
             .map(|next| {

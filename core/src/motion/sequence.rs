@@ -69,6 +69,15 @@ struct Run<P> {
     failed_checks: u32,
 }
 
+impl<P: Copy> Run<P> {
+    /// The point after via point `index` if the sequence blends at `index`.
+    fn towards(&self, index: usize) -> Option<P> {
+        let blends = self.blends.get(index).is_some_and(|t| *t > 0.0);
+        let next = self.points.get(index + 1).copied().flatten();
+        next.filter(|_| blends).map(|via| via.point)
+    }
+}
+
 impl<P: Copy> Sequence<P> {
     /// Empty slots, blending with `default_blend` (≥ 0; 0 stops at every via point).
     pub fn new(tolerances: Tolerances, default_blend: f64) -> Self {
@@ -161,7 +170,8 @@ impl<P: Copy> Sequence<P> {
     }
 
     /// Blends the next leg into the running one if the via point it runs to has a blend
-    /// tolerance: `blend(next via point, tolerance)` queues it in the generator, with the
+    /// tolerance: `blend(next via point, tolerance, the point after it if the sequence blends
+    /// there too)` queues it in the generator, with the
     /// tolerance limited to `margin(via point)` (how far the path may stray there, e.g. to a
     /// joint or workspace limit). Call while the leg's generator runs and `ready` says it
     /// accepts a next leg. The blended via point is not reach-checked: the arm only passes it.
@@ -169,7 +179,7 @@ impl<P: Copy> Sequence<P> {
         &mut self,
         ready: bool,
         margin: impl FnOnce(&P) -> f64,
-        blend: impl FnOnce(ViaPoint<P>, f64) -> Result<(), Refusal>,
+        blend: impl FnOnce(ViaPoint<P>, f64, Option<P>) -> Result<(), Refusal>,
     ) {
         let Some(run) = &mut self.run else {
             return;
@@ -182,10 +192,18 @@ impl<P: Copy> Sequence<P> {
             return;
         };
         let tolerance = tolerance.min(margin(&corner.point));
-        if ready && tolerance > 0.0 && blend(*next, tolerance).is_ok() {
+        let then = run.towards(run.current + 1);
+        if ready && tolerance > 0.0 && blend(*next, tolerance, then).is_ok() {
             run.current += 1;
             run.failed_checks = 0;
         }
+    }
+
+    /// The via point after the running leg's target if the sequence will blend there (its
+    /// tolerance is above 0): a leg that blends at its end is planned for it (the generators'
+    /// `move_towards`).
+    pub fn towards(&self) -> Option<P> {
+        self.run.as_ref().and_then(|run| run.towards(run.current))
     }
 
     /// Steps the sequence once the leg's generator is idle: checks how far the arm is from the
