@@ -388,7 +388,7 @@ fn pdo_streaming_emergencies() {
         let frames = exchange(&mut bus, &[point(101, 0)], 0.0005);
         assert!(emergencies(&frames).is_empty(), "{frames:?}");
     }
-    let overflow = emergencies(&exchange(&mut bus, &[point(101, 0)], 0.0005));
+    let overflow = emergencies(&exchange(&mut bus, &[point(101, 0)], 0.001));
     assert_eq!(overflow, [DriveEmergency::QueueFull { index: 4 }]);
     assert_eq!(bus.drive(101).unwrap().table().write_pointer(), 4);
     assert_eq!(bus.drive(101).unwrap().stats().overflows, 1);
