@@ -11,15 +11,15 @@
 mod drives_rig;
 
 use armgate_core::drives::{CanBus, DriveEmergency, REASON_UNDERFLOW};
-use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
-use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
+use armgate_core::sim::{SimWhistle, VirtualBus};
+use armgate_protocol::can::interpreter::{Mnemonic, Reply, Value};
 use armgate_protocol::can::pdo::GROUP_ID;
 use armgate_protocol::can::{
     CanFrame, Incoming, MappingRefusal, Nmt, NmtCommand, NodeId, NodeMessage, Object, PtFeedback,
     PtPoint, RPDO3_COMMUNICATION, RPDO3_MAPPING, SdoRequest, SdoResponse, SdoValue, SyncObject,
     TPDO3_COMMUNICATION, TPDO3_MAPPING, exact_bits_on_wire, sdo_abort, streaming_mapping,
 };
-use drives_rig::robot;
+use drives_rig::frames::{exchange, pt_ring, query, set, whistle};
 
 fn node(id: u8) -> NodeId {
     NodeId::new(id).unwrap()
@@ -27,21 +27,9 @@ fn node(id: u8) -> NodeId {
 
 /// The ranger-mk1 drives of joints `joints` on a bus at `bitrate`, operational.
 fn bus_with(bitrate: u32, joints: std::ops::Range<usize>) -> VirtualBus {
-    let config = robot("ranger-mk1");
-    let drives =
-        joints.map(|j| SimWhistle::new(WhistleConfig::for_joint(&config.joints[j]).unwrap()));
-    let mut bus = VirtualBus::new(bitrate, drives);
+    let mut bus = VirtualBus::new(bitrate, joints.map(whistle));
     exchange(&mut bus, &[Nmt::START_ALL.to_frame()], 0.001);
     bus
-}
-
-/// Sends `frames` and runs the bus for `seconds`, returning what the controller received.
-fn exchange(bus: &mut VirtualBus, frames: &[CanFrame], seconds: f64) -> Vec<CanFrame> {
-    for frame in frames {
-        bus.try_transmit(frame).unwrap();
-    }
-    bus.advance(bus.now() + seconds).unwrap();
-    std::iter::from_fn(|| bus.try_receive()).collect()
 }
 
 /// One SDO request and its response.
@@ -77,40 +65,6 @@ fn map(bus: &mut VirtualBus, to: u8) -> Result<(), (Object, MappingRefusal)> {
         step.check_read_back(&read).map_err(|e| (step.object, e))?;
     }
     Ok(())
-}
-
-fn set(to: u8, command: Mnemonic, index: u8, value: i32) -> CanFrame {
-    Request::Set {
-        command,
-        index: Index::from(index),
-        value: Value::Int(value),
-    }
-    .to_frame(node(to))
-}
-
-fn query(to: u8, command: Mnemonic) -> CanFrame {
-    Request::Query {
-        command,
-        index: Index::ZERO,
-    }
-    .to_frame(node(to))
-}
-
-/// Motor on and a cyclic ring QP[1..=6] with `samples` per segment, the queue-low threshold
-/// and the write pointer at 1.
-fn ring(bus: &mut VirtualBus, to: u8, samples: i32, queue_low: i32) {
-    let setup = [
-        set(to, Mnemonic::MO, 0, 1),
-        set(to, Mnemonic::MP, 1, 1),
-        set(to, Mnemonic::MP, 2, 6),
-        set(to, Mnemonic::MP, 3, 1),
-        set(to, Mnemonic::MP, 4, samples),
-        set(to, Mnemonic::MP, 5, queue_low),
-        set(to, Mnemonic::MP, 6, 1),
-    ];
-    for frame in setup {
-        exchange(bus, &[frame], 0.001);
-    }
 }
 
 fn point(to: u8, position: i32) -> CanFrame {
@@ -166,68 +120,102 @@ fn the_mapping_is_written_and_read_back() {
 fn cia_301_mapping_rules() {
     let mut bus = bus_with(500_000, 0..1);
     map(&mut bus, 101).unwrap();
-    let u8 = SdoValue::U8;
-    let u32 = SdoValue::U32;
-    // The PDO is valid: its mapping cannot change, nor its identifier.
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 0, u8(0)),
-        abort(TPDO3_MAPPING, 0, sdo_abort::DEVICE_STATE)
-    );
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_COMMUNICATION, 1, u32(0x4000_0390)),
-        abort(TPDO3_COMMUNICATION, 1, sdo_abort::INVALID_VALUE)
-    );
-    // Disabled, but sub 0 is still 3: the entries cannot change.
-    write(&mut bus, 101, TPDO3_COMMUNICATION, 1, u32(0xC000_03E5));
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 1, u32(0x6064_0020)),
-        abort(TPDO3_MAPPING, 1, sdo_abort::DEVICE_STATE)
-    );
-    write(&mut bus, 101, TPDO3_MAPPING, 0, u8(0));
-    // An unknown object, a known one in the wrong PDO or length, a ninth entry.
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 1, u32(0x6063_0020)),
-        abort(TPDO3_MAPPING, 1, sdo_abort::NO_OBJECT)
-    );
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 1, u32(0x2002_0020)),
-        abort(TPDO3_MAPPING, 1, sdo_abort::NOT_MAPPABLE)
-    );
-    assert_eq!(
-        write(&mut bus, 101, RPDO3_MAPPING, 1, u32(0x2002_0040)),
-        abort(RPDO3_MAPPING, 1, sdo_abort::DEVICE_STATE) // RPDO3 is still valid
-    );
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 9, u32(0x6064_0020)),
-        abort(TPDO3_MAPPING, 9, sdo_abort::NO_SUBINDEX)
-    );
-    // More than 64 bits.
-    for sub in 1..=3 {
-        write(&mut bus, 101, TPDO3_MAPPING, sub, u32(0x6064_0020));
+    let (u8, u32) = (SdoValue::U8, SdoValue::U32);
+    let ok = 0;
+    let (rpdo, rpdo_map) = (RPDO3_COMMUNICATION, RPDO3_MAPPING);
+    let (tpdo, tpdo_map) = (TPDO3_COMMUNICATION, TPDO3_MAPPING);
+    // In order, on the mapped drive: (object, sub, value, abort code or 0 for done, why).
+    let cases = [
+        (
+            tpdo_map,
+            0,
+            u8(0),
+            sdo_abort::DEVICE_STATE,
+            "the mapping of a valid PDO",
+        ),
+        (
+            tpdo,
+            1,
+            u32(0x4000_0390),
+            sdo_abort::INVALID_VALUE,
+            "the id of a valid PDO",
+        ),
+        (tpdo, 1, u32(0xC000_03E5), ok, "disable"),
+        (
+            tpdo_map,
+            1,
+            u32(0x6064_0020),
+            sdo_abort::DEVICE_STATE,
+            "an entry while sub 0 = 3",
+        ),
+        (tpdo_map, 0, u8(0), ok, "open the mapping"),
+        (
+            tpdo_map,
+            1,
+            u32(0x6063_0020),
+            sdo_abort::NO_OBJECT,
+            "an unknown object",
+        ),
+        (
+            tpdo_map,
+            1,
+            u32(0x2002_0020),
+            sdo_abort::NOT_MAPPABLE,
+            "an RPDO object",
+        ),
+        (
+            tpdo_map,
+            1,
+            u32(0x6064_0010),
+            sdo_abort::NOT_MAPPABLE,
+            "the wrong length",
+        ),
+        (
+            rpdo_map,
+            1,
+            u32(0x2002_0020),
+            sdo_abort::DEVICE_STATE,
+            "RPDO3 is still valid",
+        ),
+        (
+            tpdo_map,
+            9,
+            u32(0x6064_0020),
+            sdo_abort::NO_SUBINDEX,
+            "a ninth entry",
+        ),
+        (tpdo_map, 1, u32(0x6064_0020), ok, "entry 1"),
+        (tpdo_map, 2, u32(0x6064_0020), ok, "entry 2"),
+        (tpdo_map, 3, u32(0x6064_0020), ok, "entry 3"),
+        (tpdo_map, 0, u8(3), sdo_abort::PDO_TOO_LONG, "96 bits"),
+        (
+            tpdo,
+            2,
+            u8(10),
+            sdo_abort::INVALID_VALUE,
+            "transmission type 10",
+        ),
+        (
+            rpdo,
+            0,
+            u8(2),
+            sdo_abort::READ_ONLY,
+            "sub 0 of a communication object",
+        ),
+        (tpdo, 1, u32(0xC000_0390), ok, "another id while not valid"),
+    ];
+    for (index, subindex, value, code, why) in cases {
+        let object = Object { index, subindex };
+        let expected = match code {
+            0 => SdoResponse::Downloaded { object },
+            code => SdoResponse::Abort { object, code },
+        };
+        assert_eq!(
+            write(&mut bus, 101, index, subindex, value),
+            expected,
+            "{why}"
+        );
     }
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_MAPPING, 0, u8(3)),
-        abort(TPDO3_MAPPING, 0, sdo_abort::PDO_TOO_LONG)
-    );
-    // Transmission types: 1, 254, 255 only; sub 0 is read-only.
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_COMMUNICATION, 2, u8(10)),
-        abort(TPDO3_COMMUNICATION, 2, sdo_abort::INVALID_VALUE)
-    );
-    assert_eq!(
-        write(&mut bus, 101, RPDO3_COMMUNICATION, 0, u8(2)),
-        abort(RPDO3_COMMUNICATION, 0, sdo_abort::READ_ONLY)
-    );
-    // A disabled PDO may move to another identifier.
-    assert_eq!(
-        write(&mut bus, 101, TPDO3_COMMUNICATION, 1, u32(0xC000_0390)),
-        SdoResponse::Downloaded {
-            object: Object {
-                index: TPDO3_COMMUNICATION,
-                subindex: 1
-            }
-        }
-    );
 }
 
 #[test]
@@ -313,7 +301,7 @@ fn rpdo3_points_go_to_the_write_pointer_and_tpdo3_reports_the_pointers() {
     let mut bus = bus_with(1_000_000, 0..1);
     map(&mut bus, 101).unwrap();
     // 10 samples (3.6 ms) per segment, points on a line.
-    ring(&mut bus, 101, 10, 0);
+    pt_ring(&mut bus, 101, 10, 0);
     for k in 0..4 {
         exchange(&mut bus, &[point(101, 100 * k)], 0.0005);
     }
@@ -327,7 +315,7 @@ fn rpdo3_points_go_to_the_write_pointer_and_tpdo3_reports_the_pointers() {
     assert_eq!((report[0].1.head, report[0].1.tail), (5, 0));
     // Begin, then one point per segment, each with a SYNC: the read pointer follows.
     exchange(&mut bus, &[set(101, Mnemonic::PT, 0, 1)], 0.001);
-    let begun = exchange(&mut bus, &[query(101, Mnemonic::BG)], 0.001);
+    let begun = exchange(&mut bus, &[query(101, Mnemonic::BG, 0)], 0.001);
     assert!(matches!(
         Reply::parse(&begun[0]).unwrap().1,
         Reply::Value {
@@ -376,12 +364,12 @@ fn pdo_streaming_emergencies() {
     );
     // Queue low when fewer than 3 points are unexecuted; overflow when a point would land on
     // one not yet executed.
-    ring(&mut bus, 101, 50, 3);
+    pt_ring(&mut bus, 101, 50, 3);
     for _ in 0..4 {
         exchange(&mut bus, &[point(101, 0)], 0.0005);
     }
     exchange(&mut bus, &[set(101, Mnemonic::PT, 0, 1)], 0.001);
-    exchange(&mut bus, &[query(101, Mnemonic::BG)], 0.001);
+    exchange(&mut bus, &[query(101, Mnemonic::BG, 0)], 0.001);
     // BG fetched QP[1..=3], QP[4] waits. Five more points fill QP[5], QP[6] and the fetched
     // QP[1..=3] (within one 18 ms segment); the next would overwrite QP[4], not yet executed.
     for _ in 0..5 {
@@ -405,40 +393,44 @@ fn pdo_streaming_emergencies() {
     }));
 }
 
-#[test]
-fn a_group_bg_begins_every_drive_at_once() {
-    const GROUP: u8 = 120;
-    let mut bus = bus_with(500_000, 0..6);
-    for id in 101..=106 {
+/// Gives `members` the group id `group` (0x2040), then resets communication and starts
+/// every drive again: the group id takes effect, and the PDOs return to their defaults.
+fn join_group(bus: &mut VirtualBus, members: &[u8], group: u8) {
+    for &id in members {
         let object = GROUP_ID;
-        let value = SdoValue::U8(GROUP);
-        assert_eq!(
-            sdo(&mut bus, id, SdoRequest::Download { object, value }),
-            SdoResponse::Downloaded { object }
-        );
+        let value = SdoValue::U8(group);
+        let answer = sdo(bus, id, SdoRequest::Download { object, value });
+        assert_eq!(answer, SdoResponse::Downloaded { object });
     }
-    // The group id takes effect at the reset communication (which also resets the PDOs),
-    // then the drives are started again.
     let reset = Nmt {
         command: NmtCommand::ResetCommunication,
         node: None,
     };
-    exchange(
-        &mut bus,
-        &[reset.to_frame(), Nmt::START_ALL.to_frame()],
-        0.002,
-    );
+    exchange(bus, &[reset.to_frame(), Nmt::START_ALL.to_frame()], 0.002);
+}
+
+/// Maps `id` for streaming, sets up a ring of `samples` per segment, writes `points` points
+/// (0, 1, …) by RPDO3 and arms PT motion at QP[1] for the next `BG`.
+fn arm_pt(bus: &mut VirtualBus, id: u8, samples: i32, points: i32) {
+    map(bus, id).unwrap();
+    pt_ring(bus, id, samples, 0);
+    for k in 0..points {
+        exchange(bus, &[point(id, k)], 0.0005);
+    }
+    exchange(bus, &[set(id, Mnemonic::PT, 0, 1)], 0.001);
+}
+
+#[test]
+fn a_group_bg_begins_every_drive_at_once() {
+    const GROUP: u8 = 120;
+    let mut bus = bus_with(500_000, 0..6);
+    join_group(&mut bus, &[101, 102, 103, 104, 105, 106], GROUP);
     assert!(bus.drives().all(|d| d.group() == Some(node(GROUP))));
     for id in 101..=106 {
-        map(&mut bus, id).unwrap();
-        ring(&mut bus, id, 10, 0);
-        for k in 0..4 {
-            exchange(&mut bus, &[point(id, k)], 0.0005);
-        }
-        exchange(&mut bus, &[set(id, Mnemonic::PT, 0, 1)], 0.001);
+        arm_pt(&mut bus, id, 10, 4);
     }
     // One BG to the group: every drive answers with its own id, all begin together.
-    let answers = exchange(&mut bus, &[query(GROUP, Mnemonic::BG)], 0.003);
+    let answers = exchange(&mut bus, &[query(GROUP, Mnemonic::BG, 0)], 0.003);
     let mut from: Vec<u16> = answers.iter().map(CanFrame::id).collect();
     from.sort_unstable();
     assert_eq!(from, [0x2E5, 0x2E6, 0x2E7, 0x2E8, 0x2E9, 0x2EA]);
@@ -496,33 +488,11 @@ fn clock_errors_make_segments_longer_or_shorter() {
     bus.drive_mut(102).unwrap().set_clock_error_ppm(-100.0);
     const GROUP: u8 = 101;
     // Drive 102 joins drive 101's id as its group: a BG to 101 reaches both.
-    let object = GROUP_ID;
-    sdo(
-        &mut bus,
-        102,
-        SdoRequest::Download {
-            object,
-            value: SdoValue::U8(GROUP),
-        },
-    );
-    let reset = Nmt {
-        command: NmtCommand::ResetCommunication,
-        node: None,
-    };
-    exchange(
-        &mut bus,
-        &[reset.to_frame(), Nmt::START_ALL.to_frame()],
-        0.002,
-    );
+    join_group(&mut bus, &[102], GROUP);
     for id in [101, 102] {
-        map(&mut bus, id).unwrap();
-        ring(&mut bus, id, 10_000, 0);
-        for k in 0..3 {
-            exchange(&mut bus, &[point(id, k)], 0.0005);
-        }
-        exchange(&mut bus, &[set(id, Mnemonic::PT, 0, 1)], 0.001);
+        arm_pt(&mut bus, id, 10_000, 3);
     }
-    exchange(&mut bus, &[query(GROUP, Mnemonic::BG)], 0.001);
+    exchange(&mut bus, &[query(GROUP, Mnemonic::BG, 0)], 0.001);
     let mut ended = [None, None];
     while ended.iter().any(Option::is_none) && bus.now() < 10.0 {
         bus.advance(bus.now() + 10e-6).unwrap();
