@@ -13,11 +13,11 @@ mod drives_rig;
 use armgate_core::drives::{CanBus, DriveEmergency, REASON_UNDERFLOW};
 use armgate_core::sim::{SimWhistle, VirtualBus};
 use armgate_protocol::can::interpreter::{Mnemonic, Reply, Value};
-use armgate_protocol::can::pdo::GROUP_ID;
 use armgate_protocol::can::{
     CanFrame, Incoming, MappingRefusal, Nmt, NmtCommand, NodeId, NodeMessage, Object, PtFeedback,
     PtPoint, RPDO3_COMMUNICATION, RPDO3_MAPPING, SdoRequest, SdoResponse, SdoValue, SyncObject,
-    TPDO3_COMMUNICATION, TPDO3_MAPPING, exact_bits_on_wire, sdo_abort, streaming_mapping,
+    TPDO3_COMMUNICATION, TPDO3_MAPPING, exact_bits_on_wire, group_id_step, sdo_abort,
+    streaming_mapping,
 };
 use drives_rig::frames::{exchange, pt_ring, query, set, whistle};
 
@@ -396,11 +396,11 @@ fn pdo_streaming_emergencies() {
 /// Gives `members` the group id `group` (0x2040), then resets communication and starts
 /// every drive again: the group id takes effect, and the PDOs return to their defaults.
 fn join_group(bus: &mut VirtualBus, members: &[u8], group: u8) {
+    let step = group_id_step(node(group));
     for &id in members {
-        let object = GROUP_ID;
-        let value = SdoValue::U8(group);
-        let answer = sdo(bus, id, SdoRequest::Download { object, value });
-        assert_eq!(answer, SdoResponse::Downloaded { object });
+        step.check_write(&sdo(bus, id, step.write())).unwrap();
+        step.check_read_back(&sdo(bus, id, step.read_back()))
+            .unwrap();
     }
     let reset = Nmt {
         command: NmtCommand::ResetCommunication,
