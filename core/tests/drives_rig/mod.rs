@@ -2,17 +2,18 @@
 //! `sim-drives` build without the network), for the drive tests and the drive examples.
 #![allow(dead_code, clippy::unwrap_used, clippy::panic)]
 
+pub mod frames;
+
 use std::path::PathBuf;
 
 use std::collections::VecDeque;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
-use armgate_core::drives::{
-    BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
-};
+use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::{Controller, StepOutput};
+use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 
 /// Loads `robots/<name>.toml`.
