@@ -14,8 +14,9 @@ mod common;
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
 use armgate_core::math::Vector3;
-use armgate_core::motion::{Controller, IdealArm, Mode};
+use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
+use armgate_core::sim::IdealArm;
 use common::experiments::{
     RECTANGLE, RECTANGLE_JERK, RectangleRun, blended, corner_passes, jerk_limited, off_rectangle,
     rectangle_config, run_rectangle,
@@ -484,7 +485,8 @@ fn a_via_point_at_a_joint_limit_is_reached_exactly() {
 /// refusals; then a joint sequence whose slots were given tolerances this way blends.
 #[test]
 fn vt_and_jt_set_per_slot_tolerances_through_the_handler() {
-    use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
+    use armgate_core::command::CommandHandler;
+    use armgate_core::sim::{ArmModel, SimulatedDrives};
     let config = common::robot("ranger-mk1")
         .edit(|c| c.blend.cartesian = 0.004)
         .unwrap();
