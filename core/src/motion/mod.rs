@@ -7,7 +7,6 @@
 //! * [`Sequence`]: via points (§4.4).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
-//! * [`IdealArm`], [`RateLimitedArm`]: simulated arms.
 
 mod cartesian_generator;
 mod controller;
@@ -19,7 +18,6 @@ mod reach;
 mod refusal;
 mod sequence;
 mod shape;
-mod sim_arm;
 mod straight_line;
 mod trapezoid;
 mod workspace;
@@ -34,7 +32,6 @@ pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iteration
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
-pub use sim_arm::{IdealArm, RateLimitedArm};
 pub use straight_line::StraightLine;
 pub use trapezoid::Trapezoid;
 pub use workspace::Workspace;
