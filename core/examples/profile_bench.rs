@@ -4,8 +4,8 @@
 //! `cargo run --release -p armgate-core --example profile_bench`
 //!
 //! The cases are the randomised test's (`core/tests/jerk_profile.rs`, [`RandomCase`], same
-//! seed): limits over eight decades, either sign, half of them stretched to 1–3 times their
-//! minimum time. "Worst" is the slowest case, each call timed alone, the best of seven passes
+//! seed): limits over eight decades, either sign, half of them stretched to 1 + 1e-9 up to
+//! 1001 times their minimum time. "Worst" is the slowest case, each call timed alone, the best of seven passes
 //! (see `timings`).
 #![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
 
