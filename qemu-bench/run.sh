@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the bare-metal benchmarks and runs them in QEMU; prints their tables: instructions per
-# call of FK and tracking IK (armgate-qemu-bench), then per full control tick (armgate-qemu-tick).
+# call of FK and tracking IK (armgate-qemu-bench), then per full control tick (armgate-qemu-tick),
+# then per jerk-limited profile (armgate-qemu-profile).
 #
 #   qemu-bench/run.sh            (from anywhere; honours CARGO_TARGET_DIR)
 #
@@ -18,7 +19,7 @@ executables=$(cargo build -p armgate-qemu-bench --target "$target" --release \
       sed -n 's/.*"executable":"\([^"]*\)".*/\1/p')
 
 status=0
-for name in armgate-qemu-bench armgate-qemu-tick; do
+for name in armgate-qemu-bench armgate-qemu-tick armgate-qemu-profile; do
     elf=$(grep "/$name\$" <<<"$executables" | tail -n 1 || true)
     if [[ -z "$elf" || ! -f "$elf" ]]; then
         echo "run.sh: cannot find the $name executable after the build" >&2

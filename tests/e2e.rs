@@ -909,6 +909,38 @@ fn the_joint_count_comes_from_the_controller() {
     assert!(out.contains("q2") && !out.contains("q3"), "{out}");
 }
 
+/// A robot file with `[motion] profile = "jerk-limited"` runs, and its joint moves arrive.
+#[test]
+fn a_jerk_limited_robot_runs_and_its_moves_arrive() {
+    let sim = Sim::start("ranger-mk1-jerk");
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    // From home, joints 2 and 3 by ±0.1 rad: about 1.5 s.
+    let goal = ["1.5708", "0.1", "1.4708", "0", "1.5708", "0"];
+    let (result, out) = armgate(&sim, &[&["jmove"][..], &goal].concat());
+    result.unwrap();
+    // `arrived` once the measured joints are within the client's tolerance of the goal.
+    let arrived: Vec<f64> = out
+        .split("arrived:")
+        .nth(1)
+        .map(|line| {
+            line.split_whitespace()
+                .map_while(|v| v.parse().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert_eq!(arrived.len(), 6, "{out}");
+    for (reached, goal) in arrived.iter().zip(goal) {
+        assert!(
+            (reached - goal.parse::<f64>().unwrap()).abs() < 0.005,
+            "{out}"
+        );
+    }
+}
+
 #[test]
 fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     if firmware().is_some() {

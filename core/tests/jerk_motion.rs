@@ -14,7 +14,8 @@ mod common;
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
+use armgate_core::motion::{Controller, Mode, StepOutput};
+use armgate_core::sim::IdealArm;
 
 /// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];

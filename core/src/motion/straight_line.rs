@@ -251,6 +251,36 @@ mod tests {
     }
 
     #[test]
+    fn jerk_limited_diagonal_respects_each_axis_and_stays_on_the_line() {
+        // |u| = (0.6, 0.8): the path may jerk at min(1/0.6, 0.5/0.8) = 0.625, x binds velocity.
+        let line = StraightLine::plan_jerk_limited(
+            &[0.0, 0.0],
+            &[0.3, 0.4],
+            &[0.06, 1.0],
+            &[1.0, 1.0],
+            &[1.0, 0.5],
+        )
+        .unwrap();
+        let PathProfile::JerkLimited(profile) = line.profile else {
+            panic!("not jerk-limited");
+        };
+        assert_eq!(profile.limits(), JerkLimits::new(0.1, 1.25, 0.625));
+        assert!((line.length() - 0.5).abs() < 1e-15);
+        let mut p = [0.0; 2];
+        line.point(line.duration() * 0.3, &mut p);
+        assert!(
+            (p[0] * 0.8 - p[1] * 0.6).abs() < 1e-15,
+            "off the line: {p:?}"
+        );
+        line.point(line.duration(), &mut p);
+        assert_eq!(p, [0.3, 0.4]);
+        // Stretching keeps the end and lasts exactly as asked.
+        let slow = line.stretched(10.0);
+        assert!((slow.duration() - 10.0).abs() < 1e-12);
+        assert!(slow.speed(5.0) < line.speed(line.duration() / 2.0));
+    }
+
+    #[test]
     fn zero_move_stays_put() {
         let line =
             StraightLine::plan(&[1.0, 2.0], &[1.0, 2.0], &[1.0; 2], &[1.0; 2]).stretched(3.0);

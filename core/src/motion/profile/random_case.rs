@@ -13,8 +13,9 @@ pub struct RandomCase {
     /// Velocity 1e-3..1e2, acceleration 1e-3..1e3, jerk 1e-2..1e5 (each log-uniform): every
     /// combination of reached and unreached limits occurs.
     pub limits: JerkLimits,
-    /// Half the cases 0 (minimum time); the other half 1 to 3 times the minimum time
-    /// (uniform), which stretches the profile as time synchronisation does.
+    /// Half the cases 0 (minimum time); the other half `1 + x` times the minimum time with
+    /// `x` log-uniform in 1e-9..1e3 (barely to a thousand times longer), which stretches the
+    /// profile as time synchronisation does.
     pub min_duration: f64,
 }
 
@@ -33,7 +34,7 @@ impl RandomCase {
             0.0
         } else {
             let fastest = DoubleS::new(distance, limits, 0.0).map_or(0.0, |p| p.duration());
-            fastest * (1.0 + 4.0 * (stretch - 0.5))
+            fastest * (1.0 + rng.log_uniform(1e-9, 1e3))
         };
         Self {
             distance,
