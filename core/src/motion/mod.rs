@@ -4,7 +4,8 @@
 //! * [`Trapezoid`], [`StraightLine`]: profiles (spec §4.1).
 //! * [`DoubleS`], [`JerkLimits`]: jerk-limited (double-S) profiles, beyond the seed.
 //! * [`JointGenerator`], [`CartesianGenerator`], [`Shape`]: set-point sources (§4.2, §4.3, §4.5).
-//! * [`Sequence`]: via points (§4.4).
+//! * [`Sequence`]: via points (§4.4), stopping at each or blending through it within a
+//!   tolerance (`blend.rs`, beyond the seed: the next leg superposed on the running one).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
 
