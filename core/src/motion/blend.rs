@@ -22,7 +22,9 @@
 //! Every condition only gets easier as `t_s` grows and all hold at the current leg's end, so
 //! `t_s` is found by bisection with a fixed number of steps. Accelerations cannot be traded
 //! against `t_s`: the next leg is instead planned within what the current leg's acceleration
-//! leaves of each axis's limit ([`acceleration_budget`]).
+//! leaves of each axis's limit ([`acceleration_budget`]). Nor can jerks: a leg whose end blends
+//! is planned with half the jerk on the axes the next leg shares ([`jerk_towards`]), the next
+//! within the rest ([`jerk_budget`]).
 
 use super::Refusal;
 use super::straight_line::StraightLine;
