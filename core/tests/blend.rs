@@ -703,3 +703,22 @@ fn random_cartesian_sequences_on_ranger_mk1_blend_within_the_tolerance_and_the_l
     }
     assert!(ran >= 8, "only {ran} of 12 sequences were accepted");
 }
+
+#[test]
+fn repeated_via_points_and_stretched_legs_blend_without_a_jump() {
+    let config = common::robot("ranger-mk1")
+        .edit(|c| c.blend.joint = 0.05)
+        .unwrap();
+    let sweep = sweep_points();
+    // The same point twice (a zero-length leg, then one that only waits 1 s), and back.
+    let points = [
+        sweep[0],
+        sweep[0],
+        (sweep[0].0, 1.0),
+        sweep[1],
+        (sweep[2].0, 6.0),
+        sweep[3],
+    ];
+    let commands = run_joint_sequence(&config, &points, &[]);
+    check_joint_run(&config, &points, &commands, &[0.05; 5]);
+}
