@@ -240,14 +240,30 @@ class Arm:
             return None
         return self.wait_for_joints([q], self._options(time or 0.0))
 
+    def set_via_tolerance(self, cartesian: bool, slot: int, tolerance: Optional[float]) -> float:
+        """``VT`` (Cartesian slots, m + rad) or ``jT`` (joint slots, rad): the blend tolerance of
+        via point ``slot`` (0..19). The sequence passes that point within it without stopping;
+        0 stops there; None gives the slot back the robot file's default. Returns the tolerance
+        now in effect for the slot. ``VC``/``jC`` reset every slot to the default."""
+        if tolerance is not None and not (math.isfinite(tolerance) and tolerance >= 0.0):
+            raise ValueError(f"blend tolerance {tolerance} must be a finite number >= 0")
+        value = -1.0 if tolerance is None else float(tolerance)
+        reply = self.request("VT" if cartesian else "jT", [value], index=slot)
+        return float(reply.values[0])
+
     def run_via(
-        self, points: Sequence[Tuple[Union[Pose, Sequence[float]], float]], wait: bool = True
+        self,
+        points: Sequence[Tuple[Union[Pose, Sequence[float]], float]],
+        wait: bool = True,
+        blend: Optional[float] = None,
     ) -> Union[Pose, List[float], None]:
         """Runs via points ``[(target, time), ...]``: each target a :class:`Pose` (a Cartesian
         sequence, in Cartesian mode: ``VC``, ``VP`` per point, ``VE``) or a list of joint values
         (a joint sequence, in joint mode: ``jC``, ``jV``, ``jE``), reached no faster than its
-        ``time`` (s). At most 20 points. With ``wait`` the arm is polled until it has passed
-        every point, reached the last and the sequence has ended (returned)."""
+        ``time`` (s). At most 20 points. With ``blend`` (m + rad, or rad for joints) every point
+        gets that blend tolerance (``VT``/``jT``): the arm passes through within it without
+        stopping. With ``wait`` the arm is polled until it has passed every point, reached the
+        last and the sequence has ended (returned)."""
         if not points:
             raise ValueError("no via points")
         cartesian = isinstance(points[0][0], Pose)
@@ -259,14 +275,18 @@ class Arm:
             self.request("VC")
             for slot, (goal, (_, t)) in enumerate(zip(goals, points)):
                 self.request("VP", goal.xyz + goal.rpy + (float(t),), index=slot)
+                if blend is not None:
+                    self.set_via_tolerance(True, slot, blend)
             self.request("VE")
-            return self.wait_for_poses(goals, self._options(total)) if wait else None
+            return self.wait_for_poses(goals, self._passing(total, blend)) if wait else None
         qs = [self._check_joints(target) for target, _ in points]  # type: ignore[arg-type]
         self.request("jC")
         for slot, (q, (_, t)) in enumerate(zip(qs, points)):
             self._write_banks("jV", q, slot, float(t))
+            if blend is not None:
+                self.set_via_tolerance(False, slot, blend)
         self.request("jE")
-        return self.wait_for_joints(qs, self._options(total)) if wait else None
+        return self.wait_for_joints(qs, self._passing(total, blend)) if wait else None
 
     # -- waiting ---------------------------------------------------------------------------
 
@@ -387,6 +407,11 @@ class Arm:
                 continue
             _time.sleep(options.poll)
         return current
+
+    def _passing(self, requested: float, blend: Optional[float]) -> WaitOptions:
+        # Blended via points are passed within the blend, plus the usual pass tolerance.
+        options = self._options(requested)
+        return replace(options, pass_tolerance=options.pass_tolerance + (blend or 0.0))
 
     def _options(self, requested: float) -> WaitOptions:
         # As the Rust tool: 30 s plus the requested duration, unless set otherwise.

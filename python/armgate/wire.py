@@ -86,7 +86,7 @@ def _index_matches(chars: str, request: int, reply: int) -> bool:
         return request & ~BANK2 == reply & ~BANK2
     if chars in ("jP", "TM"):
         return request & BANK2 == reply & BANK2
-    if chars == "SQ":
+    if chars in ("SQ", "jT", "VT"):
         return request == reply
     return True
 

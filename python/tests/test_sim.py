@@ -108,6 +108,21 @@ def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-u
         assert isinstance(reached, list) and math.dist(reached, b) <= 0.001
 
 
+def test_blended_via_points_and_their_tolerances(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.set_mode("joint")
+        assert arm.set_via_tolerance(False, 4, 0.05) == pytest.approx(0.05)
+        assert arm.set_via_tolerance(False, 4, None) == 0.0  # the robot file's default
+        with pytest.raises(armgate.BadIndex) as bad:
+            arm.set_via_tolerance(False, 20, 0.05)
+        assert bad.value.text == "ER24 Cmd jT bad index"
+        q0 = arm.get_joints()
+        a = [q0[0] + 0.05] + q0[1:]
+        b = [a[0], a[1], a[2] - 0.05] + a[3:]
+        reached = arm.run_via([(a, 0.0), (b, 0.0)], blend=0.02)
+        assert isinstance(reached, list) and math.dist(reached, b) <= 0.001
+
+
 def test_temperatures_of_every_drive(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         temperatures = arm.get_temperatures()
