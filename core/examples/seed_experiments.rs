@@ -64,16 +64,19 @@ fn main() {
         );
         rectangles.push((exp, robot, r));
     }
-    print_blends();
+    let blends = print_blends();
     if let Some(dir) = plots {
         plot_approach(&dir, &d);
         plot_rectangles(&dir, &rectangles);
+        plot_blends(&dir, &blends);
     }
 }
 
 /// E8 with blended via points (docs/motion.md, "Blended via points"): each profile with a
-/// range of blend tolerances, against the same profile stopping at every corner.
-fn print_blends() {
+/// range of blend tolerances, against the same profile stopping at every corner. Returns the
+/// runs (profile, tolerance, run).
+fn print_blends() -> Vec<(&'static str, f64, RectangleRun)> {
+    let mut runs = Vec::new();
     println!();
     println!("E8 blended: the same rectangle on hybrid, passing corners within a tolerance.");
     println!("closest pass = the largest over the three inner corners of the path's closest");
@@ -108,8 +111,60 @@ fn print_blends() {
                 pass * 1e3,
                 off * 1e3
             );
+            runs.push((profile, tolerance, run));
         }
     }
+    runs
+}
+
+/// `e8-blended.svg`: the first corner up close for a few tolerances, and the set-point's speed
+/// over the run, stopping and blended, for both profiles.
+fn plot_blends(dir: &Path, runs: &[(&str, f64, RectangleRun)]) {
+    let [_, corner @ .., _, _, _] = RECTANGLE;
+    let [c, ..] = corner;
+    let near = |t: &TraceTick| (t.tool.y - c[1]).abs() <= 0.07 && (t.tool.z - c[2]).abs() <= 0.07;
+    let mut path = Panel::new(
+        "the first corner (0.5, 0.2, 0.4) up close, y–z view",
+        "y (m)",
+        "z (m)",
+    )
+    .equal_aspect();
+    let mut speed = Panel::new("set-point speed", "t (s)", "speed (m/s)");
+    let shown = [0.0, 0.01, 0.02, 0.05];
+    for (k, (profile, tolerance, run)) in runs
+        .iter()
+        .filter(|(_, t, _)| shown.contains(t))
+        .enumerate()
+    {
+        let name = format!("{profile}, {:.0} mm", tolerance * 1e3);
+        if *profile == "trapezoid" {
+            path = path.series(
+                Series::line(
+                    name.clone(),
+                    xy(run
+                        .trace
+                        .iter()
+                        .filter(|t| near(t))
+                        .map(|t| (t.tool.y, t.tool.z))),
+                )
+                .color(k + 1),
+            );
+        }
+        if *tolerance == 0.0 || *tolerance == 0.05 {
+            let speeds = run.trace.windows(2).filter_map(|w| match w {
+                [a, b] => Some((b.t, (b.setpoint - a.setpoint).norm() / (b.t - a.t))),
+                _ => None,
+            });
+            speed = speed.series(Series::line(name, xy(speeds)).color(k + 1));
+        }
+    }
+    let figure = Figure::new(
+        "E8 with blended via points: corners cut within the tolerance, no stop",
+        vec![path, speed],
+    )
+    .columns(2)
+    .panel_size(640, 480);
+    write(dir, "e8-blended.svg", &figure);
 }
 
 fn xy(points: impl IntoIterator<Item = (f64, f64)>) -> Vec<(f64, f64)> {
