@@ -141,10 +141,7 @@ impl<P: Copy> Sequence<P> {
         {
             *dst = *src;
         }
-        let mut blends = [self.default_blend; VIA_SLOTS];
-        for (dst, own) in blends.iter_mut().zip(&self.blends) {
-            *dst = own.unwrap_or(self.default_blend);
-        }
+        let blends = self.blends.map(|own| own.unwrap_or(self.default_blend));
         self.run = Some(Run {
             points,
             blends,
@@ -171,17 +168,17 @@ impl<P: Copy> Sequence<P> {
 
     /// Blends the next leg into the running one if the via point it runs to has a blend
     /// tolerance: `blend(next via point, tolerance, the point after it if the sequence blends
-    /// there too)` queues it in the generator, with the
-    /// tolerance limited to `margin(via point)` (how far the path may stray there, e.g. to a
-    /// joint or workspace limit). Call while the leg's generator runs and `ready` says it
-    /// accepts a next leg. The blended via point is not reach-checked: the arm only passes it.
+    /// there too)` queues it in the generator, with the tolerance limited to
+    /// `margin(via point)` (how far the path may stray there, e.g. to a joint or workspace
+    /// limit). Does nothing unless `ready`: the leg's generator runs and accepts a next leg.
+    /// The blended via point is not reach-checked: the arm only passes it.
     pub fn hand_over(
         &mut self,
         ready: bool,
         margin: impl FnOnce(&P) -> f64,
         blend: impl FnOnce(ViaPoint<P>, f64, Option<P>) -> Result<(), Refusal>,
     ) {
-        let Some(run) = &mut self.run else {
+        let Some(run) = self.run.as_mut().filter(|_| ready) else {
             return;
         };
         let (Some(Some(corner)), Some(Some(next)), Some(tolerance)) = (
@@ -193,7 +190,7 @@ impl<P: Copy> Sequence<P> {
         };
         let tolerance = tolerance.min(margin(&corner.point));
         let then = run.towards(run.current + 1);
-        if ready && tolerance > 0.0 && blend(*next, tolerance, then).is_ok() {
+        if tolerance > 0.0 && blend(*next, tolerance, then).is_ok() {
             run.current += 1;
             run.failed_checks = 0;
         }
