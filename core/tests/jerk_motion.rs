@@ -202,6 +202,54 @@ fn random_jerk_limited_joint_moves_stay_within_every_limit() {
     }
 }
 
+/// Hostile durations (the protocol's T) on jerk-limited moves: a NaN or infinite one is
+/// refused, ±1e308 give a move, and every command stays finite and within the joint limits.
+#[test]
+fn jerk_limited_moves_survive_hostile_durations() {
+    let config = common::robot("ranger-mk1-jerk");
+    let chain = armgate_core::kinematics::Chain::new(&config);
+    for duration in [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e308,
+        -1e308,
+        1e-300,
+    ] {
+        for mode in [Mode::Joint, Mode::Cartesian] {
+            let mut ctrl = Controller::new(&config);
+            ctrl.step(0.0, &MK1_READY).unwrap();
+            ctrl.set_mode(mode).unwrap();
+            let pose = ctrl.step(0.0, &MK1_READY).unwrap().measured_pose;
+            let started = match mode {
+                Mode::Joint => ctrl.move_joints(&[1.6, 0.65, -0.35, 0.2, 1.8, 0.1], duration),
+                _ => {
+                    let goal = Frame::from_parts(
+                        (pose.translation.vector + Vector3::new(0.01, 0.0, -0.01)).into(),
+                        pose.rotation,
+                    );
+                    ctrl.move_cartesian(goal, duration)
+                }
+            };
+            assert_eq!(
+                started.is_ok(),
+                duration.is_finite(),
+                "{duration} {started:?}"
+            );
+            let mut q = Joints::from_slice(&MK1_READY).unwrap();
+            for k in 1..300 {
+                let out = ctrl.step(f64::from(k), &q).unwrap();
+                let command = out.command.unwrap();
+                assert!(
+                    command.is_finite() && chain.within_limits(&command),
+                    "{command:?}"
+                );
+                q = command;
+            }
+        }
+    }
+}
+
 fn config_pose(config: &ValidRobot, q: &Joints) -> Frame {
     armgate_core::kinematics::Chain::new(config)
         .forward(q)
