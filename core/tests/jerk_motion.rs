@@ -14,7 +14,8 @@ mod common;
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, Mode, StepOutput};
+use armgate_core::motion::{Controller, JointGenerator, Mode, StepOutput};
+use armgate_core::rng::SplitMix64;
 use armgate_core::sim::IdealArm;
 
 /// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.
@@ -154,6 +155,98 @@ fn jerk_limited_cartesian_move_arrives_within_every_axis_limit() {
         assert!(within(v, *v_max, 0.0), "axis {axis}: v {v}");
         assert!(within(a, *a_max, 1e-12), "axis {axis}: a {a}");
         assert!(within(j, j_max, rounding), "axis {axis}: j {j}");
+    }
+}
+
+#[test]
+fn random_jerk_limited_joint_moves_stay_within_every_limit() {
+    let mut rng = SplitMix64::new(13);
+    let dt = 0.01;
+    for _ in 0..200 {
+        let draw = |rng: &mut SplitMix64, lo: f64, hi: f64| {
+            Joints::from_slice(&[0; 3].map(|_| rng.log_uniform(lo, hi))).unwrap()
+        };
+        let (v, a, j) = (
+            draw(&mut rng, 0.1, 2.0),
+            draw(&mut rng, 0.1, 5.0),
+            draw(&mut rng, 0.5, 50.0),
+        );
+        let start = Joints::from_slice(&[0; 3].map(|_| rng.uniform(-1.0, 1.0))).unwrap();
+        let goal = Joints::from_slice(&[0; 3].map(|_| rng.uniform(-1.0, 1.0))).unwrap();
+        let min_duration = if rng.next_f64() < 0.5 {
+            0.0
+        } else {
+            rng.uniform(0.0, 10.0)
+        };
+        let mut generator = JointGenerator::new(start, v, a).with_jerk_limits(Some(j));
+        let duration = generator.move_to(goal, min_duration).unwrap();
+        assert!(duration >= min_duration);
+        let mut q = vec![start];
+        // Until one tick past the end, so that the last differences see the arrival at rest.
+        for _ in 0..(duration / dt) as usize + 3 {
+            q.push(generator.advance(dt).0);
+        }
+        assert_eq!(*q.last().unwrap(), goal);
+        let rounding = 8.0 * f64::EPSILON / (dt * dt * dt);
+        for i in 0..3 {
+            let x: Vec<f64> = q.iter().map(|q| q[i]).collect();
+            let [vel, acc, jerk] = difference_peaks(&x, dt);
+            assert!(within(vel, v[i], 0.0), "joint {i}: v {vel} > {}", v[i]);
+            assert!(within(acc, a[i], 1e-12), "joint {i}: a {acc} > {}", a[i]);
+            assert!(
+                within(jerk, j[i], rounding),
+                "joint {i}: j {jerk} > {}",
+                j[i]
+            );
+        }
+    }
+}
+
+/// Hostile durations (the protocol's T) on jerk-limited moves: a NaN or infinite one is
+/// refused, ±1e308 give a move, and every command stays finite and within the joint limits.
+#[test]
+fn jerk_limited_moves_survive_hostile_durations() {
+    let config = common::robot("ranger-mk1-jerk");
+    let chain = armgate_core::kinematics::Chain::new(&config);
+    for duration in [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e308,
+        -1e308,
+        1e-300,
+    ] {
+        for mode in [Mode::Joint, Mode::Cartesian] {
+            let mut ctrl = Controller::new(&config);
+            ctrl.step(0.0, &MK1_READY).unwrap();
+            ctrl.set_mode(mode).unwrap();
+            let pose = ctrl.step(0.0, &MK1_READY).unwrap().measured_pose;
+            let started = match mode {
+                Mode::Joint => ctrl.move_joints(&[1.6, 0.65, -0.35, 0.2, 1.8, 0.1], duration),
+                _ => {
+                    let goal = Frame::from_parts(
+                        (pose.translation.vector + Vector3::new(0.01, 0.0, -0.01)).into(),
+                        pose.rotation,
+                    );
+                    ctrl.move_cartesian(goal, duration)
+                }
+            };
+            assert_eq!(
+                started.is_ok(),
+                duration.is_finite(),
+                "{duration} {started:?}"
+            );
+            let mut q = Joints::from_slice(&MK1_READY).unwrap();
+            for k in 1..300 {
+                let out = ctrl.step(f64::from(k), &q).unwrap();
+                let command = out.command.unwrap();
+                assert!(
+                    command.is_finite() && chain.within_limits(&command),
+                    "{command:?}"
+                );
+                q = command;
+            }
+        }
     }
 }
 

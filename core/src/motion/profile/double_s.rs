@@ -9,8 +9,9 @@ use crate::saturate::saturate;
 /// acceleration continuous, each within its limit.
 ///
 /// Planned for minimum time, or stretched to a longer duration by lowering the cruise velocity
-/// (acceleration and jerk limits kept), which synchronises several axes. See the
-/// [module documentation](super).
+/// (acceleration and jerk limits kept), which synchronises several axes: plan each with
+/// `min_duration = 0`, then [`with_duration`](Self::with_duration) the longest duration. The
+/// math, the bounds and the figures: docs/motion.md, "Jerk-limited profiles".
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DoubleS {
     /// Signed distance (the end position).

@@ -9,7 +9,8 @@
 
 use super::JerkLimits;
 
-/// The bound on the Newton iterations of [`for_duration`]. It starts within a factor √2 of the
+/// The bound on the Newton iterations of stretching a profile that stays below its acceleration
+/// limit (the cubic case of `phases::for_duration`). It starts within a factor √2 of the
 /// root and approaches it monotonically and quadratically: over 2·10⁵ random cases (distances
 /// 1e-6..1e5, jerks 1e-2..1e5, durations up to 10³ times the shortest) it stops after at most
 /// 9 steps (the unit test `newton_converges_in_a_few_steps` allows 10).
