@@ -428,6 +428,17 @@ fn random_joint_sequences_blend_within_the_tolerance_and_the_limits() {
     random_joint_sequences(&common::robot("ranger-mk1"), 13);
 }
 
+/// More of the same, for both profiles: `cargo test --release -p armgate-core --test blend --
+/// --ignored`.
+#[test]
+#[ignore]
+fn many_random_joint_sequences() {
+    for seed in 100..125 {
+        random_joint_sequences(&common::robot("ranger-mk1"), seed);
+        random_joint_sequences(&common::robot("ranger-mk1-jerk"), seed);
+    }
+}
+
 /// 40 random joint sequences (fixed `seed`) from MK1_READY with random per-slot tolerances:
 /// each passes its points within them and keeps the limits.
 fn random_joint_sequences(config: &ValidRobot, seed: u64) {

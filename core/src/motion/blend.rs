@@ -20,7 +20,9 @@
 //!   speeding up respectively), so those two speeds bound the sum throughout.
 //!
 //! Every condition only gets easier as `t_s` grows and all hold at the current leg's end, so
-//! `t_s` is found by bisection with a fixed number of steps. Accelerations cannot be traded
+//! `t_s` is found by bisection with a fixed number of steps. A blend that would not save time
+//! or would overlap for less than a control period is not made ([`worth_blending`]): the
+//! sequence stops at that via point as it does with tolerance 0. Accelerations cannot be traded
 //! against `t_s`: the next leg is instead planned within what the current leg's acceleration
 //! leaves of each axis's limit ([`acceleration_budget`]). Nor can jerks: a leg whose end blends
 //! is planned with half the jerk on the axes the next leg shares ([`jerk_towards`]), the next
@@ -211,21 +213,20 @@ pub(crate) fn blend_start(
     hi
 }
 
-/// The next leg and when it starts on the current leg's clock: the one planned within the
-/// acceleration budget, starting at `start`, if it is possible and ends earlier than the
-/// `full` leg started at the current leg's end (a tight budget can make a blend slower than a
-/// stop); otherwise that.
-pub(crate) fn quicker<L: Leg>(
+/// Whether a blend is worth it: the next leg planned within the budgets, starting at `start`
+/// on the current leg's clock, must end earlier than the `full` leg would after a stop (a
+/// tight budget can make a blend slower than stopping), and overlap the current leg for at
+/// least `min_overlap` (a control period: a shorter overlap falls between two set-points,
+/// which would then cut the corner by their chord, not within the tolerance). If not, the
+/// sequence stops at the via point as with tolerance 0.
+pub(crate) fn worth_blending<L: Leg>(
     current_duration: f64,
-    full: L,
-    budgeted: Option<(L, f64)>,
-) -> (L, f64) {
-    match budgeted {
-        Some((leg, start)) if start + leg.duration() < current_duration + full.duration() => {
-            (leg, start)
-        }
-        _ => (full, current_duration),
-    }
+    full: &L,
+    (next, start): (&L, f64),
+    min_overlap: f64,
+) -> bool {
+    start + next.duration() < current_duration + full.duration()
+        && current_duration - start >= min_overlap
 }
 
 /// What the current leg's acceleration leaves of each axis's limit `a_max` for a next leg in

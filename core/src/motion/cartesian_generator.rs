@@ -3,7 +3,7 @@
 use super::Refusal;
 use super::blend::{
     self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
-    quicker,
+    worth_blending,
 };
 use super::shape::Shape;
 use super::straight_line::StraightLine;
@@ -249,17 +249,19 @@ impl CartesianGenerator {
 
     /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
     /// ends and blends with it, passing its goal within `tolerance` (m + rad, the via-point
-    /// metric) without stopping (see `blend.rs`). Where the limits allow no overlap it starts
-    /// when the running move ends. `then`: the pose after `goal` if the move blends into a move
-    /// there too (see [`move_towards`](Self::move_towards)). Refused unless a move runs with
-    /// nothing queued.
+    /// metric) without stopping (see `blend.rs`). `then`: the pose after `goal` if the move
+    /// blends into a move there too (see [`move_towards`](Self::move_towards)). `Ok(false)`,
+    /// nothing queued, if the blend would not save time or would overlap for less than
+    /// `min_overlap` (the control period): the caller stops at the goal instead. Refused unless
+    /// a move runs with nothing queued.
     pub fn blend_into(
         &mut self,
         goal: Frame,
         min_duration: f64,
         tolerance: f64,
         then: Option<Frame>,
-    ) -> Result<(), Refusal> {
+        min_overlap: f64,
+    ) -> Result<bool, Refusal> {
         let limits = self.limits();
         let Some(Motion::Move(chain)) = &mut self.motion else {
             return Err(Refusal::NoGoal);
@@ -319,8 +321,14 @@ impl CartesianGenerator {
                 );
                 (next, start)
             });
-        let (leg, start) = quicker(current.duration, full, budgeted);
-        chain.queue(leg, start)
+        match budgeted {
+            Some((next, start))
+                if worth_blending(current.duration, &full, (&next, start), min_overlap) =>
+            {
+                chain.queue(next, start).map(|()| true)
+            }
+            _ => Ok(false),
+        }
     }
 
     fn limits(&self) -> Limits {

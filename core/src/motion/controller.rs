@@ -187,12 +187,12 @@ impl Controller {
         note_sequence(step, events);
         // A blend stays within the joint limits: its path lies within the tolerance of the via
         // point, which is kept below the via point's distance to the nearest limit.
-        let (chain, generator) = (&self.chain, &mut self.joint_generator);
+        let (chain, generator, period) = (&self.chain, &mut self.joint_generator, self.period);
         self.joint_sequence.hand_over(
             generator.accepts_blend(),
             |q| limit_margin(chain, q),
             |via, tolerance, then| {
-                generator.blend_into(via.point, via.min_duration, tolerance, then)
+                generator.blend_into(via.point, via.min_duration, tolerance, then, period)
             },
         );
         let (setpoint, finished) = self.joint_generator.advance(self.period);
@@ -227,12 +227,13 @@ impl Controller {
         note_sequence(step, events);
         // A blend's set-points stay within the tolerance of the via point, kept below its
         // distance to the workspace's edges and boxes.
-        let (workspace, generator) = (&self.workspace, &mut self.cartesian_generator);
+        let (workspace, generator, period) =
+            (&self.workspace, &mut self.cartesian_generator, self.period);
         self.cartesian_sequence.hand_over(
             generator.accepts_blend(),
             |pose| workspace.margin(&pose.translation.vector),
             |via, tolerance, then| {
-                generator.blend_into(via.point, via.min_duration, tolerance, then)
+                generator.blend_into(via.point, via.min_duration, tolerance, then, period)
             },
         );
 

@@ -3,7 +3,7 @@
 use super::Refusal;
 use super::blend::{
     self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
-    quicker,
+    worth_blending,
 };
 use super::straight_line::StraightLine;
 use crate::MAX_JOINTS;
@@ -139,17 +139,19 @@ impl JointGenerator {
 
     /// Queues a move to `goal` (at least `min_duration` s) that starts before the running move
     /// ends and blends with it, passing its goal within `tolerance` (Euclidean, rad or m)
-    /// without stopping (see `blend.rs`). Where the limits allow no overlap it starts when the
-    /// running move ends. `then`: the point after `goal` if the move blends into a move there
-    /// too (see [`move_towards`](Self::move_towards)). Refused unless a move runs with nothing
-    /// queued.
+    /// without stopping (see `blend.rs`). `then`: the point after `goal` if the move blends
+    /// into a move there too (see [`move_towards`](Self::move_towards)). `Ok(false)`, nothing
+    /// queued, if the blend would not save time or would overlap for less than `min_overlap`
+    /// (the control period): the caller stops at the goal instead. Refused unless a move runs
+    /// with nothing queued.
     pub fn blend_into(
         &mut self,
         goal: Joints,
         min_duration: f64,
         tolerance: f64,
         then: Option<Joints>,
-    ) -> Result<(), Refusal> {
+        min_overlap: f64,
+    ) -> Result<bool, Refusal> {
         let Some(chain) = &mut self.motion else {
             return Err(Refusal::NoGoal);
         };
@@ -187,8 +189,14 @@ impl JointGenerator {
                 );
                 (next, start)
             });
-        let (leg, start) = quicker(current.duration, full, budgeted);
-        chain.queue(leg, start)
+        match budgeted {
+            Some((next, start))
+                if worth_blending(current.duration, &full, (&next, start), min_overlap) =>
+            {
+                chain.queue(next, start).map(|()| true)
+            }
+            _ => Ok(false),
+        }
     }
 
     /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).

@@ -67,6 +67,8 @@ struct Run<P> {
     /// Index of the leg's target that is running or just completed.
     current: usize,
     failed_checks: u32,
+    /// The generator declined to blend at `current` (not worth it): stop there.
+    declined: bool,
 }
 
 impl<P: Copy> Run<P> {
@@ -147,6 +149,7 @@ impl<P: Copy> Sequence<P> {
             blends,
             current: 0,
             failed_checks: 0,
+            declined: false,
         });
         Ok(first)
     }
@@ -170,15 +173,17 @@ impl<P: Copy> Sequence<P> {
     /// tolerance: `blend(next via point, tolerance, the point after it if the sequence blends
     /// there too)` queues it in the generator, with the tolerance limited to
     /// `margin(via point)` (how far the path may stray there, e.g. to a joint or workspace
-    /// limit). Does nothing unless `ready`: the leg's generator runs and accepts a next leg.
-    /// The blended via point is not reach-checked: the arm only passes it.
+    /// limit). `blend` says whether it queued the leg; if not (the blend was not worth it), the
+    /// sequence stops at the via point as with tolerance 0 and does not ask again. Does nothing
+    /// unless `ready`: the leg's generator runs and accepts a next leg. The blended via point
+    /// is not reach-checked: the arm only passes it.
     pub fn hand_over(
         &mut self,
         ready: bool,
         margin: impl FnOnce(&P) -> f64,
-        blend: impl FnOnce(ViaPoint<P>, f64, Option<P>) -> Result<(), Refusal>,
+        blend: impl FnOnce(ViaPoint<P>, f64, Option<P>) -> Result<bool, Refusal>,
     ) {
-        let Some(run) = self.run.as_mut().filter(|_| ready) else {
+        let Some(run) = self.run.as_mut().filter(|r| ready && !r.declined) else {
             return;
         };
         let (Some(Some(corner)), Some(Some(next)), Some(tolerance)) = (
@@ -190,9 +195,14 @@ impl<P: Copy> Sequence<P> {
         };
         let tolerance = tolerance.min(margin(&corner.point));
         let then = run.towards(run.current + 1);
-        if tolerance > 0.0 && blend(*next, tolerance, then).is_ok() {
-            run.current += 1;
-            run.failed_checks = 0;
+        if tolerance > 0.0 {
+            match blend(*next, tolerance, then) {
+                Ok(true) => {
+                    run.current += 1;
+                    run.failed_checks = 0;
+                }
+                Ok(false) | Err(_) => run.declined = true,
+            }
         }
     }
 
@@ -235,6 +245,7 @@ impl<P: Copy> Sequence<P> {
             Some(via) => {
                 run.current += 1;
                 run.failed_checks = 0;
+                run.declined = false;
                 SequenceStep::MoveTo(via)
             }
             None => {
