@@ -1,0 +1,284 @@
+//! Velocity streaming (`TW`, `jW`): a tool twist or joint rates, each valid for
+//! [`TIMEOUT_PERIODS`] control periods, after which the arm ramps to rest.
+//!
+//! One tick, from the last joint command `q` and the streamed joint velocity `v`:
+//!
+//! 1. **target**: the command's joint rates, or zero once it is older than the timeout. A
+//!    twist (base frame, or the tool frame turned into it) is scaled down to the Cartesian
+//!    speed limits and turned into joint rates by the damped pseudo-inverse
+//!    (`Chain::joint_rates`), the damping rising smoothly near a singularity
+//!    ([`damping`]); a 7–8-joint arm adds a pull towards mid-range in the null space
+//!    ([`null_space`]). The rates are scaled down to the joints' speed limits as a whole, so
+//!    the tool keeps its direction and slows down rather than stops;
+//! 2. **joint limits**: a joint heading for a limit may not be faster than it can still stop
+//!    at a margin before it ([`joint_margin`]): twists scale the whole vector (the path stays),
+//!    joint rates each joint;
+//! 3. **acceleration**: `v` moves towards the target as far as every joint's acceleration
+//!    limit allows, all joints by the same fraction ([`ramp`]);
+//! 4. **workspace**: if the tool would end outside the workspace or in an exclusion box at
+//!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
+//!    is not commanded at all (the arm holds).
+//!
+//! The set-point is `q + v·T`. Each loop runs over the joints; no iteration is unbounded.
+
+mod damping;
+mod joint_margin;
+mod null_space;
+mod ramp;
+
+pub use damping::{MAX_DAMPING, SINGULAR_THRESHOLD, singularity_damping, smallest_singular_value};
+pub use joint_margin::MARGIN_SHARE;
+
+use armgate_protocol::client::TwistFrame;
+
+use super::workspace::Workspace;
+use crate::config::ValidRobot;
+use crate::kinematics::{Chain, Joints};
+use crate::math::Twist;
+
+/// A command holds for this many control periods; then the arm ramps to rest.
+pub const TIMEOUT_PERIODS: u32 = 3;
+
+/// What a client streams.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StreamCommand {
+    /// A tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in a frame.
+    Twist(Twist, TwistFrame),
+    /// Joint rates (rad/s, or m/s for prismatic joints), one per joint.
+    JointRates(Joints),
+}
+
+/// What one streaming tick produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamStep {
+    /// The joint set-point.
+    pub q: Joints,
+    /// The stream has come to rest with no command left: the generators take over.
+    pub finished: bool,
+    /// The workspace made the arm slow down or hold.
+    pub workspace_limit: bool,
+    /// A joint was held at the margin before its limit.
+    pub joint_limit: bool,
+}
+
+/// The state of a velocity stream: the latest command, its age and the joint velocity.
+#[derive(Clone, Debug)]
+pub struct VelocityStream {
+    command: Option<StreamCommand>,
+    /// Ticks since the command arrived.
+    age: u32,
+    /// The joint velocity of the last set-point step.
+    velocity: Joints,
+    /// Speed limits: the lower of the joint generator's and the limiter's.
+    max_speed: Joints,
+    /// Acceleration limit × period: the largest velocity change per tick.
+    max_change: Joints,
+    max_acceleration: Joints,
+    /// The joint limits with the margin kept.
+    lower: Joints,
+    upper: Joints,
+    mid: Joints,
+    cartesian_speed: [f64; 6],
+    period: f64,
+}
+
+impl VelocityStream {
+    /// An idle stream for a robot.
+    pub fn new(config: &ValidRobot) -> Self {
+        let period = config.control_period;
+        let margin = |j: &crate::config::JointConfig| MARGIN_SHARE * (j.max - j.min);
+        Self {
+            command: None,
+            age: 0,
+            velocity: Joints::zeros(config.dof()),
+            max_speed: config.per_joint(|j| j.max_velocity.min(j.max_rate)),
+            max_change: config.per_joint(|j| j.max_acceleration * period),
+            max_acceleration: config.per_joint(|j| j.max_acceleration),
+            lower: config.per_joint(|j| j.min + margin(j)),
+            upper: config.per_joint(|j| j.max - margin(j)),
+            mid: config.per_joint(|j| 0.5 * (j.min + j.max)),
+            cartesian_speed: config.cartesian.max_velocity,
+            period,
+        }
+    }
+
+    /// Takes a new command (valid for [`TIMEOUT_PERIODS`] ticks from the next one). The caller
+    /// has checked its numbers and, for joint rates, their count.
+    pub fn command(&mut self, command: StreamCommand) {
+        self.command = Some(command);
+        self.age = 0;
+    }
+
+    /// Drops the command: the arm ramps to rest within the acceleration limits.
+    pub fn ramp_to_rest(&mut self) {
+        self.command = None;
+    }
+
+    /// Ends the stream at once (mode change, drives not taking commands).
+    pub fn halt(&mut self) {
+        self.command = None;
+        self.velocity.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// True while a command holds or the arm has not yet ramped to rest.
+    pub fn is_active(&self) -> bool {
+        self.command.is_some() || self.velocity.iter().any(|v| *v != 0.0)
+    }
+
+    /// The joint velocity of the last set-point step.
+    pub fn velocity(&self) -> &Joints {
+        &self.velocity
+    }
+
+    /// One tick from the last joint command `q` (checked by the chain).
+    pub fn step(&mut self, chain: &Chain, workspace: &Workspace, q: &Joints) -> StreamStep {
+        if self.age >= TIMEOUT_PERIODS {
+            self.command = None;
+        }
+        self.age = self.age.saturating_add(1);
+        let mut joint_limit = false;
+        let target = match self.command {
+            None => Joints::zeros(q.len()),
+            Some(StreamCommand::JointRates(rates)) => {
+                let mut target = rates;
+                for (i, t) in target.iter_mut().enumerate() {
+                    let cap = self.max_speed.get(i).copied().unwrap_or(0.0);
+                    *t = crate::saturate::saturate(*t, -cap, cap);
+                    let brake = self.braking_speed(q, i, *t);
+                    if brake < libm::fabs(*t) {
+                        joint_limit |= brake == 0.0;
+                        *t = libm::copysign(brake, *t);
+                    }
+                }
+                target
+            }
+            Some(StreamCommand::Twist(twist, frame)) => {
+                let rates = self.twist_rates(chain, q, &twist, frame);
+                let brake = (0..rates.len())
+                    .map(|i| {
+                        let rate = rates.get(i).copied().unwrap_or(0.0);
+                        let ratio = self.braking_speed(q, i, rate) / libm::fabs(rate);
+                        if ratio.is_nan() { 1.0 } else { ratio }
+                    })
+                    .fold(1.0, f64::min);
+                joint_limit |= brake == 0.0;
+                scaled(&rates, brake)
+            }
+        };
+        let mut velocity = ramp::accelerate(&self.velocity, &target, &self.max_change);
+        let mut workspace_limit = false;
+        if !self.stops_inside(chain, workspace, q, &velocity) {
+            workspace_limit = true;
+            velocity = ramp::accelerate(&self.velocity, &Joints::zeros(q.len()), &self.max_change);
+        }
+        let mut next = advance(q, &velocity, self.period);
+        let next_inside = chain
+            .forward(&next)
+            .is_ok_and(|f| workspace.allows(&f.translation.vector));
+        if !next_inside {
+            workspace_limit = true;
+            velocity = Joints::zeros(q.len());
+            next = *q;
+        }
+        self.velocity = velocity;
+        StreamStep {
+            q: next,
+            finished: !self.is_active(),
+            workspace_limit,
+            joint_limit,
+        }
+    }
+
+    /// Joint rates for a twist at `q`, within the Cartesian and the joint speed limits.
+    fn twist_rates(&self, chain: &Chain, q: &Joints, twist: &Twist, frame: TwistFrame) -> Joints {
+        let mut xi = *twist;
+        if frame == TwistFrame::Tool {
+            let rotation = chain.pose(q).rotation;
+            let linear = rotation * xi.fixed_rows::<3>(0).into_owned();
+            let angular = rotation * xi.fixed_rows::<3>(3).into_owned();
+            xi.fixed_rows_mut::<3>(0).copy_from(&linear);
+            xi.fixed_rows_mut::<3>(3).copy_from(&angular);
+        }
+        // Every component within its Cartesian limit, by one factor: the direction stays.
+        let over = xi
+            .iter()
+            .zip(self.cartesian_speed)
+            .map(|(v, max)| libm::fabs(*v) / max)
+            .fold(1.0, f64::max);
+        xi /= over;
+        if xi.iter().all(|v| *v == 0.0) {
+            return Joints::zeros(q.len());
+        }
+        let Ok(j) = chain.jacobian(q) else {
+            return Joints::zeros(q.len());
+        };
+        let damping = singularity_damping(&j, chain.dof());
+        let pull =
+            (chain.dof() > 6).then(|| null_space::mid_range_pull(q, &self.mid, &self.max_speed));
+        let rates = chain
+            .joint_rates(q, &xi, damping, pull.as_deref())
+            .unwrap_or_else(|_| Joints::zeros(q.len()));
+        let over = rates
+            .iter()
+            .zip(self.max_speed.iter())
+            .map(|(r, max)| libm::fabs(*r) / max)
+            .fold(1.0, f64::max);
+        // A non-finite ratio means rates that are not numbers: no motion.
+        if over.is_finite() {
+            scaled(&rates, 1.0 / over)
+        } else {
+            Joints::zeros(q.len())
+        }
+    }
+
+    /// The braking speed of joint `i` at `q` moving at `rate`.
+    fn braking_speed(&self, q: &Joints, i: usize, rate: f64) -> f64 {
+        let at = |v: &Joints| v.get(i).copied().unwrap_or(0.0);
+        joint_margin::braking_speed(
+            at(q),
+            rate,
+            (at(&self.lower), at(&self.upper)),
+            at(&self.max_acceleration),
+            self.period,
+        )
+    }
+
+    /// Whether the tool is inside the workspace where the arm would come to rest if it braked
+    /// from `velocity` after this tick (about `q + v·(T + t_stop/2)`).
+    fn stops_inside(
+        &self,
+        chain: &Chain,
+        workspace: &Workspace,
+        q: &Joints,
+        velocity: &Joints,
+    ) -> bool {
+        let stop_time = velocity
+            .iter()
+            .zip(self.max_acceleration.iter())
+            .map(|(v, a)| libm::fabs(*v) / a)
+            .fold(0.0, f64::max);
+        if stop_time == 0.0 {
+            return true;
+        }
+        let rest = advance(q, velocity, self.period + 0.5 * stop_time);
+        chain
+            .forward(&rest)
+            .is_ok_and(|f| workspace.allows(&f.translation.vector))
+    }
+}
+
+/// `q + v·t`.
+fn advance(q: &Joints, v: &Joints, t: f64) -> Joints {
+    let mut out = *q;
+    for (o, v) in out.iter_mut().zip(v.iter()) {
+        *o += v * t;
+    }
+    out
+}
+
+/// `v · factor`.
+fn scaled(v: &Joints, factor: f64) -> Joints {
+    let mut out = *v;
+    out.iter_mut().for_each(|x| *x *= factor);
+    out
+}
