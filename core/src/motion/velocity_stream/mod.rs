@@ -26,7 +26,10 @@ mod joint_margin;
 mod null_space;
 mod ramp;
 
-pub use damping::{MAX_DAMPING, SINGULAR_THRESHOLD, singularity_damping, smallest_singular_value};
+pub use damping::{
+    MAX_DAMPING, SINGULAR_THRESHOLD, SingularDirection, singularity_damping,
+    smallest_singular_value,
+};
 pub use joint_margin::MARGIN_SHARE;
 
 use armgate_protocol::client::TwistFrame;
@@ -80,6 +83,8 @@ pub struct VelocityStream {
     mid: Joints,
     cartesian_speed: [f64; 6],
     period: f64,
+    /// The smallest singular direction, followed from tick to tick.
+    singular: SingularDirection,
 }
 
 impl VelocityStream {
@@ -99,6 +104,7 @@ impl VelocityStream {
             mid: config.per_joint(|j| 0.5 * (j.min + j.max)),
             cartesian_speed: config.cartesian.max_velocity,
             period,
+            singular: SingularDirection::default(),
         }
     }
 
@@ -190,7 +196,13 @@ impl VelocityStream {
     }
 
     /// Joint rates for a twist at `q`, within the Cartesian and the joint speed limits.
-    fn twist_rates(&self, chain: &Chain, q: &Joints, twist: &Twist, frame: TwistFrame) -> Joints {
+    fn twist_rates(
+        &mut self,
+        chain: &Chain,
+        q: &Joints,
+        twist: &Twist,
+        frame: TwistFrame,
+    ) -> Joints {
         let mut xi = *twist;
         if frame == TwistFrame::Tool {
             let rotation = chain.pose(q).rotation;
@@ -212,7 +224,7 @@ impl VelocityStream {
         let Ok(j) = chain.jacobian(q) else {
             return Joints::zeros(q.len());
         };
-        let damping = singularity_damping(&j, chain.dof());
+        let damping = singularity_damping(&j, chain.dof(), &mut self.singular);
         let pull =
             (chain.dof() > 6).then(|| null_space::mid_range_pull(q, &self.mid, &self.max_speed));
         let rates = chain
