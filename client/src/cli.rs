@@ -79,7 +79,14 @@ const TELEOP_LONG: &str = "\
 The keyboard client (thesis Fig. 3.3): Current Pose, Desired Pose, Joints and Temp(C),
 polled from PS, jP and TM; the RPY of both poses, the scale, and the latest ER/WN text.
 
-Keys edit the desired pose; Enter sends it (with --live, every key press sends).
+Jog keys (the default; v toggles): a held key moves the arm smoothly. The Cartesian keys
+stream a twist (TW, base frame, 5 mm/s x scale along the axis), the joint keys joint rates
+(jW, 0.02 rad/s x scale on the selected joint), re-sent every control period while the key
+is held; on release the arm ramps to rest. Needs mode cartesian (joint) for the Cartesian
+(joint) keys.
+
+Step keys (--step, or v): keys edit the desired pose; Enter sends it (with --live, every key
+press sends).
 
   Cartesian keys              Joint keys (after j)
   Left / Right   x - / +      Left / Right   selected joint - / +
@@ -92,6 +99,7 @@ Keys edit the desired pose; Enter sends it (with --live, every key press sends).
                  If BG (jB) is refused, e.g. a motion still runs: ST, then BG (jB) once more.
   j              switch between Cartesian and joint keys
   m              next mode via CM: off -> joint -> cart -> off (the first m selects joint)
+  v              jog keys <-> step keys
   q, Esc         quit (the terminal is restored)
 
 A Cartesian step is 1 mm x scale, a joint step 0.01 rad x scale.";
@@ -216,9 +224,12 @@ pub enum Cmd {
     /// The keyboard client: live pose, joints and temperatures; move with the arrow keys.
     #[command(long_about = TELEOP_LONG)]
     Teleop {
-        /// Send on every key press instead of on Enter.
+        /// Send on every key press instead of on Enter (step keys).
         #[arg(long)]
         live: bool,
+        /// Keys step the desired values (the seed's teleop) instead of jogging while held.
+        #[arg(long)]
+        step: bool,
         /// How often to read PS, jP and TM (Hz).
         #[arg(long, default_value_t = 10.0)]
         rate: f64,
@@ -434,7 +445,7 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
-    if let Cmd::Teleop { live, rate } = &cli.command {
+    if let Cmd::Teleop { live, step, rate } = &cli.command {
         let poll = Some(1.0 / rate)
             .filter(|p| p.is_finite() && *p > 0.0)
             .and_then(|p| Duration::try_from_secs_f64(p).ok())
@@ -442,6 +453,7 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         let options = TeleopOptions {
             joints: joint_count(cli, &mut client)?,
             live: *live,
+            jog: !*step,
             poll,
             addr: cli.addr.clone(),
         };

@@ -423,6 +423,9 @@ fn streams_are_refused_in_the_wrong_mode_and_during_a_move() {
     let reply = s.ok(rates.to_request());
     let mut expected = rates.to_request().to_bytes();
     expected[..2].copy_from_slice(b"Wj");
+    // f6: the three periods the rates hold.
+    let timeout = (3.0 * s.period()) as f32;
+    expected[26..30].copy_from_slice(&timeout.to_le_bytes());
     assert_eq!(reply, expected);
     s.tick();
     // jB during the stream is busy; ST ramps it to rest.

@@ -245,7 +245,10 @@ impl CommandHandler {
                     let q = self.complete(BankKey::Rates, joints, cmd)?;
                     self.controller.stream_joint_rates(&q).map_err(refused)?;
                 }
-                Ok(values_reply(cmd, joints, req.index))
+                // The echo: the rates as sent, and in f6 how long they hold.
+                let mut values = v;
+                values[BANK_LEN] = self.controller.stream_timeout();
+                Ok(values_reply(cmd, &values, req.index))
             }
             Command::JointReset | Command::Stop => {
                 self.controller.stop();
@@ -330,7 +333,12 @@ impl CommandHandler {
                 self.controller
                     .stream_twist(xi, twist.frame)
                     .map_err(refused)?;
-                Ok(values_reply(cmd, &[vx, vy, vz, wx, wy, wz], req.index))
+                let timeout = self.controller.stream_timeout();
+                Ok(values_reply(
+                    cmd,
+                    &[vx, vy, vz, wx, wy, wz, timeout],
+                    req.index,
+                ))
             }
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();

@@ -613,6 +613,12 @@ impl Controller {
         self.cartesian_generator.setpoint()
     }
 
+    /// How long a streamed command holds (s): [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS)
+    /// control periods. `TW` and `jW` echo it in f6, so that a client knows how often to send.
+    pub fn stream_timeout(&self) -> f64 {
+        f64::from(super::TIMEOUT_PERIODS) * self.period
+    }
+
     /// The velocity stream (TW, jW).
     pub fn stream(&self) -> &VelocityStream {
         &self.stream
