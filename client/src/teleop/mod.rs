@@ -143,12 +143,10 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
                     let until = held.press(velocity.clone(), now);
                     streamer.stream(velocity, until);
                 }
-                Some(action) => {
-                    if io.actions.send(action).is_err() {
-                        state.status = String::from("the I/O thread has ended");
-                    }
+                Some(action) if io.actions.send(action).is_err() => {
+                    state.status = String::from("the I/O thread has ended");
                 }
-                None => {}
+                Some(_) | None => {}
             }
         }
     }
