@@ -138,15 +138,17 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
             && let event::Event::Key(k) = event::read()?
             && let Some(key) = key(&k)
         {
-            match state.handle_key(key) {
+            let sent = match state.handle_key(key) {
                 Some(Action::Jog(velocity)) => {
                     let until = held.press(velocity.clone(), now);
                     streamer.stream(velocity, until);
+                    true
                 }
-                Some(action) if io.actions.send(action).is_err() => {
-                    state.status = String::from("the I/O thread has ended");
-                }
-                Some(_) | None => {}
+                Some(action) => io.actions.send(action).is_ok(),
+                None => true,
+            };
+            if !sent {
+                state.status = String::from("the I/O thread has ended");
             }
         }
     }
