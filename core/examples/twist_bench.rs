@@ -25,8 +25,8 @@ use armgate_protocol::client::TwistFrame;
 const TICKS: usize = 20_000;
 
 fn main() {
-    println!("| robot                      | ticks  | mean µs | median µs | p99 µs | max µs |");
-    println!("|----------------------------|--------|---------|-----------|--------|--------|");
+    println!("| robot                        | ticks  | mean µs | median µs | p99 µs | max µs |");
+    println!("|------------------------------|--------|---------|-----------|--------|--------|");
     let cases: [(&str, &str, Vec<f64>, Twist); 4] = [
         (
             "ranger-mk1",
@@ -66,7 +66,11 @@ fn main() {
         ctrl.set_mode(Mode::Cartesian).unwrap();
         let mut times = Vec::with_capacity(TICKS);
         for k in 1..=TICKS {
-            let sign = if (k / per_second).is_multiple_of(2) { 1.0 } else { -1.0 };
+            let sign = if (k / per_second).is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
             ctrl.stream_twist(twist * sign, TwistFrame::Base).unwrap();
             let measured = arm.measured();
             let t0 = Instant::now();
@@ -77,7 +81,7 @@ fn main() {
         times.sort_by(f64::total_cmp);
         let at = |share: f64| times[((TICKS - 1) as f64 * share) as usize];
         println!(
-            "| {label:<26} | {TICKS:>6} | {:>7.2} | {:>9.2} | {:>6.2} | {:>6.2} |",
+            "| {label:<28} | {TICKS:>6} | {:>7.2} | {:>9.2} | {:>6.2} | {:>6.2} |",
             times.iter().sum::<f64>() / TICKS as f64,
             at(0.5),
             at(0.99),

@@ -24,7 +24,11 @@ pub(super) fn streaming_ticks(session: &mut Session) -> Result<Timing, &'static 
     )?;
     let mut timing = Timing::default();
     for k in 0..TICKS {
-        let sign = if (k / REVERSE_EVERY).is_multiple_of(2) { 1.0 } else { -1.0 };
+        let sign = if (k / REVERSE_EVERY).is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         timing.add(session.request(Command::Twist, TWIST.map(|v| v * sign), b"WT")?);
     }
     Ok(timing)
