@@ -297,7 +297,9 @@ fn a_jog_through_the_wrist_singularity_neither_stops_nor_exceeds_a_rate_limit() 
         "passed the singularity"
     );
     assert!(travelled >= 2.0 * half);
-    assert!(deviation < 0.02, "{deviation}");
+    // The damping gives way in orientation, not along the path.
+    assert!(deviation < 0.0005, "{deviation}");
+    assert!(tilt < 5f64.to_radians(), "{tilt}");
 }
 
 #[test]

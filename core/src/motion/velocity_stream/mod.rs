@@ -5,11 +5,13 @@
 //!
 //! 1. **target**: the command's joint rates, or zero once it is older than the timeout. A
 //!    twist (base frame, or the tool frame turned into it) is scaled down to the Cartesian
-//!    speed limits and turned into joint rates by the damped pseudo-inverse
-//!    (`Chain::joint_rates`), the damping rising smoothly near a singularity
-//!    ([`damping`]); a 7–8-joint arm adds a pull towards mid-range in the null space
-//!    ([`null_space`]). The rates are scaled down to the joints' speed limits as a whole, so
-//!    the tool keeps its direction and slows down rather than stops;
+//!    speed limits and turned into joint rates by a damped pseudo-inverse: the damping rises
+//!    smoothly as the smallest singular value falls ([`damping`]) and acts along that
+//!    direction only ([`pseudo_inverse`]), with the linear rows weighted
+//!    ([`LINEAR_WEIGHT`]) so that the tool keeps its path and gives way in orientation; a
+//!    7–8-joint arm adds a pull towards mid-range in the null space ([`null_space`]). The rates
+//!    are scaled down to the joints' speed limits as a whole, so the tool keeps its direction
+//!    and slows down rather than stops;
 //! 2. **joint limits**: a joint heading for a limit may not be faster than it can still stop
 //!    at a margin before it ([`joint_margin`]): twists scale the whole vector (the path stays),
 //!    joint rates each joint;
@@ -24,6 +26,7 @@
 mod damping;
 mod joint_margin;
 mod null_space;
+mod pseudo_inverse;
 mod ramp;
 
 pub use damping::{
@@ -41,6 +44,11 @@ use crate::math::Twist;
 
 /// A command holds for this many control periods; then the arm ramps to rest.
 pub const TIMEOUT_PERIODS: u32 = 3;
+/// Weight of the linear rows of the Jacobian and the twist (1/m) against the angular ones:
+/// near a singularity the damped solution gives way where the weighted error is cheapest, so
+/// with 10 a millimetre off the path costs as much as 0.57° of orientation, and a jog through
+/// a wrist singularity keeps its straight line and lets the orientation wobble instead.
+pub const LINEAR_WEIGHT: f64 = 10.0;
 
 /// What a client streams.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -221,15 +229,26 @@ impl VelocityStream {
         if xi.iter().all(|v| *v == 0.0) {
             return Joints::zeros(q.len());
         }
-        let Ok(j) = chain.jacobian(q) else {
+        let Ok(mut j) = chain.jacobian(q) else {
             return Joints::zeros(q.len());
         };
-        let damping = singularity_damping(&j, chain.dof(), &mut self.singular);
-        let pull =
-            (chain.dof() > 6).then(|| null_space::mid_range_pull(q, &self.mid, &self.max_speed));
-        let rates = chain
-            .joint_rates(q, &xi, damping, pull.as_deref())
-            .unwrap_or_else(|_| Joints::zeros(q.len()));
+        // Weighted rows: the damping gives way in orientation before position.
+        j.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
+        xi.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
+        let n = chain.dof();
+        let damping = singularity_damping(&j, n, &mut self.singular);
+        let rates = if n >= 6 {
+            let pull = if n > 6 {
+                null_space::mid_range_pull(q, &self.mid, &self.max_speed)
+            } else {
+                Joints::zeros(n)
+            };
+            pseudo_inverse::selectively_damped_rates(&j, n, &xi, damping, &self.singular, &pull)
+        } else {
+            // Fewer than six joints: the smallest direction is a joint-space one; damp all.
+            chain.joint_rates(q, &xi, damping, None).ok()
+        }
+        .unwrap_or_else(|| Joints::zeros(q.len()));
         let over = rates
             .iter()
             .zip(self.max_speed.iter())
