@@ -26,9 +26,10 @@ mod drives_rig;
 use drives_rig::Rig;
 
 use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::drives::DriveSettings;
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
-use armgate_core::drives::{BusStats, DriveSettings, VirtualBus};
 use armgate_core::motion::{Mode, Shape};
+use armgate_core::sim::{BusStats, VirtualBus};
 use armgate_plot::{Figure, Panel, Series, write_svg};
 
 const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];

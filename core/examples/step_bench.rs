@@ -15,7 +15,8 @@ use std::time::Instant;
 
 use armgate_core::config::load_file;
 use armgate_core::kinematics::Joints;
-use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
+use armgate_core::motion::{Controller, Mode, Shape};
+use armgate_core::sim::IdealArm;
 
 const TICKS: usize = 20_000;
 

@@ -47,10 +47,12 @@ mod drives_rig;
 use drives_rig::Rig;
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::drives::{DriveSettings, SimWhistle, VirtualBus, WhistleConfig};
+use armgate_core::drives::DriveSettings;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, IdealArm, Mode, Shape};
+use armgate_core::motion::{Controller, Mode, Shape};
+use armgate_core::sim::IdealArm;
+use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_plot::{Figure, Panel, Series, write_svg};
 
 /// The start pose's position (m): the sinusoids' centre (spec §4.5), and the circles' start.

@@ -19,7 +19,8 @@ use std::time::Instant;
 use armgate_core::config::load_file;
 use armgate_core::kinematics::Joints;
 use armgate_core::math::Twist;
-use armgate_core::motion::{Controller, IdealArm, Mode};
+use armgate_core::motion::{Controller, Mode};
+use armgate_core::sim::IdealArm;
 use armgate_protocol::client::TwistFrame;
 
 const TICKS: usize = 20_000;

@@ -11,12 +11,13 @@
 mod common;
 mod drives_rig;
 
-use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
+use armgate_core::command::Drives;
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::Cycle;
 use armgate_core::kinematics::Joints;
-use armgate_core::motion::IdealArm;
 use armgate_core::rng::SplitMix64;
+use armgate_core::sim::IdealArm;
+use armgate_core::sim::{ArmModel, SimulatedDrives};
 
 /// The core's cycle with a simulated arm; requests answered between ticks, notices kept with
 /// the tick's time.

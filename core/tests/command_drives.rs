@@ -13,8 +13,9 @@
 mod common;
 
 use armgate_core::command::{CommandHandler, DriveStatus, Drives, Motion};
-use armgate_core::drives::{DriveManager, DriveSettings, VirtualBus};
+use armgate_core::drives::{DriveManager, DriveSettings};
 use armgate_core::motion::Mode;
+use armgate_core::sim::VirtualBus;
 
 struct Rig {
     handler: CommandHandler,

@@ -9,10 +9,11 @@
 
 mod drives_rig;
 
-use armgate_core::command::{ArmModel, SimulatedDrives};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, MAX_CATCH_UP, REQUESTS_PER_TICK};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError, VirtualBus};
-use armgate_core::motion::IdealArm;
+use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError};
+use armgate_core::sim::IdealArm;
+use armgate_core::sim::VirtualBus;
+use armgate_core::sim::{ArmModel, SimulatedDrives};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Command, Request};
 use drives_rig::{Client, robot};

@@ -12,12 +12,10 @@
 mod drives_rig;
 
 use armgate_core::config::ValidRobot;
-use armgate_core::drives::{
-    BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState, SimWhistle, VirtualBus,
-    WhistleConfig,
-};
+use armgate_core::drives::{BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Mode;
+use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
 use armgate_protocol::can::{CanFrame, Emcy, Nmt, NodeId, NodeMessage};
 use drives_rig::{Rig, robot};

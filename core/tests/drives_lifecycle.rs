@@ -246,12 +246,12 @@ fn a_drive_in_another_unit_mode_is_switched_to_position_mode() {
 }
 
 /// The same drive, powered up in speed mode.
-fn speed_mode(drive: armgate_core::drives::SimWhistle) -> armgate_core::drives::SimWhistle {
+fn speed_mode(drive: armgate_core::sim::SimWhistle) -> armgate_core::sim::SimWhistle {
     let _ = drive;
     let config = robot("ranger-mk1");
-    let mut whistle = armgate_core::drives::WhistleConfig::for_joint(&config.joints[2]).unwrap();
+    let mut whistle = armgate_core::sim::WhistleConfig::for_joint(&config.joints[2]).unwrap();
     whistle.unit_mode = 2;
-    armgate_core::drives::SimWhistle::new(whistle)
+    armgate_core::sim::SimWhistle::new(whistle)
 }
 
 #[test]
@@ -394,12 +394,12 @@ fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
             .iter()
             .enumerate()
             .map(|(i, joint)| {
-                let mut whistle = armgate_core::drives::WhistleConfig::for_joint(joint).unwrap();
+                let mut whistle = armgate_core::sim::WhistleConfig::for_joint(joint).unwrap();
                 whistle.clock_error_ppm = if i % 2 == 0 { 1000.0 } else { -1000.0 };
-                armgate_core::drives::SimWhistle::new(whistle)
+                armgate_core::sim::SimWhistle::new(whistle)
             })
             .collect();
-        *bus = armgate_core::drives::VirtualBus::new(500_000, drives);
+        *bus = armgate_core::sim::VirtualBus::new(500_000, drives);
     });
     rig.start();
     rig.ctrl_mut().set_mode(Mode::Joint).unwrap();

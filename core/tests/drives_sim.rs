@@ -10,7 +10,8 @@
 
 mod drives_rig;
 
-use armgate_core::drives::{CanBus, DriveEmergency, SimWhistle, VirtualBus, WhistleConfig};
+use armgate_core::drives::{CanBus, DriveEmergency};
+use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
     CanFrame, Emcy, Incoming, Nmt, NmtState, NodeId, NodeMessage, exact_bits_on_wire,

@@ -12,10 +12,12 @@
 mod common;
 mod drives_rig;
 
-use armgate_core::command::{ArmModel, CommandHandler, SimulatedDrives};
+use armgate_core::command::CommandHandler;
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Joints, KinematicsError};
-use armgate_core::motion::{Controller, IdealArm, JointLimiter, Mode, RateLimitedArm, Refusal};
+use armgate_core::motion::{Controller, JointLimiter, Mode, Refusal};
+use armgate_core::sim::{ArmModel, SimulatedDrives};
+use armgate_core::sim::{IdealArm, RateLimitedArm};
 use armgate_protocol::client::Command;
 use armgate_protocol::client::{JointBound, PathPoint};
 

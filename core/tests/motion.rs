@@ -13,10 +13,11 @@ use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
-    CartesianGenerator, Controller, IdealArm, JointGenerator, JointLimiter, Mode, RateLimitedArm,
-    Refusal, Shape, StepOutput, Trapezoid,
+    CartesianGenerator, Controller, JointGenerator, JointLimiter, Mode, Refusal, Shape, StepOutput,
+    Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
+use armgate_core::sim::{IdealArm, RateLimitedArm};
 use armgate_protocol::client::{JointBound, PathPoint};
 
 /// A controller and an ideal arm, stepped together at the robot's period.

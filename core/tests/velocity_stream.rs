@@ -11,12 +11,12 @@
 
 mod common;
 
-use armgate_core::command::{ArmModel, SimulatedDrives};
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Frame, Vector3};
-use armgate_core::motion::{IdealArm, MARGIN_SHARE, Mode, TIMEOUT_PERIODS};
+use armgate_core::motion::{MARGIN_SHARE, Mode, TIMEOUT_PERIODS};
+use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::{
     Command, JointRates, Message, Motion, Request, Text, Twist, TwistFrame, VALUES,
 };

@@ -39,7 +39,7 @@ pub mod bus {
 #[cfg(any(feature = "sim-drives", not(target_os = "none")))]
 pub mod bus {
     use armgate_core::config::ValidRobot;
-    use armgate_core::drives::VirtualBus;
+    use armgate_core::sim::VirtualBus;
     #[cfg(target_os = "none")]
     use embassy_stm32::{
         Peri,

@@ -34,7 +34,8 @@ use std::sync::OnceLock;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
+use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,

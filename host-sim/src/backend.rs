@@ -3,12 +3,14 @@
 
 use std::str::FromStr;
 
-use armgate_core::command::{ArmModel, Drives, SimulatedDrives};
+use armgate_core::command::Drives;
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{CanDrives, DriveSide};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Refusal;
+use armgate_core::sim::VirtualBus;
+use armgate_core::sim::{ArmModel, SimulatedDrives};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{DriveStatus, Text};
 

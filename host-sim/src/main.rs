@@ -19,13 +19,14 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use armgate_core::command::{ArmModel, Network};
+use armgate_core::command::Network;
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::cycle::{Cycle, DriveSide};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
-use armgate_core::motion::{IdealArm, RateLimitedArm};
+use armgate_core::sim::ArmModel;
+use armgate_core::sim::{IdealArm, RateLimitedArm};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};

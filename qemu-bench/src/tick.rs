@@ -20,9 +20,10 @@ use core::f64::consts::FRAC_PI_2;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError, VirtualBus};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::math;
+use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Command, Request, VALUES};
 use cortex_m_semihosting::hprintln;

@@ -9,14 +9,12 @@ mod banks;
 mod drives;
 mod handler;
 mod relay;
-mod simulated;
 mod status;
 
 pub use allow::{Network, NetworkError};
 pub use drives::Drives;
 pub use handler::CommandHandler;
 pub use relay::{NOTICE_CAPACITY, NOTICE_INTERVAL, NoticeRelay};
-pub use simulated::{ArmModel, SimulatedDrives};
 pub use status::Status;
 // The wire's state enums, which the drives and the status snapshot report in.
 pub use armgate_protocol::client::{DriveStatus, Motion};

@@ -1,6 +1,6 @@
 //! The control cycle: what happens once per control period, the same in every shell.
 //!
-//! [`Cycle`] owns the [`CommandHandler`] (and through it the controller) and the drives
+//! [`Cycle`] owns the [`CommandHandler`](crate::command::CommandHandler) (and through it the controller) and the drives
 //! ([`DriveSide`]: the CANopen drive manager on a [`CanBus`](crate::drives::CanBus), or a
 //! simulated arm). A shell — `armgate-sim`, the firmware on the board or on Linux, the QEMU
 //! benchmark, the examples, the test rigs, the fuzz target — only moves bytes and time: it

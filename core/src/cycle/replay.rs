@@ -14,7 +14,8 @@ use std::string::String;
 use std::vec::Vec;
 
 use super::{Cycle, Datagram, DriveSide, Dropped, Link, Outgoing};
-use crate::drives::{DriveManager, SimWhistle, VirtualBus};
+use crate::drives::DriveManager;
+use crate::sim::{SimWhistle, VirtualBus};
 use std::format;
 
 /// A recorded exchange.

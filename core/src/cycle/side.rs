@@ -1,7 +1,8 @@
 //! The drive side of a tick.
 
-use crate::command::{Drives, SimulatedDrives};
+use crate::command::Drives;
 use crate::kinematics::Joints;
+use crate::sim::SimulatedDrives;
 
 /// The drives as the cycle runs them: the [`Drives`] the client's requests act on, plus the
 /// two halves of a tick around the control step.

@@ -1,5 +1,5 @@
-//! The servo drives: Elmo SimplIQ "Whistle" drives on a CAN bus (spec §6), and a simulation of
-//! them for running without an arm.
+//! The servo drives: Elmo SimplIQ "Whistle" drives on a CAN bus (spec §6). Their simulation
+//! lives in [`crate::sim`].
 //!
 //! * [`DriveManager`]: the drives' life cycle as a non-blocking state machine, advanced once
 //!   per control cycle: start-up, PT set-point streaming, measurement, temperatures, faults,
@@ -9,7 +9,6 @@
 //! * [`DriveFault`]: why the drives stopped, with the client's `ER3x` text.
 //! * [`streaming`]: which frames each drive gets per cycle, and the PT flow control.
 //! * [`load`]: bus-load accounting and the fastest control period the bus carries.
-//! * [`SimWhistle`], [`VirtualBus`]: a simulated drive and a simulated bus that owns them.
 //!
 //! docs/drives.md describes the cycle schedule, the state machine, the flow control, the
 //! faults and the measured bus figures.
@@ -23,12 +22,10 @@ mod link;
 pub mod load;
 mod manager;
 mod settings;
-pub mod sim_whistle;
 mod startup;
 mod state;
 pub mod streaming;
 mod units;
-mod virtual_bus;
 
 pub use bus::{BusState, CanBus, TxError};
 pub use emergency::{DriveEmergency, REASON_UNDERFLOW};
@@ -36,7 +33,5 @@ pub use fault::{BusFault, DriveFault};
 pub use manager::{DriveManager, DriveStats, LifecycleError, UNKNOWN_TEMPERATURE};
 pub(crate) use settings::whole_samples;
 pub use settings::{DriveSettings, POSITION_MODE, SAMPLE_TIME, SetupError};
-pub use sim_whistle::{SimWhistle, WhistleConfig, WhistleFaults, WhistleStats};
 pub use state::{DriveState, STOP_HOLD_CYCLES};
 pub use units::JointUnits;
-pub use virtual_bus::{BusStats, Stalled, VirtualBus};

@@ -7,7 +7,6 @@
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
 //! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
-//! * [`IdealArm`], [`RateLimitedArm`]: simulated arms.
 
 mod cartesian_generator;
 mod controller;
@@ -18,7 +17,6 @@ mod reach;
 mod refusal;
 mod sequence;
 mod shape;
-mod sim_arm;
 mod straight_line;
 mod trapezoid;
 mod velocity_stream;
@@ -33,7 +31,6 @@ pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iteration
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
-pub use sim_arm::{IdealArm, RateLimitedArm};
 pub use straight_line::StraightLine;
 pub use trapezoid::Trapezoid;
 pub use velocity_stream::{

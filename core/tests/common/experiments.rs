@@ -15,7 +15,8 @@ use std::f64::consts::PI;
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, IdealArm, Mode, StepOutput};
+use armgate_core::motion::{Controller, Mode, StepOutput};
+use armgate_core::sim::IdealArm;
 
 /// The rectangle of E8/E9 (m), closed: the last point is the first.
 pub const RECTANGLE: [[f64; 3]; 5] = [

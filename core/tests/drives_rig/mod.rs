@@ -8,11 +8,10 @@ use std::collections::VecDeque;
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
-use armgate_core::drives::{
-    BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError, VirtualBus,
-};
+use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::{Controller, StepOutput};
+use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 
 /// Loads `robots/<name>.toml`.

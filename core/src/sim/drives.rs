@@ -2,9 +2,10 @@
 
 use armgate_protocol::client::{DriveStatus, Text};
 
-use super::Drives;
+use super::arm::{IdealArm, RateLimitedArm};
+use crate::command::Drives;
 use crate::kinematics::Joints;
-use crate::motion::{IdealArm, RateLimitedArm, Refusal};
+use crate::motion::Refusal;
 
 /// Temperature the simulated drives report (°C).
 const SIMULATED_TEMPERATURE: f64 = 30.0;

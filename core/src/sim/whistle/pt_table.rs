@@ -15,7 +15,7 @@
 
 use heapless::Vec;
 
-use crate::drives::emergency::{DriveEmergency, REASON_UNDERFLOW};
+use crate::drives::{DriveEmergency, REASON_UNDERFLOW};
 
 /// Entries of the simulated QP table.
 pub const TABLE_LEN: u16 = 64;

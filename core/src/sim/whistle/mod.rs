@@ -24,10 +24,8 @@ use heapless::Deque;
 
 use self::pt_table::{Latency, PtTable, WriteError};
 use self::servo::Servo;
-use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
-use super::settings::{POSITION_MODE, SAMPLE_TIME};
-use super::units::JointUnits;
 use crate::config::JointConfig;
+use crate::drives::{DriveEmergency, JointUnits, POSITION_MODE, REASON_UNDERFLOW, SAMPLE_TIME};
 
 /// Frames a drive can have waiting to be sent.
 const TX_QUEUE: usize = 16;

@@ -10,10 +10,10 @@
 use armgate_protocol::can::{CanFrame, bits_on_wire, exact_bits_on_wire};
 use heapless::{Deque, Vec};
 
-use super::bus::{BusState, CanBus, TxError};
-use super::sim_whistle::{SimWhistle, WhistleConfig};
+use super::whistle::{SimWhistle, WhistleConfig};
 use crate::MAX_JOINTS;
 use crate::config::RobotConfig;
+use crate::drives::{BusState, CanBus, TxError};
 
 /// Frames the controller may have queued (a CAN controller's transmit FIFO).
 const CONTROLLER_QUEUE: usize = 32;

@@ -1,0 +1,20 @@
+//! Simulations, kept apart from the product code: what an arm, its drives and their bus would
+//! do, so that the whole controller runs on a desk, in tests and in the firmware's `sim-drives`
+//! build.
+//!
+//! * [`IdealArm`], [`RateLimitedArm`]: arms that follow joint commands.
+//! * [`SimulatedDrives`]: drives without a bus, a simulated arm behind the
+//!   [`Drives`](crate::command::Drives) interface.
+//! * [`SimWhistle`]: an Elmo SimplIQ "Whistle" drive on CAN (NMT, SDO, the binary interpreter,
+//!   the PT table, a servo loop).
+//! * [`VirtualBus`]: a CAN bus with simulated Whistles on it, bit-timed with arbitration.
+
+mod arm;
+mod bus;
+mod drives;
+pub mod whistle;
+
+pub use arm::{IdealArm, RateLimitedArm};
+pub use bus::{BusStats, Stalled, VirtualBus};
+pub use drives::{ArmModel, SimulatedDrives};
+pub use whistle::{SimWhistle, WhistleConfig, WhistleFaults, WhistleStats};
