@@ -449,3 +449,38 @@ fn streams_are_refused_in_the_wrong_mode_and_during_a_move() {
     assert_eq!(s.motion(), Motion::Holding);
     s.assert_within_limits();
 }
+
+#[test]
+fn a_jog_towards_an_exclusion_box_ramps_to_rest_before_it() {
+    // A box 30 mm ahead of the tool along x, 0.2 m wide.
+    let config = common::robot("ranger-mk1");
+    let p = Chain::new(&config)
+        .forward(&MK1_READY)
+        .unwrap()
+        .translation
+        .vector;
+    let face = p.x + 0.03;
+    let config = config
+        .edit(|c| {
+            c.workspace
+                .boxes
+                .push([face, face + 0.2, p.y - 0.1, p.y + 0.1, p.z - 0.1, p.z + 0.1])
+                .unwrap();
+        })
+        .unwrap();
+    let mut s = Stream::new(config, &MK1_READY, Mode::Cartesian);
+    for _ in 0..300 {
+        s.twist([0.015, 0.0, 0.0], [0.0; 3], TwistFrame::Base);
+        s.tick();
+        assert!(s.pose().translation.vector.x <= face, "entered the box");
+    }
+    let gap = face - s.pose().translation.vector.x;
+    println!(
+        "towards an exclusion box at 15 mm/s: at rest {:.2} mm before it",
+        gap * 1e3
+    );
+    assert!(gap < 0.002, "{gap}");
+    let n = s.setpoints.len();
+    assert_eq!(s.setpoints[n - 1], s.setpoints[n - 2], "at rest");
+    s.assert_within_limits();
+}

@@ -19,7 +19,8 @@
 //!    limit allows, all joints by the same fraction ([`ramp`]);
 //! 4. **workspace**: if the tool would end outside the workspace or in an exclusion box at
 //!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
-//!    is not commanded at all (the arm holds).
+//!    is not commanded at all (the arm holds). An arm already outside moves freely, so that it
+//!    can be driven out.
 //!
 //! The set-point is `q + v·T`. Each loop runs over the joints; no iteration is unbounded.
 
@@ -180,16 +181,21 @@ impl VelocityStream {
             }
         };
         let mut velocity = ramp::accelerate(&self.velocity, &target, &self.max_change);
+        // Checked only from inside: an arm already outside (after a recalibration, at start-up)
+        // may be driven out, as joint moves may.
+        let allowed = |q: &Joints| {
+            chain
+                .forward(q)
+                .is_ok_and(|f| workspace.allows(&f.translation.vector))
+        };
         let mut workspace_limit = false;
-        if !self.stops_inside(chain, workspace, q, &velocity) {
+        let mut inside_now = None;
+        if !allowed(&self.resting_point(q, &velocity)) && *inside_now.get_or_insert(allowed(q)) {
             workspace_limit = true;
             velocity = ramp::accelerate(&self.velocity, &Joints::zeros(q.len()), &self.max_change);
         }
         let mut next = advance(q, &velocity, self.period);
-        let next_inside = chain
-            .forward(&next)
-            .is_ok_and(|f| workspace.allows(&f.translation.vector));
-        if !next_inside {
+        if !allowed(&next) && inside_now.unwrap_or_else(|| allowed(q)) {
             workspace_limit = true;
             velocity = Joints::zeros(q.len());
             next = *q;
@@ -274,27 +280,15 @@ impl VelocityStream {
         )
     }
 
-    /// Whether the tool is inside the workspace where the arm would come to rest if it braked
-    /// from `velocity` after this tick (about `q + v·(T + t_stop/2)`).
-    fn stops_inside(
-        &self,
-        chain: &Chain,
-        workspace: &Workspace,
-        q: &Joints,
-        velocity: &Joints,
-    ) -> bool {
+    /// Where the arm would come to rest if it braked from `velocity` after this tick: about
+    /// `q + v·(T + t_stop/2)`.
+    fn resting_point(&self, q: &Joints, velocity: &Joints) -> Joints {
         let stop_time = velocity
             .iter()
             .zip(self.max_acceleration.iter())
             .map(|(v, a)| libm::fabs(*v) / a)
             .fold(0.0, f64::max);
-        if stop_time == 0.0 {
-            return true;
-        }
-        let rest = advance(q, velocity, self.period + 0.5 * stop_time);
-        chain
-            .forward(&rest)
-            .is_ok_and(|f| workspace.allows(&f.translation.vector))
+        advance(q, velocity, self.period + 0.5 * stop_time)
     }
 }
 
