@@ -3,8 +3,10 @@
 //! release lets it ramp to rest.
 //!
 //! A terminal reports a held key as a press, a pause (the auto-repeat delay, typically
-//! 250–600 ms), then repeats every 30–50 ms; it does not report the release. So the first
-//! press holds for [`FIRST_HOLD`], each repeat for [`REPEAT_HOLD`] from then on.
+//! 250–600 ms), then repeats every 30–50 ms; most do not report the release. So the first
+//! press holds for [`FIRST_HOLD`], each repeat for [`REPEAT_HOLD`] from then on. Terminals that
+//! speak the kitty keyboard protocol are asked for releases too, and a release stops the stream
+//! at once.
 
 use std::time::{Duration, Instant};
 

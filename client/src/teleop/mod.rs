@@ -73,9 +73,10 @@ pub struct TeleopOptions {
     pub addr: String,
 }
 
-/// The teleop key for a terminal key event (Ctrl-C is Esc).
+/// The teleop key for a terminal key event (Ctrl-C is Esc): presses, and the repeats of a held
+/// key that terminals reporting event types send.
 pub fn key(event: &KeyEvent) -> Option<Key> {
-    if event.kind != KeyEventKind::Press {
+    if event.kind == KeyEventKind::Release {
         return None;
     }
     if event.modifiers.contains(KeyModifiers::CONTROL) {
@@ -96,12 +97,33 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
 }
 
 /// Restores the terminal when dropped, also on an error return.
-struct Restore;
+struct Restore {
+    /// Key releases were asked for ([`report_releases`]).
+    releases: bool,
+}
 
 impl Drop for Restore {
     fn drop(&mut self) {
+        if self.releases {
+            let _ = ratatui::crossterm::execute!(
+                std::io::stdout(),
+                ratatui::crossterm::event::PopKeyboardEnhancementFlags
+            );
+        }
         ratatui::restore();
     }
+}
+
+/// Asks the terminal to report key releases and repeats (the kitty keyboard protocol), where
+/// it can: a released jog key then stops the stream at once rather than at its deadline.
+fn report_releases() -> bool {
+    use ratatui::crossterm::event::{KeyboardEnhancementFlags, PushKeyboardEnhancementFlags};
+    ratatui::crossterm::terminal::supports_keyboard_enhancement().unwrap_or(false)
+        && ratatui::crossterm::execute!(
+            std::io::stdout(),
+            PushKeyboardEnhancementFlags(KeyboardEnhancementFlags::REPORT_EVENT_TYPES)
+        )
+        .is_ok()
 }
 
 /// Runs the keyboard client until q / Esc.
@@ -119,7 +141,11 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     state.jog = options.jog;
     let mut held = HeldKey::default();
     let mut terminal = ratatui::try_init()?;
-    let _restore = Restore;
+    let _restore = Restore {
+        releases: report_releases(),
+    };
+    // The terminal key that streams, to stop on its release.
+    let mut jog_key = None;
     while !state.quit {
         let now = std::time::Instant::now();
         state.at(now);
@@ -134,14 +160,23 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
             });
         }
         terminal.draw(|frame| render::render(&state, frame))?;
-        if event::poll(Duration::from_millis(30))?
-            && let event::Event::Key(k) = event::read()?
-            && let Some(key) = key(&k)
-        {
+        if !event::poll(Duration::from_millis(30))? {
+            continue;
+        }
+        let event::Event::Key(k) = event::read()? else {
+            continue;
+        };
+        if k.kind == KeyEventKind::Release && jog_key == Some(k.code) {
+            jog_key = None;
+            held = HeldKey::default();
+            streamer.stop();
+        }
+        if let Some(key) = key(&k) {
             let sent = match state.handle_key(key) {
                 Some(Action::Jog(velocity)) => {
                     let until = held.press(velocity.clone(), now);
                     streamer.stream(velocity, until);
+                    jog_key = Some(k.code);
                     true
                 }
                 Some(action) => io.actions.send(action).is_ok(),
