@@ -280,16 +280,26 @@ fn a_jog_through_the_wrist_singularity_neither_stops_nor_exceeds_a_rate_limit() 
         }
         travelled = offset.dot(&direction);
     }
+    let tilt_at_end = math::diff(&start, &s.pose()).fixed_rows::<3>(3).norm();
+    // Then a zero twist, streamed: the arm holds its place and wins the orientation back.
+    for _ in 0..(6.0 / s.period()) as usize {
+        s.twist([0.0; 3], [0.0; 3], TwistFrame::Base);
+        s.tick();
+    }
+    let tilt_after = math::diff(&start, &s.pose()).fixed_rows::<3>(3).norm();
     println!(
         "wrist-singularity jog (ranger-mk1, {speed} m/s, {:.0} mm): travelled {:.1} mm, \
          slowest {:.1} mm/s, closest |q5 − π| {nearest:.4} rad, path deviation {:.3} mm, \
-         orientation deviation {:.3}°",
+         orientation deviation {:.3}° (at the end of the line {:.3}°, 6 s later {:.4}°)",
         2e3 * half,
         travelled * 1e3,
         slowest * 1e3,
         deviation * 1e3,
-        tilt.to_degrees()
+        tilt.to_degrees(),
+        tilt_at_end.to_degrees(),
+        tilt_after.to_degrees()
     );
+    assert!(tilt_after < 0.1f64.to_radians(), "{tilt_after}");
     s.assert_within_limits();
     assert!(slowest > 0.2 * speed, "stopped near the singularity");
     assert!(

@@ -29,6 +29,7 @@ mod joint_margin;
 mod null_space;
 mod pseudo_inverse;
 mod ramp;
+mod reference;
 
 pub use damping::{
     MAX_DAMPING, SINGULAR_THRESHOLD, SingularDirection, singularity_damping,
@@ -41,7 +42,8 @@ use armgate_protocol::client::TwistFrame;
 use super::workspace::Workspace;
 use crate::config::ValidRobot;
 use crate::kinematics::{Chain, Joints};
-use crate::math::Twist;
+use crate::math::{Frame, Twist};
+use reference::PathReference;
 
 /// A command holds for this many control periods; then the arm ramps to rest.
 pub const TIMEOUT_PERIODS: u32 = 3;
@@ -94,6 +96,10 @@ pub struct VelocityStream {
     period: f64,
     /// The smallest singular direction, followed from tick to tick.
     singular: SingularDirection,
+    /// Where a twist stream means the tool to be.
+    reference: PathReference,
+    /// The last tick's damping (0 away from singularities).
+    damping: f64,
 }
 
 impl VelocityStream {
@@ -114,6 +120,8 @@ impl VelocityStream {
             cartesian_speed: config.cartesian.max_velocity,
             period,
             singular: SingularDirection::default(),
+            reference: PathReference::default(),
+            damping: 0.0,
         }
     }
 
@@ -152,6 +160,8 @@ impl VelocityStream {
         }
         self.age = self.age.saturating_add(1);
         let mut joint_limit = false;
+        // A twist's intended base-frame twist and the pose it starts from.
+        let mut path = None;
         let target = match self.command {
             None => Joints::zeros(q.len()),
             Some(StreamCommand::JointRates(rates)) => {
@@ -168,7 +178,13 @@ impl VelocityStream {
                 target
             }
             Some(StreamCommand::Twist(twist, frame)) => {
-                let rates = self.twist_rates(chain, q, &twist, frame);
+                let pose = chain.pose(q);
+                let intended = self.base_twist(&pose, &twist, frame);
+                // Faded out where the damping gives way: it would only fight it there.
+                let fade = 1.0 - self.damping / MAX_DAMPING;
+                let correction = self.reference.correction(&pose, &self.cartesian_speed) * fade;
+                path = Some((intended, pose));
+                let rates = self.twist_rates(chain, q, &(intended + correction));
                 let brake = (0..rates.len())
                     .map(|i| {
                         let rate = rates.get(i).copied().unwrap_or(0.0);
@@ -200,6 +216,13 @@ impl VelocityStream {
             velocity = Joints::zeros(q.len());
             next = *q;
         }
+        match path {
+            Some((intended, pose)) => {
+                self.reference
+                    .advance(&intended, &pose, &chain.pose(&next), self.period);
+            }
+            None => self.reference.clear(),
+        }
         self.velocity = velocity;
         StreamStep {
             q: next,
@@ -209,29 +232,32 @@ impl VelocityStream {
         }
     }
 
-    /// Joint rates for a twist at `q`, within the Cartesian and the joint speed limits.
-    fn twist_rates(
-        &mut self,
-        chain: &Chain,
-        q: &Joints,
-        twist: &Twist,
-        frame: TwistFrame,
-    ) -> Joints {
+    /// A command's twist in the base frame (the tool frame turned by the tool's rotation at
+    /// `pose`), within the Cartesian speed limits by one factor: the direction stays.
+    fn base_twist(&self, pose: &Frame, twist: &Twist, frame: TwistFrame) -> Twist {
         let mut xi = *twist;
         if frame == TwistFrame::Tool {
-            let rotation = chain.pose(q).rotation;
-            let linear = rotation * xi.fixed_rows::<3>(0).into_owned();
-            let angular = rotation * xi.fixed_rows::<3>(3).into_owned();
+            let linear = pose.rotation * xi.fixed_rows::<3>(0).into_owned();
+            let angular = pose.rotation * xi.fixed_rows::<3>(3).into_owned();
             xi.fixed_rows_mut::<3>(0).copy_from(&linear);
             xi.fixed_rows_mut::<3>(3).copy_from(&angular);
         }
-        // Every component within its Cartesian limit, by one factor: the direction stays.
+        self.within_cartesian_limits(xi)
+    }
+
+    fn within_cartesian_limits(&self, xi: Twist) -> Twist {
         let over = xi
             .iter()
             .zip(self.cartesian_speed)
             .map(|(v, max)| libm::fabs(*v) / max)
             .fold(1.0, f64::max);
-        xi /= over;
+        xi / over
+    }
+
+    /// Joint rates for a base-frame twist at `q`, within the Cartesian and the joint speed
+    /// limits.
+    fn twist_rates(&mut self, chain: &Chain, q: &Joints, twist: &Twist) -> Joints {
+        let mut xi = self.within_cartesian_limits(*twist);
         if xi.iter().all(|v| *v == 0.0) {
             return Joints::zeros(q.len());
         }
@@ -243,6 +269,7 @@ impl VelocityStream {
         xi.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
         let n = chain.dof();
         let damping = singularity_damping(&j, n, &mut self.singular);
+        self.damping = damping;
         let rates = if n >= 6 {
             let pull = if n > 6 {
                 null_space::mid_range_pull(q, &self.mid, &self.max_speed)
