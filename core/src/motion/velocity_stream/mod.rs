@@ -9,9 +9,10 @@
 //!    smoothly as the smallest singular value falls ([`damping`]) and acts along that
 //!    direction only ([`pseudo_inverse`]), with the linear rows weighted
 //!    ([`LINEAR_WEIGHT`]) so that the tool keeps its path and gives way in orientation; a
-//!    7–8-joint arm adds a pull towards mid-range in the null space ([`null_space`]). The rates
-//!    are scaled down to the joints' speed limits as a whole, so the tool keeps its direction
-//!    and slows down rather than stops;
+//!    7–8-joint arm adds a pull towards mid-range in the null space ([`null_space`]), and a
+//!    correction back to the path the twist means ([`reference`]). The rates are scaled down
+//!    to the joints' speed limits as a whole, so the tool keeps its direction and slows down
+//!    rather than stops;
 //! 2. **joint limits**: a joint heading for a limit may not be faster than it can still stop
 //!    at a margin before it ([`joint_margin`]): twists scale the whole vector (the path stays),
 //!    joint rates each joint;
