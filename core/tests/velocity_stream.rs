@@ -281,16 +281,16 @@ fn a_jog_through_the_wrist_singularity_neither_stops_nor_exceeds_a_rate_limit() 
         travelled = offset.dot(&direction);
     }
     let tilt_at_end = math::diff(&start, &s.pose()).fixed_rows::<3>(3).norm();
-    // Then a zero twist, streamed: the arm holds its place and wins the orientation back.
-    for _ in 0..(6.0 / s.period()) as usize {
-        s.twist([0.0; 3], [0.0; 3], TwistFrame::Base);
+    // Then on along the same line for 4 s more: the path reference wins the orientation back.
+    for _ in 0..(4.0 / s.period()) as usize {
+        s.twist([v.x, v.y, v.z], [0.0; 3], TwistFrame::Base);
         s.tick();
     }
     let tilt_after = math::diff(&start, &s.pose()).fixed_rows::<3>(3).norm();
     println!(
         "wrist-singularity jog (ranger-mk1, {speed} m/s, {:.0} mm): travelled {:.1} mm, \
          slowest {:.1} mm/s, closest |q5 − π| {nearest:.4} rad, path deviation {:.3} mm, \
-         orientation deviation {:.3}° (at the end of the line {:.3}°, 6 s later {:.4}°)",
+         orientation deviation {:.3}° (at the end of the line {:.3}°, 60 mm further on {:.4}°)",
         2e3 * half,
         travelled * 1e3,
         slowest * 1e3,
@@ -299,7 +299,7 @@ fn a_jog_through_the_wrist_singularity_neither_stops_nor_exceeds_a_rate_limit() 
         tilt_at_end.to_degrees(),
         tilt_after.to_degrees()
     );
-    assert!(tilt_after < 0.1f64.to_radians(), "{tilt_after}");
+    assert!(tilt_after < 0.5 * tilt_at_end, "{tilt_after}");
     s.assert_within_limits();
     assert!(slowest > 0.2 * speed, "stopped near the singularity");
     assert!(
@@ -381,6 +381,23 @@ fn a_redundant_arm_pulls_towards_mid_range_while_the_tool_follows_the_twist() {
     // The pull stays in the null space: the tool goes where the twist says.
     assert!(along > 0.95 * v * s.period() * ticks as f64);
     assert!(aside < 1e-4 && tilt < 1e-4, "{aside} {tilt}");
+    // A zero twist, streamed, holds the arm: no null-space motion without a motion asked for
+    // (once the ramp to rest is over).
+    for _ in 0..100 {
+        s.twist([0.0; 3], [0.0; 3], TwistFrame::Base);
+        s.tick();
+    }
+    let held = s.last();
+    for _ in 0..200 {
+        s.twist([0.0; 3], [0.0; 3], TwistFrame::Base);
+        s.tick();
+    }
+    let drift = held
+        .iter()
+        .zip(s.last().iter())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(drift < 1e-6, "{drift}");
     s.assert_within_limits();
 }
 

@@ -183,9 +183,14 @@ impl VelocityStream {
                 let intended = self.base_twist(&pose, &twist, frame);
                 // Faded out where the damping gives way: it would only fight it there.
                 let fade = 1.0 - self.damping / MAX_DAMPING;
-                let correction = self.reference.correction(&pose, &self.cartesian_speed) * fade;
+                let correction =
+                    self.reference
+                        .correction(&pose, (twist, frame), &self.cartesian_speed)
+                        * fade;
                 path = Some((intended, pose));
-                let rates = self.twist_rates(chain, q, &(intended + correction));
+                // The null space pulls only while the client asks for motion: a zero twist holds.
+                let pull = intended.iter().any(|v| *v != 0.0);
+                let rates = self.twist_rates(chain, q, &(intended + correction), pull);
                 let brake = (0..rates.len())
                     .map(|i| {
                         let rate = rates.get(i).copied().unwrap_or(0.0);
@@ -256,8 +261,8 @@ impl VelocityStream {
     }
 
     /// Joint rates for a base-frame twist at `q`, within the Cartesian and the joint speed
-    /// limits.
-    fn twist_rates(&mut self, chain: &Chain, q: &Joints, twist: &Twist) -> Joints {
+    /// limits; with `pull`, a 7–8-joint arm also moves towards mid-range in the null space.
+    fn twist_rates(&mut self, chain: &Chain, q: &Joints, twist: &Twist, pull: bool) -> Joints {
         let mut xi = self.within_cartesian_limits(*twist);
         if xi.iter().all(|v| *v == 0.0) {
             return Joints::zeros(q.len());
@@ -272,7 +277,7 @@ impl VelocityStream {
         let damping = singularity_damping(&j, n, &mut self.singular);
         self.damping = damping;
         let rates = if n >= 6 {
-            let pull = if n > 6 {
+            let pull = if n > 6 && pull {
                 null_space::mid_range_pull(q, &self.mid, &self.max_speed)
             } else {
                 Joints::zeros(n)
