@@ -1,8 +1,7 @@
 //! Damping of the pseudo-inverse that grows smoothly near a singularity (instead of stopping).
 
-use nalgebra::{Cholesky, SMatrix, SVector};
+use nalgebra::Cholesky;
 
-use crate::MAX_JOINTS;
 use crate::kinematics::Jacobian;
 
 /// Below this smallest singular value of the weighted Jacobian (linear rows × `LINEAR_WEIGHT`,
@@ -21,14 +20,12 @@ const ITERATIONS: usize = 4;
 
 /// The estimate of the direction of the smallest singular value, kept across ticks.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SingularDirection([f64; MAX_JOINTS]);
+pub struct SingularDirection([f64; 6]);
 
 impl SingularDirection {
-    /// The first six entries, normalised: the direction in twist space when the estimate
-    /// runs on `J Jᵀ` (six joints or more); `None` if it has no length.
+    /// The direction, normalised; `None` if it has no length.
     pub fn unit_6(&self) -> Option<nalgebra::Vector6<f64>> {
-        let [a, b, c, d, e, f, ..] = self.0;
-        let u = nalgebra::Vector6::new(a, b, c, d, e, f);
+        let u = nalgebra::Vector6::from(self.0);
         let norm = u.norm();
         (norm.is_finite() && norm > 0.0).then(|| u / norm)
     }
@@ -54,31 +51,20 @@ pub fn singularity_damping(j: &Jacobian, n: usize, direction: &mut SingularDirec
     MAX_DAMPING * libm::sqrt(1.0 - ratio * ratio)
 }
 
-/// An estimate (from above) of the smallest of the `min(n, 6)` singular values of `j`, by
-/// inverse iteration on `J Jᵀ` (six joints or more) or on `Jᵀ J` with ones for the joints the
-/// chain does not have (fewer): bounded, a Cholesky factorisation and a few solves, no
-/// eigen-solver. `None` if the matrix is not positive definite or not finite (σ ≈ 0).
+/// An estimate (from above) of the smallest singular value of `j` (six joints or more), by
+/// inverse iteration on `J Jᵀ`: bounded, a Cholesky factorisation and a few solves, no
+/// eigen-solver. A chain of fewer than six joints cannot produce every twist: 0. `None` if
+/// `J Jᵀ` is not positive definite or not finite (σ ≈ 0).
 pub fn smallest_singular_value(
     j: &Jacobian,
     n: usize,
     direction: &mut SingularDirection,
 ) -> Option<f64> {
-    let eigenvalue = if n >= 6 {
-        smallest_eigenvalue(j * j.transpose(), direction)
-    } else {
-        let unused = SVector::<f64, MAX_JOINTS>::from_fn(|i, _| f64::from(u8::from(i >= n)));
-        smallest_eigenvalue(j.tr_mul(j) + SMatrix::from_diagonal(&unused), direction)
-    }?;
-    Some(libm::sqrt(eigenvalue.max(0.0)))
-}
-
-/// The Rayleigh quotient after [`ITERATIONS`] inverse-iteration steps on the symmetric `a`,
-/// starting from (and updating) the first `D` entries of `direction`.
-fn smallest_eigenvalue<const D: usize>(
-    a: SMatrix<f64, D, D>,
-    direction: &mut SingularDirection,
-) -> Option<f64> {
-    let mut x = SVector::<f64, D>::from_fn(|i, _| direction.0.get(i).copied().unwrap_or(1.0));
+    if n < 6 {
+        return Some(0.0);
+    }
+    let a = j * j.transpose();
+    let mut x = direction.unit_6()?;
     let cholesky = Cholesky::new(a)?;
     for _ in 0..ITERATIONS {
         let y = cholesky.solve(&x);
@@ -92,7 +78,7 @@ fn smallest_eigenvalue<const D: usize>(
         *d = *v;
     }
     let quotient = x.dot(&(a * x));
-    quotient.is_finite().then_some(quotient)
+    quotient.is_finite().then(|| libm::sqrt(quotient.max(0.0)))
 }
 
 #[cfg(test)]
@@ -136,20 +122,19 @@ mod tests {
     }
 
     #[test]
-    fn fewer_joints_skip_the_rows_they_cannot_move() {
-        let mut j = Jacobian::zeros();
-        j[(0, 0)] = 0.5;
-        j[(1, 1)] = 3.0;
+    fn fewer_joints_are_singular_and_warm_starts_refine_the_estimate() {
+        let mut j = diagonal(1.0);
+        j[(5, 5)] = 0.5;
         let mut direction = SingularDirection::default();
-        let sigma = smallest_singular_value(&j, 2, &mut direction).unwrap();
+        assert_eq!(smallest_singular_value(&j, 5, &mut direction), Some(0.0));
+        let sigma = smallest_singular_value(&j, 6, &mut direction).unwrap();
         assert!(sigma >= 0.5 && sigma - 0.5 < 1e-3, "from above: {sigma}");
         // The ticks that follow refine it (warm start).
         for _ in 0..4 {
-            smallest_singular_value(&j, 2, &mut direction);
+            smallest_singular_value(&j, 6, &mut direction);
         }
-        let sigma = smallest_singular_value(&j, 2, &mut direction).unwrap();
+        let sigma = smallest_singular_value(&j, 6, &mut direction).unwrap();
         assert!((sigma - 0.5).abs() < 1e-12, "{sigma}");
-        assert_eq!(smallest_singular_value(&j, 6, &mut direction), None);
         let nan = Jacobian::from_element(f64::NAN);
         assert_eq!(damping(&nan), MAX_DAMPING);
     }

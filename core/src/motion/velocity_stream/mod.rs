@@ -179,7 +179,7 @@ impl VelocityStream {
                 target
             }
             Some(StreamCommand::Twist(twist, frame)) => {
-                let pose = chain.pose(q);
+                let pose = tool_pose(chain, q);
                 let intended = self.base_twist(&pose, &twist, frame);
                 // Faded out where the damping gives way: it would only fight it there.
                 let fade = 1.0 - self.damping / MAX_DAMPING;
@@ -205,11 +205,7 @@ impl VelocityStream {
         let mut velocity = ramp::accelerate(&self.velocity, &target, &self.max_change);
         // Checked only from inside: an arm already outside (after a recalibration, at start-up)
         // may be driven out, as joint moves may.
-        let allowed = |q: &Joints| {
-            chain
-                .forward(q)
-                .is_ok_and(|f| workspace.allows(&f.translation.vector))
-        };
+        let allowed = |q: &Joints| workspace.allows(&tool_pose(chain, q).translation.vector);
         let mut workspace_limit = false;
         let mut inside_now = None;
         if !allowed(&self.resting_point(q, &velocity)) && *inside_now.get_or_insert(allowed(q)) {
@@ -225,7 +221,7 @@ impl VelocityStream {
         match path {
             Some((intended, pose)) => {
                 self.reference
-                    .advance(&intended, &pose, &chain.pose(&next), self.period);
+                    .advance(&intended, &pose, &tool_pose(chain, &next), self.period);
             }
             None => self.reference.clear(),
         }
@@ -276,18 +272,14 @@ impl VelocityStream {
         let n = chain.dof();
         let damping = singularity_damping(&j, n, &mut self.singular);
         self.damping = damping;
-        let rates = if n >= 6 {
-            let pull = if n > 6 && pull {
-                null_space::mid_range_pull(q, &self.mid, &self.max_speed)
-            } else {
-                Joints::zeros(n)
-            };
-            pseudo_inverse::selectively_damped_rates(&j, n, &xi, damping, &self.singular, &pull)
+        let pull = if n > 6 && pull {
+            null_space::mid_range_pull(q, &self.mid, &self.max_speed)
         } else {
-            // Fewer than six joints: the smallest direction is a joint-space one; damp all.
-            chain.joint_rates(q, &xi, damping, None).ok()
-        }
-        .unwrap_or_else(|| Joints::zeros(q.len()));
+            Joints::zeros(n)
+        };
+        let rates =
+            pseudo_inverse::selectively_damped_rates(&j, n, &xi, damping, &self.singular, &pull)
+                .unwrap_or_else(|| Joints::zeros(q.len()));
         let over = rates
             .iter()
             .zip(self.max_speed.iter())
@@ -323,6 +315,14 @@ impl VelocityStream {
             .fold(0.0, f64::max);
         advance(q, velocity, self.period + 0.5 * stop_time)
     }
+}
+
+/// The tool pose at `q` (finite: the last command, or a step from it by a finite velocity),
+/// through one out-of-line copy of the chain's walk, which is `inline(always)` for the IK:
+/// the stream's four calls would otherwise each carry their own (tens of KiB of flash).
+#[inline(never)]
+fn tool_pose(chain: &Chain, q: &Joints) -> Frame {
+    chain.pose(q)
 }
 
 /// `q + v·t`.

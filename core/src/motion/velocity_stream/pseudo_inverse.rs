@@ -17,8 +17,10 @@ use crate::math::Twist;
 /// The uniform floor, as a share of the damping along `u`.
 const FLOOR_SHARE: f64 = 0.1;
 
-/// `q̇ = z + Jᵀ(JJᵀ + λ² u uᵀ + (0.1 λ)² I)⁻¹ (ξ − J z)` for a chain of `n ≥ 6` joints (`z`:
-/// the null-space preference, zero for none); `None` if the system cannot be solved.
+/// `q̇ = z + Jᵀ(JJᵀ + λ² u uᵀ + (0.1 λ)² I)⁻¹ (ξ − J z)` for a chain of `n` joints (`z`: the
+/// null-space preference, zero for none). With fewer than six joints `JJᵀ` is singular and
+/// the damping is full (`damping::smallest_singular_value`): the floor keeps the solve
+/// positive definite, a least-squares answer. `None` if the system cannot be solved.
 pub fn selectively_damped_rates(
     j: &Jacobian,
     n: usize,
