@@ -34,7 +34,7 @@ pub use shape::Shape;
 pub use straight_line::StraightLine;
 pub use trapezoid::Trapezoid;
 pub use velocity_stream::{
-    MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, SingularDirection, StreamCommand, StreamStep,
-    TIMEOUT_PERIODS, VelocityStream, singularity_damping, smallest_singular_value,
+    MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,
+    VelocityStream,
 };
 pub use workspace::Workspace;

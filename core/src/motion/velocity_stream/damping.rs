@@ -1,8 +1,6 @@
 //! Damping of the pseudo-inverse that grows smoothly near a singularity (instead of stopping).
 
-use nalgebra::Cholesky;
-
-use crate::kinematics::Jacobian;
+use nalgebra::{Cholesky, Matrix6};
 
 /// Below this smallest singular value of the weighted Jacobian (linear rows × `LINEAR_WEIGHT`,
 /// see the module) the damping starts to rise. The shipped arms show 0.5–0.7 in comfortable
@@ -38,12 +36,16 @@ impl Default for SingularDirection {
     }
 }
 
-/// The damping λ for the Jacobian `j` of an `n`-joint chain:
+/// The damping λ for the Jacobian `J` of an `n`-joint chain, given `outer` = `J Jᵀ`:
 /// `λ = λ_max √(1 − (σ/ε)²)` below the threshold ε, 0 above it (continuous in σ, the smallest
 /// singular value of the joints the chain has). A Jacobian whose singular values cannot be
 /// estimated gets the full damping.
-pub fn singularity_damping(j: &Jacobian, n: usize, direction: &mut SingularDirection) -> f64 {
-    let sigma = smallest_singular_value(j, n, direction).unwrap_or(0.0);
+pub fn singularity_damping(
+    outer: &Matrix6<f64>,
+    n: usize,
+    direction: &mut SingularDirection,
+) -> f64 {
+    let sigma = smallest_singular_value(outer, n, direction).unwrap_or(0.0);
     if sigma >= SINGULAR_THRESHOLD {
         return 0.0;
     }
@@ -51,21 +53,20 @@ pub fn singularity_damping(j: &Jacobian, n: usize, direction: &mut SingularDirec
     MAX_DAMPING * libm::sqrt(1.0 - ratio * ratio)
 }
 
-/// An estimate (from above) of the smallest singular value of `j` (six joints or more), by
-/// inverse iteration on `J Jᵀ`: bounded, a Cholesky factorisation and a few solves, no
+/// An estimate (from above) of the smallest singular value of `J` (six joints or more), by
+/// inverse iteration on `outer` = `J Jᵀ`: bounded, a Cholesky factorisation and a few solves, no
 /// eigen-solver. A chain of fewer than six joints cannot produce every twist: 0. `None` if
 /// `J Jᵀ` is not positive definite or not finite (σ ≈ 0).
 pub fn smallest_singular_value(
-    j: &Jacobian,
+    outer: &Matrix6<f64>,
     n: usize,
     direction: &mut SingularDirection,
 ) -> Option<f64> {
     if n < 6 {
         return Some(0.0);
     }
-    let a = j * j.transpose();
     let mut x = direction.unit_6()?;
-    let cholesky = Cholesky::new(a)?;
+    let cholesky = Cholesky::new(*outer)?;
     for _ in 0..ITERATIONS {
         let y = cholesky.solve(&x);
         let norm = y.norm();
@@ -77,13 +78,18 @@ pub fn smallest_singular_value(
     for (d, v) in direction.0.iter_mut().zip(x.iter()) {
         *d = *v;
     }
-    let quotient = x.dot(&(a * x));
+    let quotient = x.dot(&(outer * x));
     quotient.is_finite().then(|| libm::sqrt(quotient.max(0.0)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kinematics::Jacobian;
+
+    fn outer(j: &Jacobian) -> Matrix6<f64> {
+        j * j.transpose()
+    }
 
     fn diagonal(s: f64) -> Jacobian {
         let mut j = Jacobian::zeros();
@@ -94,7 +100,7 @@ mod tests {
     }
 
     fn damping(j: &Jacobian) -> f64 {
-        singularity_damping(j, 6, &mut SingularDirection::default())
+        singularity_damping(&outer(j), 6, &mut SingularDirection::default())
     }
 
     #[test]
@@ -115,7 +121,7 @@ mod tests {
     #[test]
     fn warm_starts_converge_on_a_well_separated_smallest_value() {
         let mut direction = SingularDirection::default();
-        let sigma = smallest_singular_value(&diagonal(0.02), 6, &mut direction).unwrap();
+        let sigma = smallest_singular_value(&outer(&diagonal(0.02)), 6, &mut direction).unwrap();
         assert!((sigma - 0.02).abs() < 1e-9, "{sigma}");
         // The direction is kept: axis 5.
         assert!((direction.0[4].abs() - 1.0).abs() < 1e-9);
@@ -126,14 +132,17 @@ mod tests {
         let mut j = diagonal(1.0);
         j[(5, 5)] = 0.5;
         let mut direction = SingularDirection::default();
-        assert_eq!(smallest_singular_value(&j, 5, &mut direction), Some(0.0));
-        let sigma = smallest_singular_value(&j, 6, &mut direction).unwrap();
+        assert_eq!(
+            smallest_singular_value(&outer(&j), 5, &mut direction),
+            Some(0.0)
+        );
+        let sigma = smallest_singular_value(&outer(&j), 6, &mut direction).unwrap();
         assert!(sigma >= 0.5 && sigma - 0.5 < 1e-3, "from above: {sigma}");
         // The ticks that follow refine it (warm start).
         for _ in 0..4 {
-            smallest_singular_value(&j, 6, &mut direction);
+            smallest_singular_value(&outer(&j), 6, &mut direction);
         }
-        let sigma = smallest_singular_value(&j, 6, &mut direction).unwrap();
+        let sigma = smallest_singular_value(&outer(&j), 6, &mut direction).unwrap();
         assert!((sigma - 0.5).abs() < 1e-12, "{sigma}");
         let nan = Jacobian::from_element(f64::NAN);
         assert_eq!(damping(&nan), MAX_DAMPING);

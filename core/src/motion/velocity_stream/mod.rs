@@ -32,10 +32,8 @@ mod pseudo_inverse;
 mod ramp;
 mod reference;
 
-pub use damping::{
-    MAX_DAMPING, SINGULAR_THRESHOLD, SingularDirection, singularity_damping,
-    smallest_singular_value,
-};
+pub use damping::{MAX_DAMPING, SINGULAR_THRESHOLD};
+use damping::{SingularDirection, singularity_damping};
 pub use joint_margin::MARGIN_SHARE;
 
 use armgate_protocol::client::TwistFrame;
@@ -270,16 +268,24 @@ impl VelocityStream {
         j.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
         xi.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
         let n = chain.dof();
-        let damping = singularity_damping(&j, n, &mut self.singular);
+        let outer = j * j.transpose();
+        let damping = singularity_damping(&outer, n, &mut self.singular);
         self.damping = damping;
         let pull = if n > 6 && pull {
             null_space::mid_range_pull(q, &self.mid, &self.max_speed)
         } else {
             Joints::zeros(n)
         };
-        let rates =
-            pseudo_inverse::selectively_damped_rates(&j, n, &xi, damping, &self.singular, &pull)
-                .unwrap_or_else(|| Joints::zeros(q.len()));
+        let rates = pseudo_inverse::selectively_damped_rates(
+            &j,
+            &outer,
+            n,
+            &xi,
+            damping,
+            &self.singular,
+            &pull,
+        )
+        .unwrap_or_else(|| Joints::zeros(q.len()));
         let over = rates
             .iter()
             .zip(self.max_speed.iter())

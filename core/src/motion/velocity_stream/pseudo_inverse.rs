@@ -17,12 +17,13 @@ use crate::math::Twist;
 /// The uniform floor, as a share of the damping along `u`.
 const FLOOR_SHARE: f64 = 0.1;
 
-/// `q̇ = z + Jᵀ(JJᵀ + λ² u uᵀ + (0.1 λ)² I)⁻¹ (ξ − J z)` for a chain of `n` joints (`z`: the
-/// null-space preference, zero for none). With fewer than six joints `JJᵀ` is singular and
+/// `q̇ = z + Jᵀ(JJᵀ + λ² u uᵀ + (0.1 λ)² I)⁻¹ (ξ − J z)` for a chain of `n` joints, given
+/// `outer` = `JJᵀ` (`z`: the null-space preference, zero for none). With fewer than six joints `JJᵀ` is singular and
 /// the damping is full (`damping::smallest_singular_value`): the floor keeps the solve
 /// positive definite, a least-squares answer. `None` if the system cannot be solved.
 pub fn selectively_damped_rates(
     j: &Jacobian,
+    outer: &Matrix6<f64>,
     n: usize,
     twist: &Twist,
     damping: f64,
@@ -37,7 +38,7 @@ pub fn selectively_damped_rates(
     let lambda2 = damping * damping;
     let floor = FLOOR_SHARE * FLOOR_SHARE * lambda2;
     let a: Matrix6<f64> =
-        j * j.transpose() + u * u.transpose() * lambda2 + Matrix6::from_diagonal_element(floor);
+        outer + u * u.transpose() * lambda2 + Matrix6::from_diagonal_element(floor);
     let residual: Vector6<f64> = twist - j * z;
     let y = Cholesky::new(a)?.solve(&residual);
     let dq = j.tr_mul(&y) + z;
@@ -60,12 +61,13 @@ mod tests {
             j[(i, i)] = s;
         }
         let mut direction = SingularDirection::default();
+        let outer = j * j.transpose();
         for _ in 0..3 {
-            super::super::damping::smallest_singular_value(&j, 6, &mut direction);
+            super::super::damping::smallest_singular_value(&outer, 6, &mut direction);
         }
         let twist = Twist::new(0.0, 0.0, 0.0, 0.0, 0.1, 0.1);
         let none = Joints::zeros(6);
-        let q = selectively_damped_rates(&j, 6, &twist, 0.05, &direction, &none).unwrap();
+        let q = selectively_damped_rates(&j, &outer, 6, &twist, 0.05, &direction, &none).unwrap();
         // Axis 5 (σ = 0.2) exact up to the floor: 0.1 / 0.2 · (1 − 1.6e-4).
         assert!((q[4] - 0.5).abs() < 1e-3, "{q:?}");
         // Axis 6 damped: σ / (σ² + λ²) · 0.1 ≈ 0.38 instead of 10.
