@@ -511,3 +511,31 @@ fn a_jog_towards_an_exclusion_box_ramps_to_rest_before_it() {
     assert_eq!(s.setpoints[n - 1], s.setpoints[n - 2], "at rest");
     s.assert_within_limits();
 }
+
+#[test]
+fn a_change_of_direction_rounds_the_corner_and_returns_to_the_new_line() {
+    let mut s = mk1(Mode::Cartesian);
+    for _ in 0..(1.0 / s.period()) as usize {
+        s.twist([0.015, 0.0, 0.0], [0.0; 3], TwistFrame::Base);
+        s.tick();
+    }
+    let corner = s.pose().translation.vector;
+    let mut overshoot = 0.0f64;
+    for _ in 0..(2.0 / s.period()) as usize {
+        s.twist([0.0, 0.015, 0.0], [0.0; 3], TwistFrame::Base);
+        s.tick();
+        overshoot = overshoot.max(s.pose().translation.vector.x - corner.x);
+    }
+    let end = s.pose().translation.vector;
+    println!(
+        "corner at 15 mm/s: {:.3} mm past the corner, back to the new line within {:.4} mm, \
+         {:.1} mm along it",
+        overshoot * 1e3,
+        (end.x - corner.x).abs() * 1e3,
+        (end.y - corner.y) * 1e3
+    );
+    assert!(overshoot < 0.001, "{overshoot}");
+    assert!((end.x - corner.x).abs() < 2e-5);
+    assert!((end.z - corner.z).abs() < 1e-5);
+    s.assert_within_limits();
+}
