@@ -1074,4 +1074,16 @@ fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
     // 15 mm, less the ramps and the gaps the scheduler leaves on a loaded machine.
     assert!((0.010..0.0155).contains(&rise), "rose {rise} m");
     assert!(aside < 2e-5, "{aside} m aside");
+
+    // The command line: 1 cm/s down for half a second, then it waits for the rest.
+    let (result, out) = armgate(&sim, &["jog", "0", "0", "-0.01", "--for", "0.5"]);
+    result.unwrap();
+    assert!(
+        out.contains("streamed") && out.ends_with("at rest\n"),
+        "{out}"
+    );
+    let fall = end[2] - arm.pose().unwrap().xyz[2];
+    assert!((0.003..0.0055).contains(&fall), "fell {fall} m");
+    let (result, _) = armgate(&sim, &["jog", "0", "0"]);
+    assert!(result.is_err(), "a twist has 3 or 6 values");
 }

@@ -3,7 +3,7 @@
 //! when it stops, the arm ramps to rest.
 //!
 //! * [`Client::twist`], [`Client::joint_velocity`]: one request each; the reply says how long
-//!   the command holds.
+//!   the command holds. [`Client::stream_for`]: a stream for a while, from this thread.
 //! * [`VelocityStreamer`]: a thread with a socket of its own that re-sends the latest command
 //!   until a deadline, so that the caller (a UI, a control loop) only says what it wants.
 //!
@@ -89,6 +89,31 @@ impl Client {
             hold = hold_time(&self.request(request.to_request())?);
         }
         Ok(hold)
+    }
+
+    /// Streams `velocity` from this thread for `duration`, once per control period (a third
+    /// of the hold time the controller echoes), or until `interrupted()` says so; then the arm
+    /// ramps to rest. Returns the number of commands sent.
+    pub fn stream_for(
+        &mut self,
+        velocity: &Velocity,
+        duration: Duration,
+        interrupted: impl Fn() -> bool,
+    ) -> Result<u32, ClientError> {
+        let end = Instant::now() + duration;
+        let mut sent = 0u32;
+        while Instant::now() < end {
+            if interrupted() {
+                return Err(ClientError::Interrupted);
+            }
+            let sent_at = Instant::now();
+            let interval = self.velocity(velocity)?.map_or(DEFAULT_INTERVAL, |h| h / 3);
+            sent = sent.saturating_add(1);
+            // Once per period from send to send, the reply's wait included.
+            let next = (sent_at + interval).min(end);
+            std::thread::sleep(next.saturating_duration_since(Instant::now()));
+        }
+        Ok(sent)
     }
 
     /// Sends one velocity command ([`twist`](Self::twist) or
@@ -243,6 +268,21 @@ mod tests {
         assert_eq!((&sent[1][..2], sent[1][30]), (&b"jW"[..], 0x80));
         assert_eq!(&sent[1][2..6], &0.7f32.to_le_bytes());
         assert_eq!((&sent[2][..2], sent[2][30]), (&b"jW"[..], 0x00));
+    }
+
+    #[test]
+    fn stream_for_resends_each_period_and_stops_when_interrupted() {
+        let fake = controller();
+        let mut c = fake.client();
+        let rates = Velocity::Joints(vec![0.0, 0.1]);
+        let sent = c
+            .stream_for(&rates, Duration::from_millis(200), || false)
+            .unwrap();
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms.
+        assert!((10..=21).contains(&sent), "{sent}");
+        assert_eq!(fake.received().len(), sent as usize);
+        let stopped = c.stream_for(&rates, Duration::from_secs(5), || true);
+        assert!(matches!(stopped, Err(ClientError::Interrupted)));
     }
 
     #[test]
