@@ -11,13 +11,14 @@ use super::drive::{Drive, Joint};
 use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
 use super::fault::{BusFault, DriveFault};
 use super::link::Link;
+use super::pdo_map::{MapStep, map_step};
 use super::settings::{DriveSettings, SetupError, Timing};
 use super::startup::{Outgoing, StartStep, StepContext};
 use super::state::{DriveState, Phase};
-use super::streaming::{FlowError, PtStream, Query, Schedule};
+use super::streaming::{FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule};
 use super::units::JointUnits;
 use crate::MAX_JOINTS;
-use crate::config::ValidRobot;
+use crate::config::{Streaming, ValidRobot};
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -66,13 +67,29 @@ pub struct DriveStats {
 /// manager.transmit(now, out.command.as_ref(), &mut bus);
 /// ```
 ///
-/// ([`cycle`](Self::cycle) does both halves, with a measurement one cycle older.) Each cycle
-/// sends every drive at most two interpreter frames: its PT point and one query (spec §6.5).
+/// ([`cycle`](Self::cycle) does both halves, with a measurement one cycle older.) On the
+/// interpreter schedule each cycle sends every drive at most two interpreter frames: its PT
+/// point and one query (spec §6.5). On the PDO schedule it sends one SYNC and every drive one
+/// receive PDO with its PT point; the drives answer the SYNC with their transmit PDOs.
 #[derive(Clone, Debug)]
 pub struct DriveManager {
     timing: Timing,
     schedule: Schedule,
     ring_len: u16,
+    /// The schedule the robot file asks for.
+    configured: Streaming,
+    /// The schedule of the current start (the interpreter's after a fallback).
+    streaming: Streaming,
+    /// A refused PDO mapping falls back to the interpreter schedule.
+    may_fall_back: bool,
+    /// The refusal that made the current start fall back.
+    fallback: Option<DriveFault>,
+    /// When the last SYNC went out (s).
+    last_sync: Option<f64>,
+    /// PDO schedule: points kept beyond the read pointer at every SYNC.
+    pdo_lead: u16,
+    /// PDO schedule: SYNCs a transmit PDO may be missing in a row.
+    pdo_missing_cycles: u32,
     joints: Vec<Joint, MAX_JOINTS>,
     phase: Phase,
     fault: Option<DriveFault>,
@@ -107,6 +124,13 @@ impl DriveManager {
             timing,
             schedule: settings.schedule,
             ring_len: settings.ring_len,
+            configured: config.drives.streaming,
+            streaming: config.drives.streaming,
+            may_fall_back: config.drives.pdo_fallback,
+            fallback: None,
+            last_sync: None,
+            pdo_lead: settings.pdo_lead,
+            pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
             joints,
             phase: Phase::Idle,
             fault: None,
@@ -123,6 +147,9 @@ impl DriveManager {
     pub fn start(&mut self) -> Result<(), LifecycleError> {
         self.phase = self.phase.start().ok_or(LifecycleError::Running)?;
         self.fault = None;
+        self.streaming = self.configured;
+        self.fallback = None;
+        self.last_sync = None;
         self.for_each_drive(|drive| {
             drive.link = Link::default();
             drive.reset_steps();
@@ -136,7 +163,8 @@ impl DriveManager {
     /// Stops the drives (the client's `OF`): they finish the motion already queued, come to
     /// rest on the last commanded position and hold it under servo.
     pub fn stop(&mut self) -> Result<(), LifecycleError> {
-        self.phase = self.phase.stop().ok_or(LifecycleError::NotRunning)?;
+        let stopping = self.phase.stop().ok_or(LifecycleError::NotRunning)?;
+        self.phase = self.with_hold_cycles(stopping);
         if !self.has_drives() {
             self.phase = Phase::Stopped;
         }
@@ -202,6 +230,9 @@ impl DriveManager {
             self.raise(DriveFault::Bus(BusFault::BusOff));
         }
         self.check_links();
+        if self.streaming == Streaming::Pdo && matches!(self.phase, Phase::Streaming(_)) {
+            self.check_sync(now);
+        }
         let mut out = Outbox {
             bus,
             cycle: self.cycle,
@@ -222,11 +253,11 @@ impl DriveManager {
             Phase::Starting => self.start_steps(&mut out),
             Phase::Streaming(n) => {
                 self.accept(command);
-                self.stream(n, &mut out);
+                self.stream_any(now, n, &mut out);
                 self.phase = Phase::Streaming(n.wrapping_add(1));
             }
             Phase::Stopping(left) if left > 0 => {
-                self.stream(self.cycle, &mut out);
+                self.stream_any(now, self.cycle, &mut out);
                 self.phase = Phase::Stopping(left - 1);
             }
             Phase::Stopping(_) => {
@@ -313,12 +344,30 @@ impl DriveManager {
     }
 
     /// PT points joint `joint`'s drive had queued ahead of its read index at its last
-    /// read-index answer (3 in steady state; `None` for a joint without a drive).
+    /// read-index answer (interpreter schedule, 3 in steady state) or at the last SYNC
+    /// answered (PDO schedule, `DriveSettings::pdo_lead` in steady state); `None` for a joint
+    /// without a drive.
     pub fn lead(&self, joint: usize) -> Option<u32> {
         match self.joints.get(joint) {
-            Some(Joint::Real(drive)) => drive.stream.as_ref().and_then(PtStream::lead),
+            Some(Joint::Real(drive)) => match (&drive.stream, &drive.pdo) {
+                (Some(stream), _) => stream.lead(),
+                (_, Some(pdo)) => pdo.lead(),
+                _ => None,
+            },
             _ => None,
         }
+    }
+
+    /// The schedule of the current start: the robot file's, or the interpreter's after a
+    /// fallback.
+    pub fn streaming(&self) -> Streaming {
+        self.streaming
+    }
+
+    /// The mapping refusal that made the current start fall back to the interpreter
+    /// schedule (`drives.pdo_fallback`), if any: reported as a warning, not a fault.
+    pub fn fallback(&self) -> Option<DriveFault> {
+        self.fallback
     }
 
     fn has_drives(&self) -> bool {
@@ -337,7 +386,51 @@ impl DriveManager {
     fn raise(&mut self, fault: DriveFault) {
         self.fault.get_or_insert(fault);
         let can_send = !matches!(fault, DriveFault::Bus(_));
-        self.phase = self.phase.fault(can_send);
+        let next = self.phase.fault(can_send);
+        self.phase = match self.phase {
+            Phase::Stopping(_) => next,
+            _ => self.with_hold_cycles(next),
+        };
+    }
+
+    /// A stop just begun, with as many hold cycles as the schedule needs: the PDO schedule
+    /// has one point more queued right after a write than its lead at the SYNC.
+    fn with_hold_cycles(&self, phase: Phase) -> Phase {
+        match (phase, self.streaming) {
+            (Phase::Stopping(_), Streaming::Pdo) => Phase::Stopping(u32::from(self.pdo_lead) + 2),
+            _ => phase,
+        }
+    }
+
+    /// PDO schedule: a SYNC more than half a period late (the control cycle skipped ticks)
+    /// is a fault: the drives' queues ran on without points.
+    fn check_sync(&mut self, now: f64) {
+        let period = self.timing.period;
+        let Some(last) = self.last_sync else { return };
+        let late = now - last - period;
+        if late > 0.5 * period {
+            // A float-to-integer `as` saturates: it cannot fail.
+            let late_us = libm::round(late * 1e6) as u32;
+            self.raise(DriveFault::LateSync { late_us });
+        }
+    }
+
+    /// A drive refused the PDO mapping: a start-up fault, or with `drives.pdo_fallback` the
+    /// interpreter schedule for this start (every drive still mapping goes on with its unit
+    /// mode).
+    fn refuse_mapping(&mut self, fault: DriveFault) {
+        if !self.may_fall_back {
+            return self.raise(fault);
+        }
+        self.streaming = Streaming::Interpreter;
+        self.fallback.get_or_insert(fault);
+        self.for_each_drive(|drive| {
+            if matches!(drive.step, StartStep::Map(_)) {
+                drive.step = StartStep::ReadUnitMode;
+                drive.step_sent = false;
+                drive.awaiting.clear();
+            }
+        });
     }
 
     /// Faults the first drive that has left a request unanswered too long.
@@ -373,12 +466,14 @@ impl DriveManager {
     /// sends the next step's frames; when every drive is ready, all get `BG` in one cycle.
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
         let (timing, ring_len) = (self.timing, self.ring_len);
+        let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
         let context = |drive: &Drive| StepContext {
             controller: timing.controller,
             heartbeat_timeout_ms: timing.heartbeat_timeout_ms,
             ring_len,
             samples_per_point: timing.samples_per_point,
             position: drive.target,
+            node: drive.node,
         };
         let mut fault = None;
         for (index, joint) in self.joints.iter_mut().enumerate() {
@@ -386,7 +481,10 @@ impl DriveManager {
             let answered = drive.step_sent && drive.awaiting.is_empty();
             let position_known = drive.step != StartStep::ReadPosition || drive.position.is_some();
             if answered && position_known {
-                match drive.step.next(drive.unit_mode, timing.unit_mode_settle) {
+                match drive
+                    .step
+                    .next(drive.unit_mode, timing.unit_mode_settle, pdo)
+                {
                     Ok(next) => {
                         if next == StartStep::Configure(0) {
                             drive.target = drive.position;
@@ -418,7 +516,12 @@ impl DriveManager {
         if self.joints.iter().all(ready) {
             self.for_each_drive(|drive| {
                 if let Some(position) = drive.target {
-                    drive.stream = Some(PtStream::new(ring_len, position));
+                    if pdo {
+                        let stream = PdoStream::new(ring_len, pdo_lead, FILLED_POINTS, position);
+                        drive.pdo = Some(stream);
+                    } else {
+                        drive.stream = Some(PtStream::new(ring_len, position));
+                    }
                     drive.step = StartStep::Begin;
                     let ctx = context(drive);
                     send_step(drive, &ctx, out);
@@ -453,6 +556,56 @@ impl DriveManager {
                 Joint::Pretend { position } => *position = value,
                 Joint::Real(drive) => drive.target = counts,
             }
+        }
+    }
+
+    /// One streaming cycle on the schedule of this start.
+    fn stream_any<B: CanBus>(&mut self, now: f64, streamed: u32, out: &mut Outbox<'_, B>) {
+        match self.streaming {
+            Streaming::Interpreter => self.stream(streamed, out),
+            Streaming::Pdo => {
+                self.last_sync = Some(now);
+                self.stream_pdo(streamed, out);
+            }
+        }
+    }
+
+    /// One PDO streaming cycle: the SYNC, then every running drive's point(s) towards its
+    /// target in receive PDOs, and now and then its temperature query; drives not yet running
+    /// (a stop during the start) get a position query instead. A drive whose transmit PDO has
+    /// been missing too long is faulted.
+    fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
+        if let Ok(sync) = CanFrame::new(SYNC_ID, &[]) {
+            out.send(&sync);
+        }
+        let (schedule, missing) = (self.schedule, self.pdo_missing_cycles);
+        let mut fault = None;
+        for (index, joint) in self.joints.iter_mut().enumerate() {
+            let Joint::Real(drive) = joint else { continue };
+            let running = drive.target.is_some() && drive.pdo.is_some();
+            if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
+                if stream.unreported() > missing {
+                    let cycles = stream.unreported();
+                    fault.get_or_insert(DriveFault::NoFeedback {
+                        joint: index,
+                        cycles,
+                    });
+                }
+                for value in &stream.points(target) {
+                    let id = RPDO3 | u16::from(drive.node.get());
+                    if let Ok(frame) = CanFrame::new(id, &value.to_le_bytes()) {
+                        out.send(&frame);
+                    }
+                }
+            }
+            let query = match schedule.query(streamed, index, false) {
+                Query::Position if running => continue,
+                query => query,
+            };
+            out.request(drive, &Outgoing::Interpreter(query.request()));
+        }
+        if let Some(fault) = fault {
+            self.raise(fault);
         }
     }
 
@@ -523,6 +676,9 @@ impl DriveManager {
     /// frame's sender for unknown nodes and gave up on the cycle at an unknown SDO, spec §9
     /// item 33).
     fn handle(&mut self, frame: &CanFrame) {
+        if let Some((node, position, head, tail)) = parse_feedback(frame) {
+            return self.on_feedback(node, position, head, tail);
+        }
         match Incoming::classify(frame) {
             Incoming::Interpreter { node, reply } => self.on_reply(node, reply),
             Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
@@ -604,6 +760,21 @@ impl DriveManager {
         }
     }
 
+    /// A drive's transmit PDO: its position and PT pointers at the last SYNC.
+    fn on_feedback(&mut self, node: NodeId, position: i32, head: u16, tail: u16) {
+        let Some((joint, drive)) = self.drive_mut(node) else {
+            self.ignored();
+            return;
+        };
+        drive.position = Some(position);
+        let flow = drive.pdo.as_mut().map(|stream| stream.feedback(head, tail));
+        match flow {
+            Some(Err(FlowError::Underflow)) => self.raise(DriveFault::Underflow { joint }),
+            Some(Err(FlowError::Overrun)) => self.raise(DriveFault::Overrun { joint }),
+            _ => {}
+        }
+    }
+
     fn on_emergency(&mut self, node: NodeId, emergency: DriveEmergency) {
         let Some((joint, _)) = self.drive_mut(node) else {
             self.ignored();
@@ -639,8 +810,26 @@ impl DriveManager {
             return;
         };
         drive.link.heard(cycle);
-        match response {
-            SdoResponse::Downloaded { object } | SdoResponse::Uploaded { object, .. } => {
+        let mapping = match drive.step {
+            StartStep::Map(n) => map_step(drive.node, n),
+            _ => None,
+        };
+        let refused = |object, code| DriveFault::MappingRefused {
+            joint,
+            object,
+            code,
+        };
+        let fault = match (response, mapping) {
+            (SdoResponse::Abort { object, code }, Some(_)) => Some(refused(object, Some(code))),
+            (SdoResponse::Abort { code, .. }, None) => {
+                return self.raise(DriveFault::SdoAbort { joint, code });
+            }
+            (SdoResponse::Uploaded { object, value }, Some(MapStep::Check { expect, .. }))
+                if value != expect =>
+            {
+                Some(refused(object, None))
+            }
+            (SdoResponse::Downloaded { object } | SdoResponse::Uploaded { object, .. }, _) => {
                 if let Some(at) = drive
                     .awaiting
                     .iter()
@@ -648,10 +837,33 @@ impl DriveManager {
                 {
                     drive.awaiting.swap_remove(at);
                 }
+                None
             }
-            SdoResponse::Abort { code, .. } => self.raise(DriveFault::SdoAbort { joint, code }),
+        };
+        if let Some(fault) = fault {
+            self.refuse_mapping(fault);
         }
     }
+}
+
+/// SYNC's COB-ID (placeholder until the protocol types land).
+const SYNC_ID: u16 = 0x080;
+/// RPDO3's function code.
+const RPDO3: u16 = 0x400;
+
+/// A TPDO3: node, position, PT head and tail (placeholder until the protocol types land).
+fn parse_feedback(frame: &CanFrame) -> Option<(NodeId, i32, u16, u16)> {
+    if frame.id() & 0x780 != 0x380 || frame.dlc() != 8 {
+        return None;
+    }
+    let node = NodeId::new((frame.id() & 0x7F) as u8)?;
+    let [p0, p1, p2, p3, h0, h1, t0, t1] = *frame.raw_data();
+    Some((
+        node,
+        i32::from_le_bytes([p0, p1, p2, p3]),
+        u16::from_le_bytes([h0, h1]),
+        u16::from_le_bytes([t0, t1]),
+    ))
 }
 
 /// Sends the frames of `drive`'s current start step; the step now waits for their answers.

@@ -4,7 +4,7 @@
 use armgate_protocol::can::NodeId;
 
 use super::load::LoadModel;
-use super::streaming::Schedule;
+use super::streaming::{PDO_TARGET_LEAD, Schedule};
 use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
@@ -43,6 +43,12 @@ pub struct DriveSettings {
     pub ring_len: u16,
     /// Which query each drive sends in each streaming cycle.
     pub schedule: Schedule,
+    /// PDO schedule: the PT points kept beyond each drive's read pointer at every SYNC
+    /// (2..=ring_len − 3; docs/drives.md).
+    pub pdo_lead: u16,
+    /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
+    /// row is faulted (at least 1).
+    pub pdo_missing_cycles: u16,
 }
 
 impl Default for DriveSettings {
@@ -57,6 +63,8 @@ impl Default for DriveSettings {
             unit_mode_settle: 0.1,
             ring_len: 6,
             schedule: Schedule::default(),
+            pdo_lead: PDO_TARGET_LEAD,
+            pdo_missing_cycles: 4,
         }
     }
 }
@@ -77,7 +85,8 @@ pub enum SetupError {
     Heartbeat,
     /// The controller's node id is not in 1..=127, or is also a drive's.
     ControllerNode,
-    /// A timeout or settle time is negative or not finite, or a schedule interval is zero.
+    /// A timeout or settle time is negative or not finite, a schedule interval is zero, or the
+    /// PDO lead or missing-feedback count is out of range.
     BadTiming,
     /// A joint's drive has a node id above 127 or no counts per revolution.
     BadDrive,
@@ -108,6 +117,8 @@ impl core::fmt::Display for SetupError {
 /// The settings turned into cycle counts for one control period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Timing {
+    /// The control period (s).
+    pub period: f64,
     /// Drive samples per PT point (`MP[4]`).
     pub samples_per_point: u16,
     /// Cycles a request may stay unanswered.
@@ -153,6 +164,10 @@ impl Timing {
         if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
             return Err(SetupError::BadTiming);
         }
+        let lead_fits = (2..=settings.ring_len.saturating_sub(3)).contains(&settings.pdo_lead);
+        if !lead_fits || settings.pdo_missing_cycles == 0 {
+            return Err(SetupError::BadTiming);
+        }
         let cycles = |seconds: f64| {
             let n = libm::ceil(seconds / period - 1e-9);
             (seconds.is_finite() && seconds >= 0.0 && n <= f64::from(u32::MAX))
@@ -160,6 +175,7 @@ impl Timing {
                 .ok_or(SetupError::BadTiming)
         };
         Ok(Self {
+            period,
             samples_per_point: samples,
             // At least two cycles: a reply to a request sent in one cycle is read in the next.
             reply_timeout: cycles(settings.reply_timeout)?.max(2),

@@ -21,11 +21,16 @@
 //! | `Configure(4)` | `QP[4]=PX`, `PT=1` | the next `BG` starts PT motion at `QP[1]` |
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
+//!
+//! The PDO schedule adds the mapping after `ConsumerHeartbeat` — `Map(0..)`, one SDO
+//! transfer per step, writes and read-backs ([`pdo_map`](super::pdo_map)) — and sets the
+//! write pointer the receive PDO writes at (`WritePointer`, `MP[6]`) after `Configure(1)`.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
 use armgate_protocol::can::{NodeId, Object, SdoRequest};
 use heapless::Vec;
 
+use super::pdo_map::{MAP_STEPS, MapStep, map_step};
 use super::settings::POSITION_MODE;
 use super::streaming::FILLED_POINTS;
 
@@ -34,6 +39,8 @@ use super::streaming::FILLED_POINTS;
 pub enum StartStep {
     /// Configure the consumer heartbeat (object 0x1016).
     ConsumerHeartbeat,
+    /// PDO schedule: step `n` of the PDO mapping.
+    Map(u8),
     /// Read the unit mode.
     ReadUnitMode,
     /// Switch the motor off before changing the unit mode.
@@ -50,6 +57,8 @@ pub enum StartStep {
     ReadPosition,
     /// Configure the PT ring and fill it (five parts).
     Configure(u8),
+    /// PDO schedule: the write pointer (`MP[6]`) at the first free entry after the fill.
+    WritePointer,
     /// Waiting for every other drive.
     Ready,
     /// `BG` sent: PT motion runs.
@@ -78,6 +87,8 @@ pub struct StepContext {
     pub samples_per_point: u16,
     /// The start position (counts), once read; the ring is filled with it.
     pub position: Option<i32>,
+    /// The drive.
+    pub node: NodeId,
 }
 
 impl StartStep {
@@ -98,11 +109,21 @@ impl StartStep {
         };
         // No position, no fill: a point is never invented (and `BG` is then refused).
         let fill = |slot: u16| ctx.position.map(|p| set(Mnemonic::QP, slot as u8, p));
+        let map = |n| {
+            map_step(ctx.node, n).map(|step| {
+                Outgoing::Sdo(match step {
+                    MapStep::Write { object, value } => SdoRequest::Download { object, value },
+                    MapStep::Check { object, .. } => SdoRequest::Upload { object },
+                })
+            })
+        };
         let frames: &[Option<Outgoing>] = match *self {
             Self::ConsumerHeartbeat => &[Some(Outgoing::Sdo(SdoRequest::consumer_heartbeat(
                 ctx.controller,
                 ctx.heartbeat_timeout_ms,
             )))],
+            Self::Map(n) => &[map(n)],
+            Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(FILLED_POINTS) + 1))],
             Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
             Self::MotorOff => &[Some(set(Mnemonic::MO, 0, 0))],
             Self::SetUnitMode => &[Some(set(Mnemonic::UM, 0, POSITION_MODE))],
@@ -132,11 +153,15 @@ impl StartStep {
     }
 
     /// The step after this one, given the unit mode the drive reported; `Err(found)` if the
-    /// drive is still not in position mode after the change.
-    pub fn next(&self, unit_mode: Option<i32>, settle: u32) -> Result<Self, i32> {
+    /// drive is still not in position mode after the change. `pdo`: the PDO schedule's steps
+    /// are included.
+    pub fn next(&self, unit_mode: Option<i32>, settle: u32, pdo: bool) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
         Ok(match *self {
+            Self::ConsumerHeartbeat if pdo => Self::Map(0),
             Self::ConsumerHeartbeat => Self::ReadUnitMode,
+            Self::Map(n) if n + 1 < MAP_STEPS && pdo => Self::Map(n + 1),
+            Self::Map(_) => Self::ReadUnitMode,
             Self::ReadUnitMode if in_position_mode => Self::MotorOn,
             Self::ReadUnitMode => Self::MotorOff,
             Self::MotorOff => Self::SetUnitMode,
@@ -147,6 +172,8 @@ impl StartStep {
             Self::CheckUnitMode => return Err(unit_mode.unwrap_or(0)),
             Self::MotorOn => Self::ReadPosition,
             Self::ReadPosition => Self::Configure(0),
+            Self::Configure(1) if pdo => Self::WritePointer,
+            Self::WritePointer => Self::Configure(2),
             Self::Configure(n @ 0..=3) => Self::Configure(n + 1),
             Self::Configure(_) | Self::Ready => Self::Ready,
             Self::Begin => Self::Begin,
