@@ -100,6 +100,8 @@ fn drive_emergencies_decode_and_encode() {
             reason: REASON_UNDERFLOW,
         },
         DriveEmergency::MessageLost,
+        DriveEmergency::WritePointerOutOfRange { write: 9 },
+        DriveEmergency::PdoNotMapped { cob_id: 0x465 },
         DriveEmergency::HeartbeatLost,
         DriveEmergency::Other(Emcy {
             code: 0x2310,
@@ -125,6 +127,28 @@ fn drive_emergencies_decode_and_encode() {
     assert_eq!(
         underflow.encode().to_frame(node(1)).data(),
         &[0x00, 0xFF, 0x81, 0x08, 0, 0, 3, 0]
+    );
+    // The PDO schedule's: queue low (write 5, read 3), more points than the queue holds,
+    // write pointer out of range, PDO not mapped (MAN-CAN301IG Table 13-4).
+    let decode = |bytes: &[u8]| {
+        let (_, emcy) = Emcy::parse(&CanFrame::new(0x081, bytes).unwrap()).unwrap();
+        DriveEmergency::decode(&emcy)
+    };
+    assert_eq!(
+        decode(&[0x00, 0xFF, 0x81, 0x56, 5, 0, 3, 0]),
+        DriveEmergency::QueueLow { write: 5, read: 3 }
+    );
+    assert_eq!(
+        decode(&[0x00, 0xFF, 0x81, 0x34, 2, 0, 0, 0]),
+        DriveEmergency::QueueFull { index: 2 }
+    );
+    assert_eq!(
+        decode(&[0x00, 0xFF, 0x81, 0x5B, 70, 0, 0, 0]),
+        DriveEmergency::WritePointerOutOfRange { write: 70 }
+    );
+    assert_eq!(
+        decode(&[0x00, 0xFF, 0x81, 0x5C, 0x65, 0x04, 0, 0]),
+        DriveEmergency::PdoNotMapped { cob_id: 0x465 }
     );
 }
 

@@ -140,7 +140,14 @@ fn emcy_and_the_hall_whitelist() {
         Incoming::Emcy { .. }
     ));
     // 0x080 is SYNC, not an emergency.
-    assert_eq!(Incoming::classify(&frame(0x080, &[])), Incoming::Other);
+    assert_eq!(Incoming::classify(&frame(0x080, &[])), Incoming::Sync);
+    assert_eq!(
+        Incoming::classify(&frame(0x080, &[0])),
+        Incoming::Malformed {
+            id: 0x080,
+            error: Error::WrongLength
+        }
+    );
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! What a drive's emergency message means (Elmo CANopen DS 301 Implementation Guide, "PVT CAN
-//! emergency messages"; CiA 301 for the heartbeat code).
+//! What a drive's emergency message means (Elmo CANopen DS 301 Implementation Guide
+//! MAN-CAN301IG, Table 13-4 "PVT CAN emergency messages"; CiA 301 for the heartbeat code).
 //!
 //! Elmo reports its own events with the EMCY code 0xFF00 and error register 0x81; byte 3 is the
 //! Elmo code and bytes 4–5 and 6–7 are two 16-bit data fields.
@@ -25,6 +25,10 @@ mod elmo {
     pub const MESSAGE_LOST: u8 = 0x09;
     /// Fewer unexecuted points than `MP[5]` remain.
     pub const QUEUE_LOW: u8 = 0x56;
+    /// A point arrived by PDO while the write pointer `MP[6]` is outside `MP[1]..=MP[2]`.
+    pub const WRITE_POINTER_OUT_OF_RANGE: u8 = 0x5B;
+    /// Motion needs points from a PDO that is not mapped ("PDO 0x3xx is not mapped").
+    pub const PDO_NOT_MAPPED: u8 = 0x5C;
 }
 
 /// `MotionTerminated::reason`: the read pointer reached the write pointer (buffer underflow).
@@ -59,6 +63,17 @@ pub enum DriveEmergency {
     },
     /// The drive lost a received CAN message.
     MessageLost,
+    /// A PT point arrived by PDO while the write pointer was outside the table.
+    WritePointerOutOfRange {
+        /// The drive's write pointer.
+        write: u16,
+    },
+    /// PT points were to come by PDO, but the PDO is not mapped.
+    PdoNotMapped {
+        /// The PDO's COB-ID (ASSUMED: Elmo's first data field; the manual names only the
+        /// PDO in its text).
+        cob_id: u16,
+    },
     /// The drive stopped receiving the controller's heartbeat in time.
     HeartbeatLost,
     /// Anything else.
@@ -84,6 +99,10 @@ impl DriveEmergency {
                 reason: field2,
             },
             (ELMO, elmo::MESSAGE_LOST) => Self::MessageLost,
+            (ELMO, elmo::WRITE_POINTER_OUT_OF_RANGE) => {
+                Self::WritePointerOutOfRange { write: field1 }
+            }
+            (ELMO, elmo::PDO_NOT_MAPPED) => Self::PdoNotMapped { cob_id: field1 },
             _ => Self::Other(*emcy),
         }
     }
@@ -116,6 +135,10 @@ impl DriveEmergency {
                 elmo(elmo::MOTION_TERMINATED, write, reason)
             }
             Self::MessageLost => elmo(elmo::MESSAGE_LOST, 0, 0),
+            Self::WritePointerOutOfRange { write } => {
+                elmo(elmo::WRITE_POINTER_OUT_OF_RANGE, write, 0)
+            }
+            Self::PdoNotMapped { cob_id } => elmo(elmo::PDO_NOT_MAPPED, cob_id, 0),
             Self::HeartbeatLost => Emcy {
                 code: HEARTBEAT,
                 register: COMMUNICATION_REGISTER,

@@ -683,7 +683,11 @@ impl DriveManager {
             Incoming::Interpreter { node, reply } => self.on_reply(node, reply),
             Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
             Incoming::SdoResponse { node, response } => self.on_sdo(node, response),
-            Incoming::Heartbeat { .. } | Incoming::Malformed { .. } | Incoming::Other => {
+            Incoming::Heartbeat { .. }
+            | Incoming::Feedback { .. }
+            | Incoming::Sync
+            | Incoming::Malformed { .. }
+            | Incoming::Other => {
                 self.ignored();
             }
         }
@@ -795,6 +799,8 @@ impl DriveManager {
             DriveEmergency::HeartbeatLost => DriveFault::HeartbeatLost { joint },
             DriveEmergency::MotionTerminated { .. }
             | DriveEmergency::MessageLost
+            | DriveEmergency::WritePointerOutOfRange { .. }
+            | DriveEmergency::PdoNotMapped { .. }
             | DriveEmergency::Other(_) => DriveFault::Emergency {
                 joint,
                 emcy: emergency.encode(),

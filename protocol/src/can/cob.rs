@@ -33,6 +33,10 @@ pub enum Function {
     Tpdo2 = 0x280,
     /// RPDO2: interpreter commands to the drives.
     Rpdo2 = 0x300,
+    /// TPDO3: the drives' synchronous feedback (PDO streaming).
+    Tpdo3 = 0x380,
+    /// RPDO3: PT points to the drives (PDO streaming).
+    Rpdo3 = 0x400,
     /// SDO server to client (response).
     SdoResponse = 0x580,
     /// SDO client to server (request).
@@ -54,6 +58,8 @@ impl Function {
             0x080 => Self::Emcy,
             0x280 => Self::Tpdo2,
             0x300 => Self::Rpdo2,
+            0x380 => Self::Tpdo3,
+            0x400 => Self::Rpdo3,
             0x580 => Self::SdoResponse,
             0x600 => Self::SdoRequest,
             0x700 => Self::Heartbeat,
@@ -110,6 +116,8 @@ mod tests {
             Function::Emcy,
             Function::Tpdo2,
             Function::Rpdo2,
+            Function::Tpdo3,
+            Function::Rpdo3,
             Function::SdoResponse,
             Function::SdoRequest,
             Function::Heartbeat,
@@ -128,6 +136,8 @@ mod tests {
         assert_eq!(Function::split(0x5E5), Some((Function::SdoResponse, node)));
         assert_eq!(Function::split(0x000), None); // NMT
         assert_eq!(Function::split(0x080), None); // SYNC
+        assert_eq!(Function::cob_id(Function::Rpdo3, node), 0x465);
+        assert_eq!(Function::split(0x3E5), Some((Function::Tpdo3, node)));
         assert_eq!(Function::split(0x1E5), None); // TPDO1: not used
     }
 }

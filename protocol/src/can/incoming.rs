@@ -2,7 +2,8 @@
 
 use super::interpreter::Reply;
 use super::{
-    CanFrame, Emcy, Error, Function, Heartbeat, NmtState, NodeId, NodeMessage, SdoResponse,
+    CanFrame, Emcy, Error, Function, Heartbeat, NmtState, NodeId, NodeMessage, PtFeedback, SYNC_ID,
+    SdoResponse, SyncObject,
 };
 
 /// A received frame, by what it means to the controller.
@@ -37,6 +38,15 @@ pub enum Incoming {
         /// The response.
         response: SdoResponse,
     },
+    /// A drive's synchronous feedback (TPDO3): position and PT pointers at the last SYNC.
+    Feedback {
+        /// The drive.
+        node: NodeId,
+        /// Its feedback.
+        feedback: PtFeedback,
+    },
+    /// A SYNC (from another SYNC producer, or seen by a drive).
+    Sync,
     /// A frame with the COB-ID of one of the kinds above that does not decode as one: reported,
     /// not dropped, so that a drive misbehaving does not go unnoticed.
     Malformed {
@@ -45,13 +55,19 @@ pub enum Incoming {
         /// Why it does not decode.
         error: Error,
     },
-    /// Anything else: NMT, SYNC, other PDOs, other masters' requests.
+    /// Anything else: NMT, other PDOs, other masters' requests.
     Other,
 }
 
 impl Incoming {
     /// Sorts `frame`. The node is always the low 7 bits of the COB-ID.
     pub fn classify(frame: &CanFrame) -> Self {
+        if frame.id() == SYNC_ID {
+            return SyncObject::parse(frame).map_or_else(
+                |error| Self::Malformed { id: SYNC_ID, error },
+                |SyncObject| Self::Sync,
+            );
+        }
         let Some((function, node)) = Function::split(frame.id()) else {
             return Self::Other;
         };
@@ -64,7 +80,10 @@ impl Incoming {
             Function::SdoResponse => {
                 SdoResponse::decode(frame).map(|response| Self::SdoResponse { node, response })
             }
-            Function::Rpdo2 | Function::SdoRequest => return Self::Other,
+            Function::Tpdo3 => {
+                PtFeedback::decode(frame).map(|feedback| Self::Feedback { node, feedback })
+            }
+            Function::Rpdo2 | Function::Rpdo3 | Function::SdoRequest => return Self::Other,
         };
         decoded.unwrap_or_else(|error| Self::Malformed {
             id: frame.id(),

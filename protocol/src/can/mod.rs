@@ -1,10 +1,14 @@
 //! CAN frames: the Elmo SimplIQ binary interpreter and the CANopen services around it
 //! (spec §6.3, §6.7).
 //!
-//! Every frame uses a standard 11-bit identifier. Except for NMT commands (COB-ID 0), the
-//! COB-ID is a [`Function`] code plus a [`NodeId`]; the messages addressed that way implement
-//! [`NodeMessage`], which turns them into frames and back. [`Incoming::classify`] sorts what a
-//! drive sends to the controller.
+//! Every frame uses a standard 11-bit identifier. Except for NMT commands (COB-ID 0) and SYNC
+//! (0x080), the COB-ID is a [`Function`] code plus a [`NodeId`]; the messages addressed that
+//! way implement [`NodeMessage`], which turns them into frames and back. [`Incoming::classify`]
+//! sorts what a drive sends to the controller.
+//!
+//! Two streaming schedules use them: the interpreter schedule (RPDO2/TPDO2, [`interpreter`])
+//! and the PDO schedule ([`SyncObject`], [`PtPoint`] in RPDO3, [`PtFeedback`] in TPDO3, mapped
+//! at start-up by the SDO writes of [`streaming_mapping`]).
 //!
 //! ```
 //! use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
@@ -26,13 +30,24 @@ mod error;
 mod frame;
 mod incoming;
 pub mod interpreter;
+mod mapping;
 mod nmt;
+pub mod pdo;
 mod sdo;
+mod sync;
 
 pub use cob::{Function, NodeId, NodeMessage};
 pub use emcy::Emcy;
 pub use error::Error;
 pub use frame::{CanFrame, MAX_DLC, MAX_ID, bits_on_wire, exact_bits_on_wire};
 pub use incoming::Incoming;
+pub use mapping::{
+    ASYNCHRONOUS, MAPPING_STEPS, MappingRefusal, MappingStep, PDO_DISABLED, PDO_NO_RTR,
+    RPDO3_COMMUNICATION, RPDO3_MAPPING, SYNCHRONOUS, TPDO3_COMMUNICATION, TPDO3_MAPPING,
+    mapping_entry, streaming_mapping,
+};
 pub use nmt::{Heartbeat, Nmt, NmtCommand, NmtState};
+pub use pdo::{PtFeedback, PtPoint};
+pub use sdo::abort as sdo_abort;
 pub use sdo::{ConsumerHeartbeat, Object, SdoRequest, SdoResponse, SdoValue};
+pub use sync::{SYNC_ID, SyncObject};

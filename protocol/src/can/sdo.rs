@@ -2,7 +2,8 @@
 //!
 //! Every SDO frame has 8 bytes: the command specifier, the object index (little-endian), the
 //! sub-index, and up to 4 data bytes. Only expedited transfers of 1, 2 or 4 bytes are supported:
-//! enough to configure heartbeats (objects 0x1016 and 0x1017) and to read small objects.
+//! enough to configure heartbeats (objects 0x1016 and 0x1017), map PDOs (see
+//! [`streaming_mapping`](super::streaming_mapping)) and read small objects.
 
 use super::{CanFrame, Error, Function, NodeId, NodeMessage};
 
@@ -20,6 +21,34 @@ mod cs {
     pub const ABORT: u8 = 0x80;
     /// The bits of an expedited specifier that hold 4 − size.
     pub const SIZE: u8 = 0x0C;
+}
+
+/// CiA 301 SDO abort codes (the `code` of [`SdoResponse::Abort`]) that the drives and their
+/// simulation use.
+pub mod abort {
+    /// Unsupported access to an object.
+    pub const UNSUPPORTED_ACCESS: u32 = 0x0601_0000;
+    /// Attempt to read a write-only object.
+    pub const WRITE_ONLY: u32 = 0x0601_0001;
+    /// Attempt to write a read-only object.
+    pub const READ_ONLY: u32 = 0x0601_0002;
+    /// Object does not exist in the object dictionary.
+    pub const NO_OBJECT: u32 = 0x0602_0000;
+    /// Object cannot be mapped to the PDO.
+    pub const NOT_MAPPABLE: u32 = 0x0604_0041;
+    /// The number and length of the objects to be mapped would exceed the PDO length.
+    pub const PDO_TOO_LONG: u32 = 0x0604_0042;
+    /// Data type does not match, length of service parameter does not match.
+    pub const LENGTH_MISMATCH: u32 = 0x0607_0010;
+    /// Sub-index does not exist.
+    pub const NO_SUBINDEX: u32 = 0x0609_0011;
+    /// Invalid value for parameter (download only).
+    pub const INVALID_VALUE: u32 = 0x0609_0030;
+    /// General error.
+    pub const GENERAL: u32 = 0x0800_0000;
+    /// Data cannot be transferred or stored because of the present device state (e.g. a
+    /// mapping written while its PDO is enabled).
+    pub const DEVICE_STATE: u32 = 0x0800_0022;
 }
 
 /// An object dictionary entry.
@@ -83,6 +112,15 @@ pub enum SdoValue {
 }
 
 impl SdoValue {
+    /// The value as a number, whatever its size.
+    pub const fn get(self) -> u32 {
+        match self {
+            Self::U8(v) => v as u32,
+            Self::U16(v) => v as u32,
+            Self::U32(v) => v,
+        }
+    }
+
     /// The expedited command specifier `base` with this value's size.
     const fn specifier(self, base: u8) -> u8 {
         base | match self {
@@ -210,6 +248,17 @@ pub enum SdoResponse {
         /// The CiA 301 abort code, e.g. 0x0602_0000 "object does not exist".
         code: u32,
     },
+}
+
+impl SdoResponse {
+    /// The entry the response is about.
+    pub const fn object(&self) -> Object {
+        match *self {
+            Self::Downloaded { object }
+            | Self::Uploaded { object, .. }
+            | Self::Abort { object, .. } => object,
+        }
+    }
 }
 
 impl NodeMessage for SdoResponse {
