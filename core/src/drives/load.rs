@@ -15,7 +15,9 @@
 //! The controller's heartbeat adds one 1-byte frame per heartbeat period to both.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
-use armgate_protocol::can::{CanFrame, Heartbeat, NmtState, NodeId, NodeMessage, bits_on_wire};
+use armgate_protocol::can::{
+    Heartbeat, NmtState, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject, bits_on_wire,
+};
 
 use super::settings::{DriveSettings, SAMPLE_TIME};
 use super::streaming::Query;
@@ -174,17 +176,21 @@ impl LoadModel {
 
 /// Worst-case bits of a SYNC (no data).
 fn sync_bits() -> u32 {
-    CanFrame::new(0x080, &[]).map_or(0, |frame| bits_on_wire(&frame))
+    bits_on_wire(&SyncObject.to_frame())
 }
 
 /// Worst-case bits of one drive's PDOs in one cycle: the receive PDO with its PT point (4
 /// bytes) and the transmit PDO with its position and PT pointers (8 bytes).
 fn pdo_bits_per_drive() -> u32 {
-    [CanFrame::new(0x401, &[0; 4]), CanFrame::new(0x381, &[0; 8])]
-        .iter()
-        .flatten()
-        .map(bits_on_wire)
-        .sum()
+    NodeId::new(1).map_or(0, |node| {
+        let point = PtPoint { position: 0 }.to_frame(node);
+        let feedback = PtFeedback {
+            position: 0,
+            head: 0,
+            tail: 0,
+        };
+        bits_on_wire(&point) + bits_on_wire(&feedback.to_frame(node))
+    })
 }
 
 /// Worst-case bits of a temperature query and its answer.

@@ -2,7 +2,8 @@
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, Heartbeat, Incoming, Nmt, NmtState, NodeId, NodeMessage, SdoResponse,
+    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtState, NodeId, NodeMessage, PtFeedback,
+    PtPoint, SdoResponse, SyncObject,
 };
 use heapless::Vec;
 
@@ -11,9 +12,8 @@ use super::drive::{Drive, Joint};
 use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
 use super::fault::{BusFault, DriveFault};
 use super::link::Link;
-use super::pdo_map::{MapStep, map_step};
 use super::settings::{DriveSettings, SetupError, Timing};
-use super::startup::{Outgoing, StartStep, StepContext};
+use super::startup::{Outgoing, StartStep, StepContext, mapping_step};
 use super::state::{DriveState, Phase};
 use super::streaming::{FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule};
 use super::units::JointUnits;
@@ -575,9 +575,7 @@ impl DriveManager {
     /// (a stop during the start) get a position query instead. A drive whose transmit PDO has
     /// been missing too long is faulted.
     fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
-        if let Ok(sync) = CanFrame::new(SYNC_ID, &[]) {
-            out.send(&sync);
-        }
+        out.send(&SyncObject.to_frame());
         let (schedule, missing) = (self.schedule, self.pdo_missing_cycles);
         let mut fault = None;
         for (index, joint) in self.joints.iter_mut().enumerate() {
@@ -591,11 +589,8 @@ impl DriveManager {
                         cycles,
                     });
                 }
-                for value in &stream.points(target) {
-                    let id = RPDO3 | u16::from(drive.node.get());
-                    if let Ok(frame) = CanFrame::new(id, &value.to_le_bytes()) {
-                        out.send(&frame);
-                    }
+                for &position in &stream.points(target) {
+                    out.send(&PtPoint { position }.to_frame(drive.node));
                 }
             }
             let query = match schedule.query(streamed, index, false) {
@@ -676,15 +671,12 @@ impl DriveManager {
     /// frame's sender for unknown nodes and gave up on the cycle at an unknown SDO, spec §9
     /// item 33).
     fn handle(&mut self, frame: &CanFrame) {
-        if let Some((node, position, head, tail)) = parse_feedback(frame) {
-            return self.on_feedback(node, position, head, tail);
-        }
         match Incoming::classify(frame) {
             Incoming::Interpreter { node, reply } => self.on_reply(node, reply),
             Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
             Incoming::SdoResponse { node, response } => self.on_sdo(node, response),
+            Incoming::Feedback { node, feedback } => self.on_feedback(node, feedback),
             Incoming::Heartbeat { .. }
-            | Incoming::Feedback { .. }
             | Incoming::Sync
             | Incoming::Malformed { .. }
             | Incoming::Other => {
@@ -765,13 +757,16 @@ impl DriveManager {
     }
 
     /// A drive's transmit PDO: its position and PT pointers at the last SYNC.
-    fn on_feedback(&mut self, node: NodeId, position: i32, head: u16, tail: u16) {
+    fn on_feedback(&mut self, node: NodeId, feedback: PtFeedback) {
         let Some((joint, drive)) = self.drive_mut(node) else {
             self.ignored();
             return;
         };
-        drive.position = Some(position);
-        let flow = drive.pdo.as_mut().map(|stream| stream.feedback(head, tail));
+        drive.position = Some(feedback.position);
+        let flow = drive
+            .pdo
+            .as_mut()
+            .map(|stream| stream.feedback(feedback.head, feedback.tail));
         match flow {
             Some(Err(FlowError::Underflow)) => self.raise(DriveFault::Underflow { joint }),
             Some(Err(FlowError::Overrun)) => self.raise(DriveFault::Overrun { joint }),
@@ -817,31 +812,45 @@ impl DriveManager {
         };
         drive.link.heard(cycle);
         let mapping = match drive.step {
-            StartStep::Map(n) => map_step(drive.node, n),
+            StartStep::Map(n) => mapping_step(drive.node, n),
             _ => None,
         };
-        let refused = |object, code| DriveFault::MappingRefused {
-            joint,
-            object,
-            code,
-        };
-        let fault = match (response, mapping) {
-            (SdoResponse::Abort { object, code }, Some(_)) => Some(refused(object, Some(code))),
-            (SdoResponse::Abort { code, .. }, None) => {
-                return self.raise(DriveFault::SdoAbort { joint, code });
+        let fault = match mapping {
+            // An answer to this drive's mapping transfer: checked.
+            Some((step, read_back)) if response.object() == step.object => {
+                let checked = if read_back {
+                    step.check_read_back(&response)
+                } else {
+                    step.check_write(&response)
+                };
+                match checked {
+                    Ok(()) => {
+                        drive.awaiting.clear();
+                        None
+                    }
+                    Err(refusal) => Some(DriveFault::MappingRefused {
+                        joint,
+                        object: step.object,
+                        code: match refusal {
+                            MappingRefusal::Abort(code) => Some(code),
+                            MappingRefusal::Mismatch { .. } | MappingRefusal::Unexpected => None,
+                        },
+                    }),
+                }
             }
-            (SdoResponse::Uploaded { object, value }, Some(MapStep::Check { expect, .. }))
-                if value != expect =>
-            {
-                Some(refused(object, None))
-            }
-            (SdoResponse::Downloaded { object } | SdoResponse::Uploaded { object, .. }, _) => {
-                if let Some(at) = drive
+            _ => {
+                let object = response.object();
+                let Some(at) = drive
                     .awaiting
                     .iter()
                     .position(|frame| frame.answered_by_sdo(object))
-                {
-                    drive.awaiting.swap_remove(at);
+                else {
+                    // Not awaited: the answer to a mapping transfer after a fallback.
+                    return self.ignored();
+                };
+                drive.awaiting.swap_remove(at);
+                if let SdoResponse::Abort { code, .. } = response {
+                    return self.raise(DriveFault::SdoAbort { joint, code });
                 }
                 None
             }
@@ -850,26 +859,6 @@ impl DriveManager {
             self.refuse_mapping(fault);
         }
     }
-}
-
-/// SYNC's COB-ID (placeholder until the protocol types land).
-const SYNC_ID: u16 = 0x080;
-/// RPDO3's function code.
-const RPDO3: u16 = 0x400;
-
-/// A TPDO3: node, position, PT head and tail (placeholder until the protocol types land).
-fn parse_feedback(frame: &CanFrame) -> Option<(NodeId, i32, u16, u16)> {
-    if frame.id() & 0x780 != 0x380 || frame.dlc() != 8 {
-        return None;
-    }
-    let node = NodeId::new((frame.id() & 0x7F) as u8)?;
-    let [p0, p1, p2, p3, h0, h1, t0, t1] = *frame.raw_data();
-    Some((
-        node,
-        i32::from_le_bytes([p0, p1, p2, p3]),
-        u16::from_le_bytes([h0, h1]),
-        u16::from_le_bytes([t0, t1]),
-    ))
 }
 
 /// Sends the frames of `drive`'s current start step; the step now waits for their answers.

@@ -21,7 +21,6 @@ mod handler;
 mod link;
 pub mod load;
 mod manager;
-mod pdo_map;
 mod settings;
 mod startup;
 mod state;

@@ -22,15 +22,17 @@
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
 //!
-//! The PDO schedule adds the mapping after `ConsumerHeartbeat` — `Map(0..)`, one SDO
-//! transfer per step, writes and read-backs ([`pdo_map`](super::pdo_map)) — and sets the
-//! write pointer the receive PDO writes at (`WritePointer`, `MP[6]`) after `Configure(1)`.
+//! The PDO schedule adds the mapping after `ConsumerHeartbeat` — `Map(0..28)`, one SDO
+//! transfer per step: each of protocol's [`streaming_mapping`] writes, then its read-back —
+//! and sets the write pointer the receive PDO writes at (`WritePointer`, `MP[6]`) after
+//! `Configure(1)`.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
-use armgate_protocol::can::{NodeId, Object, SdoRequest};
+use armgate_protocol::can::{
+    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, streaming_mapping,
+};
 use heapless::Vec;
 
-use super::pdo_map::{MAP_STEPS, MapStep, map_step};
 use super::settings::POSITION_MODE;
 use super::streaming::FILLED_POINTS;
 
@@ -39,7 +41,8 @@ use super::streaming::FILLED_POINTS;
 pub enum StartStep {
     /// Configure the consumer heartbeat (object 0x1016).
     ConsumerHeartbeat,
-    /// PDO schedule: step `n` of the PDO mapping.
+    /// PDO schedule: the PDO mapping, transfer `n`: the write of mapping step `n / 2` (even
+    /// `n`), or its read-back (odd `n`).
     Map(u8),
     /// Read the unit mode.
     ReadUnitMode,
@@ -109,11 +112,12 @@ impl StartStep {
         };
         // No position, no fill: a point is never invented (and `BG` is then refused).
         let fill = |slot: u16| ctx.position.map(|p| set(Mnemonic::QP, slot as u8, p));
-        let map = |n| {
-            map_step(ctx.node, n).map(|step| {
-                Outgoing::Sdo(match step {
-                    MapStep::Write { object, value } => SdoRequest::Download { object, value },
-                    MapStep::Check { object, .. } => SdoRequest::Upload { object },
+        let map = |n: u8| {
+            mapping_step(ctx.node, n).map(|(step, read_back)| {
+                Outgoing::Sdo(if read_back {
+                    step.read_back()
+                } else {
+                    step.write()
                 })
             })
         };
@@ -160,7 +164,7 @@ impl StartStep {
         Ok(match *self {
             Self::ConsumerHeartbeat if pdo => Self::Map(0),
             Self::ConsumerHeartbeat => Self::ReadUnitMode,
-            Self::Map(n) if n + 1 < MAP_STEPS && pdo => Self::Map(n + 1),
+            Self::Map(n) if usize::from(n) + 1 < 2 * MAPPING_STEPS && pdo => Self::Map(n + 1),
             Self::Map(_) => Self::ReadUnitMode,
             Self::ReadUnitMode if in_position_mode => Self::MotorOn,
             Self::ReadUnitMode => Self::MotorOff,
@@ -179,6 +183,12 @@ impl StartStep {
             Self::Begin => Self::Begin,
         })
     }
+}
+
+/// Transfer `n` of `node`'s PDO mapping: the step, and whether this transfer reads it back.
+pub fn mapping_step(node: NodeId, n: u8) -> Option<(MappingStep, bool)> {
+    let step = streaming_mapping(node).get(usize::from(n / 2)).copied()?;
+    Some((step, n % 2 == 1))
 }
 
 impl Outgoing {
