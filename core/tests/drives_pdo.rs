@@ -12,8 +12,10 @@
 mod drives_rig;
 
 use armgate_core::config::{Streaming, ValidRobot};
+use armgate_core::cycle::Datagram;
 use armgate_core::drives::{DriveFault, DriveSettings, DriveState};
 use armgate_protocol::can::{Object, sdo_abort};
+use armgate_protocol::client::{Command, Request};
 use drives_rig::{Rig, robot};
 
 /// ranger-mk1 on the PDO schedule at 500 kbit/s: 12 × 360 µs (231.5 Hz), or with the
@@ -68,11 +70,36 @@ fn with_fallback_a_refused_mapping_starts_the_interpreter_schedule() {
     let mut rig = Rig::with(mk1_pdo(true), DriveSettings::default(), |bus| {
         let _ = bus; // KNOB
     });
-    rig.start();
+    // The client's ON, so that its notices have somewhere to go.
+    rig.client.requests.push_back(request(Command::On));
+    rig.until(200, |r| r.manager().is_operational());
     assert_eq!(rig.manager().streaming(), Streaming::Interpreter);
     let refusal = rig.manager().fallback().unwrap();
     assert_eq!(refusal.text().as_str(), "ER39 J1 map 1402:01 06020000");
     assert_eq!(rig.manager().fault(), None);
     rig.ticks(100);
     assert!(rig.manager().is_operational());
+    // The client is told once, as a warning.
+    let texts: Vec<String> = rig.client.notices.iter().map(text_of).collect();
+    assert_eq!(texts, ["WN39 J1 map 1402:01 06020000"]);
+}
+
+fn request(command: Command) -> Datagram<()> {
+    let bytes = Request {
+        command,
+        values: [0.0; 7],
+        index: 0,
+    }
+    .to_bytes();
+    Datagram::new(&bytes, ())
+}
+
+/// A notice's text: the datagram up to its first NUL.
+fn text_of(notice: &Datagram<()>) -> String {
+    let payload = notice.payload();
+    let end = payload
+        .iter()
+        .position(|b| *b == 0)
+        .unwrap_or(payload.len());
+    String::from_utf8(payload[..end].to_vec()).unwrap()
 }

@@ -124,8 +124,14 @@ impl DriveFault {
 
     /// The text for the client, e.g. `ER30 J3 drive not answering`.
     pub fn text(&self) -> Text {
+        self.text_as(Severity::Error)
+    }
+
+    /// The same text as an error (`ER`) or, for what is reported but does not stop the arm (a
+    /// refused PDO mapping with the fallback), a warning (`WN`).
+    pub fn text_as(&self, severity: Severity) -> Text {
         let code = self.code();
-        let text = |body: core::fmt::Arguments<'_>| Text::new(Severity::Error, code, body);
+        let text = |body: core::fmt::Arguments<'_>| Text::new(severity, code, body);
         match *self {
             Self::NotAnswering { joint } => {
                 text(format_args!("J{} drive not answering", joint + 1))
