@@ -48,8 +48,8 @@ fn a_refused_mapping_is_a_start_fault_naming_the_object() {
     rig.manager_mut().start().unwrap();
     rig.until(200, |r| r.manager().state() == DriveState::Faulted);
     let object = Object {
-        index: 0x1402,
-        subindex: 1,
+        index: 0x2040,
+        subindex: 0,
     };
     assert_eq!(
         rig.manager().fault(),
@@ -61,7 +61,7 @@ fn a_refused_mapping_is_a_start_fault_naming_the_object() {
     );
     assert_eq!(
         rig.manager().fault().unwrap().text().as_str(),
-        "ER39 J1 map 1402:01 06020000"
+        "ER39 J1 map 2040:00 06020000"
     );
 }
 
@@ -75,13 +75,13 @@ fn with_fallback_a_refused_mapping_starts_the_interpreter_schedule() {
     rig.until(200, |r| r.manager().is_operational());
     assert_eq!(rig.manager().streaming(), Streaming::Interpreter);
     let refusal = rig.manager().fallback().unwrap();
-    assert_eq!(refusal.text().as_str(), "ER39 J1 map 1402:01 06020000");
+    assert_eq!(refusal.text().as_str(), "ER39 J1 map 2040:00 06020000");
     assert_eq!(rig.manager().fault(), None);
     rig.ticks(100);
     assert!(rig.manager().is_operational());
     // The client is told once, as a warning.
     let texts: Vec<String> = rig.client.notices.iter().map(text_of).collect();
-    assert_eq!(texts, ["WN39 J1 map 1402:01 06020000"]);
+    assert_eq!(texts, ["WN39 J1 map 2040:00 06020000"]);
 }
 
 fn request(command: Command) -> Datagram<()> {

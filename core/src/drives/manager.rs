@@ -2,8 +2,8 @@
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtState, NodeId, NodeMessage, PtFeedback,
-    PtPoint, SdoResponse, SyncObject,
+    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtCommand, NmtState, NodeId, NodeMessage,
+    PtFeedback, PtPoint, SdoResponse, SyncObject,
 };
 use heapless::Vec;
 
@@ -150,9 +150,13 @@ impl DriveManager {
         self.streaming = self.configured;
         self.fallback = None;
         self.last_sync = None;
+        let pdo = self.streaming == Streaming::Pdo;
         self.for_each_drive(|drive| {
             drive.link = Link::default();
             drive.reset_steps();
+            if pdo {
+                drive.step = StartStep::GroupId;
+            }
         });
         if !self.has_drives() {
             self.phase = Phase::Streaming(0);
@@ -425,11 +429,16 @@ impl DriveManager {
         self.streaming = Streaming::Interpreter;
         self.fallback.get_or_insert(fault);
         self.for_each_drive(|drive| {
-            if matches!(drive.step, StartStep::Map(_)) {
-                drive.step = StartStep::ReadUnitMode;
-                drive.step_sent = false;
-                drive.awaiting.clear();
-            }
+            // The reset communication goes out only once every drive has its group id, so a
+            // refused group id leaves the drives as the NMT start left them.
+            let next = match drive.step {
+                StartStep::GroupId | StartStep::Regroup => StartStep::ConsumerHeartbeat,
+                StartStep::Map(_) => StartStep::ReadUnitMode,
+                _ => return,
+            };
+            drive.step = next;
+            drive.step_sent = false;
+            drive.awaiting.clear();
         });
     }
 
@@ -474,6 +483,7 @@ impl DriveManager {
             samples_per_point: timing.samples_per_point,
             position: drive.target,
             node: drive.node,
+            group: timing.group,
         };
         let mut fault = None;
         for (index, joint) in self.joints.iter_mut().enumerate() {
@@ -509,11 +519,21 @@ impl DriveManager {
             self.raise(fault);
             return;
         }
+        self.regroup(out);
         let ready = |joint: &Joint| match joint {
             Joint::Real(drive) => drive.step == StartStep::Ready && drive.target.is_some(),
             Joint::Pretend { .. } => true,
         };
         if self.joints.iter().all(ready) {
+            if pdo {
+                // One `BG` to the group: every drive begins at once, and answers it.
+                let begin = Request::Query {
+                    command: Mnemonic::BG,
+                    index: Index::ZERO,
+                };
+                out.send(&begin.to_frame(timing.group));
+            }
+            let cycle = out.cycle;
             self.for_each_drive(|drive| {
                 if let Some(position) = drive.target {
                     if pdo {
@@ -524,11 +544,52 @@ impl DriveManager {
                     }
                     drive.step = StartStep::Begin;
                     let ctx = context(drive);
-                    send_step(drive, &ctx, out);
+                    if pdo {
+                        // The group `BG` went out: each drive owes its answer.
+                        drive.awaiting.clear();
+                        for frame in &drive.step.frames(&ctx) {
+                            let _ = drive.awaiting.push(*frame);
+                            drive.link.sent(cycle);
+                        }
+                        drive.step_sent = true;
+                    } else {
+                        send_step(drive, &ctx, out);
+                    }
                 }
             });
             self.phase = Phase::Streaming(0);
         }
+    }
+
+    /// PDO schedule, the group id's barriers: when every drive has written it, the reset
+    /// communication that makes it effective goes to all nodes; when every drive has waited
+    /// the settle time after it, the NMT start, and the drives go on with their heartbeat.
+    fn regroup<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
+        let all_at = |joints: &Vec<Joint, MAX_JOINTS>, step: StartStep| {
+            joints.iter().all(|joint| match joint {
+                Joint::Real(drive) => drive.step == step && drive.step_sent,
+                Joint::Pretend { .. } => true,
+            })
+        };
+        let (command, next) = if all_at(&self.joints, StartStep::Regroup) {
+            let settle = self.timing.nmt_settle;
+            (NmtCommand::ResetCommunication, StartStep::Rejoin(settle))
+        } else if all_at(&self.joints, StartStep::Rejoin(0)) {
+            (NmtCommand::Start, StartStep::ConsumerHeartbeat)
+        } else {
+            return;
+        };
+        out.send(
+            &Nmt {
+                command,
+                node: None,
+            }
+            .to_frame(),
+        );
+        self.for_each_drive(|drive| {
+            drive.step = next;
+            drive.step_sent = false;
+        });
     }
 
     /// Takes a command, all joints or none: each drive's target and each pretend joint's
@@ -849,10 +910,20 @@ impl DriveManager {
                     return self.ignored();
                 };
                 drive.awaiting.swap_remove(at);
-                if let SdoResponse::Abort { code, .. } = response {
-                    return self.raise(DriveFault::SdoAbort { joint, code });
+                match response {
+                    // The group id is part of the PDO configuration.
+                    SdoResponse::Abort { object, code } if drive.step == StartStep::GroupId => {
+                        Some(DriveFault::MappingRefused {
+                            joint,
+                            object,
+                            code: Some(code),
+                        })
+                    }
+                    SdoResponse::Abort { code, .. } => {
+                        return self.raise(DriveFault::SdoAbort { joint, code });
+                    }
+                    _ => None,
                 }
-                None
             }
         };
         if let Some(fault) = fault {

@@ -49,6 +49,9 @@ pub struct DriveSettings {
     /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
     /// row is faulted (at least 1).
     pub pdo_missing_cycles: u16,
+    /// PDO schedule: the group id (object 0x2040) the drives also answer to, 1..=127, neither
+    /// a drive's nor the controller's: one `BG` to it begins every drive at once.
+    pub group_node: u8,
 }
 
 impl Default for DriveSettings {
@@ -65,6 +68,7 @@ impl Default for DriveSettings {
             schedule: Schedule::default(),
             pdo_lead: PDO_TARGET_LEAD,
             pdo_missing_cycles: 4,
+            group_node: 126,
         }
     }
 }
@@ -83,7 +87,8 @@ pub enum SetupError {
     /// The heartbeat times must be positive, the timeout longer than the period, and the
     /// timeout at most 65.535 s (a 16-bit number of milliseconds).
     Heartbeat,
-    /// The controller's node id is not in 1..=127, or is also a drive's.
+    /// The controller's or the group's node id is not in 1..=127, or is also a drive's, or
+    /// they are the same.
     ControllerNode,
     /// A timeout or settle time is negative or not finite, a schedule interval is zero, or the
     /// PDO lead or missing-feedback count is out of range.
@@ -133,6 +138,8 @@ pub(crate) struct Timing {
     pub heartbeat_timeout_ms: u16,
     /// The controller's node id.
     pub controller: NodeId,
+    /// The drives' group id (PDO schedule).
+    pub group: NodeId,
 }
 
 impl Timing {
@@ -157,8 +164,12 @@ impl Timing {
         if !(beat > 0.0 && timeout > beat && (1.0..=65535.0).contains(&timeout_ms)) {
             return Err(SetupError::Heartbeat);
         }
-        let controller = NodeId::new(settings.controller_node)
-            .filter(|id| config.joints.iter().all(|j| j.drive.node_id != id.get()))
+        let free = |id: u8| {
+            NodeId::new(id).filter(|id| config.joints.iter().all(|j| j.drive.node_id != id.get()))
+        };
+        let controller = free(settings.controller_node).ok_or(SetupError::ControllerNode)?;
+        let group = free(settings.group_node)
+            .filter(|&group| group != controller)
             .ok_or(SetupError::ControllerNode)?;
         let schedule = settings.schedule;
         if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
@@ -184,6 +195,7 @@ impl Timing {
             heartbeat_period: beat,
             heartbeat_timeout_ms: timeout_ms as u16,
             controller,
+            group,
         })
     }
 }

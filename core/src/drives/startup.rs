@@ -22,14 +22,18 @@
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
 //!
-//! The PDO schedule adds the mapping after `ConsumerHeartbeat` — `Map(0..28)`, one SDO
+//! The PDO schedule first gives every drive the group id (`GroupId`, SDO 0x2040), which takes
+//! effect at a reset communication: when every drive has it (`Regroup`), the manager resets
+//! the communication of all nodes, waits (`Rejoin`) and starts them again; one `BG` to the group
+//! id then begins every drive at once. It adds the mapping after `ConsumerHeartbeat` — `Map(0..28)`, one SDO
 //! transfer per step: each of protocol's [`streaming_mapping`] writes, then its read-back —
 //! and sets the write pointer the receive PDO writes at (`WritePointer`, `MP[6]`) after
 //! `Configure(1)`.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
+use armgate_protocol::can::pdo::GROUP_ID;
 use armgate_protocol::can::{
-    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, streaming_mapping,
+    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, SdoValue, streaming_mapping,
 };
 use heapless::Vec;
 
@@ -39,6 +43,14 @@ use super::streaming::FILLED_POINTS;
 /// Where one drive is in its start sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StartStep {
+    /// PDO schedule: write the group id (object 0x2040).
+    GroupId,
+    /// PDO schedule: waiting for every drive to have its group id; then the reset
+    /// communication goes out.
+    Regroup,
+    /// PDO schedule: after the reset communication, this many more cycles to wait; at 0 the
+    /// NMT start goes out when every drive is there.
+    Rejoin(u32),
     /// Configure the consumer heartbeat (object 0x1016).
     ConsumerHeartbeat,
     /// PDO schedule: the PDO mapping, transfer `n`: the write of mapping step `n / 2` (even
@@ -92,6 +104,8 @@ pub struct StepContext {
     pub position: Option<i32>,
     /// The drive.
     pub node: NodeId,
+    /// The group id the drives answer to besides their own (PDO schedule).
+    pub group: NodeId,
 }
 
 impl StartStep {
@@ -126,6 +140,10 @@ impl StartStep {
                 ctx.controller,
                 ctx.heartbeat_timeout_ms,
             )))],
+            Self::GroupId => &[Some(Outgoing::Sdo(SdoRequest::Download {
+                object: GROUP_ID,
+                value: SdoValue::U8(ctx.group.get()),
+            }))],
             Self::Map(n) => &[map(n)],
             Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(FILLED_POINTS) + 1))],
             Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
@@ -145,7 +163,7 @@ impl StartStep {
             Self::Configure(3) => &[fill(2), fill(3)],
             Self::Configure(_) => &[fill(FILLED_POINTS), Some(set(Mnemonic::PT, 0, 1))],
             Self::Begin => &[Some(query(Mnemonic::BG))],
-            Self::SettleUnitMode(_) | Self::Ready => &[],
+            Self::SettleUnitMode(_) | Self::Ready | Self::Regroup | Self::Rejoin(_) => &[],
         };
         // Pushed one by one: heapless's `collect` would panic on overflow (none here: at most
         // two per step).
@@ -162,6 +180,8 @@ impl StartStep {
     pub fn next(&self, unit_mode: Option<i32>, settle: u32, pdo: bool) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
         Ok(match *self {
+            Self::GroupId | Self::Regroup => Self::Regroup,
+            Self::Rejoin(n) => Self::Rejoin(n.saturating_sub(1)),
             Self::ConsumerHeartbeat if pdo => Self::Map(0),
             Self::ConsumerHeartbeat => Self::ReadUnitMode,
             Self::Map(n) if usize::from(n) + 1 < 2 * MAPPING_STEPS && pdo => Self::Map(n + 1),
