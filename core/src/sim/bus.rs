@@ -6,6 +6,11 @@
 //! interframe space included — at the configured bit rate, and is delivered to every other
 //! node when it ends. The bus owns the drives and advances them in time with itself; its
 //! controller side is a [`CanBus`] for the drive manager.
+//!
+//! Knobs for the streaming tests: random frame loss with a fixed-seed generator (a lost frame
+//! takes its time on the wire and reaches no one, as a frame every receiver dropped), and the
+//! drives' clock errors ([`VirtualBus::spread_clock_errors`]). A late SYNC is the caller's to
+//! send late.
 
 use armgate_protocol::can::{CanFrame, bits_on_wire, exact_bits_on_wire};
 use heapless::{Deque, Vec};
@@ -14,6 +19,7 @@ use super::whistle::{SimWhistle, WhistleConfig};
 use crate::MAX_JOINTS;
 use crate::config::RobotConfig;
 use crate::drives::{BusState, CanBus, TxError};
+use crate::rng::SplitMix64;
 
 /// Frames the controller may have queued (a CAN controller's transmit FIFO).
 const CONTROLLER_QUEUE: usize = 32;
@@ -55,6 +61,11 @@ pub struct BusStats {
     pub elapsed_ns: u64,
     /// Frames lost because the controller's receive FIFO was full.
     pub inbox_overruns: u64,
+    /// Frames lost on the wire ([`VirtualBus::set_frame_loss`]).
+    pub frames_lost: u64,
+    /// The spread of the drives' PT start instants (ns; the first sample of each drive's last
+    /// PT motion), once every drive has started.
+    pub start_skew_ns: Option<u64>,
     /// A hash (FNV-1a) of every frame on the wire, in order: identifier and data. Two runs
     /// that put the same frames on the bus have the same digest (the differential test).
     pub digest: u64,
@@ -112,6 +123,8 @@ pub struct VirtualBus {
     stats: BusStats,
     /// When the statistics were last reset (ns).
     stats_since: u64,
+    /// The probability that a frame is lost, and the generator that decides.
+    loss: Option<(f64, SplitMix64)>,
 }
 
 impl VirtualBus {
@@ -128,6 +141,7 @@ impl VirtualBus {
             bus_off: false,
             stats: BusStats::default(),
             stats_since: 0,
+            loss: None,
         }
     }
 
@@ -176,10 +190,36 @@ impl VirtualBus {
         }
     }
 
+    /// Makes every frame lost with `probability` (0 for none), drawn from a generator seeded
+    /// with `seed`: the same seed loses the same frames.
+    pub fn set_frame_loss(&mut self, probability: f64, seed: u64) {
+        self.loss = (probability > 0.0).then(|| (probability, SplitMix64::new(seed)));
+    }
+
+    /// Gives every drive a clock error drawn uniformly in ±`max_ppm` from a generator seeded
+    /// with `seed`, from now on.
+    pub fn spread_clock_errors(&mut self, max_ppm: f64, seed: u64) {
+        let mut rng = SplitMix64::new(seed);
+        for drive in &mut self.drives {
+            drive.set_clock_error_ppm(rng.uniform(-max_ppm, max_ppm));
+        }
+    }
+
+    /// The spread of the drives' PT start instants (ns), once every drive has started one.
+    pub fn start_skew_ns(&self) -> Option<u64> {
+        let mut starts = self.drives.iter().map(|d| d.stats().started_at);
+        let first = starts.next()??;
+        let (min, max) = starts.try_fold((first, first), |(lo, hi), t| {
+            t.map(|t| (lo.min(t), hi.max(t)))
+        })?;
+        Some(max - min)
+    }
+
     /// Traffic since the last reset.
     pub fn stats(&self) -> BusStats {
         BusStats {
             elapsed_ns: self.now - self.stats_since,
+            start_skew_ns: self.start_skew_ns(),
             ..self.stats
         }
     }
@@ -221,7 +261,11 @@ impl VirtualBus {
                 && end == next
             {
                 self.wire = None;
-                self.deliver(&frame);
+                if self.lose() {
+                    self.stats.frames_lost += 1;
+                } else {
+                    self.deliver(&frame);
+                }
             }
         }
         Err(Stalled)
@@ -267,6 +311,13 @@ impl VirtualBus {
             self.stats.worst_case_bits += u64::from(bits_on_wire(&pending.frame));
             self.wire = Some((pending, now + u64::from(bits) * self.bit_ns));
         }
+    }
+
+    /// True if the frame just ended is lost (a draw only when loss is on).
+    fn lose(&mut self) -> bool {
+        self.loss
+            .as_mut()
+            .is_some_and(|(probability, rng)| rng.next_f64() < *probability)
     }
 
     /// A frame has ended: every other node receives it.

@@ -6,8 +6,10 @@
 //! * [`SimulatedDrives`]: drives without a bus, a simulated arm behind the
 //!   [`Drives`](crate::command::Drives) interface.
 //! * [`SimWhistle`]: an Elmo SimplIQ "Whistle" drive on CAN (NMT, SDO, the binary interpreter,
-//!   the PT table, a servo loop).
-//! * [`VirtualBus`]: a CAN bus with simulated Whistles on it, bit-timed with arbitration.
+//!   the PT table, a servo loop, and for PDO streaming SYNC, RPDO3/TPDO3 mapped by SDO and a
+//!   group id).
+//! * [`VirtualBus`]: a CAN bus with simulated Whistles on it, bit-timed with arbitration, with
+//!   random frame loss and drive clock errors to inject.
 
 mod arm;
 mod bus;

@@ -5,24 +5,30 @@
 //! binary interpreter commands `UM`, `MO`, `PX`, `VX`, `PT`, `MP[1..=6]`, `QP[k]`, `TI[1]`,
 //! `BG`, `ST` — runs PT motion through its table ([`pt_table`]), moves a speed-limited,
 //! lagging motor ([`servo`]), watches the controller's heartbeat, and sends the emergencies a
-//! real drive would. Its interpreter runs one command at a time and queues one more: a third
+//! real drive would. For the PDO streaming schedule it also has RPDO3 and TPDO3 and a group id
+//! in its object dictionary ([`pdo`]), mapped by SDO: an RPDO3 point goes into the PT table at
+//! the write pointer, and after every SYNC a synchronous TPDO3 reports the position and the PT
+//! pointers sampled when the SYNC arrived. Its interpreter runs one command at a time and queues one more: a third
 //! command arriving meanwhile replaces the queued one, which is lost (what the thesis observed,
 //! spec §6.5), and the drive reports it with an emergency. [`WhistleFaults`] injects faults.
 //!
 //! Time is in nanoseconds on the bus's clock; the drive samples its position loop every
 //! 360 µs of its own clock, which may run fast or slow by a few ppm.
 
+pub mod pdo;
 pub mod pt_table;
 pub mod servo;
 
 use armgate_protocol::can::interpreter::{Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, ConsumerHeartbeat, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId,
-    NodeMessage, Object, SdoRequest, SdoResponse, SdoValue,
+    CanFrame, ConsumerHeartbeat, Emcy, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId,
+    NodeMessage, Object, SYNC_ID, SYNCHRONOUS, SdoRequest, SdoResponse, SdoValue, SyncObject,
+    sdo_abort,
 };
 use heapless::Deque;
 
-use self::pt_table::{Latency, PtTable, WriteError};
+use self::pdo::{PdoObjects, RpdoContent, Sampled, tpdo_payload};
+use self::pt_table::{Latency, PtTable, PushError, WriteError};
 use self::servo::Servo;
 use crate::config::JointConfig;
 use crate::drives::{DriveEmergency, JointUnits, POSITION_MODE, REASON_UNDERFLOW, SAMPLE_TIME};
@@ -32,8 +38,10 @@ const TX_QUEUE: usize = 16;
 /// Internal events handled per `advance_to` call at most (a call normally covers a few
 /// samples).
 const MAX_EVENTS: u32 = 1_000_000;
-/// SDO abort: object does not exist.
-const NO_OBJECT: u32 = 0x0602_0000;
+/// CiA 301 EMCY: PDO not processed due to length error.
+const PDO_LENGTH_ERROR: u16 = 0x8210;
+/// Error register bits 0 (generic) and 4 (communication).
+const COMMUNICATION_REGISTER: u8 = 0x11;
 
 /// Error codes the simulated interpreter answers with. They are the simulation's own; a real
 /// drive's are listed under `EC` in the SimplIQ command reference.
@@ -79,6 +87,9 @@ pub struct WhistleConfig {
     pub counts: i32,
     /// Ambient temperature (°C).
     pub ambient: f64,
+    /// Time from a SYNC's end to its synchronous TPDO being ready to send (s). ASSUMED: the
+    /// manual gives no figure.
+    pub sync_response: f64,
 }
 
 impl WhistleConfig {
@@ -97,6 +108,7 @@ impl WhistleConfig {
             unit_mode: POSITION_MODE,
             counts: 0,
             ambient: 25.0,
+            sync_response: 50e-6,
         })
     }
 }
@@ -118,6 +130,12 @@ pub struct WhistleFaults {
     pub stall: bool,
     /// `UM=` is echoed but does not change the unit mode.
     pub stuck_unit_mode: bool,
+    /// SDO writes to this object are aborted with 0x0604_0041 ("cannot be mapped"): a drive
+    /// whose firmware refuses the PDO mapping.
+    pub refuse_object: Option<Object>,
+    /// The synchronous TPDOs of this many SYNCs are not sent (counted down; `u32::MAX`: none
+    /// are sent, for ever).
+    pub skip_tpdos: u32,
 }
 
 /// What happened to a simulated drive.
@@ -135,6 +153,19 @@ pub struct WhistleStats {
     pub transmit_overruns: u32,
     /// When PT motion last began (ns on the bus clock).
     pub begun_at: Option<u64>,
+    /// The first sample of the last PT motion (ns on the bus clock): when its profile started
+    /// to move. The spread over the drives is the start skew.
+    pub started_at: Option<u64>,
+    /// SYNCs received while operational.
+    pub syncs: u32,
+    /// Synchronous TPDOs sent.
+    pub tpdos_sent: u32,
+    /// Synchronous TPDOs not sent ([`WhistleFaults::skip_tpdos`]).
+    pub tpdos_skipped: u32,
+    /// PT points received by RPDO and written.
+    pub pdo_points: u32,
+    /// RPDO points refused: write pointer out of range, PDO not mapped, too short.
+    pub pdo_errors: u32,
     /// Write-to-reach times of the PT points.
     pub latency: Latency,
 }
@@ -145,6 +176,8 @@ pub struct SimWhistle {
     config: WhistleConfig,
     /// Nanoseconds per sample on the bus clock.
     sample_ns: f64,
+    /// Where sample counting restarted (sample, ns) after a clock change.
+    epoch: (u64, f64),
     /// Samples done since power-up.
     samples: u64,
     /// The time of the last event handled (ns).
@@ -167,6 +200,12 @@ pub struct SimWhistle {
     commands_received: u32,
     replies_made: u32,
     tx: Deque<(CanFrame, u64), TX_QUEUE>,
+    /// RPDO3, TPDO3 and the group id.
+    pdo: PdoObjects,
+    /// The group id in effect: RPDO2 frames to it are this drive's too.
+    group: Option<NodeId>,
+    /// A point from a synchronous RPDO, applied at the next SYNC.
+    deferred_point: Option<i32>,
     stats: WhistleStats,
     /// Faults being injected.
     pub faults: WhistleFaults,
@@ -175,7 +214,7 @@ pub struct SimWhistle {
 impl SimWhistle {
     /// A drive at power-up: pre-operational, motor off, at `config.counts`.
     pub fn new(config: WhistleConfig) -> Self {
-        let sample_ns = SAMPLE_TIME * 1e9 * (1.0 + config.clock_error_ppm * 1e-6);
+        let sample_ns = sample_ns(config.clock_error_ppm);
         let dt = sample_ns * 1e-9;
         let max_speed = config
             .units
@@ -185,6 +224,7 @@ impl SimWhistle {
         Self {
             config,
             sample_ns,
+            epoch: (0, config.sample_phase * 1e9),
             samples: 0,
             now: 0,
             nmt: NmtState::PreOperational,
@@ -200,6 +240,9 @@ impl SimWhistle {
             commands_received: 0,
             replies_made: 0,
             tx: Deque::new(),
+            pdo: PdoObjects::new(config.node),
+            group: None,
+            deferred_point: None,
             stats: WhistleStats::default(),
             faults: WhistleFaults::default(),
         }
@@ -241,10 +284,33 @@ impl SimWhistle {
         &self.table
     }
 
+    /// RPDO3, TPDO3 and the group id as configured by SDO.
+    pub fn pdo_objects(&self) -> &PdoObjects {
+        &self.pdo
+    }
+
+    /// The group id in effect (0x2040 as of the last reset communication).
+    pub fn group(&self) -> Option<NodeId> {
+        self.group
+    }
+
+    /// How fast the drive's clock runs (ppm; positive = fast).
+    pub fn clock_error_ppm(&self) -> f64 {
+        self.config.clock_error_ppm
+    }
+
+    /// Makes the drive's clock run `ppm` fast (negative: slow) from now on.
+    pub fn set_clock_error_ppm(&mut self, ppm: f64) {
+        self.epoch = (self.samples, self.sample_ns_at(self.samples));
+        self.config.clock_error_ppm = ppm;
+        self.sample_ns = sample_ns(ppm);
+    }
+
     /// What happened so far.
     pub fn stats(&self) -> WhistleStats {
         WhistleStats {
             begun_at: self.table.begun_at(),
+            started_at: self.table.started_at(),
             latency: self.table.latency(),
             ..self.stats
         }
@@ -269,8 +335,13 @@ impl SimWhistle {
 
     /// The bus-clock time of sample `k` (ns).
     fn sample_time(&self, k: u64) -> u64 {
-        let t = self.config.sample_phase * 1e9 + k as f64 * self.sample_ns;
-        t.max(0.0) as u64
+        self.sample_ns_at(k).max(0.0) as u64
+    }
+
+    /// The same, unrounded.
+    fn sample_ns_at(&self, k: u64) -> f64 {
+        let (sample, at) = self.epoch;
+        at + (k as f64 - sample as f64) * self.sample_ns
     }
 
     /// Runs the drive up to time `t` (ns).
@@ -303,8 +374,21 @@ impl SimWhistle {
             }
             return;
         }
+        if frame.id() == SYNC_ID {
+            if SyncObject::parse(frame).is_ok() && self.nmt == NmtState::Operational {
+                self.sync();
+            }
+            return;
+        }
+        if frame.id() == self.pdo.rpdo3.id()
+            && self.pdo.rpdo3.valid()
+            && self.nmt == NmtState::Operational
+        {
+            self.rpdo3(frame);
+            return;
+        }
         match Function::split(frame.id()) {
-            Some((Function::Rpdo2, to)) if to == node => {
+            Some((Function::Rpdo2, to)) if to == node || Some(to) == self.group => {
                 if let (Ok((_, request)), NmtState::Operational) = (Request::parse(frame), self.nmt)
                 {
                     self.command(request);
@@ -331,6 +415,15 @@ impl SimWhistle {
             NmtCommand::Stop => self.nmt = NmtState::Stopped,
             NmtCommand::EnterPreOperational => self.nmt = NmtState::PreOperational,
             NmtCommand::ResetNode | NmtCommand::ResetCommunication => {
+                // The communication objects return to their power-on values; the group id
+                // written to 0x2040 takes effect (MAN-CAN301IG §13).
+                let group = self.pdo.group_written;
+                self.pdo = PdoObjects {
+                    group_written: group,
+                    ..PdoObjects::new(self.config.node)
+                };
+                self.group = NodeId::new(group);
+                self.deferred_point = None;
                 self.table = PtTable::default();
                 self.motor_on = false;
                 self.consumer = None;
@@ -464,9 +557,98 @@ impl SimWhistle {
         }
     }
 
-    /// An SDO request: only the consumer heartbeat entry exists.
+    /// A SYNC has arrived: a synchronous RPDO's point is applied, and a synchronous TPDO3
+    /// reports the values at this instant.
+    fn sync(&mut self) {
+        self.stats.syncs = self.stats.syncs.wrapping_add(1);
+        if let Some(point) = self.deferred_point.take() {
+            self.write_point(point);
+        }
+        let tpdo = self.pdo.tpdo3;
+        if !tpdo.valid() || tpdo.transmission != SYNCHRONOUS {
+            return;
+        }
+        if self.faults.skip_tpdos > 0 {
+            if self.faults.skip_tpdos != u32::MAX {
+                self.faults.skip_tpdos -= 1;
+            }
+            self.stats.tpdos_skipped = self.stats.tpdos_skipped.wrapping_add(1);
+            return;
+        }
+        let values = Sampled {
+            position: self.position(),
+            head: self.table.write_pointer(),
+            tail: self.table.read_index(),
+        };
+        let data = tpdo_payload(&tpdo, values);
+        if let Ok(frame) = CanFrame::new(tpdo.id(), &data) {
+            self.stats.tpdos_sent = self.stats.tpdos_sent.wrapping_add(1);
+            let ready = self.now + seconds_to_ns(self.config.sync_response);
+            self.emit(frame, ready);
+        }
+    }
+
+    /// An RPDO3 frame: its point goes to the PT table now, or at the next SYNC for a
+    /// synchronous RPDO.
+    fn rpdo3(&mut self, frame: &CanFrame) {
+        match pdo::rpdo_content(&self.pdo.rpdo3, frame.data()) {
+            RpdoContent::Point(point) if self.pdo.rpdo3.transmission == SYNCHRONOUS => {
+                self.deferred_point = Some(point);
+            }
+            RpdoContent::Point(point) => self.write_point(point),
+            RpdoContent::NotMapped => {
+                self.stats.pdo_errors = self.stats.pdo_errors.wrapping_add(1);
+                self.inject(DriveEmergency::PdoNotMapped {
+                    cob_id: self.pdo.rpdo3.id(),
+                });
+            }
+            RpdoContent::TooShort => {
+                self.stats.pdo_errors = self.stats.pdo_errors.wrapping_add(1);
+                self.inject(DriveEmergency::Other(Emcy {
+                    code: PDO_LENGTH_ERROR,
+                    register: COMMUNICATION_REGISTER,
+                    manufacturer: [0; 5],
+                }));
+            }
+        }
+    }
+
+    /// A PT point received by PDO, written at the table's write pointer.
+    fn write_point(&mut self, point: i32) {
+        match self.table.push(point, self.now) {
+            Ok(()) => self.stats.pdo_points = self.stats.pdo_points.wrapping_add(1),
+            Err(PushError::QueueFull { write }) => {
+                self.stats.overflows += 1;
+                self.inject(DriveEmergency::QueueFull { index: write });
+            }
+            Err(PushError::OutOfRange { write }) => {
+                self.stats.pdo_errors = self.stats.pdo_errors.wrapping_add(1);
+                self.inject(DriveEmergency::WritePointerOutOfRange { write });
+            }
+        }
+    }
+
+    /// An SDO request: the consumer heartbeat entry, and the PDO objects.
     fn sdo(&mut self, request: SdoRequest) {
         let response = match request {
+            SdoRequest::Download { object, .. } if self.faults.refuse_object == Some(object) => {
+                SdoResponse::Abort {
+                    object,
+                    code: sdo_abort::NOT_MAPPABLE,
+                }
+            }
+            SdoRequest::Download { object, value } if PdoObjects::holds(object) => {
+                match self.pdo.download(object, value) {
+                    Ok(()) => SdoResponse::Downloaded { object },
+                    Err(code) => SdoResponse::Abort { object, code },
+                }
+            }
+            SdoRequest::Upload { object } if PdoObjects::holds(object) => {
+                match self.pdo.upload(object) {
+                    Ok(value) => SdoResponse::Uploaded { object, value },
+                    Err(code) => SdoResponse::Abort { object, code },
+                }
+            }
             SdoRequest::Download {
                 object: Object::CONSUMER_HEARTBEAT,
                 value: SdoValue::U32(value),
@@ -497,7 +679,7 @@ impl SimWhistle {
             SdoRequest::Download { object, .. } | SdoRequest::Upload { object } => {
                 SdoResponse::Abort {
                     object,
-                    code: NO_OBJECT,
+                    code: sdo_abort::NO_OBJECT,
                 }
             }
         };
@@ -549,6 +731,12 @@ impl SimWhistle {
             self.stats.transmit_overruns += 1;
         }
     }
+}
+
+/// Nanoseconds of bus time per sample of a clock `ppm` fast: a fast clock counts its 360 µs
+/// sooner.
+fn sample_ns(ppm: f64) -> f64 {
+    SAMPLE_TIME * 1e9 / (1.0 + ppm * 1e-6)
 }
 
 /// True if `count` is a multiple of `every` (never for `every` = 0).

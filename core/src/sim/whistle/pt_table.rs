@@ -12,6 +12,9 @@
 //!   buffer underflow — the motion ends where it is and the drive sends the "motion
 //!   terminated, read pointer reached write pointer" emergency. Writing over a point not yet
 //!   fetched is refused with the "queue full" emergency.
+//! * A point received by PDO ([`PtTable::push`]) goes to the write pointer `MP[6]`, which then
+//!   moves to the next index of the ring (MAN-CAN301IG: the PT-type object is written "at
+//!   the write pointer"); `QP[k]` writes by index leave the pointer alone.
 
 use heapless::Vec;
 
@@ -85,6 +88,21 @@ pub enum WriteError {
     QueueFull,
 }
 
+/// Why a point received by PDO was not written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PushError {
+    /// The write pointer `MP[6]` is outside the ring `MP[1]..=MP[2]` (or there is no ring).
+    OutOfRange {
+        /// The write pointer.
+        write: u16,
+    },
+    /// The entry at the write pointer holds a point not yet fetched; the pointer stays.
+    QueueFull {
+        /// The write pointer.
+        write: u16,
+    },
+}
+
 /// Points reached since the last reset: how long after being written (ns).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Latency {
@@ -109,6 +127,8 @@ pub struct PtTable {
     last_read: u16,
     /// When the motion began (ns).
     begun_at: Option<u64>,
+    /// The first sample of the motion (ns): when the profile started to move.
+    started_at: Option<u64>,
     /// When QP was last written (ns).
     last_write: Option<u64>,
     /// A queue-low warning was sent and the queue has not recovered since.
@@ -129,6 +149,7 @@ impl Default for PtTable {
             segment: None,
             last_read: 0,
             begun_at: None,
+            started_at: None,
             last_write: None,
             warned_low: false,
             latency: Latency::default(),
@@ -205,6 +226,32 @@ impl PtTable {
         Ok(())
     }
 
+    /// The write pointer `MP[6]`, as the PVT head pointer (0x2F11) reports it.
+    pub fn write_pointer(&self) -> u16 {
+        u16::try_from(self.mp_at(6)).unwrap_or(0)
+    }
+
+    /// A point received by PDO at `now` (ns): written at the write pointer, which advances
+    /// (wrapping in a cyclic ring; past `MP[2]` otherwise, where the next point is refused).
+    pub fn push(&mut self, value: i32, now: u64) -> Result<(), PushError> {
+        let write = self.write_pointer();
+        let in_ring = self
+            .ring()
+            .is_some_and(|(first, last)| (first..=last).contains(&write));
+        if !in_ring {
+            return Err(PushError::OutOfRange { write });
+        }
+        self.write(write, value, now).map_err(|error| match error {
+            WriteError::QueueFull => PushError::QueueFull { write },
+            WriteError::BadIndex => PushError::OutOfRange { write },
+        })?;
+        let next = self.next(write).unwrap_or(write.saturating_add(1));
+        if let Some(slot) = self.mp.get_mut(6) {
+            *slot = i32::from(next);
+        }
+        Ok(())
+    }
+
     /// `PT=k`: the next `BG` starts PT motion at `QP[k]`; false if `k` is outside the table.
     pub fn arm(&mut self, k: i32) -> bool {
         let k = u16::try_from(k)
@@ -254,6 +301,7 @@ impl PtTable {
             slope_to: (after - from) / 2.0,
         });
         self.begun_at = Some(now);
+        self.started_at = None;
         self.warned_low = false;
         Ok(())
     }
@@ -275,6 +323,7 @@ impl PtTable {
             return Sample::default();
         };
         let per_segment = u32::try_from(self.mp_at(4)).unwrap_or(1).max(1);
+        self.started_at.get_or_insert(now);
         if !stalled {
             segment.sample += 1;
         }
@@ -369,6 +418,11 @@ impl PtTable {
     /// When the last motion began (ns).
     pub fn begun_at(&self) -> Option<u64> {
         self.begun_at
+    }
+
+    /// The first sample of the last motion (ns): when its profile started to move.
+    pub fn started_at(&self) -> Option<u64> {
+        self.started_at
     }
 
     /// When QP was last written (ns).
