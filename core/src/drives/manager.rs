@@ -76,6 +76,8 @@ pub struct DriveManager {
     timing: Timing,
     schedule: Schedule,
     ring_len: u16,
+    /// PDO schedule: entries of the PT ring.
+    pdo_ring_len: u16,
     /// The schedule the robot file asks for.
     configured: Streaming,
     /// The schedule of the current start (the interpreter's after a fallback).
@@ -86,6 +88,8 @@ pub struct DriveManager {
     fallback: Option<DriveFault>,
     /// When the last SYNC went out (s).
     last_sync: Option<f64>,
+    /// The last `receive` raised the current fault.
+    faulted_in_receive: bool,
     /// PDO schedule: points kept beyond the read pointer at every SYNC.
     pdo_lead: u16,
     /// PDO schedule: SYNCs a transmit PDO may be missing in a row.
@@ -124,11 +128,13 @@ impl DriveManager {
             timing,
             schedule: settings.schedule,
             ring_len: settings.ring_len,
+            pdo_ring_len: settings.pdo_ring_len,
             configured: config.drives.streaming,
             streaming: config.drives.streaming,
             may_fall_back: config.drives.pdo_fallback,
             fallback: None,
             last_sync: None,
+            faulted_in_receive: false,
             pdo_lead: settings.pdo_lead,
             pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
             joints,
@@ -214,6 +220,12 @@ impl DriveManager {
     /// The receive half of a cycle: takes everything the bus has received and updates the
     /// measurement, temperatures, flow control and faults.
     pub fn receive(&mut self, bus: &mut impl CanBus) {
+        let clean = self.fault.is_none();
+        self.receive_frames(bus);
+        self.faulted_in_receive = clean && self.fault.is_some();
+    }
+
+    fn receive_frames(&mut self, bus: &mut impl CanBus) {
         if bus.state() == BusState::BusOff {
             self.raise(DriveFault::Bus(BusFault::BusOff));
         }
@@ -234,8 +246,13 @@ impl DriveManager {
             self.raise(DriveFault::Bus(BusFault::BusOff));
         }
         self.check_links();
-        if self.streaming == Streaming::Pdo && matches!(self.phase, Phase::Streaming(_)) {
-            self.check_sync(now);
+        if self.streaming == Streaming::Pdo {
+            if matches!(self.phase, Phase::Streaming(_) | Phase::Stopping(_)) {
+                self.check_sync(now);
+            }
+            if matches!(self.phase, Phase::Streaming(_)) {
+                self.check_feedback();
+            }
         }
         let mut out = Outbox {
             bus,
@@ -407,7 +424,9 @@ impl DriveManager {
     }
 
     /// PDO schedule: a SYNC more than half a period late (the control cycle skipped ticks)
-    /// is a fault: the drives' queues ran on without points.
+    /// is a fault: the drives' queues ran on without points. It is the cause of what the
+    /// drives reported meanwhile (their underflows), so it replaces a fault raised by this
+    /// cycle's receive.
     fn check_sync(&mut self, now: f64) {
         let period = self.timing.period;
         let Some(last) = self.last_sync else { return };
@@ -415,7 +434,28 @@ impl DriveManager {
         if late > 0.5 * period {
             // A float-to-integer `as` saturates: it cannot fail.
             let late_us = libm::round(late * 1e6) as u32;
+            if self.faulted_in_receive {
+                self.fault = None;
+            }
             self.raise(DriveFault::LateSync { late_us });
+        }
+    }
+
+    /// PDO schedule: faults the first drive whose transmit PDO has been missing for more than
+    /// `DriveSettings::pdo_missing_cycles` SYNCs in a row.
+    fn check_feedback(&mut self) {
+        let missing = self.pdo_missing_cycles;
+        let silent = self.joints.iter().enumerate().find_map(|(joint, entry)| match entry {
+            Joint::Real(Drive {
+                pdo: Some(stream), ..
+            }) if stream.unreported() > missing => Some(DriveFault::NoFeedback {
+                joint,
+                cycles: stream.unreported(),
+            }),
+            _ => None,
+        });
+        if let Some(fault) = silent {
+            self.raise(fault);
         }
     }
 
@@ -474,8 +514,9 @@ impl DriveManager {
     /// One cycle of the start sequence: each drive advances when its step is answered and
     /// sends the next step's frames; when every drive is ready, all get `BG` in one cycle.
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
-        let (timing, ring_len) = (self.timing, self.ring_len);
         let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
+        let timing = self.timing;
+        let ring_len = if pdo { self.pdo_ring_len } else { self.ring_len };
         let context = |drive: &Drive| StepContext {
             controller: timing.controller,
             heartbeat_timeout_ms: timing.heartbeat_timeout_ms,
@@ -637,19 +678,11 @@ impl DriveManager {
     /// been missing too long is faulted.
     fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
         out.send(&SyncObject.to_frame());
-        let (schedule, missing) = (self.schedule, self.pdo_missing_cycles);
-        let mut fault = None;
+        let schedule = self.schedule;
         for (index, joint) in self.joints.iter_mut().enumerate() {
             let Joint::Real(drive) = joint else { continue };
             let running = drive.target.is_some() && drive.pdo.is_some();
             if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
-                if stream.unreported() > missing {
-                    let cycles = stream.unreported();
-                    fault.get_or_insert(DriveFault::NoFeedback {
-                        joint: index,
-                        cycles,
-                    });
-                }
                 for &position in &stream.points(target) {
                     out.send(&PtPoint { position }.to_frame(drive.node));
                 }
@@ -659,9 +692,6 @@ impl DriveManager {
                 query => query,
             };
             out.request(drive, &Outgoing::Interpreter(query.request()));
-        }
-        if let Some(fault) = fault {
-            self.raise(fault);
         }
     }
 
@@ -819,11 +849,14 @@ impl DriveManager {
 
     /// A drive's transmit PDO: its position and PT pointers at the last SYNC.
     fn on_feedback(&mut self, node: NodeId, feedback: PtFeedback) {
+        let cycle = self.cycle;
         let Some((joint, drive)) = self.drive_mut(node) else {
             self.ignored();
             return;
         };
         drive.position = Some(feedback.position);
+        // The drive is alive: a lost answer to a temperature query is not a silent drive.
+        drive.link.heard(cycle);
         let flow = drive
             .pdo
             .as_mut()

@@ -43,8 +43,11 @@ pub struct DriveSettings {
     pub ring_len: u16,
     /// Which query each drive sends in each streaming cycle.
     pub schedule: Schedule,
+    /// PDO schedule: entries of the drives' PT ring (6..=64): room for the lead, a correction
+    /// and a margin that makes a wrong pointer show as an overrun.
+    pub pdo_ring_len: u16,
     /// PDO schedule: the PT points kept beyond each drive's read pointer at every SYNC
-    /// (2..=ring_len − 3; docs/drives.md).
+    /// (2..=pdo_ring_len − 3; docs/drives.md).
     pub pdo_lead: u16,
     /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
     /// row is faulted (at least 1).
@@ -66,6 +69,7 @@ impl Default for DriveSettings {
             unit_mode_settle: 0.1,
             ring_len: 6,
             schedule: Schedule::default(),
+            pdo_ring_len: 16,
             pdo_lead: PDO_TARGET_LEAD,
             pdo_missing_cycles: 4,
             group_node: 126,
@@ -156,7 +160,7 @@ impl Timing {
         if !fits {
             return Err(SetupError::BusOverloaded);
         }
-        if !(6..=64).contains(&settings.ring_len) {
+        if !(6..=64).contains(&settings.ring_len) || !(6..=64).contains(&settings.pdo_ring_len) {
             return Err(SetupError::RingSize);
         }
         let (beat, timeout) = (settings.heartbeat_period, settings.heartbeat_timeout);
@@ -175,7 +179,7 @@ impl Timing {
         if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
             return Err(SetupError::BadTiming);
         }
-        let lead_fits = (2..=settings.ring_len.saturating_sub(3)).contains(&settings.pdo_lead);
+        let lead_fits = (2..=settings.pdo_ring_len.saturating_sub(3)).contains(&settings.pdo_lead);
         if !lead_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
         }
