@@ -11,9 +11,10 @@
 //! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
 //! controller then drives the arm through a joint move (and on ranger-mk1 a Cartesian circle)
 //! for 30 s of simulated time on the virtual bus, and the table reports what the bus and the
-//! drives saw. The soak run then streams the PDO schedule for ranger-mk1 at 500 kbit/s for 10
-//! minutes of simulated time (`--soak SECONDS` to change it) with 1 % of the frames lost at
-//! random and the drives' clocks off by up to ±100 ppm. With `--plots DIR`, `can-bench.svg`
+//! drives saw. The soak runs then stream the PDO schedule for ranger-mk1 at both bit rates for
+//! 10 minutes of simulated time each (`--soak SECONDS` to change it) with the drives' clocks
+//! off by up to ±100 ppm, without and with 1 % of the frames lost at random, for several
+//! leads. With `--plots DIR`, `can-bench.svg`
 //! shows the six-drive rows per control cycle: the bus load and the mean write-to-reached
 //! latency of the PT points reached in that cycle.
 #![allow(
@@ -31,8 +32,8 @@ mod drives_rig;
 use drives_rig::Rig;
 
 use armgate_core::config::{Streaming, ValidRobot, load_file};
-use armgate_core::drives::{DriveSettings, DriveState};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
+use armgate_core::drives::{DriveSettings, DriveState, DriveStats};
 use armgate_core::motion::{Mode, Shape};
 use armgate_core::sim::{BusStats, VirtualBus};
 use armgate_plot::{Figure, Panel, Series, write_svg};
@@ -82,13 +83,13 @@ fn main() {
                 );
                 if header {
                     println!(
-                        "| robot, drives | schedule | bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | start skew: BG / first sample | underflows |"
+                        "| robot, drives | schedule | bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | start skew: BG / first sample | underflows | points skipped / inserted |"
                     );
-                    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+                    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
                     header = false;
                 }
                 println!(
-                    "| {name}, {} | {} | {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs / {:.0} µs | {} |",
+                    "| {name}, {} | {} | {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs / {:.0} µs | {} | {} / {} |",
                     model.drives,
                     schedule_name(streaming),
                     bitrate / 1000,
@@ -105,6 +106,8 @@ fn main() {
                     r.skew * 1e6,
                     r.first_sample_skew * 1e6,
                     r.underflows,
+                    r.stats.points_skipped,
+                    r.stats.points_inserted,
                 );
                 if name == "ranger-mk1" {
                     runs.push((bitrate, streaming, fastest.period, r));
@@ -118,15 +121,23 @@ fn main() {
     let seconds = soak_seconds();
     println!();
     println!(
-        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, 1 % of the frames lost at random (from the start of streaming), drive clocks within ±100 ppm, joint moves back and forth:"
+        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, drive clocks within ±100 ppm, frames lost at random from the start of streaming, joint moves back and forth; a fault is counted and the drives restarted:"
     );
     println!();
     println!(
-        "| bit rate | period | lead kept at the SYNC | frames lost | faults (restarted) | underflows | latency write → reached |"
+        "| bit rate | period | frame loss | lead kept at the SYNC | frames lost | faults (restarted) | underflows | latency write → reached |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
+    let cases = [
+        (0.0, 3),
+        (0.0, 4),
+        (0.01, 3),
+        (0.01, 4),
+        (0.01, 5),
+        (0.01, 6),
+    ];
     for bitrate in BITRATES {
-        for lead in 3..=6 {
+        for (loss, lead) in cases {
             let settings = DriveSettings {
                 pdo_lead: lead,
                 ..DriveSettings::default()
@@ -141,11 +152,12 @@ fn main() {
                     config.control_period = fastest.period;
                 })
                 .unwrap();
-            let s = soak(&config, &settings, seconds);
+            let s = soak(&config, &settings, seconds, loss);
             println!(
-                "| {} kbit/s | {:.2} ms | {lead} | {} | {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
+                "| {} kbit/s | {:.2} ms | {:.0} % | {lead} | {} | {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
                 bitrate / 1000,
                 fastest.period * 1e3,
+                loss * 100.0,
                 s.frames_lost,
                 s.faults.len(),
                 s.faults.iter().take(3).collect::<Vec<_>>(),
@@ -200,12 +212,12 @@ struct Soak {
 /// The PDO schedule for `seconds` with 1 % of the frames lost and the drives' clocks spread
 /// over ±100 ppm: joint moves back and forth; a fault is counted and the drives restarted (with
 /// no loss during the start, whose steps do not repeat a lost request).
-fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64) -> Soak {
+fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64, loss: f64) -> Soak {
     let mut bus = VirtualBus::for_robot(config);
     bus.spread_clock_errors(100.0, 7);
     let mut l = Rig::started(config, settings, bus);
     l.bus_mut().reset_stats();
-    l.bus_mut().set_frame_loss(0.01, 11);
+    l.bus_mut().set_frame_loss(loss, 11);
     l.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let start = l.now;
     let home = config.home();
@@ -226,7 +238,13 @@ fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64) -> Soak {
             l.until(100, |r| r.manager().state() == DriveState::Faulted);
             frames_lost += lost_so_far;
             underflows += l.bus().drives().map(|d| d.stats().underflows).sum::<u32>();
-            latency_max = latency_max.max(l.bus().drives().map(|d| d.stats().latency.max_ns).max().unwrap());
+            latency_max = latency_max.max(
+                l.bus()
+                    .drives()
+                    .map(|d| d.stats().latency.max_ns)
+                    .max()
+                    .unwrap(),
+            );
             l.bus_mut().reset_stats();
             l.manager_mut().start().unwrap();
             l.until(500, |r| r.manager().state() != DriveState::Starting);
@@ -235,12 +253,18 @@ fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64) -> Soak {
             }
             l.ticks(20);
             l.bus_mut().reset_stats();
-            l.bus_mut().set_frame_loss(0.01, faults.len() as u64 + 11);
+            l.bus_mut().set_frame_loss(loss, faults.len() as u64 + 11);
         }
     }
     frames_lost += l.bus().stats().frames_lost;
     underflows += l.bus().drives().map(|d| d.stats().underflows).sum::<u32>();
-    latency_max = latency_max.max(l.bus().drives().map(|d| d.stats().latency.max_ns).max().unwrap());
+    latency_max = latency_max.max(
+        l.bus()
+            .drives()
+            .map(|d| d.stats().latency.max_ns)
+            .max()
+            .unwrap(),
+    );
     Soak {
         frames_lost,
         faults,
@@ -257,6 +281,7 @@ struct Outcome {
     write_delay_max: f64,
     skew: f64,
     first_sample_skew: f64,
+    stats: DriveStats,
     underflows: u32,
     cycles: Vec<Cycle>,
 }
@@ -368,6 +393,7 @@ fn run(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus, seconds: 
         write_delay_max,
         skew,
         first_sample_skew,
+        stats: l.manager().stats(),
         underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
         cycles,
     }

@@ -101,7 +101,11 @@ fn with_fallback_a_refused_mapping_starts_the_interpreter_schedule() {
     assert!(rig.manager().is_operational());
     // QP writes, no SYNC.
     assert!(rig.sent().iter().all(|f| f.id() != 0x080));
-    assert!(rig.sent().iter().any(|f| f.id() == 0x365 && f.data()[..2] == *b"QP"));
+    assert!(
+        rig.sent()
+            .iter()
+            .any(|f| f.id() == 0x365 && f.data()[..2] == *b"QP")
+    );
     // The client is told once, as a warning.
     let texts: Vec<String> = rig.client.notices.iter().map(text_of).collect();
     assert_eq!(texts, ["WN39 J1 map 1A02:01 06040041"]);
@@ -185,7 +189,13 @@ fn a_missing_tpdo_stops_the_arm_holding_the_last_command() {
     let (mut rig, accepted) = moving();
     rig.bus_mut().drive_mut(103).unwrap().faults.skip_tpdos = u32::MAX;
     let fault = stops_holding(&mut rig, accepted, true);
-    assert_eq!(fault, DriveFault::NoFeedback { joint: 2, cycles: 5 });
+    assert_eq!(
+        fault,
+        DriveFault::NoFeedback {
+            joint: 2,
+            cycles: 5
+        }
+    );
     assert_eq!(fault.text().as_str(), "ER30 J3 no TPDO for 5 cycles");
 }
 
@@ -194,7 +204,11 @@ fn a_few_missing_tpdos_are_tolerated() {
     let (mut rig, _) = moving();
     rig.bus_mut().drive_mut(103).unwrap().faults.skip_tpdos = 4;
     rig.ticks(200);
-    assert!(rig.manager().is_operational(), "{:?}", rig.manager().fault());
+    assert!(
+        rig.manager().is_operational(),
+        "{:?}",
+        rig.manager().fault()
+    );
 }
 
 #[test]

@@ -445,15 +445,19 @@ impl DriveManager {
     /// `DriveSettings::pdo_missing_cycles` SYNCs in a row.
     fn check_feedback(&mut self) {
         let missing = self.pdo_missing_cycles;
-        let silent = self.joints.iter().enumerate().find_map(|(joint, entry)| match entry {
-            Joint::Real(Drive {
-                pdo: Some(stream), ..
-            }) if stream.unreported() > missing => Some(DriveFault::NoFeedback {
-                joint,
-                cycles: stream.unreported(),
-            }),
-            _ => None,
-        });
+        let silent = self
+            .joints
+            .iter()
+            .enumerate()
+            .find_map(|(joint, entry)| match entry {
+                Joint::Real(Drive {
+                    pdo: Some(stream), ..
+                }) if stream.unreported() > missing => Some(DriveFault::NoFeedback {
+                    joint,
+                    cycles: stream.unreported(),
+                }),
+                _ => None,
+            });
         if let Some(fault) = silent {
             self.raise(fault);
         }
@@ -516,7 +520,11 @@ impl DriveManager {
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
         let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
         let timing = self.timing;
-        let ring_len = if pdo { self.pdo_ring_len } else { self.ring_len };
+        let ring_len = if pdo {
+            self.pdo_ring_len
+        } else {
+            self.ring_len
+        };
         let context = |drive: &Drive| StepContext {
             controller: timing.controller,
             heartbeat_timeout_ms: timing.heartbeat_timeout_ms,
@@ -679,12 +687,20 @@ impl DriveManager {
     fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
         out.send(&SyncObject.to_frame());
         let schedule = self.schedule;
+        let stats = &mut self.stats;
         for (index, joint) in self.joints.iter_mut().enumerate() {
             let Joint::Real(drive) = joint else { continue };
             let running = drive.target.is_some() && drive.pdo.is_some();
             if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
-                for &position in &stream.points(target) {
+                let points = stream.points(target);
+                for &position in &points {
                     out.send(&PtPoint { position }.to_frame(drive.node));
+                }
+                let count = |n: &mut u32| *n = n.saturating_add(1);
+                match points.len() {
+                    0 => count(&mut stats.points_skipped),
+                    2 => count(&mut stats.points_inserted),
+                    _ => {}
                 }
             }
             let query = match schedule.query(streamed, index, false) {

@@ -25,7 +25,9 @@ use heapless::Vec;
 
 use super::FlowError;
 
-/// The lead (points beyond the read pointer) the stream keeps at every SYNC by default.
+/// The lead (points beyond the read pointer) the stream keeps at every SYNC by default, for a
+/// drive whose segment boundary follows the SYNC; one less for a drive whose boundary precedes
+/// it.
 pub const PDO_TARGET_LEAD: u16 = 3;
 
 /// The writer side of one drive's PT ring on the PDO schedule.
@@ -35,6 +37,9 @@ pub struct PdoStream {
     ring: u16,
     /// The lead kept at every SYNC (2 or more).
     target: u16,
+    /// The least lead kept: the target, one less for a drive whose boundary precedes the SYNC
+    /// (known from its first report).
+    least: Option<i32>,
     /// The value of the newest point sent (counts), for a midpoint.
     newest_value: i32,
     /// The lead at the last SYNC sent: reported, or predicted.
@@ -54,6 +59,7 @@ impl PdoStream {
         Self {
             ring: ring.max(6),
             target: target.max(2),
+            least: None,
             newest_value: position,
             // At the first SYNC the drive runs segment 1 with points 1..=filled: `filled − 1`
             // beyond it, which is what the first prediction (one segment less) gives.
@@ -76,6 +82,12 @@ impl PdoStream {
         let lead = self.lead_of(head, tail).ok_or(FlowError::Overrun)?;
         self.reported = Some(lead);
         self.unreported = 0;
+        // Every drive began with the same points at the same instant, so the first report
+        // differs from the prediction only by where the drive's segment boundary falls: before
+        // the SYNC it reads one less, and that is where it stays.
+        let phase = (i32::from(lead) - self.lead_at_sync).clamp(-1, 0);
+        self.least
+            .get_or_insert((i32::from(self.target) + phase).max(2));
         // The report is the last SYNC's: it replaces the prediction; the points sent after
         // that SYNC are still counted in `sent_since_sync`.
         self.lead_at_sync = i32::from(lead);
@@ -94,12 +106,14 @@ impl PdoStream {
         let predicted = self.lead_at_sync + i32::from(self.sent_since_sync) - 1;
         self.lead_at_sync = predicted;
         self.unreported = self.unreported.saturating_add(1);
-        // After this cycle's points and the next segment: the lead at the next SYNC.
-        let wanted = i32::from(self.target) - predicted + 1;
+        // The lead at the next SYNC is this one plus this cycle's points minus the next
+        // segment. Kept within least..=least + 1: as the drive's clock drifts, its boundary
+        // passes the SYNC and its reading moves by one without a point more or less queued.
+        let least = self.least.unwrap_or(i32::from(self.target));
         let mut points = Vec::new();
-        match wanted {
-            ..=0 => {}
-            1 => {
+        match predicted {
+            p if p > least + 1 => {}
+            p if p >= least => {
                 let _ = points.push(target);
             }
             _ => {
@@ -158,8 +172,8 @@ mod tests {
         // a midpoint first.
         stream.feedback(5, 2).unwrap();
         assert_eq!(stream.points(10).as_slice(), &[5, 10]);
-        // Lead 3 reported, two points sent after it: 4 at this SYNC, skip.
-        stream.feedback(1, 3).unwrap();
+        // Lead 4 reported, two points sent after it: 5 at this SYNC, skip.
+        stream.feedback(2, 3).unwrap();
         assert!(stream.points(20).is_empty());
         // Lead 4 reported, nothing sent after it: 3 at this SYNC, one point.
         stream.feedback(2, 3).unwrap();
