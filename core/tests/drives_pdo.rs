@@ -172,7 +172,12 @@ fn streams_at_the_target_lead_and_arrives() {
         }
     }
     rig.ticks(20);
-    assert_eq!(leads, [PDO_TARGET_LEAD.into()].into());
+    // Three points beyond the read pointer at the SYNC, two on a drive whose segment boundary
+    // precedes it; the drives began together and their clocks agree: nothing to correct.
+    let target = u32::from(PDO_TARGET_LEAD);
+    assert!(leads.iter().all(|l| (target - 1..=target).contains(l)), "{leads:?}");
+    let stats = rig.manager().stats();
+    assert_eq!((stats.points_skipped, stats.points_inserted), (0, 0));
     // Per cycle: one SYNC, one RPDO3 per drive; no interpreter frame but the temperature.
     let sent = rig.sent();
     assert_eq!(sent.iter().filter(|f| f.id() == 0x080).count(), 1);
