@@ -1,62 +1,12 @@
 //! Tool poses as the protocol carries them.
 //!
-//! The arithmetic is nalgebra's; what is the protocol's own stays here: the quaternion's wire
-//! order (x, y, z, w — nalgebra's constructor takes w first), its sign rule (w ≥ 0) and the
-//! seed's roll/pitch/yaw extraction with its gimbal branch (spec §2.4).
+//! The arithmetic is nalgebra's; the protocol's own conventions — the quaternion's wire order
+//! (x, y, z, w) and sign rule (w ≥ 0), the seed's roll/pitch/yaw extraction with its gimbal branch
+//! (spec §2.4) — are the protocol crate's, shared with the controller.
 
-use std::f64::consts::FRAC_PI_2;
+use nalgebra::Rotation3;
 
-use nalgebra::{Quaternion as Quat, Rotation3, UnitQuaternion};
-
-pub use armgate_protocol::client::Mode;
-
-/// A quaternion in the protocol's order, scalar last (`GL`, `PS`); not necessarily unit length,
-/// as the wire carries it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Quaternion {
-    /// x of the vector part.
-    pub x: f64,
-    /// y of the vector part.
-    pub y: f64,
-    /// z of the vector part.
-    pub z: f64,
-    /// The scalar part.
-    pub w: f64,
-}
-
-impl Quaternion {
-    /// No rotation.
-    pub const IDENTITY: Self = Self::new(0.0, 0.0, 0.0, 1.0);
-
-    /// A quaternion from its components in wire order.
-    pub const fn new(x: f64, y: f64, z: f64, w: f64) -> Self {
-        Self { x, y, z, w }
-    }
-
-    /// The unit quaternion of the same rotation, or `None` for a (near) zero or non-finite one.
-    pub fn normalized(self) -> Option<Self> {
-        self.unit().map(Self::from_unit)
-    }
-
-    /// The rotation, as nalgebra's unit quaternion.
-    fn unit(self) -> Option<UnitQuaternion<f64>> {
-        let q = Quat::new(self.w, self.x, self.y, self.z);
-        let n = q.norm();
-        (n.is_finite() && n >= 1e-12).then(|| UnitQuaternion::new_unchecked(q / n))
-    }
-
-    /// From nalgebra's unit quaternion, with the protocol's sign: w ≥ 0 (for w = 0 the first
-    /// nonzero of z, y, x positive, as the controller answers).
-    fn from_unit(q: UnitQuaternion<f64>) -> Self {
-        let (w, x, y, z) = (q.w, q.i, q.j, q.k);
-        let flip = [w, z, y]
-            .into_iter()
-            .find(|c| *c != 0.0)
-            .map_or(x < 0.0, |c| c < 0.0);
-        let s = if flip { -1.0 } else { 1.0 };
-        Self::new(s * x, s * y, s * z, s * w)
-    }
-}
+pub use armgate_protocol::client::{Mode, Quaternion};
 
 /// A tool pose: position (m) and orientation as a quaternion in wire order (x, y, z, w).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,7 +33,7 @@ impl Pose {
         Self {
             xyz,
             // nalgebra's Euler angles are the same Rz(yaw)·Ry(pitch)·Rx(roll).
-            quaternion: Quaternion::from_unit(UnitQuaternion::from_euler_angles(roll, pitch, yaw)),
+            quaternion: Quaternion::from_rotation(&Rotation3::from_euler_angles(roll, pitch, yaw)),
         }
     }
 
@@ -91,29 +41,14 @@ impl Pose {
     /// carries it as float32; a zero quaternion reads as the identity).
     pub fn rotation(&self) -> Rotation3<f64> {
         self.quaternion
-            .unit()
-            .unwrap_or_else(UnitQuaternion::identity)
-            .to_rotation_matrix()
+            .normalized()
+            .map_or_else(Rotation3::identity, Quaternion::to_rotation)
     }
 
-    /// Roll, pitch, yaw (rad), extracted exactly as spec §2.4 says, including its gimbal branch:
-    /// if |r20| > 1 − 1e-6 then yaw = 0, pitch = ∓π/2 and roll = −sgn(r20)·atan2(r01, r11).
-    /// (nalgebra's `euler_angles` treats gimbal lock differently.)
+    /// Roll, pitch, yaw (rad), extracted exactly as spec §2.4 says, including its gimbal branch
+    /// (nalgebra's `euler_angles` treats gimbal lock differently).
     pub fn rpy(&self) -> [f64; 3] {
-        let r = self.rotation().into_inner();
-        // nalgebra numbers the entries from 1: r00 is m11.
-        let (r00, r01, r10, r11) = (r.m11, r.m12, r.m21, r.m22);
-        let (r20, r21, r22) = (r.m31, r.m32, r.m33);
-        if r20.abs() > 1.0 - 1e-6 {
-            let sign = if r20 < 0.0 { -1.0 } else { 1.0 };
-            [-sign * r01.atan2(r11), -sign * FRAC_PI_2, 0.0]
-        } else {
-            [
-                r21.atan2(r22),
-                (-r20).atan2((r00 * r00 + r10 * r10).sqrt()),
-                r10.atan2(r00),
-            ]
-        }
+        armgate_protocol::client::rpy(&self.rotation())
     }
 
     /// The distance between the positions (m).
@@ -125,8 +60,7 @@ impl Pose {
 
     /// The angle of the rotation between the orientations (rad, in [0, π]).
     pub fn angle_to(&self, other: &Self) -> f64 {
-        let q = |p: &Self| p.quaternion.unit().unwrap_or_else(UnitQuaternion::identity);
-        q(self).angle_to(&q(other))
+        self.rotation().angle_to(&other.rotation())
     }
 }
 
@@ -141,6 +75,8 @@ pub const fn next_mode(mode: Mode) -> Mode {
 
 #[cfg(test)]
 pub(crate) mod tests {
+    use std::f64::consts::FRAC_PI_2;
+
     use super::*;
 
     /// The Fig. 3.3 quaternion of spec §2.4, to full precision (the spec prints 4 decimals).
@@ -207,10 +143,9 @@ pub(crate) mod tests {
         let pose = Pose::from_xyz_rpy([0.0; 3], [0.0, 0.0, std::f64::consts::PI]);
         let q = pose.quaternion;
         assert!(q.w.abs() < 1e-15 && (q.z - 1.0).abs() < 1e-15, "{q:?}");
-        let flipped = Quaternion::new(-q.x, -q.y, -q.z, -q.w)
-            .normalized()
-            .unwrap();
-        assert!(flipped.z > 0.0);
+        // The negated quaternion is the same rotation; read back, it has the wire's sign.
+        let flipped = Quaternion::new(-q.x, -q.y, -q.z, -q.w);
+        assert!(Quaternion::from_rotation(&flipped.to_rotation()).z > 0.0);
         assert_eq!(Quaternion::new(0.0, 0.0, 0.0, 0.0).normalized(), None);
         assert_eq!(Quaternion::new(0.0, 0.0, 0.0, f64::NAN).normalized(), None);
         let scaled = Quaternion::new(0.0, 0.0, 1.2, 1.6).normalized().unwrap();

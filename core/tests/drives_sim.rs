@@ -11,43 +11,10 @@
 mod drives_rig;
 
 use armgate_core::drives::{CanBus, DriveEmergency};
-use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
-use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
-use armgate_protocol::can::{
-    CanFrame, Emcy, Incoming, Nmt, NmtState, NodeId, NodeMessage, exact_bits_on_wire,
-};
-use drives_rig::robot;
-
-fn whistle(joint: usize) -> SimWhistle {
-    let config = robot("ranger-mk1");
-    SimWhistle::new(WhistleConfig::for_joint(&config.joints[joint]).unwrap())
-}
-
-fn set(node: u8, command: Mnemonic, index: u8, value: i32) -> CanFrame {
-    Request::Set {
-        command,
-        index: Index::from(index),
-        value: Value::Int(value),
-    }
-    .to_frame(NodeId::new(node).unwrap())
-}
-
-fn query(node: u8, command: Mnemonic, index: u8) -> CanFrame {
-    Request::Query {
-        command,
-        index: Index::from(index),
-    }
-    .to_frame(NodeId::new(node).unwrap())
-}
-
-/// Sends `frames` and runs the bus for `seconds`, returning what the controller received.
-fn exchange(bus: &mut VirtualBus, frames: &[CanFrame], seconds: f64) -> Vec<CanFrame> {
-    for frame in frames {
-        bus.try_transmit(frame).unwrap();
-    }
-    bus.advance(bus.now() + seconds).unwrap();
-    std::iter::from_fn(|| bus.try_receive()).collect()
-}
+use armgate_core::sim::VirtualBus;
+use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Value};
+use armgate_protocol::can::{Emcy, Incoming, Nmt, NmtState, NodeMessage, exact_bits_on_wire};
+use drives_rig::frames::{exchange, pt_ring, query, set, whistle};
 
 #[test]
 fn frames_take_their_exact_bit_time_and_lower_ids_win() {
@@ -126,17 +93,7 @@ fn the_drive_answers_what_the_manager_uses() {
 /// Configures a cyclic ring of 6 with `samples` per segment and the queue-low threshold,
 /// fills QP[1..=4] with `points`, and begins.
 fn begin(bus: &mut VirtualBus, n: u8, samples: i32, queue_low: i32, points: [i32; 4]) {
-    let setup = [
-        set(n, Mnemonic::MO, 0, 1),
-        set(n, Mnemonic::MP, 1, 1),
-        set(n, Mnemonic::MP, 2, 6),
-        set(n, Mnemonic::MP, 3, 1),
-        set(n, Mnemonic::MP, 4, samples),
-        set(n, Mnemonic::MP, 5, queue_low),
-    ];
-    for frame in setup {
-        exchange(bus, &[frame], 0.001);
-    }
+    pt_ring(bus, n, samples, queue_low);
     for (i, p) in points.iter().enumerate() {
         exchange(bus, &[set(n, Mnemonic::QP, i as u8 + 1, *p)], 0.001);
     }

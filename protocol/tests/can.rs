@@ -5,7 +5,7 @@
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
     CanFrame, Emcy, Error, Heartbeat, Incoming, Nmt, NmtState, NodeId, NodeMessage, Object,
-    SdoRequest, SdoResponse, SdoValue,
+    PtFeedback, PtPoint, SdoRequest, SdoResponse, SdoValue, SyncObject,
 };
 
 const NODE: NodeId = match NodeId::new(101) {
@@ -307,14 +307,16 @@ fn assert_reencodes<M: NodeMessage>(frame: &CanFrame) {
 #[test]
 fn random_frames_never_panic_and_reencode() {
     let mut rng = XorShift(0x2545_F491_4F6C_DD1D);
-    let ids = [0x000, 0x080, 0x280, 0x300, 0x580, 0x600, 0x700];
+    let ids = [
+        0x000, 0x080, 0x280, 0x300, 0x380, 0x400, 0x580, 0x600, 0x700,
+    ];
     let specifiers = [
         0x00, 0x01, 0x05, 0x7F, 0x85, 0x23, 0x27, 0x2B, 0x2F, 0x40, 0x43, 0x4F, 0x60, 0x80,
     ];
     let (mut requests, mut replies) = (0, 0);
     for case in 0..100_000 {
         let id = if case % 2 == 0 {
-            ids[case % 7] | (rng.next() as u16 & 0x7F)
+            ids[case % ids.len()] | (rng.next() as u16 & 0x7F)
         } else {
             rng.next() as u16 & 0x7FF
         };
@@ -343,6 +345,15 @@ fn random_frames_never_panic_and_reencode() {
             assert_eq!(request.to_frame(node), frame);
         }
         let _ = Nmt::parse(&frame);
+        if SyncObject::parse(&frame).is_ok() {
+            assert_eq!(SyncObject.to_frame(), frame);
+        }
+        if let Ok((node, point)) = PtPoint::parse(&frame) {
+            assert_eq!(point.to_frame(node), frame);
+        }
+        if let Ok((node, feedback)) = PtFeedback::parse(&frame) {
+            assert_eq!(feedback.to_frame(node), frame);
+        }
         assert_reencodes::<Request>(&frame);
         assert_reencodes::<Reply>(&frame);
         assert_reencodes::<Emcy>(&frame);

@@ -210,6 +210,10 @@ def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
         _can(0x366, b"TC\0\x80" + struct.pack("<f", 1.5)),               # 8 float set
         _can(0x5E6, b"\x80\x16\x10\x01" + struct.pack("<I", 0x06090011)),  # 9 SDO abort
         _can(0x000, b"\x81\x00"),                                        # 10 NMT reset node, all
+        _can(0x465, struct.pack("<i", -12345)),                          # 11 RPDO3 PT point
+        _can(0x3E5, struct.pack("<iHH", 12345, 5, 2)),                   # 12 TPDO3 feedback
+        _can(0x0E5, bytes([0x00, 0xFF, 0x81, 0x5C, 0x65, 0x04, 0, 0])),  # 13 EMCY PDO not mapped
+        _can(0x665, bytes([0x23, 0x02, 0x16, 0x01, 0x20, 0x00, 0x02, 0x20])),  # 14 map 0x2002
     ]
     path = tmp_path_factory.mktemp("crafted") / "crafted.pcapng"
     path.write_bytes(_pcapng(packets))
@@ -245,3 +249,14 @@ def test_emergencies_and_other_frames_are_decoded(tshark: str, crafted: dict) ->
     assert row(8, "armgate_can.mnemonic", "armgate_can.float") == ["TC", "1.5"]
     assert row(9, "armgate_can.sdo.abort") == ["0x06090011"]
     assert row(10, "armgate_can.nmt.command", "armgate_can.nmt.node") == ["0x81", "0"]
+
+
+def test_pdo_streaming_frames_are_decoded(tshark: str, crafted: dict) -> None:
+    def row(n: int, *names: str) -> List[str]:
+        return fields(tshark, crafted, f"frame.number == {n}", *names)[0]
+
+    assert row(11, "armgate_can.node", "armgate_can.pt.counts") == ["101", "-12345"]
+    assert row(12, "armgate_can.feedback.position", "armgate_can.feedback.head",
+               "armgate_can.feedback.tail") == ["12345", "5", "2"]
+    assert "PDO not mapped" in row(13, "armgate_can.emcy.meaning")[0]
+    assert row(14, "armgate_can.sdo.object", "armgate_can.meaning") == ["0x1602", "RPDO3 mapping"]

@@ -6,7 +6,9 @@
 --  * "armgate_can": the drives' CAN traffic (docs/drives.md): Elmo SimplIQ binary interpreter
 --    commands (RPDO2, 0x300 + node) and replies (TPDO2, 0x280 + node) with PT writes called out,
 --    NMT, SYNC, EMCY with the meanings the drive manager gives them (ER3x), heartbeats, expedited
---    SDO; other PDOs are shown as raw bytes.
+--    SDO (the PDO mapping objects named); the PDO schedule's PT point (RPDO3, 0x400 + node) and
+--    feedback (TPDO3, 0x380 + node: position, PT head and tail pointers); other PDOs are shown as
+--    raw bytes.
 --
 -- Install: copy this file into Wireshark's personal Lua plugins folder (Help > About Wireshark >
 -- Folders > Personal Lua Plugins; on Linux ~/.local/lib/wireshark/plugins/), or run
@@ -308,18 +310,30 @@ local sdo_aborts = {
     [0x05040000] = "SDO protocol timed out",
     [0x05040001] = "command specifier not valid",
     [0x06010000] = "unsupported access",
+    [0x06010001] = "attempt to read a write-only object",
+    [0x06010002] = "attempt to write a read-only object",
     [0x06020000] = "object does not exist",
     [0x06040041] = "object cannot be mapped",
+    [0x06040042] = "mapping exceeds the PDO length",
     [0x06070010] = "data type does not match",
     [0x06090011] = "sub-index does not exist",
     [0x06090030] = "value range exceeded",
     [0x08000000] = "general error",
+    [0x08000022] = "not in the present device state (PDO valid, or mapping not cleared)",
+}
+local sdo_objects = {
+    [0x1016] = "consumer heartbeat", [0x1017] = "producer heartbeat",
+    [0x1402] = "RPDO3 communication", [0x1602] = "RPDO3 mapping",
+    [0x1802] = "TPDO3 communication", [0x1A02] = "TPDO3 mapping",
+    [0x2040] = "group id (synchronized commands)",
 }
 local elmo_codes = {
     [0x34] = "PT queue full: an unexecuted point was overwritten (ER34)",
     [0x08] = "PT motion terminated (ER33 if the reason is underflow)",
     [0x09] = "CAN message lost (ER32)",
     [0x56] = "PT queue low (warning)",
+    [0x5B] = "PT write pointer out of range (ER32)",
+    [0x5C] = "PDO not mapped (ER32)",
 }
 local terminate_reasons = { [1] = "end of a non-cyclic table", [2] = "bad segment time", [3] = "read pointer reached write pointer (underflow)" }
 
@@ -335,6 +349,9 @@ local c = {
     error_code = ProtoField.uint8("armgate_can.error_code", "Elmo error code (EC)"),
     pt_slot = ProtoField.uint16("armgate_can.pt.slot", "PT write: table slot"),
     pt_counts = ProtoField.int32("armgate_can.pt.counts", "PT write: position (counts)"),
+    fb_position = ProtoField.int32("armgate_can.feedback.position", "Position PX (counts)"),
+    fb_head = ProtoField.uint16("armgate_can.feedback.head", "PT head (write) pointer"),
+    fb_tail = ProtoField.uint16("armgate_can.feedback.tail", "PT tail (read) pointer"),
     nmt_command = ProtoField.uint8("armgate_can.nmt.command", "NMT command", base.HEX, nmt_commands),
     nmt_target = ProtoField.uint8("armgate_can.nmt.node", "NMT node (0 = all)"),
     hb_state = ProtoField.uint8("armgate_can.heartbeat.state", "Heartbeat state", base.HEX, nmt_states, 0x7F),
@@ -451,6 +468,10 @@ local function dissect_sdo(tvb, tree, node, is_request)
     tree:add_le(c.sdo_object, tvb(1, 2))
     tree:add(c.sdo_subindex, tvb(3, 1))
     local where = string.format("%04X:%d", object, sub)
+    if sdo_objects[object] then
+        tree:add(c.meaning, tvb(1, 3), sdo_objects[object])
+        where = where .. " (" .. sdo_objects[object] .. ")"
+    end
     local data = tvb(4, 4):le_uint()
     local kind
     if cs == 0x80 then
@@ -483,7 +504,7 @@ local function service_of(id)
     if node == 0 then return nil, 0 end
     local services = {
         [0x080] = "EMCY", [0x180] = "TPDO1", [0x200] = "RPDO1", [0x280] = "TPDO2 (interpreter reply)",
-        [0x300] = "RPDO2 (interpreter command)", [0x380] = "TPDO3", [0x400] = "RPDO3",
+        [0x300] = "RPDO2 (interpreter command)", [0x380] = "TPDO3 (PT feedback)", [0x400] = "RPDO3 (PT point)",
         [0x480] = "TPDO4", [0x500] = "RPDO4", [0x580] = "SDO response", [0x600] = "SDO request",
         [0x700] = "Heartbeat",
     }
@@ -521,6 +542,16 @@ function can.dissector(tvb, pinfo, root)
         info = dissect_interpreter(tvb, tree, node, true)
     elseif fn == 0x280 then
         info = dissect_interpreter(tvb, tree, node, false)
+    elseif fn == 0x400 and tvb:len() == 4 then
+        tree:add(c.kind, tvb(), "PT point at the write pointer")
+        tree:add_le(c.pt_counts, tvb(0, 4))
+        info = string.format("node %d: PT point %d", node, tvb(0, 4):le_int())
+    elseif fn == 0x380 and tvb:len() == 8 then
+        tree:add_le(c.fb_position, tvb(0, 4))
+        tree:add_le(c.fb_head, tvb(4, 2))
+        tree:add_le(c.fb_tail, tvb(6, 2))
+        info = string.format("node %d: PX %d, PT head %d, tail %d", node, tvb(0, 4):le_int(),
+            tvb(4, 2):le_uint(), tvb(6, 2):le_uint())
     elseif fn == 0x600 then
         info = dissect_sdo(tvb, tree, node, true)
     elseif fn == 0x580 then

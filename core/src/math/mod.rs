@@ -10,13 +10,13 @@
 //!   §9 item 4) and loses precision below 1e-8 rad (it takes `acos` of the trace), so
 //!   [`rotation_vector`] keeps the robust one the IK needs.
 //! * Quaternions on the wire are (x, y, z, w) with w ≥ 0 ([`Quaternion`]); nalgebra's
-//!   constructor takes w first and leaves the sign free.
+//!   constructor takes w first and leaves the sign free. Both conventions are wire rules, so
+//!   they live in `armgate_protocol::client` (shared with the client) and are re-exported here.
 
 mod frame;
-mod quaternion;
 mod rotation;
 
+pub use armgate_protocol::client::{Quaternion, rpy};
 pub use frame::{Frame, Twist, dh, diff, dist, is_finite};
 pub use nalgebra::{Rotation3, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
-pub use quaternion::Quaternion;
-pub use rotation::{rotation_vector, rpy};
+pub use rotation::rotation_vector;

@@ -1,24 +1,6 @@
-//! Rotation conventions of the protocol that nalgebra does not share.
-
-use core::f64::consts::PI;
+//! The logarithm map of a rotation, robust where nalgebra's is not.
 
 use nalgebra::{Rotation3, Vector3};
-
-/// Roll, pitch, yaw of `r`, extracted as the seed does (spec §2.4), including its gimbal-lock
-/// branch (|r20| > 1 − 1e-6: yaw = 0); the inverse of `Rotation3::from_euler_angles`.
-pub fn rpy(r: &Rotation3<f64>) -> [f64; 3] {
-    let m = r.matrix();
-    if libm::fabs(m.m31) > 1.0 - 1e-6 {
-        let sign = if m.m31 < 0.0 { -1.0 } else { 1.0 };
-        [-sign * libm::atan2(m.m12, m.m22), -sign * PI / 2.0, 0.0]
-    } else {
-        [
-            libm::atan2(m.m32, m.m33),
-            libm::atan2(-m.m31, libm::sqrt(m.m11 * m.m11 + m.m21 * m.m21)),
-            libm::atan2(m.m21, m.m11),
-        ]
-    }
-}
 
 /// The rotation vector (axis × angle, angle in [0, π]) of `r`: the logarithm map, inverse of
 /// `Rotation3::new`.

@@ -2,6 +2,8 @@
 //! `sim-drives` build without the network), for the drive tests and the drive examples.
 #![allow(dead_code, clippy::unwrap_used, clippy::panic)]
 
+pub mod frames;
+
 use std::path::PathBuf;
 
 use std::collections::VecDeque;

@@ -8,7 +8,7 @@
 //! [`PT_POINT`] asynchronously (type 255: acted on at once); TPDO3 carries [`POSITION`],
 //! [`HEAD_POINTER`] and [`TAIL_POINTER`] synchronously (type 1: after every SYNC).
 
-use super::pdo::{HEAD_POINTER, POSITION, PT_POINT, TAIL_POINTER};
+use super::pdo::{GROUP_ID, HEAD_POINTER, POSITION, PT_POINT, TAIL_POINTER};
 use super::{Function, NodeId, Object, SdoRequest, SdoResponse, SdoValue};
 
 /// COB-ID bit 31: the PDO does not exist (disabled).
@@ -123,6 +123,16 @@ const fn is_communication(index: u16) -> bool {
     matches!(index, 0x1400..=0x15FF | 0x1800..=0x19FF)
 }
 
+/// The write of the group id `group` (Elmo 0x2040), checked like a mapping step. It takes
+/// effect at the next NMT reset communication, which also returns the PDOs to their
+/// power-on configuration: write it, reset, start, then map.
+pub const fn group_id_step(group: NodeId) -> MappingStep {
+    MappingStep {
+        object: GROUP_ID,
+        value: SdoValue::U8(group.get()),
+    }
+}
+
 /// The ordered steps that map RPDO3 and TPDO3 of `node` for PDO streaming.
 pub const fn streaming_mapping(node: NodeId) -> [MappingStep; MAPPING_STEPS] {
     let rpdo = Function::Rpdo3.cob_id(node) as u32 | PDO_NO_RTR;
@@ -226,6 +236,18 @@ mod tests {
             entries.check_read_back(&entries_read(SdoValue::U8(0))),
             Err(MappingRefusal::Mismatch { read: 0 })
         );
+    }
+
+    #[test]
+    fn the_group_id_write() {
+        let step = group_id_step(NodeId::new(120).unwrap());
+        let frame = step.write().to_frame(NodeId::new(101).unwrap());
+        assert_eq!(frame.data(), &[0x2F, 0x40, 0x20, 0, 120, 0, 0, 0]);
+        let read = SdoResponse::Uploaded {
+            object: GROUP_ID,
+            value: SdoValue::U8(120),
+        };
+        assert_eq!(step.check_read_back(&read), Ok(()));
     }
 
     fn abort_code() -> u32 {

@@ -44,7 +44,7 @@ pub use incoming::Incoming;
 pub use mapping::{
     ASYNCHRONOUS, MAPPING_STEPS, MappingRefusal, MappingStep, PDO_DISABLED, PDO_NO_RTR,
     RPDO3_COMMUNICATION, RPDO3_MAPPING, SYNCHRONOUS, TPDO3_COMMUNICATION, TPDO3_MAPPING,
-    mapping_entry, streaming_mapping,
+    group_id_step, mapping_entry, streaming_mapping,
 };
 pub use nmt::{Heartbeat, Nmt, NmtCommand, NmtState};
 pub use pdo::{PtFeedback, PtPoint};

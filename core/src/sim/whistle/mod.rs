@@ -35,6 +35,8 @@ use crate::drives::{DriveEmergency, JointUnits, POSITION_MODE, REASON_UNDERFLOW,
 
 /// Frames a drive can have waiting to be sent.
 const TX_QUEUE: usize = 16;
+/// PT points received by RPDO and waiting for the next sample.
+const RX_POINTS: usize = 4;
 /// Internal events handled per `advance_to` call at most (a call normally covers a few
 /// samples).
 const MAX_EVENTS: u32 = 1_000_000;
@@ -141,7 +143,8 @@ pub struct WhistleFaults {
 /// What happened to a simulated drive.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct WhistleStats {
-    /// Interpreter commands lost because two were already waiting.
+    /// Interpreter commands lost because two were already waiting, and RPDO points lost
+    /// because four were waiting for the next sample.
     pub commands_lost: u32,
     /// PT motions ended by a buffer underflow.
     pub underflows: u32,
@@ -206,6 +209,8 @@ pub struct SimWhistle {
     group: Option<NodeId>,
     /// A point from a synchronous RPDO, applied at the next SYNC.
     deferred_point: Option<i32>,
+    /// Points received by RPDO, written at the next sample.
+    received_points: Deque<i32, RX_POINTS>,
     stats: WhistleStats,
     /// Faults being injected.
     pub faults: WhistleFaults,
@@ -243,6 +248,7 @@ impl SimWhistle {
             pdo: PdoObjects::new(config.node),
             group: None,
             deferred_point: None,
+            received_points: Deque::new(),
             stats: WhistleStats::default(),
             faults: WhistleFaults::default(),
         }
@@ -424,6 +430,7 @@ impl SimWhistle {
                 };
                 self.group = NodeId::new(group);
                 self.deferred_point = None;
+                self.received_points.clear();
                 self.table = PtTable::default();
                 self.motor_on = false;
                 self.consumer = None;
@@ -562,7 +569,7 @@ impl SimWhistle {
     fn sync(&mut self) {
         self.stats.syncs = self.stats.syncs.wrapping_add(1);
         if let Some(point) = self.deferred_point.take() {
-            self.write_point(point);
+            self.receive_point(point);
         }
         let tpdo = self.pdo.tpdo3;
         if !tpdo.valid() || tpdo.transmission != SYNCHRONOUS {
@@ -588,14 +595,14 @@ impl SimWhistle {
         }
     }
 
-    /// An RPDO3 frame: its point goes to the PT table now, or at the next SYNC for a
-    /// synchronous RPDO.
+    /// An RPDO3 frame: its point goes to the PT table at the next sample, or at the first
+    /// sample after the next SYNC for a synchronous RPDO.
     fn rpdo3(&mut self, frame: &CanFrame) {
         match pdo::rpdo_content(&self.pdo.rpdo3, frame.data()) {
             RpdoContent::Point(point) if self.pdo.rpdo3.transmission == SYNCHRONOUS => {
                 self.deferred_point = Some(point);
             }
-            RpdoContent::Point(point) => self.write_point(point),
+            RpdoContent::Point(point) => self.receive_point(point),
             RpdoContent::NotMapped => {
                 self.stats.pdo_errors = self.stats.pdo_errors.wrapping_add(1);
                 self.inject(DriveEmergency::PdoNotMapped {
@@ -613,7 +620,17 @@ impl SimWhistle {
         }
     }
 
-    /// A PT point received by PDO, written at the table's write pointer.
+    /// A PT point received by PDO: the drive takes it at its next sample (ASSUMED: PDOs are
+    /// handled in the position loop's rhythm). More than fit are lost, as interpreter
+    /// commands are.
+    fn receive_point(&mut self, point: i32) {
+        if self.received_points.push_back(point).is_err() {
+            self.stats.commands_lost += 1;
+            self.inject(DriveEmergency::MessageLost);
+        }
+    }
+
+    /// A received PT point, written at the table's write pointer.
     fn write_point(&mut self, point: i32) {
         match self.table.push(point, self.now) {
             Ok(()) => self.stats.pdo_points = self.stats.pdo_points.wrapping_add(1),
@@ -703,6 +720,12 @@ impl SimWhistle {
             self.table.stop();
             self.nmt = NmtState::PreOperational;
             self.inject(DriveEmergency::HeartbeatLost);
+        }
+        for _ in 0..RX_POINTS {
+            let Some(point) = self.received_points.pop_front() else {
+                break;
+            };
+            self.write_point(point);
         }
         let sample = self.table.sample(self.now, self.faults.stall);
         if let Some(reference) = sample.reference {

@@ -1,6 +1,26 @@
-//! Quaternions as the client protocol carries them: (x, y, z, w), scalar last, w ≥ 0.
+//! Orientations as the client protocol carries them (spec §2.4): quaternions in wire order
+//! (x, y, z, w), scalar last, w ≥ 0, and the seed's roll/pitch/yaw extraction. The arithmetic is
+//! nalgebra's; only the protocol's conventions live here, shared by the controller and the client.
+
+use core::f64::consts::PI;
 
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+
+/// Roll, pitch, yaw of `r`, extracted as the seed does (spec §2.4), including its gimbal-lock
+/// branch (|r20| > 1 − 1e-6: yaw = 0); the inverse of `Rotation3::from_euler_angles`.
+pub fn rpy(r: &Rotation3<f64>) -> [f64; 3] {
+    let m = r.matrix();
+    if libm::fabs(m.m31) > 1.0 - 1e-6 {
+        let sign = if m.m31 < 0.0 { -1.0 } else { 1.0 };
+        [-sign * libm::atan2(m.m12, m.m22), -sign * PI / 2.0, 0.0]
+    } else {
+        [
+            libm::atan2(m.m32, m.m33),
+            libm::atan2(-m.m31, libm::sqrt(m.m11 * m.m11 + m.m21 * m.m21)),
+            libm::atan2(m.m21, m.m11),
+        ]
+    }
+}
 
 /// A quaternion in wire order (x, y, z, w) = (k·sin(θ/2), cos(θ/2)) for a rotation by θ about
 /// unit axis k (Craig's Euler parameters ε1..ε4, Hamilton convention). Converts to and from
