@@ -480,7 +480,11 @@ fn the_pdo_schedule_runs_a_session() {
         )
     };
     let start = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
-    let sim = Sim::start_edited("ranger-mk1", pdo, &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        pdo,
+        &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"],
+    );
     assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
     let mut goal: Vec<f32> = start.to_vec();
     goal[0] += 0.05;

@@ -13,7 +13,7 @@ use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
 use super::fault::{BusFault, DriveFault};
 use super::link::Link;
 use super::settings::{DriveSettings, SetupError, Timing};
-use super::startup::{Outgoing, StartStep, StepContext, mapping_step};
+use super::startup::{Outgoing, StartStep, StepContext};
 use super::state::{DriveState, Phase};
 use super::streaming::{FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule};
 use super::units::JointUnits;
@@ -476,7 +476,9 @@ impl DriveManager {
             // The reset communication goes out only once every drive has its group id, so a
             // refused group id leaves the drives as the NMT start left them.
             let next = match drive.step {
-                StartStep::GroupId | StartStep::Regroup => StartStep::ConsumerHeartbeat,
+                StartStep::GroupId | StartStep::CheckGroupId | StartStep::Regroup => {
+                    StartStep::ConsumerHeartbeat
+                }
                 StartStep::Map(_) => StartStep::ReadUnitMode,
                 _ => return,
             };
@@ -915,16 +917,13 @@ impl DriveManager {
     }
 
     fn on_sdo(&mut self, node: NodeId, response: SdoResponse) {
-        let cycle = self.cycle;
+        let (cycle, group) = (self.cycle, self.timing.group);
         let Some((joint, drive)) = self.drive_mut(node) else {
             self.ignored();
             return;
         };
         drive.link.heard(cycle);
-        let mapping = match drive.step {
-            StartStep::Map(n) => mapping_step(drive.node, n),
-            _ => None,
-        };
+        let mapping = drive.step.configuration(drive.node, group);
         let fault = match mapping {
             // An answer to this drive's mapping transfer: checked.
             Some((step, read_back)) if response.object() == step.object => {
@@ -959,20 +958,10 @@ impl DriveManager {
                     return self.ignored();
                 };
                 drive.awaiting.swap_remove(at);
-                match response {
-                    // The group id is part of the PDO configuration.
-                    SdoResponse::Abort { object, code } if drive.step == StartStep::GroupId => {
-                        Some(DriveFault::MappingRefused {
-                            joint,
-                            object,
-                            code: Some(code),
-                        })
-                    }
-                    SdoResponse::Abort { code, .. } => {
-                        return self.raise(DriveFault::SdoAbort { joint, code });
-                    }
-                    _ => None,
+                if let SdoResponse::Abort { code, .. } = response {
+                    return self.raise(DriveFault::SdoAbort { joint, code });
                 }
+                None
             }
         };
         if let Some(fault) = fault {

@@ -31,9 +31,8 @@
 //! `Configure(1)`.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
-use armgate_protocol::can::pdo::GROUP_ID;
 use armgate_protocol::can::{
-    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, SdoValue, streaming_mapping,
+    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, group_id_step, streaming_mapping,
 };
 use heapless::Vec;
 
@@ -45,6 +44,8 @@ use super::streaming::FILLED_POINTS;
 pub enum StartStep {
     /// PDO schedule: write the group id (object 0x2040).
     GroupId,
+    /// PDO schedule: read the group id back.
+    CheckGroupId,
     /// PDO schedule: waiting for every drive to have its group id; then the reset
     /// communication goes out.
     Regroup,
@@ -140,10 +141,8 @@ impl StartStep {
                 ctx.controller,
                 ctx.heartbeat_timeout_ms,
             )))],
-            Self::GroupId => &[Some(Outgoing::Sdo(SdoRequest::Download {
-                object: GROUP_ID,
-                value: SdoValue::U8(ctx.group.get()),
-            }))],
+            Self::GroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).write()))],
+            Self::CheckGroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).read_back()))],
             Self::Map(n) => &[map(n)],
             Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(FILLED_POINTS) + 1))],
             Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
@@ -180,7 +179,8 @@ impl StartStep {
     pub fn next(&self, unit_mode: Option<i32>, settle: u32, pdo: bool) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
         Ok(match *self {
-            Self::GroupId | Self::Regroup => Self::Regroup,
+            Self::GroupId => Self::CheckGroupId,
+            Self::CheckGroupId | Self::Regroup => Self::Regroup,
             Self::Rejoin(n) => Self::Rejoin(n.saturating_sub(1)),
             Self::ConsumerHeartbeat if pdo => Self::Map(0),
             Self::ConsumerHeartbeat => Self::ReadUnitMode,
@@ -209,6 +209,19 @@ impl StartStep {
 pub fn mapping_step(node: NodeId, n: u8) -> Option<(MappingStep, bool)> {
     let step = streaming_mapping(node).get(usize::from(n / 2)).copied()?;
     Some((step, n % 2 == 1))
+}
+
+impl StartStep {
+    /// The PDO configuration transfer this step makes, if any: the step (group id or mapping)
+    /// and whether it reads the value back.
+    pub fn configuration(&self, node: NodeId, group: NodeId) -> Option<(MappingStep, bool)> {
+        match *self {
+            Self::GroupId => Some((group_id_step(group), false)),
+            Self::CheckGroupId => Some((group_id_step(group), true)),
+            Self::Map(n) => mapping_step(node, n),
+            _ => None,
+        }
+    }
 }
 
 impl Outgoing {
