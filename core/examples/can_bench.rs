@@ -225,7 +225,12 @@ fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64, loss: f64) 
     l.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let start = l.now;
     let home = config.home();
-    let (mut faults, mut underflows, mut frames_lost, mut latency_max) = (Vec::new(), 0, 0, 0u64);
+    let mut soak = Soak {
+        frames_lost: 0,
+        faults: Vec::new(),
+        underflows: 0,
+        latency_max: 0.0,
+    };
     let mut there = false;
     while l.now - start < seconds {
         if l.manager().is_operational() && !l.ctrl().is_moving() {
@@ -235,45 +240,39 @@ fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64, loss: f64) 
         }
         l.tick();
         if let Some(fault) = l.manager().fault() {
-            faults.push(fault.text().as_str().to_string());
+            soak.faults.push(fault.text().as_str().to_string());
             // The stop's frames (the hold points, `ST`) are not repeated either.
             let lost_so_far = l.bus().stats().frames_lost;
             l.bus_mut().set_frame_loss(0.0, 0);
             l.until(100, |r| r.manager().state() == DriveState::Faulted);
-            frames_lost += lost_so_far;
-            underflows += l.bus().drives().map(|d| d.stats().underflows).sum::<u32>();
-            latency_max = latency_max.max(
-                l.bus()
-                    .drives()
-                    .map(|d| d.stats().latency.max_ns)
-                    .max()
-                    .unwrap(),
-            );
+            soak.add(l.bus(), lost_so_far);
             l.bus_mut().reset_stats();
             l.manager_mut().start().unwrap();
             l.until(500, |r| r.manager().state() != DriveState::Starting);
             if let Some(fault) = l.manager().fault() {
-                panic!("restart after {faults:?}: {fault:?}");
+                panic!("restart after {:?}: {fault:?}", soak.faults);
             }
             l.ticks(20);
             l.bus_mut().reset_stats();
-            l.bus_mut().set_frame_loss(loss, faults.len() as u64 + 11);
+            l.bus_mut()
+                .set_frame_loss(loss, soak.faults.len() as u64 + 11);
         }
     }
-    frames_lost += l.bus().stats().frames_lost;
-    underflows += l.bus().drives().map(|d| d.stats().underflows).sum::<u32>();
-    latency_max = latency_max.max(
-        l.bus()
+    soak.add(l.bus(), l.bus().stats().frames_lost);
+    soak
+}
+
+impl Soak {
+    /// Adds one stretch of streaming: `lost` frames, and what the drives counted.
+    fn add(&mut self, bus: &VirtualBus, lost: u64) {
+        self.frames_lost += lost;
+        self.underflows += bus.drives().map(|d| d.stats().underflows).sum::<u32>();
+        let latency = bus
             .drives()
             .map(|d| d.stats().latency.max_ns)
             .max()
-            .unwrap(),
-    );
-    Soak {
-        frames_lost,
-        faults,
-        underflows,
-        latency_max: latency_max as f64 * 1e-9,
+            .unwrap();
+        self.latency_max = self.latency_max.max(latency as f64 * 1e-9);
     }
 }
 

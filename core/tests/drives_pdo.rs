@@ -14,14 +14,15 @@ mod drives_rig;
 
 use armgate_core::config::{Streaming, ValidRobot};
 use armgate_core::cycle::Datagram;
+use armgate_core::drives::load::LoadModel;
 use armgate_core::drives::streaming::PDO_TARGET_LEAD;
 use armgate_core::drives::{BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Mode;
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::{Object, sdo_abort};
-use armgate_protocol::client::{Command, Request};
-use drives_rig::{Rig, robot};
+use armgate_protocol::client::Command;
+use drives_rig::{Rig, request, robot};
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
@@ -334,16 +335,6 @@ fn a_minute_with_lost_frames_and_clock_errors() {
     assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
 }
 
-fn request(command: Command) -> Datagram<()> {
-    let bytes = Request {
-        command,
-        values: [0.0; 7],
-        index: 0,
-    }
-    .to_bytes();
-    Datagram::new(&bytes, ())
-}
-
 /// A notice's text: the datagram up to its first NUL.
 fn text_of(notice: &Datagram<()>) -> String {
     let payload = notice.payload();
@@ -352,4 +343,48 @@ fn text_of(notice: &Datagram<()>) -> String {
         .position(|b| *b == 0)
         .unwrap_or(payload.len());
     String::from_utf8(payload[..end].to_vec()).unwrap()
+}
+
+/// Every arm the robot files ship with six or eight drives streams on the PDO schedule at the
+/// fastest period its bus carries: ranger-mk1 (6 drives, 500 kbit/s: 4.32 ms), ur5 (6,
+/// 1 Mbit/s: 2.16 ms), ranger-mk2 (8, 500 kbit/s: 5.76 ms).
+#[test]
+fn shipped_arms_stream_on_the_pdo_schedule() {
+    for (name, samples) in [("ranger-mk1", 12), ("ur5", 6), ("ranger-mk2", 16)] {
+        let base = robot(name)
+            .edit(|config| config.drives.streaming = Streaming::Pdo)
+            .unwrap();
+        let settings = DriveSettings::default();
+        let fastest = LoadModel::new(&base, &settings)
+            .fastest_period(base.drives.can_bitrate, base.drives.max_bus_load)
+            .unwrap();
+        assert_eq!(fastest.samples, samples, "{name}");
+        let config = base
+            .edit(|config| config.control_period = fastest.period)
+            .unwrap();
+        let mut rig = Rig::started(&config, &settings, VirtualBus::for_robot(&config));
+        rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+        // 0.05 rad (or m) from home, towards the middle of the range.
+        let goal: Vec<f64> = config
+            .joints
+            .iter()
+            .map(|j| {
+                let home = j.drive.home;
+                home + if home + 0.05 <= j.max { 0.05 } else { -0.05 }
+            })
+            .collect();
+        rig.ctrl_mut().move_joints(&goal, 0.0).unwrap();
+        rig.until(5000, |r| !r.ctrl().is_moving());
+        rig.ticks(20);
+        for (q, g) in rig.drive_positions().iter().zip(&goal) {
+            assert!((q - g).abs() < 1e-4, "{name}: {q} {g}");
+        }
+        let stats = rig.manager().stats();
+        assert_eq!(
+            (stats.points_skipped, stats.points_inserted),
+            (0, 0),
+            "{name}"
+        );
+        assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
+    }
 }
