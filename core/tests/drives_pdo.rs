@@ -12,7 +12,7 @@
 
 mod drives_rig;
 
-use armgate_core::config::{Streaming, ValidRobot};
+use armgate_core::config::{Streaming, ValidRobot, parse_toml};
 use armgate_core::cycle::Datagram;
 use armgate_core::drives::load::LoadModel;
 use armgate_core::drives::streaming::PDO_TARGET_LEAD;
@@ -42,6 +42,37 @@ fn mk1_pdo(fallback: bool) -> ValidRobot {
             config.control_period = if fallback { 24.0 } else { 12.0 } * 360e-6;
         })
         .unwrap()
+}
+
+/// The robot file's `drives.streaming`: read from TOML, and the period checked against the
+/// chosen schedule's worst-case load.
+#[test]
+fn the_robot_file_chooses_the_schedule_and_its_period_is_checked_against_it() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let fast = text.replace(
+        "control_period = 0.01944 # 54 × 360 µs Whistle position-loop samples (51.44 Hz)",
+        "control_period = 0.00432",
+    );
+    let pdo = fast.replace(
+        "unit_mode = 5 # position (PT streaming)",
+        "unit_mode = 5\nstreaming = \"pdo\"",
+    );
+    assert_eq!(
+        parse_toml(&text).unwrap().drives.streaming,
+        Streaming::Interpreter
+    );
+    let config = parse_toml(&pdo).unwrap();
+    assert_eq!(config.drives.streaming, Streaming::Pdo);
+    assert!(!config.drives.pdo_fallback);
+    // 4.32 ms at 500 kbit/s: 67 % on the PDO schedule, 140 % on the interpreter's.
+    let refused = parse_toml(&fast).unwrap_err().to_string();
+    assert!(
+        refused.contains("worst-case CAN bus load 140 %"),
+        "{refused}"
+    );
+    let unknown = pdo.replace("streaming = \"pdo\"", "streaming = \"sdo\"");
+    assert!(parse_toml(&unknown).is_err());
 }
 
 #[test]
