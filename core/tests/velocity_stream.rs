@@ -539,3 +539,21 @@ fn a_change_of_direction_rounds_the_corner_and_returns_to_the_new_line() {
     assert!((end.z - corner.z).abs() < 1e-5);
     s.assert_within_limits();
 }
+
+#[test]
+fn eight_joint_rates_come_in_two_banks() {
+    let config = common::robot("ranger-mk2");
+    let q0 = [
+        0.1508, -0.5897, 0.3452, -1.9859, -0.3564, 0.2665, 0.6688, 0.4256,
+    ];
+    let mut s = Stream::new(config, &q0, Mode::Joint);
+    for _ in 0..20 {
+        // Bank 2 (joints 7, 8) first, then bank 1 completes the vector.
+        s.joint_rates(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.02]);
+        s.tick();
+    }
+    let q = s.last();
+    assert!(q[7] > q0[7] + 0.001, "joint 8 moved: {q:?}");
+    assert!(q[..7].iter().zip(&q0).all(|(a, b)| (a - b).abs() < 1e-12));
+    s.assert_within_limits();
+}
