@@ -65,6 +65,11 @@ impl Sim {
     }
 
     fn start_with(robot: &str, extra: &[&str]) -> Self {
+        Self::start_edited(robot, |text| text, extra)
+    }
+
+    /// The same, with the robot file's text changed by `edit` (after the faster limits).
+    fn start_edited(robot: &str, edit: impl FnOnce(String) -> String, extra: &[&str]) -> Self {
         let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
         // One directory per simulator: the tests run in parallel, and each reads its own logs.
         static STARTED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -84,7 +89,7 @@ impl Sim {
                 "max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5]",
             );
         let file = dir.join("robot.toml");
-        std::fs::write(&file, fast).unwrap();
+        std::fs::write(&file, edit(fast)).unwrap();
         let mut child = match firmware() {
             Some(firmware) => {
                 // The firmware takes its robot and start pose from the environment (host
@@ -455,6 +460,46 @@ fn a_full_session_over_udp() {
     assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE needs mode 2");
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
     assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE no via point 0");
+}
+
+/// The PDO schedule end to end: ranger-mk1's robot file with `drives.streaming = "pdo"` at
+/// 12 × 360 µs (231.5 Hz, the fastest the PDO schedule carries at 500 kbit/s), in the
+/// simulator or the firmware's `sim-drives` build: the drives start (group id, mapping,
+/// group `BG`), a joint move arrives, OF and ON go through a stop and a new start, and the
+/// temperatures come in.
+#[test]
+fn the_pdo_schedule_runs_a_session() {
+    let pdo = |text: String| {
+        text.replace(
+            "unit_mode = 5 # position (PT streaming)",
+            "unit_mode = 5\nstreaming = \"pdo\"",
+        )
+        .replace(
+            "control_period = 0.01944 # 54 × 360 µs Whistle position-loop samples (51.44 Hz)",
+            "control_period = 0.00432",
+        )
+    };
+    let start = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        pdo,
+        &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"],
+    );
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    let mut goal: Vec<f32> = start.to_vec();
+    goal[0] += 0.05;
+    goal[4] -= 0.05;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    sim.wait_joints(&goal, 10.0);
+    sim.null("OF");
+    sim.retry_while("ON", &["ER11 Arm still stopping"]);
+    goal[0] -= 0.05;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    sim.wait_joints(&goal, 10.0);
+    let mt = sim.ok("TM", [0.0; 7], 0);
+    assert!(mt[..6].iter().all(|t| *t > -100.0), "{mt:?}");
 }
 
 #[test]
@@ -910,38 +955,6 @@ fn the_joint_count_comes_from_the_controller() {
     assert!(out.contains("q2") && !out.contains("q3"), "{out}");
 }
 
-/// A robot file with `[motion] profile = "jerk-limited"` runs, and its joint moves arrive.
-#[test]
-fn a_jerk_limited_robot_runs_and_its_moves_arrive() {
-    let sim = Sim::start("ranger-mk1-jerk");
-    if !knows_status(&sim) {
-        return;
-    }
-    armgate(&sim, &["on"]).0.unwrap();
-    armgate(&sim, &["mode", "joint"]).0.unwrap();
-    // From home, joints 2 and 3 by ±0.1 rad: about 1.5 s.
-    let goal = ["1.5708", "0.1", "1.4708", "0", "1.5708", "0"];
-    let (result, out) = armgate(&sim, &[&["jmove"][..], &goal].concat());
-    result.unwrap();
-    // `arrived` once the measured joints are within the client's tolerance of the goal.
-    let arrived: Vec<f64> = out
-        .split("arrived:")
-        .nth(1)
-        .map(|line| {
-            line.split_whitespace()
-                .map_while(|v| v.parse().ok())
-                .collect()
-        })
-        .unwrap_or_default();
-    assert_eq!(arrived.len(), 6, "{out}");
-    for (reached, goal) in arrived.iter().zip(goal) {
-        assert!(
-            (reached - goal.parse::<f64>().unwrap()).abs() < 0.005,
-            "{out}"
-        );
-    }
-}
-
 #[test]
 fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     if firmware().is_some() {
@@ -1052,6 +1065,104 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     sim.start_motion("BG");
     assert_eq!(status(&sim)[4], 2.0, "a Cartesian move runs");
     assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
+}
+
+#[test]
+fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
+    use armgate_client::{Client, Mode, TwistFrame, Velocity, VelocityStreamer};
+    // Away from the singularities (the home pose is 0.014 from one, where the damping would
+    // trade some accuracy for bounded rates).
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    wait_drives(&sim, 2.0);
+    let addr = sim.socket.peer_addr().unwrap();
+    let mut arm = Client::connect(addr).unwrap();
+    arm.set_mode(Mode::Cartesian).unwrap();
+    let start = arm.pose().unwrap().xyz;
+    // One TW by hand: the echo says how long it holds, three control periods of 19.44 ms.
+    let hold = arm
+        .twist([0.0; 3], [0.0; 3], TwistFrame::Base)
+        .unwrap()
+        .unwrap();
+    assert!(
+        (hold.as_secs_f64() - 3.0 * 0.01944).abs() < 1e-6,
+        "{hold:?}"
+    );
+    // In joint mode the same request is refused with its reason.
+    let mut joint = Client::connect(addr).unwrap();
+    joint.set_mode(Mode::Joint).unwrap();
+    let refused = joint.twist([0.0, 0.0, 0.01], [0.0; 3], TwistFrame::Base);
+    assert!(
+        refused.is_err_and(|e| e.to_string() == "ER20 Cmd TW needs mode 2"),
+        "TW in joint mode"
+    );
+    arm.set_mode(Mode::Cartesian).unwrap();
+
+    // 1 cm/s up for 1.5 s from the streaming thread, over its own socket.
+    let streamer = VelocityStreamer::spawn(Client::connect(addr).unwrap()).unwrap();
+    let up = Velocity::Twist {
+        linear: [0.0, 0.0, 0.01],
+        angular: [0.0; 3],
+        frame: TwistFrame::Base,
+    };
+    streamer.stream(up, Instant::now() + Duration::from_millis(1500));
+    std::thread::sleep(Duration::from_millis(700));
+    assert_eq!(status(&sim)[4], 5.0, "streaming while the twist is re-sent");
+    std::thread::sleep(Duration::from_millis(1300));
+    // The stream ended at 1.5 s; three periods and the ramp later the arm holds.
+    assert_eq!(status(&sim)[4], 0.0, "at rest after the stream");
+    assert!(streamer.events.try_recv().is_err(), "no failure");
+    let end = arm.pose().unwrap().xyz;
+    let rise = end[2] - start[2];
+    let aside = ((end[0] - start[0]).powi(2) + (end[1] - start[1]).powi(2)).sqrt();
+    // 15 mm, less the ramps and the gaps the scheduler leaves on a loaded machine.
+    assert!((0.010..0.0155).contains(&rise), "rose {rise} m");
+    assert!(aside < 2e-5, "{aside} m aside");
+
+    // The command line: 1 cm/s down for half a second, then it waits for the rest.
+    let (result, out) = armgate(&sim, &["jog", "0", "0", "-0.01", "--for", "0.5"]);
+    result.unwrap();
+    assert!(
+        out.contains("streamed") && out.ends_with("at rest\n"),
+        "{out}"
+    );
+    let fall = end[2] - arm.pose().unwrap().xyz[2];
+    assert!((0.003..0.0055).contains(&fall), "fell {fall} m");
+    let (result, _) = armgate(&sim, &["jog", "0", "0"]);
+    assert!(result.is_err(), "a twist has 3 or 6 values");
+}
+
+#[test]
+fn a_jerk_limited_robot_runs_and_its_moves_arrive() {
+    let sim = Sim::start("ranger-mk1-jerk");
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    // From home, joints 2 and 3 by ±0.1 rad: about 1.5 s.
+    let goal = ["1.5708", "0.1", "1.4708", "0", "1.5708", "0"];
+    let (result, out) = armgate(&sim, &[&["jmove"][..], &goal].concat());
+    result.unwrap();
+    // `arrived` once the measured joints are within the client's tolerance of the goal.
+    let arrived: Vec<f64> = out
+        .split("arrived:")
+        .nth(1)
+        .map(|line| {
+            line.split_whitespace()
+                .map_while(|v| v.parse().ok())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert_eq!(arrived.len(), 6, "{out}");
+    for (reached, goal) in arrived.iter().zip(goal) {
+        assert!(
+            (reached - goal.parse::<f64>().unwrap()).abs() < 0.005,
+            "{out}"
+        );
+    }
 }
 
 #[test]

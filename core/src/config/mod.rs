@@ -19,7 +19,7 @@ pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{
     BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
     JointType, MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig,
-    ToolConfig, WorkspaceConfig,
+    Streaming, ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};

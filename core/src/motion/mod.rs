@@ -8,6 +8,7 @@
 //!   tolerance (`blend.rs`, beyond the seed: the next leg superposed on the running one).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
+//! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
 
 mod blend;
 mod cartesian_generator;
@@ -22,6 +23,7 @@ mod sequence;
 mod shape;
 mod straight_line;
 mod trapezoid;
+mod velocity_stream;
 mod workspace;
 
 pub use cartesian_generator::CartesianGenerator;
@@ -36,4 +38,8 @@ pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
 pub use straight_line::StraightLine;
 pub use trapezoid::Trapezoid;
+pub use velocity_stream::{
+    MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,
+    VelocityStream,
+};
 pub use workspace::Workspace;

@@ -29,6 +29,9 @@ pub enum Command {
     /// `jT`: set the blend tolerance of joint via point `index` to f0 (rad; negative: the
     /// robot file's default).
     JointViaTolerance,
+    /// `jW`: stream joint rates f0..f5 (bank 2, index bit 7: joints 7..); valid for three
+    /// control periods (joint mode).
+    JointVelocity,
     /// `ON`: start the arm.
     On,
     /// `OF`: stop the arm.
@@ -43,6 +46,9 @@ pub enum Command {
     Stop,
     /// `TM`: read the drive temperatures.
     Temperature,
+    /// `TW`: stream a tool twist: linear f0..f2 (m/s), angular f3..f5 (rad/s), base frame or
+    /// (index bit 0) tool frame; valid for three control periods (Cartesian mode).
+    Twist,
     /// `VC`: clear the Cartesian via points.
     ViaClear,
     /// `VE`: execute the Cartesian via-point sequence.
@@ -57,7 +63,7 @@ pub enum Command {
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 23] = [
+    pub const ALL: [Self; 25] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
@@ -70,6 +76,7 @@ impl Command {
         Self::JointReset,
         Self::JointVia,
         Self::JointViaTolerance,
+        Self::JointVelocity,
         Self::On,
         Self::Off,
         Self::Pose,
@@ -77,6 +84,7 @@ impl Command {
         Self::Status,
         Self::Stop,
         Self::Temperature,
+        Self::Twist,
         Self::ViaClear,
         Self::ViaExecute,
         Self::ViaPoint,
@@ -98,6 +106,7 @@ impl Command {
             Self::JointReset => b"jR",
             Self::JointVia => b"jV",
             Self::JointViaTolerance => b"jT",
+            Self::JointVelocity => b"jW",
             Self::On => b"ON",
             Self::Off => b"OF",
             Self::Pose => b"PS",
@@ -105,6 +114,7 @@ impl Command {
             Self::Status => b"SQ",
             Self::Stop => b"ST",
             Self::Temperature => b"TM",
+            Self::Twist => b"TW",
             Self::ViaClear => b"VC",
             Self::ViaExecute => b"VE",
             Self::ViaPoint => b"VP",

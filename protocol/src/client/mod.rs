@@ -29,6 +29,7 @@
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
 //! * [`BlendTolerance`]: the via points' blend tolerances, `VT` and `jT`.
+//! * [`Twist`] and [`JointRates`]: the velocity-streaming requests `TW` and `jW`.
 
 pub mod banks;
 mod blend;
@@ -44,6 +45,7 @@ mod request;
 mod status;
 mod temperature;
 mod text;
+mod velocity;
 
 pub use blend::{BlendTolerance, ViaKind};
 pub use command::Command;
@@ -58,3 +60,4 @@ pub use request::Request;
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};
+pub use velocity::{JointRates, TOOL_FRAME, Twist, TwistFrame, VelocityError};
