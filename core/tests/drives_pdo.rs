@@ -73,6 +73,37 @@ fn the_robot_file_chooses_the_schedule_and_its_period_is_checked_against_it() {
     );
     let unknown = pdo.replace("streaming = \"pdo\"", "streaming = \"sdo\"");
     assert!(parse_toml(&unknown).is_err());
+    // The lead: none is the default, 2..=8 taken, others refused naming the key.
+    assert_eq!(config.drives.pdo_lead, None);
+    let lead = |n: u16| {
+        let text = pdo.replace(
+            "streaming = \"pdo\"",
+            &format!("streaming = \"pdo\"\npdo_lead = {n}"),
+        );
+        parse_toml(&text)
+    };
+    assert_eq!(lead(5).unwrap().drives.pdo_lead, Some(5));
+    assert_eq!(lead(2).unwrap().drives.pdo_lead, Some(2));
+    for bad in [0, 1, 9] {
+        let refused = lead(bad).unwrap_err().to_string();
+        assert!(refused.contains("drives.pdo_lead"), "{refused}");
+    }
+}
+
+/// `drives.pdo_lead` sets the lead the stream keeps at the SYNC.
+#[test]
+fn the_robot_file_sets_the_lead() {
+    let config = mk1_pdo(false)
+        .edit(|config| config.drives.pdo_lead = Some(5))
+        .unwrap();
+    let mut rig = Rig::started(
+        &config,
+        &DriveSettings::default(),
+        VirtualBus::for_robot(&config),
+    );
+    rig.ticks(50);
+    let leads: Vec<u32> = (0..6).filter_map(|j| rig.manager().lead(j)).collect();
+    assert!(leads.iter().all(|l| (4..=5).contains(l)), "{leads:?}");
 }
 
 #[test]

@@ -50,6 +50,8 @@ pub enum ConfigReason {
     },
     /// A fraction must be greater than 0 and at most 1.
     NotAFraction,
+    /// The PDO schedule's lead must be 2 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
+    PdoLead,
 }
 
 impl ConfigError {
@@ -96,6 +98,7 @@ impl fmt::Display for ConfigReason {
                 );
             }
             Self::NotAFraction => "must be greater than 0 and at most 1",
+            Self::PdoLead => "must be 2 to 8 points",
         })
     }
 }

@@ -139,7 +139,7 @@ impl DriveManager {
             fallback: None,
             last_sync: None,
             faulted_in_receive: false,
-            pdo_lead: settings.pdo_lead,
+            pdo_lead: config.drives.pdo_lead.unwrap_or(settings.pdo_lead),
             pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
             joints,
             phase: Phase::Idle,
