@@ -121,23 +121,24 @@ fn main() {
     let seconds = soak_seconds();
     println!();
     println!(
-        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, drive clocks within ±100 ppm, frames lost at random from the start of streaming (and in the restarts), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
+        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, drive clocks within ±100 ppm (0 ppm: clocks that agree, as locked ones would), frames lost at random from the start of streaming (and in the restarts), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
     );
     println!();
     println!(
-        "| bit rate | period | frame loss | lead kept at the SYNC | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
+        "| bit rate | period | drive clocks | frame loss | lead kept at the SYNC | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let cases = [
-        (0.0, 2),
-        (0.0, 3),
-        (0.01, 3),
-        (0.01, 4),
-        (0.01, 5),
-        (0.01, 6),
+        (0.0, 0.0, 2),
+        (100.0, 0.0, 2),
+        (100.0, 0.0, 3),
+        (100.0, 0.01, 3),
+        (100.0, 0.01, 4),
+        (100.0, 0.01, 5),
+        (100.0, 0.01, 6),
     ];
     for bitrate in BITRATES {
-        for (loss, lead) in cases {
+        for (ppm, loss, lead) in cases {
             // 350 ms consumer heartbeat time: two heartbeats lost in a row (1 in 10,000 at 1 %
             // loss) would exceed the default 300 ms and stop a drive (ER36), which is not what
             // the soak measures.
@@ -156,9 +157,9 @@ fn main() {
                     config.control_period = fastest.period;
                 })
                 .unwrap();
-            let s = soak(&config, &settings, seconds, loss);
+            let s = soak(&config, &settings, seconds, ppm, loss);
             println!(
-                "| {} kbit/s | {:.2} ms | {:.0} % | {lead} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
+                "| {} kbit/s | {:.2} ms | ±{ppm:.0} ppm | {:.0} % | {lead} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
                 bitrate / 1000,
                 fastest.period * 1e3,
                 loss * 100.0,
@@ -220,12 +221,18 @@ struct Soak {
     latency_max: f64,
 }
 
-/// The PDO schedule for `seconds` with 1 % of the frames lost and the drives' clocks spread
-/// over ±100 ppm: joint moves back and forth; a fault is counted and the drives restarted with
+/// The PDO schedule for `seconds` with `loss` of the frames lost and the drives' clocks spread
+/// over ±`max_ppm`: joint moves back and forth; a fault is counted and the drives restarted with
 /// the loss on (the stop's frames are not repeated: no loss while the drives stop).
-fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64, loss: f64) -> Soak {
+fn soak(
+    config: &ValidRobot,
+    settings: &DriveSettings,
+    seconds: f64,
+    max_ppm: f64,
+    loss: f64,
+) -> Soak {
     let mut bus = VirtualBus::for_robot(config);
-    bus.spread_clock_errors(100.0, 7);
+    bus.spread_clock_errors(max_ppm, 7);
     let mut l = Rig::started(config, settings, bus);
     l.bus_mut().reset_stats();
     l.bus_mut().set_frame_loss(loss, 11);

@@ -40,7 +40,7 @@ impl Retry {
         let due = cycle.wrapping_sub(self.sent_at) >= timeout && self.repeats < START_RETRIES;
         if due {
             self.sent_at = cycle;
-            self.repeats += 1;
+            self.repeats = self.repeats.saturating_add(1);
         }
         due
     }
