@@ -1137,8 +1137,9 @@ fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
     let rise = end[2] - start[2];
     let aside = ((end[0] - start[0]).powi(2) + (end[1] - start[1]).powi(2)).sqrt();
     // 15 mm, less the ramps and the gaps the scheduler leaves on a loaded machine (a gap longer
-    // than three periods ramps the arm down until the next command).
-    assert!((0.005..0.0155).contains(&rise), "rose {rise} m");
+    // than three periods ramps the arm down until the next command), plus up to the last
+    // command's three periods of hold when the streaming thread runs late.
+    assert!((0.005..0.0165).contains(&rise), "rose {rise} m");
     assert!(aside < 2e-5, "{aside} m aside: {start:?} -> {end:?}");
 
     // The command line: 1 cm/s down for half a second, then it waits for the rest.
@@ -1149,7 +1150,7 @@ fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
         "{out}"
     );
     let fall = end[2] - arm.pose().unwrap().xyz[2];
-    assert!((0.0015..0.0055).contains(&fall), "fell {fall} m");
+    assert!((0.0015..0.0065).contains(&fall), "fell {fall} m");
     let (result, _) = armgate(&sim, &["jog", "0", "0"]);
     assert!(result.is_err(), "a twist has 3 or 6 values");
 }
