@@ -72,6 +72,7 @@ fn robot() -> Option<ValidRobot> {
             // Opaque: both schedules' code is linked and checked.
             streaming: black_box(Streaming::Pdo),
             pdo_fallback: black_box(true),
+            pdo_lead: black_box(Some(3)),
         },
         cartesian: CartesianLimits {
             max_velocity: [0.1; 6],

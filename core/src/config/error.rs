@@ -54,6 +54,8 @@ pub enum ConfigReason {
     Negative,
     /// `[motion] profile = "jerk-limited"` needs this jerk limit.
     MissingJerkLimit,
+    /// The PDO schedule's lead must be 2 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
+    PdoLead,
 }
 
 impl ConfigError {
@@ -102,6 +104,7 @@ impl fmt::Display for ConfigReason {
             }
             Self::NotAFraction => "must be greater than 0 and at most 1",
             Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
+            Self::PdoLead => "must be 2 to 8 points",
         })
     }
 }

@@ -8,6 +8,7 @@ use super::motion::{MotionConfig, ProfileKind};
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
 use crate::drives::load::{DEFAULT_CEILING, LoadModel};
+use crate::drives::streaming::MAX_PDO_LEAD;
 use crate::drives::{DriveSettings, whole_samples};
 use crate::kinematics::Joints;
 
@@ -140,6 +141,11 @@ pub struct DrivesConfig {
     /// The period must then fit the interpreter schedule's load too.
     #[serde(default)]
     pub pdo_fallback: bool,
+    /// With `streaming = "pdo"`: the PT points kept beyond each drive's read pointer at every
+    /// SYNC, 2..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (3). More tolerates lost
+    /// frames, less is less latency (docs/drives.md, "The lead").
+    #[serde(default)]
+    pub pdo_lead: Option<u16>,
 }
 
 /// The streaming schedule: which frames carry the set-points and the feedback (docs/drives.md).
@@ -468,6 +474,12 @@ impl DrivesConfig {
         }
         if !(self.max_bus_load > 0.0 && self.max_bus_load <= 1.0) {
             return Err(("drives.max_bus_load", ConfigReason::NotAFraction));
+        }
+        if self
+            .pdo_lead
+            .is_some_and(|lead| !(2..=MAX_PDO_LEAD).contains(&lead))
+        {
+            return Err(("drives.pdo_lead", ConfigReason::PdoLead));
         }
         Ok(())
     }

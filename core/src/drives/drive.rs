@@ -4,6 +4,7 @@ use armgate_protocol::can::NodeId;
 use heapless::Vec;
 
 use super::link::Link;
+use super::retry::Retry;
 use super::startup::{Outgoing, StartStep};
 use super::streaming::{PdoStream, PtStream};
 use super::units::JointUnits;
@@ -44,6 +45,8 @@ pub struct Drive {
     pub awaiting: Vec<Outgoing, 2>,
     /// Whether the current step's frames went out.
     pub step_sent: bool,
+    /// When they went out, and how often they were repeated.
+    pub retry: Retry,
     /// The PT writer, from `BG` until the motion stops (interpreter schedule).
     pub stream: Option<PtStream>,
     /// The PT writer, from `BG` until the motion stops (PDO schedule).
@@ -64,6 +67,7 @@ impl Drive {
             step: StartStep::ConsumerHeartbeat,
             awaiting: Vec::new(),
             step_sent: false,
+            retry: Retry::default(),
             stream: None,
             pdo: None,
         }

@@ -28,6 +28,13 @@ impl Link {
         self.waiting_since = (self.outstanding > 0).then_some(cycle);
     }
 
+    /// The requests still owed were sent again in `cycle`: `outstanding` are owed (the lost
+    /// ones are forgotten), and the timeout starts over.
+    pub fn resent(&mut self, outstanding: u32, cycle: u32) {
+        self.outstanding = outstanding;
+        self.waiting_since = (outstanding > 0).then_some(cycle);
+    }
+
     /// True if the drive has owed an answer for more than `timeout` cycles at `cycle`.
     pub fn silent(&self, cycle: u32, timeout: u32) -> bool {
         self.waiting_since

@@ -2,7 +2,8 @@
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtState, NodeId, NodeMessage, SdoResponse,
+    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtCommand, NmtState, NodeId, NodeMessage,
+    SdoResponse,
 };
 use heapless::Vec;
 
@@ -55,6 +56,8 @@ pub struct DriveStats {
     pub commands_rejected: u32,
     /// Frames received from unknown nodes or of no interest.
     pub frames_ignored: u32,
+    /// Start-step requests sent again because their answer did not come.
+    pub requests_repeated: u32,
 }
 
 /// Runs the servo drives of one arm on one CAN bus: start-up, set-point streaming in
@@ -136,7 +139,7 @@ impl DriveManager {
             fallback: None,
             last_sync: None,
             faulted_in_receive: false,
-            pdo_lead: settings.pdo_lead,
+            pdo_lead: config.drives.pdo_lead.unwrap_or(settings.pdo_lead),
             pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
             joints,
             phase: Phase::Idle,
@@ -491,6 +494,11 @@ impl DriveManager {
             if !drive.step_sent {
                 let ctx = context(drive);
                 send_step(drive, &ctx, out);
+            } else if !drive.awaiting.is_empty() && drive.retry.due(out.cycle, timing.reply_timeout)
+            {
+                let ctx = context(drive);
+                resend_step(drive, &ctx, out);
+                self.stats.requests_repeated = self.stats.requests_repeated.saturating_add(1);
             }
         }
         if let Some(fault) = fault {
@@ -823,6 +831,32 @@ fn send_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'
         let _ = drive.awaiting.push(*frame);
     }
     drive.step_sent = true;
+    drive.retry.sent(out.cycle);
+}
+
+/// Sends all the frames of `drive`'s current start step again, in their order (see
+/// [`super::retry`]; an `MP` write forgets the points written before it): the drive now owes
+/// only their answers.
+fn resend_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'_, B>) {
+    let frames = drive.step.frames(ctx);
+    // A drive answers the interpreter only when operational: its NMT start may have been the
+    // frame lost. Starting a started node changes nothing.
+    if frames
+        .iter()
+        .any(|frame| matches!(frame, Outgoing::Interpreter(_)))
+    {
+        let start = Nmt {
+            command: NmtCommand::Start,
+            node: Some(drive.node),
+        };
+        out.send(&start.to_frame());
+    }
+    drive.awaiting.clear();
+    for frame in &frames {
+        out.request(drive, frame);
+        let _ = drive.awaiting.push(*frame);
+    }
+    drive.link.resent(frames.len() as u32, out.cycle);
 }
 
 /// This cycle's sending: frames go to the bus, requests are counted on their drive's link,

@@ -21,6 +21,7 @@ mod handler;
 mod link;
 pub mod load;
 mod manager;
+mod retry;
 mod settings;
 mod startup;
 mod state;

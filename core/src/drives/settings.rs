@@ -179,7 +179,8 @@ impl Timing {
         if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
             return Err(SetupError::BadTiming);
         }
-        let lead_fits = (2..=settings.pdo_ring_len.saturating_sub(3)).contains(&settings.pdo_lead);
+        let lead = config.drives.pdo_lead.unwrap_or(settings.pdo_lead);
+        let lead_fits = (2..=settings.pdo_ring_len.saturating_sub(3)).contains(&lead);
         if !lead_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
         }

@@ -7,6 +7,6 @@ mod pdo;
 mod pt;
 mod schedule;
 
-pub use pdo::{PDO_TARGET_LEAD, PdoStream};
+pub use pdo::{MAX_PDO_LEAD, PDO_TARGET_LEAD, PdoStream};
 pub use pt::{FILLED_POINTS, FlowError, PtStream, TARGET_LEAD};
 pub use schedule::{Query, Schedule};

@@ -30,6 +30,10 @@ use super::FlowError;
 /// it.
 pub const PDO_TARGET_LEAD: u16 = 3;
 
+/// The largest lead a robot file may ask for (`drives.pdo_lead`): the default 16-entry ring
+/// then still holds a correction and a margin that makes a wrong pointer show as an overrun.
+pub const MAX_PDO_LEAD: u16 = 8;
+
 /// The writer side of one drive's PT ring on the PDO schedule.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PdoStream {
