@@ -65,6 +65,11 @@ impl Sim {
     }
 
     fn start_with(robot: &str, extra: &[&str]) -> Self {
+        Self::start_edited(robot, |text| text, extra)
+    }
+
+    /// The same, with the robot file's text changed by `edit` (after the faster limits).
+    fn start_edited(robot: &str, edit: impl FnOnce(String) -> String, extra: &[&str]) -> Self {
         let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
         // One directory per simulator: the tests run in parallel, and each reads its own logs.
         static STARTED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -84,7 +89,7 @@ impl Sim {
                 "max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5]",
             );
         let file = dir.join("robot.toml");
-        std::fs::write(&file, fast).unwrap();
+        std::fs::write(&file, edit(fast)).unwrap();
         let mut child = match firmware() {
             Some(firmware) => {
                 // The firmware takes its robot and start pose from the environment (host
@@ -455,6 +460,46 @@ fn a_full_session_over_udp() {
     assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE needs mode 2");
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
     assert_eq!(sim.text("VE", [0.0; 7], 0), "ER20 Cmd VE no via point 0");
+}
+
+/// The PDO schedule end to end: ranger-mk1's robot file with `drives.streaming = "pdo"` at
+/// 12 × 360 µs (231.5 Hz, the fastest the PDO schedule carries at 500 kbit/s), in the
+/// simulator or the firmware's `sim-drives` build: the drives start (group id, mapping,
+/// group `BG`), a joint move arrives, OF and ON go through a stop and a new start, and the
+/// temperatures come in.
+#[test]
+fn the_pdo_schedule_runs_a_session() {
+    let pdo = |text: String| {
+        text.replace(
+            "unit_mode = 5 # position (PT streaming)",
+            "unit_mode = 5\nstreaming = \"pdo\"",
+        )
+        .replace(
+            "control_period = 0.01944 # 54 × 360 µs Whistle position-loop samples (51.44 Hz)",
+            "control_period = 0.00432",
+        )
+    };
+    let start = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        pdo,
+        &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"],
+    );
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    let mut goal: Vec<f32> = start.to_vec();
+    goal[0] += 0.05;
+    goal[4] -= 0.05;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    sim.wait_joints(&goal, 10.0);
+    sim.null("OF");
+    sim.retry_while("ON", &["ER11 Arm still stopping"]);
+    goal[0] -= 0.05;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    sim.wait_joints(&goal, 10.0);
+    let mt = sim.ok("TM", [0.0; 7], 0);
+    assert!(mt[..6].iter().all(|t| *t > -100.0), "{mt:?}");
 }
 
 #[test]

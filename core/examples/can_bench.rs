@@ -1,16 +1,22 @@
-//! CAN bench: set-point rate, bus load and latency of PT streaming to six simulated Whistles
-//! at 500 kbit/s and 1 Mbit/s, each at the fastest control period under 70 % load.
+//! CAN bench: set-point rate, bus load and latency of PT streaming to simulated Whistles,
+//! both schedules side by side (interpreter: `QP` writes and queries; PDO: SYNC and one
+//! receive and one transmit PDO per drive), six drives (ranger-mk1) and eight (ranger-mk2), at
+//! 500 kbit/s and 1 Mbit/s, each at the fastest control period under 70 % load.
 //!
 //! ```sh
-//! cargo run --release -p armgate-core --example can_bench [-- --plots DIR]
+//! cargo run --release -p armgate-core --example can_bench [-- --plots DIR] [-- --soak SECONDS]
 //! ```
 //!
-//! For each bit rate the load model ([`armgate_core::drives::load`]) picks the fastest period
+//! For each row the load model ([`armgate_core::drives::load`]) picks the fastest period
 //! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
-//! controller then drives ranger-mk1 through a joint move and a Cartesian circle for 30 s of
-//! simulated time on the virtual bus, and the table reports what the bus and the drives saw.
-//! With `--plots DIR`, `can-bench.svg` shows the same per control cycle: the bus load and the
-//! mean write-to-reached latency of the PT points reached in that cycle.
+//! controller then drives the arm through a joint move (and on ranger-mk1 a Cartesian circle)
+//! for 30 s of simulated time on the virtual bus, and the table reports what the bus and the
+//! drives saw. The soak runs then stream the PDO schedule for ranger-mk1 at both bit rates for
+//! 10 minutes of simulated time each (`--soak SECONDS` to change it) with the drives' clocks
+//! off by up to ±100 ppm, without and with 1 % of the frames lost at random, for several
+//! leads. With `--plots DIR`, `can-bench.svg`
+//! shows the six-drive rows per control cycle: the bus load and the mean write-to-reached
+//! latency of the PT points reached in that cycle.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -25,83 +31,249 @@ use std::path::{Path, PathBuf};
 mod drives_rig;
 use drives_rig::Rig;
 
-use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::drives::DriveSettings;
+use armgate_core::config::{Streaming, ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
+use armgate_core::drives::{DriveSettings, DriveState, DriveStats};
 use armgate_core::motion::{Mode, Shape};
 use armgate_core::sim::{BusStats, VirtualBus};
 use armgate_plot::{Figure, Panel, Series, write_svg};
 
 const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 const RUN_SECONDS: f64 = 30.0;
+const BITRATES: [u32; 2] = [500_000, 1_000_000];
 
 fn main() {
     let plots = armgate_plot::plots_dir_from_args().unwrap();
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
-    let base = load_file(&path).expect("robot file");
     let settings = DriveSettings::default();
-    let model = LoadModel::new(&base, &settings);
-    println!(
-        "ranger-mk1, {} drives; per drive and cycle {} bits worst case (QP + echo, query + answer)",
-        model.drives,
-        model.bits_per_drive()
-    );
-    println!();
-    println!(
-        "| bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | BG skew | underflows |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut header = true;
     let mut runs = Vec::new();
-    for bitrate in [500_000, 1_000_000] {
-        let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
-        let config = base
-            .clone()
-            .edit(|config| {
-                config.drives.can_bitrate = bitrate;
-                config.control_period = fastest.period;
-            })
-            .expect("the fastest period keeps under the default ceiling");
-        let r = run(&config, &settings);
+    for streaming in [Streaming::Interpreter, Streaming::Pdo] {
+        let model = LoadModel::new(&robot("ranger-mk1", streaming), &settings);
         println!(
-            "| {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs | {} |",
-            bitrate / 1000,
-            fastest.period * 1e3,
-            fastest.samples,
-            1.0 / fastest.period,
-            fastest.load * 100.0,
-            r.worst_load * 100.0,
-            r.typical_load * 100.0,
-            r.leads,
-            r.latency_max / fastest.period,
-            r.latency_max * 1e3,
-            (r.latency_max + r.write_delay_max) * 1e3,
-            r.skew * 1e6,
-            r.underflows,
+            "{streaming:?} schedule: per drive and cycle {} bits worst case, plus {} per cycle{}",
+            model.bits_per_drive(),
+            model.bits_per_cycle_shared(),
+            match streaming {
+                Streaming::Interpreter => " (QP + echo, query + answer)".to_string(),
+                Streaming::Pdo => format!(
+                    " (RPDO3 + TPDO3; SYNC) and a temperature query + answer per drive every {} cycles",
+                    settings.schedule.temperature_every
+                ),
+            }
         );
-        runs.push((bitrate, fastest.period, r));
+    }
+    println!();
+    for name in ["ranger-mk1", "ranger-mk2"] {
+        for bitrate in BITRATES {
+            for streaming in [Streaming::Interpreter, Streaming::Pdo] {
+                let base = robot(name, streaming);
+                let model = LoadModel::new(&base, &settings);
+                let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
+                let config = base
+                    .edit(|config| {
+                        config.drives.can_bitrate = bitrate;
+                        config.control_period = fastest.period;
+                    })
+                    .expect("the fastest period keeps under the default ceiling");
+                let r = run(
+                    &config,
+                    &settings,
+                    VirtualBus::for_robot(&config),
+                    RUN_SECONDS,
+                );
+                if header {
+                    println!(
+                        "| robot, drives | schedule | bit rate | period | set-point rate | load, worst-case stuffing (model / bus) | load, actual stuffing (bus) | lead | latency write → reached | latency step → reached | start skew: BG / first sample | underflows | points skipped / inserted |"
+                    );
+                    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+                    header = false;
+                }
+                println!(
+                    "| {name}, {} | {} | {} kbit/s | {:.2} ms ({} × 360 µs) | {:.1} Hz | {:.1} % / {:.1} % | {:.1} % | {} | ≤ {:.2} set-points = {:.1} ms | ≤ {:.1} ms | {:.0} µs / {:.0} µs | {} | {} / {} |",
+                    model.drives,
+                    schedule_name(streaming),
+                    bitrate / 1000,
+                    fastest.period * 1e3,
+                    fastest.samples,
+                    1.0 / fastest.period,
+                    fastest.load * 100.0,
+                    r.worst_load * 100.0,
+                    r.typical_load * 100.0,
+                    r.leads,
+                    r.latency_max / fastest.period,
+                    r.latency_max * 1e3,
+                    (r.latency_max + r.write_delay_max) * 1e3,
+                    r.skew * 1e6,
+                    r.first_sample_skew * 1e6,
+                    r.underflows,
+                    r.stats.points_skipped,
+                    r.stats.points_inserted,
+                );
+                if name == "ranger-mk1" {
+                    runs.push((bitrate, streaming, fastest.period, r));
+                }
+            }
+        }
     }
     if let Some(dir) = &plots {
         plot_cycles(dir, &runs);
     }
-    let seed = base.control_period;
+    let seconds = soak_seconds();
     println!();
-    let mk2 = LoadModel { drives: 8, ..model };
-    for bitrate in [500_000, 1_000_000] {
-        let p = mk2.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
-        println!(
-            "8 drives (ranger-mk2) at {} kbit/s: {:.2} ms = {:.1} Hz, {:.1} % worst case",
-            bitrate / 1000,
-            p.period * 1e3,
-            1.0 / p.period,
-            p.load * 100.0
-        );
+    println!(
+        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, drive clocks within ±100 ppm, frames lost at random from the start of streaming, consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
+    );
+    println!();
+    println!(
+        "| bit rate | period | frame loss | lead kept at the SYNC | frames lost | faults (restarted) | underflows | latency write → reached |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let cases = [
+        (0.0, 3),
+        (0.0, 4),
+        (0.01, 3),
+        (0.01, 4),
+        (0.01, 5),
+        (0.01, 6),
+    ];
+    for bitrate in BITRATES {
+        for (loss, lead) in cases {
+            // 350 ms consumer heartbeat time: two heartbeats lost in a row (1 in 10,000 at 1 %
+            // loss) would exceed the default 300 ms and stop a drive (ER36), which is not what
+            // the soak measures.
+            let settings = DriveSettings {
+                pdo_lead: lead,
+                heartbeat_timeout: 0.35,
+                ..DriveSettings::default()
+            };
+            let base = robot("ranger-mk1", Streaming::Pdo);
+            let fastest = LoadModel::new(&base, &settings)
+                .fastest_period(bitrate, DEFAULT_CEILING)
+                .unwrap();
+            let config = base
+                .edit(|config| {
+                    config.drives.can_bitrate = bitrate;
+                    config.control_period = fastest.period;
+                })
+                .unwrap();
+            let s = soak(&config, &settings, seconds, loss);
+            println!(
+                "| {} kbit/s | {:.2} ms | {:.0} % | {lead} | {} | {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
+                bitrate / 1000,
+                fastest.period * 1e3,
+                loss * 100.0,
+                s.frames_lost,
+                s.faults.len(),
+                s.faults.iter().take(3).collect::<Vec<_>>(),
+                s.underflows,
+                s.latency_max / fastest.period,
+                s.latency_max * 1e3,
+            );
+        }
     }
+    let seed = robot("ranger-mk1", Streaming::Interpreter).control_period;
+    println!();
     println!(
         "seed schedule (spec §6.5): 60 frames per {:.2} ms at 500 kbit/s = {:.1} % worst case; latency 5 points = {:.0} ms",
         seed * 1e3,
         seed_load(seed, 500_000) * 100.0,
         5.0 * seed * 1e3
     );
+}
+
+fn schedule_name(streaming: Streaming) -> &'static str {
+    match streaming {
+        Streaming::Interpreter => "interpreter",
+        Streaming::Pdo => "PDO",
+    }
+}
+
+/// `robots/<name>.toml` on `streaming`.
+fn robot(name: &str, streaming: Streaming) -> ValidRobot {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../robots/{name}.toml"));
+    load_file(&path)
+        .expect("robot file")
+        .edit(|config| config.drives.streaming = streaming)
+        .expect("the robot file's period carries both schedules")
+}
+
+/// `--soak SECONDS`, or 10 minutes.
+fn soak_seconds() -> f64 {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == "--soak")
+        .and_then(|i| args.get(i + 1))
+        .map_or(600.0, |v| v.parse().expect("--soak SECONDS"))
+}
+
+struct Soak {
+    frames_lost: u64,
+    faults: Vec<String>,
+    underflows: u32,
+    latency_max: f64,
+}
+
+/// The PDO schedule for `seconds` with 1 % of the frames lost and the drives' clocks spread
+/// over ±100 ppm: joint moves back and forth; a fault is counted and the drives restarted (with
+/// no loss during the start, whose steps do not repeat a lost request).
+fn soak(config: &ValidRobot, settings: &DriveSettings, seconds: f64, loss: f64) -> Soak {
+    let mut bus = VirtualBus::for_robot(config);
+    bus.spread_clock_errors(100.0, 7);
+    let mut l = Rig::started(config, settings, bus);
+    l.bus_mut().reset_stats();
+    l.bus_mut().set_frame_loss(loss, 11);
+    l.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    let start = l.now;
+    let home = config.home();
+    let mut soak = Soak {
+        frames_lost: 0,
+        faults: Vec::new(),
+        underflows: 0,
+        latency_max: 0.0,
+    };
+    let mut there = false;
+    while l.now - start < seconds {
+        if l.manager().is_operational() && !l.ctrl().is_moving() {
+            let goal: &[f64] = if there { &home } else { &READY };
+            l.ctrl_mut().move_joints(goal, 0.0).unwrap();
+            there = !there;
+        }
+        l.tick();
+        if let Some(fault) = l.manager().fault() {
+            soak.faults.push(fault.text().as_str().to_string());
+            // The stop's frames (the hold points, `ST`) are not repeated either.
+            let lost_so_far = l.bus().stats().frames_lost;
+            l.bus_mut().set_frame_loss(0.0, 0);
+            l.until(100, |r| r.manager().state() == DriveState::Faulted);
+            soak.add(l.bus(), lost_so_far);
+            l.bus_mut().reset_stats();
+            l.manager_mut().start().unwrap();
+            l.until(500, |r| r.manager().state() != DriveState::Starting);
+            if let Some(fault) = l.manager().fault() {
+                panic!("restart after {:?}: {fault:?}", soak.faults);
+            }
+            l.ticks(20);
+            l.bus_mut().reset_stats();
+            l.bus_mut()
+                .set_frame_loss(loss, soak.faults.len() as u64 + 11);
+        }
+    }
+    soak.add(l.bus(), l.bus().stats().frames_lost);
+    soak
+}
+
+impl Soak {
+    /// Adds one stretch of streaming: `lost` frames, and what the drives counted.
+    fn add(&mut self, bus: &VirtualBus, lost: u64) {
+        self.frames_lost += lost;
+        self.underflows += bus.drives().map(|d| d.stats().underflows).sum::<u32>();
+        let latency = bus
+            .drives()
+            .map(|d| d.stats().latency.max_ns)
+            .max()
+            .unwrap();
+        self.latency_max = self.latency_max.max(latency as f64 * 1e-9);
+    }
 }
 
 struct Outcome {
@@ -111,6 +283,8 @@ struct Outcome {
     latency_max: f64,
     write_delay_max: f64,
     skew: f64,
+    first_sample_skew: f64,
+    stats: DriveStats,
     underflows: u32,
     cycles: Vec<Cycle>,
 }
@@ -134,25 +308,31 @@ fn latency_totals(bus: &VirtualBus) -> (u64, u64) {
     })
 }
 
-/// The control loop: bus, drive manager and controller, stepped once per period.
-fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
-    let mut l = Rig::started(config, settings, VirtualBus::for_robot(config));
+/// The control loop on `bus`: drive manager and controller, stepped once per period for
+/// `seconds` of simulated time: a joint move, then (six joints) a circle, or (more) a move back.
+fn run(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus, seconds: f64) -> Outcome {
+    let mut l = Rig::started(config, settings, bus);
     let begun: Vec<u64> = l
         .bus()
         .drives()
         .filter_map(|d| d.stats().begun_at)
         .collect();
     let skew = (begun.iter().max().unwrap() - begun.iter().min().unwrap()) as f64 * 1e-9;
+    let first_sample_skew = l.bus().start_skew_ns().unwrap() as f64 * 1e-9;
     l.bus_mut().reset_stats();
     let start = l.now;
     l.ctrl_mut().set_mode(Mode::Joint).unwrap();
-    l.ctrl_mut().move_joints(&READY, 0.0).unwrap();
+    let six = config.dof() == 6;
+    // Eight joints: every joint 0.3 rad off home (all are within ±π).
+    let away: Vec<f64> = config.home().iter().map(|q| q + 0.3).collect();
+    let goal: &[f64] = if six { &READY } else { &away };
+    l.ctrl_mut().move_joints(goal, 0.0).unwrap();
     let mut leads = std::collections::BTreeSet::new();
     let mut circle_started = false;
     let mut write_delay_max: f64 = 0.0;
     let mut cycles = Vec::new();
     let (mut bus_before, mut latency_before) = (l.bus().stats(), latency_totals(l.bus()));
-    while l.now - start < RUN_SECONDS {
+    while l.now - start < seconds {
         let step_time = l.now;
         l.tick();
         let (bus, latency) = (l.bus().stats(), latency_totals(l.bus()));
@@ -177,10 +357,17 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
             write_delay_max = write_delay_max.max(written - step_time);
         }
         assert!(l.manager().is_operational(), "{:?}", l.manager().fault());
-        (0..6).filter_map(|j| l.manager().lead(j)).for_each(|lead| {
-            leads.insert(lead);
-        });
-        if !l.ctrl().is_moving() && !circle_started && l.now - start > 1.0 {
+        (0..config.dof())
+            .filter_map(|j| l.manager().lead(j))
+            .for_each(|lead| {
+                leads.insert(lead);
+            });
+        let idle = !l.ctrl().is_moving() && l.now - start > 1.0;
+        if idle && !six && !circle_started {
+            l.ctrl_mut().move_joints(&config.home(), 0.0).unwrap();
+            circle_started = true;
+        }
+        if idle && six && !circle_started {
             l.ctrl_mut().set_mode(Mode::Cartesian).unwrap();
             l.ctrl_mut()
                 .start_shape(Shape::Circle {
@@ -208,6 +395,8 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
         latency_max,
         write_delay_max,
         skew,
+        first_sample_skew,
+        stats: l.manager().stats(),
         underflows: l.bus().drives().map(|d| d.stats().underflows).sum(),
         cycles,
     }
@@ -215,7 +404,7 @@ fn run(config: &ValidRobot, settings: &DriveSettings) -> Outcome {
 
 /// `can-bench.svg`: per cycle, the bus load (actual and worst-case stuffing, against the
 /// 70 % ceiling) and the mean latency from writing a PT point to reaching it, per bit rate.
-fn plot_cycles(dir: &Path, runs: &[(u32, f64, Outcome)]) {
+fn plot_cycles(dir: &Path, runs: &[(u32, Streaming, f64, Outcome)]) {
     let mut load = Panel::new("bus load per control cycle", "t (s)", "load (%)").series(
         Series::reference(
             "ceiling",
@@ -231,8 +420,13 @@ fn plot_cycles(dir: &Path, runs: &[(u32, f64, Outcome)]) {
         "t (s)",
         "latency (ms)",
     );
-    for (k, (bitrate, period, r)) in runs.iter().enumerate() {
-        let name = format!("{} kbit/s, {:.2} ms period", bitrate / 1000, period * 1e3);
+    for (k, (bitrate, streaming, period, r)) in runs.iter().enumerate() {
+        let name = format!(
+            "{}, {} kbit/s, {:.2} ms period",
+            schedule_name(*streaming),
+            bitrate / 1000,
+            period * 1e3
+        );
         load = load
             .series(
                 Series::line(
@@ -259,7 +453,7 @@ fn plot_cycles(dir: &Path, runs: &[(u32, f64, Outcome)]) {
         );
     }
     let figure = Figure::new(
-        "CAN bench: ranger-mk1, 6 simulated Whistles, joint move then a 0.1 m circle",
+        "CAN bench: ranger-mk1, 6 simulated Whistles, joint move then a 0.1 m circle, both schedules",
         vec![load.include_y(0.0), latency.include_y(0.0)],
     );
     let file = dir.join("can-bench.svg");

@@ -9,24 +9,14 @@
 
 mod drives_rig;
 
-use armgate_core::cycle::{CanDrives, Cycle, Datagram, MAX_CATCH_UP, REQUESTS_PER_TICK};
+use armgate_core::cycle::{CanDrives, Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError};
 use armgate_core::sim::IdealArm;
 use armgate_core::sim::VirtualBus;
 use armgate_core::sim::{ArmModel, SimulatedDrives};
 use armgate_protocol::can::CanFrame;
-use armgate_protocol::client::{Command, Request};
-use drives_rig::{Client, robot};
-
-fn request(command: Command) -> Datagram<()> {
-    let bytes = Request {
-        command,
-        values: [0.0; 7],
-        index: 0,
-    }
-    .to_bytes();
-    Datagram::new(&bytes, ())
-}
+use armgate_protocol::client::Command;
+use drives_rig::{Client, request, robot};
 
 fn simulated_arm() -> Cycle<SimulatedDrives, ()> {
     let config = robot("ranger-mk1");

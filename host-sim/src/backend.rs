@@ -158,6 +158,10 @@ impl Drives for Backend {
     fn has_fault(&self) -> bool {
         self.side().has_fault()
     }
+
+    fn notice(&self) -> Option<Text> {
+        self.side().notice()
+    }
 }
 
 impl DriveSide for Backend {

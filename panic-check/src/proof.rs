@@ -5,7 +5,7 @@ use core::hint::black_box;
 
 use armgate_core::config::{
     BaseConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive, JointType,
-    MotionConfig, RobotConfig, ToolConfig, ValidRobot, WorkspaceConfig,
+    MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot, WorkspaceConfig,
 };
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
@@ -69,6 +69,9 @@ fn robot() -> Option<ValidRobot> {
             can_bitrate: 500_000,
             unit_mode: 5,
             max_bus_load: 0.7,
+            // Opaque: both schedules' code is linked and checked.
+            streaming: black_box(Streaming::Pdo),
+            pdo_fallback: black_box(true),
         },
         cartesian: CartesianLimits {
             max_velocity: [0.1; 6],

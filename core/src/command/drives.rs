@@ -36,4 +36,9 @@ pub trait Drives {
     fn has_fault(&self) -> bool {
         self.fault().is_some()
     }
+    /// A warning about the drives that lasts until the next start (the PDO schedule's fallback
+    /// to the interpreter schedule), sent once to the client when it appears.
+    fn notice(&self) -> Option<Text> {
+        None
+    }
 }

@@ -101,6 +101,7 @@ impl CommandHandler {
         }
         self.relay.observe(now, &out.events);
         self.relay.observe_fault(faulted, || drives.fault());
+        self.relay.observe_drive_notice(drives.notice());
         Ok(out)
     }
 

@@ -18,6 +18,7 @@ pub const NOTICE_CAPACITY: usize = 8;
 pub struct NoticeRelay {
     channels: [Channel; 4],
     fault_reported: bool,
+    drive_notice_reported: bool,
     outbox: Deque<Text, NOTICE_CAPACITY>,
     dropped: u32,
 }
@@ -44,6 +45,7 @@ impl Default for NoticeRelay {
                 channel(Notice::ViaPointMissed),
             ],
             fault_reported: false,
+            drive_notice_reported: false,
             outbox: Deque::new(),
             dropped: 0,
         }
@@ -81,6 +83,20 @@ impl NoticeRelay {
                 && self.outbox.push_back(text).is_err()
             {
                 self.dropped = self.dropped.saturating_add(1);
+            }
+        }
+    }
+
+    /// Takes note of the drives' lasting warning, if any: sent once, when it appears.
+    pub fn observe_drive_notice(&mut self, notice: Option<Text>) {
+        match notice {
+            None => self.drive_notice_reported = false,
+            Some(_) if self.drive_notice_reported => {}
+            Some(text) => {
+                self.drive_notice_reported = true;
+                if self.outbox.push_back(text).is_err() {
+                    self.dropped = self.dropped.saturating_add(1);
+                }
             }
         }
     }

@@ -129,6 +129,28 @@ pub struct DrivesConfig {
     /// (0 < x ≤ 1; default 0.7, [`DEFAULT_CEILING`]).
     #[serde(default = "default_ceiling")]
     pub max_bus_load: f64,
+    /// How set-points reach the drives (default [`Streaming::Interpreter`]).
+    #[serde(default)]
+    pub streaming: Streaming,
+    /// With `streaming = "pdo"`: a drive that refuses the PDO mapping makes the manager fall
+    /// back to the interpreter schedule (reported as a warning) instead of a start-up fault.
+    /// The period must then fit the interpreter schedule's load too.
+    #[serde(default)]
+    pub pdo_fallback: bool,
+}
+
+/// The streaming schedule: which frames carry the set-points and the feedback (docs/drives.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Streaming {
+    /// Binary-interpreter frames: per drive and cycle a `QP` write and one query, both
+    /// answered (the seed's way, 500 bits per drive worst case).
+    #[default]
+    Interpreter,
+    /// Process data: one SYNC per cycle, per drive one receive PDO carrying the next PT point
+    /// and one synchronous transmit PDO with the position and the PT pointers (230 bits per
+    /// drive worst case).
+    Pdo,
 }
 
 fn default_ceiling() -> f64 {
@@ -342,11 +364,20 @@ impl RobotConfig {
         }
     }
 
-    /// The drives' worst-case streaming load (drives/load.rs, with the default heartbeat) must
-    /// stay at or under `drives.max_bus_load`.
+    /// The drives' worst-case streaming load (drives/load.rs, with the default settings) must
+    /// stay at or under `drives.max_bus_load` with the chosen schedule, and with the
+    /// interpreter schedule too if the PDO schedule may fall back to it.
     fn check_bus_load(&self) -> Result<(), ConfigError> {
-        let model = LoadModel::new(self, &DriveSettings::default());
-        let load = model.load(self.control_period, self.drives.can_bitrate);
+        let settings = DriveSettings::default();
+        let model = LoadModel::new(self, &settings);
+        let mut load = model.load(self.control_period, self.drives.can_bitrate);
+        if self.drives.streaming == Streaming::Pdo && self.drives.pdo_fallback {
+            let fallback = LoadModel {
+                streaming: Streaming::Interpreter,
+                ..model
+            };
+            load = load.max(fallback.load(self.control_period, self.drives.can_bitrate));
+        }
         if load <= self.drives.max_bus_load {
             return Ok(());
         }

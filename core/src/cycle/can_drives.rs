@@ -105,6 +105,10 @@ impl<B: CanBus> Drives for CanDrives<B> {
     fn has_fault(&self) -> bool {
         self.manager.fault().is_some()
     }
+
+    fn notice(&self) -> Option<Text> {
+        Drives::notice(&self.manager)
+    }
 }
 
 impl<B: CanBus> DriveSide for CanDrives<B> {

@@ -5,7 +5,7 @@ use heapless::Vec;
 
 use super::link::Link;
 use super::startup::{Outgoing, StartStep};
-use super::streaming::PtStream;
+use super::streaming::{PdoStream, PtStream};
 use super::units::JointUnits;
 
 /// One joint: a real drive on the bus, or none (node id 0, the seed's "pretend" joint).
@@ -44,8 +44,10 @@ pub struct Drive {
     pub awaiting: Vec<Outgoing, 2>,
     /// Whether the current step's frames went out.
     pub step_sent: bool,
-    /// The PT writer, from `BG` until the motion stops.
+    /// The PT writer, from `BG` until the motion stops (interpreter schedule).
     pub stream: Option<PtStream>,
+    /// The PT writer, from `BG` until the motion stops (PDO schedule).
+    pub pdo: Option<PdoStream>,
 }
 
 impl Drive {
@@ -63,6 +65,7 @@ impl Drive {
             awaiting: Vec::new(),
             step_sent: false,
             stream: None,
+            pdo: None,
         }
     }
 
@@ -72,5 +75,6 @@ impl Drive {
         self.awaiting.clear();
         self.step_sent = false;
         self.stream = None;
+        self.pdo = None;
     }
 }

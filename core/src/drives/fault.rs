@@ -1,7 +1,7 @@
 //! Why the drives were stopped, and what the client is told.
 
-use armgate_protocol::can::Emcy;
 use armgate_protocol::can::interpreter::Mnemonic;
+use armgate_protocol::can::{Emcy, Object};
 use armgate_protocol::client::{Severity, Text};
 
 use super::settings::POSITION_MODE;
@@ -71,6 +71,29 @@ pub enum DriveFault {
         /// The CiA 301 abort code.
         code: u32,
     },
+    /// `ER39`: a drive refused the PDO schedule's mapping: it aborted the write to `object`
+    /// (`code`), or `object` read back another value (`code` `None`).
+    MappingRefused {
+        /// The joint.
+        joint: usize,
+        /// The object refused.
+        object: Object,
+        /// The CiA 301 abort code, if the drive aborted.
+        code: Option<u32>,
+    },
+    /// `ER30`: PDO schedule: a drive's transmit PDO was missing for this many SYNCs in a row.
+    NoFeedback {
+        /// The joint.
+        joint: usize,
+        /// SYNCs without it.
+        cycles: u32,
+    },
+    /// `ER35`: PDO schedule: the SYNC went out this late (µs after its due time): the control
+    /// cycle missed its period, and the drives' points with it.
+    LateSync {
+        /// How late.
+        late_us: u32,
+    },
 }
 
 /// Why the controller cannot send.
@@ -86,23 +109,29 @@ impl DriveFault {
     /// The two-digit `ER` code.
     pub const fn code(&self) -> u8 {
         match self {
-            Self::NotAnswering { .. } => 30,
+            Self::NotAnswering { .. } | Self::NoFeedback { .. } => 30,
             Self::ErrorReply { .. } => 31,
             Self::Emergency { .. } => 32,
             Self::Underflow { .. } => 33,
             Self::Overrun { .. } => 34,
-            Self::Bus(_) => 35,
+            Self::Bus(_) | Self::LateSync { .. } => 35,
             Self::HeartbeatLost { .. } => 36,
             Self::WrongUnitMode { .. } => 37,
             Self::BeginRefused { .. } => 38,
-            Self::SdoAbort { .. } => 39,
+            Self::SdoAbort { .. } | Self::MappingRefused { .. } => 39,
         }
     }
 
     /// The text for the client, e.g. `ER30 J3 drive not answering`.
     pub fn text(&self) -> Text {
+        self.text_as(Severity::Error)
+    }
+
+    /// The same text as an error (`ER`) or, for what is reported but does not stop the arm (a
+    /// refused PDO mapping with the fallback), a warning (`WN`).
+    pub fn text_as(&self, severity: Severity) -> Text {
         let code = self.code();
-        let text = |body: core::fmt::Arguments<'_>| Text::new(Severity::Error, code, body);
+        let text = |body: core::fmt::Arguments<'_>| Text::new(severity, code, body);
         match *self {
             Self::NotAnswering { joint } => {
                 text(format_args!("J{} drive not answering", joint + 1))
@@ -141,6 +170,27 @@ impl DriveFault {
             Self::SdoAbort { joint, code } => {
                 text(format_args!("J{} SDO abort {code:08X}", joint + 1))
             }
+            Self::MappingRefused {
+                joint,
+                object,
+                code,
+            } => {
+                let (index, sub) = (object.index, object.subindex);
+                match code {
+                    Some(code) => text(format_args!(
+                        "J{} map {index:04X}:{sub:02X} {code:08X}",
+                        joint + 1
+                    )),
+                    None => text(format_args!(
+                        "J{} map {index:04X}:{sub:02X} read back",
+                        joint + 1
+                    )),
+                }
+            }
+            Self::NoFeedback { joint, cycles } => {
+                text(format_args!("J{} no TPDO for {cycles} cycles", joint + 1))
+            }
+            Self::LateSync { late_us } => text(format_args!("SYNC late by {late_us} us")),
         }
     }
 }

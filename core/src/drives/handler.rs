@@ -1,6 +1,6 @@
 //! The drive manager as the client's command handler sees it (ON, OF, RC, TM, faults).
 
-use armgate_protocol::client::{DriveStatus, Text};
+use armgate_protocol::client::{DriveStatus, Severity, Text};
 
 use super::manager::DriveManager;
 use super::state::DriveState;
@@ -51,5 +51,11 @@ impl Drives for DriveManager {
 
     fn has_fault(&self) -> bool {
         DriveManager::fault(self).is_some()
+    }
+
+    /// `WN39` with the refusal's text: the PDO mapping was refused and the interpreter
+    /// schedule runs instead.
+    fn notice(&self) -> Option<Text> {
+        DriveManager::fallback(self).map(|refusal| refusal.text_as(Severity::Warning))
     }
 }

@@ -1,17 +1,27 @@
 //! Bus load of set-point streaming, and the fastest control period a bus carries.
 //!
 //! Every frame is counted at its worst-case length (stuff bits included, protocol's
-//! [`bits_on_wire`]): a schedule that fits with the worst case fits whatever the data. Per
-//! drive and cycle the manager sends its PT point (`QP`, 8 bytes) and one query (4 bytes), and
-//! the drive answers both (8 bytes each) — 500 bits whichever the query is; the controller's
-//! heartbeat adds one 1-byte frame per heartbeat period.
+//! [`bits_on_wire`]): a schedule that fits with the worst case fits whatever the data.
+//!
+//! * Interpreter schedule: per drive and cycle the manager sends its PT point (`QP`, 8 bytes)
+//!   and one query (4 bytes), and the drive answers both (8 bytes each) — 500 bits whichever
+//!   the query is.
+//! * PDO schedule: one SYNC (0 bytes) per cycle; per drive one receive PDO with the PT point
+//!   (4 bytes) and one transmit PDO with the position and the PT pointers (8 bytes) — 230
+//!   bits; plus the temperature query and its answer once per `temperature_every` cycles per
+//!   drive, counted as their average per cycle (the busiest cycle carries one more query and
+//!   answer).
+//!
+//! The controller's heartbeat adds one 1-byte frame per heartbeat period to both.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
-use armgate_protocol::can::{Heartbeat, NmtState, NodeId, NodeMessage, bits_on_wire};
+use armgate_protocol::can::{
+    Heartbeat, NmtState, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject, bits_on_wire,
+};
 
 use super::settings::{DriveSettings, SAMPLE_TIME};
 use super::streaming::Query;
-use crate::config::RobotConfig;
+use crate::config::{RobotConfig, Streaming};
 
 /// The load ceiling the fastest period keeps under by default.
 pub const DEFAULT_CEILING: f64 = 0.7;
@@ -26,6 +36,10 @@ pub struct LoadModel {
     pub drives: usize,
     /// Seconds between the controller's heartbeats.
     pub heartbeat_period: f64,
+    /// The schedule.
+    pub streaming: Streaming,
+    /// Cycles between two temperature queries of one drive (PDO schedule).
+    pub temperature_every: u16,
 }
 
 /// A control period and the load it makes.
@@ -49,12 +63,42 @@ impl LoadModel {
                 .filter(|j| j.drive.node_id != 0)
                 .count(),
             heartbeat_period: settings.heartbeat_period,
+            streaming: config.drives.streaming,
+            temperature_every: settings.schedule.temperature_every,
         }
     }
 
-    /// Worst-case bits one drive moves in one streaming cycle: its point and one query, and
-    /// their answers. (Every query has the same length, so the schedule does not change it.)
+    /// Worst-case bits one drive moves in one streaming cycle: with the interpreter schedule
+    /// its point and one query, and their answers (every query has the same length); with the
+    /// PDO schedule its receive and transmit PDOs.
     pub fn bits_per_drive(&self) -> u32 {
+        match self.streaming {
+            Streaming::Interpreter => Self::interpreter_bits_per_drive(),
+            Streaming::Pdo => pdo_bits_per_drive(),
+        }
+    }
+
+    /// Worst-case bits of the cycle's frames that are not per drive: the PDO schedule's SYNC.
+    pub fn bits_per_cycle_shared(&self) -> u32 {
+        match self.streaming {
+            Streaming::Interpreter => 0,
+            Streaming::Pdo => sync_bits(),
+        }
+    }
+
+    /// Worst-case bits per drive and cycle of the queries outside the streaming frames: the
+    /// PDO schedule's temperature query and answer, averaged over `temperature_every`.
+    pub fn side_query_bits_per_drive(&self) -> f64 {
+        match self.streaming {
+            Streaming::Interpreter => 0.0,
+            Streaming::Pdo => {
+                f64::from(temperature_query_bits()) / f64::from(self.temperature_every.max(1))
+            }
+        }
+    }
+
+    /// The interpreter schedule's worst-case bits per drive and cycle.
+    fn interpreter_bits_per_drive() -> u32 {
         // Any node: the length of a frame does not depend on its identifier.
         NodeId::new(1).map_or(0, |node| {
             let point = Request::Set {
@@ -92,7 +136,13 @@ impl LoadModel {
 
     /// Worst-case bits per control cycle of `period` seconds, averaged over heartbeats.
     pub fn bits_per_cycle(&self, period: f64) -> f64 {
-        let streaming = f64::from(self.bits_per_drive()) * self.drives as f64;
+        let per_drive = f64::from(self.bits_per_drive()) + self.side_query_bits_per_drive();
+        let shared = if self.drives > 0 {
+            f64::from(self.bits_per_cycle_shared())
+        } else {
+            0.0
+        };
+        let streaming = per_drive * self.drives as f64 + shared;
         let heartbeat = if self.drives > 0 && self.heartbeat_period > 0.0 {
             f64::from(self.heartbeat_bits()) * period / self.heartbeat_period
         } else {
@@ -122,4 +172,36 @@ impl LoadModel {
             })
         })
     }
+}
+
+/// Worst-case bits of a SYNC (no data).
+fn sync_bits() -> u32 {
+    bits_on_wire(&SyncObject.to_frame())
+}
+
+/// Worst-case bits of one drive's PDOs in one cycle: the receive PDO with its PT point (4
+/// bytes) and the transmit PDO with its position and PT pointers (8 bytes).
+fn pdo_bits_per_drive() -> u32 {
+    NodeId::new(1).map_or(0, |node| {
+        let point = PtPoint { position: 0 }.to_frame(node);
+        let feedback = PtFeedback {
+            position: 0,
+            head: 0,
+            tail: 0,
+        };
+        bits_on_wire(&point) + bits_on_wire(&feedback.to_frame(node))
+    })
+}
+
+/// Worst-case bits of a temperature query and its answer.
+fn temperature_query_bits() -> u32 {
+    NodeId::new(1).map_or(0, |node| {
+        let answer = Reply::Value {
+            command: Mnemonic::TI,
+            index: Index::from(1),
+            value: Value::Int(0),
+        };
+        bits_on_wire(&Query::Temperature.request().to_frame(node))
+            + bits_on_wire(&answer.to_frame(node))
+    })
 }

@@ -2,7 +2,7 @@
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    CanFrame, Heartbeat, Incoming, Nmt, NmtState, NodeId, NodeMessage, SdoResponse,
+    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtState, NodeId, NodeMessage, SdoResponse,
 };
 use heapless::Vec;
 
@@ -14,10 +14,12 @@ use super::link::Link;
 use super::settings::{DriveSettings, SetupError, Timing};
 use super::startup::{Outgoing, StartStep, StepContext};
 use super::state::{DriveState, Phase};
-use super::streaming::{FlowError, PtStream, Query, Schedule};
+use super::streaming::{FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule};
 use super::units::JointUnits;
+mod pdo;
+
 use crate::MAX_JOINTS;
-use crate::config::ValidRobot;
+use crate::config::{Streaming, ValidRobot};
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -66,13 +68,33 @@ pub struct DriveStats {
 /// manager.transmit(now, out.command.as_ref(), &mut bus);
 /// ```
 ///
-/// ([`cycle`](Self::cycle) does both halves, with a measurement one cycle older.) Each cycle
-/// sends every drive at most two interpreter frames: its PT point and one query (spec §6.5).
+/// ([`cycle`](Self::cycle) does both halves, with a measurement one cycle older.) On the
+/// interpreter schedule each cycle sends every drive at most two interpreter frames: its PT
+/// point and one query (spec §6.5). On the PDO schedule it sends one SYNC and every drive one
+/// receive PDO with its PT point; the drives answer the SYNC with their transmit PDOs.
 #[derive(Clone, Debug)]
 pub struct DriveManager {
     timing: Timing,
     schedule: Schedule,
     ring_len: u16,
+    /// PDO schedule: entries of the PT ring.
+    pdo_ring_len: u16,
+    /// The schedule the robot file asks for.
+    configured: Streaming,
+    /// The schedule of the current start (the interpreter's after a fallback).
+    streaming: Streaming,
+    /// A refused PDO mapping falls back to the interpreter schedule.
+    may_fall_back: bool,
+    /// The refusal that made the current start fall back.
+    fallback: Option<DriveFault>,
+    /// When the last SYNC went out (s).
+    last_sync: Option<f64>,
+    /// The last `receive` raised the current fault.
+    faulted_in_receive: bool,
+    /// PDO schedule: points kept beyond the read pointer at every SYNC.
+    pdo_lead: u16,
+    /// PDO schedule: SYNCs a transmit PDO may be missing in a row.
+    pdo_missing_cycles: u32,
     joints: Vec<Joint, MAX_JOINTS>,
     phase: Phase,
     fault: Option<DriveFault>,
@@ -107,6 +129,15 @@ impl DriveManager {
             timing,
             schedule: settings.schedule,
             ring_len: settings.ring_len,
+            pdo_ring_len: settings.pdo_ring_len,
+            configured: config.drives.streaming,
+            streaming: config.drives.streaming,
+            may_fall_back: config.drives.pdo_fallback,
+            fallback: None,
+            last_sync: None,
+            faulted_in_receive: false,
+            pdo_lead: settings.pdo_lead,
+            pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
             joints,
             phase: Phase::Idle,
             fault: None,
@@ -123,9 +154,16 @@ impl DriveManager {
     pub fn start(&mut self) -> Result<(), LifecycleError> {
         self.phase = self.phase.start().ok_or(LifecycleError::Running)?;
         self.fault = None;
+        self.streaming = self.configured;
+        self.fallback = None;
+        self.last_sync = None;
+        let pdo = self.streaming == Streaming::Pdo;
         self.for_each_drive(|drive| {
             drive.link = Link::default();
             drive.reset_steps();
+            if pdo {
+                drive.step = StartStep::GroupId;
+            }
         });
         if !self.has_drives() {
             self.phase = Phase::Streaming(0);
@@ -136,7 +174,8 @@ impl DriveManager {
     /// Stops the drives (the client's `OF`): they finish the motion already queued, come to
     /// rest on the last commanded position and hold it under servo.
     pub fn stop(&mut self) -> Result<(), LifecycleError> {
-        self.phase = self.phase.stop().ok_or(LifecycleError::NotRunning)?;
+        let stopping = self.phase.stop().ok_or(LifecycleError::NotRunning)?;
+        self.phase = self.with_hold_cycles(stopping);
         if !self.has_drives() {
             self.phase = Phase::Stopped;
         }
@@ -182,6 +221,12 @@ impl DriveManager {
     /// The receive half of a cycle: takes everything the bus has received and updates the
     /// measurement, temperatures, flow control and faults.
     pub fn receive(&mut self, bus: &mut impl CanBus) {
+        let clean = self.fault.is_none();
+        self.receive_frames(bus);
+        self.faulted_in_receive = clean && self.fault.is_some();
+    }
+
+    fn receive_frames(&mut self, bus: &mut impl CanBus) {
         if bus.state() == BusState::BusOff {
             self.raise(DriveFault::Bus(BusFault::BusOff));
         }
@@ -202,6 +247,14 @@ impl DriveManager {
             self.raise(DriveFault::Bus(BusFault::BusOff));
         }
         self.check_links();
+        if self.streaming == Streaming::Pdo {
+            if matches!(self.phase, Phase::Streaming(_) | Phase::Stopping(_)) {
+                self.check_sync(now);
+            }
+            if matches!(self.phase, Phase::Streaming(_)) {
+                self.check_feedback();
+            }
+        }
         let mut out = Outbox {
             bus,
             cycle: self.cycle,
@@ -222,11 +275,11 @@ impl DriveManager {
             Phase::Starting => self.start_steps(&mut out),
             Phase::Streaming(n) => {
                 self.accept(command);
-                self.stream(n, &mut out);
+                self.stream_any(now, n, &mut out);
                 self.phase = Phase::Streaming(n.wrapping_add(1));
             }
             Phase::Stopping(left) if left > 0 => {
-                self.stream(self.cycle, &mut out);
+                self.stream_any(now, self.cycle, &mut out);
                 self.phase = Phase::Stopping(left - 1);
             }
             Phase::Stopping(_) => {
@@ -313,12 +366,30 @@ impl DriveManager {
     }
 
     /// PT points joint `joint`'s drive had queued ahead of its read index at its last
-    /// read-index answer (3 in steady state; `None` for a joint without a drive).
+    /// read-index answer (interpreter schedule, 3 in steady state) or at the last SYNC
+    /// answered (PDO schedule, `DriveSettings::pdo_lead` in steady state); `None` for a joint
+    /// without a drive.
     pub fn lead(&self, joint: usize) -> Option<u32> {
         match self.joints.get(joint) {
-            Some(Joint::Real(drive)) => drive.stream.as_ref().and_then(PtStream::lead),
+            Some(Joint::Real(drive)) => match (&drive.stream, &drive.pdo) {
+                (Some(stream), _) => stream.lead(),
+                (_, Some(pdo)) => pdo.lead(),
+                _ => None,
+            },
             _ => None,
         }
+    }
+
+    /// The schedule of the current start: the robot file's, or the interpreter's after a
+    /// fallback.
+    pub fn streaming(&self) -> Streaming {
+        self.streaming
+    }
+
+    /// The mapping refusal that made the current start fall back to the interpreter
+    /// schedule (`drives.pdo_fallback`), if any: reported as a warning, not a fault.
+    pub fn fallback(&self) -> Option<DriveFault> {
+        self.fallback
     }
 
     fn has_drives(&self) -> bool {
@@ -337,7 +408,11 @@ impl DriveManager {
     fn raise(&mut self, fault: DriveFault) {
         self.fault.get_or_insert(fault);
         let can_send = !matches!(fault, DriveFault::Bus(_));
-        self.phase = self.phase.fault(can_send);
+        let next = self.phase.fault(can_send);
+        self.phase = match self.phase {
+            Phase::Stopping(_) => next,
+            _ => self.with_hold_cycles(next),
+        };
     }
 
     /// Faults the first drive that has left a request unanswered too long.
@@ -372,13 +447,21 @@ impl DriveManager {
     /// One cycle of the start sequence: each drive advances when its step is answered and
     /// sends the next step's frames; when every drive is ready, all get `BG` in one cycle.
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
-        let (timing, ring_len) = (self.timing, self.ring_len);
+        let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
+        let timing = self.timing;
+        let ring_len = if pdo {
+            self.pdo_ring_len
+        } else {
+            self.ring_len
+        };
         let context = |drive: &Drive| StepContext {
             controller: timing.controller,
             heartbeat_timeout_ms: timing.heartbeat_timeout_ms,
             ring_len,
             samples_per_point: timing.samples_per_point,
             position: drive.target,
+            node: drive.node,
+            group: timing.group,
         };
         let mut fault = None;
         for (index, joint) in self.joints.iter_mut().enumerate() {
@@ -386,7 +469,10 @@ impl DriveManager {
             let answered = drive.step_sent && drive.awaiting.is_empty();
             let position_known = drive.step != StartStep::ReadPosition || drive.position.is_some();
             if answered && position_known {
-                match drive.step.next(drive.unit_mode, timing.unit_mode_settle) {
+                match drive
+                    .step
+                    .next(drive.unit_mode, timing.unit_mode_settle, pdo)
+                {
                     Ok(next) => {
                         if next == StartStep::Configure(0) {
                             drive.target = drive.position;
@@ -411,17 +497,42 @@ impl DriveManager {
             self.raise(fault);
             return;
         }
+        self.regroup(out);
         let ready = |joint: &Joint| match joint {
             Joint::Real(drive) => drive.step == StartStep::Ready && drive.target.is_some(),
             Joint::Pretend { .. } => true,
         };
         if self.joints.iter().all(ready) {
+            if pdo {
+                // One `BG` to the group: every drive begins at once, and answers it.
+                let begin = Request::Query {
+                    command: Mnemonic::BG,
+                    index: Index::ZERO,
+                };
+                out.send(&begin.to_frame(timing.group));
+            }
+            let cycle = out.cycle;
             self.for_each_drive(|drive| {
                 if let Some(position) = drive.target {
-                    drive.stream = Some(PtStream::new(ring_len, position));
+                    if pdo {
+                        let stream = PdoStream::new(ring_len, pdo_lead, FILLED_POINTS, position);
+                        drive.pdo = Some(stream);
+                    } else {
+                        drive.stream = Some(PtStream::new(ring_len, position));
+                    }
                     drive.step = StartStep::Begin;
                     let ctx = context(drive);
-                    send_step(drive, &ctx, out);
+                    if pdo {
+                        // The group `BG` went out: each drive owes its answer.
+                        drive.awaiting.clear();
+                        for frame in &drive.step.frames(&ctx) {
+                            let _ = drive.awaiting.push(*frame);
+                            drive.link.sent(cycle);
+                        }
+                        drive.step_sent = true;
+                    } else {
+                        send_step(drive, &ctx, out);
+                    }
                 }
             });
             self.phase = Phase::Streaming(0);
@@ -452,6 +563,17 @@ impl DriveManager {
             match joint {
                 Joint::Pretend { position } => *position = value,
                 Joint::Real(drive) => drive.target = counts,
+            }
+        }
+    }
+
+    /// One streaming cycle on the schedule of this start.
+    fn stream_any<B: CanBus>(&mut self, now: f64, streamed: u32, out: &mut Outbox<'_, B>) {
+        match self.streaming {
+            Streaming::Interpreter => self.stream(streamed, out),
+            Streaming::Pdo => {
+                self.last_sync = Some(now);
+                self.stream_pdo(streamed, out);
             }
         }
     }
@@ -527,8 +649,8 @@ impl DriveManager {
             Incoming::Interpreter { node, reply } => self.on_reply(node, reply),
             Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
             Incoming::SdoResponse { node, response } => self.on_sdo(node, response),
+            Incoming::Feedback { node, feedback } => self.on_feedback(node, feedback),
             Incoming::Heartbeat { .. }
-            | Incoming::Feedback { .. }
             | Incoming::Sync
             | Incoming::Malformed { .. }
             | Incoming::Other => {
@@ -639,23 +761,55 @@ impl DriveManager {
     }
 
     fn on_sdo(&mut self, node: NodeId, response: SdoResponse) {
-        let cycle = self.cycle;
+        let (cycle, group) = (self.cycle, self.timing.group);
         let Some((joint, drive)) = self.drive_mut(node) else {
             self.ignored();
             return;
         };
         drive.link.heard(cycle);
-        match response {
-            SdoResponse::Downloaded { object } | SdoResponse::Uploaded { object, .. } => {
-                if let Some(at) = drive
+        let mapping = drive.step.configuration(drive.node, group);
+        let fault = match mapping {
+            // An answer to this drive's mapping transfer: checked.
+            Some((step, read_back)) if response.object() == step.object => {
+                let checked = if read_back {
+                    step.check_read_back(&response)
+                } else {
+                    step.check_write(&response)
+                };
+                match checked {
+                    Ok(()) => {
+                        drive.awaiting.clear();
+                        None
+                    }
+                    Err(refusal) => Some(DriveFault::MappingRefused {
+                        joint,
+                        object: step.object,
+                        code: match refusal {
+                            MappingRefusal::Abort(code) => Some(code),
+                            MappingRefusal::Mismatch { .. } | MappingRefusal::Unexpected => None,
+                        },
+                    }),
+                }
+            }
+            _ => {
+                let object = response.object();
+                let Some(at) = drive
                     .awaiting
                     .iter()
                     .position(|frame| frame.answered_by_sdo(object))
-                {
-                    drive.awaiting.swap_remove(at);
+                else {
+                    // Not awaited: the answer to a mapping transfer after a fallback.
+                    return self.ignored();
+                };
+                drive.awaiting.swap_remove(at);
+                if let SdoResponse::Abort { code, .. } = response {
+                    return self.raise(DriveFault::SdoAbort { joint, code });
                 }
+                None
             }
-            SdoResponse::Abort { code, .. } => self.raise(DriveFault::SdoAbort { joint, code }),
+        };
+        if let Some(fault) = fault {
+            self.refuse_mapping(fault);
         }
     }
 }

@@ -4,7 +4,7 @@
 use armgate_protocol::can::NodeId;
 
 use super::load::LoadModel;
-use super::streaming::Schedule;
+use super::streaming::{PDO_TARGET_LEAD, Schedule};
 use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
@@ -43,6 +43,18 @@ pub struct DriveSettings {
     pub ring_len: u16,
     /// Which query each drive sends in each streaming cycle.
     pub schedule: Schedule,
+    /// PDO schedule: entries of the drives' PT ring (6..=64): room for the lead, a correction
+    /// and a margin that makes a wrong pointer show as an overrun.
+    pub pdo_ring_len: u16,
+    /// PDO schedule: the PT points kept beyond each drive's read pointer at every SYNC
+    /// (2..=pdo_ring_len − 3; docs/drives.md).
+    pub pdo_lead: u16,
+    /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
+    /// row is faulted (at least 1).
+    pub pdo_missing_cycles: u16,
+    /// PDO schedule: the group id (object 0x2040) the drives also answer to, 1..=127, neither
+    /// a drive's nor the controller's: one `BG` to it begins every drive at once.
+    pub group_node: u8,
 }
 
 impl Default for DriveSettings {
@@ -57,6 +69,10 @@ impl Default for DriveSettings {
             unit_mode_settle: 0.1,
             ring_len: 6,
             schedule: Schedule::default(),
+            pdo_ring_len: 16,
+            pdo_lead: PDO_TARGET_LEAD,
+            pdo_missing_cycles: 4,
+            group_node: 126,
         }
     }
 }
@@ -75,9 +91,11 @@ pub enum SetupError {
     /// The heartbeat times must be positive, the timeout longer than the period, and the
     /// timeout at most 65.535 s (a 16-bit number of milliseconds).
     Heartbeat,
-    /// The controller's node id is not in 1..=127, or is also a drive's.
+    /// The controller's or the group's node id is not in 1..=127, or is also a drive's, or
+    /// they are the same.
     ControllerNode,
-    /// A timeout or settle time is negative or not finite, or a schedule interval is zero.
+    /// A timeout or settle time is negative or not finite, a schedule interval is zero, or the
+    /// PDO lead or missing-feedback count is out of range.
     BadTiming,
     /// A joint's drive has a node id above 127 or no counts per revolution.
     BadDrive,
@@ -108,6 +126,8 @@ impl core::fmt::Display for SetupError {
 /// The settings turned into cycle counts for one control period.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Timing {
+    /// The control period (s).
+    pub period: f64,
     /// Drive samples per PT point (`MP[4]`).
     pub samples_per_point: u16,
     /// Cycles a request may stay unanswered.
@@ -122,6 +142,8 @@ pub(crate) struct Timing {
     pub heartbeat_timeout_ms: u16,
     /// The controller's node id.
     pub controller: NodeId,
+    /// The drives' group id (PDO schedule).
+    pub group: NodeId,
 }
 
 impl Timing {
@@ -138,7 +160,7 @@ impl Timing {
         if !fits {
             return Err(SetupError::BusOverloaded);
         }
-        if !(6..=64).contains(&settings.ring_len) {
+        if !(6..=64).contains(&settings.ring_len) || !(6..=64).contains(&settings.pdo_ring_len) {
             return Err(SetupError::RingSize);
         }
         let (beat, timeout) = (settings.heartbeat_period, settings.heartbeat_timeout);
@@ -146,11 +168,19 @@ impl Timing {
         if !(beat > 0.0 && timeout > beat && (1.0..=65535.0).contains(&timeout_ms)) {
             return Err(SetupError::Heartbeat);
         }
-        let controller = NodeId::new(settings.controller_node)
-            .filter(|id| config.joints.iter().all(|j| j.drive.node_id != id.get()))
+        let free = |id: u8| {
+            NodeId::new(id).filter(|id| config.joints.iter().all(|j| j.drive.node_id != id.get()))
+        };
+        let controller = free(settings.controller_node).ok_or(SetupError::ControllerNode)?;
+        let group = free(settings.group_node)
+            .filter(|&group| group != controller)
             .ok_or(SetupError::ControllerNode)?;
         let schedule = settings.schedule;
         if schedule.read_index_every == 0 || schedule.temperature_every == 0 {
+            return Err(SetupError::BadTiming);
+        }
+        let lead_fits = (2..=settings.pdo_ring_len.saturating_sub(3)).contains(&settings.pdo_lead);
+        if !lead_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
         }
         let cycles = |seconds: f64| {
@@ -160,6 +190,7 @@ impl Timing {
                 .ok_or(SetupError::BadTiming)
         };
         Ok(Self {
+            period,
             samples_per_point: samples,
             // At least two cycles: a reply to a request sent in one cycle is read in the next.
             reply_timeout: cycles(settings.reply_timeout)?.max(2),
@@ -168,6 +199,7 @@ impl Timing {
             heartbeat_period: beat,
             heartbeat_timeout_ms: timeout_ms as u16,
             controller,
+            group,
         })
     }
 }

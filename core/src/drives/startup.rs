@@ -21,9 +21,19 @@
 //! | `Configure(4)` | `QP[4]=PX`, `PT=1` | the next `BG` starts PT motion at `QP[1]` |
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
+//!
+//! The PDO schedule first gives every drive the group id (`GroupId`, SDO 0x2040), which takes
+//! effect at a reset communication: when every drive has it (`Regroup`), the manager resets
+//! the communication of all nodes, waits (`Rejoin`) and starts them again; one `BG` to the group
+//! id then begins every drive at once. It adds the mapping after `ConsumerHeartbeat` — `Map(0..28)`, one SDO
+//! transfer per step: each of protocol's [`streaming_mapping`] writes, then its read-back —
+//! and sets the write pointer the receive PDO writes at (`WritePointer`, `MP[6]`) after
+//! `Configure(1)`.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
-use armgate_protocol::can::{NodeId, Object, SdoRequest};
+use armgate_protocol::can::{
+    MAPPING_STEPS, MappingStep, NodeId, Object, SdoRequest, group_id_step, streaming_mapping,
+};
 use heapless::Vec;
 
 use super::settings::POSITION_MODE;
@@ -32,8 +42,21 @@ use super::streaming::FILLED_POINTS;
 /// Where one drive is in its start sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StartStep {
+    /// PDO schedule: write the group id (object 0x2040).
+    GroupId,
+    /// PDO schedule: read the group id back.
+    CheckGroupId,
+    /// PDO schedule: waiting for every drive to have its group id; then the reset
+    /// communication goes out.
+    Regroup,
+    /// PDO schedule: after the reset communication, this many more cycles to wait; at 0 the
+    /// NMT start goes out when every drive is there.
+    Rejoin(u32),
     /// Configure the consumer heartbeat (object 0x1016).
     ConsumerHeartbeat,
+    /// PDO schedule: the PDO mapping, transfer `n`: the write of mapping step `n / 2` (even
+    /// `n`), or its read-back (odd `n`).
+    Map(u8),
     /// Read the unit mode.
     ReadUnitMode,
     /// Switch the motor off before changing the unit mode.
@@ -50,6 +73,8 @@ pub enum StartStep {
     ReadPosition,
     /// Configure the PT ring and fill it (five parts).
     Configure(u8),
+    /// PDO schedule: the write pointer (`MP[6]`) at the first free entry after the fill.
+    WritePointer,
     /// Waiting for every other drive.
     Ready,
     /// `BG` sent: PT motion runs.
@@ -78,6 +103,10 @@ pub struct StepContext {
     pub samples_per_point: u16,
     /// The start position (counts), once read; the ring is filled with it.
     pub position: Option<i32>,
+    /// The drive.
+    pub node: NodeId,
+    /// The group id the drives answer to besides their own (PDO schedule).
+    pub group: NodeId,
 }
 
 impl StartStep {
@@ -98,11 +127,24 @@ impl StartStep {
         };
         // No position, no fill: a point is never invented (and `BG` is then refused).
         let fill = |slot: u16| ctx.position.map(|p| set(Mnemonic::QP, slot as u8, p));
+        let map = |n: u8| {
+            mapping_step(ctx.node, n).map(|(step, read_back)| {
+                Outgoing::Sdo(if read_back {
+                    step.read_back()
+                } else {
+                    step.write()
+                })
+            })
+        };
         let frames: &[Option<Outgoing>] = match *self {
             Self::ConsumerHeartbeat => &[Some(Outgoing::Sdo(SdoRequest::consumer_heartbeat(
                 ctx.controller,
                 ctx.heartbeat_timeout_ms,
             )))],
+            Self::GroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).write()))],
+            Self::CheckGroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).read_back()))],
+            Self::Map(n) => &[map(n)],
+            Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(FILLED_POINTS) + 1))],
             Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
             Self::MotorOff => &[Some(set(Mnemonic::MO, 0, 0))],
             Self::SetUnitMode => &[Some(set(Mnemonic::UM, 0, POSITION_MODE))],
@@ -120,7 +162,7 @@ impl StartStep {
             Self::Configure(3) => &[fill(2), fill(3)],
             Self::Configure(_) => &[fill(FILLED_POINTS), Some(set(Mnemonic::PT, 0, 1))],
             Self::Begin => &[Some(query(Mnemonic::BG))],
-            Self::SettleUnitMode(_) | Self::Ready => &[],
+            Self::SettleUnitMode(_) | Self::Ready | Self::Regroup | Self::Rejoin(_) => &[],
         };
         // Pushed one by one: heapless's `collect` would panic on overflow (none here: at most
         // two per step).
@@ -132,11 +174,18 @@ impl StartStep {
     }
 
     /// The step after this one, given the unit mode the drive reported; `Err(found)` if the
-    /// drive is still not in position mode after the change.
-    pub fn next(&self, unit_mode: Option<i32>, settle: u32) -> Result<Self, i32> {
+    /// drive is still not in position mode after the change. `pdo`: the PDO schedule's steps
+    /// are included.
+    pub fn next(&self, unit_mode: Option<i32>, settle: u32, pdo: bool) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
         Ok(match *self {
+            Self::GroupId => Self::CheckGroupId,
+            Self::CheckGroupId | Self::Regroup => Self::Regroup,
+            Self::Rejoin(n) => Self::Rejoin(n.saturating_sub(1)),
+            Self::ConsumerHeartbeat if pdo => Self::Map(0),
             Self::ConsumerHeartbeat => Self::ReadUnitMode,
+            Self::Map(n) if usize::from(n) + 1 < 2 * MAPPING_STEPS && pdo => Self::Map(n + 1),
+            Self::Map(_) => Self::ReadUnitMode,
             Self::ReadUnitMode if in_position_mode => Self::MotorOn,
             Self::ReadUnitMode => Self::MotorOff,
             Self::MotorOff => Self::SetUnitMode,
@@ -147,10 +196,31 @@ impl StartStep {
             Self::CheckUnitMode => return Err(unit_mode.unwrap_or(0)),
             Self::MotorOn => Self::ReadPosition,
             Self::ReadPosition => Self::Configure(0),
+            Self::Configure(1) if pdo => Self::WritePointer,
+            Self::WritePointer => Self::Configure(2),
             Self::Configure(n @ 0..=3) => Self::Configure(n + 1),
             Self::Configure(_) | Self::Ready => Self::Ready,
             Self::Begin => Self::Begin,
         })
+    }
+}
+
+/// Transfer `n` of `node`'s PDO mapping: the step, and whether this transfer reads it back.
+pub fn mapping_step(node: NodeId, n: u8) -> Option<(MappingStep, bool)> {
+    let step = streaming_mapping(node).get(usize::from(n / 2)).copied()?;
+    Some((step, n % 2 == 1))
+}
+
+impl StartStep {
+    /// The PDO configuration transfer this step makes, if any: the step (group id or mapping)
+    /// and whether it reads the value back.
+    pub fn configuration(&self, node: NodeId, group: NodeId) -> Option<(MappingStep, bool)> {
+        match *self {
+            Self::GroupId => Some((group_id_step(group), false)),
+            Self::CheckGroupId => Some((group_id_step(group), true)),
+            Self::Map(n) => mapping_step(node, n),
+            _ => None,
+        }
     }
 }
 

@@ -15,6 +15,18 @@ use armgate_core::kinematics::Joints;
 use armgate_core::motion::{Controller, StepOutput};
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
+use armgate_protocol::client::{Command, Request};
+
+/// A client request datagram with `command` and no values.
+pub fn request(command: Command) -> Datagram<()> {
+    let bytes = Request {
+        command,
+        values: [0.0; 7],
+        index: 0,
+    }
+    .to_bytes();
+    Datagram::new(&bytes, ())
+}
 
 /// Loads `robots/<name>.toml`.
 pub fn robot(name: &str) -> ValidRobot {

@@ -1,9 +1,12 @@
 //! Set-point streaming in position mode: which frames each drive gets per cycle
 //! ([`Schedule`]) and how PT points are written and paced by the drive's read index
-//! ([`PtStream`]).
+//! ([`PtStream`], interpreter schedule) or by the PT pointers of its transmit PDO
+//! ([`PdoStream`], PDO schedule).
 
+mod pdo;
 mod pt;
 mod schedule;
 
+pub use pdo::{PDO_TARGET_LEAD, PdoStream};
 pub use pt::{FILLED_POINTS, FlowError, PtStream, TARGET_LEAD};
 pub use schedule::{Query, Schedule};

@@ -1,0 +1,177 @@
+//! The drive manager's PDO schedule: the start's group id and its barriers, a refused
+//! configuration and the fallback, the cycle's SYNC and receive PDOs, the transmit PDOs'
+//! feedback, and the checks that stop the arm (a missing transmit PDO, a late SYNC).
+
+use armgate_protocol::can::{
+    Nmt, NmtCommand, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject,
+};
+use heapless::Vec;
+
+use super::{DriveManager, Outbox};
+use crate::MAX_JOINTS;
+use crate::config::Streaming;
+use crate::drives::bus::CanBus;
+use crate::drives::drive::{Drive, Joint};
+use crate::drives::fault::DriveFault;
+use crate::drives::startup::{Outgoing, StartStep};
+use crate::drives::state::Phase;
+use crate::drives::streaming::{FlowError, Query};
+
+impl DriveManager {
+    /// A stop just begun, with as many hold cycles as the schedule needs: the PDO schedule
+    /// has one point more queued right after a write than its lead at the SYNC.
+    pub(super) fn with_hold_cycles(&self, phase: Phase) -> Phase {
+        match (phase, self.streaming) {
+            (Phase::Stopping(_), Streaming::Pdo) => Phase::Stopping(u32::from(self.pdo_lead) + 2),
+            _ => phase,
+        }
+    }
+
+    /// PDO schedule: a SYNC more than half a period late (the control cycle skipped ticks)
+    /// is a fault: the drives' queues ran on without points. It is the cause of what the
+    /// drives reported meanwhile (their underflows), so it replaces a fault raised by this
+    /// cycle's receive.
+    pub(super) fn check_sync(&mut self, now: f64) {
+        let period = self.timing.period;
+        let Some(last) = self.last_sync else { return };
+        let late = now - last - period;
+        if late > 0.5 * period {
+            // A float-to-integer `as` saturates: it cannot fail.
+            let late_us = libm::round(late * 1e6) as u32;
+            if self.faulted_in_receive {
+                self.fault = None;
+            }
+            self.raise(DriveFault::LateSync { late_us });
+        }
+    }
+
+    /// PDO schedule: faults the first drive whose transmit PDO has been missing for more than
+    /// `DriveSettings::pdo_missing_cycles` SYNCs in a row.
+    pub(super) fn check_feedback(&mut self) {
+        let missing = self.pdo_missing_cycles;
+        let silent = self
+            .joints
+            .iter()
+            .enumerate()
+            .find_map(|(joint, entry)| match entry {
+                Joint::Real(Drive {
+                    pdo: Some(stream), ..
+                }) if stream.unreported() > missing => Some(DriveFault::NoFeedback {
+                    joint,
+                    cycles: stream.unreported(),
+                }),
+                _ => None,
+            });
+        if let Some(fault) = silent {
+            self.raise(fault);
+        }
+    }
+
+    /// A drive refused the PDO mapping: a start-up fault, or with `drives.pdo_fallback` the
+    /// interpreter schedule for this start (every drive still mapping goes on with its unit
+    /// mode).
+    pub(super) fn refuse_mapping(&mut self, fault: DriveFault) {
+        if !self.may_fall_back {
+            return self.raise(fault);
+        }
+        self.streaming = Streaming::Interpreter;
+        self.fallback.get_or_insert(fault);
+        self.for_each_drive(|drive| {
+            // The reset communication goes out only once every drive has its group id, so a
+            // refused group id leaves the drives as the NMT start left them.
+            let next = match drive.step {
+                StartStep::GroupId | StartStep::CheckGroupId | StartStep::Regroup => {
+                    StartStep::ConsumerHeartbeat
+                }
+                StartStep::Map(_) => StartStep::ReadUnitMode,
+                _ => return,
+            };
+            drive.step = next;
+            drive.step_sent = false;
+            drive.awaiting.clear();
+        });
+    }
+
+    /// PDO schedule, the group id's barriers: when every drive has written it, the reset
+    /// communication that makes it effective goes to all nodes; when every drive has waited
+    /// the settle time after it, the NMT start, and the drives go on with their heartbeat.
+    pub(super) fn regroup<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
+        let all_at = |joints: &Vec<Joint, MAX_JOINTS>, step: StartStep| {
+            joints.iter().all(|joint| match joint {
+                Joint::Real(drive) => drive.step == step && drive.step_sent,
+                Joint::Pretend { .. } => true,
+            })
+        };
+        let (command, next) = if all_at(&self.joints, StartStep::Regroup) {
+            let settle = self.timing.nmt_settle;
+            (NmtCommand::ResetCommunication, StartStep::Rejoin(settle))
+        } else if all_at(&self.joints, StartStep::Rejoin(0)) {
+            (NmtCommand::Start, StartStep::ConsumerHeartbeat)
+        } else {
+            return;
+        };
+        out.send(
+            &Nmt {
+                command,
+                node: None,
+            }
+            .to_frame(),
+        );
+        self.for_each_drive(|drive| {
+            drive.step = next;
+            drive.step_sent = false;
+        });
+    }
+
+    /// One PDO streaming cycle: the SYNC, then every running drive's point(s) towards its
+    /// target in receive PDOs, and now and then its temperature query; drives not yet running
+    /// (a stop during the start) get a position query instead. A drive whose transmit PDO has
+    /// been missing too long is faulted.
+    pub(super) fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
+        out.send(&SyncObject.to_frame());
+        let schedule = self.schedule;
+        let stats = &mut self.stats;
+        for (index, joint) in self.joints.iter_mut().enumerate() {
+            let Joint::Real(drive) = joint else { continue };
+            let running = drive.target.is_some() && drive.pdo.is_some();
+            if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
+                let points = stream.points(target);
+                for &position in &points {
+                    out.send(&PtPoint { position }.to_frame(drive.node));
+                }
+                let count = |n: &mut u32| *n = n.saturating_add(1);
+                match points.len() {
+                    0 => count(&mut stats.points_skipped),
+                    2 => count(&mut stats.points_inserted),
+                    _ => {}
+                }
+            }
+            let query = match schedule.query(streamed, index, false) {
+                Query::Position if running => continue,
+                query => query,
+            };
+            out.request(drive, &Outgoing::Interpreter(query.request()));
+        }
+    }
+
+    /// A drive's transmit PDO: its position and PT pointers at the last SYNC.
+    pub(super) fn on_feedback(&mut self, node: NodeId, feedback: PtFeedback) {
+        let cycle = self.cycle;
+        let Some((joint, drive)) = self.drive_mut(node) else {
+            self.ignored();
+            return;
+        };
+        drive.position = Some(feedback.position);
+        // The drive is alive: a lost answer to a temperature query is not a silent drive.
+        drive.link.heard(cycle);
+        let flow = drive
+            .pdo
+            .as_mut()
+            .map(|stream| stream.feedback(feedback.head, feedback.tail));
+        match flow {
+            Some(Err(FlowError::Underflow)) => self.raise(DriveFault::Underflow { joint }),
+            Some(Err(FlowError::Overrun)) => self.raise(DriveFault::Overrun { joint }),
+            _ => {}
+        }
+    }
+}

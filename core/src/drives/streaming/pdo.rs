@@ -1,0 +1,193 @@
+//! The PDO schedule's flow control: how many PT points a drive gets per cycle, paced by the
+//! PT pointers its synchronous transmit PDO reports.
+//!
+//! Each cycle the manager sends one SYNC, then one receive PDO per drive carrying the next PT
+//! point; the drive writes it at its own write pointer and advances the pointer. Every drive
+//! answers each SYNC with a transmit PDO: its position and its PT head (write) and tail (read)
+//! pointers, sampled at the SYNC. The manager reads it at the start of the next cycle.
+//!
+//! The lead at a SYNC is the number of points written beyond the read pointer, `head − 1 −
+//! tail` modulo the ring. While the drive runs segment `r` it has fetched `QP[r+2]`, so a lead
+//! of 2 is the least that has not run dry, and 1 or less means it has (or will, at its next
+//! segment start). Where the drive's segment boundaries fall within the control cycle decides
+//! the least safe lead: 2 when a boundary falls between the cycle's PT point and the next
+//! SYNC, 3 when it falls between the SYNC and the point (the point then comes too late for
+//! that boundary). The phase drifts with the drive's clock, and SYNC samples cannot see where
+//! it is, so the stream keeps [`PDO_TARGET_LEAD`] = 3 at every SYNC: safe in both phases, and a
+//! point lost on the bus or a clock slip costs one insertion, not an underflow.
+//!
+//! The feedback is a cycle old when it arrives, and the points sent since are known, so the
+//! stream predicts the lead at the SYNC it is about to send (one segment consumed per cycle)
+//! and sends 0, 1 or 2 points to bring the next one to the target: a dead-beat correction
+//! without waiting for the effect to show. A missing report is replaced by the prediction.
+
+use heapless::Vec;
+
+use super::FlowError;
+
+/// The lead (points beyond the read pointer) the stream keeps at every SYNC by default, for a
+/// drive whose segment boundary follows the SYNC; one less for a drive whose boundary precedes
+/// it.
+pub const PDO_TARGET_LEAD: u16 = 3;
+
+/// The writer side of one drive's PT ring on the PDO schedule.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PdoStream {
+    /// Entries of the ring (at least 6).
+    ring: u16,
+    /// The lead kept at every SYNC (2 or more).
+    target: u16,
+    /// The least lead kept: the target, one less for a drive whose boundary precedes the SYNC
+    /// (known from its first report).
+    least: Option<i32>,
+    /// The value of the newest point sent (counts), for a midpoint.
+    newest_value: i32,
+    /// The lead at the last SYNC sent: reported, or predicted.
+    lead_at_sync: i32,
+    /// Points sent after the last SYNC.
+    sent_since_sync: u8,
+    /// The lead of the last report.
+    reported: Option<u16>,
+    /// SYNCs sent since the last report.
+    unreported: u32,
+}
+
+impl PdoStream {
+    /// A ring of `ring` entries (≥ 6) keeping `target` points beyond the read pointer at every
+    /// SYNC, begun with `filled` points holding `position`.
+    pub fn new(ring: u16, target: u16, filled: u16, position: i32) -> Self {
+        Self {
+            ring: ring.max(6),
+            target: target.max(2),
+            least: None,
+            newest_value: position,
+            // At the first SYNC the drive runs segment 1 with points 1..=filled: `filled − 1`
+            // beyond it, which is what the first prediction (one segment less) gives.
+            lead_at_sync: i32::from(filled),
+            sent_since_sync: 0,
+            reported: None,
+            unreported: 0,
+        }
+    }
+
+    /// The lead that the pointers `head` (the next entry to write) and `tail` (the read
+    /// pointer) give, both `1..=ring`.
+    pub fn lead_of(&self, head: u16, tail: u16) -> Option<u16> {
+        let valid = |p: u16| (1..=self.ring).contains(&p);
+        (valid(head) && valid(tail)).then(|| (head + 2 * self.ring - 1 - tail) % self.ring)
+    }
+
+    /// Takes the pointers of the transmit PDO answering the last SYNC.
+    pub fn feedback(&mut self, head: u16, tail: u16) -> Result<(), FlowError> {
+        let lead = self.lead_of(head, tail).ok_or(FlowError::Overrun)?;
+        self.reported = Some(lead);
+        self.unreported = 0;
+        // Every drive began with the same points at the same instant, so the first report
+        // differs from the prediction only by where the drive's segment boundary falls: before
+        // the SYNC it reads one less, and that is where it stays.
+        let phase = (i32::from(lead) - self.lead_at_sync).clamp(-1, 0);
+        self.least
+            .get_or_insert((i32::from(self.target) + phase).max(2));
+        // The report is the last SYNC's: it replaces the prediction; the points sent after
+        // that SYNC are still counted in `sent_since_sync`.
+        self.lead_at_sync = i32::from(lead);
+        match lead {
+            ..=1 => Err(FlowError::Underflow),
+            l if l + 1 >= self.ring => Err(FlowError::Overrun),
+            _ => Ok(()),
+        }
+    }
+
+    /// A SYNC is going out: the drive consumes about one segment per cycle, and this cycle's
+    /// points follow. Returns them (0, 1 or 2 values, a midpoint first) towards `target`.
+    pub fn points(&mut self, target: i32) -> Vec<i32, 2> {
+        // The predicted lead at this SYNC: the last one's, plus what was sent after it, minus
+        // the segment consumed in between.
+        let predicted = self.lead_at_sync + i32::from(self.sent_since_sync) - 1;
+        self.lead_at_sync = predicted;
+        self.unreported = self.unreported.saturating_add(1);
+        // The lead at the next SYNC is this one plus this cycle's points minus the next
+        // segment. Kept within least..=least + 1: as the drive's clock drifts, its boundary
+        // passes the SYNC and its reading moves by one without a point more or less queued.
+        let least = self.least.unwrap_or(i32::from(self.target));
+        let mut points = Vec::new();
+        match predicted {
+            p if p > least + 1 => {}
+            p if p >= least => {
+                let _ = points.push(target);
+            }
+            _ => {
+                let mid = (i64::from(self.newest_value) + i64::from(target)) / 2;
+                // The mean of two i32 values is an i32.
+                let _ = points.push(mid as i32);
+                let _ = points.push(target);
+            }
+        }
+        self.sent_since_sync = points.len() as u8;
+        if let Some(&last) = points.last() {
+            self.newest_value = last;
+        }
+        points
+    }
+
+    /// The lead at the last report.
+    pub fn lead(&self) -> Option<u32> {
+        self.reported.map(u32::from)
+    }
+
+    /// SYNCs sent since the last report.
+    pub fn unreported(&self) -> u32 {
+        self.unreported
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A drive that consumes one segment per cycle and answers every SYNC: the stream settles
+    /// on the target lead and stays there.
+    #[test]
+    fn steady_state_keeps_the_target_lead() {
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
+        let (mut head, mut tail) = (5u16, 1u16);
+        let advance = |p: u16, n: u16| (p - 1 + n) % 6 + 1;
+        for cycle in 0..50 {
+            // The SYNC samples the pointers, the points land, the answer is read, a segment
+            // passes.
+            let at_sync = (head, tail);
+            head = advance(head, stream.points(cycle).len() as u16);
+            if cycle > 0 {
+                assert_eq!(stream.lead_of(at_sync.0, at_sync.1), Some(PDO_TARGET_LEAD));
+            }
+            stream.feedback(at_sync.0, at_sync.1).unwrap();
+            tail = advance(tail, 1);
+        }
+    }
+
+    #[test]
+    fn a_lost_point_is_made_up_and_an_extra_one_skipped() {
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
+        // Lead 2 at the last SYNC and nothing sent since: 1 at this one, two points needed,
+        // a midpoint first.
+        stream.feedback(5, 2).unwrap();
+        assert_eq!(stream.points(10).as_slice(), &[5, 10]);
+        // Lead 4 reported, two points sent after it: 5 at this SYNC, skip.
+        stream.feedback(2, 3).unwrap();
+        assert!(stream.points(20).is_empty());
+        // Lead 4 reported, nothing sent after it: 3 at this SYNC, one point.
+        stream.feedback(2, 3).unwrap();
+        assert_eq!(stream.points(30).as_slice(), &[30]);
+    }
+
+    #[test]
+    fn pointers_outside_the_ring_or_the_window_stop_the_stream() {
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
+        assert_eq!(stream.feedback(0, 1), Err(FlowError::Overrun));
+        assert_eq!(stream.feedback(7, 1), Err(FlowError::Overrun));
+        assert_eq!(stream.feedback(3, 1), Err(FlowError::Underflow)); // lead 1
+        assert_eq!(stream.feedback(6, 6), Err(FlowError::Overrun)); // lead 5
+        assert_eq!(stream.feedback(5, 1), Ok(())); // lead 3
+        assert_eq!(stream.lead(), Some(3));
+    }
+}
