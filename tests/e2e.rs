@@ -1097,3 +1097,70 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     assert_eq!(status(&sim)[4], 2.0, "a Cartesian move runs");
     assert_eq!(sim.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
 }
+
+#[test]
+fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
+    use armgate_client::{Client, Mode, TwistFrame, Velocity, VelocityStreamer};
+    // Away from the singularities (the home pose is 0.014 from one, where the damping would
+    // trade some accuracy for bounded rates).
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    wait_drives(&sim, 2.0);
+    let addr = sim.socket.peer_addr().unwrap();
+    let mut arm = Client::connect(addr).unwrap();
+    arm.set_mode(Mode::Cartesian).unwrap();
+    let start = arm.pose().unwrap().xyz;
+    // One TW by hand: the echo says how long it holds, three control periods of 19.44 ms.
+    let hold = arm
+        .twist([0.0; 3], [0.0; 3], TwistFrame::Base)
+        .unwrap()
+        .unwrap();
+    assert!(
+        (hold.as_secs_f64() - 3.0 * 0.01944).abs() < 1e-6,
+        "{hold:?}"
+    );
+    // In joint mode the same request is refused with its reason.
+    let mut joint = Client::connect(addr).unwrap();
+    joint.set_mode(Mode::Joint).unwrap();
+    let refused = joint.twist([0.0, 0.0, 0.01], [0.0; 3], TwistFrame::Base);
+    assert!(
+        refused.is_err_and(|e| e.to_string() == "ER20 Cmd TW needs mode 2"),
+        "TW in joint mode"
+    );
+    arm.set_mode(Mode::Cartesian).unwrap();
+
+    // 1 cm/s up for 1.5 s from the streaming thread, over its own socket.
+    let streamer = VelocityStreamer::spawn(Client::connect(addr).unwrap()).unwrap();
+    let up = Velocity::Twist {
+        linear: [0.0, 0.0, 0.01],
+        angular: [0.0; 3],
+        frame: TwistFrame::Base,
+    };
+    streamer.stream(up, Instant::now() + Duration::from_millis(1500));
+    std::thread::sleep(Duration::from_millis(700));
+    assert_eq!(status(&sim)[4], 5.0, "streaming while the twist is re-sent");
+    std::thread::sleep(Duration::from_millis(1300));
+    // The stream ended at 1.5 s; three periods and the ramp later the arm holds.
+    assert_eq!(status(&sim)[4], 0.0, "at rest after the stream");
+    assert!(streamer.events.try_recv().is_err(), "no failure");
+    let end = arm.pose().unwrap().xyz;
+    let rise = end[2] - start[2];
+    let aside = ((end[0] - start[0]).powi(2) + (end[1] - start[1]).powi(2)).sqrt();
+    // 15 mm, less the ramps and the gaps the scheduler leaves on a loaded machine.
+    assert!((0.010..0.0155).contains(&rise), "rose {rise} m");
+    assert!(aside < 2e-5, "{aside} m aside");
+
+    // The command line: 1 cm/s down for half a second, then it waits for the rest.
+    let (result, out) = armgate(&sim, &["jog", "0", "0", "-0.01", "--for", "0.5"]);
+    result.unwrap();
+    assert!(
+        out.contains("streamed") && out.ends_with("at rest\n"),
+        "{out}"
+    );
+    let fall = end[2] - arm.pose().unwrap().xyz[2];
+    assert!((0.003..0.0055).contains(&fall), "fell {fall} m");
+    let (result, _) = armgate(&sim, &["jog", "0", "0"]);
+    assert!(result.is_err(), "a twist has 3 or 6 values");
+}

@@ -14,7 +14,7 @@ use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
     Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES, DrivesOn, Mode, NO_READING,
-    Pose, Progress, Text, WaitOptions,
+    Pose, Progress, Text, TwistFrame, Velocity, WaitOptions,
 };
 
 const ABOUT: &str = "Command an armgate robot-arm controller over UDP";
@@ -27,8 +27,8 @@ Each command sends one or a few requests and prints the answer. The controller i
 without reply within --timeout is sent again, --retries times.
 
 Units: metres and radians; roll/pitch/yaw mean R = Rz(yaw)·Ry(pitch)·Rx(roll).
-Motions need the right mode first: `armgate mode cart` for move/run with [[cartesian]] points,
-`armgate mode joint` for jmove/run with [[joint]] points.";
+Motions need the right mode first: `armgate mode cart` for move/run with [[cartesian]] points
+and jog, `armgate mode joint` for jmove/run with [[joint]] points and jog --rates.";
 
 const AFTER_HELP: &str = "\
 Examples:
@@ -40,6 +40,7 @@ Examples:
   armgate mode joint
   armgate jmove 1.5708 0.4 1.2 0 1.2 0       jG + jB, then wait
   armgate run client/examples/rectangle.toml via points from a file
+  armgate jog 0 0 0.01 --for 2               TW stream: 1 cm/s up for 2 s, then a ramp to rest
   armgate send PS                            any request, printed raw
   armgate send XY                            shows the controller's ER00 text
   armgate --joints 8 joints                  override the joint count the controller reports
@@ -79,7 +80,14 @@ const TELEOP_LONG: &str = "\
 The keyboard client (thesis Fig. 3.3): Current Pose, Desired Pose, Joints and Temp(C),
 polled from PS, jP and TM; the RPY of both poses, the scale, and the latest ER/WN text.
 
-Keys edit the desired pose; Enter sends it (with --live, every key press sends).
+Jog keys (the default; v toggles): a held key moves the arm smoothly. The Cartesian keys
+stream a twist (TW, base frame, 5 mm/s x scale along the axis), the joint keys joint rates
+(jW, 0.02 rad/s x scale on the selected joint), re-sent every control period while the key
+is held; on release the arm ramps to rest. Needs mode cartesian (joint) for the Cartesian
+(joint) keys.
+
+Step keys (--step, or v): keys edit the desired pose; Enter sends it (with --live, every key
+press sends).
 
   Cartesian keys              Joint keys (after j)
   Left / Right   x - / +      Left / Right   selected joint - / +
@@ -92,6 +100,7 @@ Keys edit the desired pose; Enter sends it (with --live, every key press sends).
                  If BG (jB) is refused, e.g. a motion still runs: ST, then BG (jB) once more.
   j              switch between Cartesian and joint keys
   m              next mode via CM: off -> joint -> cart -> off (the first m selects joint)
+  v              jog keys <-> step keys
   q, Esc         quit (the terminal is restored)
 
 A Cartesian step is 1 mm x scale, a joint step 0.01 rad x scale.";
@@ -204,6 +213,24 @@ pub enum Cmd {
         #[command(flatten)]
         wait: WaitArgs,
     },
+    /// Stream a velocity for a while, then let the arm ramp to rest: a tool twist (TW,
+    /// Cartesian mode: vx vy vz in m/s, optionally wx wy wz in rad/s, base frame unless
+    /// --tool) or, with --rates, one rate per joint (jW, joint mode: rad/s).
+    #[command(after_help = "Example: armgate jog 0 0 0.01 --for 2")]
+    Jog {
+        /// The twist (3 or 6 values) or the joint rates (one per joint).
+        #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
+        values: Vec<f64>,
+        /// How long to stream (s).
+        #[arg(long = "for", default_value_t = 1.0)]
+        seconds: f64,
+        /// The twist is in the tool frame.
+        #[arg(long, conflicts_with = "rates")]
+        tool: bool,
+        /// The values are joint rates (jW), one per joint.
+        #[arg(long)]
+        rates: bool,
+    },
     /// Run a via-point sequence from a TOML file and wait until its last point is reached.
     #[command(long_about = RUN_LONG)]
     Run {
@@ -216,9 +243,12 @@ pub enum Cmd {
     /// The keyboard client: live pose, joints and temperatures; move with the arrow keys.
     #[command(long_about = TELEOP_LONG)]
     Teleop {
-        /// Send on every key press instead of on Enter.
+        /// Send on every key press instead of on Enter (step keys).
         #[arg(long)]
         live: bool,
+        /// Keys step the desired values (the seed's teleop) instead of jogging while held.
+        #[arg(long)]
+        step: bool,
         /// How often to read PS, jP and TM (Hz).
         #[arg(long, default_value_t = 10.0)]
         rate: f64,
@@ -434,7 +464,7 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
-    if let Cmd::Teleop { live, rate } = &cli.command {
+    if let Cmd::Teleop { live, step, rate } = &cli.command {
         let poll = Some(1.0 / rate)
             .filter(|p| p.is_finite() && *p > 0.0)
             .and_then(|p| Duration::try_from_secs_f64(p).ok())
@@ -442,6 +472,7 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         let options = TeleopOptions {
             joints: joint_count(cli, &mut client)?,
             live: *live,
+            jog: !*step,
             poll,
             addr: cli.addr.clone(),
         };
@@ -477,6 +508,72 @@ fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
         Ok(()) => "sent ST: the arm stops and holds".to_owned(),
         Err(e) => format!("ST failed ({e}): the arm may still be moving"),
     })
+}
+
+/// `armgate jog`: a TW or jW stream for `seconds`, then wait until the arm has ramped to rest.
+fn jog(
+    cli: &Cli,
+    client: &mut Client,
+    values: &[f64],
+    seconds: f64,
+    (tool, rates): (bool, bool),
+    out: &mut impl Write,
+) -> Result<(), CliError> {
+    let duration = Some(seconds)
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .and_then(|s| Duration::try_from_secs_f64(s).ok())
+        .ok_or_else(|| CliError::Usage(format!("--for {seconds}: must be > 0 s")))?;
+    let velocity = if rates {
+        let n = joint_count(cli, client)?;
+        if values.len() != n {
+            return Err(CliError::Usage(format!(
+                "{} joint rates, but the arm has {n} joints",
+                values.len()
+            )));
+        }
+        Velocity::Joints(values.to_vec())
+    } else {
+        let (linear, angular) = match values {
+            [x, y, z] => ([*x, *y, *z], [0.0; 3]),
+            [x, y, z, a, b, c] => ([*x, *y, *z], [*a, *b, *c]),
+            _ => {
+                return Err(CliError::Usage(format!(
+                    "{} values: a twist is vx vy vz (m/s), optionally wx wy wz (rad/s)",
+                    values.len()
+                )));
+            }
+        };
+        let frame = if tool {
+            TwistFrame::Tool
+        } else {
+            TwistFrame::Base
+        };
+        Velocity::Twist {
+            linear,
+            angular,
+            frame,
+        }
+    };
+    // Ctrl-C ends the stream early: the arm ramps to rest as when it ends.
+    let interrupt = interrupt::ctrl_c().ok();
+    let interrupted = || interrupt.as_ref().is_some_and(interrupt::Interrupt::is_set);
+    let started = std::time::Instant::now();
+    match client.stream_for(&velocity, duration, interrupted) {
+        Ok(sent) => writeln!(
+            out,
+            "streamed {sent} commands over {:.2} s; the arm ramps to rest",
+            started.elapsed().as_secs_f64()
+        )?,
+        Err(ClientError::Interrupted) => {
+            return Err(CliError::Interrupted(
+                "stopped streaming: the arm ramps to rest".to_owned(),
+            ));
+        }
+        Err(e) => return Err(e.into()),
+    }
+    settle(client)?;
+    writeln!(out, "at rest")?;
+    Ok(())
 }
 
 /// `armgate on`: ON, then wait until the drives run.
@@ -555,6 +652,12 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             result => ok(result, "drives off", out),
         },
         Cmd::Stop => ok(client.stop(), "stopped", out),
+        Cmd::Jog {
+            values,
+            seconds,
+            tool,
+            rates,
+        } => jog(cli, client, values, *seconds, (*tool, *rates), out),
         Cmd::Move {
             x,
             y,

@@ -25,6 +25,7 @@
 //!   unsolicited notices, and one typed method per command (`pose`, `joints`, `goal_rpy`,
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
 //! * [`wait`]: polling until a pose or joint target is reached.
+//! * [`velocity`]: twist and joint-rate streaming (`TW`, `jW`), [`VelocityStreamer`].
 //! * [`runfile`]: TOML via-point sequences.
 //! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name);
 //!   [`Client::start_drives`] and [`Client::wait_motion_ended`] poll it.
@@ -47,9 +48,10 @@ mod pose;
 pub mod runfile;
 pub mod status;
 pub mod teleop;
+pub mod velocity;
 pub mod wait;
 
-pub use armgate_protocol::client::{Command, Reply, Request, Text};
+pub use armgate_protocol::client::{Command, Reply, Request, Text, TwistFrame};
 pub use client::{
     Client, ClientConfig, DEFAULT_ADDR, DEFAULT_NOTICE_CAPACITY, DEFAULT_RETRIES, DEFAULT_TIMEOUT,
     RawReply,
@@ -60,4 +62,5 @@ pub use error::ClientError;
 pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
 pub use status::{DriveStatus, Motion, Status};
+pub use velocity::{StreamEvent, Velocity, VelocityStreamer};
 pub use wait::{Progress, WaitOptions};

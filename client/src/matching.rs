@@ -4,7 +4,7 @@
 //!
 //! * it is a normal reply whose characters are the request's reversed (`BG` → `GB`), and, for
 //!   the commands that echo their index, the index matches: the via slot (bits 0–6) for `jV` and
-//!   `VP`, the bank bit (bit 7) for `jP` and `TM`; or
+//!   `VP`, the bank bit (bit 7) for `jP` and `TM`, the whole index for `TW` and `jW`; or
 //! * it is an `ER` text that names the request's characters (`ER20 Cmd BG rejected`,
 //!   `ER00 Cmd XX not understood`, `ER01 Msg XX undersized.`), or `ER10` for `OF` / `ER11` for
 //!   `ON`: the request was refused.
@@ -44,6 +44,8 @@ impl Expect {
         match &self.chars {
             b"jV" | b"VP" => index & !BANK_2 == self.index & !BANK_2,
             b"jP" | b"TM" => index & BANK_2 == self.index & BANK_2,
+            // The streams echo their index: the frame bit of TW, the bank bit of jW.
+            b"TW" | b"jW" => index == self.index,
             // The status request: index 0 the numbers, index 1 the name.
             b"SQ" => index == self.index,
             _ => true,

@@ -41,6 +41,7 @@ impl Name for Motion {
             Self::CartesianMove => "Cartesian move",
             Self::JointSequence => "joint sequence",
             Self::CartesianSequence => "Cartesian sequence",
+            Self::Streaming => "velocity stream",
         }
     }
 }

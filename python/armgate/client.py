@@ -192,6 +192,27 @@ class Arm:
         """``ST``: stops every motion and sequence; the arm holds its commanded position."""
         self.request("ST")
 
+    def twist(
+        self,
+        linear: Sequence[float],
+        angular: Sequence[float] = (0.0, 0.0, 0.0),
+        tool_frame: bool = False,
+    ) -> float:
+        """``TW``: streams a tool twist (Cartesian mode): ``linear`` (m/s) and ``angular``
+        (rad/s), in the base frame or the tool frame. It holds for three control periods, the
+        time returned (s): send the next one before then, or the arm ramps to rest."""
+        values = [float(v) for v in linear] + [float(v) for v in angular]
+        if len(values) != 6:
+            raise ValueError("a twist has three linear and three angular components")
+        index = wire.TOOL_FRAME if tool_frame else 0
+        return float(self.request("TW", values, index).values[6])
+
+    def joint_velocity(self, rates: Sequence[float]) -> float:
+        """``jW``: streams joint rates (rad/s, joint mode), one per joint (bank 2 first for
+        more than six). Returns how long they hold (s), as :meth:`twist`."""
+        reply = self._write_banks("jW", self._check_joints(rates), 0, 0.0)
+        return float(reply.values[6])
+
     def recalibrate(self, q: Sequence[float], wait: bool = True) -> None:
         """``RC``: the arm's current position becomes the joint angles ``q`` (mode off only).
 
@@ -509,9 +530,10 @@ class Arm:
             values += upper[READ_JOINTS - WRITE_JOINTS :]
         return values[:n]
 
-    def _write_banks(self, chars: str, q: Sequence[float], slot: int, f6: float) -> None:
+    def _write_banks(self, chars: str, q: Sequence[float], slot: int, f6: float) -> wire.Message:
         """Writes a joint vector: for more than six joints bank 2 (joints 7.., index bit 7)
-        first, then bank 1 (joints 1..6), which completes the vector (docs/protocol.md)."""
+        first, then bank 1 (joints 1..6), which completes the vector (docs/protocol.md).
+        Returns the bank-1 reply."""
         _check_count(len(q))
         if not 0 <= slot < wire.BANK2:
             raise ValueError(f"via slot {slot}: slots are 0..127 (bit 7 selects the bank)")
@@ -521,7 +543,7 @@ class Arm:
 
         if len(q) > WRITE_JOINTS:
             self.request(chars, bank(q[WRITE_JOINTS:]), slot | wire.BANK2)
-        self.request(chars, bank(q[:WRITE_JOINTS]), slot)
+        return self.request(chars, bank(q[:WRITE_JOINTS]), slot)
 
 
 def _check_count(n: int) -> None:

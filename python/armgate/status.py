@@ -48,6 +48,7 @@ class Motion(enum.IntEnum):
     CARTESIAN_MOVE = 2
     JOINT_SEQUENCE = 3
     CARTESIAN_SEQUENCE = 4
+    STREAMING = 5
 
 
 def _enum(kind, value: float):  # type: ignore[no-untyped-def]

@@ -31,6 +31,8 @@ VALUES = 7
 """Float values per message."""
 
 BANK2 = 0x80
+TOOL_FRAME = 0x01
+"""Index bit of ``TW``: the twist is in the tool frame."""
 """Bit 7 of the index: bank 2 (joints 7..) for joint requests."""
 
 _FLOATS = struct.Struct("<7f")
@@ -86,7 +88,7 @@ def _index_matches(chars: str, request: int, reply: int) -> bool:
         return request & ~BANK2 == reply & ~BANK2
     if chars in ("jP", "TM"):
         return request & BANK2 == reply & BANK2
-    if chars == "SQ":
+    if chars in ("SQ", "TW", "jW"):
         return request == reply
     return True
 

@@ -83,6 +83,36 @@ def test_recalibrate_then_a_cartesian_move_arrives(mk1) -> None:  # type: ignore
         assert back is not None and back.distance(start) <= 0.001
 
 
+def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.recalibrate(COMFORTABLE)
+        arm.set_mode("cartesian")
+        start = arm.get_tcp_pose()
+        # 1 cm/s down for 0.5 s, re-sent every control period (a third of the hold time).
+        deadline = time.monotonic() + 0.5
+        while time.monotonic() < deadline:
+            hold = arm.twist([0.0, 0.0, -0.01])
+            time.sleep(hold / 3)
+        assert hold == pytest.approx(3 * 0.01944, abs=1e-6)
+        time.sleep(0.5)  # the hold time and the ramp to rest
+        assert arm.get_status().motion == armgate.Motion.IDLE
+        moved = arm.get_tcp_pose()
+        assert -0.0055 < moved.z - start.z < -0.003
+        assert math.hypot(moved.x - start.x, moved.y - start.y) < 2e-5
+        with pytest.raises(armgate.CommandRejected):
+            arm.joint_velocity([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])  # needs joint mode
+        arm.set_mode("joint")
+        q0 = arm.get_joints()
+        deadline = time.monotonic() + 0.5
+        while time.monotonic() < deadline:
+            hold = arm.joint_velocity([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])
+            time.sleep(hold / 3)
+        time.sleep(0.5)
+        q = arm.get_joints()
+        assert 0.015 < q[2] - q0[2] < 0.0275
+        assert close(q[:2] + q[3:], q0[:2] + q0[3:], 1e-9)
+
+
 def test_joint_moves_arrive(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         assert arm.set_mode(armgate.Mode.JOINT) == armgate.Mode.JOINT

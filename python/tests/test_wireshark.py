@@ -41,6 +41,10 @@ def capture(tmp_path_factory: pytest.TempPathFactory) -> dict:
     with armgate.Arm("127.0.0.1", port=sim.port) as arm:
         arm.set_mode("cartesian")
         arm.request("GT", [0.25, -0.125, 1.0, 0.0, 0.5, 0.0, 2.5])
+        try:
+            arm.twist([0.01, 0.0, -0.02], [0.0, 0.0, 0.5], tool_frame=True)
+        except armgate.CommandRejected:
+            pass  # the drives may still be starting: the request is what is decoded here
         arm.set_mode("joint")
         with pytest.raises(armgate.CommandRejected):
             arm.request("BG")
@@ -143,6 +147,15 @@ def test_joint_banks_are_decoded(tshark: str, capture: dict) -> None:
     assert [float(v) for v in jv[0][2].split(",")] == pytest.approx([f32(v) for v in
                                                                      (0.1, 0.2, 0.3, 0.4, 0.5, 0.6)])
     assert float(jv[0][3]) == 1.5
+
+
+def test_twists_are_decoded(tshark: str, capture: dict) -> None:
+    rows = fields(tshark, capture, 'armgate.command == "TW"', "armgate.vx", "armgate.vz",
+                  "armgate.wz", "armgate.tool_frame")
+    assert len(rows) == 1
+    vx, vz, wz, tool = rows[0]
+    assert (float(vx), float(vz), float(wz)) == pytest.approx((f32(0.01), f32(-0.02), 0.5))
+    assert tool in ("1", "True")
 
 
 def test_can_traffic_is_decoded(tshark: str, capture: dict) -> None:

@@ -31,6 +31,8 @@ use cortex_m_semihosting::hprintln;
 use crate::counter::{Counter, Timing, measure};
 use crate::stack;
 
+mod twist;
+
 include!(concat!(env!("OUT_DIR"), "/robots.rs"));
 
 /// The robots measured, each from a well-conditioned start (joint angles, rad) from which the
@@ -233,6 +235,8 @@ struct Whole {
     requests: [u32; 3],
     /// Ticks that carried a PS, after the move.
     pose: Timing,
+    /// Ticks that carried a TW, streaming after the move.
+    twist: Timing,
     /// Motion time of the move (s).
     duration: f64,
 }
@@ -352,6 +356,11 @@ fn measure_robot(
         &whole.pose,
         "window per tick",
     );
+    row(
+        "tick with request TW, streaming a twist",
+        &whole.twist,
+        "window per tick",
+    );
     hprintln!(
         "{}: {} moving ticks ({:.2} s); stack high-water of requests + ticks: {} bytes",
         name,
@@ -393,6 +402,7 @@ fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'st
     for _ in 0..POSE_REQUESTS {
         pose.add(session.request(Command::Pose, [0.0; VALUES], b"SP")?);
     }
+    let twist = twist::streaming_ticks(&mut session)?;
     Ok(Whole {
         duration: f64::from(moving.calls) * config.control_period,
         moving,
@@ -400,6 +410,7 @@ fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'st
         holding,
         requests,
         pose,
+        twist,
     })
 }
 

@@ -37,12 +37,14 @@ local commands = {
     jP = "Joint positions",
     jR = "Stop joint motion",
     jV = "Joint via point",
+    jW = "Joint rates (stream)",
     ON = "Drives on",
     OF = "Drives off",
     PS = "Tool pose",
     RC = "Recalibrate",
     ST = "Stop",
     TM = "Temperatures",
+    TW = "Tool twist (stream)",
     VC = "Clear Cartesian via points",
     VE = "Run Cartesian via points",
     VP = "Cartesian via point",
@@ -80,7 +82,7 @@ local modes = { [0] = "off", [1] = "joint", [2] = "Cartesian" }
 local drive_states = { [0] = "off", [1] = "starting", [2] = "running", [3] = "stopping", [4] = "faulted" }
 local motions = {
     [0] = "idle", [1] = "joint move", [2] = "Cartesian move",
-    [3] = "joint sequence", [4] = "Cartesian sequence",
+    [3] = "joint sequence", [4] = "Cartesian sequence", [5] = "velocity stream",
 }
 
 local f = {
@@ -99,6 +101,14 @@ local f = {
     pitch = ProtoField.float("armgate.pitch", "Pitch (rad)"),
     yaw = ProtoField.float("armgate.yaw", "Yaw (rad)"),
     time = ProtoField.float("armgate.time", "Duration (s)"),
+    vx = ProtoField.float("armgate.vx", "vx (m/s)"),
+    vy = ProtoField.float("armgate.vy", "vy (m/s)"),
+    vz = ProtoField.float("armgate.vz", "vz (m/s)"),
+    wx = ProtoField.float("armgate.wx", "wx (rad/s)"),
+    wy = ProtoField.float("armgate.wy", "wy (rad/s)"),
+    wz = ProtoField.float("armgate.wz", "wz (rad/s)"),
+    hold = ProtoField.float("armgate.hold", "Holds for (s)"),
+    tool_frame = ProtoField.bool("armgate.tool_frame", "Tool frame", 8, nil, 0x01),
     mode = ProtoField.float("armgate.mode", "Mode"),
     joint = ProtoField.float("armgate.joint", "Joint"),
     temperature = ProtoField.float("armgate.temperature", "Temperature (degC)"),
@@ -125,6 +135,8 @@ armgate.prefs.port = Pref.uint("UDP port", 7031, "The controller's UDP port")
 local XYZ = { f.x, f.y, f.z }
 local XYZ_QUAT = { f.x, f.y, f.z, f.qx, f.qy, f.qz, f.qw }
 local XYZ_RPY_T = { f.x, f.y, f.z, f.roll, f.pitch, f.yaw, f.time }
+local TWIST = { f.vx, f.vy, f.vz, f.wx, f.wy, f.wz }
+local TWIST_HOLD = { f.vx, f.vy, f.vz, f.wx, f.wy, f.wz, f.hold }
 
 -- What f0..f6 mean: by request characters, for the request ("req") and its reply ("rep").
 -- "joints" = joint values, numbered from 1 or (bank 2) from 7; "temps" the same for TM.
@@ -137,6 +149,8 @@ local layouts = {
     jG = { req = "joints6", rep = "joints6" },
     RC = { req = "joints6" },
     jV = { req = "joints6t", rep = "joints6t" },
+    TW = { req = TWIST, rep = TWIST_HOLD },
+    jW = { req = "rates6", rep = "rates6h" },
     jP = { rep = "joints7" },
     TM = { rep = "temps7" },
 }
@@ -164,6 +178,13 @@ local function add_values(tree, tvb, layout, index)
     if layout == "joints6" or layout == "joints6t" then
         add_joints(tree, tvb, 6, first, f.joint, "rad", layout == "joints6t")
         used = layout == "joints6t" and 7 or 6
+    elseif layout == "rates6" or layout == "rates6h" then
+        add_joints(tree, tvb, 6, first, f.joint, "rad/s", false)
+        used = 6
+        if layout == "rates6h" then
+            tree:add_le(f.hold, tvb(26, 4))
+            used = 7
+        end
     elseif layout == "joints7" then
         add_joints(tree, tvb, 7, first, f.joint, "rad", false)
         used = 7
@@ -188,6 +209,10 @@ local function summary(tvb, layout)
     if layout == XYZ_QUAT or layout == XYZ_RPY_T then
         return string.format(" x=%.4f y=%.4f z=%.4f", tvb(2, 4):le_float(), tvb(6, 4):le_float(),
             tvb(10, 4):le_float())
+    elseif layout == TWIST or layout == TWIST_HOLD then
+        return string.format(" v=(%.4g, %.4g, %.4g) w=(%.4g, %.4g, %.4g)", tvb(2, 4):le_float(),
+            tvb(6, 4):le_float(), tvb(10, 4):le_float(), tvb(14, 4):le_float(),
+            tvb(18, 4):le_float(), tvb(22, 4):le_float())
     elseif layout ~= nil and type(layout) == "table" then
         return string.format(" %.4g", tvb(2, 4):le_float())
     elseif layout ~= nil then
@@ -267,7 +292,12 @@ function armgate.dissector(tvb, pinfo, root)
         index_item:add(f.slot, tvb(30, 1))
         info = info .. string.format(" slot=%d", bit.band(index, 0x7F))
     end
-    index_item:add(f.bank2, tvb(30, 1))
+    if base_chars == "TW" then
+        index_item:add(f.tool_frame, tvb(30, 1))
+        if bit.band(index, 0x01) ~= 0 then info = info .. " [tool frame]" end
+    else
+        index_item:add(f.bank2, tvb(30, 1))
+    end
     if bit.band(index, BANK2) ~= 0 then info = info .. " [bank 2]" end
     pinfo.cols.info = info
     return tvb:len()

@@ -168,6 +168,11 @@ pub fn perform(client: &mut Client, action: Action) -> Vec<Event> {
             Ok(reported) => vec![Event::Mode(reported)],
             Err(e) => vec![failure("CM", e), Event::ModeFailed],
         },
+        // One command; a held key's stream is the UI's (`VelocityStreamer`).
+        Action::Jog(velocity) => match client.velocity(&velocity) {
+            Ok(_) => vec![status(false, "jog")],
+            Err(e) => vec![move_failure("jog", e)],
+        },
     }
 }
 

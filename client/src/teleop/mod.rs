@@ -15,11 +15,20 @@
 //! | Enter | GT (desired position, current RPY, T = 0) + BG | jG + jB |
 //! | j | switch to joint keys | switch to Cartesian keys |
 //! | m | next mode via CM: off → joint → cart → off | same |
+//! | v | jog keys ↔ step keys | same |
 //! | q, Esc, Ctrl-C | quit (the terminal is restored) | same |
 //!
-//! A Cartesian step is 1 mm × scale, a joint step 0.01 rad × scale. Keys edit the desired
-//! values; Enter sends them (`--live`: every key press sends). If BG (jB) is refused, typically
-//! because a motion is still running, the client sends ST and then BG (jB) once more.
+//! **Jog keys** (the default; `v` toggles, `--step` starts without them): a held arrow or page
+//! key streams a velocity — `TW` in the base frame for the Cartesian keys, 5 mm/s × scale
+//! along the axis; `jW` for the joint keys, 0.02 rad/s × scale on the selected joint — through
+//! a [`VelocityStreamer`] on a socket of its own, re-sent every control period until shortly
+//! after the key's last auto-repeat ([`jog`]); then the controller ramps the arm to rest. The
+//! mode must match the keys (cartesian / joint), else the controller's refusal is shown.
+//!
+//! **Step keys** (the seed's): a Cartesian step is 1 mm × scale, a joint step 0.01 rad ×
+//! scale. Keys edit the desired values; Enter sends them (`--live`: every key press sends). If
+//! BG (jB) is refused, typically because a motion is still running, the client sends ST and
+//! then BG (jB) once more.
 //!
 //! The header shows the robot, mode, drives and motion from the status request (SQ); with a
 //! controller too old for it the mode is unknown until the first `m`, and `m` from an unknown
@@ -36,6 +45,7 @@
 //! `--rate` Hz, so the UI never blocks on the network.
 
 pub mod io;
+pub mod jog;
 pub mod render;
 pub mod state;
 
@@ -43,8 +53,10 @@ use std::time::Duration;
 
 use ratatui::crossterm::event::{self, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
-use crate::Client;
-use state::{Key, TeleopState};
+use crate::velocity::{StreamEvent, VelocityStreamer};
+use crate::{Client, ClientError};
+use jog::HeldKey;
+use state::{Action, Event, Key, TeleopState};
 
 /// How the keyboard client runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -53,15 +65,18 @@ pub struct TeleopOptions {
     pub joints: usize,
     /// Send on every key press instead of on Enter.
     pub live: bool,
+    /// Start with jogging keys (held keys stream velocities) rather than step keys.
+    pub jog: bool,
     /// The polling period of PS, jP and TM.
     pub poll: Duration,
     /// The controller's address, for the title.
     pub addr: String,
 }
 
-/// The teleop key for a terminal key event (Ctrl-C is Esc).
+/// The teleop key for a terminal key event (Ctrl-C is Esc): presses, and the repeats of a held
+/// key that terminals reporting event types send.
 pub fn key(event: &KeyEvent) -> Option<Key> {
-    if event.kind != KeyEventKind::Press {
+    if event.kind == KeyEventKind::Release {
         return None;
     }
     if event.modifiers.contains(KeyModifiers::CONTROL) {
@@ -82,35 +97,97 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
 }
 
 /// Restores the terminal when dropped, also on an error return.
-struct Restore;
+struct Restore {
+    /// Key releases were asked for ([`report_releases`]).
+    releases: bool,
+}
 
 impl Drop for Restore {
     fn drop(&mut self) {
+        if self.releases {
+            let _ = ratatui::crossterm::execute!(
+                std::io::stdout(),
+                ratatui::crossterm::event::PopKeyboardEnhancementFlags
+            );
+        }
         ratatui::restore();
     }
 }
 
+/// Asks the terminal to report key releases and repeats (the kitty keyboard protocol), where
+/// it can: a released jog key then stops the stream at once rather than at its deadline.
+fn report_releases() -> bool {
+    use ratatui::crossterm::event::{KeyboardEnhancementFlags, PushKeyboardEnhancementFlags};
+    ratatui::crossterm::terminal::supports_keyboard_enhancement().unwrap_or(false)
+        && ratatui::crossterm::execute!(
+            std::io::stdout(),
+            PushKeyboardEnhancementFlags(KeyboardEnhancementFlags::REPORT_EVENT_TYPES)
+        )
+        .is_ok()
+}
+
 /// Runs the keyboard client until q / Esc.
 pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
+    // The jog stream has a socket of its own: it must not wait behind the polls.
+    let config = crate::ClientConfig {
+        retries: 0,
+        ..client.config().clone()
+    };
+    let streamer = Client::connect_with(client.peer(), config)
+        .map_err(|e| std::io::Error::other(e.to_string()))
+        .and_then(VelocityStreamer::spawn)?;
     let io = io::spawn(client, options.joints, options.poll)?;
     let mut state = TeleopState::new(options.addr, options.joints, options.live);
+    state.jog = options.jog;
+    let mut held = HeldKey::default();
     let mut terminal = ratatui::try_init()?;
-    let _restore = Restore;
+    let _restore = Restore {
+        releases: report_releases(),
+    };
+    // The terminal key that streams, to stop on its release.
+    let mut jog_key = None;
     while !state.quit {
-        state.at(std::time::Instant::now());
+        let now = std::time::Instant::now();
+        state.at(now);
         while let Ok(event) = io.events.try_recv() {
             state.apply(event);
         }
+        while let Ok(event) = streamer.events.try_recv() {
+            state.apply(match event {
+                StreamEvent::Failed(ClientError::Rejected(text)) => Event::Refused(text),
+                StreamEvent::Failed(other) => Event::Status(format!("jog: {other}")),
+                StreamEvent::Notice(text) => Event::Text(text),
+            });
+        }
         terminal.draw(|frame| render::render(&state, frame))?;
-        if event::poll(Duration::from_millis(30))?
-            && let event::Event::Key(k) = event::read()?
-            && let Some(key) = key(&k)
-            && let Some(action) = state.handle_key(key)
-            && io.actions.send(action).is_err()
-        {
-            state.status = String::from("the I/O thread has ended");
+        if !event::poll(Duration::from_millis(30))? {
+            continue;
+        }
+        let event::Event::Key(k) = event::read()? else {
+            continue;
+        };
+        if k.kind == KeyEventKind::Release && jog_key == Some(k.code) {
+            jog_key = None;
+            held = HeldKey::default();
+            streamer.stop();
+        }
+        if let Some(key) = key(&k) {
+            let sent = match state.handle_key(key) {
+                Some(Action::Jog(velocity)) => {
+                    let until = held.press(velocity.clone(), now);
+                    streamer.stream(velocity, until);
+                    jog_key = Some(k.code);
+                    true
+                }
+                Some(action) => io.actions.send(action).is_ok(),
+                None => true,
+            };
+            if !sent {
+                state.status = String::from("the I/O thread has ended");
+            }
         }
     }
+    streamer.stop();
     // Dropping the sender ends the I/O thread after its current request; it is not joined, so
     // that quitting never waits for a timeout.
     Ok(())

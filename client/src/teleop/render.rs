@@ -95,7 +95,11 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
         Variant::Cartesian => "Cartesian",
         Variant::Joint => "joint",
     };
-    let send = if state.live { "every key" } else { "Enter" };
+    let send = match (state.jog, state.live) {
+        (true, _) => "jog while held",
+        (false, true) => "send on every key",
+        (false, false) => "send on Enter",
+    };
     let controller = state
         .controller
         .as_ref()
@@ -105,7 +109,7 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
     });
     frame.render_widget(
         Line::from(format!(
-            " armgate teleop  {}{controller}  mode {mode}{drives}   keys: {keys}, send on {send}",
+            " armgate teleop  {}{controller}  mode {mode}{drives}   keys: {keys}, {send}",
             state.addr
         ))
         .style(Style::new().add_modifier(Modifier::BOLD)),
@@ -140,11 +144,11 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
     let help_lines = match state.variant {
         Variant::Cartesian => [
             " ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  space desired←current  Enter send",
-            " j joint keys  m next mode  q/Esc quit",
+            " j joint keys  v jog/step  m next mode  q/Esc quit",
         ],
         Variant::Joint => [
             " 1-8 or ↑/↓ select joint  ←/→ joint −/+  +/- scale  space desired←current  Enter send",
-            " j Cartesian keys  m next mode  q/Esc quit",
+            " j Cartesian keys  v jog/step  m next mode  q/Esc quit",
         ],
     };
     frame.render_widget(

@@ -7,8 +7,9 @@
 
 use std::time::{Duration, Instant};
 
+use super::jog::{BASE_JOG_RATE, BASE_JOG_SPEED};
 use crate::status::{Motion, Status};
-use crate::{Mode, Pose, Text, next_mode};
+use crate::{Mode, Pose, Text, TwistFrame, Velocity, next_mode};
 
 /// The base Cartesian step per key press (m), multiplied by the scale.
 pub const BASE_STEP: f64 = 0.001;
@@ -94,6 +95,8 @@ pub enum Action {
     MoveJoints(Vec<f64>),
     /// CM.
     SetMode(Mode),
+    /// Stream TW (Cartesian keys) or jW (joint keys) while the key is held.
+    Jog(Velocity),
 }
 
 /// What the I/O side reports.
@@ -132,6 +135,8 @@ pub struct TeleopState {
     pub variant: Variant,
     /// Send on every key press (else on Enter).
     pub live: bool,
+    /// Keys stream velocities while held (`TW`/`jW`) instead of editing the desired values.
+    pub jog: bool,
     /// The arm's number of joints.
     pub joint_count: usize,
     /// The last PS reply.
@@ -187,6 +192,7 @@ impl TeleopState {
             addr: addr.into(),
             variant: Variant::Cartesian,
             live,
+            jog: false,
             joint_count,
             current: None,
             desired: None,
@@ -412,6 +418,15 @@ impl TeleopState {
                 .to_owned();
                 None
             }
+            Key::Char('v') => {
+                self.jog = !self.jog;
+                self.status = String::from(if self.jog {
+                    "jog: hold a key to move"
+                } else {
+                    "step: keys edit the desired values"
+                });
+                None
+            }
             Key::Char('m') => {
                 let next = next_mode(self.mode_pending.or(self.mode).unwrap_or(Mode::Off));
                 self.mode_pending = Some(next);
@@ -435,6 +450,17 @@ impl TeleopState {
             Key::PageUp => (2, 1.0),
             _ => return None,
         };
+        if self.jog {
+            let mut linear = [0.0; 3];
+            if let Some(v) = linear.get_mut(axis) {
+                *v = sign * BASE_JOG_SPEED * self.scale;
+            }
+            return self.jogging(Velocity::Twist {
+                linear,
+                angular: [0.0; 3],
+                frame: TwistFrame::Base,
+            });
+        }
         let step = self.step();
         let Some(desired) = self.desired.as_mut() else {
             self.status = String::from("no pose from the controller yet");
@@ -468,6 +494,13 @@ impl TeleopState {
             }
             _ => return None,
         };
+        if self.jog {
+            let mut rates = vec![0.0; self.joint_count];
+            if let Some(r) = rates.get_mut(self.selected) {
+                *r = sign * BASE_JOG_RATE * self.scale;
+            }
+            return self.jogging(Velocity::Joints(rates));
+        }
         let step = self.joint_step();
         let Some(q) = self.desired_joints.get_mut(self.selected) else {
             self.status = String::from("no joints from the controller yet");
@@ -476,6 +509,16 @@ impl TeleopState {
         *q += sign * step;
         self.joints_edit = Edit::Unsent;
         self.edited()
+    }
+
+    /// A jog: this client's motion, which the desired values follow.
+    fn jogging(&mut self, velocity: Velocity) -> Option<Action> {
+        self.own_motion = true;
+        self.still_polls = 0;
+        self.pose_edit = Edit::Following;
+        self.joints_edit = Edit::Following;
+        self.refused = None;
+        Some(Action::Jog(velocity))
     }
 
     /// After a change of the desired pose or joints: send at once when live.
@@ -546,6 +589,37 @@ mod tests {
         s.apply(Event::Joints(vec![1.0; 6]));
         s.apply(Event::Joints(vec![2.0; 6]));
         assert_eq!(s.desired_joints, [2.0; 6]);
+    }
+
+    #[test]
+    fn jog_keys_stream_velocities_scaled_and_follow_the_arm() {
+        let mut s = ready(false);
+        s.handle_key(Key::Char('v'));
+        assert!(s.jog);
+        s.handle_key(Key::Char('+'));
+        let twist = |linear| {
+            Some(Action::Jog(Velocity::Twist {
+                linear,
+                angular: [0.0; 3],
+                frame: TwistFrame::Base,
+            }))
+        };
+        assert_eq!(s.handle_key(Key::PageUp), twist([0.0, 0.0, 0.01]));
+        assert_eq!(s.handle_key(Key::Left), twist([-0.01, 0.0, 0.0]));
+        assert!(s.own_motion);
+        // The desired pose is not edited: it follows the arm.
+        s.apply(Event::Pose(pose(0.49, 0.2, 0.1)));
+        assert_eq!(s.desired, Some(pose(0.49, 0.2, 0.1)));
+        s.handle_key(Key::Char('j'));
+        s.handle_key(Key::Char('3'));
+        let mut rates = vec![0.0; 8];
+        rates[2] = -0.04;
+        assert_eq!(
+            s.handle_key(Key::Left),
+            Some(Action::Jog(Velocity::Joints(rates)))
+        );
+        s.handle_key(Key::Char('v'));
+        assert_eq!(s.handle_key(Key::Left), None);
     }
 
     #[test]

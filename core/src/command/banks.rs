@@ -21,6 +21,8 @@ pub(super) enum BankKey {
     Recalibrate,
     /// jV for one slot.
     Via(usize),
+    /// jW.
+    Rates,
 }
 
 /// Why a bank request was refused.
@@ -36,6 +38,7 @@ pub(super) enum BankError {
 pub(super) struct Banks {
     goal: Option<[f64; UPPER]>,
     recalibrate: Option<[f64; UPPER]>,
+    rates: Option<[f64; UPPER]>,
     via: [Option<[f64; UPPER]>; VIA_SLOTS],
 }
 
@@ -44,6 +47,7 @@ impl Banks {
         match key {
             BankKey::Goal => Ok(&mut self.goal),
             BankKey::Recalibrate => Ok(&mut self.recalibrate),
+            BankKey::Rates => Ok(&mut self.rates),
             BankKey::Via(i) => self.via.get_mut(i).ok_or(BankError::BadIndex),
         }
     }

@@ -2,8 +2,9 @@
 
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
-    Command, DriveStatus, MESSAGE_LEN, Message, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice,
-    Rejection, Reply, Request, RobotName, STATUS_INDEX, Text, VALUES, WorkspaceReason,
+    Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX, NO_JOINT_TEMPERATURE,
+    Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text, Twist as TwistRequest,
+    VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
@@ -12,7 +13,7 @@ use super::relay::NoticeRelay;
 use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
-use crate::math::{self, Frame, Quaternion, Rotation3, Vector3};
+use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
 use crate::motion::{Controller, Mode, Refusal, StepOutput};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
@@ -234,6 +235,22 @@ impl CommandHandler {
                 let (q, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
                 joint_reply(cmd, &q, bank_2, n, 0.0)
             }
+            Command::JointVelocity => {
+                let rates = JointRates::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
+                let joints = bank_values(&v, cmd)?;
+                self.in_mode(cmd)?;
+                operational(drives, cmd)?;
+                if rates.bank_2 {
+                    self.stage(BankKey::Rates, joints, cmd)?;
+                } else {
+                    let q = self.complete(BankKey::Rates, joints, cmd)?;
+                    self.controller.stream_joint_rates(&q).map_err(refused)?;
+                }
+                // The echo: the rates as sent, and in f6 how long they hold.
+                let mut values = v;
+                values[BANK_LEN] = self.controller.stream_timeout();
+                Ok(values_reply(cmd, &values, req.index))
+            }
             Command::JointReset | Command::Stop => {
                 self.controller.stop();
                 Ok(null)
@@ -303,6 +320,26 @@ impl CommandHandler {
             Command::Temperature => {
                 let t = drives.temperatures();
                 joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE)
+            }
+            Command::Twist => {
+                let twist = TwistRequest::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
+                let [vx, vy, vz] = twist.linear.map(f64::from);
+                let [wx, wy, wz] = twist.angular.map(f64::from);
+                let xi = Twist::new(vx, vy, vz, wx, wy, wz);
+                if !xi.iter().all(|v| v.is_finite()) {
+                    return Err(Notice::BadNumber(cmd));
+                }
+                self.in_mode(cmd)?;
+                operational(drives, cmd)?;
+                self.controller
+                    .stream_twist(xi, twist.frame)
+                    .map_err(refused)?;
+                let timeout = self.controller.stream_timeout();
+                Ok(values_reply(
+                    cmd,
+                    &[vx, vy, vz, wx, wy, wz, timeout],
+                    req.index,
+                ))
             }
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();
@@ -382,8 +419,8 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
 /// The mode a motion request needs (RC: off).
 fn required_mode(cmd: Command) -> Mode {
     match cmd {
-        Command::Begin | Command::ViaExecute => Mode::Cartesian,
-        Command::JointBegin | Command::JointExecute => Mode::Joint,
+        Command::Begin | Command::ViaExecute | Command::Twist => Mode::Cartesian,
+        Command::JointBegin | Command::JointExecute | Command::JointVelocity => Mode::Joint,
         _ => Mode::Off,
     }
 }

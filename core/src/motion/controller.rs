@@ -6,12 +6,13 @@ use super::joint_limiter::JointLimiter;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
+use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
-use crate::math::{self, Frame};
-use armgate_protocol::client::Motion;
+use crate::math::{self, Frame, Twist};
+use armgate_protocol::client::{Motion, TwistFrame};
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -87,6 +88,8 @@ pub struct Controller {
     cartesian_generator: CartesianGenerator,
     joint_sequence: Sequence<Joints>,
     cartesian_sequence: Sequence<Frame>,
+    /// Twist and joint-rate streaming (TW, jW).
+    stream: VelocityStream,
     /// The last joint command sent (none while off).
     command: Option<Joints>,
     /// The last measurement and its FK.
@@ -122,6 +125,7 @@ impl Controller {
             .with_jerk_limits(cartesian_j_max),
             joint_sequence: Sequence::new(JOINT_TOLERANCES),
             cartesian_sequence: Sequence::new(CARTESIAN_TOLERANCES),
+            stream: VelocityStream::new(config),
             command: None,
             measured: None,
             period: config.control_period,
@@ -143,8 +147,15 @@ impl Controller {
             workspace_limit: !self.workspace.allows(&f_m.translation.vector),
             ..Events::default()
         };
+        let mut stream_finished = false;
         let (request, setpoint) = match self.mode {
             Mode::Off => (None, None),
+            Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
+                let step = self.stream_tick(&q_m, &mut events);
+                stream_finished = step.finished;
+                let setpoint = (self.mode == Mode::Cartesian).then(|| self.chain.pose(&step.q));
+                (Some(step.q), setpoint)
+            }
             Mode::Joint => (Some(self.joint_tick(&q_m, &mut events)), None),
             Mode::Cartesian => {
                 let (q, sp) = self.cartesian_tick(&q_m, &f_m, &mut events);
@@ -162,6 +173,10 @@ impl Controller {
         if command.is_some() {
             self.command = command;
         }
+        if stream_finished {
+            // The generators take over where the stream came to rest.
+            self.hold(q_m);
+        }
         Ok(StepOutput {
             time: now,
             command,
@@ -169,6 +184,15 @@ impl Controller {
             measured_pose: f_m,
             setpoint,
         })
+    }
+
+    /// Either mode, while a velocity stream runs: its set-point from the last command.
+    fn stream_tick(&mut self, q_m: &Joints, events: &mut Events) -> StreamStep {
+        let q = self.command.unwrap_or(*q_m);
+        let step = self.stream.step(&self.chain, &self.workspace, &q);
+        events.workspace_limit |= step.workspace_limit;
+        events.joint_limit |= step.joint_limit;
+        step
     }
 
     /// Joint mode: sequence, then generator.
@@ -283,6 +307,7 @@ impl Controller {
     pub fn set_mode(&mut self, mode: Mode) -> Result<(), Refusal> {
         let (q_m, _) = self.measured.ok_or(Refusal::NotReady)?;
         self.mode = mode;
+        self.stream.halt();
         self.hold(q_m);
         if mode == Mode::Off {
             self.command = None;
@@ -296,14 +321,55 @@ impl Controller {
     /// after start-up for the same reason). Stops every motion and sequence.
     pub fn release(&mut self) {
         self.command = None;
+        self.stream.halt();
         self.stop();
     }
 
-    /// Stops every motion and sequence; the arm holds its commanded position.
+    /// Stops every motion and sequence; the arm holds its commanded position. A velocity
+    /// stream instead ramps to rest within the acceleration limits.
     pub fn stop(&mut self) {
+        self.stream.ramp_to_rest();
         if let Some((q_m, _)) = self.measured {
             self.hold(q_m);
         }
+    }
+
+    /// Streams a tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in `frame`, valid for
+    /// [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS) ticks from the next one. Cartesian mode
+    /// only; refused while a move or sequence runs.
+    pub fn stream_twist(&mut self, twist: Twist, frame: TwistFrame) -> Result<(), Refusal> {
+        if !twist.iter().all(|v| v.is_finite()) {
+            return Err(Refusal::InvalidNumber);
+        }
+        self.ready_for_stream(Mode::Cartesian)?;
+        self.stream.command(StreamCommand::Twist(twist, frame));
+        Ok(())
+    }
+
+    /// Streams joint rates (rad/s, or m/s for prismatic joints), one per joint, valid for
+    /// [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS) ticks from the next one. Joint mode only;
+    /// refused while a move or sequence runs.
+    pub fn stream_joint_rates(&mut self, rates: &[f64]) -> Result<(), Refusal> {
+        let rates = self.chain.check(rates).map_err(|e| match e {
+            KinematicsError::WrongJointCount => Refusal::WrongJointCount,
+            KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
+        })?;
+        self.ready_for_stream(Mode::Joint)?;
+        self.stream.command(StreamCommand::JointRates(rates));
+        Ok(())
+    }
+
+    fn ready_for_stream(&self, mode: Mode) -> Result<(), Refusal> {
+        if self.mode != mode {
+            return Err(Refusal::WrongMode);
+        }
+        if self.measured.is_none() {
+            return Err(Refusal::NotReady);
+        }
+        if self.is_moving() && !self.stream.is_active() {
+            return Err(Refusal::Busy);
+        }
+        Ok(())
     }
 
     fn hold(&mut self, q_m: Joints) {
@@ -515,6 +581,7 @@ impl Controller {
     pub fn is_moving(&self) -> bool {
         match self.mode {
             Mode::Off => false,
+            Mode::Joint | Mode::Cartesian if self.stream.is_active() => true,
             Mode::Joint => self.joint_generator.is_moving() || self.joint_sequence.is_running(),
             Mode::Cartesian => {
                 self.cartesian_generator.is_moving() || self.cartesian_sequence.is_running()
@@ -526,6 +593,7 @@ impl Controller {
     pub fn motion(&self) -> Motion {
         match self.mode {
             Mode::Off => Motion::Holding,
+            Mode::Joint | Mode::Cartesian if self.stream.is_active() => Motion::Streaming,
             Mode::Joint if self.joint_sequence.is_running() => Motion::JointSequence,
             Mode::Joint if self.joint_generator.is_moving() => Motion::JointMove,
             Mode::Cartesian if self.cartesian_sequence.is_running() => Motion::CartesianSequence,
@@ -547,6 +615,17 @@ impl Controller {
     /// The Cartesian generator's set-point.
     pub fn cartesian_setpoint(&self) -> Frame {
         self.cartesian_generator.setpoint()
+    }
+
+    /// How long a streamed command holds (s): [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS)
+    /// control periods. `TW` and `jW` echo it in f6, so that a client knows how often to send.
+    pub fn stream_timeout(&self) -> f64 {
+        f64::from(super::TIMEOUT_PERIODS) * self.period
+    }
+
+    /// The velocity stream (TW, jW).
+    pub fn stream(&self) -> &VelocityStream {
+        &self.stream
     }
 
     /// The kinematic chain.

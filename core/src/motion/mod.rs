@@ -7,6 +7,7 @@
 //! * [`Sequence`]: via points (§4.4).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
+//! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
 
 mod cartesian_generator;
 mod controller;
@@ -20,6 +21,7 @@ mod sequence;
 mod shape;
 mod straight_line;
 mod trapezoid;
+mod velocity_stream;
 mod workspace;
 
 pub use cartesian_generator::CartesianGenerator;
@@ -34,4 +36,8 @@ pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
 pub use straight_line::StraightLine;
 pub use trapezoid::Trapezoid;
+pub use velocity_stream::{
+    MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,
+    VelocityStream,
+};
 pub use workspace::Workspace;

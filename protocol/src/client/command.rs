@@ -26,6 +26,9 @@ pub enum Command {
     JointReset,
     /// `jV`: store joint via point `index`: joints f0..f5, duration f6.
     JointVia,
+    /// `jW`: stream joint rates f0..f5 (bank 2, index bit 7: joints 7..); valid for three
+    /// control periods (joint mode).
+    JointVelocity,
     /// `ON`: start the arm.
     On,
     /// `OF`: stop the arm.
@@ -40,6 +43,9 @@ pub enum Command {
     Stop,
     /// `TM`: read the drive temperatures.
     Temperature,
+    /// `TW`: stream a tool twist: linear f0..f2 (m/s), angular f3..f5 (rad/s), base frame or
+    /// (index bit 0) tool frame; valid for three control periods (Cartesian mode).
+    Twist,
     /// `VC`: clear the Cartesian via points.
     ViaClear,
     /// `VE`: execute the Cartesian via-point sequence.
@@ -51,7 +57,7 @@ pub enum Command {
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 21] = [
+    pub const ALL: [Self; 23] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
@@ -63,6 +69,7 @@ impl Command {
         Self::JointPosition,
         Self::JointReset,
         Self::JointVia,
+        Self::JointVelocity,
         Self::On,
         Self::Off,
         Self::Pose,
@@ -70,6 +77,7 @@ impl Command {
         Self::Status,
         Self::Stop,
         Self::Temperature,
+        Self::Twist,
         Self::ViaClear,
         Self::ViaExecute,
         Self::ViaPoint,
@@ -89,6 +97,7 @@ impl Command {
             Self::JointPosition => b"jP",
             Self::JointReset => b"jR",
             Self::JointVia => b"jV",
+            Self::JointVelocity => b"jW",
             Self::On => b"ON",
             Self::Off => b"OF",
             Self::Pose => b"PS",
@@ -96,6 +105,7 @@ impl Command {
             Self::Status => b"SQ",
             Self::Stop => b"ST",
             Self::Temperature => b"TM",
+            Self::Twist => b"TW",
             Self::ViaClear => b"VC",
             Self::ViaExecute => b"VE",
             Self::ViaPoint => b"VP",

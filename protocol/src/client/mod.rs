@@ -28,6 +28,7 @@
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
+//! * [`Twist`] and [`JointRates`]: the velocity-streaming requests `TW` and `jW`.
 
 pub mod banks;
 mod command;
@@ -42,6 +43,7 @@ mod request;
 mod status;
 mod temperature;
 mod text;
+mod velocity;
 
 pub use command::Command;
 pub use error::Error;
@@ -55,3 +57,4 @@ pub use request::Request;
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};
+pub use velocity::{JointRates, TOOL_FRAME, Twist, TwistFrame, VelocityError};

@@ -7,9 +7,11 @@ pub enum Mode {
     /// 0: no command; the drives hold their last set-point.
     #[default]
     Off,
-    /// 1: the joint generator and joint sequences drive the arm (jB, jE).
+    /// 1: the joint generator, joint sequences and joint-rate streams drive the arm (jB, jE,
+    /// jW).
     Joint,
-    /// 2: the Cartesian generator, shapes and Cartesian sequences drive the arm (BG, VE).
+    /// 2: the Cartesian generator, shapes, Cartesian sequences and twist streams drive the arm
+    /// (BG, VE, TW).
     Cartesian,
 }
 

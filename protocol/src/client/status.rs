@@ -28,16 +28,19 @@ pub enum Motion {
     JointSequence = 3,
     /// A Cartesian via-point sequence (`VE`).
     CartesianSequence = 4,
+    /// A twist or joint-rate stream (`TW`, `jW`), until it has ramped to rest.
+    Streaming = 5,
 }
 
 impl Motion {
     /// Every motion, by code.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Holding,
         Self::JointMove,
         Self::CartesianMove,
         Self::JointSequence,
         Self::CartesianSequence,
+        Self::Streaming,
     ];
 
     /// The motion with this code.

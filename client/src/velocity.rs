@@ -1,0 +1,305 @@
+//! Velocity streaming (docs/protocol.md, "Velocity streaming"): `TW` (a tool twist) and `jW`
+//! (joint rates) hold for three control periods, so a client re-sends them faster than that;
+//! when it stops, the arm ramps to rest.
+//!
+//! * [`Client::twist`], [`Client::joint_velocity`]: one request each; the reply says how long
+//!   the command holds. [`Client::stream_for`]: a stream for a while, from this thread.
+//! * [`VelocityStreamer`]: a thread with a socket of its own that re-sends the latest command
+//!   until a deadline, so that the caller (a UI, a control loop) only says what it wants.
+//!
+//! ```no_run
+//! use std::time::{Duration, Instant};
+//! use armgate_client::{Client, Mode, TwistFrame, Velocity, VelocityStreamer};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let mut arm = Client::connect("127.0.0.1:7031")?;
+//! arm.set_mode(Mode::Cartesian)?;
+//! let streamer = VelocityStreamer::spawn(Client::connect("127.0.0.1:7031")?)?;
+//! // 1 cm/s up for two seconds, then the arm ramps to rest.
+//! let up = Velocity::Twist { linear: [0.0, 0.0, 0.01], angular: [0.0; 3], frame: TwistFrame::Base };
+//! streamer.stream(up, Instant::now() + Duration::from_secs(2));
+//! # Ok(())
+//! # }
+//! ```
+
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use armgate_protocol::client::{JointRates, Reply, Twist, TwistFrame};
+
+use crate::banks;
+use crate::{Client, ClientError};
+
+/// How often a stream is re-sent until the controller has said how long a command holds.
+pub const DEFAULT_INTERVAL: Duration = Duration::from_millis(10);
+
+/// A velocity command.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Velocity {
+    /// `TW`: the tool's linear (m/s) and angular (rad/s) velocity, in the base or tool frame.
+    Twist {
+        /// vx, vy, vz (m/s).
+        linear: [f64; 3],
+        /// ωx, ωy, ωz (rad/s).
+        angular: [f64; 3],
+        /// The frame of both.
+        frame: TwistFrame,
+    },
+    /// `jW`: one rate per joint (rad/s, or m/s for prismatic joints).
+    Joints(Vec<f64>),
+}
+
+/// How long the command of an echo holds (its f6), if it says.
+fn hold_time(reply: &Reply) -> Option<Duration> {
+    let seconds = f64::from(*reply.values.last()?);
+    (seconds.is_finite() && seconds > 0.0).then(|| Duration::from_secs_f64(seconds))
+}
+
+impl Client {
+    /// `TW`: streams a tool twist (Cartesian mode). Returns how long it holds (three control
+    /// periods, from the echo); send the next one before then.
+    pub fn twist(
+        &mut self,
+        linear: [f64; 3],
+        angular: [f64; 3],
+        frame: TwistFrame,
+    ) -> Result<Option<Duration>, ClientError> {
+        let twist = Twist {
+            linear: linear.map(|v| v as f32),
+            angular: angular.map(|v| v as f32),
+            frame,
+        };
+        self.request(twist.to_request()).map(|r| hold_time(&r))
+    }
+
+    /// `jW`: streams joint rates (joint mode); for more than six joints bank 2 is sent first.
+    /// Returns how long they hold, as [`twist`](Self::twist).
+    pub fn joint_velocity(&mut self, rates: &[f64]) -> Result<Option<Duration>, ClientError> {
+        let mut hold = None;
+        for bank in banks::split(rates, 0, 0.0)? {
+            let mut values = [0.0f32; banks::WRITE_JOINTS];
+            for (v, b) in values.iter_mut().zip(bank.values) {
+                *v = b;
+            }
+            let request = JointRates {
+                bank_2: bank.index != 0,
+                rates: values,
+            };
+            hold = hold_time(&self.request(request.to_request())?);
+        }
+        Ok(hold)
+    }
+
+    /// Streams `velocity` from this thread for `duration`, once per control period (a third
+    /// of the hold time the controller echoes), or until `interrupted()` says so; then the arm
+    /// ramps to rest. Returns the number of commands sent.
+    pub fn stream_for(
+        &mut self,
+        velocity: &Velocity,
+        duration: Duration,
+        interrupted: impl Fn() -> bool,
+    ) -> Result<u32, ClientError> {
+        let end = Instant::now() + duration;
+        let mut sent = 0u32;
+        while Instant::now() < end {
+            if interrupted() {
+                return Err(ClientError::Interrupted);
+            }
+            let sent_at = Instant::now();
+            let interval = self.velocity(velocity)?.map_or(DEFAULT_INTERVAL, |h| h / 3);
+            sent = sent.saturating_add(1);
+            // Once per period from send to send, the reply's wait included.
+            let next = (sent_at + interval).min(end);
+            std::thread::sleep(next.saturating_duration_since(Instant::now()));
+        }
+        Ok(sent)
+    }
+
+    /// Sends one velocity command ([`twist`](Self::twist) or
+    /// [`joint_velocity`](Self::joint_velocity)).
+    pub fn velocity(&mut self, velocity: &Velocity) -> Result<Option<Duration>, ClientError> {
+        match velocity {
+            Velocity::Twist {
+                linear,
+                angular,
+                frame,
+            } => self.twist(*linear, *angular, *frame),
+            Velocity::Joints(rates) => self.joint_velocity(rates),
+        }
+    }
+}
+
+/// What the streaming thread reports.
+#[derive(Debug)]
+pub enum StreamEvent {
+    /// A command was refused or failed; the stream stopped (the arm ramps to rest).
+    Failed(ClientError),
+    /// Unsolicited notices that arrived on the stream's socket.
+    Notice(crate::Text),
+}
+
+/// Re-sends the latest velocity command from a thread of its own, once per control period
+/// (a third of the hold time the controller echoes), until its deadline; then sends nothing
+/// more and the controller ramps the arm to rest. Dropping it ends the thread.
+#[derive(Debug)]
+pub struct VelocityStreamer {
+    commands: Sender<Option<(Velocity, Instant)>>,
+    /// Failures and notices.
+    pub events: Receiver<StreamEvent>,
+    /// The thread.
+    pub thread: JoinHandle<()>,
+}
+
+impl VelocityStreamer {
+    /// Starts the thread with `client` (use a client of its own: requests wait for their
+    /// replies one at a time, and the stream must not wait behind other requests).
+    pub fn spawn(client: Client) -> std::io::Result<Self> {
+        let (commands, command_rx) = mpsc::channel();
+        let (event_tx, events) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name("armgate-velocity".into())
+            .spawn(move || run(client, &command_rx, &event_tx))?;
+        Ok(Self {
+            commands,
+            events,
+            thread,
+        })
+    }
+
+    /// Streams `velocity` until `until` (it replaces what was streamed before).
+    pub fn stream(&self, velocity: Velocity, until: Instant) {
+        // A send fails only if the thread has ended, which `events` has told.
+        let _ = self.commands.send(Some((velocity, until)));
+    }
+
+    /// Stops sending at once; the controller ramps the arm to rest after its hold time.
+    pub fn stop(&self) {
+        let _ = self.commands.send(None);
+    }
+}
+
+fn run(
+    mut client: Client,
+    commands: &Receiver<Option<(Velocity, Instant)>>,
+    events: &Sender<StreamEvent>,
+) {
+    let mut current: Option<(Velocity, Instant)> = None;
+    let mut interval = DEFAULT_INTERVAL;
+    let mut next_send = Instant::now();
+    loop {
+        let received = match &current {
+            None => commands.recv().map_err(|_| RecvTimeoutError::Disconnected),
+            Some(_) => commands.recv_timeout(next_send.saturating_duration_since(Instant::now())),
+        };
+        match received {
+            Ok(command) => {
+                // A new command goes out at once.
+                current = command;
+                next_send = Instant::now();
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => return,
+        }
+        let now = Instant::now();
+        let Some((velocity, until)) = &current else {
+            continue;
+        };
+        if now >= *until {
+            current = None;
+            continue;
+        }
+        if now < next_send {
+            continue;
+        }
+        match client.velocity(velocity) {
+            Ok(hold) => {
+                // One control period: two more sends fit in the hold time.
+                interval = hold.map_or(interval, |h| h / 3);
+                next_send = now + interval;
+            }
+            Err(error) => {
+                current = None;
+                if events.send(StreamEvent::Failed(error)).is_err() {
+                    return;
+                }
+            }
+        }
+        for notice in client.take_notices() {
+            if events.send(StreamEvent::Notice(notice)).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fake::FakeController;
+    use armgate_protocol::client::{MESSAGE_LEN, VALUES};
+
+    /// Echoes every request reversed, with a hold time of 30 ms in f6.
+    fn controller() -> FakeController {
+        FakeController::spawn(|request| {
+            let mut reply = request[..MESSAGE_LEN].to_vec();
+            reply.swap(0, 1);
+            reply[2 + 4 * (VALUES - 1)..2 + 4 * VALUES].copy_from_slice(&0.03f32.to_le_bytes());
+            vec![reply]
+        })
+    }
+
+    #[test]
+    fn twist_and_joint_rates_go_out_as_tw_and_banked_jw() {
+        let fake = controller();
+        let mut c = fake.client();
+        let hold = c.twist([0.5, 0.0, 0.0], [0.0, 0.0, -1.0], TwistFrame::Tool);
+        assert_eq!(
+            hold.unwrap(),
+            Some(Duration::from_secs_f64(f64::from(0.03f32)))
+        );
+        c.joint_velocity(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8])
+            .unwrap();
+        let sent = fake.received();
+        assert_eq!(sent.len(), 3);
+        assert_eq!(&sent[0][..2], b"TW");
+        assert_eq!(sent[0][30], 0x01);
+        assert_eq!(&sent[0][2..6], &0.5f32.to_le_bytes());
+        assert_eq!((&sent[1][..2], sent[1][30]), (&b"jW"[..], 0x80));
+        assert_eq!(&sent[1][2..6], &0.7f32.to_le_bytes());
+        assert_eq!((&sent[2][..2], sent[2][30]), (&b"jW"[..], 0x00));
+    }
+
+    #[test]
+    fn stream_for_resends_each_period_and_stops_when_interrupted() {
+        let fake = controller();
+        let mut c = fake.client();
+        let rates = Velocity::Joints(vec![0.0, 0.1]);
+        let sent = c
+            .stream_for(&rates, Duration::from_millis(200), || false)
+            .unwrap();
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms.
+        assert!((10..=21).contains(&sent), "{sent}");
+        assert_eq!(fake.received().len(), sent as usize);
+        let stopped = c.stream_for(&rates, Duration::from_secs(5), || true);
+        assert!(matches!(stopped, Err(ClientError::Interrupted)));
+    }
+
+    #[test]
+    fn the_streamer_resends_each_period_until_its_deadline() {
+        let fake = controller();
+        let streamer = VelocityStreamer::spawn(fake.client()).unwrap();
+        let up = Velocity::Twist {
+            linear: [0.0, 0.0, 0.01],
+            angular: [0.0; 3],
+            frame: TwistFrame::Base,
+        };
+        streamer.stream(up, Instant::now() + Duration::from_millis(200));
+        std::thread::sleep(Duration::from_millis(400));
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms, then nothing.
+        let sent = fake.received().len();
+        assert!((10..=25).contains(&sent), "{sent} sends");
+        std::thread::sleep(Duration::from_millis(100));
+        assert_eq!(fake.received().len(), sent);
+    }
+}

@@ -1,0 +1,348 @@
+//! Velocity streaming (`TW`, `jW`): a tool twist or joint rates, each valid for
+//! [`TIMEOUT_PERIODS`] control periods, after which the arm ramps to rest.
+//!
+//! One tick, from the last joint command `q` and the streamed joint velocity `v`:
+//!
+//! 1. **target**: the command's joint rates, or zero once it is older than the timeout. A
+//!    twist (base frame, or the tool frame turned into it) is scaled down to the Cartesian
+//!    speed limits and turned into joint rates by a damped pseudo-inverse: the damping rises
+//!    smoothly as the smallest singular value falls ([`damping`]) and acts along that
+//!    direction only ([`pseudo_inverse`]), with the linear rows weighted
+//!    ([`LINEAR_WEIGHT`]) so that the tool keeps its path and gives way in orientation; a
+//!    7–8-joint arm adds a pull towards mid-range in the null space ([`null_space`]), and a
+//!    correction back to the path the twist means ([`reference`]). The rates are scaled down
+//!    to the joints' speed limits as a whole, so the tool keeps its direction and slows down
+//!    rather than stops;
+//! 2. **joint limits**: a joint heading for a limit may not be faster than it can still stop
+//!    at a margin before it ([`joint_margin`]): twists scale the whole vector (the path stays),
+//!    joint rates each joint;
+//! 3. **acceleration**: `v` moves towards the target as far as every joint's acceleration
+//!    limit allows, all joints by the same fraction ([`ramp`]);
+//! 4. **workspace**: if the tool would end outside the workspace or in an exclusion box at
+//!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
+//!    is not commanded at all (the arm holds). An arm already outside moves freely, so that it
+//!    can be driven out.
+//!
+//! The set-point is `q + v·T`. Each loop runs over the joints; no iteration is unbounded.
+
+mod damping;
+mod joint_margin;
+mod null_space;
+mod pseudo_inverse;
+mod ramp;
+mod reference;
+
+pub use damping::{MAX_DAMPING, SINGULAR_THRESHOLD};
+use damping::{SingularDirection, singularity_damping};
+pub use joint_margin::MARGIN_SHARE;
+
+use armgate_protocol::client::TwistFrame;
+
+use super::workspace::Workspace;
+use crate::config::ValidRobot;
+use crate::kinematics::{Chain, Joints};
+use crate::math::{Frame, Twist};
+use reference::PathReference;
+
+/// A command holds for this many control periods; then the arm ramps to rest.
+pub const TIMEOUT_PERIODS: u32 = 3;
+/// Weight of the linear rows of the Jacobian and the twist (1/m) against the angular ones:
+/// near a singularity the damped solution gives way where the weighted error is cheapest, so
+/// with 10 a millimetre off the path costs as much as 0.57° of orientation, and a jog through
+/// a wrist singularity keeps its straight line and lets the orientation wobble instead.
+pub const LINEAR_WEIGHT: f64 = 10.0;
+
+/// What a client streams.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StreamCommand {
+    /// A tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in a frame.
+    Twist(Twist, TwistFrame),
+    /// Joint rates (rad/s, or m/s for prismatic joints), one per joint.
+    JointRates(Joints),
+}
+
+/// What one streaming tick produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StreamStep {
+    /// The joint set-point.
+    pub q: Joints,
+    /// The stream has come to rest with no command left: the generators take over.
+    pub finished: bool,
+    /// The workspace made the arm slow down or hold.
+    pub workspace_limit: bool,
+    /// A joint was held at the margin before its limit.
+    pub joint_limit: bool,
+}
+
+/// The state of a velocity stream: the latest command, its age and the joint velocity.
+#[derive(Clone, Debug)]
+pub struct VelocityStream {
+    command: Option<StreamCommand>,
+    /// Ticks since the command arrived.
+    age: u32,
+    /// The joint velocity of the last set-point step.
+    velocity: Joints,
+    /// Speed limits: the lower of the joint generator's and the limiter's.
+    max_speed: Joints,
+    /// Acceleration limit × period: the largest velocity change per tick.
+    max_change: Joints,
+    max_acceleration: Joints,
+    /// The joint limits with the margin kept.
+    lower: Joints,
+    upper: Joints,
+    mid: Joints,
+    cartesian_speed: [f64; 6],
+    period: f64,
+    /// The smallest singular direction, followed from tick to tick.
+    singular: SingularDirection,
+    /// Where a twist stream means the tool to be.
+    reference: PathReference,
+    /// The last tick's damping (0 away from singularities).
+    damping: f64,
+}
+
+impl VelocityStream {
+    /// An idle stream for a robot.
+    pub fn new(config: &ValidRobot) -> Self {
+        let period = config.control_period;
+        let margin = |j: &crate::config::JointConfig| MARGIN_SHARE * (j.max - j.min);
+        Self {
+            command: None,
+            age: 0,
+            velocity: Joints::zeros(config.dof()),
+            max_speed: config.per_joint(|j| j.max_velocity.min(j.max_rate)),
+            max_change: config.per_joint(|j| j.max_acceleration * period),
+            max_acceleration: config.per_joint(|j| j.max_acceleration),
+            lower: config.per_joint(|j| j.min + margin(j)),
+            upper: config.per_joint(|j| j.max - margin(j)),
+            mid: config.per_joint(|j| 0.5 * (j.min + j.max)),
+            cartesian_speed: config.cartesian.max_velocity,
+            period,
+            singular: SingularDirection::default(),
+            reference: PathReference::default(),
+            damping: 0.0,
+        }
+    }
+
+    /// Takes a new command (valid for [`TIMEOUT_PERIODS`] ticks from the next one). The caller
+    /// has checked its numbers and, for joint rates, their count.
+    pub fn command(&mut self, command: StreamCommand) {
+        self.command = Some(command);
+        self.age = 0;
+    }
+
+    /// Drops the command: the arm ramps to rest within the acceleration limits.
+    pub fn ramp_to_rest(&mut self) {
+        self.command = None;
+    }
+
+    /// Ends the stream at once (mode change, drives not taking commands).
+    pub fn halt(&mut self) {
+        self.command = None;
+        self.velocity.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// True while a command holds or the arm has not yet ramped to rest.
+    pub fn is_active(&self) -> bool {
+        self.command.is_some() || self.velocity.iter().any(|v| *v != 0.0)
+    }
+
+    /// The joint velocity of the last set-point step.
+    pub fn velocity(&self) -> &Joints {
+        &self.velocity
+    }
+
+    /// One tick from the last joint command `q` (checked by the chain).
+    pub fn step(&mut self, chain: &Chain, workspace: &Workspace, q: &Joints) -> StreamStep {
+        if self.age >= TIMEOUT_PERIODS {
+            self.command = None;
+        }
+        self.age = self.age.saturating_add(1);
+        let mut joint_limit = false;
+        // A twist's intended base-frame twist and the pose it starts from.
+        let mut path = None;
+        let target = match self.command {
+            None => Joints::zeros(q.len()),
+            Some(StreamCommand::JointRates(rates)) => {
+                let mut target = rates;
+                for (i, t) in target.iter_mut().enumerate() {
+                    let cap = self.max_speed.get(i).copied().unwrap_or(0.0);
+                    *t = crate::saturate::saturate(*t, -cap, cap);
+                    let brake = self.braking_speed(q, i, *t);
+                    if brake < libm::fabs(*t) {
+                        joint_limit |= brake == 0.0;
+                        *t = libm::copysign(brake, *t);
+                    }
+                }
+                target
+            }
+            Some(StreamCommand::Twist(twist, frame)) => {
+                let pose = tool_pose(chain, q);
+                let intended = self.base_twist(&pose, &twist, frame);
+                // Faded out where the damping gives way: it would only fight it there.
+                let fade = 1.0 - self.damping / MAX_DAMPING;
+                let correction =
+                    self.reference
+                        .correction(&pose, (twist, frame), &self.cartesian_speed)
+                        * fade;
+                path = Some((intended, pose));
+                // The null space pulls only while the client asks for motion: a zero twist holds.
+                let pull = intended.iter().any(|v| *v != 0.0);
+                let rates = self.twist_rates(chain, q, &(intended + correction), pull);
+                let brake = (0..rates.len())
+                    .map(|i| {
+                        let rate = rates.get(i).copied().unwrap_or(0.0);
+                        let ratio = self.braking_speed(q, i, rate) / libm::fabs(rate);
+                        if ratio.is_nan() { 1.0 } else { ratio }
+                    })
+                    .fold(1.0, f64::min);
+                joint_limit |= brake == 0.0;
+                scaled(&rates, brake)
+            }
+        };
+        let mut velocity = ramp::accelerate(&self.velocity, &target, &self.max_change);
+        // Checked only from inside: an arm already outside (after a recalibration, at start-up)
+        // may be driven out, as joint moves may.
+        let allowed = |q: &Joints| workspace.allows(&tool_pose(chain, q).translation.vector);
+        let mut workspace_limit = false;
+        let mut inside_now = None;
+        if !allowed(&self.resting_point(q, &velocity)) && *inside_now.get_or_insert(allowed(q)) {
+            workspace_limit = true;
+            velocity = ramp::accelerate(&self.velocity, &Joints::zeros(q.len()), &self.max_change);
+        }
+        let mut next = advance(q, &velocity, self.period);
+        if !allowed(&next) && inside_now.unwrap_or_else(|| allowed(q)) {
+            workspace_limit = true;
+            velocity = Joints::zeros(q.len());
+            next = *q;
+        }
+        match path {
+            Some((intended, pose)) => {
+                self.reference
+                    .advance(&intended, &pose, &tool_pose(chain, &next), self.period);
+            }
+            None => self.reference.clear(),
+        }
+        self.velocity = velocity;
+        StreamStep {
+            q: next,
+            finished: !self.is_active(),
+            workspace_limit,
+            joint_limit,
+        }
+    }
+
+    /// A command's twist in the base frame (the tool frame turned by the tool's rotation at
+    /// `pose`), within the Cartesian speed limits by one factor: the direction stays.
+    fn base_twist(&self, pose: &Frame, twist: &Twist, frame: TwistFrame) -> Twist {
+        let mut xi = *twist;
+        if frame == TwistFrame::Tool {
+            let linear = pose.rotation * xi.fixed_rows::<3>(0).into_owned();
+            let angular = pose.rotation * xi.fixed_rows::<3>(3).into_owned();
+            xi.fixed_rows_mut::<3>(0).copy_from(&linear);
+            xi.fixed_rows_mut::<3>(3).copy_from(&angular);
+        }
+        self.within_cartesian_limits(xi)
+    }
+
+    fn within_cartesian_limits(&self, xi: Twist) -> Twist {
+        let over = xi
+            .iter()
+            .zip(self.cartesian_speed)
+            .map(|(v, max)| libm::fabs(*v) / max)
+            .fold(1.0, f64::max);
+        xi / over
+    }
+
+    /// Joint rates for a base-frame twist at `q`, within the Cartesian and the joint speed
+    /// limits; with `pull`, a 7–8-joint arm also moves towards mid-range in the null space.
+    fn twist_rates(&mut self, chain: &Chain, q: &Joints, twist: &Twist, pull: bool) -> Joints {
+        let mut xi = self.within_cartesian_limits(*twist);
+        if xi.iter().all(|v| *v == 0.0) {
+            return Joints::zeros(q.len());
+        }
+        let Ok(mut j) = chain.jacobian(q) else {
+            return Joints::zeros(q.len());
+        };
+        // Weighted rows: the damping gives way in orientation before position.
+        j.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
+        xi.fixed_rows_mut::<3>(0).scale_mut(LINEAR_WEIGHT);
+        let n = chain.dof();
+        let outer = j * j.transpose();
+        let damping = singularity_damping(&outer, n, &mut self.singular);
+        self.damping = damping;
+        let pull = if n > 6 && pull {
+            null_space::mid_range_pull(q, &self.mid, &self.max_speed)
+        } else {
+            Joints::zeros(n)
+        };
+        let rates = pseudo_inverse::selectively_damped_rates(
+            &j,
+            &outer,
+            n,
+            &xi,
+            damping,
+            &self.singular,
+            &pull,
+        )
+        .unwrap_or_else(|| Joints::zeros(q.len()));
+        let over = rates
+            .iter()
+            .zip(self.max_speed.iter())
+            .map(|(r, max)| libm::fabs(*r) / max)
+            .fold(1.0, f64::max);
+        // A non-finite ratio means rates that are not numbers: no motion.
+        if over.is_finite() {
+            scaled(&rates, 1.0 / over)
+        } else {
+            Joints::zeros(q.len())
+        }
+    }
+
+    /// The braking speed of joint `i` at `q` moving at `rate`.
+    fn braking_speed(&self, q: &Joints, i: usize, rate: f64) -> f64 {
+        let at = |v: &Joints| v.get(i).copied().unwrap_or(0.0);
+        joint_margin::braking_speed(
+            at(q),
+            rate,
+            (at(&self.lower), at(&self.upper)),
+            at(&self.max_acceleration),
+            self.period,
+        )
+    }
+
+    /// Where the arm would come to rest if it braked from `velocity` after this tick: about
+    /// `q + v·(T + t_stop/2)`.
+    fn resting_point(&self, q: &Joints, velocity: &Joints) -> Joints {
+        let stop_time = velocity
+            .iter()
+            .zip(self.max_acceleration.iter())
+            .map(|(v, a)| libm::fabs(*v) / a)
+            .fold(0.0, f64::max);
+        advance(q, velocity, self.period + 0.5 * stop_time)
+    }
+}
+
+/// The tool pose at `q` (finite: the last command, or a step from it by a finite velocity),
+/// through one out-of-line copy of the chain's walk, which is `inline(always)` for the IK:
+/// the stream's four calls would otherwise each carry their own (tens of KiB of flash).
+#[inline(never)]
+fn tool_pose(chain: &Chain, q: &Joints) -> Frame {
+    chain.pose(q)
+}
+
+/// `q + v·t`.
+fn advance(q: &Joints, v: &Joints, t: f64) -> Joints {
+    let mut out = *q;
+    for (o, v) in out.iter_mut().zip(v.iter()) {
+        *o += v * t;
+    }
+    out
+}
+
+/// `v · factor`.
+fn scaled(v: &Joints, factor: f64) -> Joints {
+    let mut out = *v;
+    out.iter_mut().for_each(|x| *x *= factor);
+    out
+}
