@@ -59,13 +59,7 @@ struct Results {
 
 /// Measures every embedded robot and prints the table; false if a robot could not be measured.
 pub fn run(counter: &Counter) -> bool {
-    hprintln!(
-        "calibration: {} nop = {} SysTick ticks (empty window {:.2} ticks) -> {:.3} instructions/tick (40 expected: 1 ns per instruction, 25 MHz SysTick)",
-        Counter::calibration_instructions(),
-        counter.calibration_ticks,
-        counter.empty_ticks,
-        counter.instructions_per_tick
-    );
+    counter.print_calibration();
     hprintln!(
         "{} samples per robot, seed {:#x}; instructions per call, mean (max)",
         SAMPLES,

@@ -4,6 +4,7 @@ use core::hint::black_box;
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_semihosting::hprintln;
 
 /// SysTick is a 24-bit down-counter; it runs with the largest reload, so that one window
 /// (at most 2^24 ticks, 671 million instructions) never wraps twice.
@@ -60,6 +61,17 @@ impl Counter {
     /// Instructions in the calibration window, by construction.
     pub const fn calibration_instructions() -> u32 {
         BLOCK * BLOCKS
+    }
+
+    /// Prints the calibration over semihosting: the first line of every benchmark's output.
+    pub fn print_calibration(&self) {
+        hprintln!(
+            "calibration: {} nop = {} SysTick ticks (empty window {:.2} ticks) -> {:.3} instructions/tick (40 expected: 1 ns per instruction, 25 MHz SysTick)",
+            Self::calibration_instructions(),
+            self.calibration_ticks,
+            self.empty_ticks,
+            self.instructions_per_tick
+        );
     }
 }
 

@@ -41,12 +41,7 @@ pub fn run(counter: &Counter) -> bool {
         sets.add(ticks);
         errors += u32::from(planned.is_err());
     }
-    hprintln!(
-        "calibration: {} nop = {} SysTick ticks -> {:.3} instructions/tick",
-        Counter::calibration_instructions(),
-        counter.calibration_ticks,
-        counter.instructions_per_tick
-    );
+    counter.print_calibration();
     hprintln!(
         "jerk-limited profiles: {} random cases (seed {:#x}), {} sets of six; instructions per call, mean (max)",
         CASES,

@@ -243,12 +243,7 @@ struct Whole {
 
 /// Measures the robots of [`TICK_ROBOTS`] and prints the table; false on a failure.
 pub fn run(counter: &Counter) -> bool {
-    hprintln!(
-        "calibration: {} nop = {} SysTick ticks -> {:.3} instructions/tick",
-        Counter::calibration_instructions(),
-        counter.calibration_ticks,
-        counter.instructions_per_tick
-    );
+    counter.print_calibration();
     hprintln!(
         "control tick: Cycle::tick (CommandHandler + DriveManager) on a VirtualBus of simulated Whistles (as sim-drives) in Cartesian mode, during a straight move by ({}, {}, {}) m and {} rad yaw in >= {} s started with CM 2, GT, BG; instructions per tick, mean (max)",
         OFFSET[0],
