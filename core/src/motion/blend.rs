@@ -21,8 +21,8 @@
 //!
 //! Every condition only gets easier as `t_s` grows and all hold at the current leg's end, so
 //! `t_s` is found by bisection with a fixed number of steps. A blend that would not save time
-//! or would overlap for less than a control period is not made ([`worth_blending`]): the
-//! sequence stops at that via point as it does with tolerance 0. Accelerations cannot be traded
+//! or would overlap for less than a control period is not made
+//! ([`LegChain::queue_if_worthwhile`]): the sequence stops at that via point as it does with tolerance 0. Accelerations cannot be traded
 //! against `t_s`: the next leg is instead planned within what the current leg's acceleration
 //! leaves of each axis's limit ([`acceleration_budget`]). Nor can jerks: a leg whose end blends
 //! is planned with half the jerk on the axes the next leg shares ([`jerk_towards`]), the next
@@ -100,6 +100,31 @@ impl<L: Leg> LegChain<L> {
         let start = start.max(self.elapsed).min(self.leg.duration());
         self.next = Some((next, start));
         Ok(())
+    }
+
+    /// Queues the next leg if a blend is worth it (`Ok(true)`): `budgeted`, the next leg planned
+    /// within what the running leg leaves of the limits and its start on the running leg's
+    /// clock, must end earlier than the `full` leg (planned alone) would after a stop (a tight
+    /// budget can make a blend slower than stopping), and overlap the running leg for at least
+    /// `min_overlap` (a control period: a shorter overlap falls between two set-points, which
+    /// would then cut the corner by their chord, not within the tolerance). If not
+    /// (`Ok(false)`), the sequence stops at the via point as with tolerance 0.
+    pub fn queue_if_worthwhile(
+        &mut self,
+        full: &L,
+        budgeted: Option<(L, f64)>,
+        min_overlap: f64,
+    ) -> Result<bool, Refusal> {
+        let current = self.leg.duration();
+        match budgeted {
+            Some((next, start))
+                if start + next.duration() < current + full.duration()
+                    && current - start >= min_overlap =>
+            {
+                self.queue(next, start).map(|()| true)
+            }
+            _ => Ok(false),
+        }
     }
 
     /// The legs that make the set-point at time `t` on the running leg's clock.
@@ -211,22 +236,6 @@ pub(crate) fn blend_start(
         }
     }
     hi
-}
-
-/// Whether a blend is worth it: the next leg planned within the budgets, starting at `start`
-/// on the current leg's clock, must end earlier than the `full` leg would after a stop (a
-/// tight budget can make a blend slower than stopping), and overlap the current leg for at
-/// least `min_overlap` (a control period: a shorter overlap falls between two set-points,
-/// which would then cut the corner by their chord, not within the tolerance). If not, the
-/// sequence stops at the via point as with tolerance 0.
-pub(crate) fn worth_blending<L: Leg>(
-    current_duration: f64,
-    full: &L,
-    (next, start): (&L, f64),
-    min_overlap: f64,
-) -> bool {
-    start + next.duration() < current_duration + full.duration()
-        && current_duration - start >= min_overlap
 }
 
 /// What the current leg's acceleration leaves of each axis's limit `a_max` for a next leg in

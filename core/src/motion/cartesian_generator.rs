@@ -3,7 +3,6 @@
 use super::Refusal;
 use super::blend::{
     self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
-    worth_blending,
 };
 use super::shape::Shape;
 use super::straight_line::StraightLine;
@@ -321,14 +320,7 @@ impl CartesianGenerator {
                 );
                 (next, start)
             });
-        match budgeted {
-            Some((next, start))
-                if worth_blending(current.duration, &full, (&next, start), min_overlap) =>
-            {
-                chain.queue(next, start).map(|()| true)
-            }
-            _ => Ok(false),
-        }
+        chain.queue_if_worthwhile(&full, budgeted, min_overlap)
     }
 
     fn limits(&self) -> Limits {

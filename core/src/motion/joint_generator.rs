@@ -3,7 +3,6 @@
 use super::Refusal;
 use super::blend::{
     self, Axes, Blended, LegChain, acceleration_budget, blend_start, jerk_budget, jerk_towards,
-    worth_blending,
 };
 use super::straight_line::StraightLine;
 use crate::MAX_JOINTS;
@@ -189,14 +188,7 @@ impl JointGenerator {
                 );
                 (next, start)
             });
-        match budgeted {
-            Some((next, start))
-                if worth_blending(current.duration, &full, (&next, start), min_overlap) =>
-            {
-                chain.queue(next, start).map(|()| true)
-            }
-            _ => Ok(false),
-        }
+        chain.queue_if_worthwhile(&full, budgeted, min_overlap)
     }
 
     /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).
