@@ -153,7 +153,7 @@ impl Controller {
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
                 let step = self.stream_tick(&q_m, &mut events);
                 stream_finished = step.finished;
-                let setpoint = (self.mode == Mode::Cartesian).then(|| self.chain.pose(&step.q));
+                let setpoint = (self.mode == Mode::Cartesian).then_some(step.pose);
                 (Some(step.q), setpoint)
             }
             Mode::Joint => (Some(self.joint_tick(&q_m, &mut events)), None),

@@ -66,6 +66,8 @@ pub enum StreamCommand {
 pub struct StreamStep {
     /// The joint set-point.
     pub q: Joints,
+    /// The tool pose at `q` (computed for the workspace check; the controller reports it).
+    pub pose: Frame,
     /// The stream has come to rest with no command left: the generators take over.
     pub finished: bool,
     /// The workspace made the arm slow down or hold.
@@ -211,21 +213,23 @@ impl VelocityStream {
             velocity = ramp::accelerate(&self.velocity, &Joints::zeros(q.len()), &self.max_change);
         }
         let mut next = advance(q, &velocity, self.period);
-        if !allowed(&next) && inside_now.unwrap_or_else(|| allowed(q)) {
+        let mut pose = tool_pose(chain, &next);
+        if !workspace.allows(&pose.translation.vector) && inside_now.unwrap_or_else(|| allowed(q)) {
             workspace_limit = true;
             velocity = Joints::zeros(q.len());
             next = *q;
+            pose = tool_pose(chain, q);
         }
         match path {
-            Some((intended, pose)) => {
-                self.reference
-                    .advance(&intended, &pose, &tool_pose(chain, &next), self.period);
+            Some((intended, from)) => {
+                self.reference.advance(&intended, &from, &pose, self.period);
             }
             None => self.reference.clear(),
         }
         self.velocity = velocity;
         StreamStep {
             q: next,
+            pose,
             finished: !self.is_active(),
             workspace_limit,
             joint_limit,
