@@ -521,7 +521,7 @@ fn every_start_survives_lost_frames() {
             rig.bus().stats().frames_lost
         );
         repeated += rig.manager().stats().requests_repeated;
-        // Every drive began: streaming goes on (without loss: lead 3 is not loss-proof).
+        // Every drive began: streaming goes on (without loss: the default lead is not loss-proof).
         rig.bus_mut().set_frame_loss(0.0, 0);
         rig.ticks(100);
         assert!(

@@ -538,10 +538,10 @@ fn steady_pdo_cycle(robot_name: &str, bitrate: u32, samples: u32, seconds: f64) 
     const GROUP: u8 = 120;
     join_group(&mut bus, &ids, GROUP);
     for &id in &ids {
-        arm_pt(&mut bus, id, samples as i32, 4);
+        arm_pt(&mut bus, id, samples as i32, 3);
     }
-    // One period at most before the first point: the drives fetch QP[4] one segment after
-    // `BG`, and QP[5] one segment later.
+    // One period at most before the first point: the drives fetch QP[3] one segment after
+    // `BG`, and QP[4], the first point streamed, one segment later.
     exchange(&mut bus, &[query(GROUP, Mnemonic::BG, 0)], 0.001);
     bus.reset_stats();
     let period = f64::from(samples) * 360e-6;

@@ -452,8 +452,13 @@ impl DriveManager {
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
         let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
         let timing = self.timing;
+        // One point more than the lead, and at least FILLED_POINTS: the first point streamed
+        // after `BG` is then due at the second segment start, not the first.
         let (ring_len, filled) = if pdo {
-            (self.pdo_ring_len, pdo_lead.saturating_add(1))
+            (
+                self.pdo_ring_len,
+                pdo_lead.saturating_add(1).max(FILLED_POINTS),
+            )
         } else {
             (self.ring_len, FILLED_POINTS)
         };

@@ -21,8 +21,10 @@
 //! | `Configure(4)` | `PT=1` | the next `BG` starts PT motion at `QP[1]` |
 //!
 //! The ring is filled with one point more than the lead the stream keeps: `QP[1..=3]` on the
-//! interpreter schedule ([`FILLED_POINTS`](super::streaming::FILLED_POINTS)), `QP[1..=lead + 1]` on the PDO schedule, the fill
-//! going on two points per step before `PT=1`; the stream then starts at its lead.
+//! interpreter schedule ([`FILLED_POINTS`](super::streaming::FILLED_POINTS)), `QP[1..=lead + 1]`
+//! on the PDO schedule (at least `QP[1..=3]`: the first point streamed after `BG` is then due
+//! at the second segment start), the fill going on two points per step before `PT=1`; the
+//! stream then starts at its lead.
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
 //!
