@@ -19,14 +19,14 @@
 //! | `Configure(2)` | `MP[5]=0`, `QP[1]=PX` | no queue-low warning: the read index paces the writer |
 //! | `Configure(3)` | `QP[2]=PX`, `QP[3]=PX` | |
 //! | `Configure(4)` | `PT=1` | the next `BG` starts PT motion at `QP[1]` |
+//! | `Ready` | — | waits for every drive |
+//! | `Begin` | `BG` | all drives in one cycle |
 //!
 //! The ring is filled with one point more than the lead the stream keeps: `QP[1..=3]` on the
 //! interpreter schedule ([`FILLED_POINTS`](super::streaming::FILLED_POINTS)), `QP[1..=lead + 1]`
 //! on the PDO schedule (at least `QP[1..=3]`: the first point streamed after `BG` is then due
 //! at the second segment start), the fill going on two points per step before `PT=1`; the
 //! stream then starts at its lead.
-//! | `Ready` | — | waits for every drive |
-//! | `Begin` | `BG` | all drives in one cycle |
 //!
 //! The PDO schedule first gives every drive the group id (`GroupId`, SDO 0x2040), which takes
 //! effect at a reset communication: when every drive has it (`Regroup`), the manager resets
