@@ -6,21 +6,21 @@
 //! * `QP[1..=64]` hold positions (a real drive has 1024); `MP[1]`/`MP[2]` bound the ring, `MP[3]`
 //!   bit 0 makes it cyclic, `MP[4]` is the samples per segment, `MP[5]` the queue-low threshold.
 //! * Which point is read when, as the manual says: "When the read pointer is N, the present
-//!   motion segment starts at the position of QP[N], and ends at QP(N+1). After MP[4] control
-//!   sampling times, the Amplifier increments the read pointer to N+1, and reads the QP[N+2]
-//!   to calculate the parameters of the next motion segment." So when segment `r` starts the
-//!   drive fetches `QP[r+1]`, the segment's own end, and nothing beyond it; `BG` fetches
-//!   `QP[k]` and `QP[k+1]`. (The previous model fetched `QP[r+2]` for a Catmull-Rom end slope:
-//!   one point further than the manual. [`PtTable::new`] keeps it as an option, for a test that
-//!   a drive doing so streams with a lead one higher.)
+//!   motion segment starts at the position of `QP[N]`, and ends at `QP(N+1)`. After `MP[4]`
+//!   control sampling times, the Amplifier increments the read pointer to N+1, and reads the
+//!   `QP[N+2]` to calculate the parameters of the next motion segment." So when segment `r`
+//!   starts the drive fetches `QP[r+1]`, the segment's own end, and nothing beyond it; `BG`
+//!   fetches `QP[k]` and `QP[k+1]`. (The previous model fetched `QP[r+2]` for a Catmull-Rom
+//!   end slope: one point further than the manual. [`PtTable::new`] keeps it as an option,
+//!   for a test that a drive doing so streams with a lead one higher.)
 //! * **ASSUMED** (the manual gives no formula; "third order" is the seed's thesis): segment `r`
 //!   is a cubic Hermite from `QP[r]` to `QP[r+1]` computed only from points up to `r+1`: the
 //!   slope at knot `k` is the second-order backward difference (3·`QP[k]` − 4·`QP[k−1]` +
 //!   `QP[k−2]`) / 2 per segment — exact for constant acceleration, causal, and continuous
 //!   (each segment starts with the slope the last one ended with). `BG` starts from rest.
 //! * A point must have been written since it was last fetched (or since the table was last
-//!   configured through MP, or the last motion ended): fetching a stale point is a
-//!   buffer underflow — the motion ends where it is and the drive sends the "motion
+//!   configured through MP, or the last motion ended): a segment start fetching a stale
+//!   `QP[r+1]` is a buffer underflow — the motion ends where it is and the drive sends the "motion
 //!   terminated, read pointer reached write pointer" emergency. Writing over a point not yet
 //!   fetched is refused with the "queue full" emergency.
 //! * A point received by PDO ([`PtTable::push`]) goes to the write pointer `MP[6]`, which then
