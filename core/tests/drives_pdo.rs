@@ -399,20 +399,20 @@ fn lifecycle_through_the_control_cycle() {
 }
 
 /// The soak in short (the bench runs ten minutes): 1 % of the frames lost while streaming,
-/// the drives' clocks up to ±100 ppm off, a minute of joint moves back and forth, five points
+/// the drives' clocks up to ±100 ppm off, a minute of joint moves back and forth, four points
 /// kept at the SYNC: no underflow, no fault.
 #[test]
 fn a_minute_with_lost_frames_and_clock_errors() {
     let config = mk1_pdo(false);
     let mut bus = VirtualBus::for_robot(&config);
     bus.spread_clock_errors(100.0, 7);
-    // Five points at the SYNC: two lost points in a row cannot empty the queue (can_bench's
-    // soak table; the default three do not survive a lost point when the drive's segment
+    // Four points at the SYNC: two lost points in a row cannot empty the queue (can_bench's
+    // soak table; the default two do not survive a lost point when the drive's segment
     // boundary falls between the SYNC and the point).
     // The consumer heartbeat time 350 ms: the default 300 ms does not survive two heartbeats
     // lost in a row (1 in 10,000 at 1 % loss), which is not what this test is about.
     let settings = DriveSettings {
-        pdo_lead: 5,
+        pdo_lead: 4,
         heartbeat_timeout: 0.35,
         ..DriveSettings::default()
     };
