@@ -11,10 +11,11 @@
 //! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
 //! controller then drives the arm through a joint move (and on ranger-mk1 a Cartesian circle)
 //! for 30 s of simulated time on the virtual bus, and the table reports what the bus and the
-//! drives saw. The soak runs then stream the PDO schedule for ranger-mk1 at both bit rates for
-//! 10 minutes of simulated time each (`--soak SECONDS` to change it) with the drives' clocks
-//! off by up to ±100 ppm, without and with 1 % of the frames lost at random, for several
-//! leads. With `--plots DIR`, `can-bench.svg`
+//! drives saw. The soak runs then stream the PDO schedule at both bit rates for 10 minutes of
+//! simulated time each (`--soak SECONDS` to change it) with the drives' clocks off by up to
+//! ±100 ppm, without and with 1 % of the frames lost at random (`--loss-seed N` for another
+//! loss pattern), for several fixed leads and the robot file's default (the adaptive lead),
+//! on ranger-mk1 and, at the defaults, ranger-mk2. With `--plots DIR`, `can-bench.svg`
 //! shows the six-drive rows per control cycle: the bus load and the mean write-to-reached
 //! latency of the PT points reached in that cycle.
 #![allow(
@@ -33,6 +34,7 @@ use drives_rig::Rig;
 
 use armgate_core::config::{Streaming, ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
+use armgate_core::drives::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD};
 use armgate_core::drives::{DriveSettings, DriveState, DriveStats};
 use armgate_core::motion::{Mode, Shape};
 use armgate_core::sim::{BusStats, VirtualBus};
@@ -121,33 +123,41 @@ fn main() {
     let seconds = soak_seconds();
     println!();
     println!(
-        "PDO schedule, ranger-mk1, {seconds:.0} s of simulated time, drive clocks within ±100 ppm (0 ppm: clocks that agree, as locked ones would), frames lost at random from the start of streaming (and in the restarts), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
+        "PDO schedule, {seconds:.0} s of simulated time, drive clocks within ±100 ppm (0 ppm: clocks that agree, as locked ones would), frames lost at random from the start of streaming (and in the restarts), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
     );
     println!();
     println!(
-        "| bit rate | period | drive clocks | frame loss | lead kept at the SYNC | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
+        "| robot, drives | bit rate | period | drive clocks | frame loss | lead (`pdo_lead` + up to `pdo_lead_raise`) | leads kept | points lost; lead raised / lowered; points skipped / inserted | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // (robot, drive clocks ±ppm, frame loss, pdo_lead, pdo_lead_raise); `DEFAULT`: the robot
+    // file's defaults.
+    const DEFAULT: (u16, u16) = (PDO_TARGET_LEAD, PDO_LEAD_RAISE);
     let cases = [
-        (0.0, 0.0, 1),
-        (100.0, 0.0, 1),
-        (100.0, 0.0, 2),
-        (100.0, 0.01, 2),
-        (100.0, 0.01, 3),
-        (100.0, 0.01, 4),
-        (100.0, 0.01, 5),
+        ("ranger-mk1", 0.0, 0.0, (1, 0)),
+        ("ranger-mk1", 100.0, 0.0, (1, 0)),
+        ("ranger-mk1", 100.0, 0.0, (2, 0)),
+        ("ranger-mk1", 100.0, 0.0, DEFAULT),
+        ("ranger-mk1", 100.0, 0.01, (2, 0)),
+        ("ranger-mk1", 100.0, 0.01, (3, 0)),
+        ("ranger-mk1", 100.0, 0.01, (4, 0)),
+        ("ranger-mk1", 100.0, 0.01, DEFAULT),
+        ("ranger-mk1", 100.0, 0.01, (3, 2)),
+        ("ranger-mk2", 100.0, 0.0, DEFAULT),
+        ("ranger-mk2", 100.0, 0.01, (4, 0)),
+        ("ranger-mk2", 100.0, 0.01, DEFAULT),
+        ("ranger-mk2", 100.0, 0.01, (3, 2)),
     ];
     for bitrate in BITRATES {
-        for (ppm, loss, lead) in cases {
+        for (name, ppm, loss, (lead, raise)) in cases {
             // 350 ms consumer heartbeat time: two heartbeats lost in a row (1 in 10,000 at 1 %
             // loss) would exceed the default 300 ms and stop a drive (ER36), which is not what
             // the soak measures.
             let settings = DriveSettings {
-                pdo_lead: lead,
                 heartbeat_timeout: 0.35,
                 ..DriveSettings::default()
             };
-            let base = robot("ranger-mk1", Streaming::Pdo);
+            let base = robot(name, Streaming::Pdo);
             let fastest = LoadModel::new(&base, &settings)
                 .fastest_period(bitrate, DEFAULT_CEILING)
                 .unwrap();
@@ -155,14 +165,33 @@ fn main() {
                 .edit(|config| {
                     config.drives.can_bitrate = bitrate;
                     config.control_period = fastest.period;
+                    // The robot file's keys; none where the row is its default.
+                    if (lead, raise) != DEFAULT {
+                        config.drives.pdo_lead = Some(lead);
+                        config.drives.pdo_lead_raise = Some(raise);
+                    }
                 })
                 .unwrap();
             let s = soak(&config, &settings, seconds, ppm, loss);
+            let setting = if (lead, raise) == DEFAULT {
+                format!("{lead} + {raise} (default)")
+            } else if raise == 0 {
+                format!("{lead} fixed")
+            } else {
+                format!("{lead} + {raise}")
+            };
             println!(
-                "| {} kbit/s | {:.2} ms | ±{ppm:.0} ppm | {:.0} % | {lead} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms |",
+                "| {name}, {} | {} kbit/s | {:.2} ms | ±{ppm:.0} ppm | {:.0} % | {setting} | {:?} | {}; {} / {}; {} / {} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms (mean {:.2}) |",
+                config.dof(),
                 bitrate / 1000,
                 fastest.period * 1e3,
                 loss * 100.0,
+                s.leads,
+                s.stats.points_lost,
+                s.stats.lead_raised,
+                s.stats.lead_lowered,
+                s.stats.points_skipped,
+                s.stats.points_inserted,
                 s.frames_lost,
                 s.faults.len(),
                 s.faults.iter().take(3).collect::<Vec<_>>(),
@@ -172,6 +201,7 @@ fn main() {
                 s.underflows,
                 s.latency_max / fastest.period,
                 s.latency_max * 1e3,
+                s.latency_total_ns as f64 * 1e-9 / s.latency_points.max(1) as f64 / fastest.period,
             );
         }
     }
@@ -210,6 +240,15 @@ fn soak_seconds() -> f64 {
         .map_or(600.0, |v| v.parse().expect("--soak SECONDS"))
 }
 
+/// `--loss-seed N`: the seed of the soak's frame loss (default 11); restarts use the next ones.
+fn loss_seed() -> u64 {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == "--loss-seed")
+        .and_then(|i| args.get(i + 1))
+        .map_or(11, |v| v.parse().expect("--loss-seed N"))
+}
+
 struct Soak {
     frames_lost: u64,
     /// Start-step requests sent again during the restarts.
@@ -219,6 +258,13 @@ struct Soak {
     faults: Vec<String>,
     underflows: u32,
     latency_max: f64,
+    /// Points reached and their write-to-reached times summed (ns), for the mean.
+    latency_points: u64,
+    latency_total_ns: u64,
+    /// The leads the stream kept (`DriveManager::pdo_lead_now`) while streaming.
+    leads: std::collections::BTreeSet<u16>,
+    /// The manager's counters at the end.
+    stats: DriveStats,
 }
 
 /// The PDO schedule for `seconds` with `loss` of the frames lost and the drives' clocks spread
@@ -235,7 +281,7 @@ fn soak(
     bus.spread_clock_errors(max_ppm, 7);
     let mut l = Rig::started(config, settings, bus);
     l.bus_mut().reset_stats();
-    l.bus_mut().set_frame_loss(loss, 11);
+    l.bus_mut().set_frame_loss(loss, loss_seed());
     l.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let start = l.now;
     let home = config.home();
@@ -246,11 +292,19 @@ fn soak(
         faults: Vec::new(),
         underflows: 0,
         latency_max: 0.0,
+        latency_points: 0,
+        latency_total_ns: 0,
+        leads: Default::default(),
+        stats: DriveStats::default(),
     };
+    let away = away_from_home(config);
     let mut there = false;
     while l.now - start < seconds {
+        if l.manager().is_operational() {
+            soak.leads.insert(l.manager().pdo_lead_now());
+        }
         if l.manager().is_operational() && !l.ctrl().is_moving() {
-            let goal: &[f64] = if there { &home } else { &READY };
+            let goal: &[f64] = if there { &home } else { &away };
             l.ctrl_mut().move_joints(goal, 0.0).unwrap();
             there = !there;
         }
@@ -266,7 +320,7 @@ fn soak(
             // The restart runs with the loss on: its steps repeat a request whose answer
             // was lost.
             l.bus_mut()
-                .set_frame_loss(loss, soak.faults.len() as u64 + 11);
+                .set_frame_loss(loss, soak.faults.len() as u64 + loss_seed());
             let repeated_before = l.manager().stats().requests_repeated;
             l.manager_mut().start().unwrap();
             l.until(2000, |r| r.manager().state() != DriveState::Starting);
@@ -286,7 +340,18 @@ fn soak(
         }
     }
     soak.add(l.bus(), l.bus().stats().frames_lost);
+    soak.stats = l.manager().stats();
     soak
+}
+
+/// Where the joint moves go: the ready pose on six joints, every joint 0.3 rad off home on
+/// more.
+fn away_from_home(config: &ValidRobot) -> Vec<f64> {
+    if config.dof() == 6 {
+        READY.to_vec()
+    } else {
+        config.home().iter().map(|q| q + 0.3).collect()
+    }
 }
 
 impl Soak {
@@ -300,6 +365,9 @@ impl Soak {
             .max()
             .unwrap();
         self.latency_max = self.latency_max.max(latency as f64 * 1e-9);
+        let (points, total_ns) = latency_totals(bus);
+        self.latency_points += points;
+        self.latency_total_ns += total_ns;
     }
 }
 
@@ -351,9 +419,9 @@ fn run(config: &ValidRobot, settings: &DriveSettings, bus: VirtualBus, seconds: 
     l.ctrl_mut().set_mode(Mode::Joint).unwrap();
     let six = config.dof() == 6;
     // Eight joints: every joint 0.3 rad off home (all are within ±π).
-    let away: Vec<f64> = config.home().iter().map(|q| q + 0.3).collect();
-    let goal: &[f64] = if six { &READY } else { &away };
-    l.ctrl_mut().move_joints(goal, 0.0).unwrap();
+    l.ctrl_mut()
+        .move_joints(&away_from_home(config), 0.0)
+        .unwrap();
     let mut leads = std::collections::BTreeSet::new();
     let mut circle_started = false;
     let mut write_delay_max: f64 = 0.0;

@@ -56,6 +56,8 @@ pub enum ConfigReason {
     MissingJerkLimit,
     /// The PDO schedule's lead must be 1 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
     PdoLead,
+    /// The PDO lead raised by `drives.pdo_lead_raise` must stay at most 8 points.
+    PdoLeadRaise,
 }
 
 impl ConfigError {
@@ -105,6 +107,7 @@ impl fmt::Display for ConfigReason {
             Self::NotAFraction => "must be greater than 0 and at most 1",
             Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
             Self::PdoLead => "must be 1 to 8 points",
+            Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
         })
     }
 }

@@ -15,7 +15,9 @@ use super::link::Link;
 use super::settings::{DriveSettings, SetupError, Timing};
 use super::startup::{Outgoing, StartStep, StepContext};
 use super::state::{DriveState, Phase};
-use super::streaming::{FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule};
+use super::streaming::{
+    AdaptiveLead, FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule,
+};
 use super::units::JointUnits;
 mod pdo;
 
@@ -58,6 +60,13 @@ pub struct DriveStats {
     pub frames_ignored: u32,
     /// Start-step requests sent again because their answer did not come.
     pub requests_repeated: u32,
+    /// PDO schedule: PT points the drives' reports showed lost on the bus.
+    pub points_lost: u32,
+    /// PDO schedule: times the lead was raised by one on every drive (a point inserted on
+    /// each), and lowered (a point skipped on each).
+    pub lead_raised: u32,
+    /// See `lead_raised`.
+    pub lead_lowered: u32,
 }
 
 /// Runs the servo drives of one arm on one CAN bus: start-up, set-point streaming in
@@ -98,6 +107,9 @@ pub struct DriveManager {
     pdo_lead: u16,
     /// PDO schedule: SYNCs a transmit PDO may be missing in a row.
     pdo_missing_cycles: u32,
+    /// PDO schedule: how far the lead is raised above `pdo_lead` while points are lost (it
+    /// outlives a restart: the bus is the same).
+    lead_policy: AdaptiveLead,
     joints: Vec<Joint, MAX_JOINTS>,
     phase: Phase,
     fault: Option<DriveFault>,
@@ -141,6 +153,13 @@ impl DriveManager {
             faulted_in_receive: false,
             pdo_lead: config.drives.pdo_lead.unwrap_or(settings.pdo_lead),
             pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
+            lead_policy: AdaptiveLead::new(
+                config
+                    .drives
+                    .pdo_lead_raise
+                    .unwrap_or(settings.pdo_lead_raise),
+                timing.pdo_lead_quiet,
+            ),
             joints,
             phase: Phase::Idle,
             fault: None,
@@ -160,6 +179,7 @@ impl DriveManager {
         self.streaming = self.configured;
         self.fallback = None;
         self.last_sync = None;
+        self.lead_policy.restart();
         let pdo = self.streaming == Streaming::Pdo;
         self.for_each_drive(|drive| {
             drive.link = Link::default();
@@ -383,6 +403,13 @@ impl DriveManager {
         }
     }
 
+    /// PDO schedule: the lead the stream keeps at every SYNC now, `drives.pdo_lead` or more
+    /// while points are being lost (one less on a drive whose segment boundary precedes the
+    /// SYNC).
+    pub fn pdo_lead_now(&self) -> u16 {
+        self.pdo_lead.saturating_add(self.lead_policy.raised())
+    }
+
     /// The schedule of the current start: the robot file's, or the interpreter's after a
     /// fallback.
     pub fn streaming(&self) -> Streaming {
@@ -450,7 +477,7 @@ impl DriveManager {
     /// One cycle of the start sequence: each drive advances when its step is answered and
     /// sends the next step's frames; when every drive is ready, all get `BG` in one cycle.
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
-        let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
+        let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead_now());
         let timing = self.timing;
         // One point more than the lead, and at least FILLED_POINTS: the first point streamed
         // after `BG` is then due at the second segment start, not the first.

@@ -4,7 +4,7 @@
 use armgate_protocol::can::NodeId;
 
 use super::load::LoadModel;
-use super::streaming::{PDO_TARGET_LEAD, Schedule};
+use super::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule};
 use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
@@ -49,6 +49,13 @@ pub struct DriveSettings {
     /// PDO schedule: the PT points kept beyond each drive's read pointer at every SYNC
     /// (1..=pdo_ring_len − 3; docs/drives.md).
     pub pdo_lead: u16,
+    /// PDO schedule: the most points the stream may raise the lead above `pdo_lead` while
+    /// reports show points lost (0: a fixed lead; the robot file's `drives.pdo_lead_raise`
+    /// overrides it; the raised lead must stay within 1..=pdo_ring_len − 3).
+    pub pdo_lead_raise: u16,
+    /// PDO schedule: seconds without a lost point after which a raised lead comes down by one
+    /// (positive).
+    pub pdo_lead_quiet: f64,
     /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
     /// row is faulted (at least 1).
     pub pdo_missing_cycles: u16,
@@ -71,6 +78,8 @@ impl Default for DriveSettings {
             schedule: Schedule::default(),
             pdo_ring_len: 16,
             pdo_lead: PDO_TARGET_LEAD,
+            pdo_lead_raise: PDO_LEAD_RAISE,
+            pdo_lead_quiet: 2.0,
             pdo_missing_cycles: 4,
             group_node: 126,
         }
@@ -144,6 +153,8 @@ pub(crate) struct Timing {
     pub controller: NodeId,
     /// The drives' group id (PDO schedule).
     pub group: NodeId,
+    /// Cycles without a lost point before a raised PDO lead comes down by one.
+    pub pdo_lead_quiet: u32,
 }
 
 impl Timing {
@@ -180,8 +191,15 @@ impl Timing {
             return Err(SetupError::BadTiming);
         }
         let lead = config.drives.pdo_lead.unwrap_or(settings.pdo_lead);
-        let lead_fits = (1..=settings.pdo_ring_len.saturating_sub(3)).contains(&lead);
-        if !lead_fits || settings.pdo_missing_cycles == 0 {
+        let raise = config
+            .drives
+            .pdo_lead_raise
+            .unwrap_or(settings.pdo_lead_raise);
+        let lead_fits = (1..=settings.pdo_ring_len.saturating_sub(3))
+            .contains(&lead.saturating_add(raise))
+            && lead > 0;
+        let quiet_fits = settings.pdo_lead_quiet > 0.0;
+        if !lead_fits || !quiet_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
         }
         let cycles = |seconds: f64| {
@@ -201,6 +219,7 @@ impl Timing {
             heartbeat_timeout_ms: timeout_ms as u16,
             controller,
             group,
+            pdo_lead_quiet: cycles(settings.pdo_lead_quiet)?.max(1),
         })
     }
 }

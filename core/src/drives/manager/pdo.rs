@@ -15,7 +15,9 @@ use crate::drives::drive::{Drive, Joint};
 use crate::drives::fault::DriveFault;
 use crate::drives::startup::{Outgoing, StartStep};
 use crate::drives::state::Phase;
-use crate::drives::streaming::{FlowError, Query};
+use crate::drives::streaming::{FlowError, LeadChange, Query};
+
+const RAISE_ON_MISSING: bool = true;
 
 impl DriveManager {
     /// A stop just begun, with as many hold cycles as the schedule needs: as on the
@@ -24,7 +26,9 @@ impl DriveManager {
     /// write than its lead at the SYNC.
     pub(super) fn with_hold_cycles(&self, phase: Phase) -> Phase {
         match (phase, self.streaming) {
-            (Phase::Stopping(_), Streaming::Pdo) => Phase::Stopping(u32::from(self.pdo_lead) + 3),
+            (Phase::Stopping(_), Streaming::Pdo) => {
+                Phase::Stopping(u32::from(self.pdo_lead_now()) + 3)
+            }
             _ => phase,
         }
     }
@@ -131,21 +135,23 @@ impl DriveManager {
     /// been missing too long is faulted.
     pub(super) fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
         out.send(&SyncObject.to_frame());
+        let change = self.lead_change();
         let schedule = self.schedule;
         let stats = &mut self.stats;
         for (index, joint) in self.joints.iter_mut().enumerate() {
             let Joint::Real(drive) = joint else { continue };
             let running = drive.target.is_some() && drive.pdo.is_some();
             if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
-                let points = stream.points(target);
+                let points = stream.points_with(target, change);
                 for &position in &points {
                     out.send(&PtPoint { position }.to_frame(drive.node));
                 }
-                let count = |n: &mut u32| *n = n.saturating_add(1);
+                let add = |n: &mut u32, k: usize| {
+                    *n = n.saturating_add(u32::try_from(k).unwrap_or(u32::MAX));
+                };
                 match points.len() {
-                    0 => count(&mut stats.points_skipped),
-                    2 => count(&mut stats.points_inserted),
-                    _ => {}
+                    0 => add(&mut stats.points_skipped, 1),
+                    n => add(&mut stats.points_inserted, n - 1),
                 }
             }
             let query = match schedule.query(streamed, index, false) {
@@ -154,6 +160,34 @@ impl DriveManager {
             };
             out.request(drive, &Outgoing::Interpreter(query.request()));
         }
+    }
+
+    /// PDO schedule: what the adaptive lead does this cycle, from the points the reports read
+    /// in it showed lost (a missing report is not a loss: the next one counts the points).
+    /// Only while streaming: a stop's hold points keep the lead.
+    fn lead_change(&mut self) -> LeadChange {
+        if RAISE_ON_MISSING {
+            let mut missing = false;
+            self.for_each_drive(|drive| {
+                if let Some(stream) = drive.pdo.as_ref() {
+                    missing |= stream.unreported() > 0;
+                }
+            });
+            if missing {
+                self.lead_policy.saw_loss();
+            }
+        }
+        if !matches!(self.phase, Phase::Streaming(_)) {
+            return LeadChange::Hold;
+        }
+        let change = self.lead_policy.cycle();
+        let count = |n: &mut u32| *n = n.saturating_add(1);
+        match change {
+            LeadChange::Raise => count(&mut self.stats.lead_raised),
+            LeadChange::Lower => count(&mut self.stats.lead_lowered),
+            LeadChange::Hold => {}
+        }
+        change
     }
 
     /// A drive's transmit PDO: its position and PT pointers at the last SYNC.
@@ -166,10 +200,17 @@ impl DriveManager {
         drive.position = Some(feedback.position);
         // The drive is alive: a lost answer to a temperature query is not a silent drive.
         drive.link.heard(cycle);
-        let flow = drive
-            .pdo
-            .as_mut()
-            .map(|stream| stream.feedback(feedback.head, feedback.tail));
+        let mut lost = 0;
+        let flow = drive.pdo.as_mut().map(|stream| {
+            let flow = stream.feedback(feedback.head, feedback.tail);
+            lost = stream.take_lost();
+            flow
+        });
+        if lost > 0 {
+            // Seen even when this report faults the drive: the restart begins higher.
+            self.lead_policy.saw_loss();
+            self.stats.points_lost = self.stats.points_lost.saturating_add(lost.into());
+        }
         match flow {
             Some(Err(FlowError::Underflow)) => self.raise(DriveFault::Underflow { joint }),
             Some(Err(FlowError::Overrun)) => self.raise(DriveFault::Overrun { joint }),

@@ -3,10 +3,12 @@
 //! ([`PtStream`], interpreter schedule) or by the PT pointers of its transmit PDO
 //! ([`PdoStream`], PDO schedule).
 
+mod adaptive;
 mod pdo;
 mod pt;
 mod schedule;
 
+pub use adaptive::{AdaptiveLead, LeadChange, PDO_LEAD_RAISE};
 pub use pdo::{MAX_PDO_LEAD, PDO_TARGET_LEAD, PdoStream};
 pub use pt::{FILLED_POINTS, FlowError, PtStream, TARGET_LEAD};
 pub use schedule::{Query, Schedule};

@@ -23,10 +23,16 @@
 //! stream predicts the lead at the SYNC it is about to send (one segment consumed per cycle)
 //! and sends 0, 1 or 2 points to bring the next one to the target: a dead-beat correction
 //! without waiting for the effect to show. A missing report is replaced by the prediction.
+//!
+//! The head pointer counts the points the drive received: a report whose head moved less than
+//! the points sent before its SYNC shows points lost on the bus ([`PdoStream::take_lost`]), for
+//! the adaptive lead ([`super::AdaptiveLead`]). A clock slip moves only the tail, and a lost
+//! SYNC or transmit PDO only delays the report that counts the points, so neither reads as a
+//! lost point.
 
 use heapless::Vec;
 
-use super::FlowError;
+use super::{FlowError, LeadChange};
 
 /// The lead (points beyond the read pointer) the stream keeps at every SYNC by default, for a
 /// drive whose segment boundary follows the SYNC; one less for a drive whose boundary precedes
@@ -57,6 +63,15 @@ pub struct PdoStream {
     reported: Option<u16>,
     /// SYNCs sent since the last report.
     unreported: u32,
+    /// Points the lead has been raised (or lowered, below 0) since the start.
+    raised: i32,
+
+    /// The head pointer of the last report.
+    head: Option<u16>,
+    /// Points sent between the last reported SYNC and the last SYNC sent.
+    sent_unreported: u16,
+    /// Points lost on the bus, seen in reports since the last [`Self::take_lost`].
+    lost: u16,
 }
 
 impl PdoStream {
@@ -74,6 +89,10 @@ impl PdoStream {
             sent_since_sync: 0,
             reported: None,
             unreported: 0,
+            raised: 0,
+            head: None,
+            sent_unreported: 0,
+            lost: 0,
         }
     }
 
@@ -98,6 +117,7 @@ impl PdoStream {
         // The report is the last SYNC's: it replaces the prediction; the points sent after
         // that SYNC are still counted in `sent_since_sync`.
         self.lead_at_sync = i32::from(lead);
+        self.count_lost(head);
         match lead {
             ..=0 => Err(FlowError::Underflow),
             l if l + 1 >= self.ring => Err(FlowError::Overrun),
@@ -105,36 +125,82 @@ impl PdoStream {
         }
     }
 
+    /// Points lost between the previous report and this one: the head should have moved by the
+    /// points sent between their SYNCs (a head ahead of that is not a loss).
+    fn count_lost(&mut self, head: u16) {
+        if let Some(previous) = self.head {
+            let ring = u32::from(self.ring);
+            let expected = (u32::from(previous) + u32::from(self.sent_unreported)) % ring;
+            let short = (expected + ring - u32::from(head) % ring) % ring;
+            if short <= ring / 2 {
+                // At most half the ring: fits a u16.
+                self.lost = self.lost.saturating_add(short as u16);
+            }
+        }
+        self.head = Some(head);
+        self.sent_unreported = 0;
+    }
+
+    /// Points lost on the bus that the reports since the last call showed.
+    pub fn take_lost(&mut self) -> u16 {
+        core::mem::take(&mut self.lost)
+    }
+
     /// A SYNC is going out: the drive consumes about one segment per cycle, and this cycle's
     /// points follow. Returns them (0, 1 or 2 values, a midpoint first) towards `target`.
-    pub fn points(&mut self, target: i32) -> Vec<i32, 2> {
+    pub fn points(&mut self, target: i32) -> Vec<i32, 3> {
+        self.points_with(target, LeadChange::Hold)
+    }
+
+    /// The same, with the lead changed by `change` from this cycle on: one point more (0 to 3
+    /// values, evenly between the newest point and `target`) or one less than it would send.
+    pub fn points_with(&mut self, target: i32, change: LeadChange) -> Vec<i32, 3> {
         // The predicted lead at this SYNC: the last one's, plus what was sent after it, minus
         // the segment consumed in between.
         let predicted = self.lead_at_sync + i32::from(self.sent_since_sync) - 1;
         self.lead_at_sync = predicted;
         self.unreported = self.unreported.saturating_add(1);
+        self.sent_unreported = self.sent_unreported.saturating_add(self.sent_since_sync.into());
         // The lead at the next SYNC is this one plus this cycle's points minus the next
         // segment. Kept within least..=least + 1: as the drive's clock drifts, its boundary
         // passes the SYNC and its reading moves by one without a point more or less queued.
-        let least = self.least.unwrap_or(i32::from(self.target));
+        let least = self.least.unwrap_or(i32::from(self.target)) + self.raised;
+        let kept: u8 = match predicted {
+            p if p > least + 1 => 0,
+            p if p >= least => 1,
+            _ => 2,
+        };
+        // A change moves every drive's lead by one, wherever it is in its band.
+        let count = match change {
+            LeadChange::Hold => kept,
+            LeadChange::Raise => kept + 1,
+            LeadChange::Lower => kept.saturating_sub(1),
+        };
+        self.raised += match change {
+            LeadChange::Hold => 0,
+            LeadChange::Raise => 1,
+            LeadChange::Lower => -1,
+        };
         let mut points = Vec::new();
-        match predicted {
-            p if p > least + 1 => {}
-            p if p >= least => {
-                let _ = points.push(target);
-            }
-            _ => {
-                let mid = (i64::from(self.newest_value) + i64::from(target)) / 2;
-                // The mean of two i32 values is an i32.
-                let _ = points.push(mid as i32);
-                let _ = points.push(target);
-            }
+        let (from, to, n) = (
+            i64::from(self.newest_value),
+            i64::from(target),
+            i64::from(count),
+        );
+        for k in 1..=n {
+            // A weighted mean of two i32 values is an i32.
+            let _ = points.push(((from * (n - k) + to * k) / n) as i32);
         }
-        self.sent_since_sync = points.len() as u8;
+        self.sent_since_sync = count;
         if let Some(&last) = points.last() {
             self.newest_value = last;
         }
         points
+    }
+
+    /// Points the lead has been raised since the start (below 0: lowered).
+    pub fn raised(&self) -> i32 {
+        self.raised
     }
 
     /// The lead at the last report.
