@@ -112,7 +112,9 @@ mod tests {
         let changes = [false, true, true, true].map(&mut cycle);
         assert_eq!(changes, [Hold, Raise, Raise, Hold]);
         // Two quiet cycles, a loss: the quiet interval starts again.
-        let changes = [false, false, true, false, false, false, false, false, false, false];
+        let changes = [
+            false, false, true, false, false, false, false, false, false, false,
+        ];
         assert_eq!(
             changes.map(&mut cycle),
             [Hold, Hold, Hold, Hold, Hold, Lower, Hold, Hold, Lower, Hold]

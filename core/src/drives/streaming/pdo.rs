@@ -160,7 +160,9 @@ impl PdoStream {
         let predicted = self.lead_at_sync + i32::from(self.sent_since_sync) - 1;
         self.lead_at_sync = predicted;
         self.unreported = self.unreported.saturating_add(1);
-        self.sent_unreported = self.sent_unreported.saturating_add(self.sent_since_sync.into());
+        self.sent_unreported = self
+            .sent_unreported
+            .saturating_add(self.sent_since_sync.into());
         // The lead at the next SYNC is this one plus this cycle's points minus the next
         // segment. Kept within least..=least + 1: as the drive's clock drifts, its boundary
         // passes the SYNC and its reading moves by one without a point more or less queued.
