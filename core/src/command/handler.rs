@@ -416,6 +416,7 @@ impl CommandHandler {
 }
 
 /// The client text for a refused request, with its reason.
+#[inline(never)]
 fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
     let rejected = |why| Notice::Rejected(cmd, why);
     let workspace = |why| Notice::OutsideWorkspace(cmd, why);

@@ -156,6 +156,7 @@ impl Chain {
     /// [`check`](Self::check) into the fixed array the walk reads (entries past `n` zero).
     /// Returning the bare array, not a `Joints` through `Option` and `Result`, spares the
     /// Cortex-M7 several unaligned 72-byte copies per call.
+    #[inline(never)]
     fn checked(&self, q: &[f64]) -> Result<[f64; MAX_JOINTS], KinematicsError> {
         if q.len() != self.n {
             return Err(KinematicsError::WrongJointCount);
@@ -282,6 +283,7 @@ impl Chain {
     }
 
     /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
+    #[inline(never)]
     pub(super) fn jacobian_into(&self, axes: &Axes, tip: &Vector3<f64>, j: &mut Jacobian) {
         let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
         // Column-major storage: each chunk of six is one column.
