@@ -283,7 +283,6 @@ impl Chain {
     }
 
     /// The Jacobian at tool position `tip` from the joint axes, written into `j`.
-    #[inline(never)]
     pub(super) fn jacobian_into(&self, axes: &Axes, tip: &Vector3<f64>, j: &mut Jacobian) {
         let joints = axes.z.iter().zip(&axes.origin).zip(&self.links);
         // Column-major storage: each chunk of six is one column.

@@ -22,8 +22,7 @@ impl Workspace {
         }
     }
 
-    /// True if the tool origin may be at `p`. (Out of line: called from eight places.)
-    #[inline(never)]
+    /// True if the tool origin may be at `p`.
     pub fn allows(&self, p: &Vector3<f64>) -> bool {
         let [x0, x1, y0, y1, z0, z1] = self.bounds;
         let within = x0 <= p.x && p.x <= x1 && y0 <= p.y && p.y <= y1 && z0 <= p.z && p.z <= z1;
