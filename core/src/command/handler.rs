@@ -46,6 +46,8 @@ pub struct CommandHandler {
 
 impl CommandHandler {
     /// A handler for a validated robot description.
+    // Out of line: built once, at start; inlined, it would sit in the control task's code.
+    #[inline(never)]
     pub fn new(config: &ValidRobot) -> Self {
         Self {
             controller: Controller::new(config),
