@@ -109,7 +109,7 @@ mod tests {
     fn a_holding_arm_gets_the_solve_it_skips() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
         let config = crate::config::load_file(path).unwrap();
-        let start = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+        let start = [core::f64::consts::FRAC_PI_2, 0.6, -0.4, 0.2, 1.8, 0.1];
         let mut arm = IdealArm::new(Joints::from_slice(&start).unwrap());
         let mut ctrl = Controller::new(&config);
         let mut now = 0.0;
