@@ -142,7 +142,7 @@ pub struct DrivesConfig {
     #[serde(default)]
     pub pdo_fallback: bool,
     /// With `streaming = "pdo"`: the PT points kept beyond each drive's read pointer at every
-    /// SYNC, 2..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (3). More tolerates lost
+    /// SYNC, 1..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (2). More tolerates lost
     /// frames, less is less latency (docs/drives.md, "The lead").
     #[serde(default)]
     pub pdo_lead: Option<u16>,
@@ -483,7 +483,7 @@ impl DrivesConfig {
         }
         if self
             .pdo_lead
-            .is_some_and(|lead| !(2..=MAX_PDO_LEAD).contains(&lead))
+            .is_some_and(|lead| !(1..=MAX_PDO_LEAD).contains(&lead))
         {
             return Err(("drives.pdo_lead", ConfigReason::PdoLead));
         }
