@@ -99,7 +99,7 @@ impl CommandHandler {
         let faulted = drives.has_fault();
         self.now = now;
         // The step's result is returned as it is, not unwrapped and wrapped again: the
-        // Cortex-M7 would copy the 288-byte output twice, unaligned (≈ 2,100 instructions a
+        // Cortex-M7 would copy the 296-byte output twice, unaligned (≈ 2,100 instructions a
         // tick in qemu-bench).
         let out = self.controller.step(now, measured);
         let Ok(step) = &out else {
