@@ -58,7 +58,7 @@ fn same_bits(a: &[f64], b: &[f64]) -> bool {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+    #![allow(clippy::unwrap_used)]
 
     use super::*;
     use crate::math::{Rotation3, Vector3};
