@@ -208,6 +208,18 @@ fn stop_holds_the_last_command_and_start_resumes_without_a_jump() {
     // not some earlier point (the seed backtracked, spec §9 item 36).
     rig.ticks(10);
     assert!(rig.bus().drives().all(|d| !d.pt_running()));
+    // `ST` found every drive's profile at rest on the hold point, past its second repeat (not
+    // in the overshoot before it).
+    for drive in rig.bus().drives() {
+        let table = drive.table();
+        let hold = f64::from(table.qp(table.read_index()).unwrap());
+        assert!(
+            (drive.profile() - hold).abs() < 1e-6,
+            "{:?}: {} against {hold}",
+            drive.node(),
+            drive.profile()
+        );
+    }
     let held = rig.manager().commanded();
     for (a, h) in accepted.iter().zip(held.iter()) {
         assert!((a - h).abs() < 1e-5, "held {h}, last command {a}");

@@ -218,6 +218,12 @@ fn stops_holding(rig: &mut Rig, mut accepted: Joints, holding: bool) -> DriveFau
         for (q, h) in rig.drive_positions().iter().zip(held.iter()) {
             assert!((q - h).abs() < 1e-4, "at {q}, holding {h}");
         }
+        // `ST` found every drive's profile at rest on the hold point.
+        for drive in rig.bus().drives() {
+            let table = drive.table();
+            let hold = f64::from(table.qp(table.read_index()).unwrap());
+            assert!((drive.profile() - hold).abs() < 1e-6, "{:?}", drive.node());
+        }
         assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
     }
     rig.manager().fault().unwrap()

@@ -283,6 +283,12 @@ impl RobotConfig {
 
     /// One value per joint, e.g. `config.per_joint(|j| j.max_velocity)`.
     pub fn per_joint(&self, value: impl Fn(&JointConfig) -> f64) -> Joints {
+        self.per_joint_of(&value)
+    }
+
+    /// [`per_joint`](Self::per_joint)'s loop, compiled once for every caller's `value`.
+    #[inline(never)]
+    fn per_joint_of(&self, value: &dyn Fn(&JointConfig) -> f64) -> Joints {
         let mut q = Joints::zeros(self.dof());
         for (q, joint) in q.iter_mut().zip(&self.joints) {
             *q = value(joint);
