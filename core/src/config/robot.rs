@@ -8,7 +8,7 @@ use super::motion::{MotionConfig, ProfileKind};
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
 use crate::drives::load::{DEFAULT_CEILING, LoadModel};
-use crate::drives::streaming::{MAX_PDO_LEAD, PDO_LEAD_RAISE, PDO_TARGET_LEAD};
+use crate::drives::streaming::{MAX_PDO_LEAD, PDO_TARGET_LEAD};
 use crate::drives::{DriveSettings, whole_samples};
 use crate::kinematics::Joints;
 
@@ -148,8 +148,9 @@ pub struct DrivesConfig {
     pub pdo_lead: Option<u16>,
     /// With `streaming = "pdo"`: the most points the stream may raise the lead above
     /// `pdo_lead` while the drives' reports show points lost on the bus, lowering it again
-    /// after a quiet interval; 0 keeps the lead fixed. The sum stays at most [`MAX_PDO_LEAD`];
-    /// none: `DriveSettings::pdo_lead_raise` (2; docs/drives.md, "The lead").
+    /// after a quiet interval; 0 keeps the lead fixed. The sum must stay at most
+    /// [`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead_raise` (3), up to [`MAX_PDO_LEAD`]
+    /// (docs/drives.md, "The lead").
     #[serde(default)]
     pub pdo_lead_raise: Option<u16>,
 }
@@ -494,7 +495,8 @@ impl DrivesConfig {
             return Err(("drives.pdo_lead", ConfigReason::PdoLead));
         }
         let lead = self.pdo_lead.unwrap_or(PDO_TARGET_LEAD);
-        let raise = self.pdo_lead_raise.unwrap_or(PDO_LEAD_RAISE);
+        // Without the key the default raise stops at the highest lead.
+        let raise = self.pdo_lead_raise.unwrap_or(0);
         if lead.saturating_add(raise) > MAX_PDO_LEAD {
             return Err(("drives.pdo_lead_raise", ConfigReason::PdoLeadRaise));
         }

@@ -153,13 +153,7 @@ impl DriveManager {
             faulted_in_receive: false,
             pdo_lead: config.drives.pdo_lead.unwrap_or(settings.pdo_lead),
             pdo_missing_cycles: u32::from(settings.pdo_missing_cycles),
-            lead_policy: AdaptiveLead::new(
-                config
-                    .drives
-                    .pdo_lead_raise
-                    .unwrap_or(settings.pdo_lead_raise),
-                timing.pdo_lead_quiet,
-            ),
+            lead_policy: AdaptiveLead::new(timing.pdo_lead_raise, timing.pdo_lead_quiet),
             joints,
             phase: Phase::Idle,
             fault: None,

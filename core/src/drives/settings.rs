@@ -4,7 +4,7 @@
 use armgate_protocol::can::NodeId;
 
 use super::load::LoadModel;
-use super::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule};
+use super::streaming::{MAX_PDO_LEAD, PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule};
 use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
@@ -50,8 +50,9 @@ pub struct DriveSettings {
     /// (1..=pdo_ring_len − 3; docs/drives.md).
     pub pdo_lead: u16,
     /// PDO schedule: the most points the stream may raise the lead above `pdo_lead` while
-    /// reports show points lost (0: a fixed lead; the robot file's `drives.pdo_lead_raise`
-    /// overrides it; the raised lead must stay within 1..=pdo_ring_len − 3).
+    /// reports show points lost (0: a fixed lead), at most up to the highest lead
+    /// (`MAX_PDO_LEAD`, and `pdo_ring_len` − 3); the robot file's `drives.pdo_lead_raise`
+    /// overrides it.
     pub pdo_lead_raise: u16,
     /// PDO schedule: seconds without a lost point after which a raised lead comes down by one
     /// (positive).
@@ -155,6 +156,8 @@ pub(crate) struct Timing {
     pub group: NodeId,
     /// Cycles without a lost point before a raised PDO lead comes down by one.
     pub pdo_lead_quiet: u32,
+    /// The most the PDO lead may be raised.
+    pub pdo_lead_raise: u16,
 }
 
 impl Timing {
@@ -191,13 +194,16 @@ impl Timing {
             return Err(SetupError::BadTiming);
         }
         let lead = config.drives.pdo_lead.unwrap_or(settings.pdo_lead);
-        let raise = config
-            .drives
-            .pdo_lead_raise
-            .unwrap_or(settings.pdo_lead_raise);
-        let lead_fits = (1..=settings.pdo_ring_len.saturating_sub(3))
-            .contains(&lead.saturating_add(raise))
-            && lead > 0;
+        let highest = settings.pdo_ring_len.saturating_sub(3).min(MAX_PDO_LEAD);
+        let lead_fits = (1..=highest).contains(&lead);
+        // A raise the robot file does not ask for stops at the highest lead.
+        let pdo_lead_raise = match config.drives.pdo_lead_raise {
+            Some(raise) if lead.saturating_add(raise) > highest => {
+                return Err(SetupError::BadTiming);
+            }
+            Some(raise) => raise,
+            None => settings.pdo_lead_raise.min(highest.saturating_sub(lead)),
+        };
         let quiet_fits = settings.pdo_lead_quiet > 0.0;
         if !lead_fits || !quiet_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
@@ -220,6 +226,7 @@ impl Timing {
             controller,
             group,
             pdo_lead_quiet: cycles(settings.pdo_lead_quiet)?.max(1),
+            pdo_lead_raise,
         })
     }
 }

@@ -256,6 +256,56 @@ mod tests {
     }
 
     #[test]
+    fn a_raise_adds_a_point_between_and_a_lower_skips_one() {
+        let mut stream = PdoStream::new(16, PDO_TARGET_LEAD, 3, 0);
+        // Lead 2 at the last SYNC, one point sent after it: 2 at this one, one point kept.
+        stream.feedback(5, 2).unwrap();
+        assert_eq!(stream.points(10).as_slice(), &[10]);
+        // Raised: one more, between the newest point and the target.
+        assert_eq!(
+            stream.points_with(40, LeadChange::Raise).as_slice(),
+            &[25, 40]
+        );
+        // The band is one higher from now on: 3 kept.
+        assert_eq!(stream.points(50).as_slice(), &[50]);
+        assert_eq!(stream.raised(), 1);
+        // A point short and a raise on top: three, evenly spaced.
+        stream.feedback(7, 5).unwrap(); // lead 1
+        assert_eq!(
+            stream.points_with(80, LeadChange::Raise).as_slice(),
+            &[60, 70, 80]
+        );
+        // Lowered: one less than kept.
+        assert!(stream.points_with(90, LeadChange::Lower).is_empty());
+        assert_eq!(stream.raised(), 1);
+    }
+
+    #[test]
+    fn the_head_counts_points_lost_but_not_a_missing_report_or_a_slip() {
+        let mut stream = PdoStream::new(16, PDO_TARGET_LEAD, 3, 0);
+        stream.feedback(4, 1).unwrap();
+        let _ = stream.points(1); // one point after SYNC 1
+        let _ = stream.points(2); // SYNC 2, one point after it
+        // The report of SYNC 2: the first point arrived.
+        stream.feedback(5, 2).unwrap();
+        assert_eq!(stream.take_lost(), 0);
+        // SYNC 3's report is missing (a lost SYNC or TPDO3); SYNC 4's counts both points.
+        let _ = stream.points(3);
+        let _ = stream.points(4);
+        stream.feedback(7, 4).unwrap();
+        assert_eq!(stream.take_lost(), 0);
+        // A slip moves the tail only.
+        let _ = stream.points(5);
+        stream.feedback(8, 6).unwrap();
+        assert_eq!(stream.take_lost(), 0);
+        // The head did not move for the point sent: lost, counted once.
+        let _ = stream.points(6);
+        stream.feedback(8, 6).unwrap();
+        assert_eq!(stream.take_lost(), 1);
+        assert_eq!(stream.take_lost(), 0);
+    }
+
+    #[test]
     fn pointers_outside_the_ring_or_the_window_stop_the_stream() {
         let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 3, 0);
         assert_eq!(stream.feedback(0, 1), Err(FlowError::Overrun));
