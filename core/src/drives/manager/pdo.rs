@@ -17,8 +17,6 @@ use crate::drives::startup::{Outgoing, StartStep};
 use crate::drives::state::Phase;
 use crate::drives::streaming::{FlowError, LeadChange, Query};
 
-const RAISE_ON_MISSING: bool = true;
-
 impl DriveManager {
     /// A stop just begun, with as many hold cycles as the schedule needs: as on the
     /// interpreter schedule two beyond the lead (the drive comes to rest past the second hold
@@ -163,19 +161,19 @@ impl DriveManager {
     }
 
     /// PDO schedule: what the adaptive lead does this cycle, from the points the reports read
-    /// in it showed lost (a missing report is not a loss: the next one counts the points).
-    /// Only while streaming: a stop's hold points keep the lead.
+    /// in it showed lost and the reports missing. Only while streaming: a stop's hold points
+    /// keep the lead.
     fn lead_change(&mut self) -> LeadChange {
-        if RAISE_ON_MISSING {
-            let mut missing = false;
-            self.for_each_drive(|drive| {
-                if let Some(stream) = drive.pdo.as_ref() {
-                    missing |= stream.unreported() > 0;
-                }
-            });
-            if missing {
-                self.lead_policy.saw_loss();
+        // A report missing (a SYNC or a TPDO3 lost) is not a point lost, but it shows the bus
+        // losing frames: raising on it too often comes before the first point lost.
+        let mut missing = false;
+        self.for_each_drive(|drive| {
+            if let Some(stream) = drive.pdo.as_ref() {
+                missing |= stream.unreported() > 0;
             }
+        });
+        if missing {
+            self.lead_policy.saw_loss();
         }
         if !matches!(self.phase, Phase::Streaming(_)) {
             return LeadChange::Hold;

@@ -3,9 +3,14 @@
 //!
 //! A lost receive PDO leaves its drive one point short until the report that shows it is read,
 //! two SYNCs later; a lead that covers every loss in that window costs latency all the time.
-//! Instead the stream keeps `drives.pdo_lead` until a report shows points lost, raises the
-//! lead by one per cycle that shows a loss up to `drives.pdo_lead_raise` above it, holds it
+//! Instead the stream keeps `drives.pdo_lead` until a report shows points lost (or a report is
+//! missing: a lost SYNC or transmit PDO, not a lost point, but the bus losing frames), raises
+//! the lead by one per cycle that shows a loss up to `drives.pdo_lead_raise` above it, holds it
 //! while losses continue, and lowers it by one after each quiet interval without one.
+//!
+//! What it cannot do: a point lost while a drive sits at its least lead underflows that drive
+//! before any report can show the loss, so the first loss after a quiet interval may cost one
+//! underflow; only a higher `drives.pdo_lead` prevents that (docs/drives.md, "The lead").
 //!
 //! A change is one set-point of time stretch (raise: every drive gets one point more that
 //! cycle, an interpolated one) or compression (lower: every drive one point less), on every
