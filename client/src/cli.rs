@@ -954,7 +954,7 @@ fn joint_progress(p: &Progress<'_, [f64]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fake::{FakeController, text};
+    use crate::fake::{FakeController, echo, text};
     use crate::status::tests::status_reply;
     use armgate_protocol::client::{Command, Message, Reply, Request};
     use clap::CommandFactory;
@@ -996,9 +996,7 @@ mod tests {
             match &d[..2] {
                 b"ON" if s.0 == 0.0 || s.0 == 4.0 => {
                     *s = (1.0, 0);
-                    let mut r = d[..31].to_vec();
-                    r.swap(0, 1);
-                    vec![r]
+                    vec![echo(d)]
                 }
                 b"ON" => vec![text("ER11 Arm did not start")],
                 _ => {
@@ -1048,9 +1046,7 @@ mod tests {
             match &d[..2] {
                 b"ON" if s.0 == 0.0 => {
                     s.0 = 2.0;
-                    let mut r = d[..31].to_vec();
-                    r.swap(0, 1);
-                    vec![r]
+                    vec![echo(d)]
                 }
                 b"ON" => vec![text("ER11 Arm did not start")],
                 _ => {
@@ -1094,9 +1090,7 @@ mod tests {
             b"SQ" => vec![status_reply(d, [2.0, 0.0, 0.0, 6.0, 0.0, 3.0, 1.0], "r")],
             b"BG" => vec![text("ER20 Cmd BG drives off")],
             _ => {
-                let mut r = d[..31].to_vec();
-                r.swap(0, 1);
-                vec![r]
+                vec![echo(d)]
             }
         });
         let (result, _) = run_with(&fake, &["move", "0.5", "0.2", "0.1", "0", "0", "0"]);
@@ -1109,11 +1103,7 @@ mod tests {
 
     #[test]
     fn an_interrupted_wait_sends_st() {
-        let fake = FakeController::spawn(|d| {
-            let mut r = d[..31].to_vec();
-            r.swap(0, 1);
-            vec![r]
-        });
+        let fake = FakeController::spawn(|d| vec![echo(d)]);
         let mut client = Client::connect(fake.addr()).unwrap();
         let err = stop_if_interrupted(&mut client, ClientError::Interrupted);
         assert_eq!(
@@ -1244,9 +1234,7 @@ mod tests {
             if &d[..2] == b"BG" {
                 vec![text("ER20 Cmd BG rejected")]
             } else if &d[..2] == b"GT" {
-                let mut r = d[..31].to_vec();
-                r.swap(0, 1);
-                vec![r]
+                vec![echo(d)]
             } else {
                 vec![]
             }
