@@ -13,6 +13,17 @@ fn tool(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// Runs the tool and requires it to succeed (else fails with its stderr).
+fn tool_ok(args: &[&str]) -> Output {
+    let run = tool(args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    run
+}
+
 fn robot(name: &str) -> String {
     format!("{}/../robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
 }
@@ -36,7 +47,7 @@ fn plan_simulate_calibrate() {
         dir.join("out.toml"),
     );
     let ur5 = robot("ur5");
-    let run = tool(&[
+    tool_ok(&[
         "plan",
         "--robot",
         &ur5,
@@ -47,12 +58,7 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&plan),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let run = tool(&[
+    tool_ok(&[
         "simulate",
         "--truth",
         &ur5,
@@ -63,12 +69,7 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&measured),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let run = tool(&[
+    let run = tool_ok(&[
         "--robot",
         &ur5,
         "--measurements",
@@ -76,11 +77,6 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&out),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
     let report = String::from_utf8_lossy(&run.stdout);
     assert!(report.contains("5-fold cross-validation"), "{report}");
     assert!(
