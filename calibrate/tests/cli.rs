@@ -94,33 +94,29 @@ fn plan_simulate_calibrate() {
 fn bad_measurements_name_the_line_and_write_nothing() {
     let dir = scratch("bad");
     let (measured, out) = (dir.join("m.csv"), dir.join("out.toml"));
+    let calibrate = || {
+        tool(&[
+            "--robot",
+            &robot("ur5"),
+            "--measurements",
+            s(&measured),
+            "--out",
+            s(&out),
+        ])
+    };
     std::fs::write(
         &measured,
         "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n0,0,0,0,0,1,2\n",
     )
     .unwrap();
-    let run = tool(&[
-        "--robot",
-        &robot("ur5"),
-        "--measurements",
-        s(&measured),
-        "--out",
-        s(&out),
-    ]);
+    let run = calibrate();
     assert_eq!(run.status.code(), Some(2));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("line 3"), "{err}");
     assert!(!out.exists());
     // Too few poses for the parameters: refused, not a wild fit.
     std::fs::write(&measured, "0,0,0,0,0,0,1,2,3\n").unwrap();
-    let run = tool(&[
-        "--robot",
-        &robot("ur5"),
-        "--measurements",
-        s(&measured),
-        "--out",
-        s(&out),
-    ]);
+    let run = calibrate();
     assert_eq!(run.status.code(), Some(2));
     assert!(!out.exists());
     std::fs::remove_dir_all(dir).unwrap();
