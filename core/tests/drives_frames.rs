@@ -199,33 +199,33 @@ fn recalibration_moves_home_so_the_reading_is_exact() {
 #[test]
 fn pt_stream_paces_by_the_read_index() {
     let mut stream = PtStream::new(6, 1000);
-    // Points 5, 6, 7 go to slots 5, 6, 1.
-    for (expected, value) in [(5, 1001), (6, 1002), (1, 1003)] {
+    // Points 4, 5, 6 go to slots 4, 5, 6.
+    for (expected, value) in [(4, 1001), (5, 1002), (6, 1003)] {
         let points = stream.points(value);
         assert_eq!(points.as_slice(), &[(Index::from(expected), value)]);
     }
-    // Point 7 written while the drive reads slot 4: lead 3, on target.
+    // Point 6 written while the drive reads slot 4: lead 2, on target.
+    stream.asked();
+    stream.read_index(4).unwrap();
+    assert_eq!(stream.lead(), Some(2));
+    assert_eq!(stream.points(1004).len(), 1); // point 7, slot 1
+    // The drive is a segment behind (slot 4 still): lead 3, the next point is skipped.
     stream.asked();
     stream.read_index(4).unwrap();
     assert_eq!(stream.lead(), Some(3));
-    assert_eq!(stream.points(1004).len(), 1); // point 8, slot 2
-    // The drive is a segment behind (slot 4 still): lead 4, the next point is skipped.
-    stream.asked();
-    stream.read_index(4).unwrap();
-    assert_eq!(stream.lead(), Some(4));
     assert!(stream.points(1005).is_empty());
-    assert_eq!(stream.points(1006).as_slice(), &[(Index::from(3), 1006)]);
-    // The drive is ahead (slot 1 while point 9 is newest): lead 2, a midpoint is inserted.
+    assert_eq!(stream.points(1006).as_slice(), &[(Index::from(2), 1006)]);
+    // The drive is ahead (slot 1 while point 8 is newest): lead 1, a midpoint is inserted.
     stream.asked();
     stream.read_index(1).unwrap();
-    assert_eq!(stream.lead(), Some(2));
+    assert_eq!(stream.lead(), Some(1));
     assert_eq!(
         stream.points(1010).as_slice(),
-        &[(Index::from(4), 1008), (Index::from(5), 1010)]
+        &[(Index::from(3), 1008), (Index::from(4), 1010)]
     );
     // Lost streams.
     stream.asked();
-    assert_eq!(stream.read_index(4), Err(FlowError::Underflow)); // lead 1
+    assert_eq!(stream.read_index(4), Err(FlowError::Underflow)); // lead 0
     stream.asked();
     assert_eq!(stream.read_index(7), Err(FlowError::Overrun)); // not a slot
     // An answer nobody asked for changes nothing.
@@ -235,10 +235,10 @@ fn pt_stream_paces_by_the_read_index() {
 #[test]
 fn pt_stream_flags_a_stalled_drive() {
     let mut stream = PtStream::new(6, 0);
-    stream.points(1); // point 5, slot 5
-    stream.points(2); // point 6, slot 6
+    stream.points(1); // point 4, slot 4
+    stream.points(2); // point 5, slot 5
     stream.asked();
-    // The drive still at slot 1: lead 5.
+    // The drive still at slot 1: lead 4.
     assert_eq!(stream.read_index(1), Err(FlowError::Overrun));
 }
 
@@ -562,7 +562,6 @@ fn start_sequence_frame_by_frame() {
         (Mnemonic::QP, 1, Some(-4242)),
         (Mnemonic::QP, 2, Some(-4242)),
         (Mnemonic::QP, 3, Some(-4242)),
-        (Mnemonic::QP, 4, Some(-4242)),
         (Mnemonic::PT, 0, Some(1)),
         (Mnemonic::BG, 0, None),
     ];
@@ -579,7 +578,7 @@ fn start_sequence_frame_by_frame() {
         .unwrap();
     assert!(check as f64 * period >= 0.1, "settled only {check} cycles");
     assert!(manager.is_operational());
-    // Streaming: point 5 goes to QP[5], then a read-index query.
+    // Streaming: point 4 goes to QP[4], then a read-index query.
     now += period;
     let q = Joints::from_slice(&[1.5708 + 0.001, 0.0, 1.5708, 0.0, 1.5708, 0.0]).unwrap();
     manager.cycle(now, Some(&q), &mut bus);
@@ -587,7 +586,7 @@ fn start_sequence_frame_by_frame() {
     let counts = (0.001 * 817_741.0 / std::f64::consts::TAU).round() as i32;
     assert_eq!(
         reqs,
-        [(Mnemonic::QP, 5, Some(counts)), (Mnemonic::PT, 0, None)]
+        [(Mnemonic::QP, 4, Some(counts)), (Mnemonic::PT, 0, None)]
     );
     // The measurement: PX = -4242 read at the start; the pretend joints mirror the command.
     let measured = manager.measured();

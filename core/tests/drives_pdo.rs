@@ -19,7 +19,7 @@ use armgate_core::drives::streaming::PDO_TARGET_LEAD;
 use armgate_core::drives::{BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Mode;
-use armgate_core::sim::VirtualBus;
+use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::{Object, sdo_abort};
 use armgate_protocol::client::Command;
 use drives_rig::{Rig, request, robot};
@@ -73,7 +73,7 @@ fn the_robot_file_chooses_the_schedule_and_its_period_is_checked_against_it() {
     );
     let unknown = pdo.replace("streaming = \"pdo\"", "streaming = \"sdo\"");
     assert!(parse_toml(&unknown).is_err());
-    // The lead: none is the default, 2..=8 taken, others refused naming the key.
+    // The lead: none is the default, 1..=8 taken, others refused naming the key.
     assert_eq!(config.drives.pdo_lead, None);
     let lead = |n: u16| {
         let text = pdo.replace(
@@ -83,8 +83,8 @@ fn the_robot_file_chooses_the_schedule_and_its_period_is_checked_against_it() {
         parse_toml(&text)
     };
     assert_eq!(lead(5).unwrap().drives.pdo_lead, Some(5));
-    assert_eq!(lead(2).unwrap().drives.pdo_lead, Some(2));
-    for bad in [0, 1, 9] {
+    assert_eq!(lead(1).unwrap().drives.pdo_lead, Some(1));
+    for bad in [0, 9] {
         let refused = lead(bad).unwrap_err().to_string();
         assert!(refused.contains("drives.pdo_lead"), "{refused}");
     }
@@ -218,6 +218,12 @@ fn stops_holding(rig: &mut Rig, mut accepted: Joints, holding: bool) -> DriveFau
         for (q, h) in rig.drive_positions().iter().zip(held.iter()) {
             assert!((q - h).abs() < 1e-4, "at {q}, holding {h}");
         }
+        // `ST` found every drive's profile at rest on the hold point.
+        for drive in rig.bus().drives() {
+            let table = drive.table();
+            let hold = f64::from(table.qp(table.read_index()).unwrap());
+            assert!((drive.profile() - hold).abs() < 1e-6, "{:?}", drive.node());
+        }
         assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
     }
     rig.manager().fault().unwrap()
@@ -235,7 +241,7 @@ fn streams_at_the_target_lead_and_arrives() {
         }
     }
     rig.ticks(20);
-    // Three points beyond the read pointer at the SYNC, two on a drive whose segment boundary
+    // Two points beyond the read pointer at the SYNC, one on a drive whose segment boundary
     // precedes it; the drives began together and their clocks agree: nothing to correct.
     let target = u32::from(PDO_TARGET_LEAD);
     assert!(
@@ -253,6 +259,49 @@ fn streams_at_the_target_lead_and_arrives() {
     }
     assert!(rig.bus().start_skew_ns().unwrap() < 360_000);
     assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
+    // Every point is fetched at the first segment start after it arrives: reached less than
+    // two set-points after its write.
+    for drive in rig.bus().drives() {
+        let latency = drive.stats().latency;
+        let periods = latency.max_ns as f64 * 1e-9 / rig.period;
+        assert!(
+            latency.points > 100 && periods < 2.0,
+            "{periods} set-points"
+        );
+    }
+}
+
+/// A drive that fetched one point further than Elmo's manual says (`QP[r+2]` when segment `r`
+/// starts, the simulation's previous model) runs dry at the default lead, and streams with
+/// `drives.pdo_lead` one higher: the robot file's answer if a real drive reads ahead.
+#[test]
+fn a_drive_reading_one_point_ahead_needs_a_lead_one_higher() {
+    let run = |lead: Option<u16>| {
+        let config = mk1_pdo(false)
+            .edit(|config| config.drives.pdo_lead = lead)
+            .unwrap();
+        let drives = config.joints.iter().filter_map(|joint| {
+            let mut whistle = WhistleConfig::for_joint(joint)?;
+            whistle.reads_ahead = true;
+            Some(SimWhistle::new(whistle))
+        });
+        let bus = VirtualBus::new(config.drives.can_bitrate, drives);
+        let mut rig = Rig::on(config, &DriveSettings::default(), bus);
+        rig.start();
+        rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+        rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
+        rig.ticks(500);
+        rig
+    };
+    let short = run(None);
+    assert!(matches!(
+        short.manager().fault(),
+        Some(DriveFault::Underflow { .. })
+    ));
+    let longer = run(Some(PDO_TARGET_LEAD + 1));
+    assert_eq!(longer.manager().fault(), None);
+    assert!(longer.manager().is_operational());
+    assert!(longer.bus().drives().all(|d| d.stats().underflows == 0));
 }
 
 #[test]
@@ -356,20 +405,20 @@ fn lifecycle_through_the_control_cycle() {
 }
 
 /// The soak in short (the bench runs ten minutes): 1 % of the frames lost while streaming,
-/// the drives' clocks up to ±100 ppm off, a minute of joint moves back and forth, five points
+/// the drives' clocks up to ±100 ppm off, a minute of joint moves back and forth, four points
 /// kept at the SYNC: no underflow, no fault.
 #[test]
 fn a_minute_with_lost_frames_and_clock_errors() {
     let config = mk1_pdo(false);
     let mut bus = VirtualBus::for_robot(&config);
     bus.spread_clock_errors(100.0, 7);
-    // Five points at the SYNC: two lost points in a row cannot empty the queue (can_bench's
-    // soak table; the default three do not survive a lost point when the drive's segment
+    // Four points at the SYNC: two lost points in a row cannot empty the queue (can_bench's
+    // soak table; the default two do not survive a lost point when the drive's segment
     // boundary falls between the SYNC and the point).
     // The consumer heartbeat time 350 ms: the default 300 ms does not survive two heartbeats
     // lost in a row (1 in 10,000 at 1 % loss), which is not what this test is about.
     let settings = DriveSettings {
-        pdo_lead: 5,
+        pdo_lead: 4,
         heartbeat_timeout: 0.35,
         ..DriveSettings::default()
     };
@@ -478,7 +527,7 @@ fn every_start_survives_lost_frames() {
             rig.bus().stats().frames_lost
         );
         repeated += rig.manager().stats().requests_repeated;
-        // Every drive began: streaming goes on (without loss: lead 3 is not loss-proof).
+        // Every drive began: streaming goes on (without loss: the default lead is not loss-proof).
         rig.bus_mut().set_frame_loss(0.0, 0);
         rig.ticks(100);
         assert!(

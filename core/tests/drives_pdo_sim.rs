@@ -371,15 +371,16 @@ fn pdo_streaming_emergencies() {
     }
     exchange(&mut bus, &[set(101, Mnemonic::PT, 0, 1)], 0.001);
     exchange(&mut bus, &[query(101, Mnemonic::BG, 0)], 0.001);
-    // BG fetched QP[1..=3], QP[4] waits. Five more points fill QP[5], QP[6] and the fetched
-    // QP[1..=3] (within one 18 ms segment); the next would overwrite QP[4], not yet executed.
-    for _ in 0..5 {
+    // BG fetched QP[1..=2]; QP[3] and QP[4] wait. Four more points fill QP[5], QP[6] and the
+    // fetched QP[1..=2] (within one 18 ms segment); the next would overwrite QP[3], not yet
+    // executed.
+    for _ in 0..4 {
         let frames = exchange(&mut bus, &[point(101, 0)], 0.0005);
         assert!(emergencies(&frames).is_empty(), "{frames:?}");
     }
     let overflow = emergencies(&exchange(&mut bus, &[point(101, 0)], 0.001));
-    assert_eq!(overflow, [DriveEmergency::QueueFull { index: 4 }]);
-    assert_eq!(bus.drive(101).unwrap().table().write_pointer(), 4);
+    assert_eq!(overflow, [DriveEmergency::QueueFull { index: 3 }]);
+    assert_eq!(bus.drive(101).unwrap().table().write_pointer(), 3);
     assert_eq!(bus.drive(101).unwrap().stats().overflows, 1);
     // Stop feeding: the queue runs low, then dry (motion terminated, reason 3).
     let dry = emergencies(&exchange(&mut bus, &[], 0.2));
@@ -389,7 +390,7 @@ fn pdo_streaming_emergencies() {
         "{dry:?}"
     );
     assert!(dry.contains(&DriveEmergency::MotionTerminated {
-        write: 4,
+        write: 3,
         reason: REASON_UNDERFLOW
     }));
 }
@@ -491,7 +492,7 @@ fn clock_errors_make_segments_longer_or_shorter() {
     // Drive 102 joins drive 101's id as its group: a BG to 101 reaches both.
     join_group(&mut bus, &[102], GROUP);
     for id in [101, 102] {
-        arm_pt(&mut bus, id, 10_000, 3);
+        arm_pt(&mut bus, id, 10_000, 2);
     }
     exchange(&mut bus, &[query(GROUP, Mnemonic::BG, 0)], 0.001);
     let mut ended = [None, None];
@@ -537,10 +538,10 @@ fn steady_pdo_cycle(robot_name: &str, bitrate: u32, samples: u32, seconds: f64) 
     const GROUP: u8 = 120;
     join_group(&mut bus, &ids, GROUP);
     for &id in &ids {
-        arm_pt(&mut bus, id, samples as i32, 4);
+        arm_pt(&mut bus, id, samples as i32, 3);
     }
-    // One period at most before the first point: the drives fetch QP[4] one segment after
-    // `BG`, and QP[5] one segment later.
+    // One period at most before the first point: the drives fetch QP[3] one segment after
+    // `BG`, and QP[4], the first point streamed, one segment later.
     exchange(&mut bus, &[query(GROUP, Mnemonic::BG, 0)], 0.001);
     bus.reset_stats();
     let period = f64::from(samples) * 360e-6;

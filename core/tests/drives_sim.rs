@@ -91,8 +91,8 @@ fn the_drive_answers_what_the_manager_uses() {
 }
 
 /// Configures a cyclic ring of 6 with `samples` per segment and the queue-low threshold,
-/// fills QP[1..=4] with `points`, and begins.
-fn begin(bus: &mut VirtualBus, n: u8, samples: i32, queue_low: i32, points: [i32; 4]) {
+/// fills QP[1..=3] with `points`, and begins.
+fn begin(bus: &mut VirtualBus, n: u8, samples: i32, queue_low: i32, points: [i32; 3]) {
     pt_ring(bus, n, samples, queue_low);
     for (i, p) in points.iter().enumerate() {
         exchange(bus, &[set(n, Mnemonic::QP, i as u8 + 1, *p)], 0.001);
@@ -115,7 +115,7 @@ fn pt_motion_passes_through_the_points_then_underflows() {
     exchange(&mut bus, &[Nmt::START_ALL.to_frame()], 0.001);
     let n = 101;
     // 10 samples per segment (3.6 ms); points on a line, so the cubic is the line.
-    begin(&mut bus, n, 10, 0, [0, 100, 200, 300]);
+    begin(&mut bus, n, 10, 0, [0, 100, 200]);
     let drive = bus.drive(n).unwrap();
     let start = drive.stats().begun_at.unwrap() as f64 * 1e-9;
     let mut profile = Vec::new();
@@ -123,12 +123,12 @@ fn pt_motion_passes_through_the_points_then_underflows() {
         bus.advance(start + f64::from(k) * 0.36e-3).unwrap();
         profile.push(bus.drive(n).unwrap().profile());
     }
-    // Segment 1→2 starts from rest (slope 0) and ends at 100 with slope 100 per segment;
-    // then the line: 100 at one segment, 200 at two.
+    // Segment 1→2 starts from rest (slope 0) and ends at 100; segment 2→3 ends at 200 with
+    // the line's slope: 100 at one segment, 200 at two.
     let at_segments: Vec<f64> = profile.iter().step_by(10).copied().collect();
     assert!((at_segments[1] - 100.0).abs() < 1.0, "{at_segments:?}");
     assert!((at_segments[2] - 200.0).abs() < 1.0, "{at_segments:?}");
-    // QP[5] was never written: the segment starting at QP[3] cannot fetch it, and the drive
+    // QP[4] was never written: the segment starting at QP[3] cannot fetch it, and the drive
     // stops on QP[3] with the underflow emergency.
     assert!(!bus.drive(n).unwrap().pt_running());
     assert_eq!(bus.drive(n).unwrap().profile(), 200.0);
@@ -151,12 +151,12 @@ fn queue_low_per_mp5_and_queue_full_on_overwrite() {
     exchange(&mut bus, &[Nmt::START_ALL.to_frame()], 0.001);
     let n = 101;
     // 50 samples per segment (18 ms); warn when fewer than 2 points are unexecuted.
-    begin(&mut bus, n, 50, 2, [0, 0, 0, 0]);
-    // Write QP[5]: QP[4] and QP[5] are then unexecuted. Writing QP[5] again overwrites a
+    begin(&mut bus, n, 50, 2, [0, 0, 0]);
+    // Write QP[4]: QP[3] and QP[4] are then unexecuted. Writing QP[4] again overwrites a
     // point not yet executed: refused with "queue full".
-    let mut received = exchange(&mut bus, &[set(n, Mnemonic::QP, 5, 0)], 0.001);
-    received.extend(exchange(&mut bus, &[set(n, Mnemonic::QP, 5, 0)], 0.001));
-    // The next boundary fetches QP[4]: one unexecuted point left, the queue-low warning.
+    let mut received = exchange(&mut bus, &[set(n, Mnemonic::QP, 4, 0)], 0.001);
+    received.extend(exchange(&mut bus, &[set(n, Mnemonic::QP, 4, 0)], 0.001));
+    // The next boundary fetches QP[3]: one unexecuted point left, the queue-low warning.
     bus.advance(bus.now() + 0.02).unwrap();
     received.extend(std::iter::from_fn(|| bus.try_receive()));
     let emcy: Vec<DriveEmergency> = received
@@ -167,7 +167,7 @@ fn queue_low_per_mp5_and_queue_full_on_overwrite() {
         })
         .collect();
     assert!(
-        emcy.contains(&DriveEmergency::QueueFull { index: 5 }),
+        emcy.contains(&DriveEmergency::QueueFull { index: 4 }),
         "{emcy:?}"
     );
     assert!(
@@ -184,7 +184,7 @@ fn the_drive_limits_its_speed_and_lags_like_a_servo() {
     exchange(&mut bus, &[Nmt::START_ALL.to_frame()], 0.001);
     let n = 101;
     let step = (0.2 * 817_741.0 / std::f64::consts::TAU) as i32;
-    begin(&mut bus, n, 10, 0, [0, step, step, step]);
+    begin(&mut bus, n, 10, 0, [0, step, step]);
     let mut last = bus.drive(n).unwrap().joint_position();
     let mut fastest: f64 = 0.0;
     // Over ten samples, so that the rounding of PX does not show.

@@ -54,7 +54,7 @@ pub enum ConfigReason {
     Negative,
     /// `[motion] profile = "jerk-limited"` needs this jerk limit.
     MissingJerkLimit,
-    /// The PDO schedule's lead must be 2 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
+    /// The PDO schedule's lead must be 1 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
     PdoLead,
 }
 
@@ -104,7 +104,7 @@ impl fmt::Display for ConfigReason {
             }
             Self::NotAFraction => "must be greater than 0 and at most 1",
             Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
-            Self::PdoLead => "must be 2 to 8 points",
+            Self::PdoLead => "must be 1 to 8 points",
         })
     }
 }

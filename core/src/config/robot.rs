@@ -142,7 +142,7 @@ pub struct DrivesConfig {
     #[serde(default)]
     pub pdo_fallback: bool,
     /// With `streaming = "pdo"`: the PT points kept beyond each drive's read pointer at every
-    /// SYNC, 2..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (3). More tolerates lost
+    /// SYNC, 1..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (2). More tolerates lost
     /// frames, less is less latency (docs/drives.md, "The lead").
     #[serde(default)]
     pub pdo_lead: Option<u16>,
@@ -277,6 +277,12 @@ impl RobotConfig {
 
     /// One value per joint, e.g. `config.per_joint(|j| j.max_velocity)`.
     pub fn per_joint(&self, value: impl Fn(&JointConfig) -> f64) -> Joints {
+        self.per_joint_of(&value)
+    }
+
+    /// [`per_joint`](Self::per_joint)'s loop, compiled once for every caller's `value`.
+    #[inline(never)]
+    fn per_joint_of(&self, value: &dyn Fn(&JointConfig) -> f64) -> Joints {
         let mut q = Joints::zeros(self.dof());
         for (q, joint) in q.iter_mut().zip(&self.joints) {
             *q = value(joint);
@@ -477,7 +483,7 @@ impl DrivesConfig {
         }
         if self
             .pdo_lead
-            .is_some_and(|lead| !(2..=MAX_PDO_LEAD).contains(&lead))
+            .is_some_and(|lead| !(1..=MAX_PDO_LEAD).contains(&lead))
         {
             return Err(("drives.pdo_lead", ConfigReason::PdoLead));
         }

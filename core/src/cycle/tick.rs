@@ -149,6 +149,9 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
 
     /// Answers one request from `peer` (who then gets the notices). [`tick`](Self::tick)
     /// calls it for the requests its link delivers; protocol tests call it between ticks.
+    // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
+    // and large; inlined, it would sit in the tick's code and stack frame.
+    #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
         bump(&mut self.counters.requests);
         self.last_sender = Some(peer);

@@ -452,10 +452,15 @@ impl DriveManager {
     fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
         let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead);
         let timing = self.timing;
-        let ring_len = if pdo {
-            self.pdo_ring_len
+        // One point more than the lead, and at least FILLED_POINTS: the first point streamed
+        // after `BG` is then due at the second segment start, not the first.
+        let (ring_len, filled) = if pdo {
+            (
+                self.pdo_ring_len,
+                pdo_lead.saturating_add(1).max(FILLED_POINTS),
+            )
         } else {
-            self.ring_len
+            (self.ring_len, FILLED_POINTS)
         };
         let context = |drive: &Drive| StepContext {
             controller: timing.controller,
@@ -463,6 +468,7 @@ impl DriveManager {
             ring_len,
             samples_per_point: timing.samples_per_point,
             position: drive.target,
+            filled,
             node: drive.node,
             group: timing.group,
         };
@@ -474,7 +480,7 @@ impl DriveManager {
             if answered && position_known {
                 match drive
                     .step
-                    .next(drive.unit_mode, timing.unit_mode_settle, pdo)
+                    .next(drive.unit_mode, timing.unit_mode_settle, pdo, filled)
                 {
                     Ok(next) => {
                         if next == StartStep::Configure(0) {
@@ -523,7 +529,7 @@ impl DriveManager {
             self.for_each_drive(|drive| {
                 if let Some(position) = drive.target {
                     if pdo {
-                        let stream = PdoStream::new(ring_len, pdo_lead, FILLED_POINTS, position);
+                        let stream = PdoStream::new(ring_len, pdo_lead, filled, position);
                         drive.pdo = Some(stream);
                     } else {
                         drive.stream = Some(PtStream::new(ring_len, position));

@@ -47,7 +47,7 @@ pub struct DriveSettings {
     /// and a margin that makes a wrong pointer show as an overrun.
     pub pdo_ring_len: u16,
     /// PDO schedule: the PT points kept beyond each drive's read pointer at every SYNC
-    /// (2..=pdo_ring_len − 3; docs/drives.md).
+    /// (1..=pdo_ring_len − 3; docs/drives.md).
     pub pdo_lead: u16,
     /// PDO schedule: a drive whose transmit PDO is missing for more than this many cycles in a
     /// row is faulted (at least 1).
@@ -180,7 +180,7 @@ impl Timing {
             return Err(SetupError::BadTiming);
         }
         let lead = config.drives.pdo_lead.unwrap_or(settings.pdo_lead);
-        let lead_fits = (2..=settings.pdo_ring_len.saturating_sub(3)).contains(&lead);
+        let lead_fits = (1..=settings.pdo_ring_len.saturating_sub(3)).contains(&lead);
         if !lead_fits || settings.pdo_missing_cycles == 0 {
             return Err(SetupError::BadTiming);
         }

@@ -18,9 +18,15 @@
 //! | `Configure(1)` | `MP[3]=1`, `MP[4]=samples` | cyclic; segment = one control period |
 //! | `Configure(2)` | `MP[5]=0`, `QP[1]=PX` | no queue-low warning: the read index paces the writer |
 //! | `Configure(3)` | `QP[2]=PX`, `QP[3]=PX` | |
-//! | `Configure(4)` | `QP[4]=PX`, `PT=1` | the next `BG` starts PT motion at `QP[1]` |
+//! | `Configure(4)` | `PT=1` | the next `BG` starts PT motion at `QP[1]` |
 //! | `Ready` | — | waits for every drive |
 //! | `Begin` | `BG` | all drives in one cycle |
+//!
+//! The ring is filled with one point more than the lead the stream keeps: `QP[1..=3]` on the
+//! interpreter schedule ([`FILLED_POINTS`](super::streaming::FILLED_POINTS)), `QP[1..=lead + 1]`
+//! on the PDO schedule (at least `QP[1..=3]`: the first point streamed after `BG` is then due
+//! at the second segment start), the fill going on two points per step before `PT=1`; the
+//! stream then starts at its lead.
 //!
 //! The PDO schedule first gives every drive the group id (`GroupId`, SDO 0x2040), which takes
 //! effect at a reset communication: when every drive has it (`Regroup`), the manager resets
@@ -37,7 +43,6 @@ use armgate_protocol::can::{
 use heapless::Vec;
 
 use super::settings::POSITION_MODE;
-use super::streaming::FILLED_POINTS;
 
 /// Where one drive is in its start sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,7 +76,8 @@ pub enum StartStep {
     MotorOn,
     /// Read the start position.
     ReadPosition,
-    /// Configure the PT ring and fill it (five parts).
+    /// Configure the PT ring and fill it (two parts, then `MP[5]`, the fill and `PT=1` two
+    /// frames a part).
     Configure(u8),
     /// PDO schedule: the write pointer (`MP[6]`) at the first free entry after the fill.
     WritePointer,
@@ -103,6 +109,8 @@ pub struct StepContext {
     pub samples_per_point: u16,
     /// The start position (counts), once read; the ring is filled with it.
     pub position: Option<i32>,
+    /// Points filled with the start position before `BG`: `QP[1..=filled]`.
+    pub filled: u16,
     /// The drive.
     pub node: NodeId,
     /// The group id the drives answer to besides their own (PDO schedule).
@@ -127,6 +135,13 @@ impl StartStep {
         };
         // No position, no fill: a point is never invented (and `BG` is then refused).
         let fill = |slot: u16| ctx.position.map(|p| set(Mnemonic::QP, slot as u8, p));
+        // `Configure(2..)`: frame `i` of `MP[5]`, the fill, `PT=1`.
+        let filling = |i: u16| match i {
+            0 => Some(set(Mnemonic::MP, 5, 0)),
+            i if i <= ctx.filled => fill(i),
+            i if i == ctx.filled + 1 => Some(set(Mnemonic::PT, 0, 1)),
+            _ => None,
+        };
         let map = |n: u8| {
             mapping_step(ctx.node, n).map(|(step, read_back)| {
                 Outgoing::Sdo(if read_back {
@@ -144,7 +159,7 @@ impl StartStep {
             Self::GroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).write()))],
             Self::CheckGroupId => &[Some(Outgoing::Sdo(group_id_step(ctx.group).read_back()))],
             Self::Map(n) => &[map(n)],
-            Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(FILLED_POINTS) + 1))],
+            Self::WritePointer => &[Some(set(Mnemonic::MP, 6, i32::from(ctx.filled) + 1))],
             Self::ReadUnitMode | Self::CheckUnitMode => &[Some(query(Mnemonic::UM))],
             Self::MotorOff => &[Some(set(Mnemonic::MO, 0, 0))],
             Self::SetUnitMode => &[Some(set(Mnemonic::UM, 0, POSITION_MODE))],
@@ -158,9 +173,10 @@ impl StartStep {
                 Some(set(Mnemonic::MP, 3, 1)),
                 Some(set(Mnemonic::MP, 4, i32::from(ctx.samples_per_point))),
             ],
-            Self::Configure(2) => &[Some(set(Mnemonic::MP, 5, 0)), fill(1)],
-            Self::Configure(3) => &[fill(2), fill(3)],
-            Self::Configure(_) => &[fill(FILLED_POINTS), Some(set(Mnemonic::PT, 0, 1))],
+            Self::Configure(n) => {
+                let first = 2 * u16::from(n.saturating_sub(2));
+                &[filling(first), filling(first + 1)]
+            }
             Self::Begin => &[Some(query(Mnemonic::BG))],
             Self::SettleUnitMode(_) | Self::Ready | Self::Regroup | Self::Rejoin(_) => &[],
         };
@@ -175,8 +191,14 @@ impl StartStep {
 
     /// The step after this one, given the unit mode the drive reported; `Err(found)` if the
     /// drive is still not in position mode after the change. `pdo`: the PDO schedule's steps
-    /// are included.
-    pub fn next(&self, unit_mode: Option<i32>, settle: u32, pdo: bool) -> Result<Self, i32> {
+    /// are included; `filled`: the points the ring is filled with.
+    pub fn next(
+        &self,
+        unit_mode: Option<i32>,
+        settle: u32,
+        pdo: bool,
+        filled: u16,
+    ) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
         Ok(match *self {
             Self::GroupId => Self::CheckGroupId,
@@ -198,7 +220,10 @@ impl StartStep {
             Self::ReadPosition => Self::Configure(0),
             Self::Configure(1) if pdo => Self::WritePointer,
             Self::WritePointer => Self::Configure(2),
-            Self::Configure(n @ 0..=3) => Self::Configure(n + 1),
+            // The next part's first frame is 2 (n − 1) of `MP[5]`, the fill and `PT=1`.
+            Self::Configure(n) if 2 * u16::from(n).saturating_sub(1) <= filled + 1 => {
+                Self::Configure(n + 1)
+            }
             Self::Configure(_) | Self::Ready => Self::Ready,
             Self::Begin => Self::Begin,
         })

@@ -17,8 +17,11 @@
 use super::streaming::TARGET_LEAD;
 
 /// Cycles the hold point is written before `ST`: the drive then has executed every point that
-/// was queued, and its last segments end at rest on the hold point.
-pub const STOP_HOLD_CYCLES: u32 = TARGET_LEAD + 1;
+/// was queued, and its last segments end at rest on the hold point. Two beyond the lead: the
+/// drive's cubic has a zero slope at a knot only when the two knots before it hold the same
+/// point (a backward difference, docs/drives.md "PT flow control"), so the drive must pass
+/// the second hold point before `ST`.
+pub const STOP_HOLD_CYCLES: u32 = TARGET_LEAD + 2;
 
 /// What the drive manager is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -285,6 +285,7 @@ pub(crate) fn jerk_towards(j_max: &[f64], own: &[f64], next: &[f64], out: &mut [
 
 /// `budget = limit − peak·|d|` on the axes where `shared(d, e)` says the two legs' values add
 /// (d, e: the current and the next leg's direction components), the whole limit elsewhere.
+#[inline(never)]
 fn share(
     peak: f64,
     current: &StraightLine,

@@ -14,6 +14,7 @@ mod blend;
 mod cartesian_generator;
 mod controller;
 mod events;
+mod fixed_point;
 mod joint_generator;
 mod joint_limiter;
 mod profile;

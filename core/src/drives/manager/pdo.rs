@@ -18,11 +18,13 @@ use crate::drives::state::Phase;
 use crate::drives::streaming::{FlowError, Query};
 
 impl DriveManager {
-    /// A stop just begun, with as many hold cycles as the schedule needs: the PDO schedule
-    /// has one point more queued right after a write than its lead at the SYNC.
+    /// A stop just begun, with as many hold cycles as the schedule needs: as on the
+    /// interpreter schedule two beyond the lead (the drive comes to rest past the second hold
+    /// point), and one more because the PDO schedule has one point more queued right after a
+    /// write than its lead at the SYNC.
     pub(super) fn with_hold_cycles(&self, phase: Phase) -> Phase {
         match (phase, self.streaming) {
-            (Phase::Stopping(_), Streaming::Pdo) => Phase::Stopping(u32::from(self.pdo_lead) + 2),
+            (Phase::Stopping(_), Streaming::Pdo) => Phase::Stopping(u32::from(self.pdo_lead) + 3),
             _ => phase,
         }
     }

@@ -7,14 +7,17 @@
 //! pointers, sampled at the SYNC. The manager reads it at the start of the next cycle.
 //!
 //! The lead at a SYNC is the number of points written beyond the read pointer, `head − 1 −
-//! tail` modulo the ring. While the drive runs segment `r` it has fetched `QP[r+2]`, so a lead
-//! of 2 is the least that has not run dry, and 1 or less means it has (or will, at its next
-//! segment start). Where the drive's segment boundaries fall within the control cycle decides
-//! the least safe lead: 2 when a boundary falls between the cycle's PT point and the next
-//! SYNC, 3 when it falls between the SYNC and the point (the point then comes too late for
-//! that boundary). The phase drifts with the drive's clock, and SYNC samples cannot see where
-//! it is, so the stream keeps [`PDO_TARGET_LEAD`] = 3 at every SYNC: safe in both phases, and a
-//! point lost on the bus or a clock slip costs one insertion, not an underflow.
+//! tail` modulo the ring. While the drive runs segment `r` it has fetched `QP[r+1]`, the
+//! segment's end, and nothing beyond (Elmo's manual, docs/drives.md "PT flow control"), so a
+//! lead of 1 is the least that has not run dry, and 0 means it has. Where the drive's segment
+//! boundaries fall within the control cycle decides the least safe lead: 1 when a boundary
+//! falls between the cycle's PT point and the next SYNC (the point is fetched at that very
+//! boundary), 2 when it falls between the SYNC and the point (the point then comes too late
+//! for that boundary). The phase drifts with the drive's clock, and SYNC samples cannot see
+//! where it is, so the stream keeps [`PDO_TARGET_LEAD`] = 2 at every SYNC: safe in both
+//! phases, and a point lost on the bus or a clock slip costs one insertion, not an underflow.
+//! Either way a point is fetched at the first segment start after it arrives and reached one
+//! segment later: under two set-points from write to reached.
 //!
 //! The feedback is a cycle old when it arrives, and the points sent since are known, so the
 //! stream predicts the lead at the SYNC it is about to send (one segment consumed per cycle)
@@ -28,7 +31,7 @@ use super::FlowError;
 /// The lead (points beyond the read pointer) the stream keeps at every SYNC by default, for a
 /// drive whose segment boundary follows the SYNC; one less for a drive whose boundary precedes
 /// it.
-pub const PDO_TARGET_LEAD: u16 = 3;
+pub const PDO_TARGET_LEAD: u16 = 2;
 
 /// The largest lead a robot file may ask for (`drives.pdo_lead`): the default 16-entry ring
 /// then still holds a correction and a margin that makes a wrong pointer show as an overrun.
@@ -39,7 +42,7 @@ pub const MAX_PDO_LEAD: u16 = 8;
 pub struct PdoStream {
     /// Entries of the ring (at least 6).
     ring: u16,
-    /// The lead kept at every SYNC (2 or more).
+    /// The lead kept at every SYNC (1 or more).
     target: u16,
     /// The least lead kept: the target, one less for a drive whose boundary precedes the SYNC
     /// (known from its first report).
@@ -62,7 +65,7 @@ impl PdoStream {
     pub fn new(ring: u16, target: u16, filled: u16, position: i32) -> Self {
         Self {
             ring: ring.max(6),
-            target: target.max(2),
+            target: target.max(1),
             least: None,
             newest_value: position,
             // At the first SYNC the drive runs segment 1 with points 1..=filled: `filled − 1`
@@ -91,12 +94,12 @@ impl PdoStream {
         // the SYNC it reads one less, and that is where it stays.
         let phase = (i32::from(lead) - self.lead_at_sync).clamp(-1, 0);
         self.least
-            .get_or_insert((i32::from(self.target) + phase).max(2));
+            .get_or_insert((i32::from(self.target) + phase).max(1));
         // The report is the last SYNC's: it replaces the prediction; the points sent after
         // that SYNC are still counted in `sent_since_sync`.
         self.lead_at_sync = i32::from(lead);
         match lead {
-            ..=1 => Err(FlowError::Underflow),
+            ..=0 => Err(FlowError::Underflow),
             l if l + 1 >= self.ring => Err(FlowError::Overrun),
             _ => Ok(()),
         }
@@ -153,8 +156,8 @@ mod tests {
     /// on the target lead and stays there.
     #[test]
     fn steady_state_keeps_the_target_lead() {
-        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
-        let (mut head, mut tail) = (5u16, 1u16);
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 3, 0);
+        let (mut head, mut tail) = (4u16, 1u16);
         let advance = |p: u16, n: u16| (p - 1 + n) % 6 + 1;
         for cycle in 0..50 {
             // The SYNC samples the pointers, the points land, the answer is read, a segment
@@ -171,27 +174,28 @@ mod tests {
 
     #[test]
     fn a_lost_point_is_made_up_and_an_extra_one_skipped() {
-        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
-        // Lead 2 at the last SYNC and nothing sent since: 1 at this one, two points needed,
-        // a midpoint first.
-        stream.feedback(5, 2).unwrap();
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 3, 0);
+        // Lead 1 at the last SYNC (the drive's boundary precedes the SYNC: it keeps 1) and
+        // nothing sent since: 0 at this one, two points needed, a midpoint first.
+        stream.feedback(5, 3).unwrap();
         assert_eq!(stream.points(10).as_slice(), &[5, 10]);
-        // Lead 4 reported, two points sent after it: 5 at this SYNC, skip.
-        stream.feedback(2, 3).unwrap();
+        // Lead 3 reported, two points sent after it: 4 at this SYNC, skip.
+        stream.feedback(2, 4).unwrap();
         assert!(stream.points(20).is_empty());
-        // Lead 4 reported, nothing sent after it: 3 at this SYNC, one point.
-        stream.feedback(2, 3).unwrap();
+        // Lead 3 reported, nothing sent after it: 2 at this SYNC, one point.
+        stream.feedback(2, 4).unwrap();
         assert_eq!(stream.points(30).as_slice(), &[30]);
     }
 
     #[test]
     fn pointers_outside_the_ring_or_the_window_stop_the_stream() {
-        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 4, 0);
+        let mut stream = PdoStream::new(6, PDO_TARGET_LEAD, 3, 0);
         assert_eq!(stream.feedback(0, 1), Err(FlowError::Overrun));
         assert_eq!(stream.feedback(7, 1), Err(FlowError::Overrun));
-        assert_eq!(stream.feedback(3, 1), Err(FlowError::Underflow)); // lead 1
+        assert_eq!(stream.feedback(2, 1), Err(FlowError::Underflow)); // lead 0
         assert_eq!(stream.feedback(6, 6), Err(FlowError::Overrun)); // lead 5
-        assert_eq!(stream.feedback(5, 1), Ok(())); // lead 3
-        assert_eq!(stream.lead(), Some(3));
+        assert_eq!(stream.feedback(3, 1), Ok(())); // lead 1
+        assert_eq!(stream.feedback(4, 1), Ok(())); // lead 2
+        assert_eq!(stream.lead(), Some(2));
     }
 }

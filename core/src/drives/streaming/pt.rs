@@ -1,27 +1,27 @@
 //! Writing PT points into a drive's ring and pacing them by its read index (spec §6.6).
 //!
-//! The drive model (SimplIQ software manual, "PT motion"): while the read index is `r`, the
-//! drive moves from `QP[r]` to `QP[r+1]` in `MP[4]` samples, on a cubic whose end slope uses
-//! `QP[r+2]`; so when segment `r` starts the drive fetches `QP[r+2]`. A point written while the
-//! drive runs segment `r` can therefore go no nearer than slot `r + 3`, where it is fetched at
-//! the next segment start and reached two segments later: between 2 and 3 control periods
-//! after it was written. [`TARGET_LEAD`] keeps every point exactly there. (The seed kept five
-//! points queued, ≈ 97 ms at 51 Hz, and backtracked on stop, §9 item 36.)
+//! The drive model (Elmo HARmonica software manual §12.1.7.4, docs/drives.md "PT flow
+//! control"): while the read index is `r`, the drive moves from `QP[r]` to `QP[r+1]` in `MP[4]`
+//! samples; when segment `r` starts it fetches `QP[r+1]`, its own end, and nothing beyond. A
+//! point written while the drive runs segment `r` can therefore go no nearer than slot `r + 2`,
+//! where it is fetched at the next segment start and reached one segment later: between 1 and
+//! 2 control periods after it was written. [`TARGET_LEAD`] keeps every point exactly there.
+//! (The seed kept five points queued, ≈ 97 ms at 51 Hz, and backtracked on stop, §9 item 36.)
 //!
 //! Point `n` (1, 2, …) lives in slot `(n − 1) mod ring + 1`; only the slot of the newest point
 //! is kept, so nothing wraps however long the stream runs. The drive's read index, asked for
 //! every few cycles right after that cycle's point, gives the lead `newest − r` (mod ring):
 //!
-//! * 3: on target.
-//! * 4: the drive fell one segment behind the controller (its clock is slower): the next point
+//! * 2: on target.
+//! * 3: the drive fell one segment behind the controller (its clock is slower): the next point
 //!   is skipped, so the drive plays one segment at double speed once.
-//! * 2: the drive's segment boundary fell between the point and the query, or the drive's
+//! * 1: the drive's segment boundary fell between the point and the query, or the drive's
 //!   clock is faster and is about to overtake the controller: two points are written next
 //!   cycle (a midpoint first), so the drive plays one set-point's motion over two segments.
-//! * 1 or less (the drive has fetched a point not yet written) or 5 or more (it stopped
+//! * 0 or less (the drive has fetched a point not yet written) or 4 or more (it stopped
 //!   taking points): the stream is lost and the manager stops.
 //!
-//! With equal clocks the lead stays at 3 after the start; clock drift costs one skip or one
+//! With equal clocks the lead stays at 2 after the start; clock drift costs one skip or one
 //! insertion each time the drive's segment boundaries slide a full period relative to the
 //! control cycle (e.g. every 100 s at 100 Hz for a 100 ppm difference).
 
@@ -31,11 +31,11 @@ use armgate_protocol::can::interpreter::Index;
 use heapless::Vec;
 
 /// Points between the newest written and the drive's read index, in steady state.
-pub const TARGET_LEAD: u32 = 3;
+pub const TARGET_LEAD: u32 = 2;
 
-/// Points written before the motion begins: `QP[1..=4]` all hold the start position, so the
-/// first streamed point (the 5th) is due two segments after `BG`.
-pub const FILLED_POINTS: u16 = 4;
+/// Points written before the motion begins: `QP[1..=3]` all hold the start position, so the
+/// first streamed point (the 4th) is due when the second segment after `BG` starts.
+pub const FILLED_POINTS: u16 = 3;
 
 /// Why the stream cannot go on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -148,10 +148,10 @@ impl PtStream {
         let lead = i64::from(TARGET_LEAD) - ahead;
         self.lead = u32::try_from(lead).ok();
         self.correction = match lead {
-            ..=1 => return Err(FlowError::Underflow),
-            2 => Correction::Insert,
-            3 => Correction::None,
-            4 => Correction::Skip,
+            ..=0 => return Err(FlowError::Underflow),
+            1 => Correction::Insert,
+            2 => Correction::None,
+            3 => Correction::Skip,
             _ => return Err(FlowError::Overrun),
         };
         Ok(())
@@ -187,7 +187,7 @@ mod tests {
         // slot after the previous one, 1 after 6.
         let mut stream = PtStream::new(6, 0);
         let written = slots(&mut stream, 40, TARGET_LEAD, 6);
-        assert_eq!(written.first(), Some(&5)); // QP[1..=4] were filled
+        assert_eq!(written.first(), Some(&4)); // QP[1..=3] were filled
         for pair in written.windows(2) {
             if let [a, b] = pair {
                 assert_eq!(*b, *a % 6 + 1, "{written:?}");
@@ -198,17 +198,17 @@ mod tests {
 
     #[test]
     fn corrections_across_the_ring_end_keep_the_slots_consistent() {
-        // A drive one behind (lead 4) makes the next point skip; one ahead (lead 2) makes two
+        // A drive one behind (lead 3) makes the next point skip; one ahead (lead 1) makes two
         // points, a midpoint first. Both exercised right at the ring's end (slot 6 → 1).
         let mut stream = PtStream::new(6, 0);
-        assert_eq!(slots(&mut stream, 2, TARGET_LEAD, 6), [5, 6]);
+        assert_eq!(slots(&mut stream, 3, TARGET_LEAD, 6), [4, 5, 6]);
         stream.asked();
-        stream.read_index(2).unwrap(); // newest 6, drive at 2: lead 4
-        assert_eq!(stream.lead(), Some(4));
+        stream.read_index(3).unwrap(); // newest 6, drive at 3: lead 3
+        assert_eq!(stream.lead(), Some(3));
         assert!(stream.points(9).is_empty());
         stream.asked();
-        stream.read_index(4).unwrap(); // newest 6, drive at 4: lead 2
-        assert_eq!(stream.lead(), Some(2));
+        stream.read_index(5).unwrap(); // newest 6, drive at 5: lead 1
+        assert_eq!(stream.lead(), Some(1));
         let two: std::vec::Vec<_> = stream
             .points(10)
             .iter()
@@ -221,20 +221,20 @@ mod tests {
     #[test]
     fn answers_outside_the_ring_or_the_lead_window_stop_the_stream() {
         let mut stream = PtStream::new(6, 0);
-        let _ = stream.points(0); // newest: slot 5
+        let _ = stream.points(0); // newest: slot 4
         for (reported, error) in [
             (0, FlowError::Overrun),
             (7, FlowError::Overrun),
             (-1, FlowError::Overrun),
-            (5, FlowError::Overrun),   // lead 0 ≡ 6: taken as 6
-            (4, FlowError::Underflow), // lead 1
-            (6, FlowError::Overrun),   // lead 5
+            (4, FlowError::Underflow), // lead 0
+            (5, FlowError::Overrun),   // lead −1 ≡ 5: taken as 5
+            (6, FlowError::Overrun),   // lead 4
         ] {
             stream.asked();
             assert_eq!(stream.read_index(reported), Err(error), "{reported}");
         }
         stream.asked();
         assert_eq!(stream.read_index(2), Ok(()));
-        assert_eq!(stream.lead(), Some(3));
+        assert_eq!(stream.lead(), Some(2));
     }
 }

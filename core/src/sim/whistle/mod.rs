@@ -92,6 +92,9 @@ pub struct WhistleConfig {
     /// Time from a SYNC's end to its synchronous TPDO being ready to send (s). ASSUMED: the
     /// manual gives no figure.
     pub sync_response: f64,
+    /// The PT motion fetches one point further than the manual says (`QP[r+2]` when segment
+    /// `r` starts, the previous model): a drive that needs one point more of lead.
+    pub reads_ahead: bool,
 }
 
 impl WhistleConfig {
@@ -111,6 +114,7 @@ impl WhistleConfig {
             counts: 0,
             ambient: 25.0,
             sync_response: 50e-6,
+            reads_ahead: false,
         })
     }
 }
@@ -235,7 +239,7 @@ impl SimWhistle {
             nmt: NmtState::PreOperational,
             unit_mode: config.unit_mode,
             motor_on: false,
-            table: PtTable::default(),
+            table: PtTable::new(config.reads_ahead),
             servo: Servo::new(position, max_speed, config.lag, dt, config.ambient),
             reference: position,
             running: None,
@@ -431,7 +435,7 @@ impl SimWhistle {
                 self.group = NodeId::new(group);
                 self.deferred_point = None;
                 self.received_points.clear();
-                self.table = PtTable::default();
+                self.table = PtTable::new(self.config.reads_ahead);
                 self.motor_on = false;
                 self.consumer = None;
                 self.last_beat = None;

@@ -1,15 +1,26 @@
-//! The simulated drive's PT table and motion (SimplIQ software manual, "PT motion").
+//! The simulated drive's PT table and motion (Elmo HARmonica software manual HARSFEN0602
+//! §12.1.7.4, "Motion Management", which SimplIQ drives share).
 //!
 //! Model (the simulation's reading of the manual, documented in docs/drives.md):
 //!
 //! * `QP[1..=64]` hold positions (a real drive has 1024); `MP[1]`/`MP[2]` bound the ring, `MP[3]`
 //!   bit 0 makes it cyclic, `MP[4]` is the samples per segment, `MP[5]` the queue-low threshold.
-//! * While the read index is `r` the drive moves from `QP[r]` to `QP[r+1]` on a cubic (Hermite,
-//!   Catmull-Rom slopes: the slope at `QP[k]` is (`QP[k+1]` − `QP[k−1]`) / 2 per segment). When
-//!   segment `r` starts it fetches `QP[r+2]` for the end slope; `BG` fetches the first three.
+//! * Which point is read when, as the manual says: "When the read pointer is N, the present
+//!   motion segment starts at the position of `QP[N]`, and ends at `QP(N+1)`. After `MP[4]`
+//!   control sampling times, the Amplifier increments the read pointer to N+1, and reads the
+//!   `QP[N+2]` to calculate the parameters of the next motion segment." So when segment `r`
+//!   starts the drive fetches `QP[r+1]`, the segment's own end, and nothing beyond it; `BG`
+//!   fetches `QP[k]` and `QP[k+1]`. (The previous model fetched `QP[r+2]` for a Catmull-Rom
+//!   end slope: one point further than the manual. [`PtTable::new`] keeps it as an option,
+//!   for a test that a drive doing so streams with a lead one higher.)
+//! * **ASSUMED** (the manual gives no formula; "third order" is the seed's thesis): segment `r`
+//!   is a cubic Hermite from `QP[r]` to `QP[r+1]` computed only from points up to `r+1`: the
+//!   slope at knot `k` is the second-order backward difference (3·`QP[k]` − 4·`QP[k−1]` +
+//!   `QP[k−2]`) / 2 per segment — exact for constant acceleration, causal, and continuous
+//!   (each segment starts with the slope the last one ended with). `BG` starts from rest.
 //! * A point must have been written since it was last fetched (or since the table was last
-//!   configured through MP, or the last motion ended): fetching a stale point is a
-//!   buffer underflow — the motion ends where it is and the drive sends the "motion
+//!   configured through MP, or the last motion ended): a segment start fetching a stale
+//!   `QP[r+1]` is a buffer underflow — the motion ends where it is and the drive sends the "motion
 //!   terminated, read pointer reached write pointer" emergency. Writing over a point not yet
 //!   fetched is refused with the "queue full" emergency.
 //! * A point received by PDO ([`PtTable::push`]) goes to the write pointer `MP[6]`, which then
@@ -45,14 +56,29 @@ struct Segment {
     sample: u32,
     from: f64,
     to: f64,
-    /// `QP[read + 2]`, fetched for the end slope; the next segment's end.
-    ahead: f64,
+    /// `QP[read + 2]`, already fetched by a drive reading one point ahead.
+    ahead: Option<f64>,
     /// Slopes at both ends, counts per segment.
     slope_from: f64,
     slope_to: f64,
 }
 
 impl Segment {
+    /// The segment after this one, at read index `read` and ending at `to`: it starts where and with the slope this one
+    /// ends, and its end slope is the backward difference at `to` (**ASSUMED**, see the module
+    /// comment).
+    fn next(&self, read: u16, to: f64, ahead: Option<f64>) -> Self {
+        Self {
+            read,
+            sample: 0,
+            from: self.to,
+            to,
+            ahead,
+            slope_from: self.slope_to,
+            slope_to: backward_slope(self.from, self.to, to),
+        }
+    }
+
     /// The position at fraction `u` of the segment.
     fn at(&self, u: f64) -> f64 {
         let (u2, u3) = (u * u, u * u * u);
@@ -61,6 +87,12 @@ impl Segment {
             + (-2.0 * u3 + 3.0 * u2) * self.to
             + (u3 - u2) * self.slope_to
     }
+}
+
+/// The slope (counts per segment) at a knot `at` after knots `before_last` and `last`: the
+/// second-order backward difference, exact for constant acceleration.
+fn backward_slope(before_last: f64, last: f64, at: f64) -> f64 {
+    (3.0 * at - 4.0 * last + before_last) / 2.0
 }
 
 /// What one sample of the motion produced.
@@ -75,7 +107,7 @@ pub struct Sample {
 /// Why `BG` cannot start PT motion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BeginError {
-    /// No `PT=k`, bad MP values, or `QP[k..k+2]` not all written.
+    /// No `PT=k`, bad MP values, or `QP[k]`, `QP[k+1]` not both written.
     BadSetup,
 }
 
@@ -134,6 +166,8 @@ pub struct PtTable {
     /// A queue-low warning was sent and the queue has not recovered since.
     warned_low: bool,
     latency: Latency,
+    /// Fetch one point further than the manual says (the previous model).
+    reads_ahead: bool,
 }
 
 impl Default for PtTable {
@@ -153,11 +187,22 @@ impl Default for PtTable {
             last_write: None,
             warned_low: false,
             latency: Latency::default(),
+            reads_ahead: false,
         }
     }
 }
 
 impl PtTable {
+    /// An empty table. With `reads_ahead` its motion fetches one point further than the
+    /// manual says: `QP[r+2]` when segment `r` starts (`BG` fetches three points), the
+    /// previous simulation's fetch rule, kept to show what a drive that reads ahead costs.
+    pub fn new(reads_ahead: bool) -> Self {
+        Self {
+            reads_ahead,
+            ..Self::default()
+        }
+    }
+
     fn entry(&self, index: u16) -> Option<&Entry> {
         self.entries.get(usize::from(index).checked_sub(1)?)
     }
@@ -285,20 +330,24 @@ impl PtTable {
             return Err(BeginError::BadSetup);
         }
         let second = self.next(start).ok_or(BeginError::BadSetup)?;
-        let third = self.next(second).ok_or(BeginError::BadSetup)?;
-        let (Some(from), Some(to), Some(after)) =
-            (self.fetch(start), self.fetch(second), self.fetch(third))
-        else {
+        let (Some(from), Some(to)) = (self.fetch(start), self.fetch(second)) else {
             return Err(BeginError::BadSetup);
         };
+        let ahead = if self.reads_ahead {
+            let third = self.next(second).ok_or(BeginError::BadSetup)?;
+            Some(self.fetch(third).ok_or(BeginError::BadSetup)?)
+        } else {
+            None
+        };
+        // From rest: the point before the start is taken as the start.
         self.segment = Some(Segment {
             read: start,
             sample: 0,
             from,
             to,
-            ahead: after,
+            ahead,
             slope_from: 0.0,
-            slope_to: (after - from) / 2.0,
+            slope_to: backward_slope(from, from, to),
         });
         self.begun_at = Some(now);
         self.started_at = None;
@@ -335,26 +384,25 @@ impl PtTable {
                 emergency: None,
             };
         }
-        // Segment boundary: QP[read + 1] is reached and becomes the start; QP[read + 3] is
-        // fetched for the new end slope.
+        // Segment boundary: QP[read + 1] is reached and becomes the start, and the new end
+        // QP[read + 2] is fetched (QP[read + 3] by a drive reading ahead).
         let reached = self.next(segment.read);
-        let fetch = reached
-            .and_then(|r| self.next(r))
-            .and_then(|r| self.next(r));
+        let end = reached.and_then(|r| self.next(r));
+        let fetch = if self.reads_ahead {
+            end.and_then(|r| self.next(r))
+        } else {
+            end
+        };
         let emergency = match (reached, fetch) {
             (Some(reached), Some(fetch)) => {
                 self.record_latency(reached, now);
-                match self.fetch(fetch) {
-                    Some(ahead) => {
-                        self.segment = Some(Segment {
-                            read: reached,
-                            sample: 0,
-                            from: segment.to,
-                            to: segment.ahead,
-                            ahead,
-                            slope_from: segment.slope_to,
-                            slope_to: (ahead - segment.to) / 2.0,
-                        });
+                let next = self.fetch(fetch).map(|fetched| match segment.ahead {
+                    Some(to) => segment.next(reached, to, Some(fetched)),
+                    None => segment.next(reached, fetched, None),
+                });
+                match next {
+                    Some(next) => {
+                        self.segment = Some(next);
                         self.queue_low()
                     }
                     None => Some(self.terminate(reached, REASON_UNDERFLOW)),
@@ -428,5 +476,75 @@ impl PtTable {
     /// When QP was last written (ns).
     pub fn last_write(&self) -> Option<u64> {
         self.last_write
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cyclic ring `QP[1..=6]` of `samples` per segment holding `points` from `QP[1]`, armed
+    /// at `QP[1]`.
+    fn table(reads_ahead: bool, samples: i32, points: &[i32]) -> PtTable {
+        let mut table = PtTable::new(reads_ahead);
+        for (i, value) in [(1, 1), (2, 6), (3, 1), (4, samples), (5, 0)] {
+            assert!(table.set_mp(i, value));
+        }
+        for (i, &p) in (1..).zip(points) {
+            table.write(i, p, 0).unwrap();
+        }
+        assert!(table.arm(1));
+        table
+    }
+
+    fn fresh(table: &PtTable, i: u16) -> bool {
+        table.entry(i).is_some_and(|e| e.fresh)
+    }
+
+    #[test]
+    fn each_segment_start_fetches_only_its_own_end() {
+        let mut table = table(false, 4, &[0, 10, 20, 30]);
+        table.begin(0).unwrap();
+        // BG fetched QP[1] and QP[2]; QP[3] is still to come.
+        assert!(!fresh(&table, 2) && fresh(&table, 3));
+        for _ in 0..4 {
+            table.sample(0, false);
+        }
+        // Segment 2 started: it fetched QP[3], not QP[4].
+        assert_eq!(table.read_index(), 2);
+        assert!(!fresh(&table, 3) && fresh(&table, 4));
+    }
+
+    #[test]
+    fn a_drive_reading_ahead_fetches_one_point_further() {
+        let mut table = table(true, 4, &[0, 10, 20, 30]);
+        table.begin(0).unwrap();
+        assert!(!fresh(&table, 3) && fresh(&table, 4));
+        // It cannot begin on two points.
+        let mut short = self::table(true, 4, &[0, 10]);
+        assert_eq!(short.begin(0), Err(BeginError::BadSetup));
+    }
+
+    #[test]
+    fn constant_acceleration_is_followed_exactly_once_two_knots_lie_behind() {
+        // QP[k] = 100 (k − 1)²: from knot 3 on the backward slopes are exact, so segment 3→4
+        // is the parabola itself; the first two segments start from rest.
+        let samples = 8;
+        let mut table = table(false, samples, &[0, 100, 400, 900, 1600]);
+        table.begin(0).unwrap();
+        let mut profile = std::vec::Vec::new();
+        for _ in 0..3 * samples {
+            profile.push(table.sample(0, false).reference.unwrap());
+        }
+        for (k, &p) in profile.iter().enumerate().skip(2 * samples as usize) {
+            let u = (k + 1) as f64 / f64::from(samples);
+            assert!((p - 100.0 * u * u).abs() < 1e-9, "{k}: {p}");
+        }
+        // Every segment ends on its point.
+        let per = samples as usize;
+        assert_eq!(
+            [profile[per - 1], profile[2 * per - 1], profile[3 * per - 1]],
+            [100.0, 400.0, 900.0]
+        );
     }
 }
