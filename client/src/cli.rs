@@ -1254,18 +1254,10 @@ mod tests {
 
     #[test]
     fn jmove_with_a_time_uses_a_via_point() {
-        let fake = FakeController::spawn(|d| {
-            if &d[..2] == b"SQ" {
-                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
-            }
-            let m = Message::new_checked(d).unwrap();
-            let r = Request::parse(&m).unwrap();
-            let mut reply = Reply::null(r.command);
-            reply.index = r.index;
+        let fake = cartesian_controller(|r, reply| {
             if r.command == Command::JointPosition {
                 reply.values = [0.0, 0.5, 1.0, 0.0, 0.3, 0.0, 0.0];
             }
-            vec![reply.to_bytes().to_vec()]
         });
         let (result, out) = run_with(
             &fake,
@@ -1296,10 +1288,12 @@ mod tests {
         assert_eq!(fake.received()[before..][0][..2], *b"jG");
     }
 
-    /// A controller in Cartesian mode whose tool sits at (0.5, 0.2, 0.1): replies echo the
-    /// index and f0 (as `TV` does).
-    fn run_controller() -> FakeController {
-        FakeController::spawn(|d| {
+    /// A ranger-mk1 running in Cartesian mode: the status `RUNNING_CART`, and to any other
+    /// request the null reply with the request's index, as `answer` fills it in.
+    fn cartesian_controller(
+        answer: impl Fn(&Request, &mut Reply) + Send + 'static,
+    ) -> FakeController {
+        FakeController::spawn(move |d| {
             if &d[..2] == b"SQ" {
                 return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
             }
@@ -1307,11 +1301,19 @@ mod tests {
             let r = Request::parse(&m).unwrap();
             let mut reply = Reply::null(r.command);
             reply.index = r.index;
+            answer(&r, &mut reply);
+            vec![reply.to_bytes().to_vec()]
+        })
+    }
+
+    /// A controller in Cartesian mode whose tool sits at (0.5, 0.2, 0.1): replies echo the
+    /// index and f0 (as `TV` does).
+    fn run_controller() -> FakeController {
+        cartesian_controller(|r, reply| {
             reply.values[0] = r.values[0];
             if r.command == Command::Pose {
                 reply.values = [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0];
             }
-            vec![reply.to_bytes().to_vec()]
         })
     }
 
