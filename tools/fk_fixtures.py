@@ -110,16 +110,21 @@ def fk_kdl(solver, q):
     return out
 
 
+def dh_row(joint, v):
+    """The row's (a, alpha, d, theta) with the joint variable `v` in its own slot."""
+    a, alpha, d, theta = joint["a"], joint["alpha"], joint["d"], joint["theta"]
+    if is_prismatic(joint):
+        d += v
+    else:
+        theta += v
+    return a, alpha, d, theta
+
+
 def fk_rows(cfg, q):
     """Direct product of per-row DH_Craig1989 frames, variable in the row's own slot."""
     f = kdl.Frame.Identity()
     for joint, v in zip(cfg["joints"], q):
-        a, alpha, d, theta = joint["a"], joint["alpha"], joint["d"], joint["theta"]
-        if is_prismatic(joint):
-            d += v
-        else:
-            theta += v
-        f = f * kdl.Frame.DH_Craig1989(a, alpha, d, theta)
+        f = f * kdl.Frame.DH_Craig1989(*dh_row(joint, v))
     return f * tool_frame(cfg)
 
 
@@ -140,12 +145,7 @@ def fk_plain(cfg, q):
     """Pure-Python 4x4 product, independent of KDL (tool RPY = Rz(yaw) Ry(pitch) Rx(roll))."""
     m = [[float(i == j) for j in range(4)] for i in range(4)]
     for joint, v in zip(cfg["joints"], q):
-        a, alpha, d, theta = joint["a"], joint["alpha"], joint["d"], joint["theta"]
-        if is_prismatic(joint):
-            d += v
-        else:
-            theta += v
-        m = matmul(m, craig(a, alpha, d, theta))
+        m = matmul(m, craig(*dh_row(joint, v)))
     t = cfg.get("tool", {})
     m = matmul(m, craig(t.get("a", 0.0), t.get("alpha", 0.0), t.get("d", 0.0),
                         t.get("theta", 0.0)))

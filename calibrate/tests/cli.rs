@@ -13,6 +13,17 @@ fn tool(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// Runs the tool and requires it to succeed (else fails with its stderr).
+fn tool_ok(args: &[&str]) -> Output {
+    let run = tool(args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    run
+}
+
 fn robot(name: &str) -> String {
     format!("{}/../robots/{name}.toml", env!("CARGO_MANIFEST_DIR"))
 }
@@ -36,7 +47,7 @@ fn plan_simulate_calibrate() {
         dir.join("out.toml"),
     );
     let ur5 = robot("ur5");
-    let run = tool(&[
+    tool_ok(&[
         "plan",
         "--robot",
         &ur5,
@@ -47,12 +58,7 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&plan),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let run = tool(&[
+    tool_ok(&[
         "simulate",
         "--truth",
         &ur5,
@@ -63,12 +69,7 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&measured),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let run = tool(&[
+    let run = tool_ok(&[
         "--robot",
         &ur5,
         "--measurements",
@@ -76,11 +77,6 @@ fn plan_simulate_calibrate() {
         "--out",
         s(&out),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
     let report = String::from_utf8_lossy(&run.stdout);
     assert!(report.contains("5-fold cross-validation"), "{report}");
     assert!(
@@ -98,33 +94,29 @@ fn plan_simulate_calibrate() {
 fn bad_measurements_name_the_line_and_write_nothing() {
     let dir = scratch("bad");
     let (measured, out) = (dir.join("m.csv"), dir.join("out.toml"));
+    let calibrate = || {
+        tool(&[
+            "--robot",
+            &robot("ur5"),
+            "--measurements",
+            s(&measured),
+            "--out",
+            s(&out),
+        ])
+    };
     std::fs::write(
         &measured,
         "q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n0,0,0,0,0,1,2\n",
     )
     .unwrap();
-    let run = tool(&[
-        "--robot",
-        &robot("ur5"),
-        "--measurements",
-        s(&measured),
-        "--out",
-        s(&out),
-    ]);
+    let run = calibrate();
     assert_eq!(run.status.code(), Some(2));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("line 3"), "{err}");
     assert!(!out.exists());
     // Too few poses for the parameters: refused, not a wild fit.
     std::fs::write(&measured, "0,0,0,0,0,0,1,2,3\n").unwrap();
-    let run = tool(&[
-        "--robot",
-        &robot("ur5"),
-        "--measurements",
-        s(&measured),
-        "--out",
-        s(&out),
-    ]);
+    let run = calibrate();
     assert_eq!(run.status.code(), Some(2));
     assert!(!out.exists());
     std::fs::remove_dir_all(dir).unwrap();

@@ -954,7 +954,7 @@ fn joint_progress(p: &Progress<'_, [f64]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fake::{FakeController, text};
+    use crate::fake::{FakeController, echo, text};
     use crate::status::tests::status_reply;
     use armgate_protocol::client::{Command, Message, Reply, Request};
     use clap::CommandFactory;
@@ -996,9 +996,7 @@ mod tests {
             match &d[..2] {
                 b"ON" if s.0 == 0.0 || s.0 == 4.0 => {
                     *s = (1.0, 0);
-                    let mut r = d[..31].to_vec();
-                    r.swap(0, 1);
-                    vec![r]
+                    vec![echo(d)]
                 }
                 b"ON" => vec![text("ER11 Arm did not start")],
                 _ => {
@@ -1048,9 +1046,7 @@ mod tests {
             match &d[..2] {
                 b"ON" if s.0 == 0.0 => {
                     s.0 = 2.0;
-                    let mut r = d[..31].to_vec();
-                    r.swap(0, 1);
-                    vec![r]
+                    vec![echo(d)]
                 }
                 b"ON" => vec![text("ER11 Arm did not start")],
                 _ => {
@@ -1094,9 +1090,7 @@ mod tests {
             b"SQ" => vec![status_reply(d, [2.0, 0.0, 0.0, 6.0, 0.0, 3.0, 1.0], "r")],
             b"BG" => vec![text("ER20 Cmd BG drives off")],
             _ => {
-                let mut r = d[..31].to_vec();
-                r.swap(0, 1);
-                vec![r]
+                vec![echo(d)]
             }
         });
         let (result, _) = run_with(&fake, &["move", "0.5", "0.2", "0.1", "0", "0", "0"]);
@@ -1109,11 +1103,7 @@ mod tests {
 
     #[test]
     fn an_interrupted_wait_sends_st() {
-        let fake = FakeController::spawn(|d| {
-            let mut r = d[..31].to_vec();
-            r.swap(0, 1);
-            vec![r]
-        });
+        let fake = FakeController::spawn(|d| vec![echo(d)]);
         let mut client = Client::connect(fake.addr()).unwrap();
         let err = stop_if_interrupted(&mut client, ClientError::Interrupted);
         assert_eq!(
@@ -1244,9 +1234,7 @@ mod tests {
             if &d[..2] == b"BG" {
                 vec![text("ER20 Cmd BG rejected")]
             } else if &d[..2] == b"GT" {
-                let mut r = d[..31].to_vec();
-                r.swap(0, 1);
-                vec![r]
+                vec![echo(d)]
             } else {
                 vec![]
             }
@@ -1266,18 +1254,10 @@ mod tests {
 
     #[test]
     fn jmove_with_a_time_uses_a_via_point() {
-        let fake = FakeController::spawn(|d| {
-            if &d[..2] == b"SQ" {
-                return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
-            }
-            let m = Message::new_checked(d).unwrap();
-            let r = Request::parse(&m).unwrap();
-            let mut reply = Reply::null(r.command);
-            reply.index = r.index;
+        let fake = cartesian_controller(|r, reply| {
             if r.command == Command::JointPosition {
                 reply.values = [0.0, 0.5, 1.0, 0.0, 0.3, 0.0, 0.0];
             }
-            vec![reply.to_bytes().to_vec()]
         });
         let (result, out) = run_with(
             &fake,
@@ -1308,10 +1288,12 @@ mod tests {
         assert_eq!(fake.received()[before..][0][..2], *b"jG");
     }
 
-    /// A controller in Cartesian mode whose tool sits at (0.5, 0.2, 0.1): replies echo the
-    /// index and f0 (as `TV` does).
-    fn run_controller() -> FakeController {
-        FakeController::spawn(|d| {
+    /// A ranger-mk1 running in Cartesian mode: the status `RUNNING_CART`, and to any other
+    /// request the null reply with the request's index, as `answer` fills it in.
+    fn cartesian_controller(
+        answer: impl Fn(&Request, &mut Reply) + Send + 'static,
+    ) -> FakeController {
+        FakeController::spawn(move |d| {
             if &d[..2] == b"SQ" {
                 return vec![status_reply(d, RUNNING_CART, "ranger-mk1")];
             }
@@ -1319,11 +1301,19 @@ mod tests {
             let r = Request::parse(&m).unwrap();
             let mut reply = Reply::null(r.command);
             reply.index = r.index;
+            answer(&r, &mut reply);
+            vec![reply.to_bytes().to_vec()]
+        })
+    }
+
+    /// A controller in Cartesian mode whose tool sits at (0.5, 0.2, 0.1): replies echo the
+    /// index and f0 (as `TV` does).
+    fn run_controller() -> FakeController {
+        cartesian_controller(|r, reply| {
             reply.values[0] = r.values[0];
             if r.command == Command::Pose {
                 reply.values = [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0];
             }
-            vec![reply.to_bytes().to_vec()]
         })
     }
 

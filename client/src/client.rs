@@ -331,9 +331,10 @@ mod tests {
         }
     }
 
-    fn pose_request() -> Request {
+    /// `command` with all values zero and index 0.
+    fn bare(command: Command) -> Request {
         Request {
-            command: Command::Pose,
+            command,
             values: [0.0; VALUES],
             index: 0,
         }
@@ -348,7 +349,7 @@ mod tests {
             vec![reply.to_bytes().to_vec()]
         });
         let mut client = Client::connect_with(fake.addr(), patient()).unwrap();
-        let reply = client.request(pose_request()).unwrap();
+        let reply = client.request(bare(Command::Pose)).unwrap();
         assert_eq!(reply.command, Command::Pose);
         assert_eq!(reply.values, [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0]);
         assert_eq!(fake.received().len(), 1);
@@ -359,13 +360,7 @@ mod tests {
     fn matching_error_text_is_a_rejection() {
         let fake = FakeController::spawn(|_| vec![text("ER20 Cmd BG rejected")]);
         let mut client = Client::connect_with(fake.addr(), patient()).unwrap();
-        let err = client
-            .request(Request {
-                command: Command::Begin,
-                values: [0.0; VALUES],
-                index: 0,
-            })
-            .unwrap_err();
+        let err = client.request(bare(Command::Begin)).unwrap_err();
         match err {
             ClientError::Rejected(t) => assert_eq!(t.as_str(), "ER20 Cmd BG rejected"),
             other => panic!("{other:?}"),
@@ -385,11 +380,7 @@ mod tests {
             (Command::On, "ER11 Arm did not start"),
             (Command::Off, "ER10 Arm did not stop"),
         ] {
-            let err = client.request(Request {
-                command,
-                values: [0.0; VALUES],
-                index: 0,
-            });
+            let err = client.request(bare(command));
             assert!(
                 matches!(err, Err(ClientError::Rejected(t)) if t.as_str() == expected),
                 "{err:?}"
@@ -411,13 +402,7 @@ mod tests {
             ]
         });
         let mut client = Client::connect_with(fake.addr(), patient()).unwrap();
-        let reply = client
-            .request(Request {
-                command: Command::Begin,
-                values: [0.0; VALUES],
-                index: 0,
-            })
-            .unwrap();
+        let reply = client.request(bare(Command::Begin)).unwrap();
         assert_eq!(reply.command, Command::Begin);
         let notices: Vec<String> = client
             .take_notices()
@@ -449,13 +434,7 @@ mod tests {
         let mut config = patient();
         config.notice_capacity = 3;
         let mut client = Client::connect_with(fake.addr(), config).unwrap();
-        client
-            .request(Request {
-                command: Command::Stop,
-                values: [0.0; VALUES],
-                index: 0,
-            })
-            .unwrap();
+        client.request(bare(Command::Stop)).unwrap();
         let notices: Vec<String> = client
             .take_notices()
             .iter()
@@ -473,7 +452,7 @@ mod tests {
         let fake = FakeController::spawn(|_| vec![]);
         let mut client = Client::connect_with(fake.addr(), fast()).unwrap();
         let started = Instant::now();
-        let err = client.request(pose_request()).unwrap_err();
+        let err = client.request(bare(Command::Pose)).unwrap_err();
         match err {
             ClientError::Timeout {
                 ref command,
@@ -489,7 +468,11 @@ mod tests {
         assert!(started.elapsed() >= Duration::from_millis(4 * 40));
         let received = fake.wait_for(4);
         assert_eq!(received.len(), 4);
-        assert!(received.iter().all(|d| *d == pose_request().to_bytes()));
+        assert!(
+            received
+                .iter()
+                .all(|d| *d == bare(Command::Pose).to_bytes())
+        );
     }
 
     #[test]
@@ -511,7 +494,7 @@ mod tests {
             },
         )
         .unwrap();
-        client.request(pose_request()).unwrap();
+        client.request(bare(Command::Pose)).unwrap();
         assert_eq!(fake.received().len(), 3);
     }
 
@@ -529,11 +512,7 @@ mod tests {
             }
         });
         let mut client = Client::connect_with(fake.addr(), patient()).unwrap();
-        let stop = Request {
-            command: Command::Stop,
-            values: [0.0; VALUES],
-            index: 0,
-        };
+        let stop = bare(Command::Stop);
         client.request(stop).unwrap();
         std::thread::sleep(Duration::from_millis(50));
         let mut config = fast();
@@ -572,7 +551,7 @@ mod tests {
             probe.local_addr().unwrap()
         };
         let mut client = Client::connect_with(addr, fast()).unwrap();
-        match client.request(pose_request()) {
+        match client.request(bare(Command::Pose)) {
             Err(ClientError::Refused(a)) => assert_eq!(a, addr),
             // Some systems report no ICMP errors to UDP sockets.
             Err(ClientError::Timeout { .. }) => {}

@@ -234,16 +234,12 @@ impl Client {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fake::FakeController;
-    use armgate_protocol::client::{MESSAGE_LEN, Message};
+    use crate::fake::{FakeController, echo};
+    use armgate_protocol::client::Message;
 
     /// A fake that echoes every request with reversed characters.
-    fn echo() -> FakeController {
-        FakeController::spawn(|request| {
-            let mut reply = request[..MESSAGE_LEN].to_vec();
-            reply.swap(0, 1);
-            vec![reply]
-        })
+    fn echoing() -> FakeController {
+        FakeController::spawn(|request| vec![echo(request)])
     }
 
     fn client(fake: &FakeController) -> Client {
@@ -261,7 +257,7 @@ mod tests {
 
     #[test]
     fn eight_joint_goal_sends_bank_two_then_bank_one() {
-        let fake = echo();
+        let fake = echoing();
         let mut c = client(&fake);
         let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8];
         c.joint_goal(&q).unwrap();
@@ -282,7 +278,7 @@ mod tests {
 
     #[test]
     fn eight_joint_via_point_keeps_the_slot_in_both_banks() {
-        let fake = echo();
+        let fake = echoing();
         let mut c = client(&fake);
         let q = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
         c.via_joint(3, &q, 2.0).unwrap();
@@ -298,7 +294,7 @@ mod tests {
 
     #[test]
     fn seven_joint_recalibration_uses_banks_and_six_joints_do_not() {
-        let fake = echo();
+        let fake = echoing();
         let mut c = client(&fake);
         c.recalibrate(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]).unwrap();
         c.recalibrate(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]).unwrap();
@@ -342,7 +338,7 @@ mod tests {
     #[test]
     #[allow(clippy::approx_constant)] // −1.5708: the spec's §2.9 VP example
     fn typed_values_go_where_the_protocol_says() {
-        let fake = echo();
+        let fake = echoing();
         let mut c = client(&fake);
         c.goal_rpy([0.5, 0.2, 0.1], [0.0, 0.0, 0.0], 5.0).unwrap();
         let sent = fake.received();

@@ -16,6 +16,13 @@ pub fn text(s: &str) -> Vec<u8> {
     b
 }
 
+/// The normal reply to `request`: its 31 bytes with the command characters reversed.
+pub fn echo(request: &[u8]) -> Vec<u8> {
+    let mut reply = request[..MESSAGE_LEN].to_vec();
+    reply.swap(0, 1);
+    reply
+}
+
 /// A text as the client receives it.
 pub fn parsed_text(s: &str) -> armgate_protocol::client::Text {
     let bytes = text(s);

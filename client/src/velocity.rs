@@ -236,14 +236,13 @@ fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fake::FakeController;
-    use armgate_protocol::client::{MESSAGE_LEN, VALUES};
+    use crate::fake::{FakeController, echo};
+    use armgate_protocol::client::VALUES;
 
     /// Echoes every request reversed, with a hold time of 30 ms in f6.
     fn controller() -> FakeController {
         FakeController::spawn(|request| {
-            let mut reply = request[..MESSAGE_LEN].to_vec();
-            reply.swap(0, 1);
+            let mut reply = echo(request);
             reply[2 + 4 * (VALUES - 1)..2 + 4 * VALUES].copy_from_slice(&0.03f32.to_le_bytes());
             vec![reply]
         })

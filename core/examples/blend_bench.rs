@@ -17,7 +17,7 @@ use std::time::Instant;
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{Frame, Rotation3, Vector3};
-use armgate_core::motion::{CartesianGenerator, JointGenerator};
+use armgate_core::motion::{CartesianGenerator, JointGenerator, Refusal};
 use armgate_core::rng::SplitMix64;
 
 const CASES: usize = 20_000;
@@ -43,6 +43,25 @@ fn report(what: &str, mut times: Vec<f64>, blended: usize) {
     );
 }
 
+/// Times `blend` on `CASES` prepared generators from `prepare` (with the next point and the
+/// tolerance; cloned outside the timing) and prints the row.
+fn measure<G: Clone, P>(
+    name: &str,
+    mut prepare: impl FnMut() -> (G, P, f64),
+    blend: impl Fn(&mut G, P, f64) -> Result<bool, Refusal>,
+) {
+    let (mut times, mut blended) = (Vec::with_capacity(CASES), 0);
+    for _ in 0..CASES {
+        let (g, next, tolerance) = prepare();
+        let mut g = black_box(g.clone());
+        let t0 = Instant::now();
+        let r = blend(&mut g, next, tolerance);
+        times.push(t0.elapsed().as_secs_f64() * 1e6);
+        blended += usize::from(black_box(r).unwrap());
+    }
+    report(name, times, blended);
+}
+
 fn random_joints(rng: &mut SplitMix64, config: &ValidRobot) -> Joints {
     let mut q = Joints::zeros(config.dof());
     for (v, j) in q.iter_mut().zip(&config.joints) {
@@ -56,19 +75,18 @@ fn joints(name: &str, robot_name: &str, jerk: bool, rng: &mut SplitMix64) {
     let v = config.per_joint(|j| j.max_velocity);
     let a = config.per_joint(|j| j.max_acceleration);
     let j_max = jerk.then(|| config.per_joint(|j| j.max_jerk.unwrap_or(5.0)));
-    let (mut times, mut blended) = (Vec::with_capacity(CASES), 0);
-    for _ in 0..CASES {
-        let mut g = JointGenerator::new(random_joints(rng, &config), v, a).with_jerk_limits(j_max);
-        let (goal, next) = (random_joints(rng, &config), random_joints(rng, &config));
-        g.move_towards(goal, 0.0, Some(next)).unwrap();
-        let tolerance = rng.uniform(0.0, 0.2);
-        let mut g = black_box(g.clone());
-        let t0 = Instant::now();
-        let r = g.blend_into(next, 0.0, tolerance, None, config.control_period);
-        times.push(t0.elapsed().as_secs_f64() * 1e6);
-        blended += usize::from(black_box(r).unwrap());
-    }
-    report(name, times, blended);
+    let period = config.control_period;
+    measure(
+        name,
+        || {
+            let mut g =
+                JointGenerator::new(random_joints(rng, &config), v, a).with_jerk_limits(j_max);
+            let (goal, next) = (random_joints(rng, &config), random_joints(rng, &config));
+            g.move_towards(goal, 0.0, Some(next)).unwrap();
+            (g, next, rng.uniform(0.0, 0.2))
+        },
+        |g, next, tolerance| g.blend_into(next, 0.0, tolerance, None, period),
+    );
 }
 
 fn random_pose(rng: &mut SplitMix64) -> Frame {
@@ -89,20 +107,19 @@ fn cartesian(name: &str, jerk: bool, rng: &mut SplitMix64) {
     let config = robot("ranger-mk1");
     let c = &config.cartesian;
     let j_max = jerk.then_some([0.02, 0.02, 0.02, 0.1, 0.1, 0.1]);
-    let (mut times, mut blended) = (Vec::with_capacity(CASES), 0);
-    for _ in 0..CASES {
-        let mut g = CartesianGenerator::new(random_pose(rng), c.max_velocity, c.max_acceleration)
-            .with_jerk_limits(j_max);
-        let (goal, next) = (random_pose(rng), random_pose(rng));
-        g.move_towards(goal, 0.0, Some(next)).unwrap();
-        let tolerance = rng.uniform(0.0, 0.05);
-        let mut g = black_box(g.clone());
-        let t0 = Instant::now();
-        let r = g.blend_into(next, 0.0, tolerance, None, config.control_period);
-        times.push(t0.elapsed().as_secs_f64() * 1e6);
-        blended += usize::from(black_box(r).unwrap());
-    }
-    report(name, times, blended);
+    let period = config.control_period;
+    measure(
+        name,
+        || {
+            let mut g =
+                CartesianGenerator::new(random_pose(rng), c.max_velocity, c.max_acceleration)
+                    .with_jerk_limits(j_max);
+            let (goal, next) = (random_pose(rng), random_pose(rng));
+            g.move_towards(goal, 0.0, Some(next)).unwrap();
+            (g, next, rng.uniform(0.0, 0.05))
+        },
+        |g, next, tolerance| g.blend_into(next, 0.0, tolerance, None, period),
+    );
 }
 
 fn main() {

@@ -2,11 +2,14 @@
 // Helpers outside `#[test]` functions may unwrap too: a panic here is a failed test.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
     CanFrame, Emcy, Error, Heartbeat, Incoming, Nmt, NmtState, NodeId, NodeMessage, Object,
     PtFeedback, PtPoint, SdoRequest, SdoResponse, SdoValue, SyncObject,
 };
+use common::XorShift;
 
 const NODE: NodeId = match NodeId::new(101) {
     Some(node) => node,
@@ -281,18 +284,6 @@ fn index_high_bits() {
         index: Index::new(1000).unwrap(),
     };
     assert_request(request, &[0x51, 0x50, 0xE8, 0x03]);
-}
-
-/// xorshift64: a tiny deterministic generator for the randomised test.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
 }
 
 /// Decoding `frame` as `M`, encoding and decoding again gives the same message (compared by

@@ -2,10 +2,13 @@
 // Helpers outside `#[test]` functions may unwrap too: a panic here is a failed test.
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use armgate_protocol::client::{
     Command, DriveStatus, Error, JointBound, MESSAGE_LEN, Message, Notice, PathPoint, Rejection,
     Reply, Request, Severity, Text,
 };
+use common::XorShift;
 
 /// `GT` to x = 0.5, y = 0.2, z = 0.1 m, roll = pitch = yaw = 0, T = 5 s (spec §2.9).
 const GT: [u8; MESSAGE_LEN] = [
@@ -178,22 +181,6 @@ fn emit_into_a_thirty_byte_buffer_drops_only_the_index() {
         .unwrap()
         .emit(&mut Message::new_checked(&mut buffer[..]).unwrap());
     assert_eq!(buffer, VP[..30]);
-}
-
-/// xorshift64: a tiny deterministic generator for the randomised tests.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-
-    fn fill(&mut self, bytes: &mut [u8]) {
-        bytes.iter_mut().for_each(|b| *b = self.next() as u8);
-    }
 }
 
 #[test]

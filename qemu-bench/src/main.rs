@@ -15,19 +15,7 @@
 //! measure of the work, for comparing versions of the core.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-#[cfg(target_os = "none")]
-mod bench;
-#[cfg(target_os = "none")]
-mod counter;
-#[cfg(target_os = "none")]
-mod mcu;
+#[macro_use]
+mod entry;
 
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    mcu::run(bench::run)
-}
-
-/// Host builds: nothing to run (the benchmark runs only in QEMU).
-#[cfg(not(target_os = "none"))]
-fn main() {}
+bench_main!(bench => bench::run);

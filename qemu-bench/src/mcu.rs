@@ -1,4 +1,4 @@
-//! Start-up, panic and fault handlers, shared by both binaries: everything reports over
+//! Start-up, panic and fault handlers, shared by every benchmark binary: everything reports over
 //! semihosting and exits QEMU.
 
 use cortex_m_rt::{ExceptionFrame, exception};

@@ -5,19 +5,7 @@
 //! it: [`profile`] plans the randomised test's cases. `qemu-bench/run.sh` runs it last.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-#[cfg(target_os = "none")]
-mod counter;
-#[cfg(target_os = "none")]
-mod mcu;
-#[cfg(target_os = "none")]
-mod profile;
+#[macro_use]
+mod entry;
 
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    mcu::run(profile::run)
-}
-
-/// Host builds: nothing to run (the benchmark runs only in QEMU).
-#[cfg(not(target_os = "none"))]
-fn main() {}
+bench_main!(profile => profile::run);

@@ -7,21 +7,7 @@
 //! `qemu-bench/run.sh` builds and runs it after the kinematics benchmark.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-#[cfg(target_os = "none")]
-mod counter;
-#[cfg(target_os = "none")]
-mod mcu;
-#[cfg(target_os = "none")]
-mod stack;
-#[cfg(target_os = "none")]
-mod tick;
+#[macro_use]
+mod entry;
 
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
-    mcu::run(tick::run)
-}
-
-/// Host builds: nothing to run (the benchmark runs only in QEMU).
-#[cfg(not(target_os = "none"))]
-fn main() {}
+bench_main!(stack, tick => tick::run);

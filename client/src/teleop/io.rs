@@ -179,7 +179,7 @@ pub fn perform(client: &mut Client, action: Action) -> Vec<Event> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fake::{FakeController, text};
+    use crate::fake::{FakeController, echo, text};
     use crate::{ClientConfig, Command, Mode, Reply};
     use std::sync::{Arc, Mutex};
 
@@ -212,9 +212,7 @@ mod tests {
                     String::from_utf8_lossy(chars)
                 ))];
             }
-            let mut r = d[..31].to_vec();
-            r.swap(0, 1);
-            vec![r]
+            vec![echo(d)]
         })
     }
 
@@ -254,9 +252,7 @@ mod tests {
             if &d[..2] == b"BG" {
                 vec![text("ER20 Cmd BG rejected")]
             } else {
-                let mut r = d[..31].to_vec();
-                r.swap(0, 1);
-                vec![r]
+                vec![echo(d)]
             }
         });
         let mut c = client(&fake);

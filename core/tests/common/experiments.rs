@@ -43,6 +43,19 @@ pub struct TraceTick {
     pub setpoint: Vector3<f64>,
 }
 
+impl TraceTick {
+    /// The tick at `t` with output `out`, the tool at `tool` and the run's error `error`.
+    fn new(t: f64, out: &StepOutput, tool: Vector3<f64>, error: f64) -> Self {
+        Self {
+            t,
+            tool,
+            error,
+            diverging: out.events.ik_divergence,
+            setpoint: out.setpoint.map_or(tool, |f| f.translation.vector),
+        }
+    }
+}
+
 /// One control tick with an ideal arm: the output, the new joints and the largest joint step.
 fn tick(ctrl: &mut Controller, arm: &mut IdealArm, now: f64) -> (StepOutput, Joints, f64) {
     let before = arm.measured();
@@ -171,13 +184,7 @@ pub fn run_rectangle(config: &ValidRobot) -> RectangleRun {
             Vector3::from(RECTANGLE[leg + 1]),
         );
         let e = (p - a).cross(&(b - a)).norm() / (b - a).norm();
-        run.trace.push(TraceTick {
-            t: now,
-            tool: p,
-            error: e,
-            diverging: out.events.ik_divergence,
-            setpoint: out.setpoint.map_or(p, |f| f.translation.vector),
-        });
+        run.trace.push(TraceTick::new(now, &out, p, e));
         sum += e;
         count += 1;
         if e > run.max_error {
@@ -331,13 +338,7 @@ pub fn run_divergence(config: &ValidRobot) -> DivergenceRun {
         let p = chain.forward(&q).unwrap().translation.vector;
         last_leg |= (p - waypoints[1]).norm() < 1e-6;
         let distance = (p - goal).norm();
-        run.trace.push(TraceTick {
-            t: now,
-            tool: p,
-            error: distance,
-            diverging: out.events.ik_divergence,
-            setpoint: out.setpoint.map_or(p, |f| f.translation.vector),
-        });
+        run.trace.push(TraceTick::new(now, &out, p, distance));
         if last_leg {
             run.worst_retreat = run.worst_retreat.max(distance - prev_distance);
             run.total_retreat += (distance - prev_distance).max(0.0);

@@ -77,52 +77,29 @@ impl BlendTolerance {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::vectors::{ZERO, datagram, request};
     use crate::client::{MESSAGE_LEN, Message, Reply};
 
     /// `VT` slot 2 at 0.01 (m + rad), byte for byte.
-    const VT_SLOT_2: [u8; MESSAGE_LEN] = [
-        b'V', b'T', //
-        0x0a, 0xd7, 0x23, 0x3c, // 0.01
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
+    const VT_SLOT_2: [u8; MESSAGE_LEN] = datagram(
+        *b"VT",
+        [[0x0a, 0xd7, 0x23, 0x3c], ZERO, ZERO, ZERO, ZERO, ZERO, ZERO], // 0.01
         0x02,
-    ];
+    );
 
     /// `jT` slot 19 back to the default (−1).
-    const JT_DEFAULT_19: [u8; MESSAGE_LEN] = [
-        b'j', b'T', //
-        0x00, 0x00, 0x80, 0xbf, // -1.0
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
+    const JT_DEFAULT_19: [u8; MESSAGE_LEN] = datagram(
+        *b"jT",
+        [[0x00, 0x00, 0x80, 0xbf], ZERO, ZERO, ZERO, ZERO, ZERO, ZERO], // -1.0
         0x13,
-    ];
+    );
 
     /// The reply `Tj` to a `jT` that set slot 4 to 0.5 rad.
-    const TJ_SLOT_4: [u8; MESSAGE_LEN] = [
-        b'T', b'j', //
-        0x00, 0x00, 0x00, 0x3f, // 0.5
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
+    const TJ_SLOT_4: [u8; MESSAGE_LEN] = datagram(
+        *b"Tj",
+        [[0x00, 0x00, 0x00, 0x3f], ZERO, ZERO, ZERO, ZERO, ZERO, ZERO], // 0.5
         0x04,
-    ];
-
-    fn request(bytes: &[u8]) -> Request {
-        Message::new_checked(bytes)
-            .and_then(|m| Request::parse(&m))
-            .unwrap()
-    }
+    );
 
     #[test]
     fn vt_parses_and_emits_its_literal_bytes() {

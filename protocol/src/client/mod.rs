@@ -45,6 +45,8 @@ mod request;
 mod status;
 mod temperature;
 mod text;
+#[cfg(test)]
+mod vectors;
 mod velocity;
 
 pub use blend::{BlendTolerance, ViaKind};

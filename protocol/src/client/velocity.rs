@@ -137,39 +137,38 @@ impl JointRates {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::vectors::{ZERO, datagram, request};
     use crate::client::{MESSAGE_LEN, Message, Reply};
 
     /// `TW` with vx = 0.5 m/s, ωz = −1 rad/s, tool frame, byte for byte.
-    const TW_TOOL: [u8; MESSAGE_LEN] = [
-        b'T', b'W', //
-        0x00, 0x00, 0x00, 0x3f, // 0.5
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x80, 0xbf, // -1.0
-        0x00, 0x00, 0x00, 0x00, //
+    const TW_TOOL: [u8; MESSAGE_LEN] = datagram(
+        *b"TW",
+        [
+            [0x00, 0x00, 0x00, 0x3f], // 0.5
+            ZERO,
+            ZERO,
+            ZERO,
+            ZERO,
+            [0x00, 0x00, 0x80, 0xbf], // -1.0
+            ZERO,
+        ],
         0x01,
-    ];
+    );
 
     /// `jW` bank 2 with joint 7 at 0.25 rad/s and joint 8 at −2 rad/s.
-    const JW_BANK_2: [u8; MESSAGE_LEN] = [
-        b'j', b'W', //
-        0x00, 0x00, 0x80, 0x3e, // 0.25
-        0x00, 0x00, 0x00, 0xc0, // -2.0
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
-        0x00, 0x00, 0x00, 0x00, //
+    const JW_BANK_2: [u8; MESSAGE_LEN] = datagram(
+        *b"jW",
+        [
+            [0x00, 0x00, 0x80, 0x3e], // 0.25
+            [0x00, 0x00, 0x00, 0xc0], // -2.0
+            ZERO,
+            ZERO,
+            ZERO,
+            ZERO,
+            ZERO,
+        ],
         0x80,
-    ];
-
-    fn request(bytes: &[u8]) -> Request {
-        Message::new_checked(bytes)
-            .and_then(|m| Request::parse(&m))
-            .unwrap()
-    }
+    );
 
     #[test]
     fn twist_parses_and_emits_its_literal_bytes() {
