@@ -65,8 +65,9 @@ impl AdaptiveLead {
         self.seen = true;
     }
 
-    /// The drives start again (after a fault): a loss seen since the last cycle (the one that
-    /// made the fault, often) raises the lead the new streams begin with.
+    /// The drives start (again, after a fault) or begin streaming: a loss seen since the last
+    /// cycle (the one that made the fault, or a start request whose answer was lost) raises the
+    /// lead the new streams begin with, by one.
     pub fn restart(&mut self) {
         if core::mem::take(&mut self.seen) && self.raised < self.raise_max {
             self.raised += 1;
