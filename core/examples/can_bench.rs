@@ -237,20 +237,19 @@ fn robot(name: &str, streaming: Streaming) -> ValidRobot {
 
 /// `--soak SECONDS`, or 10 minutes.
 fn soak_seconds() -> f64 {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == "--soak")
-        .and_then(|i| args.get(i + 1))
-        .map_or(600.0, |v| v.parse().expect("--soak SECONDS"))
+    option("--soak").map_or(600.0, |v| v.parse().expect("--soak SECONDS"))
 }
 
 /// `--loss-seed N`: the seed of the soak's frame loss (default 11); restarts use the next ones.
 fn loss_seed() -> u64 {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == "--loss-seed")
-        .and_then(|i| args.get(i + 1))
-        .map_or(11, |v| v.parse().expect("--loss-seed N"))
+    option("--loss-seed").map_or(11, |v| v.parse().expect("--loss-seed N"))
+}
+
+/// The value after `flag` on the command line.
+fn option(flag: &str) -> Option<String> {
+    let mut args = std::env::args();
+    args.position(|a| a == flag)?;
+    args.next()
 }
 
 struct Soak {
