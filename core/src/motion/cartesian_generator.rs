@@ -15,16 +15,12 @@ use crate::math::{self, Frame, Rotation3, Vector3};
 #[derive(Clone, Debug)]
 pub struct CartesianGenerator {
     setpoint: Frame,
-    /// x, y, z then rx, ry, rz.
-    v_max: [f64; 6],
-    a_max: [f64; 6],
-    /// Jerk limits: jerk-limited profiles if set, the seed's trapezoids if not.
-    j_max: Option<[f64; 6]>,
+    limits: Limits,
     motion: Option<Motion>,
 }
 
 /// Per-component limits (x, y, z, rx, ry, rz): velocity, acceleration, and jerk if the
-/// profiles are jerk-limited.
+/// profiles are jerk-limited (the seed's trapezoids if not).
 #[derive(Clone, Copy, Debug)]
 struct Limits {
     v: [f64; 6],
@@ -203,9 +199,11 @@ impl CartesianGenerator {
     pub fn new(hold: Frame, v_max: [f64; 6], a_max: [f64; 6]) -> Self {
         Self {
             setpoint: hold,
-            v_max,
-            a_max,
-            j_max: None,
+            limits: Limits {
+                v: v_max,
+                a: a_max,
+                j: None,
+            },
             motion: None,
         }
     }
@@ -213,7 +211,13 @@ impl CartesianGenerator {
     /// This generator planning jerk-limited (double-S) moves within per-component jerk limits
     /// (x, y, z, rx, ry, rz); `None`: the seed's trapezoids.
     pub fn with_jerk_limits(self, j_max: Option<[f64; 6]>) -> Self {
-        Self { j_max, ..self }
+        Self {
+            limits: Limits {
+                j: j_max,
+                ..self.limits
+            },
+            ..self
+        }
     }
 
     /// Aborts any motion and holds `pose` ("hold here").
@@ -241,7 +245,7 @@ impl CartesianGenerator {
         if self.motion.is_some() {
             return Err(Refusal::Busy);
         }
-        let leg = Leg::plan_towards(self.setpoint, goal, min_duration, &self.limits(), then)?;
+        let leg = Leg::plan_towards(self.setpoint, goal, min_duration, &self.limits, then)?;
         self.motion = Some(Motion::Move(LegChain::new(leg)));
         Ok(leg.duration)
     }
@@ -261,7 +265,7 @@ impl CartesianGenerator {
         then: Option<Frame>,
         min_overlap: f64,
     ) -> Result<bool, Refusal> {
-        let limits = self.limits();
+        let limits = self.limits;
         let Some(Motion::Move(chain)) = &mut self.motion else {
             return Err(Refusal::NoGoal);
         };
@@ -321,14 +325,6 @@ impl CartesianGenerator {
                 (next, start)
             });
         chain.queue_if_worthwhile(&full, budgeted, min_overlap)
-    }
-
-    fn limits(&self) -> Limits {
-        Limits {
-            v: self.v_max,
-            a: self.a_max,
-            j: self.j_max,
-        }
     }
 
     /// True if a move runs that a next one may be blended into ([`blend_into`](Self::blend_into)).

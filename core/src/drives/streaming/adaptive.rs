@@ -32,6 +32,17 @@ pub enum LeadChange {
     Lower,
 }
 
+impl LeadChange {
+    /// Points the lead moves by: +1, 0 or −1.
+    pub fn step(self) -> i8 {
+        match self {
+            Self::Hold => 0,
+            Self::Raise => 1,
+            Self::Lower => -1,
+        }
+    }
+}
+
 /// The lead policy shared by all drives on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AdaptiveLead {

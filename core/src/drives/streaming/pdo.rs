@@ -167,22 +167,14 @@ impl PdoStream {
         // segment. Kept within least..=least + 1: as the drive's clock drifts, its boundary
         // passes the SYNC and its reading moves by one without a point more or less queued.
         let least = self.least.unwrap_or(i32::from(self.target)) + self.raised;
-        let kept: u8 = match predicted {
+        let kept: i8 = match predicted {
             p if p > least + 1 => 0,
             p if p >= least => 1,
             _ => 2,
         };
         // A change moves every drive's lead by one, wherever it is in its band.
-        let count = match change {
-            LeadChange::Hold => kept,
-            LeadChange::Raise => kept + 1,
-            LeadChange::Lower => kept.saturating_sub(1),
-        };
-        self.raised += match change {
-            LeadChange::Hold => 0,
-            LeadChange::Raise => 1,
-            LeadChange::Lower => -1,
-        };
+        let count = (kept + change.step()).max(0) as u8;
+        self.raised += i32::from(change.step());
         let mut points = Vec::new();
         let (from, to, n) = (
             i64::from(self.newest_value),
