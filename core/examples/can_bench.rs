@@ -34,7 +34,7 @@ use drives_rig::Rig;
 
 use armgate_core::config::{Streaming, ValidRobot, load_file};
 use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
-use armgate_core::drives::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD};
+use armgate_core::drives::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD, TIME_STAMP_EVERY};
 use armgate_core::drives::{DriveSettings, DriveState, DriveStats};
 use armgate_core::motion::{Mode, Shape};
 use armgate_core::sim::{BusStats, VirtualBus};
@@ -52,14 +52,14 @@ fn main() {
     for streaming in [Streaming::Interpreter, Streaming::Pdo] {
         let model = LoadModel::new(&robot("ranger-mk1", streaming), &settings);
         println!(
-            "{streaming:?} schedule: per drive and cycle {} bits worst case, plus {} per cycle{}",
+            "{streaming:?} schedule: per drive and cycle {} bits worst case, plus {:.1} per cycle{}",
             model.bits_per_drive(),
             model.bits_per_cycle_shared(),
             match streaming {
                 Streaming::Interpreter => " (QP + echo, query + answer)".to_string(),
                 Streaming::Pdo => format!(
-                    " (RPDO3 + TPDO3; SYNC) and a temperature query + answer per drive every {} cycles",
-                    settings.schedule.temperature_every
+                    " (RPDO3 + TPDO3; SYNC and a Time Stamp every {} cycles) and a temperature query + answer per drive every {} cycles",
+                    model.time_stamp_every, settings.schedule.temperature_every
                 ),
             }
         );
@@ -123,37 +123,43 @@ fn main() {
     let seconds = soak_seconds();
     println!();
     println!(
-        "PDO schedule, {seconds:.0} s of simulated time, drive clocks within ±100 ppm (0 ppm: clocks that agree, as locked ones would), frames lost at random from power-on (the first start and the restarts too), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
+        "PDO schedule, {seconds:.0} s of simulated time, drive clocks within ±100 ppm (0 ppm: clocks that agree), locked by Time Stamps or not, frames lost at random from power-on (the first start and the restarts too), consumer heartbeat time 350 ms, joint moves back and forth; a fault is counted and the drives restarted:"
     );
     println!();
     println!(
-        "| robot, drives | bit rate | period | drive clocks | frame loss | lead (`pdo_lead` + up to `pdo_lead_raise`) | leads kept | points lost; lead raised / lowered; points skipped / inserted | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
+        "| robot, drives | bit rate | period | drive clocks | Time Stamps | frame loss | lead (`pdo_lead` + up to `pdo_lead_raise`) | leads kept | points lost; lead raised / lowered; points skipped / inserted | frames lost | faults (restarted, with loss); requests repeated in the restarts; restarts failed | underflows | latency write → reached |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    // (robot, drive clocks ±ppm, frame loss, pdo_lead, pdo_lead_raise); `DEFAULT`: the robot
-    // file's defaults.
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // (robot, drive clocks ±ppm, frame loss, (pdo_lead, pdo_lead_raise), time_stamp_every);
+    // `DEFAULT` and `STAMPED`: the robot file's defaults, `UNLOCKED`: no Time Stamps.
     const DEFAULT: (u16, u16) = (PDO_TARGET_LEAD, PDO_LEAD_RAISE);
+    const STAMPED: Option<u16> = None;
+    const UNLOCKED: Option<u16> = Some(0);
     let cases = [
-        ("ranger-mk1", 0.0, 0.0, (1, 0)),
-        ("ranger-mk1", 100.0, 0.0, (1, 0)),
-        ("ranger-mk1", 100.0, 0.0, (2, 0)),
-        ("ranger-mk1", 0.0, 0.0, DEFAULT),
-        ("ranger-mk1", 100.0, 0.0, DEFAULT),
-        ("ranger-mk1", 0.0, 0.0, (3, 2)),
-        ("ranger-mk1", 100.0, 0.0, (3, 2)),
-        ("ranger-mk1", 100.0, 0.01, (2, 0)),
-        ("ranger-mk1", 100.0, 0.01, (3, 0)),
-        ("ranger-mk1", 100.0, 0.01, (4, 0)),
-        ("ranger-mk1", 100.0, 0.01, DEFAULT),
-        ("ranger-mk1", 100.0, 0.01, (3, 2)),
-        ("ranger-mk2", 0.0, 0.0, DEFAULT),
-        ("ranger-mk2", 100.0, 0.0, DEFAULT),
-        ("ranger-mk2", 100.0, 0.01, (4, 0)),
-        ("ranger-mk2", 100.0, 0.01, DEFAULT),
-        ("ranger-mk2", 100.0, 0.01, (3, 2)),
+        ("ranger-mk1", 0.0, 0.0, (1, 0), STAMPED),
+        ("ranger-mk1", 100.0, 0.0, (1, 0), STAMPED),
+        ("ranger-mk1", 100.0, 0.0, (1, 0), UNLOCKED),
+        ("ranger-mk1", 100.0, 0.0, (2, 0), UNLOCKED),
+        ("ranger-mk1", 0.0, 0.0, DEFAULT, STAMPED),
+        ("ranger-mk1", 100.0, 0.0, DEFAULT, STAMPED),
+        ("ranger-mk1", 100.0, 0.0, DEFAULT, UNLOCKED),
+        ("ranger-mk1", 0.0, 0.0, (3, 2), STAMPED),
+        ("ranger-mk1", 100.0, 0.0, (3, 2), STAMPED),
+        ("ranger-mk1", 100.0, 0.01, (2, 0), STAMPED),
+        ("ranger-mk1", 100.0, 0.01, (3, 0), STAMPED),
+        ("ranger-mk1", 100.0, 0.01, (4, 0), STAMPED),
+        ("ranger-mk1", 100.0, 0.01, DEFAULT, STAMPED),
+        ("ranger-mk1", 100.0, 0.01, DEFAULT, UNLOCKED),
+        ("ranger-mk1", 100.0, 0.01, (3, 2), STAMPED),
+        ("ranger-mk2", 0.0, 0.0, DEFAULT, STAMPED),
+        ("ranger-mk2", 100.0, 0.0, DEFAULT, STAMPED),
+        ("ranger-mk2", 100.0, 0.0, DEFAULT, UNLOCKED),
+        ("ranger-mk2", 100.0, 0.01, (4, 0), STAMPED),
+        ("ranger-mk2", 100.0, 0.01, DEFAULT, STAMPED),
+        ("ranger-mk2", 100.0, 0.01, (3, 2), STAMPED),
     ];
     for bitrate in BITRATES {
-        for (name, ppm, loss, (lead, raise)) in cases {
+        for (name, ppm, loss, (lead, raise), stamps) in cases {
             // 350 ms consumer heartbeat time: two heartbeats lost in a row (1 in 10,000 at 1 %
             // loss) would exceed the default 300 ms and stop a drive (ER36), which is not what
             // the soak measures.
@@ -161,7 +167,9 @@ fn main() {
                 heartbeat_timeout: 0.35,
                 ..DriveSettings::default()
             };
-            let base = robot(name, Streaming::Pdo);
+            let base = robot(name, Streaming::Pdo)
+                .edit(|config| config.drives.time_stamp_every = stamps)
+                .unwrap();
             let fastest = LoadModel::new(&base, &settings)
                 .fastest_period(bitrate, DEFAULT_CEILING)
                 .unwrap();
@@ -185,10 +193,14 @@ fn main() {
                 format!("{lead} + {raise}")
             };
             println!(
-                "| {name}, {} | {} kbit/s | {:.2} ms | ±{ppm:.0} ppm | {:.0} % | {setting} | {:?} | {}; {} / {}; {} / {} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms (mean {:.2}) |",
+                "| {name}, {} | {} kbit/s | {:.2} ms | ±{ppm:.0} ppm | {} | {:.0} % | {setting} | {:?} | {}; {} / {}; {} / {} | {} | {} {:?}; {}; {} {:?} | {} | ≤ {:.2} set-points = {:.1} ms (mean {:.2}) |",
                 config.dof(),
                 bitrate / 1000,
                 fastest.period * 1e3,
+                match stamps {
+                    STAMPED => format!("after every {TIME_STAMP_EVERY} SYNCs (default)"),
+                    _ => "none".to_string(),
+                },
                 loss * 100.0,
                 s.leads,
                 s.stats.points_lost,

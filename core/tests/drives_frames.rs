@@ -492,14 +492,14 @@ fn start_sequence_frame_by_frame() {
     manager.start().unwrap();
     assert_eq!(manager.start(), Err(LifecycleError::Running));
     assert_eq!(manager.state(), DriveState::Starting);
-    // Cycle 1: the heartbeat and the NMT start.
+    // Cycle 1: the NMT start and the heartbeat (last in every cycle).
     let period = config.control_period;
     let mut now = period;
     manager.cycle(now, None, &mut bus);
     let sent = bus.take();
     assert_eq!(sent.len(), 2);
-    assert_eq!((sent[0].id(), sent[0].data()), (0x77F, &[5][..]));
-    assert_eq!(sent[1], Nmt::START_ALL.to_frame());
+    assert_eq!(sent[0], Nmt::START_ALL.to_frame());
+    assert_eq!((sent[1].id(), sent[1].data()), (0x77F, &[5][..]));
     // Cycle 2: the 12 ms settle is one 19.44 ms cycle; cycle 3: the heartbeat SDO.
     now += period;
     manager.cycle(now, None, &mut bus);

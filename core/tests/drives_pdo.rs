@@ -2,7 +2,6 @@
 //! reading it back), its faults — a refused mapping, a missing transmit PDO, a late SYNC, a
 //! bus-off while streaming — each ending in a controlled stop that holds the last commanded
 //! position, and the fallback to the interpreter schedule.
-#![allow(clippy::approx_constant)]
 #![allow(
     missing_docs,
     clippy::unwrap_used,
@@ -22,9 +21,7 @@ use armgate_core::motion::Mode;
 use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::{Object, sdo_abort};
 use armgate_protocol::client::Command;
-use drives_rig::{Rig, request, robot};
-
-const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+use drives_rig::{MK1_READY, Rig, request, robot};
 
 /// ranger-mk1 on the PDO schedule at 500 kbit/s: 12 × 360 µs (231.5 Hz), or with the
 /// fallback 24 × 360 µs, the fastest period the interpreter schedule carries; faster joint

@@ -32,14 +32,34 @@ fn frames_take_their_exact_bit_time_and_lower_ids_win() {
     assert_eq!(bus.drive(101).unwrap().nmt_state(), NmtState::Operational);
     assert_eq!(bus.stats().frames, 1);
     assert_eq!(bus.stats().bits, u64::from(exact_bits_on_wire(&nmt)));
-    // Queued for 102 first, but 101's identifier is lower: 101 is asked, and answers, first.
+    // The controller sends in queue order: 102 is asked, and answers, first although 101's
+    // identifier is lower.
     let received = exchange(
         &mut bus,
         &[query(102, Mnemonic::PX, 0), query(101, Mnemonic::PX, 0)],
         0.005,
     );
     let from: Vec<u16> = received.iter().map(|f| f.id()).collect();
-    assert_eq!(from, [0x2E5, 0x2E6]);
+    assert_eq!(from, [0x2E6, 0x2E5]);
+    // Between nodes the lower identifier wins: 101's answer (0x2E5), ready 250 µs after its
+    // query, goes before the controller's next queued frame (0x369), not after the queue.
+    let queue = [
+        query(101, Mnemonic::PX, 0),
+        query(105, Mnemonic::PX, 0),
+        query(105, Mnemonic::UM, 0),
+        query(105, Mnemonic::TI, 1),
+    ];
+    let bits: Vec<f64> = queue
+        .iter()
+        .map(|f| f64::from(exact_bits_on_wire(f)))
+        .collect();
+    let answer_ready = bits[0] * 2e-6 + 250e-6;
+    assert!(answer_ready < (bits[0] + bits[1] + bits[2]) * 2e-6);
+    // An 8-byte answer takes at most 135 bits; after the fourth query it would end later.
+    let won_by = (bits[0] + bits[1] + bits[2] + 135.0) * 2e-6;
+    assert!(won_by < (bits.iter().sum::<f64>() + 100.0) * 2e-6);
+    let received = exchange(&mut bus, &queue, won_by);
+    assert_eq!(received.iter().map(|f| f.id()).collect::<Vec<_>>(), [0x2E5]);
 }
 
 #[test]

@@ -74,6 +74,7 @@ fn robot() -> Option<ValidRobot> {
             pdo_fallback: black_box(true),
             pdo_lead: black_box(Some(3)),
             pdo_lead_raise: black_box(Some(2)),
+            time_stamp_every: black_box(Some(2)),
         },
         cartesian: CartesianLimits {
             max_velocity: [0.1; 6],

@@ -153,6 +153,13 @@ pub struct DrivesConfig {
     /// (docs/drives.md, "The lead").
     #[serde(default)]
     pub pdo_lead_raise: Option<u16>,
+    /// With `streaming = "pdo"`: a Time Stamp after every n-th SYNC, which locks the drives'
+    /// motion clocks to the controller's (Elmo MAN-CAN301IG ch. 8), so that their PT segments
+    /// stop drifting against the control cycle; 0 sends none. None:
+    /// [`TIME_STAMP_EVERY`](crate::drives::streaming::TIME_STAMP_EVERY) (2)
+    /// (docs/drives.md, "SYNC locking").
+    #[serde(default)]
+    pub time_stamp_every: Option<u16>,
 }
 
 /// The streaming schedule: which frames carry the set-points and the feedback (docs/drives.md).

@@ -10,17 +10,19 @@
 //!   (4 bytes) and one transmit PDO with the position and the PT pointers (8 bytes) — 230
 //!   bits; plus the temperature query and its answer once per `temperature_every` cycles per
 //!   drive, counted as their average per cycle (the busiest cycle carries one more query and
-//!   answer).
+//!   answer), and a Time Stamp (4 bytes) after every `time_stamp_every`-th SYNC, averaged the
+//!   same way.
 //!
 //! The controller's heartbeat adds one 1-byte frame per heartbeat period to both.
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
-    Heartbeat, NmtState, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject, bits_on_wire,
+    Heartbeat, NmtState, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject, TimeStamp,
+    bits_on_wire,
 };
 
 use super::settings::{DriveSettings, SAMPLE_TIME};
-use super::streaming::Query;
+use super::streaming::{Query, TIME_STAMP_EVERY};
 use crate::config::{RobotConfig, Streaming};
 
 /// The load ceiling the fastest period keeps under by default.
@@ -40,6 +42,8 @@ pub struct LoadModel {
     pub streaming: Streaming,
     /// Cycles between two temperature queries of one drive (PDO schedule).
     pub temperature_every: u16,
+    /// Cycles between two Time Stamps (PDO schedule; 0: none).
+    pub time_stamp_every: u16,
 }
 
 /// A control period and the load it makes.
@@ -65,6 +69,7 @@ impl LoadModel {
             heartbeat_period: settings.heartbeat_period,
             streaming: config.drives.streaming,
             temperature_every: settings.schedule.temperature_every,
+            time_stamp_every: config.drives.time_stamp_every.unwrap_or(TIME_STAMP_EVERY),
         }
     }
 
@@ -78,11 +83,18 @@ impl LoadModel {
         }
     }
 
-    /// Worst-case bits of the cycle's frames that are not per drive: the PDO schedule's SYNC.
-    pub fn bits_per_cycle_shared(&self) -> u32 {
+    /// Worst-case bits of the cycle's frames that are not per drive: the PDO schedule's SYNC,
+    /// and its Time Stamp averaged over `time_stamp_every` cycles.
+    pub fn bits_per_cycle_shared(&self) -> f64 {
         match self.streaming {
-            Streaming::Interpreter => 0,
-            Streaming::Pdo => sync_bits(),
+            Streaming::Interpreter => 0.0,
+            Streaming::Pdo => {
+                let stamps = match self.time_stamp_every {
+                    0 => 0.0,
+                    every => f64::from(time_stamp_bits()) / f64::from(every),
+                };
+                f64::from(sync_bits()) + stamps
+            }
         }
     }
 
@@ -138,7 +150,7 @@ impl LoadModel {
     pub fn bits_per_cycle(&self, period: f64) -> f64 {
         let per_drive = f64::from(self.bits_per_drive()) + self.side_query_bits_per_drive();
         let shared = if self.drives > 0 {
-            f64::from(self.bits_per_cycle_shared())
+            self.bits_per_cycle_shared()
         } else {
             0.0
         };
@@ -177,6 +189,11 @@ impl LoadModel {
 /// Worst-case bits of a SYNC (no data).
 fn sync_bits() -> u32 {
     bits_on_wire(&SyncObject.to_frame())
+}
+
+/// Worst-case bits of a Time Stamp (4 bytes).
+fn time_stamp_bits() -> u32 {
+    bits_on_wire(&TimeStamp { micros: 0 }.to_frame())
 }
 
 /// Worst-case bits of one drive's PDOs in one cycle: the receive PDO with its PT point (4

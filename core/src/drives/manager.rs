@@ -277,7 +277,6 @@ impl DriveManager {
             cycle: self.cycle,
             error: None,
         };
-        self.heartbeat(now, &mut out);
         match self.phase {
             Phase::Idle => {}
             Phase::Waking(None) => {
@@ -309,6 +308,9 @@ impl DriveManager {
             }
             Phase::Stopped | Phase::Faulted => self.poll(&mut out),
         }
+        // Last: the controller's transmit FIFO sends in queue order, and the SYNC opens the
+        // cycle at its instant.
+        self.heartbeat(now, &mut out);
         if let Some(error) = out.error {
             self.raise(DriveFault::Bus(match error {
                 TxError::BusOff => BusFault::BusOff,
@@ -616,7 +618,7 @@ impl DriveManager {
             Streaming::Interpreter => self.stream(streamed, out),
             Streaming::Pdo => {
                 self.last_sync = Some(now);
-                self.stream_pdo(streamed, out);
+                self.stream_pdo(now, streamed, out);
             }
         }
     }

@@ -4,7 +4,7 @@
 use armgate_protocol::can::NodeId;
 
 use super::load::LoadModel;
-use super::streaming::{MAX_PDO_LEAD, PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule};
+use super::streaming::{MAX_PDO_LEAD, PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule, TIME_STAMP_EVERY};
 use crate::config::ValidRobot;
 
 /// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
@@ -158,6 +158,8 @@ pub(crate) struct Timing {
     pub pdo_lead_quiet: u32,
     /// The most the PDO lead may be raised.
     pub pdo_lead_raise: u16,
+    /// PDO schedule: cycles between two Time Stamps (0: none).
+    pub time_stamp_every: u16,
 }
 
 impl Timing {
@@ -227,6 +229,7 @@ impl Timing {
             group,
             pdo_lead_quiet: cycles(settings.pdo_lead_quiet)?.max(1),
             pdo_lead_raise,
+            time_stamp_every: config.drives.time_stamp_every.unwrap_or(TIME_STAMP_EVERY),
         })
     }
 }

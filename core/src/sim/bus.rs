@@ -1,7 +1,9 @@
 //! A simulated CAN bus with simulated drives on it.
 //!
 //! Frames from every node compete by arbitration: when the bus falls idle, the ready frame
-//! with the lowest identifier goes next (equal identifiers in the order queued). A frame
+//! with the lowest identifier goes next (equal identifiers in the order queued). The
+//! controller sends its own frames in the order it queued them: only the oldest competes, as
+//! with the firmware's FDCAN transmit FIFO (`TxBufferMode::Fifo`) and a SocketCAN socket. A frame
 //! occupies the bus for its exact length — stuff bits of its actual content and the
 //! interframe space included — at the configured bit rate, and is delivered to every other
 //! node when it ends. The bus owns the drives and advances them in time with itself; its
@@ -295,11 +297,18 @@ impl VirtualBus {
     /// Starts the ready frame that wins arbitration, if any.
     fn arbitrate(&mut self) {
         let now = self.now;
+        let controller_head = self
+            .pending
+            .iter()
+            .filter(|p| p.from == Sender::Controller)
+            .map(|p| p.order)
+            .min();
         let winner = self
             .pending
             .iter()
             .enumerate()
             .filter(|(_, p)| p.ready <= now)
+            .filter(|(_, p)| p.from != Sender::Controller || Some(p.order) == controller_head)
             .min_by_key(|(_, p)| (p.frame.id(), p.order))
             .map(|(i, _)| i);
         if let Some(index) = winner {

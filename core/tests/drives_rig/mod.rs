@@ -1,6 +1,6 @@
 //! The core's control cycle on a virtual bus with simulated Whistles (the firmware's
 //! `sim-drives` build without the network), for the drive tests and the drive examples.
-#![allow(dead_code, clippy::unwrap_used, clippy::panic)]
+#![allow(dead_code, clippy::unwrap_used, clippy::panic, clippy::approx_constant)]
 
 pub mod frames;
 
@@ -16,6 +16,9 @@ use armgate_core::motion::{Controller, StepOutput};
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Command, Request};
+
+/// A ready pose of ranger-mk1 (rad): the arm raised, away from its joint limits.
+pub const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
 
 /// A client request datagram with `command` and no values.
 pub fn request(command: Command) -> Datagram<()> {

@@ -8,7 +8,8 @@
 //!
 //! Two streaming schedules use them: the interpreter schedule (RPDO2/TPDO2, [`interpreter`])
 //! and the PDO schedule ([`SyncObject`], [`PtPoint`] in RPDO3, [`PtFeedback`] in TPDO3, mapped
-//! at start-up by the SDO writes of [`streaming_mapping`]).
+//! at start-up by the SDO writes of [`streaming_mapping`], and [`TimeStamp`] to lock the drives'
+//! clocks).
 //!
 //! ```
 //! use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
@@ -35,6 +36,7 @@ mod nmt;
 pub mod pdo;
 mod sdo;
 mod sync;
+mod time_stamp;
 
 pub use cob::{Function, NodeId, NodeMessage};
 pub use emcy::Emcy;
@@ -51,3 +53,4 @@ pub use pdo::{PtFeedback, PtPoint};
 pub use sdo::abort as sdo_abort;
 pub use sdo::{ConsumerHeartbeat, Object, SdoRequest, SdoResponse, SdoValue};
 pub use sync::{SYNC_ID, SyncObject};
+pub use time_stamp::{TIME_STAMP_ID, TimeStamp};

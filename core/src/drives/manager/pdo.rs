@@ -3,7 +3,7 @@
 //! feedback, and the checks that stop the arm (a missing transmit PDO, a late SYNC).
 
 use armgate_protocol::can::{
-    Nmt, NmtCommand, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject,
+    Nmt, NmtCommand, NodeId, NodeMessage, PtFeedback, PtPoint, SyncObject, TimeStamp,
 };
 use heapless::Vec;
 
@@ -128,17 +128,23 @@ impl DriveManager {
     }
 
     /// One PDO streaming cycle: the SYNC, then every running drive's point(s) towards its
-    /// target in receive PDOs, and now and then its temperature query; drives not yet running
-    /// (a stop during the start) get a position query instead. A drive whose transmit PDO has
-    /// been missing too long is faulted.
-    pub(super) fn stream_pdo<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
+    /// target in receive PDOs, then now and then a drive's temperature query and a Time
+    /// Stamp; drives not yet running (a stop during the start) get a position query instead.
+    /// The controller sends in queue order, so every drive's point lands at the same offset
+    /// after the SYNC in every cycle (one more or one less only while a point is inserted or
+    /// skipped): with drive clocks locked to the controller's, where a drive's segment
+    /// boundary falls against its point never changes.
+    pub(super) fn stream_pdo<B: CanBus>(
+        &mut self,
+        now: f64,
+        streamed: u32,
+        out: &mut Outbox<'_, B>,
+    ) {
         out.send(&SyncObject.to_frame());
         let change = self.lead_change();
-        let schedule = self.schedule;
         let stats = &mut self.stats;
-        for (index, joint) in self.joints.iter_mut().enumerate() {
+        for joint in self.joints.iter_mut() {
             let Joint::Real(drive) = joint else { continue };
-            let running = drive.target.is_some() && drive.pdo.is_some();
             if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
                 let points = stream.points_with(target, change);
                 for &position in &points {
@@ -152,11 +158,27 @@ impl DriveManager {
                     n => add(&mut stats.points_inserted, n - 1),
                 }
             }
+        }
+        let schedule = self.schedule;
+        for (index, joint) in self.joints.iter_mut().enumerate() {
+            let Joint::Real(drive) = joint else { continue };
+            let running = drive.target.is_some() && drive.pdo.is_some();
             let query = match schedule.query(streamed, index, false) {
                 Query::Position if running => continue,
                 query => query,
             };
             out.request(drive, &Outgoing::Interpreter(query.request()));
+        }
+        // After the SYNC it refers to, and after the points, which it would otherwise delay
+        // every `time_stamp_every` cycles.
+        let every = u32::from(self.timing.time_stamp_every);
+        if every != 0 && streamed.is_multiple_of(every) {
+            out.send(
+                &TimeStamp {
+                    micros: micros(now),
+                }
+                .to_frame(),
+            );
         }
     }
 
@@ -215,4 +237,12 @@ impl DriveManager {
             _ => {}
         }
     }
+}
+
+/// The controller's clock for a Time Stamp: `now` (s) in microseconds, wrapping at 2³² as the
+/// drives' motion clocks do. The SYNC goes out first in the cycle, so `now` is its time up to
+/// a frame in transmission, jitter the drives' filter smooths.
+fn micros(now: f64) -> u32 {
+    // Saturating in the float-to-integer cast (0 for NaN), then wrapping by truncation.
+    (libm::round(now * 1e6) as u64) as u32
 }

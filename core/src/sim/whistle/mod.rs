@@ -13,8 +13,10 @@
 //! spec §6.5), and the drive reports it with an emergency. [`WhistleFaults`] injects faults.
 //!
 //! Time is in nanoseconds on the bus's clock; the drive samples its position loop every
-//! 360 µs of its own clock, which may run fast or slow by a few ppm.
+//! 360 µs of its own clock, which may run fast or slow by a few ppm, unless SYNC and Time
+//! Stamp pairs lock it to the controller's ([`motion_clock`]).
 
+pub mod motion_clock;
 pub mod pdo;
 pub mod pt_table;
 pub mod servo;
@@ -23,10 +25,11 @@ use armgate_protocol::can::interpreter::{Mnemonic, Reply, Request, Value};
 use armgate_protocol::can::{
     CanFrame, ConsumerHeartbeat, Emcy, Function, Heartbeat, Nmt, NmtCommand, NmtState, NodeId,
     NodeMessage, Object, SYNC_ID, SYNCHRONOUS, SdoRequest, SdoResponse, SdoValue, SyncObject,
-    sdo_abort,
+    TIME_STAMP_ID, TimeStamp, sdo_abort,
 };
 use heapless::Deque;
 
+use self::motion_clock::MotionClock;
 use self::pdo::{PdoObjects, RpdoContent, Sampled, tpdo_payload};
 use self::pt_table::{Latency, PtTable, PushError, WriteError};
 use self::servo::Servo;
@@ -79,7 +82,7 @@ pub struct WhistleConfig {
     pub lag: f64,
     /// Time the interpreter takes per command (s).
     pub interpreter_time: f64,
-    /// How fast the drive's clock runs (ppm; positive = fast).
+    /// How fast the drive's oscillator runs (ppm; positive = fast), before any lock.
     pub clock_error_ppm: f64,
     /// Where the drive's first sample falls (s, within one sample time).
     pub sample_phase: f64,
@@ -185,6 +188,8 @@ pub struct SimWhistle {
     sample_ns: f64,
     /// Where sample counting restarted (sample, ns) after a clock change.
     epoch: (u64, f64),
+    /// The motion clock and its lock to the controller's.
+    clock: MotionClock,
     /// Samples done since power-up.
     samples: u64,
     /// The time of the last event handled (ns).
@@ -234,6 +239,7 @@ impl SimWhistle {
             config,
             sample_ns,
             epoch: (0, config.sample_phase * 1e9),
+            clock: MotionClock::default(),
             samples: 0,
             now: 0,
             nmt: NmtState::PreOperational,
@@ -304,16 +310,33 @@ impl SimWhistle {
         self.group
     }
 
-    /// How fast the drive's clock runs (ppm; positive = fast).
+    /// How fast the drive's oscillator runs (ppm; positive = fast), before any lock.
     pub fn clock_error_ppm(&self) -> f64 {
         self.config.clock_error_ppm
     }
 
-    /// Makes the drive's clock run `ppm` fast (negative: slow) from now on.
+    /// Makes the drive's oscillator run `ppm` fast (negative: slow) from now on.
     pub fn set_clock_error_ppm(&mut self, ppm: f64) {
-        self.epoch = (self.samples, self.sample_ns_at(self.samples));
         self.config.clock_error_ppm = ppm;
-        self.sample_ns = sample_ns(ppm);
+        self.retime();
+    }
+
+    /// The motion clock: the lock's correction and the pairs it took.
+    pub fn motion_clock(&self) -> &MotionClock {
+        &self.clock
+    }
+
+    /// Samples from the last one on at the oscillator's rate with the lock's correction.
+    fn retime(&mut self) {
+        self.epoch = (self.samples, self.sample_ns_at(self.samples));
+        self.sample_ns = sample_ns(self.config.clock_error_ppm + self.clock.correction_ppm());
+    }
+
+    /// The motion clock's oscillator count now (µs): 360 µs a sample, fractions included.
+    fn oscillator_us(&self) -> f64 {
+        let (sample, at) = self.epoch;
+        let samples = sample as f64 + (self.now as f64 - at) / self.sample_ns;
+        samples * SAMPLE_TIME * 1e6
     }
 
     /// What happened so far.
@@ -385,8 +408,23 @@ impl SimWhistle {
             return;
         }
         if frame.id() == SYNC_ID {
-            if SyncObject::parse(frame).is_ok() && self.nmt == NmtState::Operational {
-                self.sync();
+            if SyncObject::parse(frame).is_ok() && self.nmt != NmtState::Stopped {
+                // SYNC and Time Stamp are served in pre-operational too (CiA 301).
+                self.clock.latch(self.oscillator_us());
+                if self.nmt == NmtState::Operational {
+                    self.sync();
+                }
+            }
+            return;
+        }
+        if frame.id() == TIME_STAMP_ID {
+            let stamp = TimeStamp::parse(frame)
+                .ok()
+                .filter(|_| self.nmt != NmtState::Stopped);
+            if let Some(stamp) = stamp
+                && self.clock.stamp(stamp.micros).is_some()
+            {
+                self.retime();
             }
             return;
         }
