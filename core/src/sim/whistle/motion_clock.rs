@@ -112,8 +112,9 @@ impl MotionClock {
 
 /// A clock value (µs) as the drive's 32-bit counter holds it.
 fn wrap(us: f64) -> u32 {
-    // Floor to whole microseconds; `rem_euclid` keeps it in 0..2³², so the cast is exact.
-    libm::floor(us).rem_euclid(4_294_967_296.0) as u32
+    // Floor to whole microseconds (saturating in the float cast), then modulo 2³² by the
+    // integer cast's truncation.
+    libm::floor(us) as i64 as u32
 }
 
 #[cfg(test)]
