@@ -550,10 +550,10 @@ impl DriveManager {
                 out.send(&begin.to_frame(timing.group));
             }
             // A request repeated in this start (its answer lost) is the bus losing frames
-            // before any point is streamed: the streams begin one point higher, as after a loss
-            // while streaming, instead of learning it from the first lost point, which at the
-            // least lead underflows its drive before any report can show it. The ring was
-            // filled for the lower lead; the streams make up the point in their first cycles.
+            // before any point is streamed: the streams begin `START_RAISE` points higher,
+            // instead of learning it from the first lost point, which at the least lead
+            // underflows its drive before any report can show it. The ring was filled for the
+            // lower lead; the streams make up the points in their first cycles.
             self.lead_policy.restart();
             let pdo_lead = self.pdo_lead_now();
             let cycle = out.cycle;
