@@ -423,22 +423,7 @@ fn a_minute_with_lost_frames_and_clock_errors() {
     // After the start: its steps wait for every answer and do not repeat a lost request (a
     // real CAN controller repeats a frame that was not received).
     rig.bus_mut().set_frame_loss(0.01, 11);
-    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
-    let home = config.home();
-    let cycles = (60.0 / rig.period) as usize;
-    for k in 0..cycles {
-        if !rig.ctrl().is_moving() {
-            let goal: &[f64] = if k % 2 == 0 { &MK1_READY } else { &home };
-            rig.ctrl_mut().move_joints(goal, 0.0).unwrap();
-        }
-        rig.tick();
-        assert!(
-            rig.manager().is_operational(),
-            "{:?} after {k}, lost {}",
-            rig.manager().fault(),
-            rig.bus().stats().frames_lost
-        );
-    }
+    rig.shuttle(60.0);
     assert!(rig.bus().stats().frames_lost > 1000);
     assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
 }

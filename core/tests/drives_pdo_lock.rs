@@ -13,10 +13,9 @@ mod drives_rig;
 
 use armgate_core::config::{Streaming, ValidRobot};
 use armgate_core::drives::DriveSettings;
-use armgate_core::motion::Mode;
 use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::{SYNC_ID, TIME_STAMP_ID, TimeStamp};
-use drives_rig::{MK1_READY, Rig, robot};
+use drives_rig::{Rig, robot};
 
 /// ranger-mk1 on the PDO schedule at 231.5 Hz (500 kbit/s), Time Stamps as `every` says
 /// (`None`: the default).
@@ -28,24 +27,6 @@ fn mk1(every: Option<u16>) -> ValidRobot {
             config.drives.time_stamp_every = every;
         })
         .unwrap()
-}
-
-/// Moves the arm back and forth for `seconds` after the start.
-fn run(rig: &mut Rig, seconds: f64) {
-    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
-    let home = rig.config.home();
-    for k in 0..(seconds / rig.period) as usize {
-        if !rig.ctrl().is_moving() {
-            let goal: &[f64] = if k % 2 == 0 { &MK1_READY } else { &home };
-            rig.ctrl_mut().move_joints(goal, 0.0).unwrap();
-        }
-        rig.tick();
-        assert!(
-            rig.manager().is_operational(),
-            "{:?}",
-            rig.manager().fault()
-        );
-    }
 }
 
 /// The drives' write → reached latency, in set-points at most.
@@ -100,7 +81,7 @@ fn a_fast_drive_slips_without_time_stamps_and_is_locked_with_them() {
         let mut bus = VirtualBus::for_robot(&config);
         bus.drive_mut(103).unwrap().set_clock_error_ppm(500.0);
         let mut rig = Rig::started(&config, &DriveSettings::default(), bus);
-        run(&mut rig, 20.0);
+        rig.shuttle(20.0);
         let stats = rig.manager().stats();
         assert_eq!(stats.points_inserted > 0, slips, "{every:?}: {stats:?}");
         assert!(rig.bus().drives().all(|d| d.stats().underflows == 0));
@@ -138,7 +119,7 @@ fn locked_drives_reach_every_point_under_two_set_points_whatever_their_phase() {
         let mut bus = VirtualBus::new(config.drives.can_bitrate, drives.collect::<Vec<_>>());
         bus.spread_clock_errors(100.0, draw);
         let mut rig = Rig::started(&config, &DriveSettings::default(), bus);
-        run(&mut rig, 15.0);
+        rig.shuttle(15.0);
         let stats = rig.manager().stats();
         assert_eq!(
             (stats.points_skipped, stats.points_inserted),

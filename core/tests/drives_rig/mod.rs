@@ -12,7 +12,7 @@ use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveManager, DriveSettings, DriveState, TxError};
 use armgate_core::kinematics::Joints;
-use armgate_core::motion::{Controller, StepOutput};
+use armgate_core::motion::{Controller, Mode, StepOutput};
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{Command, Request};
@@ -134,6 +134,26 @@ impl Rig {
         }
         assert!(done(self), "condition not reached in {max} ticks");
         max
+    }
+
+    /// Moves ranger-mk1 back and forth between [`MK1_READY`] and home in joint mode for
+    /// `seconds`, the drives operational throughout.
+    pub fn shuttle(&mut self, seconds: f64) {
+        self.ctrl_mut().set_mode(Mode::Joint).unwrap();
+        let home = self.config.home();
+        for k in 0..(seconds / self.period) as usize {
+            if !self.ctrl().is_moving() {
+                let goal: &[f64] = if k % 2 == 0 { &MK1_READY } else { &home };
+                self.ctrl_mut().move_joints(goal, 0.0).unwrap();
+            }
+            self.tick();
+            assert!(
+                self.manager().is_operational(),
+                "{:?} after {k}, lost {}",
+                self.manager().fault(),
+                self.bus().stats().frames_lost
+            );
+        }
     }
 
     /// Starts the drives and ticks until they stream; the ticks it took.
