@@ -235,6 +235,7 @@ def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
         _can(0x3E5, struct.pack("<iHH", 12345, 5, 2)),                   # 12 TPDO3 feedback
         _can(0x0E5, bytes([0x00, 0xFF, 0x81, 0x5C, 0x65, 0x04, 0, 0])),  # 13 EMCY PDO not mapped
         _can(0x665, bytes([0x23, 0x02, 0x16, 0x01, 0x20, 0x00, 0x02, 0x20])),  # 14 map 0x2002
+        _can(0x100, struct.pack("<I", 4_000_000_123)),                   # 15 Time Stamp
     ]
     path = tmp_path_factory.mktemp("crafted") / "crafted.pcapng"
     path.write_bytes(_pcapng(packets))
@@ -281,3 +282,5 @@ def test_pdo_streaming_frames_are_decoded(tshark: str, crafted: dict) -> None:
                "armgate_can.feedback.tail") == ["12345", "5", "2"]
     assert "PDO not mapped" in row(13, "armgate_can.emcy.meaning")[0]
     assert row(14, "armgate_can.sdo.object", "armgate_can.meaning") == ["0x1602", "RPDO3 mapping"]
+    assert row(15, "armgate_can.service", "armgate_can.time_stamp.micros") == [
+        "Time Stamp", "4000000123"]

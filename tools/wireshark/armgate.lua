@@ -7,8 +7,8 @@
 --    commands (RPDO2, 0x300 + node) and replies (TPDO2, 0x280 + node) with PT writes called out,
 --    NMT, SYNC, EMCY with the meanings the drive manager gives them (ER3x), heartbeats, expedited
 --    SDO (the PDO mapping objects named); the PDO schedule's PT point (RPDO3, 0x400 + node) and
---    feedback (TPDO3, 0x380 + node: position, PT head and tail pointers); other PDOs are shown as
---    raw bytes.
+--    feedback (TPDO3, 0x380 + node: position, PT head and tail pointers), and the Time Stamp
+--    (0x100: the controller's µs at the last SYNC); other PDOs are shown as raw bytes.
 --
 -- Install: copy this file into Wireshark's personal Lua plugins folder (Help > About Wireshark >
 -- Folders > Personal Lua Plugins; on Linux ~/.local/lib/wireshark/plugins/), or run
@@ -391,6 +391,7 @@ local c = {
     nmt_target = ProtoField.uint8("armgate_can.nmt.node", "NMT node (0 = all)"),
     hb_state = ProtoField.uint8("armgate_can.heartbeat.state", "Heartbeat state", base.HEX, nmt_states, 0x7F),
     sync_counter = ProtoField.uint8("armgate_can.sync.counter", "SYNC counter"),
+    time_stamp = ProtoField.uint32("armgate_can.time_stamp.micros", "Controller clock at the last SYNC (µs)"),
     emcy_code = ProtoField.uint16("armgate_can.emcy.code", "EMCY error code", base.HEX),
     emcy_register = ProtoField.uint8("armgate_can.emcy.register", "Error register", base.HEX),
     emcy_meaning = ProtoField.string("armgate_can.emcy.meaning", "EMCY meaning"),
@@ -536,6 +537,7 @@ local function service_of(id)
     local fn, node = bit.band(id, 0x780), bit.band(id, 0x7F)
     if id == 0x000 then return "NMT", 0 end
     if id == 0x080 then return "SYNC", 0 end
+    if id == 0x100 then return "Time Stamp", 0 end
     if node == 0 then return nil, 0 end
     local services = {
         [0x080] = "EMCY", [0x180] = "TPDO1", [0x200] = "RPDO1", [0x280] = "TPDO2 (interpreter reply)",
@@ -571,6 +573,13 @@ function can.dissector(tvb, pinfo, root)
     elseif service == "SYNC" then
         if tvb:len() >= 1 then tree:add(c.sync_counter, tvb(0, 1)) end
         info = "SYNC"
+    elseif service == "Time Stamp" then
+        if tvb:len() == 4 then
+            tree:add_le(c.time_stamp, tvb(0, 4))
+            info = string.format("Time Stamp %d µs (the last SYNC)", tvb(0, 4):le_uint())
+        else
+            info = "Time Stamp, not 4 bytes"
+        end
     elseif fn == 0x080 then
         info = dissect_emcy(tvb, tree, node)
     elseif fn == 0x300 then

@@ -17,7 +17,9 @@
 //! * a pair more than [`REJECT_US`] off is ignored (a SYNC lost, so the Time Stamp met an
 //!   older latch), as is a pair more than [`STALE_US`] after the one before (the filter starts
 //!   over, with the rate it had);
-//! * the correction is at most ±[`MAX_CORRECTION_PPM`].
+//! * the correction is at most ±[`MAX_CORRECTION_PPM`];
+//! * a stamp may come any time before the next SYNC (the manual's limit is not in the copy
+//!   found).
 
 /// Pairs over which the lock's error decays by about e (a double pole at `1 − 1/N`).
 const POLE_PAIRS: f64 = 20.0;
