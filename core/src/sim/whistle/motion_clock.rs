@@ -15,8 +15,9 @@
 //! * the first pair sets the clock (an offset: the samples do not jump), later ones steer its
 //!   rate through a proportional-integral filter whose error decays within about 200 pairs;
 //! * a pair more than [`REJECT_US`] off is ignored (a SYNC lost, so the Time Stamp met an
-//!   older latch), as is a pair more than [`STALE_US`] after the one before (the filter starts
-//!   over, with the rate it had);
+//!   older latch), unless [`REANCHOR_AFTER`] in a row are (the clock was set from a wrong pair:
+//!   it is set again), and a pair more than [`STALE_US`] after the one before sets the clock
+//!   again too, the filter keeping the rate it had;
 //! * the correction is at most ±[`MAX_CORRECTION_PPM`];
 //! * a stamp may come any time before the next SYNC (the manual's limit is not in the copy
 //!   found).
@@ -26,6 +27,9 @@ const POLE_PAIRS: f64 = 20.0;
 
 /// A pair whose error exceeds this (µs) after the first is ignored.
 pub const REJECT_US: i32 = 500;
+
+/// This many pairs ignored in a row: the next one sets the clock again.
+pub const REANCHOR_AFTER: u8 = 8;
 
 /// A pair this long (µs) after the one before starts the filter over.
 pub const STALE_US: u32 = 1_000_000;
@@ -49,6 +53,8 @@ pub struct MotionClock {
     last_stamp: Option<u32>,
     /// Pairs taken and ignored.
     pairs: (u32, u32),
+    /// Pairs ignored since the last one taken.
+    ignored_in_row: u8,
 }
 
 impl MotionClock {
@@ -74,19 +80,25 @@ impl MotionClock {
         // Two's complement of the wrapped difference: the signed error.
         let error = latched.wrapping_sub(master_us) as i32;
         let interval = self.last_stamp.map(|last| master_us.wrapping_sub(last));
+        let far_off = error.unsigned_abs() > REJECT_US.unsigned_abs();
+        let anchored = self.ignored_in_row < REANCHOR_AFTER;
         match interval {
-            Some(interval) if interval > 0 && interval < STALE_US => {
-                if error.unsigned_abs() > REJECT_US.unsigned_abs() {
+            Some(interval) if interval > 0 && interval < STALE_US && anchored => {
+                if far_off {
                     self.pairs.1 = self.pairs.1.saturating_add(1);
+                    self.ignored_in_row = self.ignored_in_row.saturating_add(1);
                     return None;
                 }
+                self.ignored_in_row = 0;
                 self.pairs.0 = self.pairs.0.saturating_add(1);
                 self.last_stamp = Some(master_us);
                 Some(self.steer(f64::from(error), f64::from(interval)))
             }
             _ => {
-                // The first pair (or the first after a long gap): set the clock.
+                // The first pair (or the first after a long gap, or after many far off): set
+                // the clock.
                 self.offset_us -= f64::from(error);
+                self.ignored_in_row = 0;
                 self.latched = Some(master_us);
                 self.last_stamp = Some(master_us);
                 self.pairs.0 = self.pairs.0.saturating_add(1);
@@ -176,5 +188,28 @@ mod tests {
         assert_eq!(clock.stamp(4320), None);
         assert_eq!(clock.pairs(), (1, 1));
         assert_eq!(clock.correction_ppm(), 0.0);
+    }
+
+    #[test]
+    fn a_clock_set_from_a_wrong_pair_is_set_again() {
+        let mut clock = MotionClock::default();
+        // The first stamp met a latch one period old: the clock is set 4320 µs ahead.
+        clock.latch(0.0);
+        clock.stamp(4320);
+        let mut oscillator = 4320.0;
+        let mut master = 4320u32;
+        let mut errors = Vec::new();
+        for _ in 0..12 {
+            oscillator += 8640.0;
+            master += 8640;
+            clock.latch(oscillator);
+            errors.push(clock.latched.unwrap().wrapping_sub(master) as i32);
+            clock.stamp(master);
+        }
+        // Ignored, then set again after REANCHOR_AFTER: on time from then on.
+        let reanchor = usize::from(REANCHOR_AFTER);
+        assert!(errors[..=reanchor].iter().all(|&e| e == 4320), "{errors:?}");
+        assert!(errors[reanchor + 1..].iter().all(|&e| e == 0), "{errors:?}");
+        assert_eq!(clock.pairs().1, u32::from(REANCHOR_AFTER));
     }
 }
