@@ -327,9 +327,15 @@ impl SimWhistle {
     }
 
     /// Samples from the last one on at the oscillator's rate with the lock's correction.
+    /// The part of the sample under way stays done: the clock is continuous and the next
+    /// sample never falls before now.
     fn retime(&mut self) {
-        self.epoch = (self.samples, self.sample_ns_at(self.samples));
+        // Before the first sample (power-up) the sample phase stands.
+        let last = self.sample_ns_at(self.samples);
+        let now = (self.now as f64).max(last);
+        let done = ((now - last) / self.sample_ns).min(1.0);
         self.sample_ns = sample_ns(self.config.clock_error_ppm + self.clock.correction_ppm());
+        self.epoch = (self.samples, now - done * self.sample_ns);
     }
 
     /// The motion clock's oscillator count now (µs): 360 µs a sample, fractions included.
