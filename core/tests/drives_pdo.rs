@@ -93,11 +93,7 @@ fn the_robot_file_sets_the_lead() {
     let config = mk1_pdo(false)
         .edit(|config| config.drives.pdo_lead = Some(5))
         .unwrap();
-    let mut rig = Rig::started(
-        &config,
-        &DriveSettings::default(),
-        VirtualBus::for_robot(&config),
-    );
+    let mut rig = Rig::running(&config);
     rig.ticks(50);
     let leads: Vec<u32> = (0..6).filter_map(|j| rig.manager().lead(j)).collect();
     assert!(leads.iter().all(|l| (4..=5).contains(l)), "{leads:?}");
@@ -629,11 +625,7 @@ fn the_lead_rises_on_loss_and_falls_after_quiet_on_every_drive_together() {
 #[test]
 fn a_clean_bus_keeps_the_robot_files_lead() {
     let config = mk1_at_lead(None);
-    let mut rig = Rig::started(
-        &config,
-        &DriveSettings::default(),
-        VirtualBus::for_robot(&config),
-    );
+    let mut rig = Rig::running(&config);
     rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
     rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
     rig.until(3000, |r| !r.ctrl().is_moving());
@@ -652,11 +644,7 @@ fn the_robot_file_bounds_or_turns_off_the_raise() {
     let config = mk1_at_lead(Some(4))
         .edit(|config| config.drives.pdo_lead_raise = Some(0))
         .unwrap();
-    let mut rig = Rig::started(
-        &config,
-        &DriveSettings::default(),
-        VirtualBus::for_robot(&config),
-    );
+    let mut rig = Rig::running(&config);
     rig.bus_mut().set_frame_loss(0.01, 5);
     rig.ticks(500);
     assert!(rig.manager().stats().points_lost > 0);
@@ -670,10 +658,6 @@ fn the_robot_file_bounds_or_turns_off_the_raise() {
     assert!(refused.contains("drives.pdo_lead_raise"), "{refused}");
     // Without the key the default raise stops at 8.
     let config = mk1_at_lead(Some(7));
-    let rig = Rig::started(
-        &config,
-        &DriveSettings::default(),
-        VirtualBus::for_robot(&config),
-    );
+    let rig = Rig::running(&config);
     assert_eq!(rig.manager().pdo_lead_now(), 7);
 }

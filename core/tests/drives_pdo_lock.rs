@@ -39,9 +39,7 @@ fn latency(rig: &Rig) -> f64 {
 
 #[test]
 fn a_time_stamp_follows_every_second_sync_with_the_controllers_clock() {
-    let mut rig = Rig::started(&mk1(None), &DriveSettings::default(), {
-        VirtualBus::for_robot(&mk1(None))
-    });
+    let mut rig = Rig::running(&mk1(None));
     let mut stamps = Vec::new();
     for _ in 0..6 {
         rig.tick();
@@ -64,9 +62,7 @@ fn a_time_stamp_follows_every_second_sync_with_the_controllers_clock() {
         assert!(drive.motion_clock().pairs().0 > 10);
     }
     // None with `time_stamp_every = 0`.
-    let mut off = Rig::started(&mk1(Some(0)), &DriveSettings::default(), {
-        VirtualBus::for_robot(&mk1(Some(0)))
-    });
+    let mut off = Rig::running(&mk1(Some(0)));
     off.ticks(4);
     assert!(off.sent().iter().all(|f| f.id() != TIME_STAMP_ID));
 }

@@ -136,6 +136,15 @@ impl Rig {
         max
     }
 
+    /// [`started`](Self::started) with the default settings on the robot's own bus.
+    pub fn running(config: &ValidRobot) -> Self {
+        Self::started(
+            config,
+            &DriveSettings::default(),
+            VirtualBus::for_robot(config),
+        )
+    }
+
     /// Moves ranger-mk1 back and forth between [`MK1_READY`] and home in joint mode for
     /// `seconds`, the drives operational throughout.
     pub fn shuttle(&mut self, seconds: f64) {

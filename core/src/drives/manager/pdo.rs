@@ -239,9 +239,10 @@ impl DriveManager {
     }
 }
 
-/// The controller's clock for a Time Stamp: `now` (s) in microseconds, wrapping at 2³² as the
-/// drives' motion clocks do. The SYNC goes out first in the cycle, so `now` is its time up to
-/// a frame in transmission, jitter the drives' filter smooths.
+/// The controller's clock for a Time Stamp: `now` (s), the tick's scheduled time, in
+/// microseconds, wrapping at 2³² as the drives' motion clocks do. The SYNC leaves after the
+/// tick's receive half and the controller's step, and after any frame already on the wire:
+/// a constant part the first pair takes out, and jitter the drives' filter smooths.
 fn micros(now: f64) -> u32 {
     // Saturating in the float-to-integer cast (0 for NaN), then wrapping by truncation.
     (libm::round(now * 1e6) as u64) as u32

@@ -326,9 +326,9 @@ impl SimWhistle {
         &self.clock
     }
 
-    /// Samples from the last one on at the oscillator's rate with the lock's correction.
-    /// The part of the sample under way stays done: the clock is continuous and the next
-    /// sample never falls before now.
+    /// Samples on at the oscillator's rate with the lock's correction. The part of the sample
+    /// under way stays done: the clock is continuous and the next sample never falls before
+    /// now.
     fn retime(&mut self) {
         // Before the first sample (power-up) the sample phase stands.
         let last = self.sample_ns_at(self.samples);
@@ -340,9 +340,7 @@ impl SimWhistle {
 
     /// The motion clock's oscillator count now (µs): 360 µs a sample, fractions included.
     fn oscillator_us(&self) -> f64 {
-        let (sample, at) = self.epoch;
-        let samples = sample as f64 + (self.now as f64 - at) / self.sample_ns;
-        samples * SAMPLE_TIME * 1e6
+        self.samples_at(self.now as f64) * SAMPLE_TIME * 1e6
     }
 
     /// What happened so far.
@@ -381,6 +379,13 @@ impl SimWhistle {
     fn sample_ns_at(&self, k: u64) -> f64 {
         let (sample, at) = self.epoch;
         at + (k as f64 - sample as f64) * self.sample_ns
+    }
+
+    /// Samples counted at bus time `t` (ns), fractions included: the inverse of
+    /// [`Self::sample_ns_at`].
+    fn samples_at(&self, t: f64) -> f64 {
+        let (sample, at) = self.epoch;
+        sample as f64 + (t - at) / self.sample_ns
     }
 
     /// Runs the drive up to time `t` (ns).
