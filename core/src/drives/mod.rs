@@ -8,7 +8,8 @@
 //! * [`JointUnits`]: joint positions ↔ encoder counts.
 //! * [`DriveFault`]: why the drives stopped, with the client's `ER3x` text.
 //! * [`streaming`]: which frames each drive gets per cycle, and the PT flow control.
-//! * [`load`]: bus-load accounting and the fastest control period the bus carries.
+//! * [`DriveSettings::load_model`]: the bus load ([`crate::config::bus_load`]) with these
+//!   settings.
 //!
 //! docs/drives.md describes the cycle schedule, the state machine, the flow control, the
 //! faults and the measured bus figures.
@@ -19,7 +20,6 @@ mod emergency;
 mod fault;
 mod handler;
 mod link;
-pub mod load;
 mod manager;
 mod retry;
 mod settings;
@@ -32,7 +32,6 @@ pub use bus::{BusState, CanBus, TxError};
 pub use emergency::{DriveEmergency, REASON_UNDERFLOW};
 pub use fault::{BusFault, DriveFault};
 pub use manager::{DriveManager, DriveStats, LifecycleError, UNKNOWN_TEMPERATURE};
-pub(crate) use settings::whole_samples;
-pub use settings::{DriveSettings, POSITION_MODE, SAMPLE_TIME, SetupError};
+pub use settings::{DriveSettings, POSITION_MODE, SetupError};
 pub use state::{DriveState, STOP_HOLD_CYCLES};
 pub use units::JointUnits;

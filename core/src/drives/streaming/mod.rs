@@ -9,6 +9,6 @@ mod pt;
 mod schedule;
 
 pub use adaptive::{AdaptiveLead, LeadChange, PDO_LEAD_RAISE};
-pub use pdo::{MAX_PDO_LEAD, PDO_TARGET_LEAD, PdoStream, TIME_STAMP_EVERY};
+pub use pdo::PdoStream;
 pub use pt::{FILLED_POINTS, FlowError, PtStream, TARGET_LEAD};
 pub use schedule::{Query, Schedule};

@@ -34,7 +34,8 @@ use self::pdo::{PdoObjects, RpdoContent, Sampled, tpdo_payload};
 use self::pt_table::{Latency, PtTable, PushError, WriteError};
 use self::servo::Servo;
 use crate::config::JointConfig;
-use crate::drives::{DriveEmergency, JointUnits, POSITION_MODE, REASON_UNDERFLOW, SAMPLE_TIME};
+use crate::config::SAMPLE_TIME;
+use crate::drives::{DriveEmergency, JointUnits, POSITION_MODE, REASON_UNDERFLOW};
 
 /// Frames a drive can have waiting to be sent.
 const TX_QUEUE: usize = 16;
