@@ -18,7 +18,6 @@ mod bus;
 mod drive;
 mod emergency;
 mod fault;
-mod handler;
 mod link;
 mod manager;
 mod retry;

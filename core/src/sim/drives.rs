@@ -4,6 +4,7 @@ use armgate_protocol::client::{DriveStatus, Text};
 
 use super::arm::{IdealArm, RateLimitedArm};
 use crate::command::Drives;
+use crate::drives::LifecycleError;
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -75,12 +76,18 @@ impl SimulatedDrives {
 }
 
 impl Drives for SimulatedDrives {
-    fn start(&mut self) -> bool {
-        !core::mem::replace(&mut self.running, true)
+    fn start(&mut self) -> Result<(), LifecycleError> {
+        match core::mem::replace(&mut self.running, true) {
+            false => Ok(()),
+            true => Err(LifecycleError::Running),
+        }
     }
 
-    fn stop(&mut self) -> bool {
-        core::mem::replace(&mut self.running, false)
+    fn stop(&mut self) -> Result<(), LifecycleError> {
+        match core::mem::replace(&mut self.running, false) {
+            true => Ok(()),
+            false => Err(LifecycleError::NotRunning),
+        }
     }
 
     fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {

@@ -19,7 +19,10 @@ impl DriveManager {
         let stats = &mut self.stats;
         for (index, joint) in self.joints.iter_mut().enumerate() {
             let Joint::Real(drive) = joint else { continue };
-            let points = match (drive.target, drive.stream.as_mut().and_then(Stream::interpreter)) {
+            let points = match (
+                drive.target,
+                drive.stream.as_mut().and_then(Stream::interpreter),
+            ) {
                 (Some(target), Some(stream)) => stream.points(target),
                 _ => Vec::new(),
             };
@@ -44,10 +47,11 @@ impl DriveManager {
             let pacing = points.len() == 1;
             let query = schedule.query(streamed, index, pacing);
             out.request(drive, &Outgoing::Interpreter(query.request()));
-            if let (Query::ReadIndex, Some(stream)) = (query, drive.stream.as_mut().and_then(Stream::interpreter)) {
+            if let (Query::ReadIndex, Some(stream)) =
+                (query, drive.stream.as_mut().and_then(Stream::interpreter))
+            {
                 stream.asked();
             }
         }
     }
-
 }

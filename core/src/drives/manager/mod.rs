@@ -464,7 +464,6 @@ impl DriveManager {
         });
     }
 
-
     /// Takes a command, all joints or none: each drive's target and each pretend joint's
     /// position.
     fn accept(&mut self, command: Option<&Joints>) {
@@ -493,7 +492,6 @@ impl DriveManager {
         }
     }
 
-
     /// One streaming cycle on the schedule of this start (`streamed`: the cycle count the
     /// query schedule staggers by).
     fn stream<B: CanBus>(&mut self, now: f64, streamed: u32, out: &mut Outbox<'_, B>) {
@@ -505,7 +503,6 @@ impl DriveManager {
             }
         }
     }
-
 
     /// The end of a stop: `ST` to every drive, which then holds where its profile ended.
     /// The motors stay on (as in the seed, spec §6.4): an arm under gravity must not go limp.
@@ -530,5 +527,4 @@ impl DriveManager {
             }
         }
     }
-
 }

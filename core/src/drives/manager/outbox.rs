@@ -6,7 +6,6 @@ use crate::drives::bus::{CanBus, TxError};
 use crate::drives::drive::Drive;
 use crate::drives::startup::Outgoing;
 
-
 /// This cycle's sending: frames go to the bus, requests are counted on their drive's link,
 /// and the first failure is kept.
 pub(super) struct Outbox<'a, B: CanBus> {

@@ -26,7 +26,10 @@ impl DriveManager {
             let position_known = drive.step != StartStep::ReadPosition || drive.position.is_some();
             if answered && position_known {
                 let settle = timing.unit_mode_settle;
-                match drive.step.next(drive.unit_mode, settle, streaming, ring.filled) {
+                match drive
+                    .step
+                    .next(drive.unit_mode, settle, streaming, ring.filled)
+                {
                     Ok(next) => {
                         if next == StartStep::Configure(0) {
                             drive.target = drive.position;
