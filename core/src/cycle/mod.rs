@@ -37,7 +37,7 @@
 mod can_drives;
 mod counters;
 mod link;
-#[cfg(feature = "std")]
+#[cfg(all(feature = "std", feature = "sim"))]
 pub mod replay;
 mod side;
 mod tick;
