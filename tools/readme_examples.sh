@@ -5,9 +5,12 @@
 # drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
 # ranger-mk1's 3 cm/s).
 #
-# Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
-# terminal; tests cover it at the state level) and `armgate plot` (it needs the logs of a
-# `--log-dir` session; tests/plot_e2e.rs makes one and plots it).
+# The simulator's logs go to a temporary directory instead of logs/, and `armgate plot logs`
+# runs on them after the simulator has stopped (its logs are flushed then).
+#
+# Not run: `cargo test` (CI's own step), the nightly fuzzer (.ci/run runs it where a nightly
+# toolchain and cargo-fuzz are installed) and `armgate teleop` (it needs a terminal; tests cover
+# it at the state level).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -64,10 +67,30 @@ quick=$(examples "Quick start")
 client=$(examples 'Client: `armgate`')
 [[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
 
+# `armgate calibrate` is how its help names it (it runs armgate-calibrate).
+if ! armgate calibrate --help | grep -q '^Usage: armgate calibrate '; then
+    echo "FAILED: armgate calibrate --help does not say armgate calibrate" >&2
+    failures=$((failures + 1))
+fi
+
+# Every `Example:` of a subcommand's --help is one of the README's client examples, so it runs
+# below on the robot the README names.
+for sub in $(armgate --help | awk '/^Commands:/ { on = 1; next } /^$/ { on = 0 } on { print $1 }'); do
+    # calibrate needs measurements (its own tests run it), help has no --help.
+    [[ $sub == calibrate || $sub == help ]] && continue
+    example=$(armgate "$sub" --help | sed -n 's/^Example: //p')
+    [[ -z $example ]] && continue
+    if ! grep -qxF -- "$example" <<<"$(tr ';' '\n' <<<"$client" | sed 's/^ *//; s/ *$//')"; then
+        echo "FAILED: the example of \`armgate $sub --help\` is not among the README's: $example" >&2
+        failures=$((failures + 1))
+    fi
+done
+
 # The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
 # itself by the binary, so $! is the simulator).
 sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
 log=$shim/sim.log
+sim=${sim/--log-dir logs/--log-dir $shim/logs}
 echo "\$ $sim --listen 127.0.0.1:0"
 bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
 sim_pid=$!
@@ -96,13 +119,14 @@ while IFS= read -r line; do
 done <<<"$quick"
 
 # Client lines may hold several commands separated by `;`; each runs on its own.
+plots=()
 while IFS= read -r line; do
     IFS=';' read -ra commands <<<"$line"
     for cmd in "${commands[@]}"; do
         cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
         case $cmd in
             *teleop*) echo "skipped: $cmd (needs a terminal)" ;;
-            "armgate plot"*) echo "skipped: $cmd (needs a --log-dir session: tests/plot_e2e.rs runs one and plots it)" ;;
+            "armgate plot logs"*) plots+=("${cmd/plot logs/plot $shim/logs}") ;;
             *) run "$cmd" ;;
         esac
     done
@@ -147,6 +171,11 @@ if [[ $status -ne 0 ]]; then
     echo "FAILED: armgate-sim exited with $status on SIGTERM" >&2
     failures=$((failures + 1))
 fi
+
+# The plots of the session's logs, now complete.
+for cmd in "${plots[@]}"; do
+    run "$cmd"
+done
 
 if [[ $failures -ne 0 ]]; then
     echo "$failures README example(s) failed" >&2
