@@ -19,8 +19,8 @@
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::Cycle;
-use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::sim::replay::{self, Replay};
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;

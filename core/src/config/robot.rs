@@ -9,7 +9,7 @@ use super::error::{ConfigError, ConfigReason};
 use super::motion::{MotionConfig, ProfileKind};
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
-use crate::kinematics::Joints;
+use crate::math::Joints;
 
 /// Longest robot name, in bytes.
 pub const MAX_NAME_LEN: usize = 32;

@@ -37,8 +37,6 @@
 mod can_drives;
 mod counters;
 mod link;
-#[cfg(all(feature = "std", feature = "sim"))]
-pub mod replay;
 mod side;
 mod tick;
 

@@ -10,10 +10,10 @@
 mod chain;
 mod ik;
 mod jacobian;
-mod joints;
+
 mod velocity;
 
+pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
 pub use ik::{IkError, IkResult, IkSolution, diverges};
 pub use jacobian::Jacobian;
-pub use joints::Joints;
