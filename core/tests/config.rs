@@ -300,3 +300,32 @@ fn workspace_boxes_must_be_ordered() {
 fn syntax_errors_are_load_errors() {
     assert!(matches!(parse_toml("name = "), Err(LoadError::Syntax(_))));
 }
+
+/// A tick runs a few tracking solves: a robot file may not let each take 65,535 iterations.
+#[test]
+fn tracking_iterations_are_bounded() {
+    for (value, accepted) in [
+        (0, false),
+        (1, true),
+        (100, true),
+        (101, false),
+        (65535, false),
+    ] {
+        let text = mk1_text().replacen(
+            "[drives]",
+            &format!("[ik]\ntracking_iterations = {value}\n\n[drives]"),
+            1,
+        );
+        match parse_toml(&text) {
+            Ok(_) => assert!(accepted, "{value} accepted"),
+            Err(e) => {
+                assert!(!accepted, "{value} refused: {e}");
+                assert!(
+                    e.to_string()
+                        .contains("ik.tracking_iterations: must be 1 to 100"),
+                    "{e}"
+                );
+            }
+        }
+    }
+}

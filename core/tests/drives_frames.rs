@@ -521,6 +521,9 @@ fn start_sequence_frame_by_frame() {
     };
     bus.inbox.push_back(stranger.to_frame(node(55)));
     bus.inbox.push_back(stranger.to_frame(node(101)));
+    // A one-byte interpreter answer (TPDO2) from the drive: malformed, not of no interest.
+    bus.inbox
+        .push_back(armgate_protocol::can::CanFrame::new(0x280 + 101, &[0x50]).unwrap());
     // The drive answers UM = 2 (speed): motor off, position mode, settle, check, motor on.
     let mut log = Vec::new();
     let mut unit_mode = 2;
@@ -545,6 +548,7 @@ fn start_sequence_frame_by_frame() {
         }
     }
     assert_eq!(manager.stats().frames_ignored, 1);
+    assert_eq!(manager.stats().frames_malformed, 1);
     let flat: Vec<_> = log.iter().flatten().copied().collect();
     let expected = [
         (Mnemonic::UM, 0, None),

@@ -191,13 +191,17 @@ pub struct BlendConfig {
     pub joint: f64,
 }
 
+/// The most iterations one tracking solve may take (`ik.tracking_iterations`): a tick runs a
+/// few solves, and 65,535 each would not end within any control period.
+pub const MAX_TRACKING_ITERATIONS: u16 = 100;
+
 /// Inverse-kinematics tuning.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IkConfig {
     /// Convergence tolerance on position (m) and on orientation (rad).
     pub tolerance: f64,
-    /// Iteration limit of one tracking solve.
+    /// Iteration limit of one tracking solve, 1..=[`MAX_TRACKING_ITERATIONS`].
     pub tracking_iterations: u16,
     /// Total iteration budget of one global solve, over all restarts.
     pub global_iterations: u16,
@@ -402,8 +406,8 @@ impl ToolConfig {
 impl IkConfig {
     fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
         positive(self.tolerance).map_err(|r| ("ik.tolerance", r))?;
-        if self.tracking_iterations == 0 {
-            return Err(("ik.tracking_iterations", ConfigReason::NotPositive));
+        if !(1..=MAX_TRACKING_ITERATIONS).contains(&self.tracking_iterations) {
+            return Err(("ik.tracking_iterations", ConfigReason::TrackingIterations));
         }
         if self.global_iterations == 0 {
             return Err(("ik.global_iterations", ConfigReason::NotPositive));

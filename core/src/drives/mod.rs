@@ -1,5 +1,5 @@
 //! The servo drives: Elmo SimplIQ "Whistle" drives on a CAN bus (spec §6). Their simulation
-//! lives in [`crate::sim`].
+//! lives in `crate::sim` (feature `sim`).
 //!
 //! * [`DriveManager`]: the drives' life cycle as a non-blocking state machine, advanced once
 //!   per control cycle: start-up, PT set-point streaming, measurement, temperatures, faults,

@@ -63,6 +63,8 @@ pub struct DriveStats {
     pub commands_rejected: u32,
     /// Frames received from unknown nodes or of no interest.
     pub frames_ignored: u32,
+    /// Frames with the COB-ID of a kind the manager reads that did not decode as one.
+    pub frames_malformed: u32,
     /// Start-step requests sent again because their answer did not come.
     pub requests_repeated: u32,
     /// PDO schedule: PT points the drives' reports showed lost on the bus.

@@ -20,12 +20,12 @@ impl DriveManager {
             Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
             Incoming::SdoResponse { node, response } => self.on_sdo(node, response),
             Incoming::Feedback { node, feedback } => self.on_feedback(node, feedback),
-            Incoming::Heartbeat { .. }
-            | Incoming::Sync
-            | Incoming::Malformed { .. }
-            | Incoming::Other => {
-                self.ignored();
+            // A drive's COB-ID carrying what does not decode: a drive misbehaving, counted
+            // apart from what is merely of no interest.
+            Incoming::Malformed { .. } => {
+                self.stats.frames_malformed = self.stats.frames_malformed.saturating_add(1);
             }
+            Incoming::Heartbeat { .. } | Incoming::Sync | Incoming::Other => self.ignored(),
         }
     }
 
