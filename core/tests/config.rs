@@ -329,3 +329,21 @@ fn tracking_iterations_are_bounded() {
         }
     }
 }
+
+/// A joint whose limits, in encoder counts, do not fit the drive's 32 bits is refused: the
+/// drive manager would otherwise drop every set-point near them with only a counter.
+#[test]
+fn limits_beyond_the_drives_counts_are_refused() {
+    let robot = common::robot("ranger-mk1");
+    let e = robot.clone().edit(|c| c.joints[0].max = 1e5).unwrap_err();
+    assert_eq!(
+        (e.joint, e.field, e.reason),
+        (
+            Some(0),
+            "drive.counts_per_rev",
+            ConfigReason::CountsOverflow
+        )
+    );
+    // The shipped counts fit.
+    assert!(robot.edit(|_| ()).is_ok());
+}

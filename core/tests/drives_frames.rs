@@ -523,7 +523,7 @@ fn start_sequence_frame_by_frame() {
     bus.inbox.push_back(stranger.to_frame(node(101)));
     // A one-byte interpreter answer (TPDO2) from the drive: malformed, not of no interest.
     bus.inbox
-        .push_back(armgate_protocol::can::CanFrame::new(0x280 + 101, &[0x50]).unwrap());
+        .push_back(CanFrame::new(0x280 + 101, &[0x50]).unwrap());
     // The drive answers UM = 2 (speed): motor off, position mode, settle, check, motor on.
     let mut log = Vec::new();
     let mut unit_mode = 2;

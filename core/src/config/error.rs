@@ -58,6 +58,8 @@ pub enum ConfigReason {
     PdoLead,
     /// The PDO lead raised by `drives.pdo_lead_raise` must stay at most 8 points.
     PdoLeadRaise,
+    /// The joint's limits, in encoder counts, do not fit the drive's 32-bit positions.
+    CountsOverflow,
     /// One tracking solve may take 1 to 100 iterations (`config::MAX_TRACKING_ITERATIONS`).
     TrackingIterations,
 }
@@ -111,6 +113,9 @@ impl fmt::Display for ConfigReason {
             Self::PdoLead => "must be 1 to 8 points",
             Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
             Self::TrackingIterations => "must be 1 to 100",
+            Self::CountsOverflow => {
+                "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
+            }
         })
     }
 }

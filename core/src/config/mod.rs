@@ -14,6 +14,7 @@ mod motion;
 mod robot;
 #[cfg(feature = "std")]
 mod toml_file;
+mod units;
 mod valid;
 
 pub use bus_load::SAMPLE_TIME;
@@ -27,4 +28,5 @@ pub use robot::{
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};
+pub use units::JointUnits;
 pub use valid::ValidRobot;

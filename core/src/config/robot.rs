@@ -7,6 +7,7 @@ use super::bus_load::whole_samples;
 use super::drives::DrivesConfig;
 use super::error::{ConfigError, ConfigReason};
 use super::motion::{MotionConfig, ProfileKind};
+use super::units::JointUnits;
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
 use crate::math::Joints;
@@ -382,6 +383,14 @@ impl JointConfig {
         }
         if self.drive.node_id != 0 && self.drive.counts_per_rev == 0 {
             return Err(("drive.counts_per_rev", ConfigReason::ZeroCounts));
+        }
+        // Every position within the limits must be a set-point the drive can take.
+        if self.drive.node_id != 0 {
+            let units =
+                JointUnits::new(self).ok_or(("drive.counts_per_rev", ConfigReason::ZeroCounts))?;
+            if units.counts(self.min).is_none() || units.counts(self.max).is_none() {
+                return Err(("drive.counts_per_rev", ConfigReason::CountsOverflow));
+            }
         }
         Ok(())
     }

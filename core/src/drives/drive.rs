@@ -7,7 +7,7 @@ use super::link::Link;
 use super::retry::Retry;
 use super::startup::{Outgoing, StartStep};
 use super::streaming::Stream;
-use super::units::JointUnits;
+use crate::config::JointUnits;
 
 /// One joint: a real drive on the bus, or none (node id 0, the seed's "pretend" joint).
 #[derive(Clone, Debug, PartialEq)]

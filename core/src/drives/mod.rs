@@ -5,7 +5,7 @@
 //!   per control cycle: start-up, PT set-point streaming, measurement, temperatures, faults,
 //!   stop and recalibration.
 //! * [`CanBus`]: the CAN controller the manager talks through.
-//! * [`JointUnits`]: joint positions ↔ encoder counts.
+//! * [`JointUnits`]: joint positions ↔ encoder counts (defined with the robot description).
 //! * [`DriveFault`]: why the drives stopped, with the client's `ER3x` text.
 //! * [`streaming`]: which frames each drive gets per cycle, and the PT flow control.
 //! * [`DriveSettings::load_model`]: the bus load ([`crate::config::bus_load`]) with these
@@ -25,12 +25,11 @@ mod settings;
 mod startup;
 mod state;
 pub mod streaming;
-mod units;
 
+pub use crate::config::JointUnits;
 pub use bus::{BusState, CanBus, TxError};
 pub use emergency::{DriveEmergency, REASON_UNDERFLOW};
 pub use fault::{BusFault, DriveFault};
 pub use manager::{DriveManager, DriveStats, LifecycleError, UNKNOWN_TEMPERATURE};
 pub use settings::{DriveSettings, POSITION_MODE, SetupError};
 pub use state::{DriveState, STOP_HOLD_CYCLES};
-pub use units::JointUnits;

@@ -23,7 +23,7 @@ use super::settings::{DriveSettings, SetupError, Timing};
 use super::startup::{Outgoing, StartStep};
 use super::state::{DriveState, Phase};
 use super::streaming::{AdaptiveLead, Schedule};
-use super::units::JointUnits;
+use crate::config::JointUnits;
 use outbox::Outbox;
 
 use crate::MAX_JOINTS;
