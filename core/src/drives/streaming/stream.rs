@@ -14,6 +14,7 @@ pub enum Stream {
 
 impl Stream {
     /// The points the drive had queued ahead of its read pointer when it last said.
+    #[inline]
     pub fn lead(&self) -> Option<u32> {
         match self {
             Self::Interpreter(stream) => stream.lead(),
@@ -22,6 +23,7 @@ impl Stream {
     }
 
     /// The interpreter schedule's writer, if this is one.
+    #[inline]
     pub fn interpreter(&mut self) -> Option<&mut PtStream> {
         match self {
             Self::Interpreter(stream) => Some(stream),
@@ -30,6 +32,7 @@ impl Stream {
     }
 
     /// The PDO schedule's writer, if this is one.
+    #[inline]
     pub fn pdo(&mut self) -> Option<&mut PdoStream> {
         match self {
             Self::Pdo(stream) => Some(stream),
