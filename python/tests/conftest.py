@@ -33,6 +33,19 @@ def sim_binary() -> Path:
     return binary
 
 
+def viz_binary() -> Path:
+    """``$ARMGATE_VIZ`` if set, else ``target/debug/armgate-viz`` (built with cargo if missing):
+    the tool behind ``armgate urdf`` and ``armgate record``."""
+    given = os.environ.get("ARMGATE_VIZ")
+    if given:
+        return Path(given)
+    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+    binary = target / "debug" / "armgate-viz"
+    if not binary.exists():
+        subprocess.run(["cargo", "build", "-q", "-p", "armgate-viz"], cwd=REPO, check=True)
+    return binary
+
+
 def free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
