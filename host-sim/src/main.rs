@@ -7,6 +7,7 @@ mod args;
 mod backend;
 mod log;
 mod pcap;
+mod record;
 mod socketcan;
 mod status;
 mod udp;
@@ -86,6 +87,11 @@ struct Args {
     /// Wireshark with tools/wireshark/armgate.lua).
     #[arg(long, value_name = "FILE")]
     pcap: Option<PathBuf>,
+    /// Record the run into this MCAP file for Foxglove (docs/visualisation.md): joints,
+    /// frames, goals and planned paths, the workspace, every request, reply and notice, the
+    /// raw datagrams and CAN frames, and the URDF; simulation time as log time.
+    #[arg(long, value_name = "FILE")]
+    mcap: Option<PathBuf>,
     /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
@@ -194,6 +200,13 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         }
         None => None,
     };
+    let recording = match &args.mcap {
+        Some(path) => Some(
+            record::Recording::start(config, path)
+                .map_err(|e| format!("{}: {e}", path.display()))?,
+        ),
+        None => None,
+    };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
     let local = socket.local_addr().map_err(|e| e.to_string())?;
     socket
@@ -241,6 +254,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             time: elapsed.as_secs_f64(),
             error: None,
         };
+        record::set_time(cycle.next_due_us());
         let outcome = cycle.tick(micros(elapsed), &mut link);
         if let Some(error) = link.error {
             return Err(error);
@@ -256,6 +270,16 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
                 command: out.command,
                 setpoint: out.setpoint,
             })));
+        }
+        if record::enabled()
+            && let Ok(out) = &outcome.step
+        {
+            record::joints(
+                outcome.time,
+                cycle.drives().measured(),
+                out.command,
+                out.setpoint,
+            );
         }
         if status && now >= next_status {
             next_status = now + Duration::from_millis(250);
@@ -273,6 +297,16 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             .map_err(|e| format!("{}: {e}", path.display()))?;
         eprintln!(
             "armgate-sim: {}: {written} packets captured, {lost} dropped (queue full)",
+            path.display()
+        );
+    }
+    if let (Some(recording), Some(path)) = (recording, &args.mcap) {
+        let dropped = record::dropped();
+        let (written, _) = recording
+            .finish()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        eprintln!(
+            "armgate-sim: {}: {written} messages recorded, {dropped} events dropped (queue full)",
             path.display()
         );
     }

@@ -1,5 +1,10 @@
 //! See the arm: a URDF of any robot file whose frames are armgate's forward kinematics, and
-//! (in later modules) MCAP recordings and a live Foxglove view of a running controller.
-//! `armgate urdf` runs this crate's `armgate-viz` tool. See docs/visualisation.md.
+//! recordings of a running controller in MCAP (Foxglove's JSON schemas), made off the control
+//! loop by a recorder thread. `armgate urdf` runs this crate's `armgate-viz` tool; `armgate-sim
+//! --mcap` records with it. See docs/visualisation.md.
 
+pub mod foxglove;
+pub mod mcap_file;
+pub mod recorder;
+pub mod translate;
 pub mod urdf;

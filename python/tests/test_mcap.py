@@ -1,0 +1,169 @@
+"""``armgate-sim --mcap``: a 20 s run read back by an independent reader (the ``mcap`` package
+from PyPI): every channel with its schema, the expected message counts, joint states at the
+tick rate, monotonic log times (the simulation's), the URDF as attachment and channel.
+
+Skipped without the ``mcap`` package, unless ``ARMGATE_REQUIRE_VIZ=1`` (CI sets it).
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import signal
+import subprocess
+import time
+from collections import Counter, defaultdict
+from pathlib import Path
+
+import pytest
+
+import armgate
+from conftest import REPO, Sim, viz_binary
+
+CHANNELS = {
+    "/robot_description": "foxglove.RobotDescription",
+    "/joint_states": "foxglove.JointStates",
+    "/joint_command": "foxglove.JointStates",
+    "/tf": "foxglove.FrameTransforms",
+    "/setpoint": "foxglove.PoseInFrame",
+    "/goal": "foxglove.PoseInFrame",
+    "/planned_path": "foxglove.PosesInFrame",
+    "/workspace": "foxglove.SceneUpdate",
+    "/log": "foxglove.Log",
+    "/udp": "armgate.Datagram",
+    "/can": "armgate.CanFrame",
+}
+PERIOD_NS = 19_440_000  # ranger-mk1's control period
+RUN_S = 20.0
+
+
+@pytest.fixture(scope="module")
+def mcap_reader():
+    try:
+        from mcap.reader import make_reader  # noqa: PLC0415 (optional dependency)
+    except ImportError:
+        if os.environ.get("ARMGATE_REQUIRE_VIZ") == "1":
+            pytest.fail("the mcap package is not installed (pip install mcap)")
+        pytest.skip("the mcap package is not installed")
+    return make_reader
+
+
+@pytest.fixture(scope="module")
+def recording(mcap_reader, tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """20 s of ranger-mk1: a Cartesian move, a joint move, a refused request, pose polls;
+    then SIGTERM (the file must be complete all the same)."""
+    path = tmp_path_factory.mktemp("mcap") / "run.mcap"
+    started = time.monotonic()
+    sim = Sim("ranger-mk1", ["--mcap", str(path)])
+    sent = 0
+    with armgate.Arm("127.0.0.1", port=sim.port, retries=0, timeout=1.0) as arm:
+        def request(chars: str, values=(), index: int = 0) -> None:
+            nonlocal sent
+            sent += 1
+            try:
+                arm.request(chars, values, index)
+            except armgate.ControllerMessage:
+                pass
+
+        request("CM", [2])
+        request("GT", [0.0, 0.3, 0.8, 0.0, 1.5708, 0.0, 3.0])
+        request("BG")
+        request("XY")  # unknown: an ER00 reply
+        time.sleep(4.0)
+        request("CM", [1])
+        request("jG", [1.5708, 0.1, 1.5, 0.0, 1.2, 0.0])
+        request("jB")
+        while time.monotonic() - started < RUN_S:
+            request("PS")
+            time.sleep(0.5)
+    sim.process.send_signal(signal.SIGTERM)
+    _, stderr = sim.process.communicate(timeout=20)
+    with path.open("rb") as f:
+        reader = mcap_reader(f)
+        summary = reader.get_summary()
+        messages = [(channel.topic, message) for _, channel, message in reader.iter_messages(log_time_order=False)]
+        attachments = list(reader.iter_attachments())
+        metadata = list(reader.iter_metadata())
+    return {"summary": summary, "messages": messages, "attachments": attachments,
+            "metadata": metadata, "sent": sent, "port": sim.port, "stderr": stderr.decode()}
+
+
+def payloads(recording: dict, topic: str) -> list:
+    return [json.loads(m.data) for t, m in recording["messages"] if t == topic]
+
+
+def test_every_channel_has_its_schema(recording: dict) -> None:
+    summary = recording["summary"]
+    found = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
+    assert {topic: schema.name for topic, schema in found.items()} == CHANNELS
+    for channel in summary.channels.values():
+        assert channel.message_encoding == "json"
+        schema = summary.schemas[channel.schema_id]
+        assert schema.encoding == "jsonschema"
+        assert json.loads(schema.data)["title"] == schema.name
+    assert "0 events dropped" in recording["stderr"], recording["stderr"]
+
+
+def test_joint_states_come_at_the_tick_rate(recording: dict) -> None:
+    times = [m.log_time for t, m in recording["messages"] if t == "/joint_states"]
+    # The run is ~20 s from the first tick; the start-up and SIGTERM take a little of it.
+    assert RUN_S * 0.85 < len(times) * PERIOD_NS * 1e-9 < RUN_S * 1.15, len(times)
+    steps = Counter(b - a for a, b in zip(times, times[1:]))
+    assert set(steps) == {PERIOD_NS}, steps.most_common(3)
+    joints = payloads(recording, "/joint_states")[0]["joints"]
+    assert [j["name"] for j in joints] == [f"joint_{k}" for k in range(1, 7)]
+    counts = Counter(t for t, _ in recording["messages"])
+    assert counts["/tf"] == counts["/joint_states"]
+    assert 0 < counts["/joint_command"] <= counts["/joint_states"]
+    assert counts["/can"] > counts["/joint_states"]  # set-points and answers every tick
+
+
+def test_log_times_are_monotonic(recording: dict) -> None:
+    times = [m.log_time for _, m in recording["messages"]]
+    assert all(a <= b for a, b in zip(times, times[1:]))
+    per_topic = defaultdict(list)
+    for topic, m in recording["messages"]:
+        per_topic[topic].append(m.log_time)
+        assert m.publish_time == m.log_time
+    assert per_topic["/robot_description"] == [0]
+
+
+def test_every_request_reply_and_notice_is_logged(recording: dict) -> None:
+    udp = payloads(recording, "/udp")
+    log = payloads(recording, "/log")
+    assert len(log) == len(udp)
+    to_sim = [d for d in udp if d["to"].endswith(f":{recording['port']}")]
+    from_test = Counter(d["from"] for d in to_sim).most_common()
+    # The readiness probe used other sockets; the test client sent `sent` requests.
+    assert recording["sent"] in [n for _, n in from_test]
+    messages = [entry["message"] for entry in log]
+    assert any(m.startswith("TG 0 0.3 0.8 0 1.5708 0 3 ") for m in messages), messages[:10]
+    errors = [entry for entry in log if entry["level"] == 4]
+    assert any(e["message"].startswith("ER00") for e in errors)
+
+
+def test_goals_and_planned_paths(recording: dict) -> None:
+    goals = payloads(recording, "/goal")
+    paths = payloads(recording, "/planned_path")
+    assert len(goals) == len(paths) == 2
+    cartesian = goals[0]["pose"]["position"]
+    assert [cartesian["x"], cartesian["y"], cartesian["z"]] == pytest.approx([0.0, 0.3, 0.8], abs=1e-6)
+    for goal, path in zip(goals, paths):
+        assert path["poses"][-1]["position"] == pytest.approx(goal["pose"]["position"], abs=1e-6)
+        assert goal["frame_id"] == path["frame_id"] == "world"
+
+
+def test_workspace_and_urdf_are_in_the_file(recording: dict) -> None:
+    urdf = subprocess.run([str(viz_binary()), "urdf", str(REPO / "robots" / "ranger-mk1.toml")],
+                          check=True, capture_output=True).stdout
+    assert [a.name for a in recording["attachments"]] == ["robot.urdf"]
+    assert recording["attachments"][0].data == urdf
+    description = payloads(recording, "/robot_description")
+    assert len(description) == 1 and description[0]["format"] == "urdf"
+    assert base64.b64decode(description[0]["data"]) == urdf
+    scene = payloads(recording, "/workspace")
+    assert len(scene) == 1
+    cubes = scene[0]["entities"][1]["cubes"]
+    assert len(cubes) == 1 and cubes[0]["size"] == pytest.approx({"x": 0.4, "y": 0.4, "z": 0.5})
+    assert recording["metadata"][0].metadata["robot"] == "ranger-mk1"
