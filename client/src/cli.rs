@@ -49,6 +49,8 @@ Examples:
                                              poses to measure for kinematic calibration
   armgate urdf robots/ur5.toml --out ur5.urdf
                                              the arm for URDF tools (Foxglove, RViz)
+  armgate record run.mcap --robot robots/ranger-mk1.toml --duration 60
+                                             the controller in MCAP for Foxglove
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
 WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
@@ -280,6 +282,14 @@ pub enum Cmd {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
+    /// Record this controller into an MCAP file for Foxglove (runs `armgate-viz record --addr
+    /// ADDR`; docs/visualisation.md): jP and PS at --rate, SQ once a second, every notice.
+    #[command(disable_help_flag = true)]
+    Record {
+        /// Passed on unchanged, e.g. `run.mcap --robot robots/ranger-mk1.toml --rate 20`.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
     /// Draw SVG figures from armgate-sim's --log-dir CSVs: tool path, joints over time, mode
     /// changes and warnings (no controller needed).
     Plot(crate::plot::PlotArgs),
@@ -453,6 +463,10 @@ pub fn main() -> u8 {
         Cmd::Urdf { args } => {
             let args = [&[std::ffi::OsString::from("urdf")], args.as_slice()].concat();
             return crate::tools::run(crate::tools::VIZ, &args);
+        }
+        Cmd::Record { args } => {
+            let head = ["record", "--addr", cli.addr.as_str()].map(std::ffi::OsString::from);
+            return crate::tools::run(crate::tools::VIZ, &[&head[..], args].concat());
         }
         _ => {}
     }
@@ -806,8 +820,12 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             }
             Ok(())
         }
-        // Handled in `run`: teleop takes the client over; calibrate, urdf and plot need none.
-        Cmd::Teleop { .. } | Cmd::Calibrate { .. } | Cmd::Urdf { .. } | Cmd::Plot(_) => Ok(()),
+        // Handled in `run`: teleop takes the client over; calibrate, urdf, record and plot need none.
+        Cmd::Teleop { .. }
+        | Cmd::Calibrate { .. }
+        | Cmd::Urdf { .. }
+        | Cmd::Record { .. }
+        | Cmd::Plot(_) => Ok(()),
     }
 }
 

@@ -279,6 +279,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
                 cycle.drives().measured(),
                 out.command,
                 out.setpoint,
+                out.measured_pose,
             );
         }
         if status && now >= next_status {

@@ -96,14 +96,21 @@ pub fn can(frame: &CanFrame) {
     record(|t| Event::Can { t, frame: *frame });
 }
 
-/// The joints of a tick at time `t` (s).
-pub fn joints(t: f64, measured: Joints, command: Option<Joints>, setpoint: Option<Frame>) {
+/// The joints of a tick at time `t` (s), with the measured tool pose.
+pub fn joints(
+    t: f64,
+    measured: Joints,
+    command: Option<Joints>,
+    setpoint: Option<Frame>,
+    pose: Frame,
+) {
     if let Some(tap) = TAP.get() {
         tap.record(Event::Joints {
             t,
             measured,
             command,
             setpoint,
+            pose: Some(pose),
         });
     }
 }

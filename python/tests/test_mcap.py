@@ -26,6 +26,7 @@ CHANNELS = {
     "/joint_states": "foxglove.JointStates",
     "/joint_command": "foxglove.JointStates",
     "/tf": "foxglove.FrameTransforms",
+    "/tool_pose": "foxglove.PoseInFrame",
     "/setpoint": "foxglove.PoseInFrame",
     "/goal": "foxglove.PoseInFrame",
     "/planned_path": "foxglove.PosesInFrame",
@@ -114,7 +115,7 @@ def test_joint_states_come_at_the_tick_rate(recording: dict) -> None:
     joints = payloads(recording, "/joint_states")[0]["joints"]
     assert [j["name"] for j in joints] == [f"joint_{k}" for k in range(1, 7)]
     counts = Counter(t for t, _ in recording["messages"])
-    assert counts["/tf"] == counts["/joint_states"]
+    assert counts["/tf"] == counts["/tool_pose"] == counts["/joint_states"]
     assert 0 < counts["/joint_command"] <= counts["/joint_states"]
     assert counts["/can"] > counts["/joint_states"]  # set-points and answers every tick
 
@@ -167,3 +168,64 @@ def test_workspace_and_urdf_are_in_the_file(recording: dict) -> None:
     cubes = scene[0]["entities"][1]["cubes"]
     assert len(cubes) == 1 and cubes[0]["size"] == pytest.approx({"x": 0.4, "y": 0.4, "z": 0.5})
     assert recording["metadata"][0].metadata["robot"] == "ranger-mk1"
+
+
+def test_record_reads_a_controller_over_the_protocol(mcap_reader, sim_factory, tmp_path: Path) -> None:
+    """``armgate-viz record`` (what ``armgate record`` runs) against armgate-sim: jP and PS at
+    the stated rate, SQ once a second; the tool pose PS reports is the FK of the joints jP
+    reports (to the wire's float precision)."""
+    sim = sim_factory("ranger-mk1")
+    path = tmp_path / "record.mcap"
+    result = subprocess.run(
+        [str(viz_binary()), "record", str(path), "--robot", str(sim.robot),
+         "--addr", f"127.0.0.1:{sim.port}", "--rate", "20", "--duration", "3"],
+        check=True, capture_output=True, text=True,
+    )
+    assert "0 without reply" in result.stderr, result.stderr
+    with path.open("rb") as f:
+        reader = mcap_reader(f)
+        summary = reader.get_summary()
+        counts = {summary.channels[k].topic: v
+                  for k, v in summary.statistics.channel_message_counts.items()}
+        messages = [(c.topic, json.loads(m.data)) for _, c, m in reader.iter_messages()]
+        attachments = [a.name for a in reader.iter_attachments()]
+    assert 55 <= counts["/joint_states"] <= 61, counts
+    assert counts["/tool_pose"] == counts["/tf"] == counts["/joint_states"]
+    assert 3 <= counts["/log"] <= 4
+    assert attachments == ["robot.urdf"] and counts["/robot_description"] == 1
+    status = [m for t, m in messages if t == "/log"][0]["message"]
+    assert status.startswith("robot ranger-mk1 (6 joints); mode off (0)"), status
+    tf = [m for t, m in messages if t == "/tf"][-1]["transforms"]
+    assert [x["child_frame_id"] for x in tf][-1] == "tool"
+    pose = [m for t, m in messages if t == "/tool_pose"][-1]["pose"]["position"]
+    # /tf is a chain of transforms: the tool's world position is their composition.
+    world = compose(tf)
+    assert [pose["x"], pose["y"], pose["z"]] == pytest.approx(world, abs=1e-6)
+
+
+def compose(transforms: list) -> list:
+    """The world position of the last child of a chain of foxglove.FrameTransform."""
+    def rotate(q: dict, v: list) -> list:
+        x, y, z, w = q["x"], q["y"], q["z"], q["w"]
+        # v + 2w(u x v) + 2u x (u x v), u = (x, y, z)
+        u = [x, y, z]
+        c1 = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+        c2 = [u[1] * c1[2] - u[2] * c1[1], u[2] * c1[0] - u[0] * c1[2], u[0] * c1[1] - u[1] * c1[0]]
+        return [v[i] + 2 * w * c1[i] + 2 * c2[i] for i in range(3)]
+
+    def multiply(a: dict, b: dict) -> dict:
+        return {
+            "w": a["w"] * b["w"] - a["x"] * b["x"] - a["y"] * b["y"] - a["z"] * b["z"],
+            "x": a["w"] * b["x"] + a["x"] * b["w"] + a["y"] * b["z"] - a["z"] * b["y"],
+            "y": a["w"] * b["y"] - a["x"] * b["z"] + a["y"] * b["w"] + a["z"] * b["x"],
+            "z": a["w"] * b["z"] + a["x"] * b["y"] - a["y"] * b["x"] + a["z"] * b["w"],
+        }
+
+    position = [0.0, 0.0, 0.0]
+    rotation = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+    for transform in transforms:
+        t = transform["translation"]
+        step = rotate(rotation, [t["x"], t["y"], t["z"]])
+        position = [position[i] + step[i] for i in range(3)]
+        rotation = multiply(rotation, transform["rotation"])
+    return position

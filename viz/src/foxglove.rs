@@ -24,6 +24,8 @@ pub enum Topic {
     JointCommand,
     /// World → base → every link → tool at the measured joints, every tick.
     Transforms,
+    /// The measured tool pose as the controller computes it (what `PS` answers).
+    ToolPose,
     /// The Cartesian set-point given to the IK (Cartesian mode).
     Setpoint,
     /// The goal of a move when it begins.
@@ -43,11 +45,12 @@ pub enum Topic {
 
 impl Topic {
     /// Every channel, in the order they are registered.
-    pub const ALL: [Self; 11] = [
+    pub const ALL: [Self; 12] = [
         Self::RobotDescription,
         Self::JointStates,
         Self::JointCommand,
         Self::Transforms,
+        Self::ToolPose,
         Self::Setpoint,
         Self::Goal,
         Self::PlannedPath,
@@ -64,6 +67,7 @@ impl Topic {
             Self::JointStates => "/joint_states",
             Self::JointCommand => "/joint_command",
             Self::Transforms => "/tf",
+            Self::ToolPose => "/tool_pose",
             Self::Setpoint => "/setpoint",
             Self::Goal => "/goal",
             Self::PlannedPath => "/planned_path",
@@ -80,7 +84,7 @@ impl Topic {
             Self::RobotDescription => "foxglove.RobotDescription",
             Self::JointStates | Self::JointCommand => "foxglove.JointStates",
             Self::Transforms => "foxglove.FrameTransforms",
-            Self::Setpoint | Self::Goal => "foxglove.PoseInFrame",
+            Self::ToolPose | Self::Setpoint | Self::Goal => "foxglove.PoseInFrame",
             Self::PlannedPath => "foxglove.PosesInFrame",
             Self::Workspace => "foxglove.SceneUpdate",
             Self::Log => "foxglove.Log",
@@ -114,7 +118,7 @@ impl Topic {
                     ("rotation", QUATERNION),
                 ])
             ),
-            Self::Setpoint | Self::Goal => object(&[
+            Self::ToolPose | Self::Setpoint | Self::Goal => object(&[
                 ("timestamp", TIME),
                 ("frame_id", r#"{"type":"string"}"#),
                 ("pose", &pose_schema()),

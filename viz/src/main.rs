@@ -1,4 +1,7 @@
-//! `armgate-viz`: the URDF of a robot file (`armgate urdf` runs it). See docs/visualisation.md.
+//! `armgate-viz`: the URDF of a robot file, and recordings of a running controller (`armgate
+//! urdf` and `armgate record` run it). See docs/visualisation.md.
+
+mod record;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,7 +15,7 @@ use armgate_core::rng::SplitMix64;
 use armgate_viz::urdf;
 use clap::{Parser, Subcommand};
 
-/// See the arm: URDF export (and recordings) for 3-D viewers such as Foxglove.
+/// See the arm: URDF export and MCAP recordings for 3-D viewers such as Foxglove.
 #[derive(Debug, Parser)]
 #[command(name = "armgate-viz", version)]
 struct Cli {
@@ -40,6 +43,13 @@ enum Cmd {
         #[arg(long, default_value_t = 1000, hide = true)]
         samples: usize,
     },
+    /// Record a running controller (the firmware, or armgate-sim) into an MCAP file for
+    /// Foxglove, from what the protocol reads: jP and PS at --rate, SQ once a second, and every
+    /// notice. Stop with Ctrl-C or SIGTERM (the file is completed) or --duration.
+    #[command(
+        after_help = "Example: armgate record run.mcap --robot robots/ranger-mk1.toml --rate 20"
+    )]
+    Record(record::RecordArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +60,7 @@ fn main() -> ExitCode {
             fk_csv,
             samples,
         } => write_urdf(&robot, out.as_deref(), fk_csv.as_deref(), samples),
+        Cmd::Record(args) => load(args.robot()).and_then(|robot| record::run(&args, &robot)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

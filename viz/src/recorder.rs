@@ -14,8 +14,9 @@ use armgate_core::config::ValidRobot;
 
 use crate::translate::{Event, Message, Translator};
 
-/// Events waiting for the recorder thread at most (about 4 s of a busy 200 Hz arm).
-pub const QUEUE: usize = 16_384;
+/// Events waiting for the recorder thread at most (about 400 bytes each, so about 3 MiB; a
+/// 200 Hz arm with six drives makes about 3,000 a second).
+pub const QUEUE: usize = 8192;
 
 /// The longest time a message stays in a sink's buffers.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
@@ -30,8 +31,10 @@ pub trait Sink: Send {
     fn finish(&mut self) -> io::Result<()>;
 }
 
+// By value (see `Event`): the bounded channel's slots are allocated once.
+#[allow(clippy::large_enum_variant)]
 enum Item {
-    Event(Box<Event>),
+    Event(Event),
     Finish,
 }
 
@@ -46,7 +49,7 @@ impl Tap {
     /// Queues an event without blocking; a full queue drops it and counts it.
     pub fn record(&self, event: Event) {
         if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) =
-            self.sender.try_send(Item::Event(Box::new(event)))
+            self.sender.try_send(Item::Event(event))
         {
             self.dropped.fetch_add(1, Ordering::Relaxed);
         }

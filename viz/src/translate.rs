@@ -26,6 +26,9 @@ const PATH_POSES: usize = 50;
 
 /// Something the controller saw or did, stamped with its time (s; the simulation's, or the
 /// recording client's clock).
+// Not boxed: the recorder's queue holds events by value in slots allocated once, so that
+// recording allocates nothing on the control loop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Event {
     /// The joints of one tick.
@@ -38,6 +41,19 @@ pub enum Event {
         command: Option<Joints>,
         /// The Cartesian set-point (Cartesian mode).
         setpoint: Option<Frame>,
+        /// The measured tool pose as the controller reports it.
+        pose: Option<Frame>,
+    },
+    /// A line for the log that is no datagram (e.g. the status a recording client read).
+    Log {
+        /// Time (s).
+        t: f64,
+        /// Its level.
+        level: Level,
+        /// Who says it.
+        name: String,
+        /// What.
+        text: String,
     },
     /// A datagram from a client to the controller.
     Request {
@@ -150,7 +166,28 @@ impl Translator {
                 measured,
                 command,
                 setpoint,
-            } => self.joints(*t, measured, command.as_ref(), setpoint.as_ref()),
+                pose,
+            } => {
+                let mut out = self.joints(*t, measured, command.as_ref(), setpoint.as_ref());
+                if let Some(pose) = pose {
+                    out.push(Message::new(
+                        Topic::ToolPose,
+                        *t,
+                        &foxglove::pose_in_frame(*t, pose),
+                    ));
+                }
+                out
+            }
+            Event::Log {
+                t,
+                level,
+                name,
+                text,
+            } => vec![Message::new(
+                Topic::Log,
+                *t,
+                &foxglove::log(*t, *level, name, text),
+            )],
             Event::Request {
                 t,
                 from,
