@@ -92,6 +92,11 @@ struct Args {
     /// raw datagrams and CAN frames, and the URDF; simulation time as log time.
     #[arg(long, value_name = "FILE")]
     mcap: Option<PathBuf>,
+    /// Serve the same channels live over the Foxglove WebSocket protocol (Foxglove: Open
+    /// connection, ws://ADDR), on 127.0.0.1:8765 without ADDR. Read-only: a viewer cannot
+    /// command the arm; mind who can reach ADDR all the same.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    foxglove: Option<SocketAddr>,
     /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
@@ -200,12 +205,16 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         }
         None => None,
     };
-    let recording = match &args.mcap {
-        Some(path) => Some(
-            record::Recording::start(config, path)
-                .map_err(|e| format!("{}: {e}", path.display()))?,
-        ),
-        None => None,
+    let recording = if args.mcap.is_some() || args.foxglove.is_some() {
+        let (recording, live) =
+            record::Recording::start(config, args.mcap.as_deref(), args.foxglove)
+                .map_err(|e| e.to_string())?;
+        if let Some(addr) = live {
+            eprintln!("armgate-sim: Foxglove live view on ws://{addr}");
+        }
+        Some(recording)
+    } else {
+        None
     };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
     let local = socket.local_addr().map_err(|e| e.to_string())?;
@@ -301,14 +310,11 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             path.display()
         );
     }
-    if let (Some(recording), Some(path)) = (recording, &args.mcap) {
+    if let Some(recording) = recording {
         let dropped = record::dropped();
-        let (written, _) = recording
-            .finish()
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let (written, _) = recording.finish().map_err(|e| format!("record: {e}"))?;
         eprintln!(
-            "armgate-sim: {}: {written} messages recorded, {dropped} events dropped (queue full)",
-            path.display()
+            "armgate-sim: recorded {written} messages, {dropped} events dropped (queue full)"
         );
     }
     let counters = cycle.counters();

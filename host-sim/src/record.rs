@@ -1,4 +1,5 @@
-//! `--mcap FILE`: the run recorded for Foxglove by armgate-viz's recorder (docs/visualisation.md).
+//! `--mcap FILE` and `--foxglove [ADDR]`: the run recorded for Foxglove by armgate-viz's
+//! recorder, into an MCAP file and/or served live (docs/visualisation.md).
 //!
 //! Process-wide like the pcap capture, so that the socket and bus code make one call each; the
 //! calls do nothing until [`Recording::start`]. Everything is stamped with the simulation's
@@ -17,6 +18,7 @@ use armgate_core::kinematics::Joints;
 use armgate_core::math::Frame;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::MESSAGE_LEN;
+use armgate_viz::live::LiveServer;
 use armgate_viz::mcap_file::McapFile;
 use armgate_viz::recorder::{Recorder, Sink, Tap};
 use armgate_viz::translate::{Event, MAX_DATAGRAM};
@@ -31,14 +33,30 @@ pub struct Recording {
 }
 
 impl Recording {
-    /// Creates the MCAP file and starts the recorder. Only one per process.
-    pub fn start(robot: &ValidRobot, mcap: &Path) -> io::Result<Self> {
-        let sinks: Vec<Box<dyn Sink>> =
-            vec![Box::new(McapFile::create(mcap, robot, "armgate-sim")?)];
+    /// Creates the MCAP file and/or listens for live viewers, and starts the recorder; returns
+    /// the address the live view listens on. Only one per process.
+    pub fn start(
+        robot: &ValidRobot,
+        mcap: Option<&Path>,
+        live: Option<SocketAddr>,
+    ) -> io::Result<(Self, Option<SocketAddr>)> {
+        let mut sinks: Vec<Box<dyn Sink>> = Vec::new();
+        if let Some(path) = mcap {
+            let file = McapFile::create(path, robot, "armgate-sim")
+                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            sinks.push(Box::new(file));
+        }
+        let mut listening = None;
+        if let Some(addr) = live {
+            let server = LiveServer::bind(addr, "armgate-sim")
+                .map_err(|e| io::Error::new(e.kind(), format!("--foxglove {addr}: {e}")))?;
+            listening = Some(server.local_addr());
+            sinks.push(Box::new(server));
+        }
         let recorder = Recorder::start(robot, 0.0, sinks)?;
         TAP.set(recorder.tap())
             .map_err(|_| io::Error::other("a recording is already running"))?;
-        Ok(Self { recorder })
+        Ok((Self { recorder }, listening))
     }
 
     /// Writes what is queued, ends the file; returns messages written and events dropped.

@@ -111,7 +111,10 @@ def test_joint_states_come_at_the_tick_rate(recording: dict) -> None:
     # The run is ~20 s from the first tick; the start-up and SIGTERM take a little of it.
     assert RUN_S * 0.85 < len(times) * PERIOD_NS * 1e-9 < RUN_S * 1.15, len(times)
     steps = Counter(b - a for a, b in zip(times, times[1:]))
-    assert set(steps) == {PERIOD_NS}, steps.most_common(3)
+    # One per tick on the schedule: every step a whole number of periods (a tick the shell
+    # skipped, more than 50 periods late on a loaded machine, leaves a gap), nearly all one.
+    assert all(step > 0 and step % PERIOD_NS == 0 for step in steps), steps.most_common(3)
+    assert steps[PERIOD_NS] >= 0.99 * (len(times) - 1), steps.most_common(3)
     joints = payloads(recording, "/joint_states")[0]["joints"]
     assert [j["name"] for j in joints] == [f"joint_{k}" for k in range(1, 7)]
     counts = Counter(t for t, _ in recording["messages"])
