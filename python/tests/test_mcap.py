@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import base64
 import json
-import os
 import signal
 import subprocess
 import time
@@ -19,7 +18,7 @@ from pathlib import Path
 import pytest
 
 import armgate
-from conftest import REPO, Sim, viz_binary
+from conftest import REPO, Sim, require_viz_package, viz_binary
 
 CHANNELS = {
     "/robot_description": "foxglove.RobotDescription",
@@ -41,13 +40,7 @@ RUN_S = 20.0
 
 @pytest.fixture(scope="module")
 def mcap_reader():
-    try:
-        from mcap.reader import make_reader  # noqa: PLC0415 (optional dependency)
-    except ImportError:
-        if os.environ.get("ARMGATE_REQUIRE_VIZ") == "1":
-            pytest.fail("the mcap package is not installed (pip install mcap)")
-        pytest.skip("the mcap package is not installed")
-    return make_reader
+    return require_viz_package("mcap.reader").make_reader
 
 
 @pytest.fixture(scope="module")

@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 import subprocess
 from pathlib import Path
 from typing import List
 
 import pytest
 
-from conftest import REPO, viz_binary
+from conftest import REPO, require_viz_package, viz_binary
 
 ROBOTS: List[Path] = sorted((REPO / "robots").glob("*.toml")) + [
     REPO / "python" / "tests" / "data" / "ur5-calibrated.toml"
@@ -27,13 +26,7 @@ SAMPLES = 1000
 
 @pytest.fixture(scope="module")
 def yourdfpy():
-    try:
-        import yourdfpy as module  # noqa: PLC0415 (optional dependency)
-    except ImportError:
-        if os.environ.get("ARMGATE_REQUIRE_VIZ") == "1":
-            pytest.fail("yourdfpy is not installed (pip install yourdfpy)")
-        pytest.skip("yourdfpy is not installed")
-    return module
+    return require_viz_package("yourdfpy")
 
 
 def rotation_angle(a, b) -> float:

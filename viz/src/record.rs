@@ -53,6 +53,13 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
     if !(args.rate.is_finite() && args.rate > 0.0 && args.rate <= 1000.0) {
         return Err(format!("--rate {}: give 0 < Hz <= 1000", args.rate));
     }
+    if let Some(d) = args.duration
+        && !(d.is_finite() && d >= 0.0)
+    {
+        return Err(format!(
+            "--duration {d}: give a number of seconds, 0 or more"
+        ));
+    }
     let stop = interrupt::ctrl_c()?;
     let config = ClientConfig {
         timeout: Duration::from_millis(200),
