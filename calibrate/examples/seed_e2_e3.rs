@@ -135,21 +135,21 @@ fn main() {
     );
 
     // E3 (a): joint offsets only; (b): then lengths only, offsets held; (c): all together.
-    let a = calibrate(&nominal, &e2, &check, FitSet::Offsets).unwrap();
+    let a = calibrate(&nominal, &e2, &check, FitSet::Offsets, None).unwrap();
     result_row("E3 (a) offsets only", &a);
     let after_a = nominal
         .clone()
         .edit(|config| a.fit.geometry.apply_to(config))
         .unwrap();
-    let b = calibrate(&after_a, &e2, &check, FitSet::Lengths).unwrap();
+    let b = calibrate(&after_a, &e2, &check, FitSet::Lengths, None).unwrap();
     result_row("E3 (b) then lengths, offsets held", &b);
-    let c = calibrate(&nominal, &e2, &check, FitSet::All).unwrap();
+    let c = calibrate(&nominal, &e2, &check, FitSet::All, None).unwrap();
     result_row("E3 (c) everything identifiable, same data", &c);
 
     // armgate: 50 planned poses instead of 10 repeated ones.
     let planned = plan::plan(&nominal, FitSet::All, 50, 1000, 1).unwrap();
     let measured = sim::measure(&truth, &planned.poses, NOISE, 4);
-    let full = calibrate(&nominal, &measured, &check, FitSet::All).unwrap();
+    let full = calibrate(&nominal, &measured, &check, FitSet::All, None).unwrap();
     result_row("armgate: 50 planned poses, all parameters", &full);
     println!("\nE3 (c) report:\n{}", c.report());
     println!("\narmgate report:\n{}", full.report());

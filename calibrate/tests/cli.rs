@@ -80,7 +80,7 @@ fn plan_simulate_calibrate() {
     let report = String::from_utf8_lossy(&run.stdout);
     assert!(report.contains("5-fold cross-validation"), "{report}");
     assert!(
-        report.contains("not identifiable (kept nominal): J6.theta"),
+        report.contains("not identifiable (kept nominal): J1.theta"),
         "{report}"
     );
     // The written file loads and carries the report.
