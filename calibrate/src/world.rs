@@ -6,8 +6,8 @@
 //! move with it, or every box would guard a different place. Workspace regions are axis-aligned
 //! boxes, and a turned box is not one: when the turn is not a quarter-turn multiple, an
 //! exclusion box becomes the axis-aligned box around the carried one (it guards at least the
-//! same space) and the bounds become the centred axis-aligned box inside the carried bounds
-//! (they allow no more than before).
+//! same space) and the bounds become the centred axis-aligned box of largest volume inside the
+//! carried bounds (they allow no more than before).
 
 use armgate_core::config::WorkspaceConfig;
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
@@ -73,17 +73,63 @@ fn enclosing(b: &[f64; 6], t: &Isometry3<f64>, abs: &Matrix3<f64>) -> [f64; 6] {
     from_centre_half(t.transform_point(&Point3::from(c)).coords, abs * h)
 }
 
-/// The largest centred axis-aligned box inside `b` carried by `t`, with the proportions of
-/// the enclosing one: half extents `s·|R|h` with `s` the largest for which `|R|ᵀ(s·|R|h) ≤ h`.
+/// The centred axis-aligned box of largest volume inside `b` carried by `t`: half extents `e`
+/// with `|R|ᵀe ≤ h` (every corner inside), found by a log-barrier Newton method (three
+/// unknowns), then scaled until a constraint is tight (exact for a quarter turn).
 fn inscribed(b: &[f64; 6], t: &Isometry3<f64>, abs: &Matrix3<f64>) -> [f64; 6] {
     let (c, h) = centre_half(b);
+    let a = abs.transpose();
+    let centre = t.transform_point(&Point3::from(c)).coords;
+    // Strictly inside to start: the enclosing box's proportions, scaled well in.
     let around = abs * h;
-    let reach = abs.transpose() * around;
-    let s = h
-        .iter()
+    let mut e = around * (0.5 * fit_scale(&a, &h, &around));
+    if !(e.iter().all(|v| *v > 0.0)) {
+        return from_centre_half(centre, Vector3::zeros());
+    }
+    // maximise  τ·Σ ln eⱼ + Σ ln sᵢ,  sᵢ = hᵢ − (A e)ᵢ,  for growing τ.
+    let objective = |e: &Vector3<f64>, tau: f64| {
+        let s = h - a * e;
+        if e.iter().chain(s.iter()).any(|v| *v <= 0.0) {
+            return f64::NEG_INFINITY;
+        }
+        tau * e.iter().map(|v| v.ln()).sum::<f64>() + s.iter().map(|v| v.ln()).sum::<f64>()
+    };
+    let mut tau = 1.0;
+    for _ in 0..8 {
+        for _ in 0..30 {
+            let s = h - a * e;
+            let inv_s = s.map(|v| 1.0 / v);
+            let gradient = e.map(|v| tau / v) - a.transpose() * inv_s;
+            let hessian = -Matrix3::from_diagonal(&e.map(|v| tau / (v * v)))
+                - a.transpose() * Matrix3::from_diagonal(&inv_s.component_mul(&inv_s)) * a;
+            let Some(step) = hessian.try_inverse().map(|inv| -(inv * gradient)) else {
+                break;
+            };
+            let now = objective(&e, tau);
+            let mut length = 1.0;
+            while length > 1e-12 && objective(&(e + step * length), tau) < now {
+                length /= 2.0;
+            }
+            let next = e + step * length;
+            let done = (next - e).norm() <= 1e-15 * e.norm().max(1.0);
+            if objective(&next, tau) >= now {
+                e = next;
+            }
+            if done {
+                break;
+            }
+        }
+        tau *= 10.0;
+    }
+    from_centre_half(centre, e * fit_scale(&a, &h, &e))
+}
+
+/// The largest `s` with `A (s·e) ≤ h`.
+fn fit_scale(a: &Matrix3<f64>, h: &Vector3<f64>, e: &Vector3<f64>) -> f64 {
+    let reach = a * e;
+    h.iter()
         .zip(reach.iter())
         .filter(|(_, r)| **r > 0.0)
         .map(|(h, r)| h / r)
-        .fold(1.0, f64::min);
-    from_centre_half(t.transform_point(&Point3::from(c)).coords, around * s)
+        .fold(f64::INFINITY, f64::min)
 }

@@ -354,6 +354,10 @@ fn a_world_base_carries_the_workspace() {
     for c in corners(&carried.workspace.bounds) {
         assert!(inside(&nominal.workspace.bounds, &(back * c)));
     }
+    // Turned mostly about z, the bounds keep nearly all their height.
+    let height = |b: &[f64; 6]| b[5] - b[4];
+    let kept = height(&carried.workspace.bounds) / height(&nominal.workspace.bounds);
+    assert!(kept > 0.9, "{kept}");
     // A quarter turn is exact both ways.
     let quarter = Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::z() * 90.0 * DEG);
     let exact = world::carry(&nominal.workspace, &quarter);
