@@ -8,7 +8,7 @@ use armgate_core::config::RobotConfig;
 use crate::fit::{self, Fit, FitError, Measurement, Residuals};
 use crate::identify::{self, Identifiability};
 use crate::instrument::{self, Placement};
-use crate::model::{self, FitSet, Geometry, Param};
+use crate::model::{self, FitSet, Geometry, MeasuredIn, Param};
 use crate::robust::{self, Rejected};
 
 /// Folds of the cross-validation run when no held-out poses are given.
@@ -55,7 +55,8 @@ pub struct Calibration {
     pub analysis: Identifiability,
     /// The fit (of the poses kept).
     pub fit: Fit,
-    /// The instrument's frame in the robot's base frame, with its σ.
+    /// The instrument's frame in the robot's base frame, with its σ (the world frame's, given,
+    /// when measured in it).
     pub instrument: Placement,
     /// The measurements set aside as outliers, with their residuals.
     pub rejected: Vec<Rejected>,
@@ -73,17 +74,42 @@ pub struct Calibration {
     pub validation: Validation,
 }
 
-/// Calibrates the parameters of `set` of `config` from `measurements` taken in an instrument's
-/// frame (registered first, then fitted with the robot), checking the result on `held_out`
-/// poses (same instrument, same place), or by cross-validation when there are none. `noise` is
-/// the instrument's stated noise per coordinate (m), if known.
+/// What a calibration fits, and what it knows of the instrument.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Options {
+    /// Which robot constants to fit.
+    pub set: FitSet,
+    /// The frame of the measured positions.
+    pub measured_in: MeasuredIn,
+    /// The instrument's stated noise per coordinate (m), if known.
+    pub noise: Option<f64>,
+}
+
+impl Options {
+    /// Every identifiable constant, measured in an instrument's frame, with this noise.
+    pub fn with_noise(noise: Option<f64>) -> Self {
+        Self {
+            noise,
+            ..Self::default()
+        }
+    }
+}
+
+/// Calibrates `config` from `measurements` — taken in an instrument's frame, which is
+/// registered first and then fitted with the robot, unless they are in the world frame —
+/// checking the result on `held_out` poses (same instrument, same place), or by
+/// cross-validation when there are none.
 pub fn calibrate(
     config: &RobotConfig,
     measurements: &[Measurement],
     held_out: &[Measurement],
-    set: FitSet,
-    noise: Option<f64>,
+    options: &Options,
 ) -> Result<Calibration, FitError> {
+    let Options {
+        set,
+        measured_in,
+        noise,
+    } = *options;
     let unregistered = Geometry::new(config);
     if measurements.is_empty() {
         return Err(FitError::NoMeasurements);
@@ -97,9 +123,12 @@ pub fn calibrate(
     }
     let registration =
         instrument::register(&unregistered, measurements).ok_or(FitError::Unregistrable)?;
-    let nominal = unregistered.registered(registration.transform);
+    let nominal = match measured_in {
+        MeasuredIn::Instrument => unregistered.registered(registration.transform),
+        MeasuredIn::World => unregistered,
+    };
     let poses: Vec<Vec<f64>> = measurements.iter().map(|m| m.q.clone()).collect();
-    let analysis = identify::analyse(&nominal, &nominal.candidates(set), &poses);
+    let analysis = identify::analyse(&nominal, &nominal.candidates(set, measured_in), &poses);
     let robust = robust::fit(
         &nominal,
         &analysis.identified,
@@ -209,18 +238,29 @@ impl Calibration {
         let mut out = String::new();
         let a = &self.analysis;
         let robot_fitted = a.identified.iter().filter(|p| !p.is_instrument()).count();
+        let instrument_fitted = robot_fitted < a.identified.len();
         let _ = writeln!(
             out,
-            "{} robot parameters and the instrument's frame (6) identified from {} poses; not \
-             identifiable (kept nominal): {}",
-            robot_fitted,
+            "{robot_fitted} robot parameters{} identified from {} poses; not identifiable (kept \
+             nominal): {}",
+            if instrument_fitted {
+                " and the instrument's frame (6)"
+            } else {
+                ""
+            },
             self.before.count + self.rejected.len(),
             model::list(&a.unidentifiable)
         );
         let _ = writeln!(
             out,
-            "the robot's base frame is its own: joint 1's constants that the instrument's frame \
-             could also explain stay nominal, the [base] frame is not fitted"
+            "{}",
+            if instrument_fitted {
+                "the robot's base frame is its own: joint 1's constants that the instrument's \
+                 frame could also explain stay nominal, the [base] frame is not fitted"
+            } else {
+                "measured in the robot's world frame: no instrument frame fitted; joint 1's \
+                 constants and the [base] are fitted where identifiable"
+            }
         );
         let _ = writeln!(
             out,
@@ -263,7 +303,9 @@ impl Calibration {
                 let _ = writeln!(out, "  {}: residual {:.3} mm", r.name, r.residual * 1e3);
             }
         }
-        let _ = write!(out, "\n{}", self.instrument.report());
+        if instrument_fitted {
+            let _ = write!(out, "\n{}", self.instrument.report());
+        }
         let _ = writeln!(
             out,
             "\nposition error (mm)           poses     mean      rms      max  std dev"

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use armgate_calibrate::calibration::{self, Calibration, Validation};
 use armgate_calibrate::instrument::Placement;
-use armgate_calibrate::model::{self, FitSet, Param};
+use armgate_calibrate::model::{self, FitSet, MeasuredIn, Param};
 use armgate_calibrate::{measurements, plan, robot_file, sim, world};
 use armgate_core::config::{ValidRobot, load_file};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -66,9 +66,14 @@ struct FitArgs {
     /// where the turn is not a quarter turn). Default: the robot's own frames, unchanged.
     #[arg(long)]
     world_base: bool,
-    /// Which parameters to fit (the instrument's frame always is).
+    /// Which parameters to fit (the instrument's frame always is, when measured in it).
     #[arg(long, value_enum, default_value_t = FitSet::All)]
     fit: FitSet,
+    /// The frame of the measured positions: the instrument's own (its placement is fitted, the
+    /// robot file keeps its frames), or the robot file's world frame (an instrument registered
+    /// to it beforehand; joint 1's constants and the [base] are fitted).
+    #[arg(long, value_enum, default_value_t = MeasuredIn::Instrument)]
+    measured_in: MeasuredIn,
 }
 
 #[derive(Debug, Subcommand)]
@@ -91,6 +96,10 @@ enum Cmd {
         /// Which parameters the poses should determine.
         #[arg(long, value_enum, default_value_t = FitSet::All)]
         fit: FitSet,
+        /// The frame the positions will be measured in: an instrument's own frame is six more
+        /// parameters to determine.
+        #[arg(long, value_enum, default_value_t = MeasuredIn::Instrument)]
+        measured_in: MeasuredIn,
         /// Write the poses here (CSV, one per line) instead of to standard output.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -133,8 +142,16 @@ fn main() -> ExitCode {
             candidates,
             seed,
             fit,
+            measured_in,
             out,
-        }) => run_plan(&robot, poses, candidates, seed, fit, out.as_deref()),
+        }) => run_plan(
+            &robot,
+            poses,
+            candidates,
+            seed,
+            (fit, measured_in),
+            out.as_deref(),
+        ),
         Some(Cmd::Simulate {
             truth,
             poses,
@@ -213,7 +230,15 @@ fn run_fit(args: &FitArgs) -> Result<()> {
         Some(_) => return Err("--noise-mm must be a positive number".into()),
         None => None,
     };
-    let result = calibration::calibrate(&config, &measured, &held_out, args.fit, noise)?;
+    let options = calibration::Options {
+        set: args.fit,
+        measured_in: args.measured_in,
+        noise,
+    };
+    if args.world_base && args.measured_in == MeasuredIn::World {
+        return Err("--world-base needs measurements in the instrument's frame".into());
+    }
+    let result = calibration::calibrate(&config, &measured, &held_out, &options)?;
     let mut report = result.report();
     let problems = result.problems();
     if !problems.is_empty() && !args.force {
@@ -274,9 +299,10 @@ fn comment_block(result: &Calibration, args: &FitArgs, report: &str) -> String {
         .fit
         .to_possible_value()
         .map(|v| v.get_name().to_string());
-    let instrument = match &args.instrument_out {
-        Some(path) => format!("; the instrument's frame is in {}", path.display()),
-        None => String::new(),
+    let instrument = match (&args.instrument_out, args.measured_in) {
+        (_, MeasuredIn::World) => "; measured in the world frame".to_string(),
+        (Some(path), _) => format!("; the instrument's frame is in {}", path.display()),
+        (None, _) => String::new(),
     };
     format!(
         "Calibrated by armgate-calibrate (--fit {}) from {} with the measurements {} ({} \
@@ -296,19 +322,19 @@ fn run_plan(
     poses: usize,
     candidates: usize,
     seed: u64,
-    fit: FitSet,
+    (fit, measured_in): (FitSet, MeasuredIn),
     out: Option<&Path>,
 ) -> Result<()> {
     if poses == 0 {
         return Err("--poses must be at least 1".into());
     }
     let config = robot(robot_path)?;
-    let plan = plan::plan(&config, fit, poses, candidates, seed)?;
+    let plan = plan::plan(&config, fit, measured_in, poses, candidates, seed)?;
     let a = &plan.analysis;
     let mut text = format!(
         "# {} poses for {} chosen from {} random candidates (seed {seed}) for observability\n\
-         # O1 {:.4} m, condition number {:.1}; {} parameters identifiable (the instrument's \
-         frame's 6 and {} of the robot); not identifiable: {}\n\
+         # O1 {:.4} m, condition number {:.1}; {} parameters identifiable ({} of the robot, the \
+         rest the instrument's frame); not identifiable: {}\n\
          # measure the tool position at each and append x,y,z (m) to its line\n",
         plan.poses.len(),
         robot_path.display(),

@@ -107,6 +107,18 @@ pub enum FitSet {
     Lengths,
 }
 
+/// The frame the measured positions are in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeasuredIn {
+    /// The instrument's own frame, wherever it stands: its placement is fitted too.
+    #[default]
+    Instrument,
+    /// The robot file's world frame (the instrument registered to the robot's world beforehand,
+    /// as the seed's Faro arm was): no instrument frame is fitted; joint 1's constants and what
+    /// they leave of the `[base]` are.
+    World,
+}
+
 /// One link's constants.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Link {
@@ -294,16 +306,21 @@ impl Geometry {
     /// comes first: it takes whatever the robot's base frame and joint 1's constants could
     /// also explain (the `[base]` frame is not a candidate at all, and joint 1's offset, `d`,
     /// `a` and `alpha` stay nominal), so the robot's constants stay relative to its own base.
-    /// Then the robot's [`constants`](Self::constants) in their order.
-    pub fn candidates(&self, set: FitSet) -> Vec<Param> {
-        (0..6)
-            .map(Param::Instrument)
-            .chain(
-                self.constants(set)
-                    .into_iter()
-                    .filter(|p| !matches!(p, Param::BaseXyz(_) | Param::BaseRpy(_))),
-            )
-            .collect()
+    /// Then the robot's [`constants`](Self::constants) in their order. Measured in the world
+    /// frame there is no instrument frame: the candidates are the constants, the `[base]` (the
+    /// robot's place in that world) last.
+    pub fn candidates(&self, set: FitSet, measured_in: MeasuredIn) -> Vec<Param> {
+        match measured_in {
+            MeasuredIn::World => self.constants(set),
+            MeasuredIn::Instrument => (0..6)
+                .map(Param::Instrument)
+                .chain(
+                    self.constants(set)
+                        .into_iter()
+                        .filter(|p| !matches!(p, Param::BaseXyz(_) | Param::BaseRpy(_))),
+                )
+                .collect(),
+        }
     }
 
     /// The robot file's constants of `set`: joint offsets first, then DH lengths and the tool

@@ -3,7 +3,7 @@
 
 use armgate_calibrate::identify;
 use armgate_calibrate::measurements::{format, format_poses, parse, parse_poses};
-use armgate_calibrate::model::{FitSet, Geometry, Param};
+use armgate_calibrate::model::{FitSet, Geometry, MeasuredIn, Param};
 use armgate_calibrate::robot_file::{BEGIN, END, edit};
 use armgate_calibrate::{plan, sim};
 use armgate_core::config::{ValidRobot, parse_toml};
@@ -122,19 +122,23 @@ fn planned_poses_are_reachable_deterministic_and_better_than_random() {
         let config = robot(name);
         let chain = Chain::new(&config);
         let workspace = Workspace::new(&config.workspace);
-        let planned = plan::plan(&config, FitSet::All, 30, 600, 4).unwrap();
+        let planned = plan::plan(&config, FitSet::All, MeasuredIn::Instrument, 30, 600, 4).unwrap();
         assert_eq!(planned.poses.len(), 30);
         for q in &planned.poses {
             assert!(chain.within_limits(q));
             assert!(workspace.allows(&chain.forward(q).unwrap().translation.vector));
         }
-        let again = plan::plan(&config, FitSet::All, 30, 600, 4).unwrap();
+        let again = plan::plan(&config, FitSet::All, MeasuredIn::Instrument, 30, 600, 4).unwrap();
         assert_eq!(planned.poses, again.poses);
 
         // Against 30 random poses: better observability and conditioning.
         let random = plan::random_poses(&config, 30, 99).unwrap();
         let g = Geometry::new(&config);
-        let chance = identify::analyse(&g, &g.candidates(FitSet::All), &random);
+        let chance = identify::analyse(
+            &g,
+            &g.candidates(FitSet::All, MeasuredIn::Instrument),
+            &random,
+        );
         let a = &planned.analysis;
         println!(
             "{name}: planned O1 {:.3} cond {:.1}; random O1 {:.3} cond {:.1}",
@@ -152,7 +156,11 @@ fn a_redundant_parameter_has_a_zero_singular_value() {
     let config = robot("ur5");
     let g = Geometry::new(&config);
     let poses = plan::random_poses(&config, 40, 3).unwrap();
-    let a = identify::analyse(&g, &g.candidates(FitSet::All), &poses);
+    let a = identify::analyse(
+        &g,
+        &g.candidates(FitSet::All, MeasuredIn::Instrument),
+        &poses,
+    );
     let largest = a.singular_values[0];
     let zero = a
         .singular_values

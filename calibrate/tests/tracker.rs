@@ -6,11 +6,11 @@
 //! the data must change none of that.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)] // helpers of tests: a panic is a failed test
 
-use armgate_calibrate::calibration::{Calibration, Validation, calibrate};
+use armgate_calibrate::calibration::{Calibration, Options, Validation, calibrate};
 use armgate_calibrate::fit::Measurement;
 use armgate_calibrate::instrument::xyz_rpy;
 use armgate_calibrate::measurements::{format, parse};
-use armgate_calibrate::model::{FitSet, Geometry, Param};
+use armgate_calibrate::model::{FitSet, Geometry, MeasuredIn, Param};
 use armgate_calibrate::{identify, plan, sim, world};
 use armgate_core::config::{JointConfig, ValidRobot, load_file};
 use armgate_core::kinematics::Chain;
@@ -125,7 +125,11 @@ fn scenario(name: &str, seed: u64, identifiable_errors: bool) -> Scenario {
     let poses = plan::random_poses(&nominal, 50, seed + 1).unwrap();
     if identifiable_errors {
         let g = Geometry::new(&nominal);
-        let analysis = identify::analyse(&g, &g.candidates(FitSet::All), &poses);
+        let analysis = identify::analyse(
+            &g,
+            &g.candidates(FitSet::All, MeasuredIn::Instrument),
+            &poses,
+        );
         let mut t = Geometry::new(&truth);
         let joint_1 = [Param::Theta(0), Param::D(0), Param::A(0), Param::Alpha(0)];
         for p in analysis
@@ -164,7 +168,13 @@ fn poses(measured: &[Measurement]) -> Vec<Vec<f64>> {
 /// worst robot parameter's distance from the truth in σ.
 fn check(name: &str, s: &Scenario, measured: &[Measurement]) -> (Calibration, f64) {
     let held_out = sim::measure_from(&s.own, &s.placement, &s.check_poses, 0.0, 0);
-    let result = calibrate(&s.nominal, measured, &held_out, FitSet::All, Some(NOISE)).unwrap();
+    let result = calibrate(
+        &s.nominal,
+        measured,
+        &held_out,
+        &Options::with_noise(Some(NOISE)),
+    )
+    .unwrap();
     println!("{name}:\n{}", result.report());
     assert!(result.problems().is_empty(), "{:?}", result.problems());
     assert!(result.large_moves().is_empty());
@@ -183,7 +193,7 @@ fn check(name: &str, s: &Scenario, measured: &[Measurement]) -> (Calibration, f6
     // partner's error: the truth it estimates is the noise-free fit at the same poses (which
     // reproduces the arm to well below the noise).
     let exact_data = sim::measure_from(&s.own, &s.placement, &poses(measured), 0.0, 0);
-    let exact = calibrate(&s.nominal, &exact_data, &[], FitSet::All, None).unwrap();
+    let exact = calibrate(&s.nominal, &exact_data, &[], &Options::with_noise(None)).unwrap();
     assert!(exact.after.max < 0.025e-3, "{}", exact.after.max);
     let truth = if s.identifiable_errors {
         Geometry::new(&s.own)
@@ -203,20 +213,23 @@ fn check(name: &str, s: &Scenario, measured: &[Measurement]) -> (Calibration, f6
             worst = (Some(*p), sigmas);
         }
     }
-    println!("{name}: worst parameter {:?} at {:.2}σ", worst.0, worst.1);
 
-    // The instrument: within 3σ of where it is in the robot's own frame.
+    // The instrument: where it is in the robot's own frame, to within 0.1 mm / 0.01° and (in
+    // the worst σ-distance) 3σ.
     let fitted = result.instrument;
     let sigma = fitted.sigma.unwrap();
     let (truth_at, fitted_at) = (xyz_rpy(&s.placement), xyz_rpy(&fitted.pose));
     for k in 0..6 {
         let error = (truth_at[k] - fitted_at[k]).abs();
-        println!("{name}: instrument component {k}: {:.2}σ", error / sigma[k]);
         assert!(
-            error <= 3.0 * sigma[k] + 1e-9,
-            "{name}: instrument {k} off by {error:e}"
+            error < if k < 3 { 0.1e-3 } else { 0.01 * DEG },
+            "{name}: instrument {k}"
         );
+        if error / sigma[k] > worst.1 {
+            worst = (Some(Param::Instrument(k)), error / sigma[k]);
+        }
     }
+    println!("{name}: worst parameter {:?} at {:.2}σ", worst.0, worst.1);
 
     // Held-out poses through the reported instrument frame and the calibrated file, by the
     // core's forward kinematics.
@@ -367,4 +380,68 @@ fn a_world_base_carries_the_workspace() {
         (b[0] - 0.8).abs() < 1e-12 && (b[1] - 1.2).abs() < 1e-12,
         "{b:?}"
     );
+}
+
+#[test]
+fn a_wrong_file_is_reported_as_a_modelling_error() {
+    // The arm is ranger-mk1, the file says its upper arm is 8 mm longer: the fit finds it, and
+    // the report says that is a modelling error, not a calibration.
+    let truth = robot("ranger-mk1");
+    let wrong = truth.clone().edit(|c| c.joints[2].a += 8e-3).unwrap();
+    let poses = plan::random_poses(&truth, 50, 5).unwrap();
+    let measured = sim::measure_from(&truth, &tracker(5), &poses, NOISE, 6);
+    let result = calibrate(&wrong, &measured, &[], &Options::with_noise(Some(NOISE))).unwrap();
+    let moves = result.large_moves();
+    assert_eq!(moves.len(), 1, "{moves:?}");
+    assert_eq!(moves[0].0, Param::A(2));
+    assert!((moves[0].1 + 8e-3).abs() < 0.05e-3);
+    assert!(result.report().contains("WARNING: J3.a moved -8.0"));
+    assert!(result.problems().is_empty());
+}
+
+#[test]
+fn a_plan_identifies_the_instruments_frame_too() {
+    // Six more parameters: the instrument's frame; joint 1's four constants are its.
+    let planned = plan::plan(
+        &robot("ur5"),
+        FitSet::All,
+        MeasuredIn::Instrument,
+        40,
+        400,
+        1,
+    )
+    .unwrap();
+    let a = &planned.analysis;
+    assert!(a.identified[..6].iter().all(|p| p.is_instrument()));
+    assert_eq!(a.identified.len(), 6 + 19);
+    for p in [Param::Theta(0), Param::D(0), Param::A(0), Param::Alpha(0)] {
+        assert!(a.unidentifiable.contains(&p), "{p}");
+    }
+    assert!(a.condition < 100.0, "{}", a.condition);
+}
+
+#[test]
+fn measured_in_the_world_frame_fits_joint_1_and_no_instrument() {
+    // An instrument registered to the world frame beforehand: joint 1's constants and the
+    // [base] are the robot's to fit (the earlier behaviour). A tracker 2 m away then fits but
+    // folds its placement into joint 1: the report calls that a modelling error.
+    let nominal = robot("ur5");
+    let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, 3).unwrap();
+    let poses = plan::random_poses(&nominal, 50, 4).unwrap();
+    let world = Options {
+        measured_in: MeasuredIn::World,
+        ..Options::with_noise(Some(NOISE))
+    };
+    let at_base = sim::measure(&truth, &poses, NOISE, 5);
+    let result = calibrate(&nominal, &at_base, &[], &world).unwrap();
+    assert!(result.fit.params.iter().all(|p| !p.is_instrument()));
+    assert!(result.fit.params.contains(&Param::BaseXyz(1)));
+    for p in [Param::Theta(0), Param::D(0), Param::A(0), Param::Alpha(0)] {
+        assert!(result.fit.params.contains(&p), "{p}");
+    }
+    assert!(result.problems().is_empty(), "{:?}", result.problems());
+    assert!(!result.report().contains("instrument frame in"));
+    let far = sim::measure_from(&truth, &tracker(4), &poses, NOISE, 5);
+    let result = calibrate(&nominal, &far, &[], &world).unwrap();
+    assert!(result.large_moves().iter().any(|(p, _)| *p == Param::A(0)));
 }
