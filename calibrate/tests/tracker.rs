@@ -177,7 +177,12 @@ fn check(name: &str, s: &Scenario, measured: &[Measurement]) -> (Calibration, f6
     .unwrap();
     println!("{name}:\n{}", result.report());
     assert!(result.problems().is_empty(), "{:?}", result.problems());
-    assert!(result.large_moves().is_empty());
+    // Errors of 0.5° and 1 mm are no modelling errors. (With errors in every constant, one that
+    // absorbs a fixed partner's may move further: ur5's J5.theta takes J6.a's error at 0.7° per
+    // mm on its 82 mm wrist.)
+    if s.identifiable_errors {
+        assert!(result.large_moves().is_empty(), "{name}: {:?}", result.large_moves());
+    }
 
     // The robot's own frame: joint 1's constants and the base stay nominal, and every fitted
     // constant is the truth's within 2 mm / 0.2° and 3σ (its σ floored at 1 µm / 0.1 mdeg for
