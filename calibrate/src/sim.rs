@@ -67,7 +67,9 @@ pub fn perturb(config: &ValidRobot, errors: &Errors, seed: u64) -> Result<ValidR
 /// Measures the tool position of `truth` at each pose, in its world frame, with Gaussian noise
 /// of standard deviation `noise` (m) per coordinate.
 pub fn measure(truth: &ValidRobot, poses: &[Vec<f64>], noise: f64, seed: u64) -> Vec<Measurement> {
-    measure_in(truth, &Isometry3::identity(), poses, noise, seed)
+    // An instrument whose frame is the world frame lies at the base's inverse in {0}.
+    let world = Geometry::new(truth).base().inverse();
+    measure_from(truth, &world, poses, noise, seed)
 }
 
 /// [`measure`] by an instrument whose frame lies at `instrument` in `truth`'s base frame {0}
@@ -80,17 +82,6 @@ pub fn measure_from(
     seed: u64,
 ) -> Vec<Measurement> {
     let world_to_instrument = (Geometry::new(truth).base() * instrument).inverse();
-    measure_in(truth, &world_to_instrument, poses, noise, seed)
-}
-
-/// Measures with positions mapped from the world frame by `world_to_instrument`.
-fn measure_in(
-    truth: &ValidRobot,
-    world_to_instrument: &Isometry3<f64>,
-    poses: &[Vec<f64>],
-    noise: f64,
-    seed: u64,
-) -> Vec<Measurement> {
     let chain = Chain::new(truth);
     let mut rng = SplitMix64::new(seed);
     poses

@@ -181,7 +181,11 @@ fn check(name: &str, s: &Scenario, measured: &[Measurement]) -> (Calibration, f6
     // absorbs a fixed partner's may move further: ur5's J5.theta takes J6.a's error at 0.7° per
     // mm on its 82 mm wrist.)
     if s.identifiable_errors {
-        assert!(result.large_moves().is_empty(), "{name}: {:?}", result.large_moves());
+        assert!(
+            result.large_moves().is_empty(),
+            "{name}: {:?}",
+            result.large_moves()
+        );
     }
 
     // The robot's own frame: joint 1's constants and the base stay nominal, and every fitted
