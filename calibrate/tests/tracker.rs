@@ -454,3 +454,23 @@ fn measured_in_the_world_frame_fits_joint_1_and_no_instrument() {
     let result = calibrate(&nominal, &far, &[], &world).unwrap();
     assert!(result.large_moves().iter().any(|(p, _)| *p == Param::A(0)));
 }
+
+#[test]
+fn a_result_worse_than_nominal_is_refused() {
+    // An arm exactly as its file says: the fit can only add noise to it, so on held-out poses
+    // it is no better than the nominal file, and the result is refused.
+    let nominal = robot("ranger-mk1");
+    let placement = tracker(8);
+    let poses = plan::random_poses(&nominal, 50, 9).unwrap();
+    let measured = sim::measure_from(&nominal, &placement, &poses, NOISE, 10);
+    let check = plan::random_poses(&nominal, 100, 11).unwrap();
+    let held_out = sim::measure_from(&nominal, &placement, &check, 0.0, 0);
+    let options = Options::with_noise(Some(NOISE));
+    let result = calibrate(&nominal, &measured, &held_out, &options).unwrap();
+    let problems = result.problems();
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    assert!(
+        problems[0].contains("no better than the nominal"),
+        "{problems:?}"
+    );
+}
