@@ -429,3 +429,128 @@ fn describe(chars: [u8; 2], values: &[f32], index: u8) -> String {
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+    use super::*;
+    use armgate_protocol::client::{Reply, Severity};
+
+    fn robot() -> ValidRobot {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
+        armgate_core::config::load_file(std::path::Path::new(path)).unwrap()
+    }
+
+    const CLIENT: &str = "127.0.0.1:5000";
+    const CONTROLLER: &str = "127.0.0.1:7031";
+
+    fn request(command: Command, values: [f32; 7]) -> Event {
+        let bytes = Request {
+            command,
+            values,
+            index: 0,
+        }
+        .to_bytes();
+        let mut padded = [0; MAX_DATAGRAM];
+        padded[..MESSAGE_LEN].copy_from_slice(&bytes);
+        Event::Request {
+            t: 1.0,
+            from: CLIENT.parse().unwrap(),
+            to: CONTROLLER.parse().unwrap(),
+            len: MESSAGE_LEN,
+            bytes: padded,
+        }
+    }
+
+    fn answer(bytes: [u8; MESSAGE_LEN]) -> Event {
+        Event::Answer {
+            t: 1.0,
+            from: CONTROLLER.parse().unwrap(),
+            to: CLIENT.parse().unwrap(),
+            bytes,
+        }
+    }
+
+    fn topics(messages: &[Message]) -> Vec<Topic> {
+        messages.iter().map(|m| m.topic).collect()
+    }
+
+    fn json_of(message: &Message) -> Value {
+        serde_json::from_slice(&message.data).unwrap()
+    }
+
+    #[test]
+    fn an_accepted_begin_draws_the_stored_goal_and_a_refused_one_nothing() {
+        let robot = robot();
+        let mut translator = Translator::new(&robot);
+        let home = robot.home();
+        let joints = Event::Joints {
+            t: 0.0,
+            measured: home,
+            command: None,
+            setpoint: None,
+            pose: None,
+        };
+        assert_eq!(
+            topics(&translator.translate(&joints)),
+            [Topic::JointStates, Topic::Transforms]
+        );
+        let goal = [0.0, 0.3, 0.8, 0.0, 1.5708, 0.0, 3.0];
+        let logged = translator.translate(&request(Command::GoalRpy, goal));
+        assert_eq!(topics(&logged), [Topic::Udp, Topic::Log]);
+        assert_eq!(
+            json_of(&logged[1])["message"],
+            "GT 0 0.3 0.8 0 1.5708 0 3 #0"
+        );
+        // Refused: an ER text, logged as an error, no goal.
+        let refusal = Text::new(Severity::Error, 20, "Cmd BG rejected");
+        let mut bytes = [0; MESSAGE_LEN];
+        refusal.emit(&mut Wire::new_checked(&mut bytes[..]).unwrap());
+        let refused = translator.translate(&answer(bytes));
+        assert_eq!(topics(&refused), [Topic::Udp, Topic::Log]);
+        assert_eq!(json_of(&refused[1])["level"], Level::Error as u8);
+        // Accepted: the goal and a straight line to it from the measured tool pose.
+        let accepted = translator.translate(&answer(Reply::null(Command::Begin).to_bytes()));
+        assert_eq!(
+            topics(&accepted),
+            [Topic::Udp, Topic::Log, Topic::Goal, Topic::PlannedPath]
+        );
+        let position = &json_of(&accepted[2])["pose"]["position"];
+        assert!((position["y"].as_f64().unwrap() - 0.3).abs() < 1e-6);
+        let path = json_of(&accepted[3]);
+        let poses = path["poses"].as_array().unwrap();
+        assert_eq!(poses.len(), PATH_POSES + 1);
+        let start = Chain::new(&robot)
+            .forward(&home)
+            .unwrap()
+            .translation
+            .vector;
+        let first = &poses[0]["position"];
+        assert!((first["z"].as_f64().unwrap() - start.z).abs() < 1e-12);
+        assert_eq!(poses[PATH_POSES]["position"], *position);
+    }
+
+    #[test]
+    fn a_joint_begin_draws_the_fk_of_the_joint_goal() {
+        let robot = robot();
+        let chain = Chain::new(&robot);
+        let mut translator = Translator::new(&robot);
+        let home = robot.home();
+        translator.translate(&Event::Joints {
+            t: 0.0,
+            measured: home,
+            command: None,
+            setpoint: None,
+            pose: None,
+        });
+        let goal = [1.5708_f32, 0.1, 1.5, 0.0, 1.2, 0.0, 0.0];
+        translator.translate(&request(Command::JointGoal, goal));
+        let accepted = translator.translate(&answer(Reply::null(Command::JointBegin).to_bytes()));
+        assert_eq!(topics(&accepted)[2..], [Topic::Goal, Topic::PlannedPath]);
+        let q: Vec<f64> = goal[..6].iter().map(|v| f64::from(*v)).collect();
+        let expected = chain.forward(&q).unwrap().translation.vector;
+        let got = &json_of(&accepted[2])["pose"]["position"];
+        assert!((got["x"].as_f64().unwrap() - expected.x).abs() < 1e-12);
+        assert!((got["z"].as_f64().unwrap() - expected.z).abs() < 1e-12);
+    }
+}
