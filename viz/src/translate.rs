@@ -432,7 +432,7 @@ fn hex(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+    #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::approx_constant)]
     use super::*;
     use armgate_protocol::client::{Reply, Severity};
 
