@@ -8,9 +8,12 @@
 # The simulator's logs go to a temporary directory instead of logs/, and `armgate plot logs`
 # runs on them after the simulator has stopped (its logs are flushed then).
 #
+# Then the lines of "See the arm" (`armgate urdf`, `armgate record`, the recipe's move).
+#
 # Not run: `cargo test` (CI's own step), the nightly fuzzer (.ci/run runs it where a nightly
-# toolchain and cargo-fuzz are installed) and `armgate teleop` (it needs a terminal; tests cover
-# it at the state level).
+# toolchain and cargo-fuzz are installed), `armgate teleop` (it needs a terminal; tests cover it
+# at the state level) and the other armgate-sim lines (python/tests/test_mcap.py records with
+# --mcap, tests/foxglove_live.rs views --foxglove).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,6 +23,7 @@ target=${CARGO_TARGET_DIR:-target}
 # call), so that the README's commands find them built.
 cargo build -q -p armgate-sim
 cargo build -q -p armgate-client
+cargo build -q -p armgate-viz
 
 # `armgate` as the README writes it: the binary just built.
 shim=$(mktemp -d)
@@ -65,7 +69,8 @@ run() {
 
 quick=$(examples "Quick start")
 client=$(examples 'Client: `armgate`')
-[[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
+viz=$(examples 'See the arm: Foxglove, MCAP and URDF')
+[[ -n $quick && -n $client && -n $viz ]] || { echo "no examples found in $readme" >&2; exit 1; }
 
 # `armgate calibrate` is how its help names it (it runs armgate-calibrate).
 if ! armgate calibrate --help | grep -q '^Usage: armgate calibrate '; then
@@ -73,14 +78,14 @@ if ! armgate calibrate --help | grep -q '^Usage: armgate calibrate '; then
     failures=$((failures + 1))
 fi
 
-# Every `Example:` of a subcommand's --help is one of the README's client examples, so it runs
-# below on the robot the README names.
+# Every `Example:` of a subcommand's --help is one of the README's client or "See the arm"
+# examples, so it runs below on the robot the README names.
 for sub in $(armgate --help | awk '/^Commands:/ { on = 1; next } /^$/ { on = 0 } on { print $1 }'); do
     # calibrate needs measurements (its own tests run it), help has no --help.
     [[ $sub == calibrate || $sub == help ]] && continue
     example=$(armgate "$sub" --help | sed -n 's/^Example: //p')
     [[ -z $example ]] && continue
-    if ! grep -qxF -- "$example" <<<"$(tr ';' '\n' <<<"$client" | sed 's/^ *//; s/ *$//')"; then
+    if ! grep -qxF -- "$example" <<<"$(printf '%s\n%s\n' "$client" "$viz" | tr ';' '\n' | sed 's/^ *//; s/ *$//')"; then
         echo "FAILED: the example of \`armgate $sub --help\` is not among the README's: $example" >&2
         failures=$((failures + 1))
     fi
@@ -158,6 +163,19 @@ if [[ $status -ne 130 ]] || ! grep -q 'sent ST' "$shim/jmove.out" || [[ $before 
 else
     echo "(exit 130; the arm holds)"
 fi
+
+# "See the arm": the files they write are removed afterwards.
+while IFS= read -r line; do
+    IFS=';' read -ra commands <<<"$line"
+    for cmd in "${commands[@]}"; do
+        cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
+        case $cmd in
+            *armgate-sim*) echo "skipped: $cmd (the simulator runs; tests record and view it)" ;;
+            *) run "$cmd" ;;
+        esac
+    done
+done <<<"$viz"
+rm -f ur5.urdf run.mcap
 
 # The simulator ends cleanly on SIGTERM, with its summary.
 kill -TERM "$sim_pid"

@@ -41,7 +41,7 @@ use armgate_protocol::client::{MESSAGE_LEN, Notice, Request};
 use libfuzzer_sys::fuzz_target;
 
 mod checks;
-use checks::{check_notice, check_parsers, check_reply};
+use checks::{Chunk, check_notice, check_parsers, check_reply, chunks};
 
 /// Ticks run after a chunk, by header bits 0–1.
 const TICKS: [u32; 4] = [0, 1, 8, 64];
@@ -148,28 +148,16 @@ fuzz_target!(|data: &[u8]| {
     let mut cycle = start().clone();
     let mut client = Client::default();
     let mut ticks = 0u32;
-    let mut rest = data;
-    while let Some((&header, tail)) = rest.split_first() {
-        rest = tail;
-        if header & 0b100 == 0 {
-            let len = usize::from(header >> 3);
-            let (datagram, tail) = rest.split_at(len.min(rest.len()));
-            rest = tail;
-            let expected = check_parsers(datagram);
-            client.unanswered.push_back((datagram.to_vec(), expected));
-            client.waiting.push_back(Datagram::new(datagram, ()));
-        } else {
-            let len = usize::from((header >> 3) & 0x0F).min(8);
-            let (frame, tail) = rest.split_at((2 + len).min(rest.len()));
-            rest = tail;
-            if let [lo, hi, data @ ..] = frame {
-                let id = u16::from_le_bytes([*lo, *hi]) & 0x7FF;
-                if let Ok(frame) = CanFrame::new(id, data) {
-                    cycle.drives_mut().bus_mut().injected.push_back(frame);
-                }
+    for (after, chunk) in chunks(data) {
+        match chunk {
+            Chunk::Datagram(datagram) => {
+                let expected = check_parsers(datagram);
+                client.unanswered.push_back((datagram.to_vec(), expected));
+                client.waiting.push_back(Datagram::new(datagram, ()));
             }
+            Chunk::Frame(frame) => cycle.drives_mut().bus_mut().injected.extend(frame),
         }
-        for _ in 0..TICKS[usize::from(header & 0b11)] {
+        for _ in 0..TICKS[after] {
             if ticks >= MAX_TICKS {
                 break;
             }

@@ -30,7 +30,7 @@ use armgate_protocol::can::CanFrame;
 use libfuzzer_sys::fuzz_target;
 
 mod checks;
-use checks::{check_notice, check_parsers, check_reply};
+use checks::{Chunk, check_notice, check_parsers, check_reply, chunks};
 
 /// Ticks run after a chunk, by header bits 0–1.
 const TICKS: [u32; 4] = [0, 1, 1, 2];
@@ -111,28 +111,16 @@ impl State {
 fuzz_target!(|data: &[u8]| {
     let mut state = start().clone();
     let mut ticks = 0u32;
-    let mut rest = data;
-    while let Some((&header, tail)) = rest.split_first() {
-        rest = tail;
-        if header & 0b100 == 0 {
-            let len = usize::from(header >> 3);
-            let (datagram, tail) = rest.split_at(len.min(rest.len()));
-            rest = tail;
-            let expected = check_parsers(datagram);
-            let reply = state.handler.handle(datagram, &mut state.drives);
-            check_reply(datagram, expected, &reply);
-        } else {
-            let len = usize::from((header >> 3) & 0x0F).min(8);
-            let (frame, tail) = rest.split_at((2 + len).min(rest.len()));
-            rest = tail;
-            if let [lo, hi, data @ ..] = frame {
-                let id = u16::from_le_bytes([*lo, *hi]) & 0x7FF;
-                if let Ok(frame) = CanFrame::new(id, data) {
-                    state.drives.bus_mut().injected.push_back(frame);
-                }
+    for (after, chunk) in chunks(data) {
+        match chunk {
+            Chunk::Datagram(datagram) => {
+                let expected = check_parsers(datagram);
+                let reply = state.handler.handle(datagram, &mut state.drives);
+                check_reply(datagram, expected, &reply);
             }
+            Chunk::Frame(frame) => state.drives.bus_mut().injected.extend(frame),
         }
-        for _ in 0..TICKS[usize::from(header & 0b11)] {
+        for _ in 0..TICKS[after] {
             if ticks >= MAX_TICKS {
                 break;
             }
