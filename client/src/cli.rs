@@ -127,6 +127,14 @@ pub struct Cli {
     /// use the two-bank requests.
     #[arg(long, global = true, value_parser = parse_joints)]
     pub joints: Option<usize>,
+    /// Sign every request with the key in this file (64 hex digits on one line) and accept
+    /// only answers signed with it, for a controller that has the key (docs/safety.md).
+    #[arg(long, global = true, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
+    pub key: Option<std::path::PathBuf>,
+    /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
+    /// their own.
+    #[arg(long, global = true, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
+    pub link_id: u8,
     /// What to do.
     #[command(subcommand)]
     pub command: Cmd,
@@ -487,6 +495,9 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
+    if let Some(path) = &cli.key {
+        client.set_signer(Some(crate::Signer::from_file(path, cli.link_id)?));
+    }
     if let Cmd::Teleop { live, step, rate } = &cli.command {
         let poll = Some(1.0 / rate)
             .filter(|p| p.is_finite() && *p > 0.0)

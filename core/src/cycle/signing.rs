@@ -59,6 +59,17 @@ impl FromStr for UnsignedAccess {
     }
 }
 
+impl fmt::Display for UnsignedAccess {
+    /// `no`, `read` or `all`, as [`FromStr`] takes them.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Refused => "no",
+            Self::Read => "read",
+            Self::All => "all",
+        })
+    }
+}
+
 /// The text is not `no`, `read` or `all`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct UnknownAccess;
