@@ -57,34 +57,9 @@ impl SigningKey {
         }
     }
 
-    /// Reads a key file: the first line that is neither empty nor a comment (`#`), 64 hex
-    /// digits (either case), spaces around them ignored.
+    /// Reads a key file (see [`parse_key`]).
     pub fn parse(text: &str) -> Result<Self, KeyError> {
-        let line = text
-            .lines()
-            .map(str::trim)
-            .find(|l| !l.is_empty() && !l.starts_with('#'))
-            .ok_or(KeyError::Missing)?;
-        if line.len() != 2 * KEY_LEN {
-            return Err(if line.bytes().all(|b| b.is_ascii_hexdigit()) {
-                KeyError::WrongLength(line.len())
-            } else {
-                KeyError::NotHex
-            });
-        }
-        let mut bytes = [0u8; KEY_LEN];
-        for (byte, pair) in bytes.iter_mut().zip(line.as_bytes().chunks_exact(2)) {
-            let digit = |c: &u8| char::from(*c).to_digit(16).ok_or(KeyError::NotHex);
-            let (Some(hi), Some(lo)) = (pair.first(), pair.get(1)) else {
-                return Err(KeyError::NotHex);
-            };
-            // Two hex digits make at most 255.
-            *byte = u8::try_from(digit(hi)? * 16 + digit(lo)?).unwrap_or(u8::MAX);
-        }
-        if bytes == [0; KEY_LEN] {
-            return Err(KeyError::AllZero);
-        }
-        Ok(Self::new(&bytes))
+        parse_key(text).map(|bytes| Self::new(&bytes))
     }
 
     /// The tag of `signed`: the first [`TAG_LEN`] bytes of HMAC-SHA256 over it.
@@ -103,6 +78,36 @@ impl SigningKey {
         mac.update(signed);
         mac.verify_truncated_left(tag).is_ok()
     }
+}
+
+/// The key bytes of a key file: the first line that is neither empty nor a comment (`#`), 64
+/// hex digits (either case), spaces around them ignored.
+pub fn parse_key(text: &str) -> Result<[u8; KEY_LEN], KeyError> {
+    let line = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .ok_or(KeyError::Missing)?;
+    if line.len() != 2 * KEY_LEN {
+        return Err(if line.bytes().all(|b| b.is_ascii_hexdigit()) {
+            KeyError::WrongLength(line.len())
+        } else {
+            KeyError::NotHex
+        });
+    }
+    let mut bytes = [0u8; KEY_LEN];
+    for (byte, pair) in bytes.iter_mut().zip(line.as_bytes().chunks_exact(2)) {
+        let digit = |c: &u8| char::from(*c).to_digit(16).ok_or(KeyError::NotHex);
+        let (Some(hi), Some(lo)) = (pair.first(), pair.get(1)) else {
+            return Err(KeyError::NotHex);
+        };
+        // Two hex digits make at most 255.
+        *byte = u8::try_from(digit(hi)? * 16 + digit(lo)?).unwrap_or(u8::MAX);
+    }
+    if bytes == [0; KEY_LEN] {
+        return Err(KeyError::AllZero);
+    }
+    Ok(bytes)
 }
 
 impl fmt::Debug for SigningKey {

@@ -25,7 +25,7 @@ mod report;
 mod timestamp;
 
 pub use block::{Signature, SignatureError, Signed};
-pub use key::{KEY_LEN, KeyError, SigningKey};
+pub use key::{KEY_LEN, KeyError, SigningKey, parse_key};
 pub use report::{SIGNING_INDEX, SigningPolicy, SigningReport};
 pub use timestamp::{
     TIMESTAMP_EPOCH_UNIX, TIMESTAMP_MAX, TIMESTAMP_UNIT_US, timestamp_from_unix_us,
