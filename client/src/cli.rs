@@ -464,6 +464,12 @@ pub fn main() -> u8 {
             {
                 eprintln!("hint: {hint}");
             }
+            if matches!(e, CliError::Client(ClientError::Timeout { .. })) && cli.key.is_none() {
+                eprintln!(
+                    "hint: a controller with a signing key never answers unsigned requests: \
+                     --key FILE (or ARMGATE_KEY_FILE)"
+                );
+            }
             e.exit_code()
         }
     }
