@@ -52,7 +52,7 @@ pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) 
     let signing = match signing.policy {
         Some(SigningPolicy::Off) | None => String::new(),
         Some(_) => format!(
-            " signed {} unsigned dropped {}",
+            " signed {} unverified {}",
             signing.signed,
             signing.dropped()
         ),
