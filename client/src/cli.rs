@@ -649,6 +649,20 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         } => send(client, chars, values, *index, out),
         Cmd::Status => {
             writeln!(out, "{}", client.status()?)?;
+            if cli.key.is_some() {
+                let s = client.signing_report()?;
+                writeln!(
+                    out,
+                    "signing    {} signed, {} unsigned served; dropped {} unsigned, {} truncated, \
+                     {} forged, {} replayed",
+                    s.signed,
+                    s.unsigned,
+                    s.dropped_unsigned,
+                    s.dropped_truncated,
+                    s.dropped_forged,
+                    s.dropped_replayed
+                )?;
+            }
             Ok(())
         }
         Cmd::Pose => print_pose(&client.pose()?, out),
