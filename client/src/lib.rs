@@ -33,7 +33,6 @@
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
-pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;
@@ -50,6 +49,7 @@ pub mod runfile;
 mod signer;
 pub mod status;
 pub mod teleop;
+pub mod tools;
 pub mod velocity;
 pub mod wait;
 
