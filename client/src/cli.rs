@@ -136,7 +136,7 @@ pub struct Cli {
     #[arg(long, global = true, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
     pub key: Option<std::path::PathBuf>,
     /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
-    /// their own.
+    /// their own (teleop also uses the next one, for its jog stream).
     #[arg(long, global = true, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
     pub link_id: u8,
     /// What to do.

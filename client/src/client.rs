@@ -127,6 +127,11 @@ impl Client {
         self.signer = signer;
     }
 
+    /// The signer, if requests are signed.
+    pub fn signer(&self) -> Option<&Signer> {
+        self.signer.as_ref()
+    }
+
     /// How many datagrams were dropped because they were not signed with the key, or were
     /// older than the request they could answer (forged, replayed, another key).
     pub fn unverified(&self) -> u64 {

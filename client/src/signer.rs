@@ -54,6 +54,17 @@ impl Signer {
         self.link
     }
 
+    /// A signer with the same key on the next link id (255 is followed by 1): for a second
+    /// socket of the same program (teleop's jog stream), whose requests would otherwise race
+    /// the first one's timestamps on one link.
+    pub fn next_link(&self) -> Self {
+        Self {
+            key: self.key.clone(),
+            link: self.link % 255 + 1,
+            last: 0,
+        }
+    }
+
     /// `message` signed with a new timestamp, and that timestamp.
     pub fn sign(&mut self, message: &[u8; MESSAGE_LEN]) -> ([u8; SIGNED_LEN], u64) {
         let now = SystemTime::now()
@@ -109,6 +120,8 @@ mod tests {
         assert_eq!(block.link(), 7);
         assert_eq!(block.timestamp(), t1);
         assert!(Signer::new(key(), 0).is_err());
+        assert_eq!(signer.next_link().link(), 8);
+        assert_eq!(Signer::new(key(), 255).unwrap().next_link().link(), 1);
     }
 
     #[test]
