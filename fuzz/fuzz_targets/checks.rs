@@ -1,42 +1,8 @@
-//! What both fuzz targets share: the input's chunks, and what they check of every datagram's
-//! answer and every unsolicited notice.
+//! What both fuzz targets check of every datagram's answer and every unsolicited notice.
 
-use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
 };
-
-/// One chunk of an input (the format is in each target's docs).
-pub enum Chunk<'a> {
-    /// A client datagram, 0..=31 bytes.
-    Datagram(&'a [u8]),
-    /// A CAN frame for the drive manager (none if its bytes make no frame).
-    Frame(Option<CanFrame>),
-}
-
-/// The chunks of `data`, each with its header's bits 0–1 (which ticks follow it).
-pub fn chunks(mut data: &[u8]) -> impl Iterator<Item = (usize, Chunk<'_>)> {
-    std::iter::from_fn(move || {
-        let (&header, rest) = data.split_first()?;
-        let chunk = if header & 0b100 == 0 {
-            let len = usize::from(header >> 3);
-            let (datagram, rest) = rest.split_at(len.min(rest.len()));
-            data = rest;
-            Chunk::Datagram(datagram)
-        } else {
-            let len = usize::from((header >> 3) & 0x0F).min(8);
-            let (frame, rest) = rest.split_at((2 + len).min(rest.len()));
-            data = rest;
-            Chunk::Frame(match frame {
-                [lo, hi, bytes @ ..] => {
-                    CanFrame::new(u16::from_le_bytes([*lo, *hi]) & 0x7FF, bytes).ok()
-                }
-                _ => None,
-            })
-        };
-        Some((usize::from(header & 0b11), chunk))
-    })
-}
 
 /// The parsers on a datagram: what the handler must answer it with.
 pub fn check_parsers(datagram: &[u8]) -> Result<Request, Notice> {

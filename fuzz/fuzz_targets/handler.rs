@@ -2,7 +2,7 @@
 //! handling, without simulated time. Beside `datagram` (the whole cycle over simulated
 //! Whistles at their 360 µs sample time, a few dozen inputs a second), this one runs thousands.
 //!
-//! Input format (the same as `datagram`'s; every byte string is valid): a sequence of chunks,
+//! Input format (`datagram`'s without its signed chunks; every byte string is valid): a sequence of chunks,
 //! each one header byte `h`:
 //!
 //! * bits 0–1: control ticks run after the chunk: 0, 1, 1 or 2 (at most [`MAX_TICKS`] per
@@ -30,7 +30,7 @@ use armgate_protocol::can::CanFrame;
 use libfuzzer_sys::fuzz_target;
 
 mod checks;
-use checks::{Chunk, check_notice, check_parsers, check_reply, chunks};
+use checks::{check_notice, check_parsers, check_reply};
 
 /// Ticks run after a chunk, by header bits 0–1.
 const TICKS: [u32; 4] = [0, 1, 1, 2];
@@ -58,6 +58,38 @@ impl CanBus for ScriptBus {
     fn state(&self) -> BusState {
         BusState::ErrorActive
     }
+}
+
+/// One chunk of an input (the format is in each target's docs).
+pub enum Chunk<'a> {
+    /// A client datagram, 0..=31 bytes.
+    Datagram(&'a [u8]),
+    /// A CAN frame for the drive manager (none if its bytes make no frame).
+    Frame(Option<CanFrame>),
+}
+
+/// The chunks of `data`, each with its header's bits 0–1 (which ticks follow it).
+pub fn chunks(mut data: &[u8]) -> impl Iterator<Item = (usize, Chunk<'_>)> {
+    std::iter::from_fn(move || {
+        let (&header, rest) = data.split_first()?;
+        let chunk = if header & 0b100 == 0 {
+            let len = usize::from(header >> 3);
+            let (datagram, rest) = rest.split_at(len.min(rest.len()));
+            data = rest;
+            Chunk::Datagram(datagram)
+        } else {
+            let len = usize::from((header >> 3) & 0x0F).min(8);
+            let (frame, rest) = rest.split_at((2 + len).min(rest.len()));
+            data = rest;
+            Chunk::Frame(match frame {
+                [lo, hi, bytes @ ..] => {
+                    CanFrame::new(u16::from_le_bytes([*lo, *hi]) & 0x7FF, bytes).ok()
+                }
+                _ => None,
+            })
+        };
+        Some((usize::from(header & 0b11), chunk))
+    })
 }
 
 #[derive(Clone)]
@@ -92,7 +124,11 @@ impl State {
         let out = self.handler.tick(self.now, &measured, &self.drives);
         let command = out.ok().and_then(|out| out.command);
         if let Some(cmd) = &command {
-            assert!(cmd.is_finite(), "t {}: non-finite command {cmd:?}", self.now);
+            assert!(
+                cmd.is_finite(),
+                "t {}: non-finite command {cmd:?}",
+                self.now
+            );
             assert!(
                 self.handler.controller().chain().within_limits(cmd),
                 "t {}: command beyond the joint limits {cmd:?}",

@@ -1,6 +1,7 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::banks::READ_JOINTS;
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX,
     NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text,
@@ -40,6 +41,8 @@ pub struct CommandHandler {
     name: RobotName,
     /// Requests answered with an `ER` text so far.
     refused: u32,
+    /// The cycle's signing counters, for `SQ` index 4.
+    signing: SigningReport,
     /// Time of the last tick (s).
     now: f64,
 }
@@ -57,6 +60,7 @@ impl CommandHandler {
             relay: NoticeRelay::default(),
             name: RobotName::new(&config.name),
             refused: 0,
+            signing: SigningReport::default(),
             now: 0.0,
         }
     }
@@ -72,6 +76,12 @@ impl CommandHandler {
             refused: self.refused,
             uptime: self.now,
         }
+    }
+
+    /// The signing counters `SQ` index 4 reports (kept by the cycle, which checks signatures
+    /// before a datagram reaches the handler).
+    pub fn set_signing_report(&mut self, report: SigningReport) {
+        self.signing = report;
     }
 
     /// The controller.
@@ -323,6 +333,7 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                SIGNING_INDEX => Ok(self.signing.to_reply()),
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {
