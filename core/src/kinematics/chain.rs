@@ -2,6 +2,7 @@
 
 use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 
+use super::family::ClosedForm;
 use super::jacobian::Jacobian;
 use super::joints::Joints;
 use crate::MAX_JOINTS;
@@ -51,6 +52,8 @@ pub struct Chain {
     tool: Frame,
     min: [f64; MAX_JOINTS],
     max: [f64; MAX_JOINTS],
+    /// The closed-form family, if the geometry has one.
+    closed_form: Option<ClosedForm>,
 }
 
 /// The joint axes (z of each joint frame) and their origins from one evaluation, base
@@ -71,6 +74,7 @@ impl Chain {
             tool: tool_frame(config),
             min: [0.0; MAX_JOINTS],
             max: [0.0; MAX_JOINTS],
+            closed_form: None,
         };
         let slots = chain
             .links
@@ -93,7 +97,13 @@ impl Chain {
             *min = joint.min;
             *max = joint.max;
         }
+        chain.closed_form = ClosedForm::detect(&chain);
         chain
+    }
+
+    /// The closed-form family detected when the chain was built.
+    pub(super) fn closed_form(&self) -> Option<&ClosedForm> {
+        self.closed_form.as_ref()
     }
 
     /// Number of joints.

@@ -82,6 +82,8 @@ pub enum IkError {
     NonFiniteSeed,
     /// The target frame holds NaN or infinite values.
     NonFiniteTarget,
+    /// The chain belongs to no closed-form family (only the numeric solvers apply).
+    NoClosedForm,
 }
 
 impl core::fmt::Display for IkError {
@@ -90,6 +92,7 @@ impl core::fmt::Display for IkError {
             Self::WrongJointCount => "seed length differs from the number of joints",
             Self::NonFiniteSeed => "seed holds NaN or infinite values",
             Self::NonFiniteTarget => "target holds NaN or infinite values",
+            Self::NoClosedForm => "no closed-form inverse kinematics for this chain",
         })
     }
 }
@@ -262,7 +265,11 @@ impl Chain {
     }
 
     /// Validates the inputs and returns the seed clamped into the limits.
-    fn prepare(&self, target: &Frame, seed: &[f64]) -> Result<[f64; MAX_JOINTS], IkError> {
+    pub(super) fn prepare(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+    ) -> Result<[f64; MAX_JOINTS], IkError> {
         if !math::is_finite(target) {
             return Err(IkError::NonFiniteTarget);
         }

@@ -1,0 +1,244 @@
+//! Every inverse-kinematics solution in closed form, for chains of a known [`Family`].
+//!
+//! A family solver ([`spherical_wrist`](super::spherical_wrist),
+//! [`three_parallel`](super::three_parallel)) lists candidate solutions as angles with their
+//! [`Branch`]. Each candidate is then taken to the 2π turn of every revolute joint that lies
+//! within the limits nearest to a reference configuration (the present joints), polished by
+//! Newton steps on the true chain if the chain only approximately belongs to its family, and
+//! kept only if forward kinematics reproduces the target within [`CHECK`]. So every solution
+//! returned is exact and admissible; a pose with none returns an empty list.
+
+use heapless::Vec;
+
+use super::chain::Chain;
+use super::family::{ClosedForm, Family, FamilyFit};
+use super::ik::{IkError, IkResult};
+use super::joints::Joints;
+use super::subproblems::Angle;
+use super::{spherical_wrist, three_parallel};
+use crate::MAX_JOINTS;
+use crate::config::IkConfig;
+use crate::math::{self, Frame};
+
+/// Most solutions of a closed-form solve (2 shoulders · 2 elbows · 2 wrists).
+pub const MAX_SOLUTIONS: usize = 8;
+/// Position (m) and orientation (rad) error up to which a solution counts as reproducing the
+/// target.
+pub const CHECK: f64 = 1e-9;
+/// A candidate this close to the target (m, rad) but not within [`CHECK`] is polished.
+const POLISH_FROM: f64 = 1e-5;
+/// Newton steps that polish a solution of the ideal model on a calibrated chain.
+const POLISH_ITERATIONS: u16 = 8;
+
+/// A configuration branch of a closed-form family: which root each of the three two-way
+/// choices took. Bit 0 is the shoulder (the second root of θ1), bit 1 the elbow (of θ3), bit
+/// 2 the wrist (of θ4, θ5 for a spherical wrist; of θ5 for three parallel axes). Flipping a bit
+/// gives the mirrored configuration: shoulder left/right, elbow up/down, wrist flipped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Branch(u8);
+
+impl Branch {
+    /// Shoulder bit.
+    pub const SHOULDER: u8 = 1;
+    /// Elbow bit.
+    pub const ELBOW: u8 = 2;
+    /// Wrist bit.
+    pub const WRIST: u8 = 4;
+
+    /// The branch with these bits; `None` above 7.
+    pub const fn from_bits(bits: u8) -> Option<Self> {
+        if bits < 8 { Some(Self(bits)) } else { None }
+    }
+
+    /// Its bits.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// The branch of the roots taken (each 0 or 1).
+    pub(super) fn from_roots(shoulder: u8, elbow: u8, wrist: u8) -> Self {
+        Self((shoulder & 1) | (elbow & 1) << 1 | (wrist & 1) << 2)
+    }
+
+    /// This branch with the wrist root `wrist`.
+    pub(super) fn with_wrist(self, wrist: u8) -> Self {
+        Self(self.0 & !Self::WRIST | (wrist & 1) << 2)
+    }
+}
+
+/// One exact solution and its branch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BranchSolution {
+    /// Joint values within the limits.
+    pub q: Joints,
+    /// The branch it lies on.
+    pub branch: Branch,
+}
+
+/// Every solution of a closed-form solve.
+pub type Solutions = Vec<BranchSolution, MAX_SOLUTIONS>;
+
+/// A candidate of a family solver: angles of the six joints and the branch.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Candidate {
+    pub angles: [Angle; 6],
+    pub branch: Branch,
+}
+
+/// The candidates of one solve.
+pub(super) type Candidates = Vec<Candidate, MAX_SOLUTIONS>;
+
+impl Chain {
+    /// The closed-form family this chain belongs to, detected when it was built.
+    pub fn family(&self) -> FamilyFit {
+        self.closed_form().map_or(
+            FamilyFit {
+                family: Family::Numeric,
+                deviation: f64::INFINITY,
+            },
+            |form| form.fit,
+        )
+    }
+
+    /// Every solution for `target` within the joint limits, each on its own branch, each
+    /// revolute joint on the 2π turn nearest to `reference` (the present joints; also the
+    /// value kept by a joint a singularity leaves free). Refused with
+    /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
+    pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
+        let (form, reference, candidates) = self.candidates(target, reference)?;
+        let mut solutions = Solutions::new();
+        for candidate in &candidates {
+            if let Some(solution) = self.finish(form, candidate, target, &reference) {
+                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+                let _ = solutions.push(solution);
+            }
+        }
+        Ok(solutions)
+    }
+
+    /// The solution nearest to `reference` (on `branch` if given): the candidates are tried
+    /// from the nearest, so usually only one is checked. `None` if there is none.
+    pub fn solve_nearest(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Result<Option<BranchSolution>, IkError> {
+        let (form, reference, mut candidates) = self.candidates(target, reference)?;
+        candidates.retain(|c| branch.is_none_or(|b| b == c.branch));
+        let mut near = [Angle::of(0.0); 6];
+        for (a, r) in near.iter_mut().zip(&reference) {
+            *a = Angle::of(*r);
+        }
+        // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
+        let distance = |c: &Candidate| {
+            c.angles
+                .iter()
+                .zip(&near)
+                .map(|(a, r)| 1.0 - (a.cos * r.cos + a.sin * r.sin))
+                .sum::<f64>()
+        };
+        candidates.sort_unstable_by(|a, b| distance(a).total_cmp(&distance(b)));
+        Ok(candidates
+            .iter()
+            .find_map(|c| self.finish(form, c, target, &reference)))
+    }
+
+    /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
+    /// lies at `q`. `None` for a numeric chain or at a configuration no branch reproduces
+    /// (within 1e-6 per joint).
+    pub fn branch_of(&self, q: &[f64]) -> Option<Branch> {
+        let pose = self.forward(q).ok()?;
+        let found = self.solve_nearest(&pose, q, None).ok()??;
+        let same = found.q.iter().zip(q).all(|(a, b)| (a - b).abs() <= 1e-6);
+        same.then_some(found.branch)
+    }
+
+    /// The family, the checked reference and the family solver's candidates.
+    fn candidates(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
+        let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
+        let reference = self.prepare(target, reference)?;
+        let mut candidates = Candidates::new();
+        match form.fit.family {
+            Family::SphericalWrist => {
+                spherical_wrist::solve(form, target, &reference, &mut candidates);
+            }
+            Family::ThreeParallel => {
+                three_parallel::solve(form, target, &reference, &mut candidates);
+            }
+            Family::Numeric => {}
+        }
+        Ok((form, reference, candidates))
+    }
+
+    /// A candidate on the turns nearest `reference`, polished if the family fit is
+    /// approximate, if it is within the limits and reproduces `target`.
+    fn finish(
+        &self,
+        form: &ClosedForm,
+        candidate: &Candidate,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+    ) -> Option<BranchSolution> {
+        let (min, max) = self.limits();
+        let mut q = Joints::zeros(self.dof());
+        let joints = q.iter_mut().zip(&candidate.angles).zip(reference);
+        for (((v, angle), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
+            *v = nearest_turn(angle.value(), *r, *lo, *hi)?;
+        }
+        if !form.fit.is_exact() {
+            q = self.polish(target, &q)?;
+        }
+        let (position, orientation) = self.errors(&q, target);
+        if position.max(orientation) > CHECK {
+            // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
+            // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
+            if position.max(orientation) > POLISH_FROM {
+                return None;
+            }
+            q = self.polish(target, &q)?;
+            let (position, orientation) = self.errors(&q, target);
+            if position.max(orientation) > CHECK {
+                return None;
+            }
+        }
+        Some(BranchSolution {
+            q,
+            branch: candidate.branch,
+        })
+    }
+
+    /// Position and orientation error of configuration `q` from `target`.
+    fn errors(&self, q: &Joints, target: &Frame) -> (f64, f64) {
+        let e = math::diff(&self.pose(q), target);
+        (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm())
+    }
+
+    /// Newton steps on the true chain from a solution of its ideal model.
+    fn polish(&self, target: &Frame, q: &Joints) -> Option<Joints> {
+        let config = IkConfig {
+            tolerance: 0.1 * CHECK,
+            tracking_iterations: POLISH_ITERATIONS,
+            ..IkConfig::default()
+        };
+        match self.solve_tracking(target, q, &config).ok()? {
+            IkResult::Converged(s) => Some(s.q),
+            IkResult::NotConverged(_) => None,
+        }
+    }
+}
+
+/// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
+/// `reference`; `None` if no turn fits.
+fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
+    const TAU: f64 = core::f64::consts::TAU;
+    let near = angle + TAU * libm::round((reference - angle) / TAU);
+    [near, near - TAU, near + TAU]
+        .into_iter()
+        .filter(|v| lo <= *v && *v <= hi)
+        .min_by(|a, b| (a - reference).abs().total_cmp(&(b - reference).abs()))
+}

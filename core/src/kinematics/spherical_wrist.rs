@@ -1,0 +1,99 @@
+//! The closed form of [`Family::SphericalWrist`](super::Family::SphericalWrist): axes 2 and 3
+//! parallel, axes 4–6 meeting in the wrist centre.
+//!
+//! The wrist centre moves with joints 1–3 only, so the position is solved first: rotations
+//! about axes 2 and 3 keep the component along their common direction, which gives θ1
+//! (subproblem 4); the distance from axis 2's point to the wrist centre depends on θ3 alone
+//! (subproblem 3); θ2 turns one known vector onto another (subproblem 1). The wrist then
+//! produces the remaining rotation: θ4, θ5 from where axis 6 must point (subproblem 2), θ6
+//! from what is left (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
+
+use nalgebra::Matrix3;
+
+use super::closed_form::{Branch, Candidate, Candidates};
+use super::family::ClosedForm;
+use super::subproblems::{Angle, PairRoots, rotation, sp1, sp2, sp3, sp4};
+use crate::MAX_JOINTS;
+use crate::math::Frame;
+
+/// Every candidate solution for `target` (unchecked: the caller applies limits and FK).
+/// `free` gives the value of a joint left free by a singularity.
+pub(super) fn solve(
+    form: &ClosedForm,
+    target: &Frame,
+    free: &[f64; MAX_JOINTS],
+    out: &mut Candidates,
+) {
+    let s = &form.screws;
+    let [h1, h2, h3, _, _, _, _, _] = &s.axis;
+    let [o1, o2, o3, _, _, _, _, _] = &s.point;
+    let w = &form.centre;
+    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
+    let centre = target.translation.vector - tool * (s.tool_position - w);
+    let v = centre - o1;
+    let (shoulders, n1) = sp4(&v, h1, h2, h2.dot(&(w - o1))).list(free[0]);
+    for &(a1, b1) in shoulders.iter().take(n1) {
+        let r1 = rotation(h1, &a1);
+        let u = r1.transpose() * v - (o2 - o1);
+        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm()).list(free[2]);
+        for &(a3, b3) in elbows.iter().take(n3) {
+            let r3 = rotation(h3, &a3);
+            let reach = (o3 - o2) + r3 * (w - o3);
+            let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+            let arm = r1 * rotation(h2, &a2) * r3;
+            let branch = Branch::from_roots(b1, b3, 0);
+            wrist(
+                form,
+                &(arm.transpose() * tool),
+                [a1, a2, a3],
+                branch,
+                free,
+                out,
+            );
+        }
+    }
+}
+
+/// Joints 4–6 producing the rotation `m = R4 R5 R6`, appended to the arm's `[θ1, θ2, θ3]`.
+fn wrist(
+    form: &ClosedForm,
+    m: &Matrix3<f64>,
+    arm: [Angle; 3],
+    branch: Branch,
+    free: &[f64; MAX_JOINTS],
+    out: &mut Candidates,
+) {
+    let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
+    let pointing = m * h6;
+    let last = |a4: &Angle, a5: &Angle| {
+        let rest = (rotation(h4, a4) * rotation(h5, a5)).transpose() * m;
+        sp1(h6, h5, &(rest * h5))
+    };
+    let [a1, a2, a3] = arm;
+    let mut push = |a4: Angle, a5: Angle, wrist: u8| {
+        if let Some(a6) = last(&a4, &a5) {
+            // A full list only drops further roots, which cannot occur (8 at most).
+            let _ = out.push(Candidate {
+                angles: [a1, a2, a3, a4, a5, a6],
+                branch: branch.with_wrist(wrist),
+            });
+        }
+    };
+    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
+    match sp2(h4, &pointing, h5, h6) {
+        PairRoots::Some(pairs, count) => {
+            for (bw, (t4, t5)) in (0u8..).zip(pairs.iter().take(count)) {
+                push(t4.negated(), *t5, bw);
+            }
+        }
+        PairRoots::FreeFirst => {
+            // Axis 6 along axis 4 (θ5 = 0 on most arms): θ4 + θ6 is fixed, θ4 keeps `free`.
+            let a4 = Angle::of(free[3]);
+            let turned = rotation(h4, &a4).transpose() * pointing;
+            if let Some(a5) = sp1(h5, h6, &turned) {
+                push(a4, a5, 0);
+            }
+        }
+        PairRoots::None => {}
+    }
+}

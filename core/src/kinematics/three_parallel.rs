@@ -1,0 +1,61 @@
+//! The closed form of [`Family::ThreeParallel`](super::Family::ThreeParallel): axes 2, 3 and 4
+//! parallel, axes 5 and 6 meeting (UR-type arms).
+//!
+//! The point where axes 5 and 6 meet moves with joints 1–4 only, and rotations about the three
+//! parallel axes keep its component along their direction: θ1 (subproblem 4). The same
+//! direction is kept by the product `R2 R3 R4`, which gives θ5 (subproblem 4) and then θ6
+//! (subproblem 1) from the orientation. What is left is a planar two-link problem for the
+//! origin of axis 4: θ3 (subproblem 3), θ2 (subproblem 1), and θ4 from the remaining rotation
+//! (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
+
+use super::closed_form::{Branch, Candidate, Candidates};
+use super::family::ClosedForm;
+use super::subproblems::{Angle, rotation, sp1, sp3, sp4};
+use crate::MAX_JOINTS;
+use crate::math::Frame;
+
+/// Every candidate solution for `target` (unchecked: the caller applies limits and FK).
+/// `free` gives the value of a joint left free by a singularity.
+pub(super) fn solve(
+    form: &ClosedForm,
+    target: &Frame,
+    free: &[f64; MAX_JOINTS],
+    out: &mut Candidates,
+) {
+    let s = &form.screws;
+    let [h1, h, h3, h4, h5, h6, _, _] = &s.axis;
+    let [o1, o2, o3, o4, _, _, _, _] = &s.point;
+    let c = &form.centre;
+    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
+    let centre = target.translation.vector - tool * (s.tool_position - c);
+    let v = centre - o1;
+    let (shoulders, n1) = sp4(&v, h1, h, h.dot(&(c - o1))).list(free[0]);
+    for &(a1, b1) in shoulders.iter().take(n1) {
+        let r1 = rotation(h1, &a1);
+        // m = R2 R3 R4 R5 R6, and hᵀ R2 R3 R4 = hᵀ.
+        let m = r1.transpose() * tool;
+        let (wrists, n5) = sp4(h, h5, h6, h.dot(&(m * h6))).list(free[4]);
+        for &(a5, b5) in wrists.iter().take(n5) {
+            let r5 = rotation(h5, &a5);
+            let a6 = sp1(h6, &(m.transpose() * h), &(r5.transpose() * h))
+                .unwrap_or_else(|| Angle::of(free[5]));
+            let planar = m * (r5 * rotation(h6, &a6)).transpose();
+            let u = r1.transpose() * v + o1 - planar * (c - o4) - o2;
+            let (elbows, n3) = sp3(h3, &(o4 - o3), &(o2 - o3), u.norm()).list(free[2]);
+            for &(a3, b3) in elbows.iter().take(n3) {
+                let r3 = rotation(h3, &a3);
+                let reach = (o3 - o2) + r3 * (o4 - o3);
+                let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+                let rest = (rotation(h, &a2) * r3).transpose() * planar;
+                let Some(a4) = sp1(h4, h5, &(rest * h5)) else {
+                    continue;
+                };
+                // A full list only drops further roots, which cannot occur (8 at most).
+                let _ = out.push(Candidate {
+                    angles: [a1, a2, a3, a4, a5, a6],
+                    branch: Branch::from_roots(b1, b3, b5),
+                });
+            }
+        }
+    }
+}
