@@ -18,7 +18,7 @@ use super::subproblems::Angle;
 use super::{spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
-use crate::math::{self, Frame};
+use crate::math::Frame;
 
 /// Most solutions of a closed-form solve (2 shoulders · 2 elbows · 2 wrists).
 pub const MAX_SOLUTIONS: usize = 8;
@@ -82,7 +82,21 @@ pub type Solutions = Vec<BranchSolution, MAX_SOLUTIONS>;
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Candidate {
     pub angles: [Angle; 6],
+    /// The values of the angles a solver already took (`atan2` once for a root that several
+    /// candidates share); NaN where not.
+    pub values: [f64; 6],
     pub branch: Branch,
+}
+
+impl Candidate {
+    /// A candidate of `angles` on `branch`, with the `known` values (NaN: not taken yet).
+    pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch) -> Self {
+        Self {
+            angles,
+            values: known,
+            branch,
+        }
+    }
 }
 
 /// The candidates of one solve.
@@ -186,23 +200,36 @@ impl Chain {
     ) -> Option<BranchSolution> {
         let (min, max) = self.limits();
         let mut q = Joints::zeros(self.dof());
-        let joints = q.iter_mut().zip(&candidate.angles).zip(reference);
-        for (((v, angle), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
-            *v = nearest_turn(angle.value(), *r, *lo, *hi)?;
+        let angles = candidate.angles.iter().zip(&candidate.values);
+        let joints = q.iter_mut().zip(angles).zip(reference);
+        for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
+            let value = if known.is_nan() {
+                angle.value()
+            } else {
+                *known
+            };
+            *v = nearest_turn(value, *r, *lo, *hi)?;
         }
         if !form.fit.is_exact() {
             q = self.polish(target, &q)?;
         }
-        let (position, orientation) = self.errors(&q, target);
-        if position.max(orientation) > CHECK {
+        let mut sin_cos = [(0.0, 1.0); MAX_JOINTS];
+        for (sc, a) in sin_cos.iter_mut().zip(&candidate.angles) {
+            *sc = (a.sin, a.cos);
+        }
+        let reached = if form.fit.is_exact() {
+            self.pose_by_trig(&sin_cos)
+        } else {
+            self.pose(&q)
+        };
+        if misses(&reached, target) > CHECK {
             // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
             // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
-            if position.max(orientation) > POLISH_FROM {
+            if misses(&reached, target) > POLISH_FROM {
                 return None;
             }
             q = self.polish(target, &q)?;
-            let (position, orientation) = self.errors(&q, target);
-            if position.max(orientation) > CHECK {
+            if misses(&self.pose(&q), target) > CHECK {
                 return None;
             }
         }
@@ -210,12 +237,6 @@ impl Chain {
             q,
             branch: candidate.branch,
         })
-    }
-
-    /// Position and orientation error of configuration `q` from `target`.
-    fn errors(&self, q: &Joints, target: &Frame) -> (f64, f64) {
-        let e = math::diff(&self.pose(q), target);
-        (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm())
     }
 
     /// Newton steps on the true chain from a solution of its ideal model.
@@ -232,13 +253,26 @@ impl Chain {
     }
 }
 
+/// How far `reached` misses `target`: the larger of the position error (m) and the rotation
+/// angle between them (rad), the angle read from the matrices' difference
+/// (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter),
+/// which needs no logarithm.
+fn misses(reached: &Frame, target: &Frame) -> f64 {
+    let position = (reached.translation.vector - target.translation.vector).norm();
+    let rotation = (reached.rotation.matrix() - target.rotation.matrix()).norm();
+    position.max(rotation * core::f64::consts::FRAC_1_SQRT_2)
+}
+
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
 /// `reference`; `None` if no turn fits.
 fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
     const TAU: f64 = core::f64::consts::TAU;
+    // Within π of the reference: if it fits, no other turn is nearer.
     let near = angle + TAU * libm::round((reference - angle) / TAU);
-    [near, near - TAU, near + TAU]
-        .into_iter()
-        .filter(|v| lo <= *v && *v <= hi)
-        .min_by(|a, b| (a - reference).abs().total_cmp(&(b - reference).abs()))
+    if lo <= near && near <= hi {
+        return Some(near);
+    }
+    // Outside on one side: the next turn towards the range is the only nearer candidate.
+    let next = if near > hi { near - TAU } else { near + TAU };
+    (lo <= next && next <= hi).then_some(next)
 }

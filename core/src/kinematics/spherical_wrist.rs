@@ -8,11 +8,11 @@
 //! produces the remaining rotation: θ4, θ5 from where axis 6 must point (subproblem 2), θ6
 //! from what is left (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
 
-use nalgebra::Matrix3;
+use nalgebra::Vector3;
 
 use super::closed_form::{Branch, Candidate, Candidates};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, PairRoots, rotation, sp1, sp2, sp3, sp4};
+use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3, sp4};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -25,27 +25,34 @@ pub(super) fn solve(
     out: &mut Candidates,
 ) {
     let s = &form.screws;
-    let [h1, h2, h3, _, _, _, _, _] = &s.axis;
+    let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
+    // R1 ⋯ R6 = target · (tool at zero)ᵀ; only its action on h5 and h6 is needed.
     let tool = target.rotation.matrix() * s.tool_rotation.transpose();
     let centre = target.translation.vector - tool * (s.tool_position - w);
+    let (tool_h5, tool_h6) = (tool * h5, tool * h6);
     let v = centre - o1;
     let (shoulders, n1) = sp4(&v, h1, h2, h2.dot(&(w - o1))).list(free[0]);
     for &(a1, b1) in shoulders.iter().take(n1) {
-        let r1 = rotation(h1, &a1);
-        let u = r1.transpose() * v - (o2 - o1);
+        let v1 = a1.value();
+        let back1 = a1.negated();
+        let u = rotate(h1, &back1, &v) - (o2 - o1);
         let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm()).list(free[2]);
         for &(a3, b3) in elbows.iter().take(n3) {
-            let r3 = rotation(h3, &a3);
-            let reach = (o3 - o2) + r3 * (w - o3);
+            let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
-            let arm = r1 * rotation(h2, &a2) * r3;
+            // (R1 R2 R3)ᵀ applied to the tool's h5 and h6: what the wrist must produce.
+            let back = |x: &Vector3<f64>| {
+                let x = rotate(h1, &back1, x);
+                rotate(h3, &a3.negated(), &rotate(h2, &a2.negated(), &x))
+            };
+            let arm = ([a1, a2, a3], [v1, a2.value(), a3.value()]);
             let branch = Branch::from_roots(b1, b3, 0);
             wrist(
                 form,
-                &(arm.transpose() * tool),
-                [a1, a2, a3],
+                [back(&tool_h5), back(&tool_h6)],
+                arm,
                 branch,
                 free,
                 out,
@@ -54,29 +61,29 @@ pub(super) fn solve(
     }
 }
 
-/// Joints 4–6 producing the rotation `m = R4 R5 R6`, appended to the arm's `[θ1, θ2, θ3]`.
+/// Joints 4–6 producing the rotation `m = R4 R5 R6`, given as `[m h5, m h6]`, appended to the
+/// arm's `[θ1, θ2, θ3]` (angles and values).
 fn wrist(
     form: &ClosedForm,
-    m: &Matrix3<f64>,
-    arm: [Angle; 3],
+    [turned_h5, pointing]: [Vector3<f64>; 2],
+    arm: ([Angle; 3], [f64; 3]),
     branch: Branch,
     free: &[f64; MAX_JOINTS],
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
-    let pointing = m * h6;
+    // R6 = R5ᵀ R4ᵀ m: where it takes h5.
     let last = |a4: &Angle, a5: &Angle| {
-        let rest = (rotation(h4, a4) * rotation(h5, a5)).transpose() * m;
-        sp1(h6, h5, &(rest * h5))
+        let back = rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5));
+        sp1(h6, h5, &back)
     };
-    let [a1, a2, a3] = arm;
+    let ([a1, a2, a3], [v1, v2, v3]) = arm;
     let mut push = |a4: Angle, a5: Angle, wrist: u8| {
         if let Some(a6) = last(&a4, &a5) {
+            let known = [v1, v2, v3, f64::NAN, f64::NAN, f64::NAN];
+            let angles = [a1, a2, a3, a4, a5, a6];
             // A full list only drops further roots, which cannot occur (8 at most).
-            let _ = out.push(Candidate {
-                angles: [a1, a2, a3, a4, a5, a6],
-                branch: branch.with_wrist(wrist),
-            });
+            let _ = out.push(Candidate::new(angles, known, branch.with_wrist(wrist)));
         }
     };
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
@@ -89,7 +96,7 @@ fn wrist(
         PairRoots::FreeFirst => {
             // Axis 6 along axis 4 (θ5 = 0 on most arms): θ4 + θ6 is fixed, θ4 keeps `free`.
             let a4 = Angle::of(free[3]);
-            let turned = rotation(h4, &a4).transpose() * pointing;
+            let turned = rotate(h4, &a4.negated(), &pointing);
             if let Some(a5) = sp1(h5, h6, &turned) {
                 push(a4, a5, 0);
             }

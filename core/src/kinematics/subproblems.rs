@@ -6,7 +6,7 @@
 //! `atan2`) is only needed for the answer. Only exact solutions are returned: a problem whose
 //! data admit none within [`TANGENT`] has no roots (the caller's FK check is the final word).
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// How far beyond a tangency (|cos| > 1, a negative square) the data may be and still count as
 /// touching: the rounding of a stretched elbow or a wrist at the edge of its range.
@@ -69,21 +69,9 @@ impl Roots {
     }
 }
 
-/// The rotation about the unit axis `k` by `a` (Rodrigues).
-pub(super) fn rotation(k: &Vector3<f64>, a: &Angle) -> Matrix3<f64> {
-    let (c, s) = (a.cos, a.sin);
-    let t = 1.0 - c;
-    Matrix3::new(
-        c + t * k.x * k.x,
-        t * k.x * k.y - s * k.z,
-        t * k.x * k.z + s * k.y,
-        t * k.x * k.y + s * k.z,
-        c + t * k.y * k.y,
-        t * k.y * k.z - s * k.x,
-        t * k.x * k.z - s * k.y,
-        t * k.y * k.z + s * k.x,
-        c + t * k.z * k.z,
-    )
+/// `v` turned about the unit axis `k` by `a` (Rodrigues, without building the matrix).
+pub(super) fn rotate(k: &Vector3<f64>, a: &Angle, v: &Vector3<f64>) -> Vector3<f64> {
+    v * a.cos + k.cross(v) * a.sin + k * (k.dot(v) * (1.0 - a.cos))
 }
 
 /// Subproblem 1: the angle that turns `p` about `k` onto `q` (`R(k, θ) p = q`). `None` if `p`
@@ -93,7 +81,7 @@ pub(super) fn sp1(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> Optio
     let qp = q - k * k.dot(q);
     let x = pp.dot(&qp);
     let y = k.dot(&p.cross(q));
-    let r = libm::hypot(x, y);
+    let r = libm::sqrt(x * x + y * y);
     (r > DEGENERATE).then(|| Angle {
         cos: x / r,
         sin: y / r,
@@ -108,7 +96,7 @@ pub(super) fn sp4(h: &Vector3<f64>, k: &Vector3<f64>, p: &Vector3<f64>, d: f64) 
     let a = h.dot(&pp);
     let b = h.dot(&k.cross(p));
     let c = d - h.dot(k) * along;
-    let r = libm::hypot(a, b);
+    let r = libm::sqrt(a * a + b * b);
     if r <= DEGENERATE {
         return if c.abs() <= TANGENT {
             Roots::Any
@@ -239,13 +227,13 @@ mod tests {
                 unit(&mut rng),
             );
             let (t1, t2) = (rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
-            let q = rotation(&k, &Angle::of(t1)) * p;
+            let q = rotate(&k, &Angle::of(t1), &p);
             assert!(close(&sp1(&k, &p, &q).unwrap(), t1));
             assert!(contains(sp4(&h, &k, &p, h.dot(&q)), t1));
             let p2 = unit(&mut rng) * 0.3;
             assert!(contains(sp3(&k, &p, &p2, (q - p2).norm()), t1));
             // R(k, t1) p = R(k2, t2) p2'
-            let p2 = rotation(&k2, &Angle::of(t2)).transpose() * q;
+            let p2 = rotate(&k2, &Angle::of(t2).negated(), &q);
             let PairRoots::Some(pairs, count) = sp2(&k, &p, &k2, &p2) else {
                 panic!("no roots");
             };

@@ -10,7 +10,9 @@
 
 use super::closed_form::{Branch, Candidate, Candidates};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, rotation, sp1, sp3, sp4};
+use nalgebra::Vector3;
+
+use super::subproblems::{Angle, rotate, sp1, sp3, sp4};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -26,35 +28,44 @@ pub(super) fn solve(
     let [h1, h, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, o4, _, _, _, _] = &s.point;
     let c = &form.centre;
+    // R1 ⋯ R6 = target · (tool at zero)ᵀ, used on vectors only.
     let tool = target.rotation.matrix() * s.tool_rotation.transpose();
     let centre = target.translation.vector - tool * (s.tool_position - c);
+    let tool_h6 = tool * h6;
     let v = centre - o1;
     let (shoulders, n1) = sp4(&v, h1, h, h.dot(&(c - o1))).list(free[0]);
     for &(a1, b1) in shoulders.iter().take(n1) {
-        let r1 = rotation(h1, &a1);
-        // m = R2 R3 R4 R5 R6, and hᵀ R2 R3 R4 = hᵀ.
-        let m = r1.transpose() * tool;
-        let (wrists, n5) = sp4(h, h5, h6, h.dot(&(m * h6))).list(free[4]);
+        let v1 = a1.value();
+        let back1 = a1.negated();
+        // m = R1ᵀ R1 ⋯ R6 = R2 ⋯ R6, and hᵀ R2 R3 R4 = hᵀ: hᵀ m h6 = hᵀ R5 h6.
+        let m = |x: &Vector3<f64>| rotate(h1, &back1, &(tool * x));
+        let m_h6 = rotate(h1, &back1, &tool_h6);
+        let mt_h = tool.transpose() * rotate(h1, &a1, h);
+        let (wrists, n5) = sp4(h, h5, h6, h.dot(&m_h6)).list(free[4]);
         for &(a5, b5) in wrists.iter().take(n5) {
-            let r5 = rotation(h5, &a5);
-            let a6 = sp1(h6, &(m.transpose() * h), &(r5.transpose() * h))
-                .unwrap_or_else(|| Angle::of(free[5]));
-            let planar = m * (r5 * rotation(h6, &a6)).transpose();
-            let u = r1.transpose() * v + o1 - planar * (c - o4) - o2;
+            let back5 = a5.negated();
+            // R6 mᵀ h = R5ᵀ h
+            let a6 = sp1(h6, &mt_h, &rotate(h5, &back5, h)).unwrap_or_else(|| Angle::of(free[5]));
+            let (v5, v6) = (a5.value(), a6.value());
+            let back6 = a6.negated();
+            // planar = R2 R3 R4 = m R6ᵀ R5ᵀ, on the two vectors that matter.
+            let planar_c = m(&rotate(h6, &back6, &rotate(h5, &back5, &(c - o4))));
+            let planar_h5 = m(&rotate(h6, &back6, h5));
+            let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
             let (elbows, n3) = sp3(h3, &(o4 - o3), &(o2 - o3), u.norm()).list(free[2]);
             for &(a3, b3) in elbows.iter().take(n3) {
-                let r3 = rotation(h3, &a3);
-                let reach = (o3 - o2) + r3 * (o4 - o3);
+                let reach = (o3 - o2) + rotate(h3, &a3, &(o4 - o3));
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
-                let rest = (rotation(h, &a2) * r3).transpose() * planar;
-                let Some(a4) = sp1(h4, h5, &(rest * h5)) else {
+                // R4 = (R2 R3)ᵀ planar: where it takes h5.
+                let rest = rotate(h3, &a3.negated(), &rotate(h, &a2.negated(), &planar_h5));
+                let Some(a4) = sp1(h4, h5, &rest) else {
                     continue;
                 };
+                let known = [v1, f64::NAN, f64::NAN, f64::NAN, v5, v6];
+                let angles = [a1, a2, a3, a4, a5, a6];
+                let branch = Branch::from_roots(b1, b3, b5);
                 // A full list only drops further roots, which cannot occur (8 at most).
-                let _ = out.push(Candidate {
-                    angles: [a1, a2, a3, a4, a5, a6],
-                    branch: Branch::from_roots(b1, b3, b5),
-                });
+                let _ = out.push(Candidate::new(angles, known, branch));
             }
         }
     }
