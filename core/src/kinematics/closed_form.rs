@@ -12,13 +12,14 @@ use heapless::Vec;
 
 use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
-use super::ik::{IkError, IkResult};
+use super::ik::{IkError, IkSolution};
 use super::joints::Joints;
 use super::subproblems::Angle;
 use super::{spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::Frame;
+use crate::saturate::saturate;
 
 /// Most solutions of a closed-form solve (2 shoulders · 2 elbows · 2 wrists).
 pub const MAX_SOLUTIONS: usize = 8;
@@ -28,7 +29,7 @@ pub const CHECK: f64 = 1e-9;
 /// A candidate this close to the target (m, rad) but not within [`CHECK`] is polished.
 const POLISH_FROM: f64 = 1e-5;
 /// Newton steps that polish a solution of the ideal model on a calibrated chain.
-const POLISH_ITERATIONS: u16 = 8;
+const POLISH_ITERATIONS: u16 = 20;
 
 /// A configuration branch of a closed-form family: which root each of the three two-way
 /// choices took. Bit 0 is the shoulder (the second root of θ1), bit 1 the elbow (of θ3), bit
@@ -99,6 +100,30 @@ impl Candidate {
     }
 }
 
+/// A checked solution with its errors.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Exact {
+    pub solution: BranchSolution,
+    /// Distance from the target position (m).
+    pub position_error: f64,
+    /// Rotation angle from the target orientation (rad).
+    pub orientation_error: f64,
+}
+
+impl Exact {
+    /// As an [`IkSolution`] (no Newton steps), if both errors are below `tolerance`.
+    pub fn within(&self, tolerance: f64) -> Option<IkSolution> {
+        (self.position_error < tolerance && self.orientation_error < tolerance).then_some(
+            IkSolution {
+                q: self.solution.q,
+                iterations: 0,
+                position_error: self.position_error,
+                orientation_error: self.orientation_error,
+            },
+        )
+    }
+}
+
 /// The candidates of one solve.
 pub(super) type Candidates = Vec<Candidate, MAX_SOLUTIONS>;
 
@@ -119,12 +144,12 @@ impl Chain {
     /// value kept by a joint a singularity leaves free). Refused with
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference)?;
+        let (form, reference, candidates) = self.candidates(target, reference, false)?;
         let mut solutions = Solutions::new();
         for candidate in &candidates {
-            if let Some(solution) = self.finish(form, candidate, target, &reference) {
+            if let Some(exact) = self.finish(form, candidate, target, &reference) {
                 // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                let _ = solutions.push(solution);
+                let _ = solutions.push(exact.solution);
             }
         }
         Ok(solutions)
@@ -138,7 +163,19 @@ impl Chain {
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<BranchSolution>, IkError> {
-        let (form, reference, mut candidates) = self.candidates(target, reference)?;
+        Ok(self
+            .nearest_exact(target, reference, branch)?
+            .map(|e| e.solution))
+    }
+
+    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors.
+    pub(super) fn nearest_exact(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Result<Option<Exact>, IkError> {
+        let (form, reference, mut candidates) = self.candidates(target, reference, false)?;
         candidates.retain(|c| branch.is_none_or(|b| b == c.branch));
         let mut near = [Angle::of(0.0); 6];
         for (a, r) in near.iter_mut().zip(&reference) {
@@ -158,6 +195,15 @@ impl Chain {
             .find_map(|c| self.finish(form, c, target, &reference)))
     }
 
+    /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
+    /// two-way choice the root nearest the seed, so one candidate is built and checked.
+    pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
+        let (form, reference, candidates) = self.candidates(target, seed, true)?;
+        Ok(candidates
+            .first()
+            .and_then(|c| self.finish(form, c, target, &reference)))
+    }
+
     /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
     /// lies at `q`. `None` for a numeric chain or at a configuration no branch reproduces
     /// (within 1e-6 per joint).
@@ -168,21 +214,23 @@ impl Chain {
         same.then_some(found.branch)
     }
 
-    /// The family, the checked reference and the family solver's candidates.
+    /// The family, the checked reference and the family solver's candidates (with `nearest`,
+    /// only the one nearest `reference` at every choice).
     fn candidates(
         &self,
         target: &Frame,
         reference: &[f64],
+        nearest: bool,
     ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         let reference = self.prepare(target, reference)?;
         let mut candidates = Candidates::new();
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &reference, &mut candidates);
+                spherical_wrist::solve(form, target, &reference, nearest, &mut candidates);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, &reference, &mut candidates);
+                three_parallel::solve(form, target, &reference, nearest, &mut candidates);
             }
             Family::Numeric => {}
         }
@@ -197,18 +245,26 @@ impl Chain {
         candidate: &Candidate,
         target: &Frame,
         reference: &[f64; MAX_JOINTS],
-    ) -> Option<BranchSolution> {
+    ) -> Option<Exact> {
         let (min, max) = self.limits();
         let mut q = Joints::zeros(self.dof());
         let angles = candidate.angles.iter().zip(&candidate.values);
         let joints = q.iter_mut().zip(angles).zip(reference);
+        // An ideal model's root may lie a little beyond a limit the true chain's is within:
+        // widened limits, then Newton from the nearest point within them.
+        let widen = if form.fit.is_exact() {
+            0.0
+        } else {
+            form.slack()
+        };
         for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
             let value = if known.is_nan() {
                 angle.value()
             } else {
                 *known
             };
-            *v = nearest_turn(value, *r, *lo, *hi)?;
+            let turned = nearest_turn(value, *r, lo - widen, hi + widen)?;
+            *v = saturate(turned, *lo, *hi);
         }
         if !form.fit.is_exact() {
             q = self.polish(target, &q)?;
@@ -222,45 +278,50 @@ impl Chain {
         } else {
             self.pose(&q)
         };
-        if misses(&reached, target) > CHECK {
+        let mut errors = misses(&reached, target);
+        if errors.0.max(errors.1) > CHECK {
             // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
             // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
-            if misses(&reached, target) > POLISH_FROM {
+            if errors.0.max(errors.1) > POLISH_FROM {
                 return None;
             }
             q = self.polish(target, &q)?;
-            if misses(&self.pose(&q), target) > CHECK {
+            errors = misses(&self.pose(&q), target);
+            if errors.0.max(errors.1) > CHECK {
                 return None;
             }
         }
-        Some(BranchSolution {
-            q,
-            branch: candidate.branch,
+        Some(Exact {
+            solution: BranchSolution {
+                q,
+                branch: candidate.branch,
+            },
+            position_error: errors.0,
+            orientation_error: errors.1,
         })
     }
 
-    /// Newton steps on the true chain from a solution of its ideal model.
+    /// Newton steps on the true chain from a solution of its ideal model (or from a root known
+    /// only to √ε); the best pose reached.
     fn polish(&self, target: &Frame, q: &Joints) -> Option<Joints> {
         let config = IkConfig {
             tolerance: 0.1 * CHECK,
             tracking_iterations: POLISH_ITERATIONS,
             ..IkConfig::default()
         };
-        match self.solve_tracking(target, q, &config).ok()? {
-            IkResult::Converged(s) => Some(s.q),
-            IkResult::NotConverged(_) => None,
-        }
+        // Aiming below CHECK, Newton may stall on rounding just above its tolerance: its best
+        // pose goes to the caller's check either way.
+        Some(self.newton_tracking(target, q, &config).ok()?.solution().q)
     }
 }
 
-/// How far `reached` misses `target`: the larger of the position error (m) and the rotation
-/// angle between them (rad), the angle read from the matrices' difference
-/// (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter),
-/// which needs no logarithm.
-fn misses(reached: &Frame, target: &Frame) -> f64 {
+/// How far `reached` misses `target`: the position error (m) and the rotation angle between
+/// them (rad), the angle read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
+/// `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter), which needs no logarithm.
+fn misses(reached: &Frame, target: &Frame) -> (f64, f64) {
     let position = (reached.translation.vector - target.translation.vector).norm();
     let rotation = (reached.rotation.matrix() - target.rotation.matrix()).norm();
-    position.max(rotation * core::f64::consts::FRAC_1_SQRT_2)
+    (position, rotation * core::f64::consts::FRAC_1_SQRT_2)
 }
 
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to

@@ -11,11 +11,14 @@ use nalgebra::Vector3;
 
 use super::chain::Chain;
 use super::screws::{Screws, closest_meeting, distance_to_line, misalignment};
+use super::subproblems::TANGENT;
 
 /// Deviation (m, or the sine of an angle) up to which the chain is the family's ideal model.
 const EXACT: f64 = 1e-9;
 /// Deviation up to which the chain is solved on its ideal model and polished.
 const NEAR: f64 = 1e-2;
+/// The subproblems' slack beyond a tangency on an ideal model ([`ClosedForm::slack`]).
+const NEAR_SLACK: f64 = 0.05;
 /// Two axes at least this far from parallel (sine) count as distinct directions.
 const DISTINCT: f64 = 0.1;
 
@@ -60,6 +63,17 @@ pub(super) struct ClosedForm {
 }
 
 impl ClosedForm {
+    /// How far beyond a tangency the subproblems accept data: rounding for an exact model;
+    /// for an ideal model of a calibrated arm, enough that a target the true arm reaches at the
+    /// edge of its workspace still gives the ideal model's tangent root, which Newton polishes.
+    pub fn slack(&self) -> f64 {
+        if self.fit.is_exact() {
+            TANGENT
+        } else {
+            NEAR_SLACK
+        }
+    }
+
     /// The family `chain` belongs to, if any.
     pub fn detect(chain: &Chain) -> Option<Self> {
         if chain.dof() != 6 || (0..6).any(|i| chain.is_prismatic(i)) {

@@ -25,6 +25,9 @@ use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
 use crate::saturate::saturate;
 
+/// The most a joint may move from the seed in a closed-form tracking solution (rad): beyond,
+/// the seed's branch has no solution within the limits here.
+pub const TRACKING_JUMP: f64 = 0.5;
 /// Damping floor: keeps every system positive definite, small enough that steps near the
 /// solution are Newton steps.
 const LAMBDA_MIN: f64 = 1e-9;
@@ -125,7 +128,44 @@ struct Descent {
 }
 
 impl Chain {
-    /// Tracking IK: a few damped Newton steps from a nearby `seed`, typically the previous
+    /// Tracking IK: the solution nearest to a nearby `seed`, typically the previous tick's
+    /// solution. Never wraps joints by 2π, so the result stays on the seed's branch and a
+    /// commanded trajectory cannot jump a whole turn.
+    ///
+    /// A chain of a closed-form family takes the closed-form solution nearest the seed if no
+    /// joint moves more than [`TRACKING_JUMP`] from it (a larger jump means the seed's branch
+    /// has no exact solution here, e.g. beyond a limit, and Newton's best effort is the
+    /// answer); otherwise, and for every other chain, [`newton_tracking`](Self::newton_tracking).
+    pub fn solve_tracking(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+    ) -> Result<IkResult, IkError> {
+        if self.closed_form().is_some() {
+            // A seed that already reaches the target is the answer itself, bit for bit (a
+            // holding arm's set-points must not jitter by rounding).
+            let start = self.prepare(target, seed)?;
+            let here = self.descend(target, start, 0, config.tolerance, Bounds::Free, &mut || {});
+            if here.converged {
+                return Ok(IkResult::Converged(here.best));
+            }
+            let close = |q: &[f64]| {
+                q.iter()
+                    .zip(seed)
+                    .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
+            };
+            if let Some(found) = self.follow(target, seed)?
+                && close(&found.solution.q)
+                && let Some(solution) = found.within(config.tolerance)
+            {
+                return Ok(IkResult::Converged(solution));
+            }
+        }
+        self.newton_tracking(target, seed, config)
+    }
+
+    /// Tracking IK by damped Newton steps alone from a nearby `seed`, typically the previous
     /// tick's solution. Never wraps joints by 2π, so the result stays on the seed's branch and
     /// a commanded trajectory cannot jump a whole turn.
     ///
@@ -134,7 +174,7 @@ impl Chain {
     /// does a bounded descent from the same seed follow. An unbounded Newton path may pass
     /// outside a limit on its way to a solution inside; a bounded one can then end on the
     /// limit in a local minimum (seeds a few millimetres inside UR5's ±2π limits did).
-    pub fn solve_tracking(
+    pub fn newton_tracking(
         &self,
         target: &Frame,
         seed: &[f64],
@@ -173,9 +213,11 @@ impl Chain {
         Ok(bounded.into_result())
     }
 
-    /// Global IK: descends from `seed`, then from deterministic random configurations drawn
-    /// with `rng_seed`, until one converges within the limits or `config.global_iterations`
-    /// iterations are spent. The same inputs always give the same answer.
+    /// Global IK. A chain of a closed-form family takes the exact solution nearest `seed` if
+    /// there is one. Otherwise (and for every other chain) it descends from `seed`, then from
+    /// deterministic random configurations drawn with `rng_seed`, until one converges within
+    /// the limits or `config.global_iterations` iterations are spent. The same inputs always
+    /// give the same answer.
     pub fn solve_global(
         &self,
         target: &Frame,
@@ -183,6 +225,12 @@ impl Chain {
         config: &IkConfig,
         rng_seed: u64,
     ) -> Result<IkResult, IkError> {
+        if self.closed_form().is_some()
+            && let Some(found) = self.nearest_exact(target, seed, None)?
+            && let Some(solution) = found.within(config.tolerance)
+        {
+            return Ok(IkResult::Converged(solution));
+        }
         self.solve_global_counted(target, seed, config, rng_seed, &mut || {})
     }
 

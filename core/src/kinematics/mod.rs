@@ -24,6 +24,6 @@ mod velocity;
 pub use chain::{Chain, KinematicsError};
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
 pub use family::{Family, FamilyFit};
-pub use ik::{IkError, IkResult, IkSolution, diverges};
+pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;
 pub use joints::Joints;

@@ -16,15 +16,18 @@ use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3, sp4};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
-/// Every candidate solution for `target` (unchecked: the caller applies limits and FK).
-/// `free` gives the value of a joint left free by a singularity.
+/// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
+/// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
+/// gives the value of a joint left free by a singularity.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
     free: &[f64; MAX_JOINTS],
+    nearest: bool,
     out: &mut Candidates,
 ) {
     let s = &form.screws;
+    let slack = form.slack();
     let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
@@ -33,12 +36,12 @@ pub(super) fn solve(
     let centre = target.translation.vector - tool * (s.tool_position - w);
     let (tool_h5, tool_h6) = (tool * h5, tool * h6);
     let v = centre - o1;
-    let (shoulders, n1) = sp4(&v, h1, h2, h2.dot(&(w - o1))).list(free[0]);
+    let (shoulders, n1) = sp4(&v, h1, h2, h2.dot(&(w - o1)), slack).list(free[0], nearest);
     for &(a1, b1) in shoulders.iter().take(n1) {
         let v1 = a1.value();
         let back1 = a1.negated();
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm()).list(free[2]);
+        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
         for &(a3, b3) in elbows.iter().take(n3) {
             let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
@@ -54,7 +57,7 @@ pub(super) fn solve(
                 [back(&tool_h5), back(&tool_h6)],
                 arm,
                 branch,
-                free,
+                (free, nearest),
                 out,
             );
         }
@@ -68,7 +71,7 @@ fn wrist(
     [turned_h5, pointing]: [Vector3<f64>; 2],
     arm: ([Angle; 3], [f64; 3]),
     branch: Branch,
-    free: &[f64; MAX_JOINTS],
+    (free, nearest): (&[f64; MAX_JOINTS], bool),
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
@@ -87,9 +90,19 @@ fn wrist(
         }
     };
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
-    match sp2(h4, &pointing, h5, h6) {
+    match sp2(h4, &pointing, h5, h6, form.slack()) {
         PairRoots::Some(pairs, count) => {
-            for (bw, (t4, t5)) in (0u8..).zip(pairs.iter().take(count)) {
+            let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
+            let closeness = |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
+            let skip = match pairs {
+                [first, second] if nearest && count == 2 => {
+                    usize::from(closeness(&second) > closeness(&first))
+                }
+                _ => 0,
+            };
+            let take = if nearest { 1 } else { count };
+            let roots = (0u8..).zip(pairs.iter()).skip(skip).take(take);
+            for (bw, (t4, t5)) in roots {
                 push(t4.negated(), *t5, bw);
             }
         }

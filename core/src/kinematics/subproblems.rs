@@ -8,9 +8,10 @@
 
 use nalgebra::Vector3;
 
-/// How far beyond a tangency (|cos| > 1, a negative square) the data may be and still count as
-/// touching: the rounding of a stretched elbow or a wrist at the edge of its range.
-const TANGENT: f64 = 1e-9;
+/// How far beyond a tangency (|cos| > 1, a negative square) the data of an exact model may be
+/// and still count as touching: the rounding of a stretched elbow or a wrist at the edge of its
+/// range. (The ideal model of a calibrated arm allows more: its roots are polished anyway.)
+pub(super) const TANGENT: f64 = 1e-9;
 /// Below this a projection onto the plane of an axis counts as zero: the angle is free.
 const DEGENERATE: f64 = 1e-12;
 
@@ -31,6 +32,11 @@ impl Angle {
     /// Its value in (−π, π].
     pub fn value(&self) -> f64 {
         libm::atan2(self.sin, self.cos)
+    }
+
+    /// The cosine of the difference to `other`: 1 when equal, −1 half a turn apart.
+    pub fn closeness(&self, other: &Angle) -> f64 {
+        self.cos * other.cos + self.sin * other.sin
     }
 
     /// The opposite angle.
@@ -57,14 +63,23 @@ pub(super) enum Roots {
 
 impl Roots {
     /// The roots as an array of up to two, each with its branch index (0 = `+`, 1 = `−`);
-    /// `Any` gives `free` as branch 0.
-    pub fn list(self, free: f64) -> ([(Angle, u8); 2], usize) {
+    /// `Any` gives `reference` as branch 0. With `nearest`, only the root nearest
+    /// `reference` (the tracking case, which follows one branch).
+    pub fn list(self, reference: f64, nearest: bool) -> ([(Angle, u8); 2], usize) {
         let none = Angle { cos: 1.0, sin: 0.0 };
         match self {
             Self::None => ([(none, 0); 2], 0),
             Self::One(a) => ([(a, 0), (none, 0)], 1),
+            Self::Two(a, b) if nearest => {
+                let r = Angle::of(reference);
+                if a.closeness(&r) >= b.closeness(&r) {
+                    ([(a, 0), (none, 0)], 1)
+                } else {
+                    ([(b, 1), (none, 0)], 1)
+                }
+            }
             Self::Two(a, b) => ([(a, 0), (b, 1)], 2),
-            Self::Any => ([(Angle::of(free), 0), (none, 0)], 1),
+            Self::Any => ([(Angle::of(reference), 0), (none, 0)], 1),
         }
     }
 }
@@ -88,8 +103,15 @@ pub(super) fn sp1(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> Optio
     })
 }
 
-/// Subproblem 4: the angles with `hᵀ R(k, θ) p = d`.
-pub(super) fn sp4(h: &Vector3<f64>, k: &Vector3<f64>, p: &Vector3<f64>, d: f64) -> Roots {
+/// Subproblem 4: the angles with `hᵀ R(k, θ) p = d`; data up to `slack` beyond a tangency
+/// give the tangent root.
+pub(super) fn sp4(
+    h: &Vector3<f64>,
+    k: &Vector3<f64>,
+    p: &Vector3<f64>,
+    d: f64,
+    slack: f64,
+) -> Roots {
     let along = k.dot(p);
     let pp = p - k * along;
     // hᵀR(k,θ)p = (hᵀk)(kᵀp) + cos θ · hᵀp⊥ + sin θ · hᵀ(k × p)
@@ -98,19 +120,27 @@ pub(super) fn sp4(h: &Vector3<f64>, k: &Vector3<f64>, p: &Vector3<f64>, d: f64) 
     let c = d - h.dot(k) * along;
     let r = libm::sqrt(a * a + b * b);
     if r <= DEGENERATE {
-        return if c.abs() <= TANGENT {
+        return if c.abs() <= slack {
             Roots::Any
         } else {
             Roots::None
         };
     }
     let ratio = c / r;
-    if ratio.abs() > 1.0 + TANGENT {
+    if ratio.abs() > 1.0 + slack {
         return Roots::None;
     }
-    let ratio = ratio.clamp(-1.0, 1.0);
     let (cos_phi, sin_phi) = (a / r, b / r);
-    let half = libm::sqrt(1.0 - ratio * ratio);
+    // Beyond a tangency on an ideal model (slack above rounding), the true arm's two roots
+    // straddle the tangent one about as far as the data overshoot: both are seeded.
+    let beyond = ratio.abs() > 1.0 && slack > TANGENT;
+    let half = libm::sqrt((1.0 - ratio * ratio).abs());
+    let half = if beyond || ratio.abs() < 1.0 {
+        half
+    } else {
+        0.0
+    };
+    let ratio = ratio.clamp(-1.0, 1.0);
     // θ = φ ± δ with cos δ = ratio, sin δ = half.
     let plus = Angle {
         cos: cos_phi * ratio - sin_phi * half,
@@ -127,9 +157,15 @@ pub(super) fn sp4(h: &Vector3<f64>, k: &Vector3<f64>, p: &Vector3<f64>, d: f64) 
 }
 
 /// Subproblem 3: the angles with `‖R(k, θ) p1 − p2‖ = d` (as subproblem 4 on the dot product).
-pub(super) fn sp3(k: &Vector3<f64>, p1: &Vector3<f64>, p2: &Vector3<f64>, d: f64) -> Roots {
+pub(super) fn sp3(
+    k: &Vector3<f64>,
+    p1: &Vector3<f64>,
+    p2: &Vector3<f64>,
+    d: f64,
+    slack: f64,
+) -> Roots {
     let dot = 0.5 * (p1.norm_squared() + p2.norm_squared() - d * d);
-    sp4(p2, k, p1, dot)
+    sp4(p2, k, p1, dot, slack)
 }
 
 /// Both angles of subproblem 2's answer, `R(k1, θ1) p1 = R(k2, θ2) p2`.
@@ -153,6 +189,7 @@ pub(super) fn sp2(
     p1: &Vector3<f64>,
     k2: &Vector3<f64>,
     p2: &Vector3<f64>,
+    slack: f64,
 ) -> PairRoots {
     let (a1, a2) = (k1.dot(p1), k2.dot(p2));
     if (p1 - k1 * a1).norm_squared() <= DEGENERATE * DEGENERATE {
@@ -161,14 +198,14 @@ pub(super) fn sp2(
     let c = k1.dot(k2);
     let s2 = 1.0 - c * c;
     let (n1, n2) = (p1.norm_squared(), p2.norm_squared());
-    if s2 <= DEGENERATE || (n1 - n2).abs() > TANGENT * (n1 + n2) {
+    if s2 <= DEGENERATE || (n1 - n2).abs() > slack * (n1 + n2) {
         return PairRoots::None;
     }
     // The common point z = αk1 + βk2 + γ(k1 × k2) keeps both axial components and the norm.
     let alpha = (a1 - c * a2) / s2;
     let beta = (a2 - c * a1) / s2;
     let gamma2 = (n1 - alpha * alpha - beta * beta - 2.0 * alpha * beta * c) / s2;
-    if gamma2 < -TANGENT {
+    if gamma2 < -slack {
         return PairRoots::None;
     }
     let gamma = libm::sqrt(gamma2.max(0.0));
@@ -229,12 +266,12 @@ mod tests {
             let (t1, t2) = (rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
             let q = rotate(&k, &Angle::of(t1), &p);
             assert!(close(&sp1(&k, &p, &q).unwrap(), t1));
-            assert!(contains(sp4(&h, &k, &p, h.dot(&q)), t1));
+            assert!(contains(sp4(&h, &k, &p, h.dot(&q), TANGENT), t1));
             let p2 = unit(&mut rng) * 0.3;
-            assert!(contains(sp3(&k, &p, &p2, (q - p2).norm()), t1));
+            assert!(contains(sp3(&k, &p, &p2, (q - p2).norm(), TANGENT), t1));
             // R(k, t1) p = R(k2, t2) p2'
             let p2 = rotate(&k2, &Angle::of(t2).negated(), &q);
-            let PairRoots::Some(pairs, count) = sp2(&k, &p, &k2, &p2) else {
+            let PairRoots::Some(pairs, count) = sp2(&k, &p, &k2, &p2, TANGENT) else {
                 panic!("no roots");
             };
             assert!(
@@ -251,13 +288,16 @@ mod tests {
         let z = Vector3::z();
         let x = Vector3::x();
         assert_eq!(sp1(&z, &z, &x), None);
-        assert_eq!(sp4(&z, &z, &x, 0.0), Roots::Any);
-        assert_eq!(sp4(&z, &z, &x, 0.5), Roots::None);
-        assert_eq!(sp4(&x, &z, &x, 2.0), Roots::None);
+        assert_eq!(sp4(&z, &z, &x, 0.0, TANGENT), Roots::Any);
+        assert_eq!(sp4(&z, &z, &x, 0.5, TANGENT), Roots::None);
+        assert_eq!(sp4(&x, &z, &x, 2.0, TANGENT), Roots::None);
         // Tangent: the one angle that points x at x.
-        assert!(matches!(sp4(&x, &z, &x, 1.0), Roots::One(a) if close(&a, 0.0)));
-        assert_eq!(sp3(&z, &x, &(x * 3.0), 0.5), Roots::None);
-        assert_eq!(sp2(&z, &z, &x, &z), PairRoots::FreeFirst);
-        assert_eq!(sp2(&z, &x, &x, &(Vector3::y() * 2.0)), PairRoots::None);
+        assert!(matches!(sp4(&x, &z, &x, 1.0, TANGENT), Roots::One(a) if close(&a, 0.0)));
+        assert_eq!(sp3(&z, &x, &(x * 3.0), 0.5, TANGENT), Roots::None);
+        assert_eq!(sp2(&z, &z, &x, &z, TANGENT), PairRoots::FreeFirst);
+        assert_eq!(
+            sp2(&z, &x, &x, &(Vector3::y() * 2.0), TANGENT),
+            PairRoots::None
+        );
     }
 }

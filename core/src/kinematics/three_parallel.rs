@@ -16,15 +16,18 @@ use super::subproblems::{Angle, rotate, sp1, sp3, sp4};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
-/// Every candidate solution for `target` (unchecked: the caller applies limits and FK).
-/// `free` gives the value of a joint left free by a singularity.
+/// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
+/// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
+/// gives the value of a joint left free by a singularity.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
     free: &[f64; MAX_JOINTS],
+    nearest: bool,
     out: &mut Candidates,
 ) {
     let s = &form.screws;
+    let slack = form.slack();
     let [h1, h, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, o4, _, _, _, _] = &s.point;
     let c = &form.centre;
@@ -33,7 +36,7 @@ pub(super) fn solve(
     let centre = target.translation.vector - tool * (s.tool_position - c);
     let tool_h6 = tool * h6;
     let v = centre - o1;
-    let (shoulders, n1) = sp4(&v, h1, h, h.dot(&(c - o1))).list(free[0]);
+    let (shoulders, n1) = sp4(&v, h1, h, h.dot(&(c - o1)), slack).list(free[0], nearest);
     for &(a1, b1) in shoulders.iter().take(n1) {
         let v1 = a1.value();
         let back1 = a1.negated();
@@ -41,7 +44,7 @@ pub(super) fn solve(
         let m = |x: &Vector3<f64>| rotate(h1, &back1, &(tool * x));
         let m_h6 = rotate(h1, &back1, &tool_h6);
         let mt_h = tool.transpose() * rotate(h1, &a1, h);
-        let (wrists, n5) = sp4(h, h5, h6, h.dot(&m_h6)).list(free[4]);
+        let (wrists, n5) = sp4(h, h5, h6, h.dot(&m_h6), slack).list(free[4], nearest);
         for &(a5, b5) in wrists.iter().take(n5) {
             let back5 = a5.negated();
             // R6 mᵀ h = R5ᵀ h
@@ -52,7 +55,8 @@ pub(super) fn solve(
             let planar_c = m(&rotate(h6, &back6, &rotate(h5, &back5, &(c - o4))));
             let planar_h5 = m(&rotate(h6, &back6, h5));
             let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
-            let (elbows, n3) = sp3(h3, &(o4 - o3), &(o2 - o3), u.norm()).list(free[2]);
+            let (elbows, n3) =
+                sp3(h3, &(o4 - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
             for &(a3, b3) in elbows.iter().take(n3) {
                 let reach = (o3 - o2) + rotate(h3, &a3, &(o4 - o3));
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
