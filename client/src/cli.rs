@@ -290,8 +290,8 @@ pub enum Cmd {
     /// explains them; docs/calibration.md). Needs no controller.
     #[command(disable_help_flag = true)]
     Calibrate {
-        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml` or
-        /// `plan --robot R.toml --poses 50`.
+        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml
+        /// --instrument-out I.toml` or `plan --robot R.toml --poses 50`.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
