@@ -9,12 +9,13 @@
 //! returned is exact and admissible; a pose with none returns an empty list.
 
 use heapless::Vec;
+use nalgebra::{Matrix3, Vector3};
 
 use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
 use super::joints::Joints;
-use super::subproblems::Angle;
+use super::subproblems::{Angle, sp4};
 use super::{spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
@@ -97,6 +98,31 @@ impl Candidate {
             values: known,
             branch,
         }
+    }
+}
+
+/// Where both families start: the target's rotation relative to the tool's at q = 0
+/// (`R1 ⋯ R6`), the target's place for the form's centre (which moves with the joints before
+/// the last two or three only) relative to axis 1's point, and the roots of θ1 that keep its
+/// component along axis 2 (subproblem 4: rotations about axis 2 and the axes parallel to it
+/// keep it).
+pub(super) struct Shoulder {
+    pub tool: Matrix3<f64>,
+    pub v: Vector3<f64>,
+    pub roots: ([(Angle, u8); 2], usize),
+}
+
+impl Shoulder {
+    /// The start of `form`'s solve for `target` (`nearest`: only the root nearest `free`).
+    pub fn of(form: &ClosedForm, target: &Frame, free: f64, nearest: bool) -> Self {
+        let s = &form.screws;
+        let [h1, h2, _, _, _, _, _, _] = &s.axis;
+        let o1 = &s.point[0];
+        let c = &form.centre;
+        let tool = target.rotation.matrix() * s.tool_rotation.transpose();
+        let v = target.translation.vector - tool * (s.tool_position - c) - o1;
+        let roots = sp4(&v, h1, h2, h2.dot(&(c - o1)), form.slack()).list(free, nearest);
+        Self { tool, v, roots }
     }
 }
 

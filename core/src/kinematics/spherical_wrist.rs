@@ -10,9 +10,9 @@
 
 use nalgebra::Vector3;
 
-use super::closed_form::{Branch, Candidate, Candidates};
+use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3, sp4};
+use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -31,12 +31,10 @@ pub(super) fn solve(
     let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
-    // R1 ⋯ R6 = target · (tool at zero)ᵀ; only its action on h5 and h6 is needed.
-    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
-    let centre = target.translation.vector - tool * (s.tool_position - w);
+    let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
+    // Only the action of R1 ⋯ R6 on h5 and h6 is needed.
     let (tool_h5, tool_h6) = (tool * h5, tool * h6);
-    let v = centre - o1;
-    let (shoulders, n1) = sp4(&v, h1, h2, h2.dot(&(w - o1)), slack).list(free[0], nearest);
+    let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let v1 = a1.value();
         let back1 = a1.negated();

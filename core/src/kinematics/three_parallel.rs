@@ -8,7 +8,7 @@
 //! origin of axis 4: θ3 (subproblem 3), θ2 (subproblem 1), and θ4 from the remaining rotation
 //! (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
 
-use super::closed_form::{Branch, Candidate, Candidates};
+use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
 use super::family::ClosedForm;
 use nalgebra::Vector3;
 
@@ -31,12 +31,10 @@ pub(super) fn solve(
     let [h1, h, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, o4, _, _, _, _] = &s.point;
     let c = &form.centre;
-    // R1 ⋯ R6 = target · (tool at zero)ᵀ, used on vectors only.
-    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
-    let centre = target.translation.vector - tool * (s.tool_position - c);
+    // R1 ⋯ R6, used on vectors only.
+    let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
     let tool_h6 = tool * h6;
-    let v = centre - o1;
-    let (shoulders, n1) = sp4(&v, h1, h, h.dot(&(c - o1)), slack).list(free[0], nearest);
+    let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let v1 = a1.value();
         let back1 = a1.negated();
