@@ -147,32 +147,34 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        if self.closed_form().is_some() {
-            // A seed that already reaches the target is the answer itself, bit for bit (a
-            // holding arm's set-points must not jitter by rounding).
-            let start = self.prepare(target, seed)?;
-            let here = self.descend(target, start, 0, config.tolerance, Bounds::Free, &mut || {});
-            if here.converged {
-                return Ok(IkResult::Converged(here.best));
-            }
-            // Close to the target Newton converges in two or three steps, fewer instructions
-            // than the closed form (the control tick's case); farther out the closed form wins.
-            if score(&here.best) < NEWTON_NEAR {
-                return self.newton_tracking(target, seed, config);
-            }
-            let close = |q: &[f64]| {
-                q.iter()
-                    .zip(seed)
-                    .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
-            };
-            if let Some(found) = self.follow(target, seed)?
-                && close(&found.solution.q)
-                && let Some(solution) = found.within(config.tolerance)
-            {
-                return Ok(IkResult::Converged(solution));
-            }
+        let start = self.prepare(target, seed)?;
+        if self.closed_form().is_none() {
+            return Ok(self.newton_from(target, start, config, None));
         }
-        self.newton_tracking(target, seed, config)
+        // The seed's pose, evaluated once: Newton's first step reuses it.
+        let mut axes = Axes::default();
+        let tool = self.tool_and_axes(&start, &mut axes);
+        let e = math::diff(&tool, target);
+        let here = e.fixed_rows::<3>(0).norm() + e.fixed_rows::<3>(3).norm();
+        let first = Some((tool, axes));
+        // Close to the target (the control tick's case, and a seed that already reaches it:
+        // returned bit for bit) Newton converges in two or three steps, fewer instructions
+        // than the closed form; farther out the closed form wins.
+        if here < NEWTON_NEAR {
+            return Ok(self.newton_from(target, start, config, first.as_ref()));
+        }
+        let close = |q: &[f64]| {
+            q.iter()
+                .zip(seed)
+                .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
+        };
+        if let Some(found) = self.follow(target, seed)?
+            && close(&found.solution.q)
+            && let Some(solution) = found.within(config.tolerance)
+        {
+            return Ok(IkResult::Converged(solution));
+        }
+        Ok(self.newton_from(target, start, config, first.as_ref()))
     }
 
     /// Tracking IK by damped Newton steps alone from a nearby `seed`, typically the previous
@@ -191,13 +193,32 @@ impl Chain {
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
         let q = self.prepare(target, seed)?;
+        Ok(self.newton_from(target, q, config, None))
+    }
+
+    /// [`newton_tracking`](Self::newton_tracking) from a checked seed, whose pose and axes may
+    /// have been evaluated already (`first`).
+    fn newton_from(
+        &self,
+        target: &Frame,
+        q: [f64; MAX_JOINTS],
+        config: &IkConfig,
+        first: Option<&(Frame, Axes)>,
+    ) -> IkResult {
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
         let no_hook = &mut || {};
-        let free = self.descend(target, q, iterations, tolerance, Bounds::Free, no_hook);
+        let free = self.descend(
+            target,
+            q,
+            iterations,
+            tolerance,
+            (Bounds::Free, first),
+            no_hook,
+        );
         let mut used = free.steps;
         if free.converged {
             if self.within_limits(&free.best.q) {
-                return Ok(IkResult::Converged(free.best));
+                return IkResult::Converged(free.best);
             }
             // Converged beyond a limit: near a stretched or folded singularity the nearby
             // branches mirror each other about the joint value there, so the solution
@@ -208,19 +229,20 @@ impl Chain {
                 mirrored,
                 iterations,
                 tolerance,
-                Bounds::Enforced,
+                (Bounds::Enforced, None),
                 no_hook,
             );
             used += retry.steps;
             if retry.converged {
                 let mut best = retry.best;
                 best.iterations = used;
-                return Ok(IkResult::Converged(best));
+                return IkResult::Converged(best);
             }
         }
-        let mut bounded = self.descend(target, q, iterations, tolerance, Bounds::Enforced, no_hook);
+        let bounds = (Bounds::Enforced, None);
+        let mut bounded = self.descend(target, q, iterations, tolerance, bounds, no_hook);
         bounded.best.iterations += used;
-        Ok(bounded.into_result())
+        bounded.into_result()
     }
 
     /// Global IK. A chain of a closed-form family takes the exact solution nearest `seed` if
@@ -268,7 +290,7 @@ impl Chain {
                 q,
                 limit,
                 config.tolerance,
-                Bounds::Wrapping,
+                (Bounds::Wrapping, None),
                 on_step,
             );
             used += descent.steps;
@@ -296,7 +318,7 @@ impl Chain {
                 start,
                 0,
                 config.tolerance,
-                Bounds::Wrapping,
+                (Bounds::Wrapping, None),
                 on_step,
             )
             .best
@@ -365,14 +387,15 @@ impl Chain {
         q
     }
 
-    /// Damped Newton iterations from `q`; returns the best pose visited.
+    /// Damped Newton iterations from `q` (whose pose and axes `first` may give); returns the
+    /// best pose visited.
     fn descend(
         &self,
         target: &Frame,
         mut q: [f64; MAX_JOINTS],
         iterations: u16,
         tolerance: f64,
-        bounds: Bounds,
+        (bounds, first): (Bounds, Option<&(Frame, Axes)>),
         on_step: &mut impl FnMut(),
     ) -> Descent {
         // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
@@ -388,7 +411,13 @@ impl Chain {
         let mut steps = 0;
         let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
-            let tool = self.tool_and_axes(&q, &mut axes);
+            let tool = match first {
+                Some((tool, evaluated)) if it == 0 => {
+                    axes = *evaluated;
+                    *tool
+                }
+                _ => self.tool_and_axes(&q, &mut axes),
+            };
             let e = math::diff(&tool, target);
             let pose = Pose {
                 q,
