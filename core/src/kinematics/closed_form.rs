@@ -201,24 +201,45 @@ impl Chain {
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let (form, reference, mut candidates) = self.candidates(target, reference, false)?;
-        candidates.retain(|c| branch.is_none_or(|b| b == c.branch));
+        let (form, reference, candidates) = self.candidates(target, reference, false)?;
         let mut near = [Angle::of(0.0); 6];
         for (a, r) in near.iter_mut().zip(&reference) {
             *a = Angle::of(*r);
         }
         // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
-        let distance = |c: &Candidate| {
-            c.angles
+        let mut distance = [f64::INFINITY; MAX_SOLUTIONS];
+        for (d, c) in distance.iter_mut().zip(&candidates) {
+            if branch.is_none_or(|b| b == c.branch) {
+                *d = c
+                    .angles
+                    .iter()
+                    .zip(&near)
+                    .map(|(a, r)| 1.0 - a.closeness(r))
+                    .sum();
+            }
+        }
+        // Nearest first (a selection, not a sort: a sort's code would cost the firmware
+        // kilobytes for eight entries).
+        for _ in 0..MAX_SOLUTIONS {
+            let Some((k, _)) = distance
                 .iter()
-                .zip(&near)
-                .map(|(a, r)| 1.0 - (a.cos * r.cos + a.sin * r.sin))
-                .sum::<f64>()
-        };
-        candidates.sort_unstable_by(|a, b| distance(a).total_cmp(&distance(b)));
-        Ok(candidates
-            .iter()
-            .find_map(|c| self.finish(form, c, target, &reference)))
+                .enumerate()
+                .filter(|(_, d)| d.is_finite())
+                .min_by(|(_, a), (_, b)| a.total_cmp(b))
+            else {
+                break;
+            };
+            if let Some(d) = distance.get_mut(k) {
+                *d = f64::INFINITY;
+            }
+            let found = candidates
+                .get(k)
+                .and_then(|c| self.finish(form, c, target, &reference));
+            if found.is_some() {
+                return Ok(found);
+            }
+        }
+        Ok(None)
     }
 
     /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
