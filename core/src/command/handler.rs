@@ -2,6 +2,7 @@
 
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::branch::BRANCH_INDEX;
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX,
     NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text,
@@ -42,6 +43,8 @@ pub struct CommandHandler {
     name: RobotName,
     /// Requests answered with an `ER` text so far.
     refused: u32,
+    /// The cycle's signing counters, for `SQ` index 4.
+    signing: SigningReport,
     /// Time of the last tick (s).
     now: f64,
 }
@@ -59,6 +62,7 @@ impl CommandHandler {
             relay: NoticeRelay::default(),
             name: RobotName::new(&config.name),
             refused: 0,
+            signing: SigningReport::default(),
             now: 0.0,
         }
     }
@@ -74,6 +78,12 @@ impl CommandHandler {
             refused: self.refused,
             uptime: self.now,
         }
+    }
+
+    /// The signing counters `SQ` index 4 reports (kept by the cycle, which checks signatures
+    /// before a datagram reaches the handler).
+    pub fn set_signing_report(&mut self, report: SigningReport) {
+        self.signing = report;
     }
 
     /// The controller.
@@ -352,6 +362,7 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                SIGNING_INDEX => Ok(self.signing.to_reply()),
                 BRANCH_INDEX => {
                     let present = self.controller.measured().map(|(q, _)| q);
                     Ok(ik::present_branch(
