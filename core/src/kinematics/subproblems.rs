@@ -84,7 +84,11 @@ impl Roots {
     }
 }
 
-/// `v` turned about the unit axis `k` by `a` (Rodrigues, without building the matrix).
+/// `v` turned about the unit axis `k` by `a` (Rodrigues, without building the matrix). Out of
+/// line on the microcontroller: the solvers call it about fifteen times, and inlined copies
+/// cost the firmware 2.3 KB of its flash budget (on the host, inlined, the solves are 20 %
+/// faster).
+#[cfg_attr(target_os = "none", inline(never))]
 pub(super) fn rotate(k: &Vector3<f64>, a: &Angle, v: &Vector3<f64>) -> Vector3<f64> {
     v * a.cos + k.cross(v) * a.sin + k * (k.dot(v) * (1.0 - a.cos))
 }
