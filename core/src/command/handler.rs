@@ -324,14 +324,14 @@ impl CommandHandler {
                 if drives.status() == DriveStatus::Starting {
                     return Ok(null);
                 }
-                if !drives.start() {
+                if drives.start().is_err() {
                     return Err(Notice::ArmDidNotStart(drives.status()));
                 }
                 self.controller.stop();
                 Ok(null)
             }
             Command::Off => {
-                if !drives.stop() {
+                if drives.stop().is_err() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
                 self.controller.stop();
