@@ -16,7 +16,7 @@ use embassy_time::{Duration, Instant, Timer};
 
 use crate::board::Watchdog;
 use crate::drives::BoardDrives;
-use crate::link::{COUNTERS, OUTGOING, REQUESTS, count};
+use crate::link::{COUNTERS, OUTGOING, count, take};
 use crate::telemetry::{STATUS, Status};
 
 /// The cycle as the board runs it.
@@ -123,7 +123,7 @@ struct QueueLink;
 
 impl Link<IpEndpoint> for QueueLink {
     fn receive(&mut self) -> Option<Datagram<IpEndpoint>> {
-        REQUESTS.try_receive().ok()
+        take()
     }
 
     /// A full queue drops the datagram and counts it.

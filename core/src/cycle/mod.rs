@@ -39,11 +39,13 @@ mod counters;
 mod link;
 #[cfg(feature = "std")]
 pub mod replay;
+mod shares;
 mod side;
 mod tick;
 
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
 pub use link::{Datagram, Dropped, Link, Outgoing};
+pub use shares::Shares;
 pub use side::DriveSide;
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};
