@@ -9,7 +9,11 @@
 
 mod drives_rig;
 
-use armgate_core::cycle::{CanDrives, Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK};
+use std::net::SocketAddr;
+
+use armgate_core::cycle::{
+    CanDrives, Cycle, Datagram, Dropped, Link, MAX_CATCH_UP, Outgoing, REQUESTS_PER_TICK,
+};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError};
 use armgate_core::sim::IdealArm;
 use armgate_core::sim::VirtualBus;
@@ -177,4 +181,68 @@ fn a_replay_offers_each_datagram_to_the_first_tick_due_after_it_arrives() {
     );
     assert!(Replay::parse("12 zz\n").is_err());
     assert!(Replay::parse("x 00\n").is_err());
+}
+
+/// Two clients with their own addresses.
+#[derive(Default)]
+struct Clients {
+    requests: std::collections::VecDeque<Datagram<SocketAddr>>,
+    notices: Vec<Datagram<SocketAddr>>,
+}
+
+impl Link<SocketAddr> for Clients {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        self.requests.pop_front()
+    }
+
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
+        if kind == Outgoing::Notice {
+            self.notices.push(*datagram);
+        }
+        Ok(())
+    }
+}
+
+/// The bus-off fault's notice, after `requests` from their clients: to whom it went.
+fn bus_off_notice_after(requests: &[(SocketAddr, &[u8])]) -> Vec<SocketAddr> {
+    let config = robot("ranger-mk1");
+    let bus = LatchingBus {
+        bus: VirtualBus::for_robot(&config),
+        bus_off: false,
+        recoveries: 0,
+    };
+    let drives = CanDrives::started(&config, &DriveSettings::default(), bus).unwrap();
+    let mut cycle: Cycle<_, SocketAddr> = Cycle::new(&config, drives);
+    let mut clients = Clients::default();
+    for _ in 0..200 {
+        cycle.tick(cycle.next_due_us(), &mut clients);
+    }
+    for (from, bytes) in requests {
+        clients.requests.push_back(Datagram::new(bytes, *from));
+    }
+    cycle.tick(cycle.next_due_us(), &mut clients);
+    cycle.drives_mut().bus_mut().bus_off = true;
+    for _ in 0..5 {
+        cycle.tick(cycle.next_due_us(), &mut clients);
+    }
+    clients.notices.iter().map(|n| n.peer).collect()
+}
+
+#[test]
+fn notices_go_to_the_holder_or_the_last_valid_sender_never_to_garbage() {
+    let a = SocketAddr::from(([192, 168, 1, 2], 5000));
+    let b = SocketAddr::from(([192, 168, 1, 3], 6000));
+    let mode = request(Command::ChangeMode);
+    let poll = request(Command::Pose);
+    let garbage = [b'X'; 31];
+    // Nobody holds the arm: the last valid sender gets it, not the sender of garbage.
+    assert_eq!(
+        bus_off_notice_after(&[(a, poll.payload()), (b, &garbage)]),
+        [a]
+    );
+    // A holds the arm (CM): B's polls do not take its notices.
+    assert_eq!(
+        bus_off_notice_after(&[(a, mode.payload()), (b, poll.payload()), (b, &garbage)]),
+        [a]
+    );
 }

@@ -13,12 +13,12 @@
 //! [`CommandHandler`]: armgate_core::command::CommandHandler
 
 use core::cell::RefCell;
+use core::net::SocketAddr;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use armgate_core::command::NOTICE_CAPACITY;
 use armgate_core::cycle::REQUESTS_PER_TICK;
 use armgate_core::cycle::Shares;
-use embassy_net::IpEndpoint;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
@@ -35,7 +35,7 @@ pub const REQUEST_QUEUE: usize = REQUESTS_PER_TICK;
 pub const OUTGOING_QUEUE: usize = 4 * (REQUEST_QUEUE + NOTICE_CAPACITY);
 
 /// A datagram of the client protocol and the peer it came from or goes to.
-pub type Datagram = armgate_core::cycle::Datagram<IpEndpoint>;
+pub type Datagram = armgate_core::cycle::Datagram<SocketAddr>;
 
 /// Requests from allowed sources, in arrival order ([`offer`], [`take`]).
 static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
@@ -93,9 +93,9 @@ static SHARES: Mutex<CriticalSectionRawMutex, RefCell<Shares<REQUEST_QUEUE>>> =
 /// source already holds its share (the datagram is dropped).
 pub fn offer(request: Datagram) -> bool {
     SHARES.lock(|shares| {
-        shares.borrow_mut().admit(request.peer.addr.into(), || {
-            REQUESTS.try_send(request).is_ok()
-        })
+        shares
+            .borrow_mut()
+            .admit(request.peer.ip(), || REQUESTS.try_send(request).is_ok())
     })
 }
 
@@ -103,7 +103,7 @@ pub fn offer(request: Datagram) -> bool {
 pub fn take() -> Option<Datagram> {
     SHARES.lock(|shares| {
         let request = REQUESTS.try_receive().ok()?;
-        shares.borrow_mut().release(request.peer.addr.into());
+        shares.borrow_mut().release(request.peer.ip());
         Some(request)
     })
 }

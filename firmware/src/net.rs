@@ -14,7 +14,7 @@ use core::net::IpAddr;
 
 use embassy_futures::join::join;
 use embassy_net::udp::{PacketMetadata, UdpSocket};
-use embassy_net::{IpAddress, Runner, Stack, StackResources};
+use embassy_net::{Runner, Stack, StackResources};
 use static_cell::StaticCell;
 
 use crate::ingress::{FRAMES_PER_POLL, Paced};
@@ -113,9 +113,9 @@ pub async fn udp_server(stack: Stack<'static>) {
 async fn receive(stack: Stack<'static>, socket: &mut UdpSocket<'_>) {
     loop {
         let request = socket
-            .recv_from_with(|payload, meta| Datagram::new(payload, meta.endpoint))
+            .recv_from_with(|payload, meta| Datagram::new(payload, meta.endpoint.into()))
             .await;
-        if !allowed(stack, request.peer.addr) {
+        if !allowed(stack, request.peer.ip()) {
             count(&COUNTERS.foreign);
         } else if offer(request) {
             count(&COUNTERS.received);
@@ -128,8 +128,7 @@ async fn receive(stack: Stack<'static>, socket: &mut UdpSocket<'_>) {
 /// True if `source` may command the arm: on a network of `ARMGATE_ALLOW`, or (with `local`)
 /// on the board's own network. (A source address proves nothing about the sender; the
 /// allow-list keeps out the rest of the network, not an attacker on it.)
-fn allowed(stack: Stack<'_>, source: IpAddress) -> bool {
-    let source = IpAddr::from(source);
+fn allowed(stack: Stack<'_>, source: IpAddr) -> bool {
     ALLOW.iter().any(|network| network.contains(source))
         || (ALLOW_LOCAL
             && stack.config_v4().is_some_and(|config| {

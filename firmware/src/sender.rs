@@ -10,8 +10,10 @@
 //! as dropped, and the destination is [`Unreachable`] for [`UNREACHABLE_FOR`]: its datagrams
 //! are dropped (counted) without waiting, and after that one is tried again.
 
+use core::net::{IpAddr, SocketAddr};
 use embassy_net::udp::{PacketMetadata, UdpSocket};
-use embassy_net::{IpAddress, Stack};
+
+use embassy_net::Stack;
 use embassy_time::{Duration, Instant, with_timeout};
 
 use crate::link::{COUNTERS, OUTGOING, count};
@@ -31,12 +33,12 @@ const UNREACHABLE_ENTRIES: usize = 8;
 #[derive(Default)]
 pub struct Unreachable {
     /// Each with the time it was found unreachable.
-    entries: [Option<(IpAddress, Instant)>; UNREACHABLE_ENTRIES],
+    entries: [Option<(IpAddr, Instant)>; UNREACHABLE_ENTRIES],
 }
 
 impl Unreachable {
     /// True if `address` did not resolve within [`UNREACHABLE_FOR`] before `now`.
-    pub fn holds(&self, address: IpAddress, now: Instant) -> bool {
+    pub fn holds(&self, address: IpAddr, now: Instant) -> bool {
         self.entries.iter().flatten().any(|(a, since)| {
             *a == address && now.saturating_duration_since(*since) < UNREACHABLE_FOR
         })
@@ -44,8 +46,8 @@ impl Unreachable {
 
     /// Remembers that `address` did not resolve at `now`, in its own entry, a free or expired
     /// one, or the oldest.
-    pub fn mark(&mut self, address: IpAddress, now: Instant) {
-        let age = |e: &Option<(IpAddress, Instant)>| match e {
+    pub fn mark(&mut self, address: IpAddr, now: Instant) {
+        let age = |e: &Option<(IpAddr, Instant)>| match e {
             Some((a, _)) if *a == address => Duration::MAX,
             Some((_, since)) => now.saturating_duration_since(*since),
             None => Duration::MAX,
@@ -109,18 +111,23 @@ async fn send_until_stuck(socket: &mut UdpSocket<'_>, unreachable: &mut Unreacha
     loop {
         let outgoing = OUTGOING.receive().await;
         let peer = outgoing.peer;
-        if unreachable.holds(peer.addr, Instant::now()) {
+        if unreachable.holds(peer.ip(), Instant::now()) {
             count(&COUNTERS.unreachable);
             continue;
         }
-        // The ring is empty: this only copies the datagram.
-        if socket.send_to(outgoing.payload(), peer).await.is_err() {
+        // The stack speaks IPv4 only (so every request came from an IPv4 address). The ring is
+        // empty: sending only copies the datagram.
+        let SocketAddr::V4(to) = peer else {
+            count(&COUNTERS.send_errors);
+            continue;
+        };
+        if socket.send_to(outgoing.payload(), to).await.is_err() {
             count(&COUNTERS.send_errors);
             continue;
         }
         if with_timeout(RESOLVE_TIMEOUT, socket.flush()).await.is_err() {
             count(&COUNTERS.unreachable);
-            unreachable.mark(peer.addr, Instant::now());
+            unreachable.mark(peer.ip(), Instant::now());
             return;
         }
     }

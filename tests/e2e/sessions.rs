@@ -204,3 +204,89 @@ fn stop_resending(sim: &Sim) -> usize {
     sim.socket.set_read_timeout(timeout).unwrap();
     sends
 }
+
+/// A second client, from [`second_client_address`], talking to the same controller.
+fn second_client(sim: &Sim) -> UdpSocket {
+    let socket = UdpSocket::bind(second_client_address()).unwrap();
+    socket.connect(sim.socket.peer_addr().unwrap()).unwrap();
+    socket
+        .set_read_timeout(sim.socket.read_timeout().unwrap())
+        .unwrap();
+    socket
+}
+
+/// Sends a request on `socket` and returns the next answer that is not an unsolicited notice.
+fn ask(socket: &UdpSocket, cmd: &str, values: [f32; 7], index: u8) -> Answer {
+    socket.send(&datagram(cmd, values, index)).unwrap();
+    loop {
+        let mut buf = [0u8; 64];
+        let n = socket.recv(&mut buf).expect("no reply");
+        assert_eq!(n, 31);
+        match decode(&buf) {
+            Answer::Text(t) if is_unsolicited(&t) => continue,
+            answer => return answer,
+        }
+    }
+}
+
+/// `SQ` index 3: holder (0 nobody, 1 you, 2 another), its IPv4 address in two 16-bit halves,
+/// its port, the watchdog (ms), send drops, clients.
+fn session(socket: &UdpSocket) -> [f32; 7] {
+    match ask(socket, "SQ", [0.0; 7], 3) {
+        Answer::Reply(chars, v, 3) if &chars == b"QS" => v,
+        other => panic!("SQ 3: {other:?}"),
+    }
+}
+
+#[test]
+fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
+    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
+    assert!(knows_status(&sim));
+    let b = second_client(&sim);
+    let a_ip = match sim.socket.local_addr().unwrap().ip() {
+        std::net::IpAddr::V4(ip) if !ip.is_unspecified() => ip,
+        _ if firmware().is_some() => std::net::Ipv4Addr::new(192, 168, 1, 1),
+        _ => std::net::Ipv4Addr::LOCALHOST,
+    };
+    let held = format!("ER40 held by {a_ip}");
+    // A long joint move by A: A holds the arm.
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.5;
+    goal[6] = 0.0;
+    sim.ok("jG", goal, 0);
+    sim.start_motion("jB");
+    let [high, low] = [
+        (u32::from(a_ip) >> 16) as f32,
+        (u32::from(a_ip) & 0xffff) as f32,
+    ];
+    let mine = session(&sim.socket);
+    assert_eq!(mine[..3], [1.0, high, low], "{mine:?}");
+    let port = f32::from(sim.socket.local_addr().unwrap().port());
+    assert_eq!(mine[3], port);
+    // B may read, but not command, while the arm moves.
+    assert!(matches!(ask(&b, "PS", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"SP"));
+    for cmd in ["CM", "jG", "jB", "OF", "RC", "GT"] {
+        assert_eq!(
+            ask(&b, cmd, [1.0, 0., 0., 0., 0., 0., 0.], 0),
+            Answer::Text(held.clone()),
+            "{cmd} from the second client"
+        );
+    }
+    let theirs = session(&b);
+    assert_eq!(theirs[..4], [2.0, high, low, port], "{theirs:?}");
+    assert_eq!(status(&sim)[4], 1.0, "A's move runs on");
+    // A datagram that does not parse, from B, changes nothing (and is answered).
+    assert!(matches!(ask(&b, "XY", [0.0; 7], 0), Answer::Text(t) if t.starts_with("ER00")));
+    // B's ST is obeyed at once; A still holds the arm.
+    assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
+    assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
+    assert_eq!(session(&sim.socket)[0], 1.0);
+    // At rest, B takes control with its next command request.
+    match ask(&b, "CM", [2.0, 0., 0., 0., 0., 0., 0.], 0) {
+        Answer::Reply(c, v, 0) if &c == b"MC" => assert_eq!(v[0], 2.0),
+        other => panic!("CM from the second client at rest: {other:?}"),
+    }
+    assert_eq!(session(&b)[0], 1.0);
+    assert_eq!(session(&sim.socket)[0], 2.0);
+}

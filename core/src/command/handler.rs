@@ -1,15 +1,18 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::banks::READ_JOINTS;
+use core::net::{Ipv4Addr, SocketAddr};
+
 use armgate_protocol::client::{
-    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX,
-    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text,
-    Twist as TwistRequest, VALUES, WorkspaceReason,
+    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, Motion, NAME_INDEX,
+    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, SESSION_INDEX,
+    STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
 use super::relay::NoticeRelay;
+use super::session::Session;
 use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
@@ -36,6 +39,7 @@ pub struct CommandHandler {
     joint_goal: Option<Joints>,
     banks: Banks,
     relay: NoticeRelay,
+    session: Session,
     /// The robot's name, for the status request.
     name: RobotName,
     /// Requests answered with an `ER` text so far.
@@ -55,6 +59,7 @@ impl CommandHandler {
             joint_goal: None,
             banks: Banks::default(),
             relay: NoticeRelay::default(),
+            session: Session::default(),
             name: RobotName::new(&config.name),
             refused: 0,
             now: 0.0,
@@ -124,15 +129,32 @@ impl CommandHandler {
         self.relay.dropped()
     }
 
-    /// Handles one datagram of any length and returns the reply datagram.
+    /// Handles one datagram of any length from a client that gives no address (tests, the
+    /// recorded exchange): [`handle_from`](Self::handle_from) the unspecified address.
     pub fn handle(
         &mut self,
         datagram: &[u8],
         drives: &mut (impl Drives + ?Sized),
     ) -> [u8; MESSAGE_LEN] {
+        self.handle_from(datagram, ANONYMOUS, drives)
+    }
+
+    /// Handles one datagram of any length from `client` and returns the reply datagram. A
+    /// datagram that does not parse is answered and changes nothing else; a valid one is
+    /// admitted by the session first (who may command the arm, [`Session`]).
+    pub fn handle_from(
+        &mut self,
+        datagram: &[u8],
+        client: SocketAddr,
+        drives: &mut (impl Drives + ?Sized),
+    ) -> [u8; MESSAGE_LEN] {
         let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
+        let busy = self.controller.motion() != Motion::Holding;
         let reply = match request {
-            Ok(request) => self.answer(&request, drives),
+            Ok(request) => self
+                .session
+                .admit(request.command, client, self.now, busy)
+                .and_then(|()| self.answer(&request, client, drives)),
             Err(e) => Err(Notice::from(e)),
         };
         match reply {
@@ -144,15 +166,30 @@ impl CommandHandler {
         }
     }
 
-    /// The reply datagram to a request: the name reply to `SQ` index 1 is the one that is not
-    /// seven floats.
+    /// Where the notices go: the client that holds the arm, or the last one that sent a valid
+    /// request.
+    pub fn notice_recipient(&self) -> Option<SocketAddr> {
+        self.session.notice_recipient()
+    }
+
+    /// The shell's count of replies and notices it could not send (`SQ` index 3 reports it).
+    pub fn set_send_drops(&mut self, drops: u64) {
+        self.session.set_send_drops(drops);
+    }
+
+    /// The reply datagram to a request from `client`: the name reply to `SQ` index 1 is the
+    /// one that is not seven floats; the session report depends on who asks.
     fn answer(
         &mut self,
         req: &Request,
+        client: SocketAddr,
         drives: &mut (impl Drives + ?Sized),
     ) -> Result<[u8; MESSAGE_LEN], Notice> {
         match (req.command, req.index) {
             (Command::Status, NAME_INDEX) => Ok(self.name.to_bytes()),
+            (Command::Status, SESSION_INDEX) => {
+                Ok(self.session.report(client).to_reply().to_bytes())
+            }
             _ => self.execute(req, drives).map(|reply| reply.to_bytes()),
         }
     }
@@ -416,6 +453,9 @@ impl CommandHandler {
             .map_err(|_| Notice::BadIndex(cmd))
     }
 }
+
+/// The address of a client that gives none.
+const ANONYMOUS: SocketAddr = SocketAddr::new(core::net::IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0);
 
 /// The client text for a refused request, with its reason. (Out of line: eleven callers, all
 /// answering requests.)

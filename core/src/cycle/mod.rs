@@ -27,8 +27,9 @@
 //!    a tick's work stays bounded (a reply waits at most about a period). They come after the
 //!    step, so that every reply reflects this tick's measurement (also the very first tick's)
 //!    and a motion they start runs from the next tick on;
-//! 6. **notices**: every unsolicited warning the relay holds goes to the last client that sent
-//!    an allowed request; with none yet, it is counted and dropped.
+//! 6. **notices**: every unsolicited warning the relay holds goes to the client that holds the
+//!    arm, or with none to the last client that sent a valid request
+//!    ([`Session`](crate::command::Session)); with none yet, it is counted and dropped.
 //!
 //! Bus-off: the drive manager latches it as fault `ER35` and stops; the client's `ON` clears
 //! it — [`CanDrives`] first asks the bus to recover ([`CanBus::recover`](crate::drives::CanBus::recover)),
@@ -45,7 +46,7 @@ mod tick;
 
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
-pub use link::{Datagram, Dropped, Link, Outgoing};
+pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
 pub use shares::Shares;
 pub use side::DriveSide;
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

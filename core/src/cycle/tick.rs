@@ -1,7 +1,7 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
 use super::counters::bump;
-use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing};
+use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
@@ -43,11 +43,11 @@ pub struct Cycle<D, P> {
     next: u64,
     /// Time of the previous tick (s).
     previous: Option<f64>,
-    last_sender: Option<P>,
     counters: CycleCounters,
+    _peer: core::marker::PhantomData<P>,
 }
 
-impl<D: DriveSide, P: Copy> Cycle<D, P> {
+impl<D: DriveSide, P: Peer> Cycle<D, P> {
     /// A cycle for a validated robot description with `drives`, before its first tick.
     pub fn new(config: &ValidRobot, drives: D) -> Self {
         // The period is validated finite and positive; the cast saturates for absurd values.
@@ -59,8 +59,8 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             period_us: NonZeroU64::new(period_us).unwrap_or(NonZeroU64::MIN),
             next: 0,
             previous: None,
-            last_sender: None,
             counters: CycleCounters::default(),
+            _peer: core::marker::PhantomData,
         }
     }
 
@@ -142,23 +142,26 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
         self.counters
     }
 
-    /// The client that sent the last request: where notices go.
-    pub fn last_sender(&self) -> Option<P> {
-        self.last_sender
+    /// Where notices go: the client that holds the arm, or the last one that sent a valid
+    /// request.
+    pub fn notice_recipient(&self) -> Option<P> {
+        self.handler.notice_recipient().map(P::from_address)
     }
 
-    /// Answers one request from `peer` (who then gets the notices). [`tick`](Self::tick)
-    /// calls it for the requests its link delivers; protocol tests call it between ticks.
+    /// Answers one request from `peer`. [`tick`](Self::tick) calls it for the requests its
+    /// link delivers; protocol tests call it between ticks.
     // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
         bump(&mut self.counters.requests);
-        self.last_sender = Some(peer);
-        self.handler.handle(datagram, &mut self.drives)
+        self.handler
+            .handle_from(datagram, peer.address(), &mut self.drives)
     }
 
     fn handle_requests(&mut self, link: &mut impl Link<P>) {
+        let drops = self.counters.send_dropped.saturating_add(link.dropped());
+        self.handler.set_send_drops(drops);
         for _ in 0..REQUESTS_PER_TICK {
             let Some(request) = link.receive() else {
                 break;
@@ -173,7 +176,7 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             let Some(text) = self.handler.next_notice() else {
                 break;
             };
-            match self.last_sender {
+            match self.notice_recipient() {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
                     self.send(

@@ -1,6 +1,7 @@
 //! The controller's fixed error and warning texts (spec §2.3, §2.5, §2.6).
 
 use core::fmt::{self, Write as _};
+use core::net::Ipv4Addr;
 
 use super::{Command, DriveStatus, Error, JointBound, Rejection, Severity, Text, WorkspaceReason};
 
@@ -38,6 +39,9 @@ pub enum Notice {
     BeyondJointLimit(Command, JointBound),
     /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
     ViaPointMissed,
+    /// `ER40 held by 192.168.1.2`: another client controls the arm while it moves (its IPv4
+    /// address; `another client` for an IPv6 one, which may not fit).
+    HeldBy(Option<[u8; 4]>),
 }
 
 impl Notice {
@@ -65,6 +69,7 @@ impl Notice {
             Self::OutsideWorkspace(..) => 25,
             Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
+            Self::HeldBy(_) => 40,
         }
     }
 
@@ -118,6 +123,8 @@ impl fmt::Display for Body {
             Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
+            Notice::HeldBy(Some(ip)) => write!(f, "held by {}", Ipv4Addr::from(ip)),
+            Notice::HeldBy(None) => f.write_str("held by another client"),
         }
     }
 }
@@ -135,6 +142,16 @@ impl fmt::Display for Pair {
 mod tests {
     use super::*;
     use crate::client::PathPoint;
+
+    #[test]
+    fn the_holder_is_named_where_it_fits() {
+        let held = |ip| Notice::HeldBy(ip).text();
+        assert_eq!(
+            held(Some([192, 168, 100, 200])).as_str(),
+            "ER40 held by 192.168.100.200"
+        );
+        assert_eq!(held(None).as_str(), "ER40 held by another client");
+    }
 
     #[test]
     fn texts_are_exact() {
