@@ -293,7 +293,7 @@ impl Sim {
 }
 
 fn is_unsolicited(text: &str) -> bool {
-    ["ER21", "WN12", "WN22", "WN27", "ER3"]
+    ["ER21", "WN12", "WN22", "WN27", "ER3", "ER41"]
         .iter()
         .any(|p| text.starts_with(p))
 }

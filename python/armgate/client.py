@@ -192,6 +192,11 @@ class Arm:
         """``ST``: stops every motion and sequence; the arm holds its commanded position."""
         self.request("ST")
 
+    def watchdog(self, ms: int) -> None:
+        """``WD``: the client watchdog: while the arm moves and this client (holding the arm)
+        is silent for longer than ``ms``, the controller stops it (``ER41``); 0 turns it off."""
+        self.request("WD", [float(ms)])
+
     def twist(
         self,
         linear: Sequence[float],
@@ -346,6 +351,32 @@ class Arm:
         return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
 
     def _wait(
+        self,
+        goals: Sequence[T],
+        options: WaitOptions,
+        read: Callable[[], T],
+        measure: Callable[[T, T, bool], Tuple[float, Optional[float], bool]],
+        moved: Callable[[T, T], bool],
+    ) -> T:
+        """Polls until arrival, with the controller's client watchdog on meanwhile (twenty
+        polls, at least a second): if this program dies or loses the network while the arm
+        moves, the controller stops it. A controller without one, or another client holding
+        the arm, refuses it; the wait goes on without."""
+        try:
+            self.watchdog(max(1000, min(60000, round(options.poll * 20 * 1000))))
+            watched = True
+        except (ControllerMessage, ControllerTooOld, ReplyTimeout):
+            watched = False
+        try:
+            return self._poll(goals, options, read, measure, moved)
+        finally:
+            if watched:
+                try:
+                    self.watchdog(0)
+                except (ControllerMessage, ControllerTooOld, ReplyTimeout):
+                    pass
+
+    def _poll(
         self,
         goals: Sequence[T],
         options: WaitOptions,

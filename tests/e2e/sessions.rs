@@ -290,3 +290,67 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
     assert_eq!(session(&b)[0], 1.0);
     assert_eq!(session(&sim.socket)[0], 2.0);
 }
+
+#[test]
+fn a_begin_whose_reply_was_lost_is_answered_again_not_refused_busy() {
+    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.3;
+    goal[6] = 0.0;
+    sim.ok("jG", goal, 0);
+    // jB until the drives take it; its reply is "lost" (read and ignored), and the client
+    // resends the same datagram 200 ms later.
+    sim.start_motion("jB");
+    std::thread::sleep(Duration::from_millis(200));
+    match sim.request("jB", [0.0; 7], 0) {
+        Answer::Reply(c, v, 0) if &c == b"Bj" => assert_eq!(v, [0.0; 7]),
+        other => panic!("the resent jB: {other:?}"),
+    }
+    // Carried out once: the move runs on to its goal (not restarted, not refused).
+    assert_eq!(status(&sim)[4], 1.0);
+    sim.wait_joints(&goal[..6], 20.0);
+}
+
+#[test]
+fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
+    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    // Out of range: refused; 300 ms: in force, SQ 3 f4 reports it.
+    assert_eq!(
+        sim.text("WD", [-1.0, 0., 0., 0., 0., 0., 0.], 0),
+        "ER23 Cmd WD bad number"
+    );
+    assert_eq!(sim.ok("WD", [300.0, 0., 0., 0., 0., 0., 0.], 0)[0], 300.0);
+    assert_eq!(session(&sim.socket)[4], 300.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.5;
+    goal[6] = 0.0;
+    sim.ok("jG", goal, 0);
+    sim.start_motion("jB");
+    // Polling feeds it: the move runs on.
+    for _ in 0..8 {
+        std::thread::sleep(Duration::from_millis(100));
+        assert_eq!(status(&sim)[4], 1.0);
+    }
+    // Silent (another client's polls do not count): the arm is stopped, with the notice.
+    let b = second_client(&sim);
+    let silent_from = Instant::now();
+    while silent_from.elapsed() < Duration::from_millis(700) {
+        assert!(matches!(ask(&b, "PS", [0.0; 7], 0), Answer::Reply(..)));
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let mut notice = None;
+    let mut buf = [0u8; 64];
+    while let Ok(n) = sim.socket.recv(&mut buf) {
+        assert_eq!(n, 31);
+        if let Answer::Text(t) = decode(&buf) {
+            notice = Some(t);
+            break;
+        }
+    }
+    assert_eq!(notice.as_deref(), Some("ER41 client silent 300 ms"));
+    assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
+}

@@ -46,6 +46,8 @@ pub struct CommandHandler {
     refused: u32,
     /// Time of the last tick (s).
     now: f64,
+    /// The client whose request is being handled.
+    client: SocketAddr,
 }
 
 impl CommandHandler {
@@ -63,6 +65,7 @@ impl CommandHandler {
             name: RobotName::new(&config.name),
             refused: 0,
             now: 0.0,
+            client: ANONYMOUS,
         }
     }
 
@@ -103,6 +106,12 @@ impl CommandHandler {
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
         self.now = now;
+        if self.controller.motion() != Motion::Holding
+            && let Some(ms) = self.session.silent(now)
+        {
+            self.stop();
+            self.relay.announce(Notice::ClientSilent(ms).text());
+        }
         // The step's result is returned as it is, not unwrapped and wrapped again: the
         // Cortex-M7 would copy the 296-byte output twice, unaligned (≈ 2,100 instructions a
         // tick in qemu-bench).
@@ -148,22 +157,29 @@ impl CommandHandler {
         client: SocketAddr,
         drives: &mut (impl Drives + ?Sized),
     ) -> [u8; MESSAGE_LEN] {
-        let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
-        let busy = self.controller.motion() != Motion::Holding;
-        let reply = match request {
-            Ok(request) => self
-                .session
-                .admit(request.command, client, self.now, busy)
-                .and_then(|()| self.answer(&request, client, drives)),
-            Err(e) => Err(Notice::from(e)),
+        let request = match Message::new_checked(datagram).and_then(|m| Request::parse(&m)) {
+            Ok(request) => request,
+            Err(e) => return self.refuse(Notice::from(e)),
         };
-        match reply {
-            Ok(bytes) => bytes,
-            Err(notice) => {
-                self.refused = self.refused.saturating_add(1);
-                notice.text().to_bytes()
-            }
+        if let Some(reply) = self.session.resent(client, datagram, self.now) {
+            return reply;
         }
+        let busy = self.controller.motion() != Motion::Holding;
+        self.client = client;
+        let reply = self
+            .session
+            .admit(request.command, client, self.now, busy)
+            .and_then(|()| self.answer(&request, client, drives))
+            .unwrap_or_else(|notice| self.refuse(notice));
+        self.session
+            .answered(client, request.command, datagram, &reply, self.now);
+        reply
+    }
+
+    /// The text of a refusal, counted.
+    fn refuse(&mut self, notice: Notice) -> [u8; MESSAGE_LEN] {
+        self.refused = self.refused.saturating_add(1);
+        notice.text().to_bytes()
     }
 
     /// Where the notices go: the client that holds the arm, or the last one that sent a valid
@@ -217,6 +233,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::ChangeMode => {
+                self.banks.clear();
                 // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
                 let mode = Mode::from_value(req.values[0]).ok_or(Notice::BadNumber(cmd))?;
                 self.controller.set_mode(mode).map_err(refused)?;
@@ -297,8 +314,17 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::JointReset | Command::Stop => {
-                self.controller.stop();
+                self.stop();
                 Ok(null)
+            }
+            Command::Watchdog => {
+                let ms = v[0];
+                if !(0.0..=f64::from(MAX_WATCHDOG_MS)).contains(&ms) {
+                    return Err(Notice::BadNumber(cmd));
+                }
+                let ms = libm::round(ms) as u16;
+                self.session.set_watchdog(ms);
+                Ok(values_reply(cmd, &[f64::from(ms)], 0))
             }
             Command::JointVia => {
                 let joints = bank_values(&v, cmd)?;
@@ -318,6 +344,7 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::On => {
+                self.banks.clear();
                 // Already starting (e.g. at power-up): ON asks for what is under way.
                 if drives.status() == DriveStatus::Starting {
                     return Ok(null);
@@ -329,6 +356,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::Off => {
+                self.banks.clear();
                 if !drives.stop() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
@@ -430,6 +458,12 @@ impl CommandHandler {
         }
     }
 
+    /// Stops the arm: `ST`, `jR`, and the client watchdog (one path for all of them).
+    fn stop(&mut self) {
+        self.banks.clear();
+        self.controller.stop();
+    }
+
     /// A wrong mode is reported before the drives' state: it outlasts it.
     fn in_mode(&self, cmd: Command) -> Result<(), Notice> {
         if self.controller.mode() == required_mode(cmd) {
@@ -442,17 +476,20 @@ impl CommandHandler {
     fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {
         let n = self.controller.chain().dof();
         self.banks
-            .stage(key, values, n)
+            .stage(key, values, n, self.client, self.now)
             .map_err(|_| Notice::BadIndex(cmd))
     }
 
     fn complete(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<Joints, Notice> {
         let n = self.controller.chain().dof();
         self.banks
-            .complete(key, values, n)
+            .complete(key, values, n, self.client, self.now)
             .map_err(|_| Notice::BadIndex(cmd))
     }
 }
+
+/// The longest client watchdog (ms): a minute.
+const MAX_WATCHDOG_MS: u16 = 60_000;
 
 /// The address of a client that gives none.
 const ANONYMOUS: SocketAddr = SocketAddr::new(core::net::IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0);

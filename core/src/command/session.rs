@@ -10,17 +10,29 @@
 //! * **Reads for everyone.** `PS`, `jP`, `TM`, `SQ` are answered to every client.
 //! * **Notices** go to the holder, or with none to the last client that sent a valid request;
 //!   a datagram that does not parse changes nothing.
+//! * **Resends are idempotent.** A motion start (`BG`, `jB`, `VE`, `jE`) repeated byte for
+//!   byte by the same client within [`RESEND_WINDOW`] of its reply (the client's reply was
+//!   lost) gets that reply again and is not carried out twice. Every other request is the same
+//!   done once or twice (reads, stops, goals, modes, power) or meant to repeat (the streams
+//!   `TW`, `jW`), and a refused one changed nothing: those are carried out every time.
+//!
+//! * **A client watchdog.** The holder may ask for one (`WD`, ms; 0 off): while the arm moves
+//!   and the holder has sent nothing for longer, the arm is stopped as by `ST` with the notice
+//!   `ER41 client silent N ms` ([`Session::silent`]). It ends with the holder's control.
 //!
 //! A source address proves nothing about the sender (docs/safety.md): this keeps honest tools
 //! from overriding each other, it is no defence against a forger on the network.
 
 use core::net::{IpAddr, SocketAddr};
 
-use armgate_protocol::client::{Command, Holder, Notice, SessionReport};
+use armgate_protocol::client::{Command, Holder, MESSAGE_LEN, Notice, SessionReport, Severity};
 
 /// Clients the controller keeps track of; a new one replaces the one heard from longest ago
 /// (never the holder).
 pub const CLIENTS: usize = 8;
+
+/// How long after a reply the same datagram from the same client is a resend (s).
+pub const RESEND_WINDOW: f64 = 1.0;
 
 /// What a request may do, and so who may send it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -46,11 +58,45 @@ impl Class {
     }
 }
 
-/// A client: its source address and when it was last heard (s, the controller's time).
+/// A client: its source address, when it was last heard (s, the controller's time), and its
+/// last request with the reply it got, if that reply may be sent again.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Client {
     address: SocketAddr,
     heard: f64,
+    last: Option<Exchange>,
+}
+
+/// A request (its first 31 bytes and length) and its reply.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Exchange {
+    request: [u8; MESSAGE_LEN],
+    len: usize,
+    /// The reply, if the request is one whose reply a resend gets again.
+    reply: Option<[u8; MESSAGE_LEN]>,
+    at: f64,
+}
+
+impl Exchange {
+    fn new(datagram: &[u8], reply: Option<[u8; MESSAGE_LEN]>, at: f64) -> Self {
+        let mut request = [0; MESSAGE_LEN];
+        let mut len = 0;
+        for (r, b) in request.iter_mut().zip(datagram) {
+            *r = *b;
+            len += 1;
+        }
+        Self {
+            request,
+            len,
+            reply,
+            at,
+        }
+    }
+
+    fn is(&self, datagram: &[u8]) -> bool {
+        datagram.len().min(MESSAGE_LEN) == self.len
+            && self.request.get(..self.len) == datagram.get(..self.len)
+    }
 }
 
 /// The clients, the holder, the notice recipient.
@@ -62,6 +108,10 @@ pub struct Session {
     last: Option<SocketAddr>,
     /// Replies and notices the shell could not send (the shell's count).
     send_drops: u64,
+    /// The holder's watchdog (ms), if on.
+    watchdog: Option<u16>,
+    /// The watchdog stopped the arm, and the holder has not been heard since.
+    tripped: bool,
 }
 
 impl Session {
@@ -82,11 +132,78 @@ impl Session {
         }
         match self.holder {
             Some(holder) if holder != client && busy => Err(Notice::HeldBy(ipv4(holder))),
+            Some(holder) if holder == client => Ok(()),
             _ => {
                 self.holder = Some(client);
+                self.watchdog = None;
                 Ok(())
             }
         }
+    }
+
+    /// Sets the holder's watchdog to `ms` (0: off); the request was admitted, so the sender
+    /// holds the arm.
+    pub fn set_watchdog(&mut self, ms: u16) {
+        self.watchdog = (ms > 0).then_some(ms);
+    }
+
+    /// The holder's watchdog time (ms) if it has run out at `now`: the holder has been silent
+    /// for longer. Once per silence: the next request from the holder rearms it.
+    pub fn silent(&mut self, now: f64) -> Option<u16> {
+        let ms = self.watchdog?;
+        let holder = self.find(self.holder?)?;
+        let silent = now - holder.heard > f64::from(ms) * 1e-3;
+        if !silent || self.tripped {
+            return None;
+        }
+        self.tripped = true;
+        Some(ms)
+    }
+
+    /// The reply `client` got for `datagram`, if this is a resend of its last request within
+    /// [`RESEND_WINDOW`] of that reply at `now`.
+    pub fn resent(
+        &self,
+        client: SocketAddr,
+        datagram: &[u8],
+        now: f64,
+    ) -> Option<[u8; MESSAGE_LEN]> {
+        let last = self.find(client)?.last?;
+        (last.is(datagram) && now - last.at <= RESEND_WINDOW)
+            .then_some(last.reply)
+            .flatten()
+    }
+
+    /// Records the reply `client` got at `now` for the valid request `datagram` of `command`.
+    pub fn answered(
+        &mut self,
+        client: SocketAddr,
+        command: Command,
+        datagram: &[u8],
+        reply: &[u8; MESSAGE_LEN],
+        now: f64,
+    ) {
+        // Only a motion start done twice differs from done once (the second is `busy`, or a
+        // second move); a refused one changed nothing and may now succeed.
+        let [c0, c1, ..] = *reply;
+        let refused = Severity::from_prefix([c0, c1]).is_some();
+        let repeatable = matches!(
+            command,
+            Command::Begin | Command::JointBegin | Command::ViaExecute | Command::JointExecute
+        ) && !refused;
+        let exchange = Exchange::new(datagram, repeatable.then_some(*reply), now);
+        if let Some(entry) = self
+            .clients
+            .iter_mut()
+            .flatten()
+            .find(|c| c.address == client)
+        {
+            entry.last = Some(exchange);
+        }
+    }
+
+    fn find(&self, client: SocketAddr) -> Option<&Client> {
+        self.clients.iter().flatten().find(|c| c.address == client)
     }
 
     /// Where notices go: the holder, or the last client that sent a valid request.
@@ -116,7 +233,7 @@ impl Session {
                 Some(SocketAddr::V4(a)) => Some(a),
                 _ => None,
             },
-            watchdog_ms: 0,
+            watchdog_ms: self.watchdog.map_or(0, u32::from),
             send_drops: u32::try_from(self.send_drops).unwrap_or(u32::MAX),
             clients: u8::try_from(self.clients.iter().flatten().count()).unwrap_or(u8::MAX),
         }
@@ -126,6 +243,9 @@ impl Session {
     /// from longest ago that is not the holder.
     fn hear(&mut self, client: SocketAddr, now: f64) {
         let holder = self.holder;
+        if holder == Some(client) {
+            self.tripped = false;
+        }
         let age = |e: &Option<Client>| match e {
             Some(c) if c.address == client => f64::INFINITY,
             Some(c) if Some(c.address) == holder => f64::NEG_INFINITY,
@@ -139,9 +259,11 @@ impl Session {
             }
         }
         if let Some(entry) = oldest {
+            let last = entry.filter(|c| c.address == client).and_then(|c| c.last);
             *entry = Some(Client {
                 address: client,
                 heard: now,
+                last,
             });
         }
     }
@@ -204,6 +326,74 @@ mod tests {
         s.admit(Command::On, a, 0.1, false).unwrap();
         s.admit(Command::Status, b, 0.2, false).unwrap();
         assert_eq!(s.notice_recipient(), Some(a));
+    }
+
+    #[test]
+    fn a_resent_command_gets_its_reply_again_within_a_second() {
+        let (a, b) = (at(2, 5000), at(3, 6000));
+        let mut s = Session::default();
+        let begin = *b"BG\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+        let reply = *b"GB\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0";
+        s.admit(Command::Begin, a, 0.0, false).unwrap();
+        s.answered(a, Command::Begin, &begin, &reply, 0.0);
+        assert_eq!(s.resent(a, &begin, 0.2), Some(reply));
+        assert_eq!(
+            s.resent(a, &begin, 1.1),
+            None,
+            "a second later it is a new request"
+        );
+        assert_eq!(
+            s.resent(b, &begin, 0.2),
+            None,
+            "another client's is its own"
+        );
+        assert_eq!(
+            s.resent(a, &begin[..30], 0.2),
+            None,
+            "not the same datagram"
+        );
+        // Another request in between: the next BG is new.
+        s.admit(Command::Stop, a, 0.3, true).unwrap();
+        s.answered(a, Command::Stop, b"ST", &[0; MESSAGE_LEN], 0.3);
+        assert_eq!(s.resent(a, &begin, 0.4), None);
+        // A refusal changed nothing: the same request is carried out again.
+        s.admit(Command::Begin, a, 0.4, false).unwrap();
+        s.answered(
+            a,
+            Command::Begin,
+            &begin,
+            &Notice::HeldBy(None).text().to_bytes(),
+            0.4,
+        );
+        assert_eq!(s.resent(a, &begin, 0.45), None);
+        // Reads and streams are carried out every time.
+        s.admit(Command::Twist, a, 0.5, false).unwrap();
+        s.answered(a, Command::Twist, b"TW", &[1; MESSAGE_LEN], 0.5);
+        assert_eq!(s.resent(a, b"TW", 0.5), None);
+        s.admit(Command::Pose, a, 0.6, false).unwrap();
+        s.answered(a, Command::Pose, b"PS", &[1; MESSAGE_LEN], 0.6);
+        assert_eq!(s.resent(a, b"PS", 0.6), None);
+    }
+
+    #[test]
+    fn the_watchdog_trips_once_per_silence_of_the_holder_and_ends_with_its_control() {
+        let (a, b) = (at(2, 5000), at(3, 6000));
+        let mut s = Session::default();
+        s.admit(Command::Watchdog, a, 0.0, false).unwrap();
+        s.set_watchdog(500);
+        assert_eq!(s.report(a).watchdog_ms, 500);
+        // Another client's polls do not feed it.
+        s.admit(Command::Pose, b, 0.4, true).unwrap();
+        assert_eq!(s.silent(0.45), None);
+        assert_eq!(s.silent(0.51), Some(500));
+        assert_eq!(s.silent(0.6), None, "once");
+        s.admit(Command::Pose, a, 0.7, false).unwrap();
+        assert_eq!(s.silent(1.0), None);
+        assert_eq!(s.silent(1.21), Some(500));
+        // A new holder starts without one.
+        s.admit(Command::On, b, 2.0, false).unwrap();
+        assert_eq!(s.silent(9.0), None);
+        assert_eq!(s.report(b).watchdog_ms, 0);
     }
 
     #[test]

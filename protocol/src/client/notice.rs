@@ -42,6 +42,9 @@ pub enum Notice {
     /// `ER40 held by 192.168.1.2`: another client controls the arm while it moves (its IPv4
     /// address; `another client` for an IPv6 one, which may not fit).
     HeldBy(Option<[u8; 4]>),
+    /// `ER41 client silent 500 ms`: the controlling client said nothing for longer than its
+    /// watchdog (`WD`, this many ms, at most 60,000) while the arm moved: the arm was stopped.
+    ClientSilent(u16),
 }
 
 impl Notice {
@@ -70,6 +73,7 @@ impl Notice {
             Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
             Self::HeldBy(_) => 40,
+            Self::ClientSilent(_) => 41,
         }
     }
 
@@ -125,6 +129,7 @@ impl fmt::Display for Body {
             Notice::ViaPointMissed => f.write_str("Via point missed."),
             Notice::HeldBy(Some(ip)) => write!(f, "held by {}", Ipv4Addr::from(ip)),
             Notice::HeldBy(None) => f.write_str("held by another client"),
+            Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
         }
     }
 }
@@ -151,6 +156,10 @@ mod tests {
             "ER40 held by 192.168.100.200"
         );
         assert_eq!(held(None).as_str(), "ER40 held by another client");
+        assert_eq!(
+            Notice::ClientSilent(60_000).text().as_str(),
+            "ER41 client silent 60000 ms"
+        );
     }
 
     #[test]
