@@ -1106,7 +1106,9 @@ fn a_streamed_twist_moves_the_tool_and_a_silent_client_lets_it_ramp_to_rest() {
         (hold.as_secs_f64() - 3.0 * 0.01944).abs() < 1e-6,
         "{hold:?}"
     );
-    // In joint mode the same request is refused with its reason.
+    // In joint mode the same request is refused with its reason. (Another client, so once
+    // the zero twist has ended: while the arm streams, only its client may change the mode.)
+    assert!(poll_status(&sim, Duration::from_secs(2), |s| s[4] == 0.0));
     let mut joint = Client::connect(addr).unwrap();
     joint.set_mode(Mode::Joint).unwrap();
     let refused = joint.twist([0.0, 0.0, 0.01], [0.0; 3], TwistFrame::Base);

@@ -248,7 +248,7 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
         _ if firmware().is_some() => std::net::Ipv4Addr::new(192, 168, 1, 1),
         _ => std::net::Ipv4Addr::LOCALHOST,
     };
-    let held = format!("ER40 held by {a_ip}");
+    let held = |cmd: &str| format!("ER40 Cmd {cmd} by {a_ip}");
     // A long joint move by A: A holds the arm.
     assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
     let mut goal = sim.ok("jP", [0.0; 7], 0);
@@ -269,7 +269,7 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
     for cmd in ["CM", "jG", "jB", "OF", "RC", "GT"] {
         assert_eq!(
             ask(&b, cmd, [1.0, 0., 0., 0., 0., 0., 0.], 0),
-            Answer::Text(held.clone()),
+            Answer::Text(held(cmd)),
             "{cmd} from the second client"
         );
     }

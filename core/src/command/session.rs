@@ -4,7 +4,7 @@
 //! * **One controlling client.** Requests that command the arm — motion, mode, power,
 //!   recalibration, goals, via points and blends ([`Class::Command`]) — come from the client
 //!   that holds the arm. While the arm moves or streams, another client's are refused
-//!   (`ER40 held by <address>`); at rest, another client's takes control (so a restarted
+//!   (`ER40 Cmd XX by <address>`); at rest, another client's takes control (so a restarted
 //!   client, or one on a new port, just works).
 //! * **A stop from anyone.** `ST` (and `jR`) are obeyed from every allowed client, always.
 //! * **Reads for everyone.** `PS`, `jP`, `TM`, `SQ` are answered to every client.
@@ -131,7 +131,7 @@ impl Session {
             return Ok(());
         }
         match self.holder {
-            Some(holder) if holder != client && busy => Err(Notice::HeldBy(ipv4(holder))),
+            Some(holder) if holder != client && busy => Err(Notice::HeldBy(command, ipv4(holder))),
             Some(holder) if holder == client => Ok(()),
             _ => {
                 self.holder = Some(client);
@@ -295,7 +295,7 @@ mod tests {
         assert_eq!(s.admit(Command::Pose, b, 0.1, true), Ok(()));
         assert_eq!(
             s.admit(Command::ChangeMode, b, 0.1, true),
-            Err(Notice::HeldBy(Some([192, 168, 1, 2])))
+            Err(Notice::HeldBy(Command::ChangeMode, Some([192, 168, 1, 2])))
         );
         assert_eq!(
             s.admit(Command::GoalRpy, b, 0.1, true)
@@ -362,7 +362,7 @@ mod tests {
             a,
             Command::Begin,
             &begin,
-            &Notice::HeldBy(None).text().to_bytes(),
+            &Notice::HeldBy(Command::Begin, None).text().to_bytes(),
             0.4,
         );
         assert_eq!(s.resent(a, &begin, 0.45), None);

@@ -39,9 +39,9 @@ pub enum Notice {
     BeyondJointLimit(Command, JointBound),
     /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
     ViaPointMissed,
-    /// `ER40 held by 192.168.1.2`: another client controls the arm while it moves (its IPv4
+    /// `ER40 Cmd XX by 192.168.1.2`: another client controls the arm while it moves (its IPv4
     /// address; `another client` for an IPv6 one, which may not fit).
-    HeldBy(Option<[u8; 4]>),
+    HeldBy(Command, Option<[u8; 4]>),
     /// `ER41 client silent 500 ms`: the controlling client said nothing for longer than its
     /// watchdog (`WD`, this many ms, at most 60,000) while the arm moved: the arm was stopped.
     ClientSilent(u16),
@@ -72,7 +72,7 @@ impl Notice {
             Self::OutsideWorkspace(..) => 25,
             Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
-            Self::HeldBy(_) => 40,
+            Self::HeldBy(..) => 40,
             Self::ClientSilent(_) => 41,
         }
     }
@@ -127,8 +127,10 @@ impl fmt::Display for Body {
             Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
-            Notice::HeldBy(Some(ip)) => write!(f, "held by {}", Ipv4Addr::from(ip)),
-            Notice::HeldBy(None) => f.write_str("held by another client"),
+            Notice::HeldBy(c, Some(ip)) => {
+                write!(f, "Cmd {} by {}", Pair(c.chars()), Ipv4Addr::from(ip))
+            }
+            Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
             Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
         }
     }
@@ -150,12 +152,12 @@ mod tests {
 
     #[test]
     fn the_holder_is_named_where_it_fits() {
-        let held = |ip| Notice::HeldBy(ip).text();
+        let held = |ip| Notice::HeldBy(Command::Begin, ip).text();
         assert_eq!(
             held(Some([192, 168, 100, 200])).as_str(),
-            "ER40 held by 192.168.100.200"
+            "ER40 Cmd BG by 192.168.100.200"
         );
-        assert_eq!(held(None).as_str(), "ER40 held by another client");
+        assert_eq!(held(None).as_str(), "ER40 Cmd BG by another client");
         assert_eq!(
             Notice::ClientSilent(60_000).text().as_str(),
             "ER41 client silent 60000 ms"
