@@ -109,8 +109,8 @@ impl CanBus for LatchingBus {
     }
 }
 
-#[test]
-fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
+/// ranger-mk1 on a bus whose bus-off the test sets, for clients with addresses `P`.
+fn latching<P: armgate_core::cycle::Peer>() -> Cycle<CanDrives<LatchingBus>, P> {
     let config = robot("ranger-mk1");
     let bus = LatchingBus {
         bus: VirtualBus::for_robot(&config),
@@ -118,7 +118,12 @@ fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
         recoveries: 0,
     };
     let drives = CanDrives::started(&config, &DriveSettings::default(), bus).unwrap();
-    let mut cycle: Cycle<_, ()> = Cycle::new(&config, drives);
+    Cycle::new(&config, drives)
+}
+
+#[test]
+fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
+    let mut cycle: Cycle<_, ()> = latching();
     let mut client = Client::default();
     let tick = |cycle: &mut Cycle<CanDrives<LatchingBus>, ()>, client: &mut Client| {
         let due = cycle.next_due_us();
@@ -205,14 +210,7 @@ impl Link<SocketAddr> for Clients {
 
 /// The bus-off fault's notice, after `requests` from their clients: to whom it went.
 fn bus_off_notice_after(requests: &[(SocketAddr, &[u8])]) -> Vec<SocketAddr> {
-    let config = robot("ranger-mk1");
-    let bus = LatchingBus {
-        bus: VirtualBus::for_robot(&config),
-        bus_off: false,
-        recoveries: 0,
-    };
-    let drives = CanDrives::started(&config, &DriveSettings::default(), bus).unwrap();
-    let mut cycle: Cycle<_, SocketAddr> = Cycle::new(&config, drives);
+    let mut cycle: Cycle<_, SocketAddr> = latching();
     let mut clients = Clients::default();
     for _ in 0..200 {
         cycle.tick(cycle.next_due_us(), &mut clients);

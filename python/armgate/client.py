@@ -3,12 +3,23 @@
 from __future__ import annotations
 
 import collections
+import contextlib
 import logging
 import math
 import socket
 import time as _time
 from dataclasses import dataclass, replace
-from typing import Callable, Deque, List, Optional, Sequence, Tuple, TypeVar, Union
+from typing import (
+    Callable,
+    Deque,
+    Iterator,
+    List,
+    Optional,
+    Sequence,
+    Tuple,
+    TypeVar,
+    Union,
+)
 
 from . import wire
 from .errors import (
@@ -330,7 +341,8 @@ class Arm:
         def moved(a: Pose, b: Pose) -> bool:
             return a.distance(b) > _STILL or a.angle_to(b) > _STILL
 
-        return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
+        with self._watchdog_while(opts):
+            return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
 
     def wait_for_joints(
         self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
@@ -348,35 +360,30 @@ class Arm:
         def moved(a: List[float], b: List[float]) -> bool:
             return any(abs(x - y) > _STILL for x, y in zip(a, b))
 
-        return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
+        with self._watchdog_while(opts):
+            return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
 
-    def _wait(
-        self,
-        goals: Sequence[T],
-        options: WaitOptions,
-        read: Callable[[], T],
-        measure: Callable[[T, T, bool], Tuple[float, Optional[float], bool]],
-        moved: Callable[[T, T], bool],
-    ) -> T:
-        """Polls until arrival, with the controller's client watchdog on meanwhile (twenty
-        polls, at least a second): if this program dies or loses the network while the arm
-        moves, the controller stops it. A controller without one, or another client holding
-        the arm, refuses it; the wait goes on without."""
+    @contextlib.contextmanager
+    def _watchdog_while(self, options: WaitOptions) -> Iterator[None]:
+        """The controller's client watchdog on (twenty polls, at least a second) for the
+        block: if this program dies or loses the network while the arm moves, the controller
+        stops it. A controller without one, or another client holding the arm, refuses it;
+        the block runs without."""
+        refused = (ControllerMessage, ControllerTooOld, ReplyTimeout)
         try:
             self.watchdog(max(1000, min(60000, round(options.poll * 20 * 1000))))
-            watched = True
-        except (ControllerMessage, ControllerTooOld, ReplyTimeout):
-            watched = False
+        except refused:
+            yield
+            return
         try:
-            return self._poll(goals, options, read, measure, moved)
+            yield
         finally:
-            if watched:
-                try:
-                    self.watchdog(0)
-                except (ControllerMessage, ControllerTooOld, ReplyTimeout):
-                    pass
+            try:
+                self.watchdog(0)
+            except refused:
+                pass
 
-    def _poll(
+    def _wait(
         self,
         goals: Sequence[T],
         options: WaitOptions,

@@ -110,18 +110,26 @@ fn replies_to_a_source_nobody_owns_do_not_silence_the_controller() {
 /// A start where ranger-mk1 can move its first joint a long way (as in the full session).
 const START: &str = "1.5708,0.6,-0.4,0.2,1.8,0.1";
 
-#[test]
-fn a_stop_gets_through_while_another_client_floods() {
+/// ranger-mk1 from [`START`] in joint mode, `before_move` done, then moving its first joint by
+/// `by` rad (the move accepted); the goal's joints.
+fn moving(by: f32, before_move: impl FnOnce(&Sim)) -> (Sim, [f32; 7]) {
     let sim = Sim::start_with("ranger-mk1", &["--start", START]);
     assert!(knows_status(&sim));
-    let period = 0.01944;
-    // A long joint move (half a radian on the first joint).
     assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    before_move(&sim);
     let mut goal = sim.ok("jP", [0.0; 7], 0);
-    goal[0] += 0.5;
+    goal[0] += by;
     goal[6] = 0.0;
     sim.ok("jG", goal, 0);
     sim.start_motion("jB");
+    (sim, goal)
+}
+
+#[test]
+fn a_stop_gets_through_while_another_client_floods() {
+    let period = 0.01944;
+    // A long joint move (half a radian on the first joint).
+    let (sim, goal) = moving(0.5, |_| {});
     assert_eq!(status(&sim)[4], 1.0, "a joint move");
 
     // Another allowed client floods PS, never reading its replies: 10,000 at about 2,000 a
@@ -240,8 +248,8 @@ fn session(socket: &UdpSocket) -> [f32; 7] {
 
 #[test]
 fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
-    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
-    assert!(knows_status(&sim));
+    // A long joint move by A: A holds the arm.
+    let (sim, _) = moving(0.5, |_| {});
     let b = second_client(&sim);
     let a_ip = match sim.socket.local_addr().unwrap().ip() {
         std::net::IpAddr::V4(ip) if !ip.is_unspecified() => ip,
@@ -249,13 +257,6 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
         _ => std::net::Ipv4Addr::LOCALHOST,
     };
     let held = |cmd: &str| format!("ER40 Cmd {cmd} by {a_ip}");
-    // A long joint move by A: A holds the arm.
-    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
-    let mut goal = sim.ok("jP", [0.0; 7], 0);
-    goal[0] += 0.5;
-    goal[6] = 0.0;
-    sim.ok("jG", goal, 0);
-    sim.start_motion("jB");
     let [high, low] = [
         (u32::from(a_ip) >> 16) as f32,
         (u32::from(a_ip) & 0xffff) as f32,
@@ -293,16 +294,9 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
 
 #[test]
 fn a_begin_whose_reply_was_lost_is_answered_again_not_refused_busy() {
-    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
-    assert!(knows_status(&sim));
-    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
-    let mut goal = sim.ok("jP", [0.0; 7], 0);
-    goal[0] += 0.3;
-    goal[6] = 0.0;
-    sim.ok("jG", goal, 0);
     // jB until the drives take it; its reply is "lost" (read and ignored), and the client
     // resends the same datagram 200 ms later.
-    sim.start_motion("jB");
+    let (sim, goal) = moving(0.3, |_| {});
     std::thread::sleep(Duration::from_millis(200));
     match sim.request("jB", [0.0; 7], 0) {
         Answer::Reply(c, v, 0) if &c == b"Bj" => assert_eq!(v, [0.0; 7]),
@@ -315,21 +309,15 @@ fn a_begin_whose_reply_was_lost_is_answered_again_not_refused_busy() {
 
 #[test]
 fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
-    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
-    assert!(knows_status(&sim));
-    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
-    // Out of range: refused; 300 ms: in force, SQ 3 f4 reports it.
-    assert_eq!(
-        sim.text("WD", [-1.0, 0., 0., 0., 0., 0., 0.], 0),
-        "ER23 Cmd WD bad number"
-    );
-    assert_eq!(sim.ok("WD", [300.0, 0., 0., 0., 0., 0., 0.], 0)[0], 300.0);
-    assert_eq!(session(&sim.socket)[4], 300.0);
-    let mut goal = sim.ok("jP", [0.0; 7], 0);
-    goal[0] += 0.5;
-    goal[6] = 0.0;
-    sim.ok("jG", goal, 0);
-    sim.start_motion("jB");
+    let (sim, _) = moving(0.5, |sim| {
+        // Out of range: refused; 300 ms: in force, SQ 3 f4 reports it.
+        assert_eq!(
+            sim.text("WD", [-1.0, 0., 0., 0., 0., 0., 0.], 0),
+            "ER23 Cmd WD bad number"
+        );
+        assert_eq!(sim.ok("WD", [300.0, 0., 0., 0., 0., 0., 0.], 0)[0], 300.0);
+        assert_eq!(session(&sim.socket)[4], 300.0);
+    });
     // Polling feeds it: the move runs on.
     for _ in 0..8 {
         std::thread::sleep(Duration::from_millis(100));

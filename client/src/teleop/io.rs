@@ -256,11 +256,12 @@ mod tests {
         assert_eq!(events, [Event::Started("sent jG + jB".into())]);
     }
 
-    #[test]
-    fn a_second_refusal_is_shown_as_the_text() {
-        let fake = FakeController::spawn(|d| {
+    /// A Cartesian move against a controller that refuses every BG with `refusal`: what was
+    /// sent, and the events.
+    fn move_refused_with(refusal: &'static str) -> (Vec<String>, Vec<Event>) {
+        let fake = FakeController::spawn(move |d| {
             if &d[..2] == b"BG" {
-                vec![text("ER20 Cmd BG busy")]
+                vec![text(refusal)]
             } else {
                 vec![echo(d)]
             }
@@ -273,28 +274,20 @@ mod tests {
                 rpy: [0.0; 3],
             },
         );
-        assert_eq!(sent(&fake), ["GT", "BG", "ST", "BG"]);
+        (sent(&fake), events)
+    }
+
+    #[test]
+    fn a_second_refusal_is_shown_as_the_text() {
+        let (sent, events) = move_refused_with("ER20 Cmd BG busy");
+        assert_eq!(sent, ["GT", "BG", "ST", "BG"]);
         assert!(matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER20 Cmd BG busy"));
     }
 
     #[test]
     fn another_clients_arm_is_never_stopped_through() {
-        let fake = FakeController::spawn(|d| {
-            if &d[..2] == b"BG" {
-                vec![text("ER40 Cmd BG by 192.168.1.2")]
-            } else {
-                vec![echo(d)]
-            }
-        });
-        let mut c = client(&fake);
-        let events = perform(
-            &mut c,
-            Action::MoveCartesian {
-                xyz: [0.5, 0.2, 0.1],
-                rpy: [0.0; 3],
-            },
-        );
-        assert_eq!(sent(&fake), ["GT", "BG"]);
+        let (sent, events) = move_refused_with("ER40 Cmd BG by 192.168.1.2");
+        assert_eq!(sent, ["GT", "BG"]);
         assert!(
             matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER40 Cmd BG by 192.168.1.2")
         );

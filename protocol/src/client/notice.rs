@@ -1,7 +1,6 @@
 //! The controller's fixed error and warning texts (spec §2.3, §2.5, §2.6).
 
 use core::fmt::{self, Write as _};
-use core::net::Ipv4Addr;
 
 use super::{Command, DriveStatus, Error, JointBound, Rejection, Severity, Text, WorkspaceReason};
 
@@ -127,8 +126,10 @@ impl fmt::Display for Body {
             Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
-            Notice::HeldBy(c, Some(ip)) => {
-                write!(f, "Cmd {} by {}", Pair(c.chars()), Ipv4Addr::from(ip))
+            // The octets one by one: `Ipv4Addr`'s Display has a panic path (its padding
+            // buffer), which the control tick must not link.
+            Notice::HeldBy(c, Some([a, b, x, y])) => {
+                write!(f, "Cmd {} by {a}.{b}.{x}.{y}", Pair(c.chars()))
             }
             Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
             Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
