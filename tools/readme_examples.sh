@@ -5,9 +5,13 @@
 # drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
 # ranger-mk1's 3 cm/s).
 #
+# Then the lines of "See the arm" (`armgate urdf`, `armgate record`, the recipe's move).
+#
 # Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
-# terminal; tests cover it at the state level) and `armgate plot` (it needs the logs of a
-# `--log-dir` session; tests/plot_e2e.rs makes one and plots it).
+# terminal; tests cover it at the state level), `armgate plot` (it needs the logs of a
+# `--log-dir` session; tests/plot_e2e.rs makes one and plots it) and the other armgate-sim
+# lines (python/tests/test_mcap.py records with --mcap, tests/foxglove_live.rs views
+# --foxglove).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +21,7 @@ target=${CARGO_TARGET_DIR:-target}
 # call), so that the README's commands find them built.
 cargo build -q -p armgate-sim
 cargo build -q -p armgate-client
+cargo build -q -p armgate-viz
 
 # `armgate` as the README writes it: the binary just built.
 shim=$(mktemp -d)
@@ -62,7 +67,8 @@ run() {
 
 quick=$(examples "Quick start")
 client=$(examples 'Client: `armgate`')
-[[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
+viz=$(examples 'See the arm: Foxglove, MCAP and URDF')
+[[ -n $quick && -n $client && -n $viz ]] || { echo "no examples found in $readme" >&2; exit 1; }
 
 # The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
 # itself by the binary, so $! is the simulator).
@@ -134,6 +140,19 @@ if [[ $status -ne 130 ]] || ! grep -q 'sent ST' "$shim/jmove.out" || [[ $before 
 else
     echo "(exit 130; the arm holds)"
 fi
+
+# "See the arm": the files they write are removed afterwards.
+while IFS= read -r line; do
+    IFS=';' read -ra commands <<<"$line"
+    for cmd in "${commands[@]}"; do
+        cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
+        case $cmd in
+            *armgate-sim*) echo "skipped: $cmd (the simulator runs; tests record and view it)" ;;
+            *) run "$cmd" ;;
+        esac
+    done
+done <<<"$viz"
+rm -f ur5.urdf run.mcap
 
 # The simulator ends cleanly on SIGTERM, with its summary.
 kill -TERM "$sim_pid"

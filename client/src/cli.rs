@@ -47,6 +47,10 @@ Examples:
   armgate teleop                             keyboard client (Fig. 3.3 of the thesis)
   armgate calibrate plan --robot robots/ur5.toml --poses 50
                                              poses to measure for kinematic calibration
+  armgate urdf robots/ur5.toml --out ur5.urdf
+                                             the arm for URDF tools (Foxglove, RViz)
+  armgate record run.mcap --robot robots/ranger-mk1.toml --duration 60
+                                             the controller in MCAP for Foxglove
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
 WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
@@ -265,8 +269,24 @@ pub enum Cmd {
     /// explains them; docs/calibration.md). Needs no controller.
     #[command(disable_help_flag = true)]
     Calibrate {
-        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml` or
-        /// `plan --robot R.toml --poses 50`.
+        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml
+        /// --instrument-out I.toml` or `plan --robot R.toml --poses 50`.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
+    /// Write the URDF of a robot file, whose link frames are armgate's kinematics (runs
+    /// `armgate-viz urdf`; docs/visualisation.md). Needs no controller.
+    #[command(disable_help_flag = true)]
+    Urdf {
+        /// Passed on unchanged, e.g. `robots/ur5.toml --out ur5.urdf` (`--help` for more).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
+    /// Record this controller into an MCAP file for Foxglove (runs `armgate-viz record --addr
+    /// ADDR`; docs/visualisation.md): jP and PS at --rate, SQ once a second, every notice.
+    #[command(disable_help_flag = true)]
+    Record {
+        /// Passed on unchanged, e.g. `run.mcap --robot robots/ranger-mk1.toml --rate 20`.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
@@ -438,8 +458,17 @@ fn parse_joints(s: &str) -> Result<usize, String> {
 /// Runs the command line (parsed from the process's arguments) and returns the exit status.
 pub fn main() -> u8 {
     let cli = Cli::parse();
-    if let Cmd::Calibrate { args } = &cli.command {
-        return crate::calibrate::run(args);
+    match &cli.command {
+        Cmd::Calibrate { args } => return crate::tools::run(crate::tools::CALIBRATE, args),
+        Cmd::Urdf { args } => {
+            let args = [&[std::ffi::OsString::from("urdf")], args.as_slice()].concat();
+            return crate::tools::run(crate::tools::VIZ, &args);
+        }
+        Cmd::Record { args } => {
+            let head = ["record", "--addr", cli.addr.as_str()].map(std::ffi::OsString::from);
+            return crate::tools::run(crate::tools::VIZ, &[&head[..], args].concat());
+        }
+        _ => {}
     }
     let mut out = std::io::stdout().lock();
     let result = run(&cli, &mut out).and_then(|()| out.flush().map_err(CliError::Output));
@@ -791,8 +820,12 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             }
             Ok(())
         }
-        // Handled in `run`: teleop takes the client over; calibrate and plot need none.
-        Cmd::Teleop { .. } | Cmd::Calibrate { .. } | Cmd::Plot(_) => Ok(()),
+        // Handled in `run`: teleop takes the client over; calibrate, urdf, record and plot need none.
+        Cmd::Teleop { .. }
+        | Cmd::Calibrate { .. }
+        | Cmd::Urdf { .. }
+        | Cmd::Record { .. }
+        | Cmd::Plot(_) => Ok(()),
     }
 }
 

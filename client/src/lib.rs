@@ -32,7 +32,6 @@
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
-pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;
@@ -48,6 +47,7 @@ mod pose;
 pub mod runfile;
 pub mod status;
 pub mod teleop;
+pub mod tools;
 pub mod velocity;
 pub mod wait;
 

@@ -7,6 +7,7 @@ mod args;
 mod backend;
 mod log;
 mod pcap;
+mod record;
 mod socketcan;
 mod status;
 mod udp;
@@ -86,6 +87,16 @@ struct Args {
     /// Wireshark with tools/wireshark/armgate.lua).
     #[arg(long, value_name = "FILE")]
     pcap: Option<PathBuf>,
+    /// Record the run into this MCAP file for Foxglove (docs/visualisation.md): joints,
+    /// frames, goals and planned paths, the workspace, every request, reply and notice, the
+    /// raw datagrams and CAN frames, and the URDF; simulation time as log time.
+    #[arg(long, value_name = "FILE")]
+    mcap: Option<PathBuf>,
+    /// Serve the same channels live over the Foxglove WebSocket protocol (Foxglove: Open
+    /// connection, ws://ADDR), on 127.0.0.1:8765 without ADDR. Read-only: a viewer cannot
+    /// command the arm; mind who can reach ADDR all the same.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    foxglove: Option<SocketAddr>,
     /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
@@ -194,6 +205,17 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         }
         None => None,
     };
+    let recording = if args.mcap.is_some() || args.foxglove.is_some() {
+        let (recording, live) =
+            record::Recording::start(config, args.mcap.as_deref(), args.foxglove)
+                .map_err(|e| e.to_string())?;
+        if let Some(addr) = live {
+            eprintln!("armgate-sim: Foxglove live view on ws://{addr}");
+        }
+        Some(recording)
+    } else {
+        None
+    };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
     let local = socket.local_addr().map_err(|e| e.to_string())?;
     socket
@@ -243,6 +265,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             time: elapsed.as_secs_f64(),
             error: None,
         };
+        record::set_time(cycle.next_due_us());
         let outcome = cycle.tick(micros(elapsed), &mut link);
         if let Some(error) = link.error {
             return Err(error);
@@ -258,6 +281,17 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
                 command: out.command,
                 setpoint: out.setpoint,
             })));
+        }
+        if record::enabled()
+            && let Ok(out) = &outcome.step
+        {
+            record::joints(
+                outcome.time,
+                cycle.drives().measured(),
+                out.command,
+                out.setpoint,
+                out.measured_pose,
+            );
         }
         if status && now >= next_status {
             next_status = now + Duration::from_millis(250);
@@ -276,6 +310,13 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         eprintln!(
             "armgate-sim: {}: {written} packets captured, {lost} dropped (queue full)",
             path.display()
+        );
+    }
+    if let Some(recording) = recording {
+        let dropped = record::dropped();
+        let (written, _) = recording.finish().map_err(|e| format!("record: {e}"))?;
+        eprintln!(
+            "armgate-sim: recorded {written} messages, {dropped} events dropped (queue full)"
         );
     }
     let counters = cycle.counters();

@@ -107,6 +107,7 @@ impl UdpLink<'_> {
             // capture.
             let datagram = buf.get(..len).unwrap_or(&[]);
             crate::pcap::udp(from, self.local, datagram);
+            crate::record::request(from, self.local, datagram);
             if !self.allow.iter().any(|net| net.contains(from.ip())) {
                 self.stats.refused_sources += 1;
                 continue;
@@ -156,6 +157,7 @@ impl Link<SocketAddr> for UdpLink<'_> {
         let sent = self.socket.send_to(bytes, datagram.peer);
         if sent.is_ok() {
             crate::pcap::udp(self.local, datagram.peer, bytes);
+            crate::record::answer(self.local, datagram.peer, bytes);
         }
         sent.map(drop).map_err(|_| Dropped)
     }
