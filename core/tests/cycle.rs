@@ -192,6 +192,7 @@ fn a_replay_offers_each_datagram_to_the_first_tick_due_after_it_arrives() {
 #[derive(Default)]
 struct Clients {
     requests: std::collections::VecDeque<Datagram<SocketAddr>>,
+    replies: Vec<Datagram<SocketAddr>>,
     notices: Vec<Datagram<SocketAddr>>,
 }
 
@@ -201,8 +202,9 @@ impl Link<SocketAddr> for Clients {
     }
 
     fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
-        if kind == Outgoing::Notice {
-            self.notices.push(*datagram);
+        match kind {
+            Outgoing::Reply => self.replies.push(*datagram),
+            Outgoing::Notice => self.notices.push(*datagram),
         }
         Ok(())
     }
@@ -243,4 +245,86 @@ fn notices_go_to_the_holder_or_the_last_valid_sender_never_to_garbage() {
         bus_off_notice_after(&[(a, mode.payload()), (b, poll.payload()), (b, &garbage)]),
         [a]
     );
+}
+
+#[test]
+fn one_planning_request_a_tick_the_rest_wait_and_a_stop_cancels_them() {
+    let a = SocketAddr::from(([192, 168, 1, 2], 5000));
+    let b = SocketAddr::from(([192, 168, 1, 3], 6000));
+    let mut cycle: Cycle<SimulatedDrives, SocketAddr> = {
+        let config = robot("ranger-mk1");
+        let arm = IdealArm::new(config.home());
+        Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm)))
+    };
+    let mut clients = Clients::default();
+    let tick = |cycle: &mut Cycle<_, _>, clients: &mut Clients| {
+        clients.replies.clear();
+        cycle.tick(cycle.next_due_us(), clients);
+        clients
+            .replies
+            .iter()
+            .map(|r| {
+                (
+                    r.peer,
+                    String::from_utf8_lossy(&r.payload()[..2]).into_owned(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    tick(&mut cycle, &mut clients);
+    // A: three goals (each checked with the IK) and a poll; B: a poll.
+    for (from, command) in [
+        (a, Command::GoalRpy),
+        (a, Command::GoalRpy),
+        (a, Command::Pose),
+        (b, Command::Pose),
+        (a, Command::GoalRpy),
+    ] {
+        clients
+            .requests
+            .push_back(Datagram::new(request(command).payload(), from));
+    }
+    // One planning request this tick; A's later requests wait behind its second, B's poll
+    // does not.
+    let first = tick(&mut cycle, &mut clients);
+    assert_eq!(first[0].0, a);
+    assert_eq!(first[1..], [(b, "SP".to_owned())]);
+    let second = tick(&mut cycle, &mut clients);
+    assert_eq!(second.iter().map(|r| r.0).collect::<Vec<_>>(), [a, a]);
+    assert_eq!(second[1].1, "SP");
+    let third = tick(&mut cycle, &mut clients);
+    assert_eq!(third.iter().map(|r| r.0).collect::<Vec<_>>(), [a]);
+    // Three begins from A and B's ST in one tick: the first begin is handled, the two that
+    // wait are cancelled by the stop, which arrived after them.
+    for (from, command) in [
+        (a, Command::JointBegin),
+        (a, Command::JointBegin),
+        (a, Command::JointBegin),
+        (b, Command::Stop),
+    ] {
+        clients
+            .requests
+            .push_back(Datagram::new(request(command).payload(), from));
+    }
+    clients.replies.clear();
+    cycle.tick(cycle.next_due_us(), &mut clients);
+    let texts: Vec<String> = clients
+        .replies
+        .iter()
+        .map(|r| {
+            String::from_utf8_lossy(r.payload())
+                .trim_end_matches('\0')
+                .to_owned()
+        })
+        .collect();
+    assert_eq!(texts[0], "ER20 Cmd jB no goal");
+    assert_eq!(
+        texts[1..],
+        [
+            "ER42 Cmd jB cancelled by ST",
+            "ER42 Cmd jB cancelled by ST",
+            "TS"
+        ]
+    );
+    assert!(tick(&mut cycle, &mut clients).is_empty());
 }

@@ -176,6 +176,11 @@ impl CommandHandler {
         reply
     }
 
+    /// Counts a refusal the cycle answered itself (a request cancelled by a stop).
+    pub fn count_refusal(&mut self) {
+        self.refused = self.refused.saturating_add(1);
+    }
+
     /// The text of a refusal, counted.
     fn refuse(&mut self, notice: Notice) -> [u8; MESSAGE_LEN] {
         self.refused = self.refused.saturating_add(1);

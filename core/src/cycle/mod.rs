@@ -27,6 +27,9 @@
 //!    a tick's work stays bounded (a reply waits at most about a period). They come after the
 //!    step, so that every reply reflects this tick's measurement (also the very first tick's)
 //!    and a motion they start runs from the next tick on;
+//!    At most [`PLANNING_PER_TICK`] of them may plan a motion (a move, a sequence, a
+//!    recalibration, a Cartesian goal): the others, and what their clients send after them,
+//!    wait for the next ticks; a stop cancels them (module `budget`);
 //! 6. **notices**: every unsolicited warning the relay holds goes to the client that holds the
 //!    arm, or with none to the last client that sent a valid request
 //!    ([`Session`](crate::command::Session)); with none yet, it is counted and dropped.
@@ -35,6 +38,7 @@
 //! it — [`CanDrives`] first asks the bus to recover ([`CanBus::recover`](crate::drives::CanBus::recover)),
 //! then restarts the drives. docs/architecture.md shows the cycle and the shells.
 
+mod budget;
 mod can_drives;
 mod counters;
 mod link;
@@ -44,6 +48,7 @@ mod shares;
 mod side;
 mod tick;
 
+pub use budget::PLANNING_PER_TICK;
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
 pub use link::{Datagram, Dropped, Link, Outgoing, Peer};

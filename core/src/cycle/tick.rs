@@ -1,12 +1,13 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
+use super::budget::{PLANNING_PER_TICK, Waiting, Work, cancel_planning, waits};
 use super::counters::bump;
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
-use armgate_protocol::client::MESSAGE_LEN;
+use armgate_protocol::client::{MESSAGE_LEN, Notice};
 use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
@@ -44,7 +45,8 @@ pub struct Cycle<D, P> {
     /// Time of the previous tick (s).
     previous: Option<f64>,
     counters: CycleCounters,
-    _peer: core::marker::PhantomData<P>,
+    /// Requests the work budget left for a later tick.
+    waiting: Waiting<P>,
 }
 
 impl<D: DriveSide, P: Peer> Cycle<D, P> {
@@ -60,7 +62,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             next: 0,
             previous: None,
             counters: CycleCounters::default(),
-            _peer: core::marker::PhantomData,
+            waiting: Waiting::new(),
         }
     }
 
@@ -162,12 +164,48 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
     fn handle_requests(&mut self, link: &mut impl Link<P>) {
         let drops = self.counters.send_dropped.saturating_add(link.dropped());
         self.handler.set_send_drops(drops);
+        // The work budget (module `budget`): requests waiting from earlier ticks first.
+        let mut planned = 0;
+        let mut later = Waiting::new();
         for _ in 0..REQUESTS_PER_TICK {
-            let Some(request) = link.receive() else {
+            let Some(request) = self.waiting.pop_front().or_else(|| link.receive()) else {
                 break;
             };
+            let work = Work::of(request.payload());
+            let plans = matches!(work, Work::Plans(_));
+            if waits(&later, request.peer) || (plans && planned >= PLANNING_PER_TICK) {
+                // Room: at most one a pass.
+                let _ = later.push_back(request);
+                continue;
+            }
+            planned += usize::from(plans);
+            if work == Work::Stops {
+                self.cancel_waiting(&mut later, link);
+            }
             let reply = self.answer(request.payload(), request.peer);
             self.send(link, Datagram::new(&reply, request.peer), Outgoing::Reply);
+        }
+        // What waited before stays ahead of what the link still holds. (Together never more
+        // than the queue: with some left in `waiting`, every pass took one from it.)
+        while let Some(request) = self.waiting.pop_front() {
+            let _ = later.push_back(request);
+        }
+        self.waiting = later;
+    }
+
+    /// Answers the planning requests waiting (in `later` and in `waiting`) as cancelled by a
+    /// stop that arrived after them.
+    fn cancel_waiting(&mut self, later: &mut Waiting<P>, link: &mut impl Link<P>) {
+        let mut cancelled = Waiting::new();
+        for queue in [&mut *later, &mut self.waiting] {
+            cancel_planning(queue, |command, peer| {
+                let reply = Notice::Cancelled(command).text().to_bytes();
+                let _ = cancelled.push_back(Datagram::new(&reply, peer));
+            });
+        }
+        while let Some(reply) = cancelled.pop_front() {
+            self.handler.count_refusal();
+            self.send(link, reply, Outgoing::Reply);
         }
     }
 

@@ -44,6 +44,9 @@ pub enum Notice {
     /// `ER41 client silent 500 ms`: the controlling client said nothing for longer than its
     /// watchdog (`WD`, this many ms, at most 60,000) while the arm moved: the arm was stopped.
     ClientSilent(u16),
+    /// `ER42 Cmd XX cancelled by ST`: a planning request that waited for a later tick (the
+    /// per-tick work budget) was cancelled by a stop that arrived after it.
+    Cancelled(Command),
 }
 
 impl Notice {
@@ -73,6 +76,7 @@ impl Notice {
             Self::ViaPointMissed => 27,
             Self::HeldBy(..) => 40,
             Self::ClientSilent(_) => 41,
+            Self::Cancelled(_) => 42,
         }
     }
 
@@ -133,6 +137,7 @@ impl fmt::Display for Body {
             }
             Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
             Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
+            Notice::Cancelled(c) => write!(f, "Cmd {} cancelled by ST", Pair(c.chars())),
         }
     }
 }
@@ -159,6 +164,10 @@ mod tests {
             "ER40 Cmd BG by 192.168.100.200"
         );
         assert_eq!(held(None).as_str(), "ER40 Cmd BG by another client");
+        assert_eq!(
+            Notice::Cancelled(Command::ViaExecute).text().as_str(),
+            "ER42 Cmd VE cancelled by ST"
+        );
         assert_eq!(
             Notice::ClientSilent(60_000).text().as_str(),
             "ER41 client silent 60000 ms"
