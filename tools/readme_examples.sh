@@ -7,6 +7,10 @@
 #
 # Then the lines of "See the arm" (`armgate urdf`, `armgate record`, the recipe's move).
 #
+# With ARMGATE_SIGNED=1 the same examples run signed (docs/safety.md, "Signing"): armgate-sim
+# gets a fresh key (--key), the client signs with it (ARMGATE_KEY_FILE), the Python client's
+# README line runs with `key=`, and at the end the simulator must have dropped nothing.
+#
 # Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
 # terminal; tests cover it at the state level), `armgate plot` (it needs the logs of a
 # `--log-dir` session; tests/plot_e2e.rs makes one and plots it) and the other armgate-sim
@@ -35,6 +39,15 @@ cleanup() {
 trap cleanup EXIT
 ln -s "$(realpath "$target/debug/armgate")" "$shim/armgate"
 export PATH="$shim:$PATH"
+
+sim_key=
+if [[ ${ARMGATE_SIGNED:-} == 1 ]]; then
+    key=$shim/arm.key
+    (umask 077 && od -An -N32 -tx1 /dev/urandom | tr -d ' \n' >"$key" && echo >>"$key")
+    sim_key="--key $key"
+    export ARMGATE_KEY_FILE=$key
+    echo "signed pass: key file $key"
+fi
 
 # The non-empty lines of the ```sh blocks under the heading `## $1`, comments removed.
 examples() {
@@ -74,8 +87,8 @@ viz=$(examples 'See the arm: Foxglove, MCAP and URDF')
 # itself by the binary, so $! is the simulator).
 sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
 log=$shim/sim.log
-echo "\$ $sim --listen 127.0.0.1:0"
-bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
+echo "\$ $sim --listen 127.0.0.1:0 $sim_key"
+bash -c "exec $sim --listen 127.0.0.1:0 $sim_key" 2>"$log" &
 sim_pid=$!
 for _ in $(seq 600); do
     grep -q 'udp://' "$log" && break
@@ -113,6 +126,13 @@ while IFS= read -r line; do
         esac
     done
 done <<<"$client"
+
+# The signed pass: the Python client's README line, with the key.
+if [[ -n $sim_key ]]; then
+    python=$(examples "Python client" | grep -m1 '^python3') || { echo "no python3 line" >&2; exit 1; }
+    port=${ARMGATE_ADDR##*:}
+    run "PYTHONPATH=python ${python/port=7031)/port=$port, key=\"$key\")}"
+fi
 
 # Ctrl-C during a wait sends ST: the arm stops and holds. (A background job of a script
 # ignores SIGINT until armgate installs its handler, as it does before its first request.)
@@ -161,9 +181,13 @@ wait "$sim_pid"
 status=$?
 set -e
 sim_pid=
-tail -n 1 "$log"
+tail -n 2 "$log"
 if [[ $status -ne 0 ]]; then
     echo "FAILED: armgate-sim exited with $status on SIGTERM" >&2
+    failures=$((failures + 1))
+fi
+if [[ -n $sim_key ]] && ! grep -q 'dropped: 0 unsigned, 0 truncated, 0 forged, 0 replayed' "$log"; then
+    echo "FAILED: the signed clients' datagrams were not all served" >&2
     failures=$((failures + 1))
 fi
 

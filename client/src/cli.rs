@@ -131,6 +131,14 @@ pub struct Cli {
     /// use the two-bank requests.
     #[arg(long, global = true, value_parser = parse_joints)]
     pub joints: Option<usize>,
+    /// Sign every request with the key in this file (64 hex digits on one line) and accept
+    /// only answers signed with it, for a controller that has the key (docs/safety.md).
+    #[arg(long, global = true, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
+    pub key: Option<std::path::PathBuf>,
+    /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
+    /// their own (teleop also uses the next one, for its jog stream).
+    #[arg(long, global = true, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
+    pub link_id: u8,
     /// What to do.
     #[command(subcommand)]
     pub command: Cmd,
@@ -485,6 +493,12 @@ pub fn main() -> u8 {
             {
                 eprintln!("hint: {hint}");
             }
+            if matches!(e, CliError::Client(ClientError::Timeout { .. })) && cli.key.is_none() {
+                eprintln!(
+                    "hint: a controller with a signing key never answers unsigned requests: \
+                     --key FILE (or ARMGATE_KEY_FILE)"
+                );
+            }
             e.exit_code()
         }
     }
@@ -516,6 +530,9 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
+    if let Some(path) = &cli.key {
+        client.set_signer(Some(crate::Signer::from_file(path, cli.link_id)?));
+    }
     if let Cmd::Teleop { live, step, rate } = &cli.command {
         let poll = Some(1.0 / rate)
             .filter(|p| p.is_finite() && *p > 0.0)
@@ -661,6 +678,20 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         } => send(client, chars, values, *index, out),
         Cmd::Status => {
             writeln!(out, "{}", client.status()?)?;
+            if cli.key.is_some() {
+                let s = client.signing_report()?;
+                writeln!(
+                    out,
+                    "signing    {} signed, {} unsigned served; dropped {} unsigned, {} truncated, \
+                     {} forged, {} replayed",
+                    s.signed,
+                    s.unsigned,
+                    s.dropped_unsigned,
+                    s.dropped_truncated,
+                    s.dropped_forged,
+                    s.dropped_replayed
+                )?;
+            }
             Ok(())
         }
         Cmd::Pose => print_pose(&client.pose()?, out),

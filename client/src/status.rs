@@ -8,6 +8,7 @@
 
 use std::fmt;
 
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName, STATUS_INDEX, StatusReport, VALUES,
 };
@@ -126,6 +127,18 @@ impl Client {
         let numbers = self.status_part(STATUS_INDEX)?;
         let name = self.status_part(NAME_INDEX)?;
         Status::decode(&numbers.values, &name.bytes)
+    }
+
+    /// `SQ` index 4: the controller's signing policy and counters (docs/protocol.md).
+    pub fn signing_report(&mut self) -> Result<SigningReport, ClientError> {
+        let raw = self.status_part(SIGNING_INDEX)?;
+        let reply = Reply {
+            command: Command::Status,
+            values: raw.values,
+            index: raw.index,
+        };
+        SigningReport::from_reply(&reply)
+            .ok_or_else(|| ClientError::InvalidArgument("a malformed SQ 4 reply".into()))
     }
 
     fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {

@@ -29,8 +29,8 @@ pub type Device = Paced<crate::board::NetDevice>;
 /// Datagrams the receiving socket buffers before the queues of [`crate::link`]: two paced
 /// batches of frames, so that it never overflows between two runs of the server.
 pub const SOCKET_PACKETS: usize = 2 * FRAMES_PER_POLL;
-/// Payload bytes per buffered datagram (the protocol's datagrams are 31 bytes; a larger
-/// datagram that does not fit is dropped by the stack).
+/// Payload bytes per buffered datagram (the protocol's datagrams are 31 bytes, 44 signed; a
+/// larger datagram that does not fit is dropped by the stack).
 pub const PACKET_BYTES: usize = 64;
 /// Sockets of the stack: the UDP server's two (receiving, sending), and the DHCP client with
 /// `dhcp`.

@@ -81,7 +81,12 @@ class Sim:
 
     def wait_ready(self) -> None:
         deadline = time.monotonic() + 20
-        with armgate.Arm("127.0.0.1", self.port, timeout=0.1, retries=0, joints=1) as probe:
+        # A simulator with --key answers only signed requests.
+        args = self.process.args
+        key = args[args.index("--key") + 1] if "--key" in args else None
+        with armgate.Arm(
+            "127.0.0.1", self.port, timeout=0.1, retries=0, joints=1, key=key, link_id=200
+        ) as probe:
             while time.monotonic() < deadline:
                 if self.process.poll() is not None:
                     raise RuntimeError(f"armgate-sim exited: {self.process.stderr.read()!r}")

@@ -8,7 +8,7 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use armgate_client::{Client, ClientConfig, ClientError, interrupt};
+use armgate_client::{Client, ClientConfig, ClientError, Signer, interrupt};
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
 use armgate_core::math::Frame;
@@ -36,6 +36,13 @@ pub struct RecordArgs {
     /// Stop after this many seconds (default: until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS")]
     duration: Option<f64>,
+    /// Sign the requests with the key in this file, for a controller with a key
+    /// (docs/safety.md, "Signing").
+    #[arg(long, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
+    key: Option<PathBuf>,
+    /// With --key: the link id to sign with, 1..=255.
+    #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = armgate_client::DEFAULT_LINK)]
+    link_id: u8,
 }
 
 impl RecordArgs {
@@ -67,6 +74,10 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(&args.addr, config).map_err(|e| e.to_string())?;
+    if let Some(key) = &args.key {
+        let signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        client.set_signer(Some(signer));
+    }
     let peer = client.peer();
     let local = client.local_addr().map_err(|e| e.to_string())?;
     let file = McapFile::create(&args.file, robot, "armgate record")

@@ -107,6 +107,8 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
 struct StopOnExit {
     peer: std::net::SocketAddr,
     config: crate::ClientConfig,
+    /// Signs the stop for a controller that wants signed requests.
+    signer: Option<crate::Signer>,
 }
 
 impl Drop for StopOnExit {
@@ -114,6 +116,7 @@ impl Drop for StopOnExit {
         // ST is obeyed from any client: a socket of its own, so that it never waits behind the
         // I/O thread's request.
         if let Ok(mut client) = Client::connect_with(self.peer, self.config.clone()) {
+            client.set_signer(self.signer.take());
             let _ = client.stop();
         }
     }
@@ -156,13 +159,21 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
         retries: 0,
         ..client.config().clone()
     };
+    // Signed on the next link id: its timestamps would race the polls' on one link.
+    let signer = client.signer().map(crate::Signer::next_link);
     let _stop = StopOnExit {
         peer: client.peer(),
         config: client.config().clone(),
+        // A link of its own again: the stop must not race the jog stream's timestamps.
+        signer: signer.as_ref().map(crate::Signer::next_link),
     };
     // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
     let signalled = crate::interrupt::ctrl_c().map_err(std::io::Error::other)?;
     let streamer = Client::connect_with(client.peer(), config)
+        .map(|mut streamer| {
+            streamer.set_signer(signer);
+            streamer
+        })
         .map_err(|e| std::io::Error::other(e.to_string()))
         .and_then(VelocityStreamer::spawn)?;
     let io = io::spawn(client, options.joints, options.poll)?;

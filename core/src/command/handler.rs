@@ -1,6 +1,7 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::banks::READ_JOINTS;
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use core::net::{Ipv4Addr, SocketAddr};
 
 use armgate_protocol::client::{
@@ -44,6 +45,8 @@ pub struct CommandHandler {
     name: RobotName,
     /// Requests answered with an `ER` text so far.
     refused: u32,
+    /// The cycle's signing counters, for `SQ` index 4.
+    signing: SigningReport,
     /// Time of the last tick (s).
     now: f64,
     /// The client whose request is being handled.
@@ -64,6 +67,7 @@ impl CommandHandler {
             session: Session::default(),
             name: RobotName::new(&config.name),
             refused: 0,
+            signing: SigningReport::default(),
             now: 0.0,
             client: ANONYMOUS,
         }
@@ -80,6 +84,12 @@ impl CommandHandler {
             refused: self.refused,
             uptime: self.now,
         }
+    }
+
+    /// The signing counters `SQ` index 4 reports (kept by the cycle, which checks signatures
+    /// before a datagram reaches the handler).
+    pub fn set_signing_report(&mut self, report: SigningReport) {
+        self.signing = report;
     }
 
     /// The controller.
@@ -393,6 +403,7 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                SIGNING_INDEX => Ok(self.signing.to_reply()),
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {

@@ -50,30 +50,39 @@ impl Work {
     }
 }
 
+/// A request past the signature check: the message, its client, and whether it came signed
+/// (its reply is sealed alike).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pending<P> {
+    pub datagram: Datagram<P>,
+    pub signed: bool,
+}
+
 /// Requests that wait for a later tick, in arrival order.
-pub(super) type Waiting<P> = Deque<Datagram<P>, REQUESTS_PER_TICK>;
+pub(super) type Waiting<P> = Deque<Pending<P>, REQUESTS_PER_TICK>;
 
 /// True if a request from `peer` waits in `waiting` (its next one must wait behind it).
 pub(super) fn waits<P: Peer>(waiting: &Waiting<P>, peer: P) -> bool {
-    waiting.iter().any(|d| d.peer.address() == peer.address())
+    waiting
+        .iter()
+        .any(|p| p.datagram.peer.address() == peer.address())
 }
 
 /// Takes the planning requests out of `waiting` (the others stay, in order), calling
 /// `cancel` for each.
 pub(super) fn cancel_planning<P: Copy>(
     waiting: &mut Waiting<P>,
-    mut cancel: impl FnMut(Command, P),
+    mut cancel: impl FnMut(Pending<P>),
 ) {
     for _ in 0..waiting.len() {
         let Some(request) = waiting.pop_front() else {
             break;
         };
-        match Work::of(request.payload()) {
-            Work::Plans(command) => cancel(command, request.peer),
+        if matches!(Work::of(request.datagram.payload()), Work::Plans(_)) {
+            cancel(request);
+        } else {
             // Room: it was just taken out.
-            _ => {
-                let _ = waiting.push_back(request);
-            }
+            let _ = waiting.push_back(request);
         }
     }
 }

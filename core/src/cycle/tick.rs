@@ -1,12 +1,14 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
-use super::budget::{PLANNING_PER_TICK, Waiting, Work, cancel_planning, waits};
+use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, waits};
 use super::counters::bump;
-use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer};
+use super::signing::Gate;
+use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
+use armgate_protocol::client::signed::SigningReport;
 use armgate_protocol::client::{MESSAGE_LEN, Notice};
 use core::num::NonZeroU64;
 
@@ -47,6 +49,8 @@ pub struct Cycle<D, P> {
     counters: CycleCounters,
     /// Requests the work budget left for a later tick.
     waiting: Waiting<P>,
+    /// The signature checks every datagram passes first.
+    gate: Gate,
 }
 
 impl<D: DriveSide, P: Peer> Cycle<D, P> {
@@ -63,7 +67,15 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             previous: None,
             counters: CycleCounters::default(),
             waiting: Waiting::new(),
+            gate: Gate::new(Signing::default()),
         }
+    }
+
+    /// The same cycle with these signing settings (a key, what unsigned datagrams may do).
+    pub fn with_signing(mut self, signing: Signing) -> Self {
+        self.gate = Gate::new(signing);
+        self.handler.set_signing_report(self.gate.report());
+        self
     }
 
     /// When the next tick is due on the shell's clock (µs since the cycle started).
@@ -150,6 +162,11 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
         self.handler.notice_recipient().map(P::from_address)
     }
 
+    /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
+    pub fn signing(&self) -> SigningReport {
+        self.gate.report()
+    }
+
     /// Answers one request from `peer`. [`tick`](Self::tick) calls it for the requests its
     /// link delivers; protocol tests call it between ticks.
     // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
@@ -168,12 +185,26 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
         let mut planned = 0;
         let mut later = Waiting::new();
         for _ in 0..REQUESTS_PER_TICK {
-            let Some(request) = self.waiting.pop_front().or_else(|| link.receive()) else {
-                break;
+            let request = match self.waiting.pop_front() {
+                Some(waiting) => waiting,
+                None => {
+                    let Some(datagram) = link.receive() else {
+                        break;
+                    };
+                    // Dropped datagrams are counted by the gate and never answered.
+                    let Some(admitted) = self.gate.admit(datagram.payload()) else {
+                        continue;
+                    };
+                    self.handler.set_signing_report(self.gate.report());
+                    Pending {
+                        datagram: Datagram::new(admitted.message, datagram.peer),
+                        signed: admitted.signed,
+                    }
+                }
             };
-            let work = Work::of(request.payload());
+            let work = Work::of(request.datagram.payload());
             let plans = matches!(work, Work::Plans(_));
-            if waits(&later, request.peer) || (plans && planned >= PLANNING_PER_TICK) {
+            if waits(&later, request.datagram.peer) || (plans && planned >= PLANNING_PER_TICK) {
                 // Room: at most one a pass.
                 let _ = later.push_back(request);
                 continue;
@@ -182,8 +213,8 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             if work == Work::Stops {
                 self.cancel_waiting(&mut later, link);
             }
-            let reply = self.answer(request.payload(), request.peer);
-            self.send(link, Datagram::new(&reply, request.peer), Outgoing::Reply);
+            let reply = self.answer(request.datagram.payload(), request.datagram.peer);
+            self.reply(link, &reply, &request);
         }
         // What waited before stays ahead of what the link still holds. (Together never more
         // than the queue: with some left in `waiting`, every pass took one from it.)
@@ -198,15 +229,24 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
     fn cancel_waiting(&mut self, later: &mut Waiting<P>, link: &mut impl Link<P>) {
         let mut cancelled = Waiting::new();
         for queue in [&mut *later, &mut self.waiting] {
-            cancel_planning(queue, |command, peer| {
-                let reply = Notice::Cancelled(command).text().to_bytes();
-                let _ = cancelled.push_back(Datagram::new(&reply, peer));
+            cancel_planning(queue, |request| {
+                let _ = cancelled.push_back(request);
             });
         }
-        while let Some(reply) = cancelled.pop_front() {
+        while let Some(request) = cancelled.pop_front() {
             self.handler.count_refusal();
-            self.send(link, reply, Outgoing::Reply);
+            if let Work::Plans(command) = Work::of(request.datagram.payload()) {
+                let reply = Notice::Cancelled(command).text().to_bytes();
+                self.reply(link, &reply, &request);
+            }
         }
+    }
+
+    /// Sends `reply` to the client of `request`, sealed if the request was signed.
+    fn reply(&mut self, link: &mut impl Link<P>, reply: &[u8; MESSAGE_LEN], request: &Pending<P>) {
+        let sealed = self.gate.seal(reply, request.signed);
+        let peer = request.datagram.peer;
+        self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Reply);
     }
 
     fn send_notices(&mut self, link: &mut impl Link<P>) {
@@ -217,11 +257,8 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             match self.notice_recipient() {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
-                    self.send(
-                        link,
-                        Datagram::new(&text.to_bytes(), peer),
-                        Outgoing::Notice,
-                    );
+                    let sealed = self.gate.seal(&text.to_bytes(), self.gate.last_signed());
+                    self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Notice);
                 }
                 None => bump(&mut self.counters.notices_unaddressed),
             }
