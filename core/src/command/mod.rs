@@ -9,6 +9,7 @@ mod allow;
 mod banks;
 mod drives;
 mod handler;
+mod ik;
 mod relay;
 mod session;
 mod status;

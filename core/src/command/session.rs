@@ -49,9 +49,11 @@ impl Class {
     /// The class of `command`.
     pub fn of(command: Command) -> Self {
         match command {
-            Command::Pose | Command::JointPosition | Command::Temperature | Command::Status => {
-                Self::Read
-            }
+            Command::Pose
+            | Command::JointPosition
+            | Command::Temperature
+            | Command::Status
+            | Command::IkSolution => Self::Read,
             Command::Stop | Command::JointReset => Self::Stop,
             _ => Self::Command,
         }

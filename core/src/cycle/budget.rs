@@ -43,6 +43,7 @@ impl Work {
             | Command::Recalibrate
             | Command::GoalQuaternion
             | Command::GoalRpy
+            | Command::IkGoal
             | Command::ViaPoint) => Self::Plans(c),
             Command::Stop | Command::JointReset => Self::Stops,
             _ => Self::Other,
