@@ -8,8 +8,8 @@
 # 1. the differential test: tools/replay/session.txt replayed through armgate-sim and through
 #    the firmware on a virtual clock, their transcripts compared tick by tick;
 # 2. the end-to-end tests of tests/e2e.rs: inside a new network namespace (`unshare -n`: no
-#    traffic leaves it) it creates tap0 with the address 192.168.1.1/24 (the firmware's default
-#    ARMGATE_IP is 192.168.1.50/24) and runs the tests one at a time with ARMGATE_E2E_FIRMWARE
+#    traffic leaves it) it creates tap0 with the addresses 192.168.1.1/24 and, for a second
+#    client, 192.168.1.2/24 (the firmware's default ARMGATE_IP is 192.168.1.50/24) and runs the tests one at a time with ARMGATE_E2E_FIRMWARE
 #    set: each test starts the firmware on tap0 and talks to it over UDP.
 # Without the privileges for that it says why and exits 0 — except under CI=true, where that is
 # a failure.
@@ -58,6 +58,7 @@ unshare -n bash -euo pipefail -c '
     ip link set lo up
     ip tuntap add dev tap0 mode tap
     ip addr add 192.168.1.1/24 dev tap0
+    ip addr add 192.168.1.2/24 dev tap0
     ip link set tap0 up
     exec "$0" --test-threads 1
 ' "$tests"

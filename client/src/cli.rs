@@ -1440,8 +1440,10 @@ mod tests {
             .received()
             .iter()
             .map(|d| String::from_utf8_lossy(&d[..2]).into_owned())
+            .filter(|c| c != "WD")
             .collect();
-        // The joint count comes from the status (SQ twice: numbers and name).
+        // The joint count comes from the status (SQ twice: numbers and name); the wait's
+        // watchdog (WD) left out.
         assert_eq!(sent[..5], ["SQ", "SQ", "jC", "jV", "jE"]);
         // Then jP until arrival, and SQ until the motion has ended.
         let polls = &sent[5..];

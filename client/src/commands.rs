@@ -95,6 +95,15 @@ impl Client {
         self.simple(Command::Stop).map(drop)
     }
 
+    /// `WD`: the client watchdog: while the arm moves and this client (holding the arm) is
+    /// silent for longer than `ms`, the controller stops it (`ER41`); 0 turns it off.
+    pub fn watchdog(&mut self, ms: u16) -> Result<(), ClientError> {
+        let mut values = [0.0; VALUES];
+        values[0] = f32::from(ms);
+        self.request(request(Command::Watchdog, values, 0))
+            .map(drop)
+    }
+
     /// `jR`: stops a joint motion.
     pub fn joint_reset(&mut self) -> Result<(), ClientError> {
         self.simple(Command::JointReset).map(drop)

@@ -112,12 +112,14 @@ pub fn code(text: &Text) -> Option<u8> {
 
 /// Whether a notice means that a running motion will not complete: `ER21` (workspace limit,
 /// the generator is reset), `WN22` (IK divergence, the arm holds), `WN27` (via point missed, the
-/// sequence stopped) and drive faults `ER30`..`ER39`.
+/// sequence stopped), `ER41` (the client watchdog stopped the arm) and drive faults
+/// `ER30`..`ER39`.
 pub fn ends_motion(text: &Text) -> bool {
-    const ENDING: [Notice; 3] = [
+    const ENDING: [Notice; 4] = [
         Notice::WorkspaceLimit,
         Notice::IkDivergence,
         Notice::ViaPointMissed,
+        Notice::ClientSilent(0),
     ];
     let Some(c) = code(text) else {
         return false;

@@ -16,6 +16,11 @@
 //!
 //! Notices that arrive during a wait are handed to the progress callback (and not left in
 //! the client's queue).
+//!
+//! While it waits the client asks for the controller's client watchdog ([`watchdog_ms`]): its
+//! polls feed it, and if the client dies or loses the network, the controller stops the arm
+//! (`ER41`). A controller without one (the seed's) or another client holding the arm refuses;
+//! the wait goes on without it.
 
 use std::time::{Duration, Instant};
 
@@ -82,6 +87,13 @@ pub struct Progress<'a, T: ?Sized> {
 
 /// Below this a measurement counts as unchanged (m, rad, or quaternion components).
 const STILL: f64 = 1e-6;
+
+/// The watchdog a wait asks for: twenty polls, at least a second (a loaded machine or a lost
+/// datagram must not stop the arm).
+pub fn watchdog_ms(poll: Duration) -> u16 {
+    let ms = (poll * 20).as_millis().max(1000);
+    u16::try_from(ms).unwrap_or(u16::MAX).min(60_000)
+}
 
 fn joint_distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
@@ -209,8 +221,32 @@ impl Client {
         Ok(previous)
     }
 
-    /// The shared polling loop.
+    /// The shared polling loop, with the controller's watchdog on while it runs.
     fn wait_through<T, F, M, P>(
+        &mut self,
+        goals: &[T],
+        options: &WaitOptions,
+        read: impl FnMut(&mut Self) -> Result<T, ClientError>,
+        measure: F,
+        moved: M,
+        progress: P,
+    ) -> Result<T, ClientError>
+    where
+        F: FnMut(&T, &T, bool) -> (f64, Option<f64>, bool),
+        M: Fn(&T, &T) -> bool,
+        P: FnMut(&Progress<'_, T>),
+    {
+        let watched = self.watchdog(watchdog_ms(options.poll)).is_ok();
+        let result = self.poll_through(goals, options, read, measure, moved, progress);
+        if watched {
+            // Best effort: a lost reply leaves it on, which only matters once the client is
+            // silent while the arm moves.
+            let _ = self.watchdog(0);
+        }
+        result
+    }
+
+    fn poll_through<T, F, M, P>(
         &mut self,
         goals: &[T],
         options: &WaitOptions,
@@ -464,8 +500,12 @@ mod tests {
             .unwrap_err();
         assert!(matches!(err, ClientError::Interrupted), "{err:?}");
         assert_eq!(polls, 3);
-        // Nothing but PS polls was sent: stopping is the caller's decision.
-        assert!(fake.received()[1..].iter().all(|d| &d[..2] == b"PS"));
+        // Nothing but the watchdog, PS polls and the watchdog off was sent: stopping is the
+        // caller's decision.
+        let sent = fake.received();
+        assert_eq!(&sent[1][..2], b"WD");
+        assert_eq!(&sent[sent.len() - 1][..6], b"WD\0\0\0\0");
+        assert!(sent[2..sent.len() - 1].iter().all(|d| &d[..2] == b"PS"));
     }
 
     #[test]

@@ -46,6 +46,14 @@ impl Rig {
         self.now = outcome.time;
     }
 
+    /// Ticks for `seconds`.
+    fn run_for(&mut self, seconds: f64) {
+        let until = self.now + seconds;
+        while self.now < until {
+            self.tick();
+        }
+    }
+
     fn send(&mut self, datagram: &[u8]) -> [u8; 31] {
         self.cycle.answer(datagram, ())
     }
@@ -125,8 +133,11 @@ fn worked_examples_cm_bg_and_vp() {
     let mut gb = [0u8; 31];
     gb[..2].copy_from_slice(&[0x47, 0x42]);
     assert_eq!(bg, gb);
-    // While moving, BG is rejected.
+    // The same datagram again within a second is a resend: its reply again, not carried out
+    // twice. Later, while still moving, BG is rejected.
     rig.tick();
+    assert_eq!(rig.request("BG", [0.0; 7], 0), gb);
+    rig.run_for(1.1);
     assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG busy");
     // VP via point 3 = (0.5, −0.2, 0.4), yaw −1.5708, T = 2 (spec §2.9).
     let vp: [u8; 31] = [

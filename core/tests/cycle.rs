@@ -9,7 +9,11 @@
 
 mod drives_rig;
 
-use armgate_core::cycle::{CanDrives, Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK};
+use std::net::SocketAddr;
+
+use armgate_core::cycle::{
+    CanDrives, Cycle, Datagram, Dropped, Link, MAX_CATCH_UP, Outgoing, REQUESTS_PER_TICK,
+};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, DriveState, TxError};
 use armgate_core::sim::IdealArm;
 use armgate_core::sim::VirtualBus;
@@ -105,8 +109,8 @@ impl CanBus for LatchingBus {
     }
 }
 
-#[test]
-fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
+/// ranger-mk1 on a bus whose bus-off the test sets, for clients with addresses `P`.
+fn latching<P: armgate_core::cycle::Peer>() -> Cycle<CanDrives<LatchingBus>, P> {
     let config = robot("ranger-mk1");
     let bus = LatchingBus {
         bus: VirtualBus::for_robot(&config),
@@ -114,7 +118,12 @@ fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
         recoveries: 0,
     };
     let drives = CanDrives::started(&config, &DriveSettings::default(), bus).unwrap();
-    let mut cycle: Cycle<_, ()> = Cycle::new(&config, drives);
+    Cycle::new(&config, drives)
+}
+
+#[test]
+fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
+    let mut cycle: Cycle<_, ()> = latching();
     let mut client = Client::default();
     let tick = |cycle: &mut Cycle<CanDrives<LatchingBus>, ()>, client: &mut Client| {
         let due = cycle.next_due_us();
@@ -177,4 +186,145 @@ fn a_replay_offers_each_datagram_to_the_first_tick_due_after_it_arrives() {
     );
     assert!(Replay::parse("12 zz\n").is_err());
     assert!(Replay::parse("x 00\n").is_err());
+}
+
+/// Two clients with their own addresses.
+#[derive(Default)]
+struct Clients {
+    requests: std::collections::VecDeque<Datagram<SocketAddr>>,
+    replies: Vec<Datagram<SocketAddr>>,
+    notices: Vec<Datagram<SocketAddr>>,
+}
+
+impl Link<SocketAddr> for Clients {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        self.requests.pop_front()
+    }
+
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
+        match kind {
+            Outgoing::Reply => self.replies.push(*datagram),
+            Outgoing::Notice => self.notices.push(*datagram),
+        }
+        Ok(())
+    }
+}
+
+/// The bus-off fault's notice, after `requests` from their clients: to whom it went.
+fn bus_off_notice_after(requests: &[(SocketAddr, &[u8])]) -> Vec<SocketAddr> {
+    let mut cycle: Cycle<_, SocketAddr> = latching();
+    let mut clients = Clients::default();
+    for _ in 0..200 {
+        cycle.tick(cycle.next_due_us(), &mut clients);
+    }
+    for (from, bytes) in requests {
+        clients.requests.push_back(Datagram::new(bytes, *from));
+    }
+    cycle.tick(cycle.next_due_us(), &mut clients);
+    cycle.drives_mut().bus_mut().bus_off = true;
+    for _ in 0..5 {
+        cycle.tick(cycle.next_due_us(), &mut clients);
+    }
+    clients.notices.iter().map(|n| n.peer).collect()
+}
+
+#[test]
+fn notices_go_to_the_holder_or_the_last_valid_sender_never_to_garbage() {
+    let a = SocketAddr::from(([192, 168, 1, 2], 5000));
+    let b = SocketAddr::from(([192, 168, 1, 3], 6000));
+    let mode = request(Command::ChangeMode);
+    let poll = request(Command::Pose);
+    let garbage = [b'X'; 31];
+    // Nobody holds the arm: the last valid sender gets it, not the sender of garbage.
+    assert_eq!(
+        bus_off_notice_after(&[(a, poll.payload()), (b, &garbage)]),
+        [a]
+    );
+    // A holds the arm (CM): B's polls do not take its notices.
+    assert_eq!(
+        bus_off_notice_after(&[(a, mode.payload()), (b, poll.payload()), (b, &garbage)]),
+        [a]
+    );
+}
+
+#[test]
+fn one_planning_request_a_tick_the_rest_wait_and_a_stop_cancels_them() {
+    let a = SocketAddr::from(([192, 168, 1, 2], 5000));
+    let b = SocketAddr::from(([192, 168, 1, 3], 6000));
+    let mut cycle: Cycle<SimulatedDrives, SocketAddr> = {
+        let config = robot("ranger-mk1");
+        let arm = IdealArm::new(config.home());
+        Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm)))
+    };
+    let mut clients = Clients::default();
+    let tick = |cycle: &mut Cycle<_, _>, clients: &mut Clients| {
+        clients.replies.clear();
+        cycle.tick(cycle.next_due_us(), clients);
+        clients
+            .replies
+            .iter()
+            .map(|r| {
+                (
+                    r.peer,
+                    String::from_utf8_lossy(&r.payload()[..2]).into_owned(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    tick(&mut cycle, &mut clients);
+    // A: three goals (each checked with the IK) and a poll; B: a poll.
+    for (from, command) in [
+        (a, Command::GoalRpy),
+        (a, Command::GoalRpy),
+        (a, Command::Pose),
+        (b, Command::Pose),
+        (a, Command::GoalRpy),
+    ] {
+        clients
+            .requests
+            .push_back(Datagram::new(request(command).payload(), from));
+    }
+    // One planning request this tick; A's later requests wait behind its second, B's poll
+    // does not.
+    let first = tick(&mut cycle, &mut clients);
+    assert_eq!(first[0].0, a);
+    assert_eq!(first[1..], [(b, "SP".to_owned())]);
+    let second = tick(&mut cycle, &mut clients);
+    assert_eq!(second.iter().map(|r| r.0).collect::<Vec<_>>(), [a, a]);
+    assert_eq!(second[1].1, "SP");
+    let third = tick(&mut cycle, &mut clients);
+    assert_eq!(third.iter().map(|r| r.0).collect::<Vec<_>>(), [a]);
+    // Three begins from A and B's ST in one tick: the first begin is handled, the two that
+    // wait are cancelled by the stop, which arrived after them.
+    for (from, command) in [
+        (a, Command::JointBegin),
+        (a, Command::JointBegin),
+        (a, Command::JointBegin),
+        (b, Command::Stop),
+    ] {
+        clients
+            .requests
+            .push_back(Datagram::new(request(command).payload(), from));
+    }
+    clients.replies.clear();
+    cycle.tick(cycle.next_due_us(), &mut clients);
+    let texts: Vec<String> = clients
+        .replies
+        .iter()
+        .map(|r| {
+            String::from_utf8_lossy(r.payload())
+                .trim_end_matches('\0')
+                .to_owned()
+        })
+        .collect();
+    assert_eq!(texts[0], "ER20 Cmd jB no goal");
+    assert_eq!(
+        texts[1..],
+        [
+            "ER42 Cmd jB cancelled by ST",
+            "ER42 Cmd jB cancelled by ST",
+            "TS"
+        ]
+    );
+    assert!(tick(&mut cycle, &mut clients).is_empty());
 }

@@ -11,16 +11,17 @@
 
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing, Signing};
-use embassy_net::IpEndpoint;
+use core::net::SocketAddr;
+
 use embassy_time::{Duration, Instant, Timer};
 
 use crate::board::Watchdog;
 use crate::drives::BoardDrives;
-use crate::link::{COUNTERS, OUTGOING, REQUESTS, count};
+use crate::link::{COUNTERS, OUTGOING, count, read, take};
 use crate::telemetry::{STATUS, Status};
 
 /// The cycle as the board runs it.
-type BoardCycle = Cycle<BoardDrives, IpEndpoint>;
+type BoardCycle = Cycle<BoardDrives, SocketAddr>;
 
 /// Interval between two status snapshots.
 const REPORT_INTERVAL: Duration = Duration::from_secs(1);
@@ -128,16 +129,22 @@ pub async fn run(
 /// The queues of [`crate::link`] as the cycle's client port.
 struct QueueLink;
 
-impl Link<IpEndpoint> for QueueLink {
-    fn receive(&mut self) -> Option<Datagram<IpEndpoint>> {
-        REQUESTS.try_receive().ok()
+impl Link<SocketAddr> for QueueLink {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        take()
     }
 
     /// A full queue drops the datagram and counts it.
-    fn send(&mut self, datagram: &Datagram<IpEndpoint>, _kind: Outgoing) -> Result<(), Dropped> {
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, _kind: Outgoing) -> Result<(), Dropped> {
         OUTGOING.try_send(*datagram).map_err(|_| {
             count(&COUNTERS.outgoing_full);
             Dropped
         })
+    }
+
+    /// Replies and notices the UDP server dropped: destinations that did not resolve, and what
+    /// the stack refused.
+    fn dropped(&self) -> u64 {
+        u64::from(read(&COUNTERS.unreachable)) + u64::from(read(&COUNTERS.send_errors))
     }
 }

@@ -6,13 +6,20 @@
 //! unsolicited notices wait in [`OUTGOING`] until the UDP server sends them. Neither side ever
 //! waits on the other: a full queue drops the datagram and counts it ([`COUNTERS`]).
 //!
+//! One source address may hold at most half of the waiting requests ([`offer`],
+//! [`take`]): a client that floods the controller fills its own share, and the others' requests
+//! — a stop among them — still find room and are handled in the next tick.
+//!
 //! [`CommandHandler`]: armgate_core::command::CommandHandler
 
+use core::cell::RefCell;
+use core::net::SocketAddr;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use armgate_core::command::NOTICE_CAPACITY;
 use armgate_core::cycle::REQUESTS_PER_TICK;
-use embassy_net::IpEndpoint;
+use armgate_core::cycle::Shares;
+use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 
@@ -22,15 +29,16 @@ use embassy_sync::channel::Channel;
 /// datagrams before the queue.
 pub const REQUEST_QUEUE: usize = REQUESTS_PER_TICK;
 /// Replies and notices waiting to be sent: one tick produces at most one reply per queued
-/// request and at most the notices the core's relay holds, and the UDP server empties the
-/// queue between two ticks.
-pub const OUTGOING_QUEUE: usize = REQUEST_QUEUE + NOTICE_CAPACITY;
+/// request and at most the notices the core's relay holds; the UDP server empties the queue
+/// between two ticks, except while a destination fails to resolve
+/// ([`crate::sender::RESOLVE_TIMEOUT`]): room for four ticks of that.
+pub const OUTGOING_QUEUE: usize = 4 * (REQUEST_QUEUE + NOTICE_CAPACITY);
 
 /// A datagram of the client protocol and the peer it came from or goes to.
-pub type Datagram = armgate_core::cycle::Datagram<IpEndpoint>;
+pub type Datagram = armgate_core::cycle::Datagram<SocketAddr>;
 
-/// Requests from allowed sources, in arrival order.
-pub static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
+/// Requests from allowed sources, in arrival order ([`offer`], [`take`]).
+static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
 /// Replies and notices, in the order the control task produced them.
 pub static OUTGOING: Channel<CriticalSectionRawMutex, Datagram, OUTGOING_QUEUE> = Channel::new();
 
@@ -46,6 +54,9 @@ pub struct Counters {
     pub outgoing_full: AtomicU32,
     /// Datagrams the network stack refused to send (no route, not bound).
     pub send_errors: AtomicU32,
+    /// Replies and notices dropped because their destination did not resolve (no answer to
+    /// ARP: a client gone, a forged source).
+    pub unreachable: AtomicU32,
 }
 
 impl Counters {
@@ -56,6 +67,7 @@ impl Counters {
             requests_full: AtomicU32::new(0),
             outgoing_full: AtomicU32::new(0),
             send_errors: AtomicU32::new(0),
+            unreachable: AtomicU32::new(0),
         }
     }
 }
@@ -71,4 +83,27 @@ pub fn count(counter: &AtomicU32) {
 /// The current value of `counter`.
 pub fn read(counter: &AtomicU32) -> u32 {
     counter.load(Ordering::Relaxed)
+}
+
+/// How many of the waiting requests each source holds.
+static SHARES: Mutex<CriticalSectionRawMutex, RefCell<Shares<REQUEST_QUEUE>>> =
+    Mutex::new(RefCell::new(Shares::new()));
+
+/// Queues `request` for the control task (UDP server side); false if the queue is full or its
+/// source already holds its share (the datagram is dropped).
+pub fn offer(request: Datagram) -> bool {
+    SHARES.lock(|shares| {
+        shares
+            .borrow_mut()
+            .admit(request.peer.ip(), || REQUESTS.try_send(request).is_ok())
+    })
+}
+
+/// The oldest waiting request (control task side).
+pub fn take() -> Option<Datagram> {
+    SHARES.lock(|shares| {
+        let request = REQUESTS.try_receive().ok()?;
+        shares.borrow_mut().release(request.peer.ip());
+        Some(request)
+    })
 }

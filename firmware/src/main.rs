@@ -31,10 +31,12 @@ mod drives;
 mod eth;
 #[cfg(not(target_os = "none"))]
 mod host;
+mod ingress;
 mod link;
 #[cfg(target_os = "none")]
 mod mcu;
 mod net;
+mod sender;
 mod settings;
 mod telemetry;
 

@@ -5,38 +5,48 @@
 //! * embassy-net (smoltcp) on top: static IPv4 from `ARMGATE_IP`/`ARMGATE_GATEWAY`, or DHCP with
 //!   the cargo feature `dhcp`.
 //! * [`udp_server`]: receives datagrams on `ARMGATE_PORT`, drops those from sources not on the
-//!   allow-list, queues the others for the control task, and sends what the control task
-//!   queued (replies, notices). It never touches the core.
+//!   allow-list, queues the others for the control task ([`crate::link::offer`], a bounded
+//!   share per source), and, in a loop of its own on a socket of its own, sends what the control
+//!   task queued (replies, notices; [`crate::sender`]). Receiving never waits on a send. It
+//!   never touches the core.
 
 use core::net::IpAddr;
 
-use embassy_futures::select::{Either, select};
+use embassy_futures::join::join;
 use embassy_net::udp::{PacketMetadata, UdpSocket};
-use embassy_net::{IpAddress, Runner, Stack, StackResources};
+use embassy_net::{Runner, Stack, StackResources};
 use static_cell::StaticCell;
 
-use crate::link::{COUNTERS, Datagram, OUTGOING, REQUESTS, count};
+use crate::ingress::{FRAMES_PER_POLL, Paced};
+use crate::link::{COUNTERS, Datagram, count, offer};
+use crate::sender;
 use crate::settings::{ALLOW, ALLOW_LOCAL, Network, PORT};
 
-/// The network driver: the board's Ethernet MAC and PHY, or a Linux TAP device on the host.
-pub use crate::board::NetDevice as Device;
+/// The network driver: the board's Ethernet MAC and PHY, or a Linux TAP device on the host,
+/// paced ([`crate::ingress`]).
+pub type Device = Paced<crate::board::NetDevice>;
 
-/// Datagrams the UDP socket buffers in each direction, before the queues of [`crate::link`].
-pub const SOCKET_PACKETS: usize = 8;
-/// Payload bytes of the UDP socket buffers in each direction (the protocol's datagrams are 31
-/// bytes, 44 signed; a larger datagram that does not fit is dropped by the stack).
-const SOCKET_BYTES: usize = SOCKET_PACKETS * 64;
-/// Sockets of the stack: the UDP server, and the DHCP client with `dhcp`.
-const SOCKETS: usize = 2;
+/// Datagrams the receiving socket buffers before the queues of [`crate::link`]: two paced
+/// batches of frames, so that it never overflows between two runs of the server.
+pub const SOCKET_PACKETS: usize = 2 * FRAMES_PER_POLL;
+/// Payload bytes per buffered datagram (the protocol's datagrams are 31 bytes, 44 signed; a
+/// larger datagram that does not fit is dropped by the stack).
+pub const PACKET_BYTES: usize = 64;
+/// Sockets of the stack: the UDP server's two (receiving, sending), and the DHCP client with
+/// `dhcp`.
+const SOCKETS: usize = 3;
 
 /// The network stack's socket storage.
 static RESOURCES: StaticCell<StackResources<SOCKETS>> = StaticCell::new();
 
 /// The network stack on `device`, whose MAC address and random seed derive from the unique id
 /// `uid` (the chip's, on the board).
-pub fn stack(device: Device, uid: &[u8]) -> (Stack<'static>, Runner<'static, Device>) {
+pub fn stack(
+    device: crate::board::NetDevice,
+    uid: &[u8],
+) -> (Stack<'static>, Runner<'static, Device>) {
     embassy_net::new(
-        device,
+        Paced::new(device),
         ip_config(),
         RESOURCES.init(StackResources::new()),
         fnv1a(uid),
@@ -73,7 +83,8 @@ pub async fn runner(mut runner: Runner<'static, Device>) -> ! {
     runner.run().await
 }
 
-/// The UDP server: requests in, replies and notices out.
+/// The UDP server: requests in, replies and notices out, in two loops that never wait on each
+/// other.
 #[embassy_executor::task]
 pub async fn udp_server(stack: Stack<'static>) {
     stack.wait_config_up().await;
@@ -82,44 +93,34 @@ pub async fn udp_server(stack: Stack<'static>) {
     }
     log_allow_list();
     let mut rx_meta = [PacketMetadata::EMPTY; SOCKET_PACKETS];
-    let mut rx_buffer = [0; SOCKET_BYTES];
-    let mut tx_meta = [PacketMetadata::EMPTY; SOCKET_PACKETS];
-    let mut tx_buffer = [0; SOCKET_BYTES];
-    let mut socket = UdpSocket::new(
-        stack,
-        &mut rx_meta,
-        &mut rx_buffer,
-        &mut tx_meta,
-        &mut tx_buffer,
-    );
-    if let Err(e) = socket.bind(PORT) {
+    let mut rx_buffer = [0; SOCKET_PACKETS * PACKET_BYTES];
+    // Made first: smoltcp gives a datagram to the first socket bound to its port.
+    let mut receiving = UdpSocket::new(stack, &mut rx_meta, &mut rx_buffer, &mut [], &mut []);
+    if let Err(e) = receiving.bind(PORT) {
         defmt::error!("net: cannot bind UDP port {}: {}", PORT, e);
         return;
     }
+    let mut sending = sender::Buffers::new();
+    join(
+        receive(stack, &mut receiving),
+        sender::run(stack, &mut sending),
+    )
+    .await;
+}
+
+/// Takes the datagrams the stack received, for ever: those from allowed sources are offered to
+/// the control task, the others counted.
+async fn receive(stack: Stack<'static>, socket: &mut UdpSocket<'_>) {
     loop {
-        // Both futures are cancel-safe: a datagram is taken only when its branch completes.
-        match select(socket.wait_recv_ready(), OUTGOING.receive()).await {
-            Either::First(()) => {
-                let request = socket
-                    .recv_from_with(|payload, meta| Datagram::new(payload, meta.endpoint))
-                    .await;
-                if !allowed(stack, request.peer.addr) {
-                    count(&COUNTERS.foreign);
-                } else if REQUESTS.try_send(request).is_ok() {
-                    count(&COUNTERS.received);
-                } else {
-                    count(&COUNTERS.requests_full);
-                }
-            }
-            Either::Second(outgoing) => {
-                if socket
-                    .send_to(outgoing.payload(), outgoing.peer)
-                    .await
-                    .is_err()
-                {
-                    count(&COUNTERS.send_errors);
-                }
-            }
+        let request = socket
+            .recv_from_with(|payload, meta| Datagram::new(payload, meta.endpoint.into()))
+            .await;
+        if !allowed(stack, request.peer.ip()) {
+            count(&COUNTERS.foreign);
+        } else if offer(request) {
+            count(&COUNTERS.received);
+        } else {
+            count(&COUNTERS.requests_full);
         }
     }
 }
@@ -127,8 +128,7 @@ pub async fn udp_server(stack: Stack<'static>) {
 /// True if `source` may command the arm: on a network of `ARMGATE_ALLOW`, or (with `local`)
 /// on the board's own network. (A source address proves nothing about the sender; the
 /// allow-list keeps out the rest of the network, not an attacker on it.)
-fn allowed(stack: Stack<'_>, source: IpAddress) -> bool {
-    let source = IpAddr::from(source);
+fn allowed(stack: Stack<'_>, source: IpAddr) -> bool {
     ALLOW.iter().any(|network| network.contains(source))
         || (ALLOW_LOCAL
             && stack.config_v4().is_some_and(|config| {

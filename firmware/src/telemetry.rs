@@ -78,7 +78,7 @@ pub async fn run(stack: Stack<'static>) {
             s.signing.dropped_replayed,
         );
         defmt::info!(
-            "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",
+            "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} unreachable, {} relay",
             if stack.is_link_up() { "up" } else { "down" },
             s.mode.name(),
             if s.moving { "moving" } else { "holding" },
@@ -100,6 +100,7 @@ pub async fn run(stack: Stack<'static>) {
             read(&COUNTERS.outgoing_full),
             s.notices_unaddressed,
             read(&COUNTERS.send_errors),
+            read(&COUNTERS.unreachable),
             s.relay_dropped,
         );
     }

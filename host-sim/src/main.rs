@@ -33,7 +33,7 @@ use armgate_protocol::client::signed::SigningKey;
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
-use udp::{Stats, UdpLink};
+use udp::{Inbox, Stats, UdpLink};
 
 /// Run the armgate arm controller on this computer, with a simulated arm.
 ///
@@ -258,6 +258,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     let epoch = Instant::now();
     let mut next_status = epoch;
     let mut stats = Stats::default();
+    let mut inbox = Inbox::default();
     while running.load(Ordering::SeqCst) {
         let now = Instant::now();
         let elapsed = now - epoch;
@@ -277,6 +278,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             socket: &socket,
             local,
             allow: &allow,
+            inbox: &mut inbox,
             logger: &logger,
             stats: &mut stats,
             time: elapsed.as_secs_f64(),

@@ -75,11 +75,12 @@ pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) 
 pub fn summary(stats: &Stats, refused: u32, counters: &CycleCounters, log_dropped: u64) -> String {
     format!(
         "{} datagrams handled ({} refused), {} from sources not allowed (dropped), \
-         {} warnings sent, {} ticks late (caught up), {} ticks missed (skipped), \
+         {} over the inbox's capacity (dropped), {} warnings sent, {} ticks late (caught up), {} ticks missed (skipped), \
          {} tick errors, {} log records dropped",
         stats.received,
         refused,
         stats.refused_sources,
+        stats.crowded,
         counters.notices,
         counters.late_ticks,
         counters.skipped_ticks,
@@ -122,6 +123,7 @@ mod tests {
         let stats = Stats {
             received: 5,
             refused_sources: 1,
+            crowded: 0,
         };
         let counters = CycleCounters {
             skipped_ticks: 103,

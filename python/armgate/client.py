@@ -3,12 +3,23 @@
 from __future__ import annotations
 
 import collections
+import contextlib
 import logging
 import math
 import socket
 import time as _time
 from dataclasses import dataclass, replace
-from typing import Callable, Deque, List, Optional, Sequence, Tuple, TypeVar, Union
+from typing import (
+    Callable,
+    Deque,
+    Iterator,
+    List,
+    Optional,
+    Sequence,
+    Tuple,
+    TypeVar,
+    Union,
+)
 
 from . import wire
 from .signing import KeyLike, Signer
@@ -226,6 +237,11 @@ class Arm:
         """``ST``: stops every motion and sequence; the arm holds its commanded position."""
         self.request("ST")
 
+    def watchdog(self, ms: int) -> None:
+        """``WD``: the client watchdog: while the arm moves and this client (holding the arm)
+        is silent for longer than ``ms``, the controller stops it (``ER41``); 0 turns it off."""
+        self.request("WD", [float(ms)])
+
     def twist(
         self,
         linear: Sequence[float],
@@ -394,7 +410,8 @@ class Arm:
         def moved(a: Pose, b: Pose) -> bool:
             return a.distance(b) > _STILL or a.angle_to(b) > _STILL
 
-        return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
+        with self._watchdog_while(opts):
+            return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
 
     def wait_for_joints(
         self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
@@ -412,7 +429,28 @@ class Arm:
         def moved(a: List[float], b: List[float]) -> bool:
             return any(abs(x - y) > _STILL for x, y in zip(a, b))
 
-        return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
+        with self._watchdog_while(opts):
+            return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
+
+    @contextlib.contextmanager
+    def _watchdog_while(self, options: WaitOptions) -> Iterator[None]:
+        """The controller's client watchdog on (twenty polls, at least a second) for the
+        block: if this program dies or loses the network while the arm moves, the controller
+        stops it. A controller without one, or another client holding the arm, refuses it;
+        the block runs without."""
+        refused = (ControllerMessage, ControllerTooOld, ReplyTimeout)
+        try:
+            self.watchdog(max(1000, min(60000, round(options.poll * 20 * 1000))))
+        except refused:
+            yield
+            return
+        try:
+            yield
+        finally:
+            try:
+                self.watchdog(0)
+            except refused:
+                pass
 
     def _wait(
         self,

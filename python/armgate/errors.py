@@ -117,10 +117,11 @@ class ControllerMessage(ArmError):
     @property
     def ends_motion(self) -> bool:
         """Whether a running motion will not complete: ``ER21`` (workspace limit), ``WN22`` (IK
-        divergence), ``WN27`` (via point missed) and drive faults ``ER30``..``ER39``."""
+        divergence), ``WN27`` (via point missed), ``ER41`` (the client watchdog stopped the arm)
+        and drive faults ``ER30``..``ER39``."""
         if self.is_warning:
             return self.code in (22, 27)
-        return self.code == 21 or 30 <= self.code <= 39
+        return self.code in (21, 41) or 30 <= self.code <= 39
 
     @classmethod
     def from_text(cls, text: str) -> "ControllerMessage":

@@ -121,14 +121,16 @@ fn read_state(client: &mut Client, joints: usize, with_status: &mut bool) -> Vec
     events
 }
 
-/// Sends a begin command; if it is refused (a motion is running), sends ST and tries once more.
+/// Sends a begin command; if it is refused `busy` (this client's motion is running), sends ST
+/// and tries once more. Any other refusal — another client holding the arm (`ER40`) among
+/// them — is reported, never stopped through.
 fn begin_or_restart(
     client: &mut Client,
     begin: fn(&mut Client) -> Result<(), ClientError>,
 ) -> Result<bool, ClientError> {
     match begin(client) {
         Ok(()) => Ok(false),
-        Err(ClientError::Rejected(_)) => {
+        Err(ClientError::Rejected(text)) if text.as_str().ends_with(" busy") => {
             client.stop()?;
             begin(client).map(|()| true)
         }
@@ -167,6 +169,14 @@ pub fn perform(client: &mut Client, action: Action) -> Vec<Event> {
         Action::SetMode(mode) => match client.set_mode(mode) {
             Ok(reported) => vec![Event::Mode(reported)],
             Err(e) => vec![failure("CM", e), Event::ModeFailed],
+        },
+        Action::Stop => match client.stop() {
+            Ok(()) => vec![status(false, "stopped (ST)")],
+            Err(e) => vec![failure("ST", e)],
+        },
+        Action::DrivesOn => match client.on() {
+            Ok(()) => vec![status(false, "drives on (ON)")],
+            Err(e) => vec![failure("ON", e)],
         },
         // One command; a held key's stream is the UI's (`VelocityStreamer`).
         Action::Jog(velocity) => match client.velocity(&velocity) {
@@ -208,7 +218,7 @@ mod tests {
                 && !std::mem::replace(&mut *refused.lock().unwrap(), true)
             {
                 return vec![text(&format!(
-                    "ER20 Cmd {} rejected",
+                    "ER20 Cmd {} busy",
                     String::from_utf8_lossy(chars)
                 ))];
             }
@@ -246,11 +256,12 @@ mod tests {
         assert_eq!(events, [Event::Started("sent jG + jB".into())]);
     }
 
-    #[test]
-    fn a_second_refusal_is_shown_as_the_text() {
-        let fake = FakeController::spawn(|d| {
+    /// A Cartesian move against a controller that refuses every BG with `refusal`: what was
+    /// sent, and the events.
+    fn move_refused_with(refusal: &'static str) -> (Vec<String>, Vec<Event>) {
+        let fake = FakeController::spawn(move |d| {
             if &d[..2] == b"BG" {
-                vec![text("ER20 Cmd BG rejected")]
+                vec![text(refusal)]
             } else {
                 vec![echo(d)]
             }
@@ -263,8 +274,23 @@ mod tests {
                 rpy: [0.0; 3],
             },
         );
-        assert_eq!(sent(&fake), ["GT", "BG", "ST", "BG"]);
-        assert!(matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER20 Cmd BG rejected"));
+        (sent(&fake), events)
+    }
+
+    #[test]
+    fn a_second_refusal_is_shown_as_the_text() {
+        let (sent, events) = move_refused_with("ER20 Cmd BG busy");
+        assert_eq!(sent, ["GT", "BG", "ST", "BG"]);
+        assert!(matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER20 Cmd BG busy"));
+    }
+
+    #[test]
+    fn another_clients_arm_is_never_stopped_through() {
+        let (sent, events) = move_refused_with("ER40 Cmd BG by 192.168.1.2");
+        assert_eq!(sent, ["GT", "BG"]);
+        assert!(
+            matches!(&events[..], [Event::Refused(t)] if t.as_str() == "ER40 Cmd BG by 192.168.1.2")
+        );
     }
 
     #[test]

@@ -11,12 +11,14 @@
 //! | PgDn / PgUp | desired z − / + | — |
 //! | 1..8 | — | select joint 1..8 |
 //! | + / − | double / halve the scale | same |
-//! | space | desired pose ← current pose | desired joints ← current joints |
+//! | space | **stop** (ST) | same |
+//! | o | drives on (ON) | same |
+//! | c | desired pose ← current pose | desired joints ← current joints |
 //! | Enter | GT (desired position, current RPY, T = 0) + BG | jG + jB |
 //! | j | switch to joint keys | switch to Cartesian keys |
 //! | m | next mode via CM: off → joint → cart → off | same |
 //! | v | jog keys ↔ step keys | same |
-//! | q, Esc, Ctrl-C | quit (the terminal is restored) | same |
+//! | q, Esc, Ctrl-C | stop (ST) and quit (the terminal is restored) | same |
 //!
 //! **Jog keys** (the default; `v` toggles, `--step` starts without them): a held arrow or page
 //! key streams a velocity — `TW` in the base frame for the Cartesian keys, 5 mm/s × scale
@@ -27,8 +29,12 @@
 //!
 //! **Step keys** (the seed's): a Cartesian step is 1 mm × scale, a joint step 0.01 rad ×
 //! scale. Keys edit the desired values; Enter sends them (`--live`: every key press sends). If
-//! BG (jB) is refused, typically because a motion is still running, the client sends ST and
-//! then BG (jB) once more.
+//! BG (jB) is refused `busy` (this client's motion is still running), the client sends ST and
+//! then BG (jB) once more; any other refusal (another client holding the arm, `ER40`) is shown.
+//!
+//! Leaving stops what teleop started: `q`, Esc, Ctrl-C, SIGTERM, a closed terminal (SIGHUP)
+//! or an error of the terminal all send `ST` (on a socket of its own, [`StopOnExit`]) before
+//! the process ends, as `armgate move` does on Ctrl-C.
 //!
 //! The header shows the robot, mode, drives and motion from the status request (SQ); with a
 //! controller too old for it the mode is unknown until the first `m`, and `m` from an unknown
@@ -96,6 +102,26 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
     })
 }
 
+/// Sends `ST` when dropped — on every way out of [`run`], an error return included — so that
+/// leaving teleop never leaves the arm moving.
+struct StopOnExit {
+    peer: std::net::SocketAddr,
+    config: crate::ClientConfig,
+    /// Signs the stop for a controller that wants signed requests.
+    signer: Option<crate::Signer>,
+}
+
+impl Drop for StopOnExit {
+    fn drop(&mut self) {
+        // ST is obeyed from any client: a socket of its own, so that it never waits behind the
+        // I/O thread's request.
+        if let Ok(mut client) = Client::connect_with(self.peer, self.config.clone()) {
+            client.set_signer(self.signer.take());
+            let _ = client.stop();
+        }
+    }
+}
+
 /// Restores the terminal when dropped, also on an error return.
 struct Restore {
     /// Key releases were asked for ([`report_releases`]).
@@ -126,7 +152,7 @@ fn report_releases() -> bool {
         .is_ok()
 }
 
-/// Runs the keyboard client until q / Esc.
+/// Runs the keyboard client until q / Esc / Ctrl-C or a signal; sends ST on the way out.
 pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     // The jog stream has a socket of its own: it must not wait behind the polls.
     let config = crate::ClientConfig {
@@ -135,6 +161,14 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // Signed on the next link id: its timestamps would race the polls' on one link.
     let signer = client.signer().map(crate::Signer::next_link);
+    let _stop = StopOnExit {
+        peer: client.peer(),
+        config: client.config().clone(),
+        // A link of its own again: the stop must not race the jog stream's timestamps.
+        signer: signer.as_ref().map(crate::Signer::next_link),
+    };
+    // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
+    let signalled = crate::interrupt::ctrl_c().map_err(std::io::Error::other)?;
     let streamer = Client::connect_with(client.peer(), config)
         .map(|mut streamer| {
             streamer.set_signer(signer);
@@ -152,7 +186,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // The terminal key that streams, to stop on its release.
     let mut jog_key = None;
-    while !state.quit {
+    while !state.quit && !signalled.is_set() {
         let now = std::time::Instant::now();
         state.at(now);
         while let Ok(event) = io.events.try_recv() {

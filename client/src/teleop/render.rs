@@ -11,8 +11,8 @@
 //!  Scale: 4.0000   (step 4.000 mm)
 //!  ER/WN: WN12 Joint limit.
 //!  sent GT + BG
-//!  ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  space desired←current  Enter send
-//!  j joint keys  m next mode  q/Esc quit
+//!  ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  c desired←current  Enter send
+//!  space STOP  o drives on  j joint keys  v jog/step  m next mode  q/Esc stop+quit
 //! ```
 
 use ratatui::Frame;
@@ -143,12 +143,12 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
 
     let help_lines = match state.variant {
         Variant::Cartesian => [
-            " ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  space desired←current  Enter send",
-            " j joint keys  v jog/step  m next mode  q/Esc quit",
+            " ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  c desired←current  Enter send",
+            " space STOP  o drives on  j joint keys  v jog/step  m next mode  q/Esc stop+quit",
         ],
         Variant::Joint => [
-            " 1-8 or ↑/↓ select joint  ←/→ joint −/+  +/- scale  space desired←current  Enter send",
-            " j Cartesian keys  v jog/step  m next mode  q/Esc quit",
+            " 1-8 or ↑/↓ select joint  ←/→ joint −/+  +/- scale  c desired←current  Enter send",
+            " space STOP  o drives on  j Cartesian keys  v jog/step  m next mode  q/Esc stop+quit",
         ],
     };
     frame.render_widget(

@@ -97,6 +97,10 @@ pub enum Action {
     SetMode(Mode),
     /// Stream TW (Cartesian keys) or jW (joint keys) while the key is held.
     Jog(Velocity),
+    /// ST: stop every motion.
+    Stop,
+    /// ON: start the drives (clears a drive fault).
+    DrivesOn,
 }
 
 /// What the I/O side reports.
@@ -398,6 +402,14 @@ impl TeleopState {
                 None
             }
             Key::Char(' ') => {
+                self.status = String::from("stop (ST)");
+                Some(Action::Stop)
+            }
+            Key::Char('o') => {
+                self.status = String::from("drives on (ON)");
+                Some(Action::DrivesOn)
+            }
+            Key::Char('c') => {
                 self.desired = self.current;
                 self.desired_joints.clone_from(&self.joints);
                 self.pose_edit = Edit::Following;
@@ -666,15 +678,17 @@ mod tests {
     }
 
     #[test]
-    fn space_resets_the_desired_pose_and_joints() {
+    fn c_resets_the_desired_pose_and_joints_space_stops_o_starts_the_drives() {
         let mut s = ready(false);
         s.handle_key(Key::Up);
         s.apply(Event::Pose(pose(0.4, 0.0, 0.3)));
-        s.handle_key(Key::Char(' '));
+        s.handle_key(Key::Char('c'));
         assert_eq!(s.desired, Some(pose(0.4, 0.0, 0.3)));
         s.desired_joints[0] = 1.0;
-        s.handle_key(Key::Char(' '));
+        s.handle_key(Key::Char('c'));
         assert_eq!(s.desired_joints, [0.0; 8]);
+        assert_eq!(s.handle_key(Key::Char(' ')), Some(Action::Stop));
+        assert_eq!(s.handle_key(Key::Char('o')), Some(Action::DrivesOn));
     }
 
     #[test]
@@ -903,7 +917,7 @@ mod tests {
         assert_eq!(s.refused, Some(text));
         assert_eq!(s.joints_edit, Edit::Unsent);
         assert_eq!(s.recent_text(), Some(&text));
-        s.handle_key(Key::Char(' '));
+        s.handle_key(Key::Char('c'));
         assert_eq!(s.refused, None);
         assert_eq!(s.desired_joints, s.joints);
     }

@@ -3,16 +3,19 @@
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
+use core::net::{Ipv4Addr, SocketAddr};
+
 use armgate_protocol::client::{
-    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX,
-    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text,
-    Twist as TwistRequest, VALUES, WorkspaceReason,
+    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, Motion, NAME_INDEX,
+    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, SESSION_INDEX,
+    STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
 use super::ik::{self, IkRequestError};
 use super::relay::NoticeRelay;
+use super::session::Session;
 use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
@@ -39,6 +42,7 @@ pub struct CommandHandler {
     joint_goal: Option<Joints>,
     banks: Banks,
     relay: NoticeRelay,
+    session: Session,
     /// The robot's name, for the status request.
     name: RobotName,
     /// Requests answered with an `ER` text so far.
@@ -47,6 +51,8 @@ pub struct CommandHandler {
     signing: SigningReport,
     /// Time of the last tick (s).
     now: f64,
+    /// The client whose request is being handled.
+    client: SocketAddr,
 }
 
 impl CommandHandler {
@@ -60,10 +66,12 @@ impl CommandHandler {
             joint_goal: None,
             banks: Banks::default(),
             relay: NoticeRelay::default(),
+            session: Session::default(),
             name: RobotName::new(&config.name),
             refused: 0,
             signing: SigningReport::default(),
             now: 0.0,
+            client: ANONYMOUS,
         }
     }
 
@@ -110,6 +118,12 @@ impl CommandHandler {
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
         self.now = now;
+        if self.controller.motion() != Motion::Holding
+            && let Some(ms) = self.session.silent(now)
+        {
+            self.stop();
+            self.relay.announce(Notice::ClientSilent(ms).text());
+        }
         // The step's result is returned as it is, not unwrapped and wrapped again: the
         // Cortex-M7 would copy the 296-byte output twice, unaligned (≈ 2,100 instructions a
         // tick in qemu-bench).
@@ -136,35 +150,79 @@ impl CommandHandler {
         self.relay.dropped()
     }
 
-    /// Handles one datagram of any length and returns the reply datagram.
+    /// Handles one datagram of any length from a client that gives no address (tests, the
+    /// recorded exchange): [`handle_from`](Self::handle_from) the unspecified address.
     pub fn handle(
         &mut self,
         datagram: &[u8],
         drives: &mut (impl Drives + ?Sized),
     ) -> [u8; MESSAGE_LEN] {
-        let request = Message::new_checked(datagram).and_then(|m| Request::parse(&m));
-        let reply = match request {
-            Ok(request) => self.answer(&request, drives),
-            Err(e) => Err(Notice::from(e)),
-        };
-        match reply {
-            Ok(bytes) => bytes,
-            Err(notice) => {
-                self.refused = self.refused.saturating_add(1);
-                notice.text().to_bytes()
-            }
-        }
+        self.handle_from(datagram, ANONYMOUS, drives)
     }
 
-    /// The reply datagram to a request: the name reply to `SQ` index 1 is the one that is not
-    /// seven floats.
+    /// Handles one datagram of any length from `client` and returns the reply datagram. A
+    /// datagram that does not parse is answered and changes nothing else; a valid one is
+    /// admitted by the session first (who may command the arm, [`Session`]).
+    pub fn handle_from(
+        &mut self,
+        datagram: &[u8],
+        client: SocketAddr,
+        drives: &mut (impl Drives + ?Sized),
+    ) -> [u8; MESSAGE_LEN] {
+        let request = match Message::new_checked(datagram).and_then(|m| Request::parse(&m)) {
+            Ok(request) => request,
+            Err(e) => return self.refuse(Notice::from(e)),
+        };
+        if let Some(reply) = self.session.resent(client, datagram, self.now) {
+            return reply;
+        }
+        let busy = self.controller.motion() != Motion::Holding;
+        self.client = client;
+        let reply = self
+            .session
+            .admit(request.command, client, self.now, busy)
+            .and_then(|()| self.answer(&request, client, drives))
+            .unwrap_or_else(|notice| self.refuse(notice));
+        self.session
+            .answered(client, request.command, datagram, &reply, self.now);
+        reply
+    }
+
+    /// Counts a refusal the cycle answered itself (a request cancelled by a stop).
+    pub fn count_refusal(&mut self) {
+        self.refused = self.refused.saturating_add(1);
+    }
+
+    /// The text of a refusal, counted.
+    fn refuse(&mut self, notice: Notice) -> [u8; MESSAGE_LEN] {
+        self.refused = self.refused.saturating_add(1);
+        notice.text().to_bytes()
+    }
+
+    /// Where the notices go: the client that holds the arm, or the last one that sent a valid
+    /// request.
+    pub fn notice_recipient(&self) -> Option<SocketAddr> {
+        self.session.notice_recipient()
+    }
+
+    /// The shell's count of replies and notices it could not send (`SQ` index 3 reports it).
+    pub fn set_send_drops(&mut self, drops: u64) {
+        self.session.set_send_drops(drops);
+    }
+
+    /// The reply datagram to a request from `client`: the name reply to `SQ` index 1 is the
+    /// one that is not seven floats; the session report depends on who asks.
     fn answer(
         &mut self,
         req: &Request,
+        client: SocketAddr,
         drives: &mut (impl Drives + ?Sized),
     ) -> Result<[u8; MESSAGE_LEN], Notice> {
         match (req.command, req.index) {
             (Command::Status, NAME_INDEX) => Ok(self.name.to_bytes()),
+            (Command::Status, SESSION_INDEX) => {
+                Ok(self.session.report(client).to_reply().to_bytes())
+            }
             _ => self.execute(req, drives).map(|reply| reply.to_bytes()),
         }
     }
@@ -192,6 +250,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::ChangeMode => {
+                self.banks.clear();
                 // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
                 let mode = Mode::from_value(req.values[0]).ok_or(Notice::BadNumber(cmd))?;
                 self.controller.set_mode(mode).map_err(refused)?;
@@ -299,8 +358,17 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::JointReset | Command::Stop => {
-                self.controller.stop();
+                self.stop();
                 Ok(null)
+            }
+            Command::Watchdog => {
+                let ms = v[0];
+                if !(0.0..=f64::from(MAX_WATCHDOG_MS)).contains(&ms) {
+                    return Err(Notice::BadNumber(cmd));
+                }
+                let ms = libm::round(ms) as u16;
+                self.session.set_watchdog(ms);
+                Ok(values_reply(cmd, &[f64::from(ms)], 0))
             }
             Command::JointVia => {
                 let joints = bank_values(&v, cmd)?;
@@ -320,6 +388,7 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::On => {
+                self.banks.clear();
                 // Already starting (e.g. at power-up): ON asks for what is under way.
                 if drives.status() == DriveStatus::Starting {
                     return Ok(null);
@@ -331,6 +400,7 @@ impl CommandHandler {
                 Ok(null)
             }
             Command::Off => {
+                self.banks.clear();
                 if drives.stop().is_err() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
@@ -440,6 +510,12 @@ impl CommandHandler {
         }
     }
 
+    /// Stops the arm: `ST`, `jR`, and the client watchdog (one path for all of them).
+    fn stop(&mut self) {
+        self.banks.clear();
+        self.controller.stop();
+    }
+
     /// A wrong mode is reported before the drives' state: it outlasts it.
     fn in_mode(&self, cmd: Command) -> Result<(), Notice> {
         if self.controller.mode() == required_mode(cmd) {
@@ -452,17 +528,23 @@ impl CommandHandler {
     fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {
         let n = self.controller.chain().dof();
         self.banks
-            .stage(key, values, n)
+            .stage(key, values, n, self.client, self.now)
             .map_err(|_| Notice::BadIndex(cmd))
     }
 
     fn complete(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<Joints, Notice> {
         let n = self.controller.chain().dof();
         self.banks
-            .complete(key, values, n)
+            .complete(key, values, n, self.client, self.now)
             .map_err(|_| Notice::BadIndex(cmd))
     }
 }
+
+/// The longest client watchdog (ms): a minute.
+const MAX_WATCHDOG_MS: u16 = 60_000;
+
+/// The address of a client that gives none.
+const ANONYMOUS: SocketAddr = SocketAddr::new(core::net::IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0);
 
 /// The client text for a refused request, with its reason. (Out of line: eleven callers, all
 /// answering requests.)

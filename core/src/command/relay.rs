@@ -94,10 +94,15 @@ impl NoticeRelay {
             Some(_) if self.drive_notice_reported => {}
             Some(text) => {
                 self.drive_notice_reported = true;
-                if self.outbox.push_back(text).is_err() {
-                    self.dropped = self.dropped.saturating_add(1);
-                }
+                self.announce(text);
             }
+        }
+    }
+
+    /// Sends `text` once (an event the caller reports once, such as the client watchdog's).
+    pub fn announce(&mut self, text: Text) {
+        if self.outbox.push_back(text).is_err() {
+            self.dropped = self.dropped.saturating_add(1);
         }
     }
 

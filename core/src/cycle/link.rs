@@ -1,6 +1,38 @@
 //! The client side of a tick: datagrams in, replies and notices out.
 
+use core::net::{IpAddr, Ipv4Addr, SocketAddr};
+
 use armgate_protocol::client::signed::SIGNED_LEN;
+
+/// A shell's peer address, as the core knows its clients: a socket address. The one place
+/// where a datagram's source enters the core (the command handler's session, and where
+/// notices go).
+pub trait Peer: Copy {
+    /// The client's address.
+    fn address(self) -> SocketAddr;
+    /// The peer with this address (where a notice goes).
+    fn from_address(address: SocketAddr) -> Self;
+}
+
+impl Peer for SocketAddr {
+    fn address(self) -> SocketAddr {
+        self
+    }
+
+    fn from_address(address: SocketAddr) -> Self {
+        address
+    }
+}
+
+/// One client without an address (recordings, benches, the fuzz target): every datagram is
+/// from the unspecified address.
+impl Peer for () {
+    fn address(self) -> SocketAddr {
+        SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0)
+    }
+
+    fn from_address(_: SocketAddr) -> Self {}
+}
 
 /// A client datagram (its first 44 bytes: a signed datagram's length; the protocol reads no
 /// more) and the peer it came from or goes to. `P` is the shell's address type.
@@ -53,4 +85,9 @@ pub trait Link<P> {
     fn receive(&mut self) -> Option<Datagram<P>>;
     /// Sends (or queues) `datagram` to its peer.
     fn send(&mut self, datagram: &Datagram<P>, kind: Outgoing) -> Result<(), Dropped>;
+    /// Datagrams the shell dropped after [`send`](Self::send) accepted them (a destination
+    /// that did not resolve), since it started; the cycle adds its own count of refused sends.
+    fn dropped(&self) -> u64 {
+        0
+    }
 }

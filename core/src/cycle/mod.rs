@@ -28,23 +28,32 @@
 //!    a tick's work stays bounded (a reply waits at most about a period). They come after the
 //!    step, so that every reply reflects this tick's measurement (also the very first tick's)
 //!    and a motion they start runs from the next tick on;
-//! 6. **notices**: every unsolicited warning the relay holds goes to the last client that sent
-//!    an allowed request (signed if its request was); with none yet, it is counted and dropped.
+//!    At most [`PLANNING_PER_TICK`] of them may plan a motion (a move, a sequence, a
+//!    recalibration, a Cartesian goal): the others, and what their clients send after them,
+//!    wait for the next ticks; a stop cancels them (module `budget`);
+//! 6. **notices**: every unsolicited warning the relay holds goes to the client that holds the
+//!    arm, or with none to the last client that sent a valid request
+//!    ([`Session`](crate::command::Session)), signed if its request was; with none yet, it is
+//!    counted and dropped.
 //!
 //! Bus-off: the drive manager latches it as fault `ER35` and stops; the client's `ON` clears
 //! it — [`CanDrives`] first asks the bus to recover ([`CanBus::recover`](crate::drives::CanBus::recover)),
 //! then restarts the drives. docs/architecture.md shows the cycle and the shells.
 
+mod budget;
 mod can_drives;
 mod counters;
 mod link;
+mod shares;
 mod side;
 mod signing;
 mod tick;
 
+pub use budget::PLANNING_PER_TICK;
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
-pub use link::{Datagram, Dropped, Link, Outgoing};
+pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
+pub use shares::Shares;
 pub use side::DriveSide;
 pub use signing::{Signing, UNSIGNED_READS, UnknownAccess, UnsignedAccess};
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

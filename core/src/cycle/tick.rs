@@ -1,14 +1,15 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
+use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, waits};
 use super::counters::bump;
 use super::signing::Gate;
-use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Signing};
+use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
-use armgate_protocol::client::MESSAGE_LEN;
 use armgate_protocol::client::signed::SigningReport;
+use armgate_protocol::client::{MESSAGE_LEN, Notice};
 use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
@@ -45,13 +46,14 @@ pub struct Cycle<D, P> {
     next: u64,
     /// Time of the previous tick (s).
     previous: Option<f64>,
-    last_sender: Option<P>,
     counters: CycleCounters,
+    /// Requests the work budget left for a later tick.
+    waiting: Waiting<P>,
     /// The signature checks every datagram passes first.
     gate: Gate,
 }
 
-impl<D: DriveSide, P: Copy> Cycle<D, P> {
+impl<D: DriveSide, P: Peer> Cycle<D, P> {
     /// A cycle for a validated robot description with `drives`, before its first tick.
     pub fn new(config: &ValidRobot, drives: D) -> Self {
         // The period is validated finite and positive; the cast saturates for absurd values.
@@ -63,8 +65,8 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             period_us: NonZeroU64::new(period_us).unwrap_or(NonZeroU64::MIN),
             next: 0,
             previous: None,
-            last_sender: None,
             counters: CycleCounters::default(),
+            waiting: Waiting::new(),
             gate: Gate::new(Signing::default()),
         }
     }
@@ -154,45 +156,97 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
         self.counters
     }
 
+    /// Where notices go: the client that holds the arm, or the last one that sent a valid
+    /// request.
+    pub fn notice_recipient(&self) -> Option<P> {
+        self.handler.notice_recipient().map(P::from_address)
+    }
+
     /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
     pub fn signing(&self) -> SigningReport {
         self.gate.report()
     }
 
-    /// The client that sent the last request: where notices go.
-    pub fn last_sender(&self) -> Option<P> {
-        self.last_sender
-    }
-
-    /// Answers one request from `peer` (who then gets the notices). [`tick`](Self::tick)
-    /// calls it for the requests its link delivers; protocol tests call it between ticks.
+    /// Answers one request from `peer`. [`tick`](Self::tick) calls it for the requests its
+    /// link delivers; protocol tests call it between ticks.
     // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
         bump(&mut self.counters.requests);
-        self.last_sender = Some(peer);
-        self.handler.handle(datagram, &mut self.drives)
+        self.handler
+            .handle_from(datagram, peer.address(), &mut self.drives)
     }
 
     fn handle_requests(&mut self, link: &mut impl Link<P>) {
+        let drops = self.counters.send_dropped.saturating_add(link.dropped());
+        self.handler.set_send_drops(drops);
+        // The work budget (module `budget`): requests waiting from earlier ticks first.
+        let mut planned = 0;
+        let mut later = Waiting::new();
         for _ in 0..REQUESTS_PER_TICK {
-            let Some(request) = link.receive() else {
-                break;
+            let request = match self.waiting.pop_front() {
+                Some(waiting) => waiting,
+                None => {
+                    let Some(datagram) = link.receive() else {
+                        break;
+                    };
+                    // Dropped datagrams are counted by the gate and never answered.
+                    let Some(admitted) = self.gate.admit(datagram.payload()) else {
+                        continue;
+                    };
+                    self.handler.set_signing_report(self.gate.report());
+                    Pending {
+                        datagram: Datagram::new(admitted.message, datagram.peer),
+                        signed: admitted.signed,
+                    }
+                }
             };
-            // Dropped datagrams are counted by the gate and never answered.
-            let Some(admitted) = self.gate.admit(request.payload()) else {
+            let work = Work::of(request.datagram.payload());
+            let plans = matches!(work, Work::Plans(_));
+            if waits(&later, request.datagram.peer) || (plans && planned >= PLANNING_PER_TICK) {
+                // Room: at most one a pass.
+                let _ = later.push_back(request);
                 continue;
-            };
-            self.handler.set_signing_report(self.gate.report());
-            let reply = self.answer(admitted.message, request.peer);
-            let sealed = self.gate.seal(&reply, admitted.signed);
-            self.send(
-                link,
-                Datagram::new(sealed.bytes(), request.peer),
-                Outgoing::Reply,
-            );
+            }
+            planned += usize::from(plans);
+            if work == Work::Stops {
+                self.cancel_waiting(&mut later, link);
+            }
+            let reply = self.answer(request.datagram.payload(), request.datagram.peer);
+            self.reply(link, &reply, &request);
         }
+        // What waited before stays ahead of what the link still holds. (Together never more
+        // than the queue: with some left in `waiting`, every pass took one from it.)
+        while let Some(request) = self.waiting.pop_front() {
+            let _ = later.push_back(request);
+        }
+        self.waiting = later;
+    }
+
+    /// Answers the planning requests waiting (in `later` and in `waiting`) as cancelled by a
+    /// stop that arrived after them.
+    fn cancel_waiting(&mut self, later: &mut Waiting<P>, link: &mut impl Link<P>) {
+        let mut cancelled = Waiting::new();
+        for queue in [&mut *later, &mut self.waiting] {
+            cancel_planning(queue, |request| {
+                let _ = cancelled.push_back(request);
+            });
+        }
+        while let Some(request) = cancelled.pop_front() {
+            self.handler.count_refusal();
+            if let Work::Plans(command) = Work::of(request.datagram.payload()) {
+                let reply = Notice::Cancelled(command).text().to_bytes();
+                self.reply(link, &reply, &request);
+            }
+        }
+    }
+
+    /// Sends `reply` to the client of `request`, sealed if the request was signed.
+    fn reply(&mut self, link: &mut impl Link<P>, reply: &[u8; MESSAGE_LEN], request: &Pending<P>) {
+        let sealed = self.gate.seal(reply, request.signed);
+        let peer = request.datagram.peer;
+        self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Reply);
     }
 
     fn send_notices(&mut self, link: &mut impl Link<P>) {
@@ -200,7 +254,7 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             let Some(text) = self.handler.next_notice() else {
                 break;
             };
-            match self.last_sender {
+            match self.notice_recipient() {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
                     let sealed = self.gate.seal(&text.to_bytes(), self.gate.last_signed());

@@ -69,11 +69,14 @@ pub enum Command {
     /// `VT`: set the blend tolerance of Cartesian via point `index` to f0 (m + rad; negative:
     /// the robot file's default).
     ViaTolerance,
+    /// `WD`: the client watchdog: while the arm moves and the controlling client is silent for
+    /// longer than f0 ms, the arm is stopped (0: off).
+    Watchdog,
 }
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 27] = [
+    pub const ALL: [Self; 28] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
@@ -101,6 +104,7 @@ impl Command {
         Self::ViaExecute,
         Self::ViaPoint,
         Self::ViaTolerance,
+        Self::Watchdog,
     ];
 
     /// The request's two characters.
@@ -133,6 +137,7 @@ impl Command {
             Self::ViaExecute => b"VE",
             Self::ViaPoint => b"VP",
             Self::ViaTolerance => b"VT",
+            Self::Watchdog => b"WD",
         }
     }
 

@@ -24,7 +24,8 @@
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
 //!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
-//! * [`StatusReport`] and [`RobotName`]: the replies to the status request `SQ`.
+//! * [`StatusReport`], [`RobotName`] and [`SessionReport`]: the replies to the status request
+//!   `SQ`.
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
@@ -44,6 +45,7 @@ mod orientation;
 mod reason;
 mod reply;
 mod request;
+mod session;
 pub mod signed;
 mod status;
 mod temperature;
@@ -62,6 +64,7 @@ pub use orientation::{Quaternion, rpy};
 pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
+pub use session::{Holder, SESSION_INDEX, SessionReport};
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};

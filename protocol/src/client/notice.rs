@@ -38,6 +38,15 @@ pub enum Notice {
     BeyondJointLimit(Command, JointBound),
     /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
     ViaPointMissed,
+    /// `ER40 Cmd XX by 192.168.1.2`: another client controls the arm while it moves (its IPv4
+    /// address; `another client` for an IPv6 one, which may not fit).
+    HeldBy(Command, Option<[u8; 4]>),
+    /// `ER41 client silent 500 ms`: the controlling client said nothing for longer than its
+    /// watchdog (`WD`, this many ms, at most 60,000) while the arm moved: the arm was stopped.
+    ClientSilent(u16),
+    /// `ER42 Cmd XX cancelled by ST`: a planning request that waited for a later tick (the
+    /// per-tick work budget) was cancelled by a stop that arrived after it.
+    Cancelled(Command),
 }
 
 impl Notice {
@@ -65,6 +74,9 @@ impl Notice {
             Self::OutsideWorkspace(..) => 25,
             Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
+            Self::HeldBy(..) => 40,
+            Self::ClientSilent(_) => 41,
+            Self::Cancelled(_) => 42,
         }
     }
 
@@ -118,6 +130,14 @@ impl fmt::Display for Body {
             Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
+            // The octets one by one: `Ipv4Addr`'s Display has a panic path (its padding
+            // buffer), which the control tick must not link.
+            Notice::HeldBy(c, Some([a, b, x, y])) => {
+                write!(f, "Cmd {} by {a}.{b}.{x}.{y}", Pair(c.chars()))
+            }
+            Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
+            Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
+            Notice::Cancelled(c) => write!(f, "Cmd {} cancelled by ST", Pair(c.chars())),
         }
     }
 }
@@ -135,6 +155,24 @@ impl fmt::Display for Pair {
 mod tests {
     use super::*;
     use crate::client::PathPoint;
+
+    #[test]
+    fn the_holder_is_named_where_it_fits() {
+        let held = |ip| Notice::HeldBy(Command::Begin, ip).text();
+        assert_eq!(
+            held(Some([192, 168, 100, 200])).as_str(),
+            "ER40 Cmd BG by 192.168.100.200"
+        );
+        assert_eq!(held(None).as_str(), "ER40 Cmd BG by another client");
+        assert_eq!(
+            Notice::Cancelled(Command::ViaExecute).text().as_str(),
+            "ER42 Cmd VE cancelled by ST"
+        );
+        assert_eq!(
+            Notice::ClientSilent(60_000).text().as_str(),
+            "ER41 client silent 60000 ms"
+        );
+    }
 
     #[test]
     fn texts_are_exact() {

@@ -1,0 +1,89 @@
+//! The per-tick work budget: at most [`PLANNING_PER_TICK`] planning request a tick.
+//!
+//! A planning request (`BG`, `VE`, `jB`, `jE`, `RC`, and the Cartesian goals and via points
+//! `GL`, `GT`, `VP`) may run the IK along a whole line: about 1.5 M instructions to an
+//! unreachable goal on the board. Eight in one tick would take several periods and let the
+//! drives' buffers run dry, so the second and later planning requests of a tick wait for the
+//! next ticks ([`Waiting`]), and so does everything after them from the same client (its
+//! requests keep their order). Other clients' requests go on meanwhile; a stop (`ST`, `jR`),
+//! from anyone, cancels the planning requests still waiting, which arrived before it: each is
+//! answered `ER42 Cmd XX cancelled by ST` rather than started after the stop.
+
+use armgate_protocol::client::{Command, Message, Request};
+use heapless::Deque;
+
+use super::link::{Datagram, Peer};
+use super::tick::REQUESTS_PER_TICK;
+
+/// Planning requests handled per tick at most.
+pub const PLANNING_PER_TICK: usize = 1;
+
+/// What a request costs, as the budget sees it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Work {
+    /// May plan a motion (counted against the budget).
+    Plans(Command),
+    /// Stops the arm (cancels the planning requests waiting).
+    Stops,
+    /// Anything else (or not a request at all: answered with its refusal).
+    Other,
+}
+
+impl Work {
+    /// The work of a datagram.
+    pub(super) fn of(datagram: &[u8]) -> Self {
+        let Ok(request) = Message::new_checked(datagram).and_then(|m| Request::parse(&m)) else {
+            return Self::Other;
+        };
+        match request.command {
+            c @ (Command::Begin
+            | Command::ViaExecute
+            | Command::JointBegin
+            | Command::JointExecute
+            | Command::Recalibrate
+            | Command::GoalQuaternion
+            | Command::GoalRpy
+            | Command::IkGoal
+            | Command::ViaPoint) => Self::Plans(c),
+            Command::Stop | Command::JointReset => Self::Stops,
+            _ => Self::Other,
+        }
+    }
+}
+
+/// A request past the signature check: the message, its client, and whether it came signed
+/// (its reply is sealed alike).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pending<P> {
+    pub datagram: Datagram<P>,
+    pub signed: bool,
+}
+
+/// Requests that wait for a later tick, in arrival order.
+pub(super) type Waiting<P> = Deque<Pending<P>, REQUESTS_PER_TICK>;
+
+/// True if a request from `peer` waits in `waiting` (its next one must wait behind it).
+pub(super) fn waits<P: Peer>(waiting: &Waiting<P>, peer: P) -> bool {
+    waiting
+        .iter()
+        .any(|p| p.datagram.peer.address() == peer.address())
+}
+
+/// Takes the planning requests out of `waiting` (the others stay, in order), calling
+/// `cancel` for each.
+pub(super) fn cancel_planning<P: Copy>(
+    waiting: &mut Waiting<P>,
+    mut cancel: impl FnMut(Pending<P>),
+) {
+    for _ in 0..waiting.len() {
+        let Some(request) = waiting.pop_front() else {
+            break;
+        };
+        if matches!(Work::of(request.datagram.payload()), Work::Plans(_)) {
+            cancel(request);
+        } else {
+            // Room: it was just taken out.
+            let _ = waiting.push_back(request);
+        }
+    }
+}
