@@ -14,7 +14,7 @@ use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{
     CartesianGenerator, Controller, JointGenerator, JointLimiter, Mode, Refusal, Shape, StepOutput,
-    Trapezoid,
+    StopCause, Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
 use armgate_core::sim::{IdealArm, RateLimitedArm};
@@ -259,7 +259,7 @@ fn refusals_say_why() {
         rig.ctrl.set_joint_via(20, &MK1_READY, 0.0),
         Err(Refusal::IndexOutOfRange)
     );
-    rig.ctrl.stop();
+    rig.ctrl.stop(StopCause::Stop);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let mut bad = pose;
     bad.translation.vector.x = f64::NAN;
@@ -383,18 +383,30 @@ fn joint_limiter_clamps_range_and_rate_and_reports() {
     at[1] = -0.785;
     let mut prev_at = prev;
     prev_at[1] = -0.785;
-    let l = limiter.limit(&Joints::from_slice(&at).unwrap(), &prev_at);
+    let rest = Joints::zeros(6);
+    let l = limiter.limit(&Joints::from_slice(&at).unwrap(), &prev_at, &rest);
     assert!(!l.position_clamped && !l.rate_clamped);
     let mut beyond = at;
     beyond[1] = -0.9;
-    let l = limiter.limit(&Joints::from_slice(&beyond).unwrap(), &prev_at);
+    let l = limiter.limit(&Joints::from_slice(&beyond).unwrap(), &prev_at, &rest);
     assert!(l.position_clamped && l.q[1] == -0.785);
-    // Rate: 0.2 rad/s × 0.01944 s per tick.
+    // Rate: 0.2 rad/s × 0.01944 s per tick, for a joint already moving at it.
     let mut jump = MK1_HOME;
     jump[0] += 0.5;
-    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), &prev);
-    assert!(l.rate_clamped && !l.position_clamped);
+    let mut cruising = rest;
+    cruising[0] = 0.2;
+    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), &prev, &cruising);
+    assert!(l.rate_clamped && !l.position_clamped && !l.acceleration_clamped);
     assert!((l.q[0] - (MK1_HOME[0] + 0.2 * 0.01944)).abs() < 1e-12);
+    // Acceleration: from rest, the step grows by at most 0.5 rad/s² × 0.01944² per tick;
+    // at 0.2 rad/s, a request to stop dead is eased by as much.
+    let l = limiter.limit(&Joints::from_slice(&jump).unwrap(), &prev, &rest);
+    assert!(l.acceleration_clamped);
+    assert!((l.q[0] - (MK1_HOME[0] + 0.5 * 0.01944 * 0.01944)).abs() < 1e-12);
+    let l = limiter.limit(&prev, &prev, &cruising);
+    assert!(l.acceleration_clamped && !l.rate_clamped);
+    let step = 0.2 * 0.01944 - 0.5 * 0.01944 * 0.01944;
+    assert!((l.q[0] - (MK1_HOME[0] + step)).abs() < 1e-12);
 }
 
 #[test]

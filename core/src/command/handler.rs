@@ -2,9 +2,9 @@
 
 use armgate_protocol::client::banks::READ_JOINTS;
 use armgate_protocol::client::{
-    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, NAME_INDEX,
-    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, STATUS_INDEX, Text,
-    Twist as TwistRequest, VALUES, WorkspaceReason,
+    BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
+    Message, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName,
+    STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
@@ -14,7 +14,7 @@ use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
-use crate::motion::{Controller, Mode, Refusal, StepOutput};
+use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -42,6 +42,10 @@ pub struct CommandHandler {
     refused: u32,
     /// Time of the last tick (s).
     now: f64,
+    /// `OF` while moving: the drives stop when the arm is at rest, or at this time (s).
+    power_off_at: Option<f64>,
+    /// The longest a stop from full speed may take (s), with a margin: the bound on `OF`'s wait.
+    stop_within: f64,
 }
 
 impl CommandHandler {
@@ -58,6 +62,8 @@ impl CommandHandler {
             name: RobotName::new(&config.name),
             refused: 0,
             now: 0.0,
+            power_off_at: None,
+            stop_within: stop_time_bound(config),
         }
     }
 
@@ -90,11 +96,14 @@ impl CommandHandler {
     /// hold their last point) the controller holds the measured position, so motion resumes
     /// from where the arm is; motion requests are refused meanwhile
     /// ([`Drives::is_operational`]).
+    ///
+    /// An `OF` that came while the arm moved stops the drives here, once the supervisor has
+    /// brought the arm to rest (or the bound on a stop's time has passed).
     pub fn tick(
         &mut self,
         now: f64,
         measured: &[f64],
-        drives: &(impl Drives + ?Sized),
+        drives: &mut (impl Drives + ?Sized),
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
         self.now = now;
@@ -105,6 +114,12 @@ impl CommandHandler {
         let Ok(step) = &out else {
             return out;
         };
+        if let Some(deadline) = self.power_off_at
+            && (!self.controller.is_moving() || now >= deadline)
+        {
+            self.power_off_at = None;
+            let _ = drives.stop();
+        }
         if !drives.is_operational() {
             self.controller.release();
         }
@@ -260,7 +275,7 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::JointReset | Command::Stop => {
-                self.controller.stop();
+                self.controller.stop(StopCause::Stop);
                 Ok(null)
             }
             Command::JointVia => {
@@ -288,14 +303,21 @@ impl CommandHandler {
                 if !drives.start() {
                     return Err(Notice::ArmDidNotStart(drives.status()));
                 }
-                self.controller.stop();
+                self.power_off_at = None;
+                self.controller.release();
                 Ok(null)
             }
             Command::Off => {
+                // A category-1 stop: decelerate, then remove power (in `tick`).
+                if self.controller.is_moving() && drives.is_operational() {
+                    self.controller.stop(StopCause::PowerOff);
+                    self.power_off_at = Some(self.now + self.stop_within);
+                    return Ok(null);
+                }
                 if !drives.stop() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
-                self.controller.stop();
+                self.controller.release();
                 Ok(null)
             }
             Command::Pose => {
@@ -323,6 +345,11 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                CAUSE_INDEX => Ok(CauseReport {
+                    cause: self.controller.stop_cause(),
+                    joint: None,
+                }
+                .to_reply()),
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {
@@ -525,4 +552,25 @@ fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Res
         values,
         index: if bank_2 { BANK_2 } else { 0 },
     })
+}
+
+/// The longest a stop from full speed may take (s): every joint from its top speed at its
+/// acceleration (plus the jerk ramp), and the Cartesian components likewise, doubled, plus
+/// half a second.
+fn stop_time_bound(config: &ValidRobot) -> f64 {
+    let ramp = |v: f64, a: f64, j: Option<f64>| v / a + j.map_or(0.0, |j| a / j);
+    let joints = config.joints.iter().map(|j| {
+        ramp(
+            j.max_velocity.min(j.max_rate),
+            j.max_acceleration,
+            j.max_jerk,
+        )
+    });
+    let c = &config.cartesian;
+    let cartesian = (0..6).map(|k| {
+        let at = |v: &[f64; 6]| v.get(k).copied().unwrap_or(0.0);
+        let jerk = c.max_jerk.as_ref().map(at);
+        ramp(at(&c.max_velocity), at(&c.max_acceleration), jerk)
+    });
+    2.0 * joints.chain(cartesian).fold(0.0, f64::max) + 0.5
 }

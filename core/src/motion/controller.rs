@@ -7,6 +7,7 @@ use super::joint_limiter::JointLimiter;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
+use super::supervisor::{Along, StopCause, Supervisor, budget};
 use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
 use super::workspace::Workspace;
 use super::{Events, Refusal};
@@ -30,19 +31,19 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
     fine: 0.001,
     coarse: 0.05,
 };
-/// Attempts per tick at a smaller step when the full one is too fast for the joints.
-const SLOWDOWN_ATTEMPTS: usize = 4;
-/// Below this fraction of real time a motion counts as stalled rather than slowed down.
+/// Below this fraction of real time a motion counts as stalled rather than slowed down: the
+/// supervisor brings it to rest in joint space and aborts it (`WN22`).
 const MIN_TIME_SCALE: f64 = 0.01;
-/// A Cartesian motion that cannot advance for this long (s) is aborted.
-pub const STALL_TIME: f64 = 0.5;
 
 /// How a Cartesian set-point can be tracked this tick.
 enum Tracking {
     /// Reached within the tolerance and the rate limits.
     Reached(Joints),
-    /// Reached, but some joint would exceed its rate limit by this factor.
-    TooFast(f64),
+    /// Reached within the rate limits, but some joint would exceed its acceleration limit
+    /// (the limiter then eases the step, and the tool leaves the path a little).
+    Abrupt(Joints),
+    /// Reached, but some joint would exceed its rate limit.
+    TooFast,
     /// Not reached within the tolerance.
     Unreachable,
 }
@@ -97,8 +98,16 @@ pub struct Controller {
     measured: Option<(Joints, Frame)>,
     /// Control period (s): each tick advances the motion by at most this much motion time.
     period: f64,
-    /// Consecutive ticks in which a Cartesian motion could not advance.
-    stalled_ticks: u32,
+    /// Every transition to rest, and the commanded velocity.
+    supervisor: Supervisor,
+    /// The Cartesian motion's time scale (1: as planned), kept from tick to tick: a slow-down
+    /// near a singularity or a joint limit changes it within the joints' acceleration limits.
+    time_scale: f64,
+    /// The Cartesian set-point's velocity at full time scale, from the last tick's step.
+    cartesian_nominal: [f64; 6],
+    /// Cartesian limits (x, y, z, rx, ry, rz): acceleration, and jerk if set.
+    cartesian_acceleration: [f64; 6],
+    cartesian_jerk: Option<[f64; 6]>,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
 }
@@ -132,7 +141,11 @@ impl Controller {
             command: None,
             measured: None,
             period: config.control_period,
-            stalled_ticks: 0,
+            supervisor: Supervisor::new(config),
+            time_scale: 1.0,
+            cartesian_nominal: [0.0; 6],
+            cartesian_acceleration: cartesian.max_acceleration,
+            cartesian_jerk: cartesian_j_max,
             fixed_point: FixedPoint::default(),
         }
     }
@@ -157,30 +170,44 @@ impl Controller {
             ..Events::default()
         };
         let mut stream_finished = false;
-        let (request, setpoint) = match self.mode {
-            Mode::Off => (None, None),
+        let running = match self.mode {
+            _ if self.supervisor.stopping().is_some() => None,
+            Mode::Off => Some((None, None)),
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
                 let step = self.stream_tick(&q_m, &mut events);
                 stream_finished = step.finished;
                 let setpoint = (self.mode == Mode::Cartesian).then_some(step.pose);
-                (Some(step.q), setpoint)
+                Some((Some(step.q), setpoint))
             }
-            Mode::Joint => (Some(self.joint_tick(&q_m, &mut events)), None),
-            Mode::Cartesian => {
-                let (q, sp) = self.cartesian_tick(&q_m, &f_m, &mut events);
-                (Some(q), Some(sp))
-            }
+            Mode::Joint => Some((Some(self.joint_tick(&q_m, &mut events)), None)),
+            Mode::Cartesian => self
+                .cartesian_tick(&q_m, &f_m, &mut events)
+                .map(|(q, sp)| (Some(q), Some(sp))),
         };
+        // A stop in progress, or one that began this tick: the supervisor commands.
+        let (request, setpoint) = match running {
+            Some(out) => out,
+            None => self.stopping_tick(&q_m, &mut events),
+        };
+        let previous = self.command.unwrap_or(q_m);
         let command = request.map(|r| {
             let limited = self
                 .limiter
-                .limit(&r, self.command.as_ref().unwrap_or(&q_m));
+                .limit(&r, &previous, self.supervisor.velocity());
             events.joint_limit = limited.position_clamped;
-            events.rate_limit = limited.rate_clamped;
+            events.rate_limit = limited.rate_clamped || limited.acceleration_clamped;
             limited.q
         });
-        if command.is_some() {
-            self.command = command;
+        match &command {
+            Some(q) => {
+                self.supervisor.observe(q, &previous);
+                self.command = command;
+            }
+            None => {
+                // Nothing commanded (mode off): the next command starts from rest.
+                self.supervisor.reset();
+                self.command = None;
+            }
         }
         if stream_finished {
             // The generators take over where the stream came to rest.
@@ -239,14 +266,17 @@ impl Controller {
     /// the full step would need a joint to move faster than its rate limit: the path stays exact
     /// and the motion slows down (the seed enforced no rate in position mode, spec §9 item 27).
     /// A set-point that cannot be tracked even at a much smaller step (out of reach, or at a
-    /// singularity) holds the arm and raises [`Events::ik_divergence`]; a motion stalled like
-    /// this for [`STALL_TIME`] is aborted.
+    /// singularity) raises [`Events::ik_divergence`] and the supervisor brings the arm to rest
+    /// in joint space. So does a measured pose outside the workspace (`ER21`); a set-point
+    /// that would come within the stopping distance of the workspace's edge or a box starts a
+    /// stop along the path, which ends before it. `None`: a stop began, the supervisor
+    /// commands this tick.
     fn cartesian_tick(
         &mut self,
         q_m: &Joints,
         f_m: &Frame,
         events: &mut Events,
-    ) -> (Joints, Frame) {
+    ) -> Option<(Joints, Frame)> {
         let leg_done = !self.cartesian_generator.is_moving();
         let step = self
             .cartesian_sequence
@@ -271,38 +301,208 @@ impl Controller {
         );
 
         let seed = self.command.unwrap_or(*q_m);
+        let moving = self.cartesian_generator.is_moving();
         let t0 = self.cartesian_generator.elapsed();
-        let mut scale = 1.0;
-        for _ in 0..SLOWDOWN_ATTEMPTS {
+        let before = self.cartesian_generator.setpoint();
+        // The time scale may change by as much as the joints' acceleration allows at the speed
+        // they would have at full scale: up first, then the same, then down (by half at most
+        // when the joints are slow: the plan's own acceleration is what is too much then).
+        let s = if moving { self.time_scale } else { 1.0 };
+        let mut nominal = *self.supervisor.velocity();
+        if s > 0.0 {
+            nominal.iter_mut().for_each(|v| *v /= s);
+        }
+        let (joint_delta, _) = self.supervisor.joint_budget(&nominal);
+        let cartesian_nominal = if moving {
+            self.cartesian_nominal
+        } else {
+            [0.0; 6]
+        };
+        let delta = joint_delta.min(budget(
+            &cartesian_nominal,
+            &self.cartesian_acceleration,
+            self.period,
+        ));
+        // The slowest step that only the acceleration clamp keeps from being reached.
+        let mut abrupt = None;
+        for scale in [(s + delta).min(1.0), s, (s - delta).max(0.0)] {
+            if scale < MIN_TIME_SCALE {
+                break;
+            }
             let t = t0 + self.period * scale;
             let sample = self.cartesian_generator.sample(t);
             let (setpoint, finished) = sample;
             if events.workspace_limit || !self.workspace.allows(&setpoint.translation.vector) {
-                // An illegal set-point never reaches the IK: abort and hold the commanded pose.
+                // An illegal set-point never reaches the IK: the arm comes to rest in joint
+                // space and the motion is aborted.
                 events.workspace_limit = true;
-                return (seed, self.abort_cartesian_motion(&seed, f_m, events));
+                self.abort_cartesian_motion(StopCause::Workspace, events);
+                return None;
             }
-            match self.track(&setpoint, &seed) {
+            let tracked = match self.track(&setpoint, &seed) {
+                Tracking::Abrupt(q) => {
+                    abrupt = Some((q, scale, t, sample));
+                    continue;
+                }
+                other => other,
+            };
+            match tracked {
+                Tracking::Abrupt(_) | Tracking::TooFast => {}
                 Tracking::Reached(q) => {
-                    self.stalled_ticks = 0;
+                    self.time_scale = scale;
+                    self.cartesian_nominal =
+                        cartesian_velocity(&before, &setpoint, self.period * scale);
                     self.cartesian_generator.commit(t, sample);
                     events.motion_finished |= finished && !self.cartesian_sequence.is_running();
-                    return (q, setpoint);
+                    if moving && !finished && self.boundary_ahead(&before, &setpoint, t, scale) {
+                        events.workspace_limit = true;
+                        self.supervisor.begin(StopCause::Workspace, Along::Path);
+                        self.cartesian_sequence.halt();
+                    }
+                    return Some((q, setpoint));
                 }
-                Tracking::TooFast(ratio) if scale / ratio >= MIN_TIME_SCALE => {
-                    // Joint steps grow about linearly with the step along the path.
-                    scale /= ratio * 1.05;
-                }
-                Tracking::TooFast(_) | Tracking::Unreachable => break,
+                Tracking::Unreachable => break,
             }
         }
-        events.ik_divergence = true;
-        self.stalled_ticks = self.stalled_ticks.saturating_add(1);
-        let stalled = f64::from(self.stalled_ticks) * self.period >= STALL_TIME;
-        if !self.cartesian_generator.is_moving() || stalled {
-            return (seed, self.abort_cartesian_motion(&seed, f_m, events));
+        if let Some((q, scale, t, sample)) = abrupt {
+            self.time_scale = scale;
+            self.cartesian_nominal = cartesian_velocity(&before, &sample.0, self.period * scale);
+            self.cartesian_generator.commit(t, sample);
+            events.motion_finished |= sample.1 && !self.cartesian_sequence.is_running();
+            return Some((q, sample.0));
         }
-        (seed, self.cartesian_generator.setpoint())
+        events.ik_divergence = true;
+        let _ = f_m;
+        self.abort_cartesian_motion(StopCause::IkDivergence, events);
+        None
+    }
+
+    /// True if the Cartesian motion, at `setpoint` (motion time `t`, one tick after `before`
+    /// at a time scale `scale`), would leave the workspace or enter an exclusion box within
+    /// its stopping distance along the path: the point where a stop along the path beginning
+    /// next tick would end (half the stopping time at the present speed, plus two ticks, of
+    /// motion time) and the straight way there.
+    fn boundary_ahead(&self, before: &Frame, setpoint: &Frame, t: f64, scale: f64) -> bool {
+        let nominal = cartesian_velocity(before, setpoint, self.period * scale);
+        let stop_time = nominal
+            .iter()
+            .zip(self.cartesian_acceleration.iter())
+            .map(|(v, a)| libm::fabs(*v) / a)
+            .fold(0.0, f64::max);
+        let ramp = self.cartesian_jerk.map_or(0.0, |j| {
+            self.cartesian_acceleration
+                .iter()
+                .zip(j.iter())
+                .map(|(a, j)| a / j)
+                .fold(0.0, f64::max)
+        });
+        let horizon = 0.5 * stop_time + ramp + 2.0 * self.period;
+        let (ahead, _) = self.cartesian_generator.sample(t + horizon);
+        let (here, there) = (&setpoint.translation.vector, &ahead.translation.vector);
+        !self.workspace.allows(there) || self.workspace.first_box_crossing(here, there).is_some()
+    }
+
+    /// One tick of the stop in progress (begun earlier or this tick): its command, and the
+    /// Cartesian set-point of a stop along a Cartesian path. At rest the generators hold where
+    /// it ended and the stop is over.
+    fn stopping_tick(
+        &mut self,
+        q_m: &Joints,
+        events: &mut Events,
+    ) -> (Option<Joints>, Option<Frame>) {
+        let Some(stop) = self.supervisor.stopping() else {
+            return (None, None);
+        };
+        let q_cmd = self.command.unwrap_or(*q_m);
+        if stop.along == Along::Path && self.mode == Mode::Cartesian {
+            if let Some(out) = self.cartesian_path_stop(&q_cmd) {
+                return out;
+            }
+            // The path cannot be followed: on in joint space.
+            events.ik_divergence = true;
+            self.supervisor.leave_path();
+        } else if stop.along == Along::Path && self.mode == Mode::Joint {
+            let mut peek = self.joint_generator.clone();
+            let before = self.joint_generator.setpoint();
+            let (ahead, _) = peek.advance(self.period);
+            let nominal = joint_velocity(&before, &ahead, self.period);
+            let (rate, change) = self.supervisor.joint_budget(&nominal);
+            let scale = self.brake(rate, change);
+            let (q, finished) = self.joint_generator.advance(scale * self.period);
+            if finished || scale <= 0.0 {
+                self.finish_stop(&q);
+            }
+            return (Some(q), None);
+        }
+        let Some(Along::Joints(v0)) = self.supervisor.stopping().map(|s| s.along) else {
+            self.finish_stop(&q_cmd);
+            return (Some(q_cmd), None);
+        };
+        let (rate, change) = self.supervisor.joint_budget(&v0);
+        let scale = self.brake(rate, change);
+        let mut q = q_cmd;
+        for (q, v) in q.iter_mut().zip(v0.iter()) {
+            *q += scale * v * self.period;
+        }
+        if scale <= 0.0 {
+            self.finish_stop(&q);
+        }
+        (Some(q), None)
+    }
+
+    /// A stop along a Cartesian path: the motion time advances by the brake's scale of a
+    /// period, within the Cartesian limits at the path's nominal speed and the joints' at the
+    /// speed they were commanded. `None` if the IK cannot follow the path.
+    fn cartesian_path_stop(&mut self, q_cmd: &Joints) -> Option<(Option<Joints>, Option<Frame>)> {
+        let t0 = self.cartesian_generator.elapsed();
+        let before = self.cartesian_generator.setpoint();
+        let (ahead, _) = self.cartesian_generator.sample(t0 + self.period);
+        let nominal = cartesian_velocity(&before, &ahead, self.period);
+        let t = self.period;
+        let mut rate = budget(&nominal, &self.cartesian_acceleration, t);
+        let mut change = self
+            .cartesian_jerk
+            .map_or(f64::INFINITY, |j| budget(&nominal, &j, t * t));
+        // The joints at the speed the scale stands for now.
+        let scale_now = self.supervisor.stopping().map_or(1.0, |s| s.brake.scale());
+        if scale_now > 0.0 {
+            let mut joints = *self.supervisor.velocity();
+            joints.iter_mut().for_each(|v| *v /= scale_now);
+            let (r, c) = self.supervisor.joint_budget(&joints);
+            (rate, change) = (rate.min(r), change.min(c));
+        }
+        let mut brake = self.supervisor.stopping()?.brake;
+        let scale = brake.next(rate, change);
+        let t_next = t0 + scale * self.period;
+        let sample = self.cartesian_generator.sample(t_next);
+        let (setpoint, finished) = sample;
+        let Tracking::Reached(q) = self.track(&setpoint, q_cmd) else {
+            return None;
+        };
+        if let Some(stop) = self.supervisor.stopping_mut() {
+            stop.brake = brake;
+        }
+        self.cartesian_generator.commit(t_next, sample);
+        if finished || scale <= 0.0 {
+            self.supervisor.finish();
+            self.joint_generator.hold(q);
+            self.cartesian_generator.hold(setpoint);
+            self.cartesian_sequence.halt();
+        }
+        Some((Some(q), Some(setpoint)))
+    }
+
+    /// The next scale of the stop in progress (0 if none).
+    fn brake(&mut self, rate: f64, change: f64) -> f64 {
+        self.supervisor
+            .stopping_mut()
+            .map_or(0.0, |stop| stop.brake.next(rate, change))
+    }
+
+    /// The stop has come to rest at `q`: the generators hold there.
+    fn finish_stop(&mut self, q: &Joints) {
+        self.supervisor.finish();
+        self.hold_at(*q);
     }
 
     /// Tracking IK from `seed` to `setpoint`, checked against the reach tolerance and the
@@ -322,35 +522,44 @@ impl Controller {
         if !reached {
             return Tracking::Unreachable;
         }
-        match self.limiter.rate_ratio(&s.q, seed) {
-            ratio if ratio <= 1.0 => {
-                self.fixed_point.note(setpoint, seed, &s.q);
-                Tracking::Reached(s.q)
-            }
-            ratio => Tracking::TooFast(ratio),
+        if self.limiter.rate_ratio(&s.q, seed) > 1.0 {
+            return Tracking::TooFast;
         }
+        let velocity = self.supervisor.velocity();
+        if self.limiter.acceleration_ratio(&s.q, seed, velocity) > 1.0 + 1e-9 {
+            return Tracking::Abrupt(s.q);
+        }
+        self.fixed_point.note(setpoint, seed, &s.q);
+        Tracking::Reached(s.q)
     }
 
-    /// Stops the Cartesian motion (and its sequence) and holds the commanded pose.
-    fn abort_cartesian_motion(&mut self, seed: &Joints, f_m: &Frame, events: &mut Events) -> Frame {
-        self.stalled_ticks = 0;
+    /// Aborts the Cartesian motion (and its sequence): the supervisor brings the arm to rest
+    /// in joint space from the commanded velocity, and the generators then hold there.
+    fn abort_cartesian_motion(&mut self, cause: StopCause, events: &mut Events) {
         events.sequence_aborted |= self.cartesian_sequence.is_running();
         self.cartesian_sequence.halt();
-        let hold = self.chain.forward(seed).unwrap_or(*f_m);
-        self.cartesian_generator.hold(hold);
-        hold
+        let setpoint = self.cartesian_generator.setpoint();
+        self.cartesian_generator.hold(setpoint);
+        self.supervisor
+            .begin(cause, Along::Joints(*self.supervisor.velocity()));
     }
 
     /// Switches the control mode. The newly active generator holds the last command (or the
     /// measured joints when coming from off), so the switch itself never moves the arm.
-    /// Selecting the current mode again stops any motion.
+    /// Selecting the current mode again stops any motion. While the arm moves, the supervisor
+    /// first brings it to rest in joint space (cause [`StopCause::ModeChange`]); the new mode
+    /// holds where it stops (mode off: no command from then on).
     pub fn set_mode(&mut self, mode: Mode) -> Result<(), Refusal> {
         let (q_m, _) = self.measured.ok_or(Refusal::NotReady)?;
+        let moving = self.is_moving() && self.command.is_some();
         self.mode = mode;
         self.stream.halt();
         self.hold(q_m);
-        if mode == Mode::Off {
-            self.command = None;
+        if moving {
+            let velocity = *self.supervisor.velocity();
+            self.supervisor.finish();
+            self.supervisor
+                .begin(StopCause::ModeChange, Along::Joints(velocity));
         }
         Ok(())
     }
@@ -362,16 +571,40 @@ impl Controller {
     pub fn release(&mut self) {
         self.command = None;
         self.stream.halt();
-        self.stop();
-    }
-
-    /// Stops every motion and sequence; the arm holds its commanded position. A velocity
-    /// stream instead ramps to rest within the acceleration limits.
-    pub fn stop(&mut self) {
-        self.stream.ramp_to_rest();
+        self.supervisor.reset();
         if let Some((q_m, _)) = self.measured {
             self.hold(q_m);
         }
+    }
+
+    /// Stops every motion and sequence, for `cause` (`ST`, `OF`, a client's watchdog, …): the
+    /// one way to rest. A moving arm decelerates within every joint's acceleration (and jerk)
+    /// limits — a move or sequence along its path, a stream in joint space — and then holds;
+    /// [`is_moving`](Self::is_moving) stays true until it is at rest. A held arm just stays.
+    pub fn stop(&mut self, cause: StopCause) {
+        if !self.is_moving() || self.command.is_none() {
+            if let Some((q_m, _)) = self.measured {
+                self.hold(q_m);
+            }
+            return;
+        }
+        if self.stream.is_active() {
+            self.stream.halt();
+            self.supervisor
+                .begin(cause, Along::Joints(*self.supervisor.velocity()));
+            if let Some(q) = self.command {
+                self.hold_at(q);
+            }
+            return;
+        }
+        self.joint_sequence.halt();
+        self.cartesian_sequence.halt();
+        self.supervisor.begin(cause, Along::Path);
+    }
+
+    /// The stop or hold cause in force (`SQ` index 2).
+    pub fn stop_cause(&self) -> Option<StopCause> {
+        self.supervisor.cause()
     }
 
     /// Streams a tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in `frame`, valid for
@@ -382,6 +615,7 @@ impl Controller {
             return Err(Refusal::InvalidNumber);
         }
         self.ready_for_stream(Mode::Cartesian)?;
+        self.supervisor.set_cause(None);
         self.stream.command(StreamCommand::Twist(twist, frame));
         Ok(())
     }
@@ -395,6 +629,7 @@ impl Controller {
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
         self.ready_for_stream(Mode::Joint)?;
+        self.supervisor.set_cause(None);
         self.stream.command(StreamCommand::JointRates(rates));
         Ok(())
     }
@@ -413,7 +648,11 @@ impl Controller {
     }
 
     fn hold(&mut self, q_m: Joints) {
-        let q = self.command.unwrap_or(q_m);
+        self.hold_at(self.command.unwrap_or(q_m));
+    }
+
+    /// Every generator holds `q` (the Cartesian one its tool pose); sequences end.
+    fn hold_at(&mut self, q: Joints) {
         self.joint_generator.hold(q);
         if let Ok(pose) = self.chain.forward(&q) {
             self.cartesian_generator.hold(pose);
@@ -432,6 +671,7 @@ impl Controller {
             let (start, seed) = self.cartesian_start();
             reach.line(&start, &goal, &seed)?;
         }
+        self.supervisor.set_cause(None);
         self.cartesian_generator
             .move_to(goal, min_duration.max(0.0))
     }
@@ -459,12 +699,14 @@ impl Controller {
     /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
     pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
+        self.supervisor.set_cause(None);
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
 
     /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
     pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        self.supervisor.set_cause(None);
         self.cartesian_generator.start_shape(shape)
     }
 
@@ -554,6 +796,7 @@ impl Controller {
             }
         }
         let first = self.cartesian_sequence.start()?;
+        self.supervisor.set_cause(None);
         let then = self.cartesian_sequence.towards();
         self.cartesian_generator
             .move_towards(first.point, first.min_duration, then)
@@ -569,6 +812,7 @@ impl Controller {
             return Err(Refusal::Busy);
         }
         let first = self.joint_sequence.start()?;
+        self.supervisor.set_cause(None);
         let then = self.joint_sequence.towards();
         self.joint_generator
             .move_towards(first.point, first.min_duration, then)
@@ -643,6 +887,9 @@ impl Controller {
 
     /// True while a move, shape or sequence of the active mode runs.
     pub fn is_moving(&self) -> bool {
+        if self.supervisor.stopping().is_some() {
+            return true;
+        }
         match self.mode {
             Mode::Off => false,
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => true,
@@ -656,6 +903,7 @@ impl Controller {
     /// What the arm is doing: which kind of motion runs in the active mode.
     pub fn motion(&self) -> Motion {
         match self.mode {
+            _ if self.supervisor.stopping().is_some() => Motion::Stopping,
             Mode::Off => Motion::Holding,
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => Motion::Streaming,
             Mode::Joint if self.joint_sequence.is_running() => Motion::JointSequence,
@@ -718,4 +966,19 @@ fn limit_margin(chain: &Chain, q: &Joints) -> f64 {
 /// Euclidean distance between joint vectors (the joint sequence's reach metric).
 fn joint_distance(a: &Joints, b: &Joints) -> f64 {
     libm::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
+}
+
+/// Joint velocity of the step from `a` to `b` over `dt`.
+fn joint_velocity(a: &Joints, b: &Joints, dt: f64) -> Joints {
+    let mut v = *b;
+    for (v, a) in v.iter_mut().zip(a.iter()) {
+        *v = (*v - a) / dt;
+    }
+    v
+}
+
+/// Cartesian velocity (x, y, z, rx, ry, rz) of the step from `a` to `b` over `dt`.
+fn cartesian_velocity(a: &Frame, b: &Frame, dt: f64) -> [f64; 6] {
+    let d: [f64; 6] = math::diff(a, b).into();
+    d.map(|x| if dt > 0.0 { x / dt } else { 0.0 })
 }

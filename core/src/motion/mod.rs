@@ -7,10 +7,12 @@
 //! * [`Sequence`]: via points (§4.4), stopping at each or blending through it within a
 //!   tolerance (`blend.rs`, beyond the seed: the next leg superposed on the running one).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
-//! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
+//! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4); its supervisor
+//!   (`supervisor.rs`) owns every transition to rest ([`StopCause`]).
 //! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
 
 mod blend;
+mod brake;
 mod cartesian_generator;
 mod controller;
 mod events;
@@ -23,6 +25,7 @@ mod refusal;
 mod sequence;
 mod shape;
 mod straight_line;
+mod supervisor;
 mod trapezoid;
 mod velocity_stream;
 mod workspace;
@@ -38,6 +41,7 @@ pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
 pub use straight_line::StraightLine;
+pub use supervisor::StopCause;
 pub use trapezoid::Trapezoid;
 pub use velocity_stream::{
     MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,

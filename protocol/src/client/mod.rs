@@ -24,7 +24,8 @@
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
 //!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
-//! * [`StatusReport`] and [`RobotName`]: the replies to the status request `SQ`.
+//! * [`StatusReport`], [`RobotName`] and [`CauseReport`]: the replies to the status request
+//!   `SQ` (indices 0, 1, 2).
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
@@ -43,6 +44,7 @@ mod reason;
 mod reply;
 mod request;
 mod status;
+mod stop;
 mod temperature;
 mod text;
 #[cfg(test)]
@@ -60,6 +62,7 @@ pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason}
 pub use reply::Reply;
 pub use request::Request;
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
+pub use stop::{CAUSE_INDEX, CauseReport, StopCause};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};
 pub use velocity::{JointRates, TOOL_FRAME, Twist, TwistFrame, VelocityError};
