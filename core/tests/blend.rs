@@ -59,6 +59,15 @@ fn run_joint_sequence(
     points: &[([f64; 6], f64)],
     blends: &[(usize, f64)],
 ) -> Vec<Joints> {
+    // The joint points are about the blends, not the workspace: their way leaves ranger-mk1's
+    // bounds, which joint moves now refuse up front.
+    let config = &config
+        .clone()
+        .edit(|c| {
+            c.workspace.bounds = [-5.0, 5.0, -5.0, 5.0, -5.0, 5.0];
+            c.workspace.boxes.clear();
+        })
+        .unwrap();
     let mut ctrl = Controller::new(config);
     let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
     let period = config.control_period;

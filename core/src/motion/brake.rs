@@ -29,8 +29,9 @@ impl Brake {
     /// reaches 0 with no deceleration left.
     pub fn next(&mut self, max_rate: f64, max_change: f64) -> f64 {
         let (max_rate, max_change) = (positive(max_rate), positive(max_change));
-        let up = (self.rate + max_change).min(max_rate);
-        let hold = self.rate.min(max_rate);
+        let left = self.scale;
+        let up = (self.rate + max_change).min(max_rate).min(left);
+        let hold = self.rate.min(max_rate).min(left);
         let down = (self.rate - max_change).max(0.0);
         // What the scale still falls while the fall ramps down from `r` to nothing.
         let ramp_down = |r: f64| {
@@ -40,7 +41,6 @@ impl Brake {
                 0.0
             }
         };
-        let left = self.scale;
         let rate = [up, hold]
             .into_iter()
             .find(|r| left - r >= ramp_down(*r))

@@ -4,6 +4,7 @@ use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
+use super::joint_path::check_joint_path;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
@@ -31,9 +32,6 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
     fine: 0.001,
     coarse: 0.05,
 };
-/// Below this fraction of real time a motion counts as stalled rather than slowed down: the
-/// supervisor brings it to rest in joint space and aborts it (`WN22`).
-const MIN_TIME_SCALE: f64 = 0.01;
 
 /// How a Cartesian set-point can be tracked this tick.
 enum Tracking {
@@ -304,29 +302,39 @@ impl Controller {
         let moving = self.cartesian_generator.is_moving();
         let t0 = self.cartesian_generator.elapsed();
         let before = self.cartesian_generator.setpoint();
-        // The time scale may change by as much as the joints' acceleration allows at the speed
-        // they would have at full scale: up first, then the same, then down (by half at most
-        // when the joints are slow: the plan's own acceleration is what is too much then).
-        let s = if moving { self.time_scale } else { 1.0 };
+        // The time scale may change by as much as the joints' and the Cartesian acceleration
+        // limits allow at the speeds of full scale: up first, then the same, then down. A
+        // motion that starts at speed (a shape) starts from scale 0.
+        let (s, cartesian_nominal) = match (moving, t0 > 0.0) {
+            (false, _) => (1.0, [0.0; 6]),
+            (true, true) => (self.time_scale, self.cartesian_nominal),
+            (true, false) => {
+                let (ahead, _) = self.cartesian_generator.sample(self.period);
+                (0.0, cartesian_velocity(&before, &ahead, self.period))
+            }
+        };
         let mut nominal = *self.supervisor.velocity();
         if s > 0.0 {
             nominal.iter_mut().for_each(|v| *v /= s);
         }
         let (joint_delta, _) = self.supervisor.joint_budget(&nominal);
-        let cartesian_nominal = if moving {
-            self.cartesian_nominal
-        } else {
-            [0.0; 6]
-        };
-        let delta = joint_delta.min(budget(
-            &cartesian_nominal,
-            &self.cartesian_acceleration,
-            self.period,
-        ));
+        let c_a = &self.cartesian_acceleration;
+        let delta = joint_delta.min(budget(&cartesian_nominal, c_a, self.period));
+        // A shape that ends at speed: slow down so that the scale is down to about one step's
+        // change when the end comes (the scale s covers s²/2δ + s/2 periods while it falls).
+        let cap = self
+            .cartesian_generator
+            .time_to_abrupt_end()
+            .map_or(1.0, |left| {
+                let n = left / self.period;
+                -0.5 * delta + libm::sqrt(0.25 * delta * delta + 2.0 * delta * n)
+            });
         // The slowest step that only the acceleration clamp keeps from being reached.
         let mut abrupt = None;
-        for scale in [(s + delta).min(1.0), s, (s - delta).max(0.0)] {
-            if scale < MIN_TIME_SCALE {
+        let down = (s - delta).max(0.0);
+        let up = (s + delta).min(1.0).min(cap).max(down);
+        for scale in [up, s.min(cap).max(down), down] {
+            if scale <= 0.0 {
                 break;
             }
             let t = t0 + self.period * scale;
@@ -696,9 +704,13 @@ impl Controller {
         })
     }
 
-    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
+    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only. The
+    /// tool's way is checked first: a move into an exclusion box or out of the workspace is
+    /// refused with where (driving out of a box the tool is in stays possible).
     pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
+        let start = self.joint_generator.setpoint();
+        check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
         self.supervisor.set_cause(None);
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
@@ -810,6 +822,11 @@ impl Controller {
         }
         if self.is_moving() {
             return Err(Refusal::Busy);
+        }
+        let mut from = self.joint_generator.setpoint();
+        for via in self.joint_sequence.ready() {
+            check_joint_path(&self.chain, &self.workspace, &from, &via.point)?;
+            from = via.point;
         }
         let first = self.joint_sequence.start()?;
         self.supervisor.set_cause(None);

@@ -19,6 +19,7 @@ mod events;
 mod fixed_point;
 mod joint_generator;
 mod joint_limiter;
+mod joint_path;
 mod profile;
 mod reach;
 mod refusal;
