@@ -171,6 +171,14 @@ impl Controller {
         let running = match self.mode {
             _ if self.supervisor.stopping().is_some() => None,
             Mode::Off => Some((None, None)),
+            Mode::Joint | Mode::Cartesian if self.stream.expires() => {
+                // A silent client: the supervisor brings the arm to rest.
+                self.stream.halt();
+                let velocity = *self.supervisor.velocity();
+                self.supervisor
+                    .begin(StopCause::StreamTimeout, Along::Joints(velocity));
+                None
+            }
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
                 let step = self.stream_tick(&q_m, &mut events);
                 stream_finished = step.finished;
@@ -448,9 +456,12 @@ impl Controller {
         };
         let (rate, change) = self.supervisor.joint_budget(&v0);
         let scale = self.brake(rate, change);
+        let mut v = v0;
+        v.iter_mut().for_each(|v| *v *= scale);
+        self.supervisor.keep_within_range(&q_cmd, &mut v);
         let mut q = q_cmd;
-        for (q, v) in q.iter_mut().zip(v0.iter()) {
-            *q += scale * v * self.period;
+        for (q, v) in q.iter_mut().zip(v.iter()) {
+            *q += v * self.period;
         }
         if scale <= 0.0 {
             self.finish_stop(&q);

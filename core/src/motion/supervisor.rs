@@ -44,6 +44,9 @@ pub struct Supervisor {
     velocity: Joints,
     a_max: Joints,
     j_max: Option<Joints>,
+    /// Joint ranges.
+    min: Joints,
+    max: Joints,
     period: f64,
     stopping: Option<Stopping>,
     /// The cause in force: the last stop's, until the next motion starts.
@@ -57,6 +60,8 @@ impl Supervisor {
             velocity: Joints::zeros(config.dof()),
             a_max: config.per_joint(|j| j.max_acceleration),
             j_max: config.joint_jerk_limits(),
+            min: config.per_joint(|j| j.min),
+            max: config.per_joint(|j| j.max),
             period: config.control_period,
             stopping: None,
             cause: None,
@@ -136,6 +141,23 @@ impl Supervisor {
     /// The last commanded joint velocity.
     pub fn velocity(&self) -> &Joints {
         &self.velocity
+    }
+
+    /// Eases a joint-space stop's next velocity `v` (from the command `q`) where a joint
+    /// decelerating by the common fraction would not stop before its limit: that joint brakes
+    /// at its own acceleration limit instead, so the range clamp never has to stop it dead.
+    /// The direction of motion gives way; in joint space there is no path to keep.
+    pub fn keep_within_range(&self, q: &Joints, v: &mut Joints) {
+        let t = self.period;
+        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        let state = q.iter().zip(self.velocity.iter());
+        for ((v, (q, last)), ((lo, hi), a)) in v.iter_mut().zip(state).zip(limits) {
+            let left = if *v > 0.0 { hi - q } else { q - lo } - libm::fabs(*v) * t;
+            if *v * *v > 2.0 * a * left.max(0.0) {
+                let slower = (libm::fabs(*last) - a * t).max(0.0);
+                *v = libm::copysign(slower.min(libm::fabs(*v)), *v);
+            }
+        }
     }
 
     /// The brake's budgets for a joint velocity `nominal` at scale 1: the largest fall of the

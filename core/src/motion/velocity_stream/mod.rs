@@ -144,6 +144,11 @@ impl VelocityStream {
         self.velocity.iter_mut().for_each(|v| *v = 0.0);
     }
 
+    /// True if the command is too old to hold on the next step: the client has gone quiet.
+    pub fn expires(&self) -> bool {
+        self.command.is_some() && self.age >= TIMEOUT_PERIODS
+    }
+
     /// True while a command holds or the arm has not yet ramped to rest.
     pub fn is_active(&self) -> bool {
         self.command.is_some() || self.velocity.iter().any(|v| *v != 0.0)
