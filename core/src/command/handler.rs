@@ -345,11 +345,10 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
-                CAUSE_INDEX => Ok(CauseReport {
-                    cause: self.controller.stop_cause(),
-                    joint: None,
+                CAUSE_INDEX => {
+                    let (cause, joint) = self.controller.stop_cause();
+                    Ok(CauseReport { cause, joint }.to_reply())
                 }
-                .to_reply()),
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {

@@ -1,6 +1,6 @@
 //! Unsolicited warnings to the client (spec §2.6), with a rate limit that cannot skip.
 
-use armgate_protocol::client::{Notice, Text};
+use armgate_protocol::client::{Hold, Notice, Text};
 use heapless::Deque;
 
 use crate::motion::Events;
@@ -19,6 +19,8 @@ pub struct NoticeRelay {
     channels: [Channel; 4],
     fault_reported: bool,
     drive_notice_reported: bool,
+    /// The stream's hold last told (a new cause is told once, when it begins).
+    hold: Option<Hold>,
     outbox: Deque<Text, NOTICE_CAPACITY>,
     dropped: u32,
 }
@@ -46,6 +48,7 @@ impl Default for NoticeRelay {
             ],
             fault_reported: false,
             drive_notice_reported: false,
+            hold: None,
             outbox: Deque::new(),
             dropped: 0,
         }
@@ -69,6 +72,14 @@ impl NoticeRelay {
                 }
             }
             channel.active = raised;
+        }
+        if events.hold != self.hold {
+            self.hold = events.hold;
+            if let Some(hold) = events.hold
+                && self.outbox.push_back(Notice::Held(hold).text()).is_err()
+            {
+                self.dropped = self.dropped.saturating_add(1);
+            }
         }
     }
 

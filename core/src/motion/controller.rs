@@ -15,7 +15,7 @@ use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::{self, Frame, Twist};
-use armgate_protocol::client::{Motion, TwistFrame};
+use armgate_protocol::client::{Hold, JointBound, Motion, PathPoint, TwistFrame};
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -233,7 +233,21 @@ impl Controller {
         let q = self.command.unwrap_or(*q_m);
         let step = self.stream.step(&self.chain, &self.workspace, &q);
         events.workspace_limit |= step.workspace_limit;
-        events.joint_limit |= step.joint_limit;
+        events.hold = match step.held_joint {
+            Some((i, upper)) => {
+                let limits = if upper {
+                    self.chain.max()
+                } else {
+                    self.chain.min()
+                };
+                let limit = limits.get(i).copied().unwrap_or(0.0);
+                let bound = JointBound::new(i, upper, limit, PathPoint::Goal);
+                Some(Hold::JointLimit(bound))
+            }
+            None if step.workspace_limit => Some(Hold::Workspace),
+            None => None,
+        };
+        self.supervisor.hold(events.hold);
         step
     }
 
@@ -621,9 +635,9 @@ impl Controller {
         self.supervisor.begin(cause, Along::Path);
     }
 
-    /// The stop or hold cause in force (`SQ` index 2).
-    pub fn stop_cause(&self) -> Option<StopCause> {
-        self.supervisor.cause()
+    /// The stop or hold cause in force (`SQ` index 2), and the joint of a joint-limit hold.
+    pub fn stop_cause(&self) -> (Option<StopCause>, Option<u8>) {
+        (self.supervisor.cause(), self.supervisor.held_joint())
     }
 
     /// Streams a tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in `frame`, valid for
@@ -634,7 +648,7 @@ impl Controller {
             return Err(Refusal::InvalidNumber);
         }
         self.ready_for_stream(Mode::Cartesian)?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         self.stream.command(StreamCommand::Twist(twist, frame));
         Ok(())
     }
@@ -648,7 +662,7 @@ impl Controller {
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
         self.ready_for_stream(Mode::Joint)?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         self.stream.command(StreamCommand::JointRates(rates));
         Ok(())
     }
@@ -690,7 +704,7 @@ impl Controller {
             let (start, seed) = self.cartesian_start();
             reach.line(&start, &goal, &seed)?;
         }
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         self.cartesian_generator
             .move_to(goal, min_duration.max(0.0))
     }
@@ -722,14 +736,14 @@ impl Controller {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
         let start = self.joint_generator.setpoint();
         check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
 
     /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
     pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         self.cartesian_generator.start_shape(shape)
     }
 
@@ -819,7 +833,7 @@ impl Controller {
             }
         }
         let first = self.cartesian_sequence.start()?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         let then = self.cartesian_sequence.towards();
         self.cartesian_generator
             .move_towards(first.point, first.min_duration, then)
@@ -840,7 +854,7 @@ impl Controller {
             from = via.point;
         }
         let first = self.joint_sequence.start()?;
-        self.supervisor.set_cause(None);
+        self.supervisor.clear_cause();
         let then = self.joint_sequence.towards();
         self.joint_generator
             .move_towards(first.point, first.min_duration, then)

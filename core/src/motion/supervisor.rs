@@ -15,6 +15,7 @@
 use super::brake::Brake;
 use crate::config::ValidRobot;
 use crate::kinematics::Joints;
+use armgate_protocol::client::Hold;
 pub use armgate_protocol::client::StopCause;
 
 /// How a stop in progress brings the arm to rest.
@@ -51,6 +52,10 @@ pub struct Supervisor {
     stopping: Option<Stopping>,
     /// The cause in force: the last stop's, until the next motion starts.
     cause: Option<StopCause>,
+    /// The joint (0-based) a stream holds at its limit.
+    held_joint: Option<u8>,
+    /// The cause in force is a stream's hold: it ends with the hold.
+    holding: bool,
 }
 
 impl Supervisor {
@@ -65,6 +70,8 @@ impl Supervisor {
             period: config.control_period,
             stopping: None,
             cause: None,
+            held_joint: None,
+            holding: false,
         }
     }
 
@@ -79,6 +86,8 @@ impl Supervisor {
             });
         }
         self.cause = Some(self.stopping.map_or(cause, |s| s.cause));
+        self.held_joint = None;
+        self.holding = false;
     }
 
     /// A stop along the path that cannot follow it any more goes on in joint space, from the
@@ -106,16 +115,37 @@ impl Supervisor {
         self.stopping = None;
     }
 
-    /// Records a cause without a stop (a stream's hold), or clears it (`None`: a new motion).
-    pub fn set_cause(&mut self, cause: Option<StopCause>) {
+    /// Clears the cause in force: a new motion starts.
+    pub fn clear_cause(&mut self) {
         if self.stopping.is_none() {
-            self.cause = cause;
+            self.cause = None;
+            self.held_joint = None;
         }
+    }
+
+    /// Takes note of a stream's hold this tick (or none): the cause in force while it lasts.
+    pub fn hold(&mut self, hold: Option<Hold>) {
+        if self.stopping.is_some() || (hold.is_none() && !self.holding) {
+            return;
+        }
+        (self.cause, self.held_joint) = match hold {
+            Some(Hold::JointLimit(bound)) => {
+                (Some(StopCause::JointLimit), bound.joint.checked_sub(1))
+            }
+            Some(Hold::Workspace) => (Some(StopCause::Workspace), None),
+            None => (None, None),
+        };
+        self.holding = hold.is_some();
     }
 
     /// The cause in force.
     pub fn cause(&self) -> Option<StopCause> {
         self.cause
+    }
+
+    /// The joint (0-based) a stream holds at its limit.
+    pub fn held_joint(&self) -> Option<u8> {
+        self.held_joint
     }
 
     /// Forgets the velocity and any stop: nothing is commanded (mode off, drives not taking

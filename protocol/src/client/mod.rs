@@ -58,7 +58,7 @@ pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;
 pub use orientation::{Quaternion, rpy};
-pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
+pub use reason::{DriveStatus, Hold, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};

@@ -2,7 +2,11 @@
 
 use core::fmt::{self, Write as _};
 
-use super::{Command, DriveStatus, Error, JointBound, Rejection, Severity, Text, WorkspaceReason};
+use super::reason::Milli;
+
+use super::{
+    Command, DriveStatus, Error, Hold, JointBound, Rejection, Severity, Text, WorkspaceReason,
+};
 
 /// A fixed error or warning. Add a variant (with its [`code`](Self::code), severity and body) for
 /// every new text, so that the codes stay in one place.
@@ -38,13 +42,17 @@ pub enum Notice {
     BeyondJointLimit(Command, JointBound),
     /// `WN27 Via point missed.`: a sequence stopped because a via point was not reached.
     ViaPointMissed,
+    /// `WN12 jN at limit L` / `WN13 Held at workspace edge.`: a stream holds the arm there.
+    Held(Hold),
 }
 
 impl Notice {
     /// Error or warning.
     pub const fn severity(self) -> Severity {
         match self {
-            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed => Severity::Warning,
+            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed | Self::Held(_) => {
+                Severity::Warning
+            }
             _ => Severity::Error,
         }
     }
@@ -65,6 +73,8 @@ impl Notice {
             Self::OutsideWorkspace(..) => 25,
             Self::BeyondJointLimit(..) => 26,
             Self::ViaPointMissed => 27,
+            Self::Held(Hold::JointLimit(_)) => 12,
+            Self::Held(Hold::Workspace) => 13,
         }
     }
 
@@ -118,6 +128,10 @@ impl fmt::Display for Body {
             Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
             Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
             Notice::ViaPointMissed => f.write_str("Via point missed."),
+            Notice::Held(Hold::JointLimit(bound)) => {
+                write!(f, "j{} at limit {}", bound.joint, Milli(bound.limit_milli))
+            }
+            Notice::Held(Hold::Workspace) => f.write_str("Held at workspace edge."),
         }
     }
 }
@@ -249,6 +263,28 @@ mod tests {
                 "ER26 Cmd BG j3 > 1.600 at 12%",
             ),
             (Notice::ViaPointMissed, "WN27 Via point missed."),
+            (
+                Notice::Held(Hold::JointLimit(JointBound::new(
+                    5,
+                    true,
+                    3.142,
+                    PathPoint::Goal,
+                ))),
+                "WN12 j6 at limit 3.142",
+            ),
+            (
+                Notice::Held(Hold::JointLimit(JointBound::new(
+                    4,
+                    false,
+                    -1.745,
+                    PathPoint::Goal,
+                ))),
+                "WN12 j5 at limit -1.745",
+            ),
+            (
+                Notice::Held(Hold::Workspace),
+                "WN13 Held at workspace edge.",
+            ),
         ];
         for (notice, expected) in cases {
             assert!(expected.len() <= super::super::TEXT_CAPACITY, "{expected}");
