@@ -679,7 +679,8 @@ fn rate_limited_arm_follows_a_stream_without_restarting_from_rest() {
 fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     // `armgate move 0.5 0.2 0.1 0 0 0 --time 5` from ranger-mk1's home: the straight line
     // needs joint 3 beyond its 1.600 maximum 3 % of the way (the seed's arm stopped there
-    // after 3.9 s with WN22).
+    // after 3.9 s with WN22), and already there joint 1 would have to turn faster than its
+    // rate limit (the line passes near the base axis), which the check finds first.
     let config = common::robot("ranger-mk1");
     let goal = at(
         Rotation3::from_euler_angles(0.0, 0.0, 0.0),
@@ -687,9 +688,14 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     );
     let mut rig = Rig::new(&config, &MK1_HOME);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
-    let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
     assert_eq!(
         rig.ctrl.move_cartesian(goal, 5.0),
+        Err(Refusal::TooFast(1, PathPoint::Along(3)))
+    );
+    // Given the time, joint 1 keeps up, and joint 3's limit is what refuses it.
+    let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
+    assert_eq!(
+        rig.ctrl.move_cartesian(goal, 500.0),
         Err(Refusal::OutsideJointLimits(j3_max))
     );
     assert!(!rig.ctrl.is_moving());
@@ -796,9 +802,13 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
         let mut rig = Rig::new(&config, &q);
         rig.ctrl.set_mode(Mode::Cartesian).unwrap();
         let verdict = rig.ctrl.move_cartesian(goal, 0.0);
+        // Lines refused for the joints' rates would be followed (slowed down) by the tick.
         if matches!(
             verdict,
-            Err(Refusal::OutsideWorkspace | Refusal::ArmOutsideWorkspace | Refusal::CrossesBox(_))
+            Err(Refusal::OutsideWorkspace
+                | Refusal::ArmOutsideWorkspace
+                | Refusal::CrossesBox(_)
+                | Refusal::TooFast(..))
         ) {
             continue;
         }
@@ -820,4 +830,65 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
 /// The frame with this rotation and position.
 fn at(rotation: Rotation3<f64>, position: Vector3<f64>) -> Frame {
     Frame::from_parts(position.into(), rotation)
+}
+
+#[test]
+#[allow(clippy::needless_range_loop)]
+fn the_half_turn_line_is_refused_or_followed_without_a_jump() {
+    // The issue's case: after the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0`, the line to
+    // (0.1, 0.6, 0.9) with roll-pitch-yaw (0, 1.57, 0) swung joint 1 half a turn and aborted
+    // with WN22. Now it is refused up front with the joint and where, or followed with every
+    // step within the joints' rates and accelerations.
+    // The shipped limits, the Cartesian limits armgate-sim's end-to-end tests use (where the
+    // issue saw it), and joints fast enough to follow the swing near the base axis.
+    let e2e = common::robot("ranger-mk1")
+        .edit(|c| {
+            c.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            c.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+        })
+        .unwrap();
+    for (config, refused) in [
+        (common::robot("ranger-mk1"), true),
+        (e2e, true),
+        (mk1_fast(), false),
+    ] {
+        let start = [1.5708, 0.4, 1.2, 0.0, 1.2, 0.0];
+        let goal = at(
+            Rotation3::from_euler_angles(0.0, 1.57, 0.0),
+            Vector3::new(0.1, 0.6, 0.9),
+        );
+        let mut rig = Rig::new(&config, &start);
+        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+        let verdict = rig.ctrl.move_cartesian(goal, 0.0);
+        assert_eq!(verdict.is_err(), refused, "{verdict:?}");
+        match verdict {
+            Err(Refusal::TooFast(joint, PathPoint::Along(percent))) => {
+                println!("refused: joint {joint} too fast at {percent}%");
+            }
+            Err(other) => panic!("{other}"),
+            Ok(_) => {
+                // Followed within every joint's rate and acceleration (joint 1 turns fast near
+                // its axis: within its 2 rad/s here), or, where the tick's tracking gives up,
+                // brought to rest in a controlled stop with WN22: never a jump.
+                let outs = rig.settle(100_000);
+                let q: Vec<Joints> = outs.iter().filter_map(|o| o.command).collect();
+                let dt = config.control_period;
+                for w in q.windows(3) {
+                    for j in 0..6 {
+                        let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (dt * dt);
+                        let limit = config.joints[j].max_acceleration;
+                        assert!(a.abs() <= limit * (1.0 + 1e-9), "joint {j}: {a}");
+                        let v = (w[2][j] - w[1][j]) / dt;
+                        assert!(v.abs() <= config.joints[j].max_rate * (1.0 + 1e-9));
+                    }
+                }
+                let swing = q
+                    .iter()
+                    .map(|c| (c[0] - start[0]).abs())
+                    .fold(0.0, f64::max);
+                let diverged = outs.iter().any(|o| o.events.ik_divergence);
+                println!("followed: joint 1 within {swing:.3} rad of its start, WN22 {diverged}");
+            }
+        }
+    }
 }

@@ -456,6 +456,7 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
         Refusal::CrossesBox(percent) => workspace(WorkspaceReason::CrossesBox(percent)),
         Refusal::Unreachable(at) => workspace(WorkspaceReason::Unreachable(at)),
         Refusal::ArmOutsideWorkspace => workspace(WorkspaceReason::ArmOutside),
+        Refusal::TooFast(joint, at) => workspace(WorkspaceReason::TooFast(joint, at)),
         Refusal::OutsideJointLimits(bound) => Notice::BeyondJointLimit(cmd, bound),
         Refusal::NoGoal => rejected(match cmd {
             Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,

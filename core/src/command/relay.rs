@@ -189,4 +189,33 @@ mod tests {
         assert_eq!(relay.dropped(), 4);
         assert_eq!(drain(&mut relay).len(), 8);
     }
+
+    #[test]
+    fn a_hold_is_told_once_per_cause() {
+        use armgate_protocol::client::{JointBound, PathPoint};
+        let mut relay = NoticeRelay::default();
+        let at_limit = Hold::JointLimit(JointBound::new(5, true, 2.967, PathPoint::Goal));
+        let mut texts = Vec::new();
+        for (k, hold) in [
+            None,
+            Some(at_limit),
+            Some(at_limit),
+            Some(Hold::Workspace),
+            None,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let events = Events {
+                hold,
+                ..Events::default()
+            };
+            relay.observe(k as f64, &events);
+            texts.extend(drain(&mut relay));
+        }
+        assert_eq!(
+            texts,
+            ["WN12 j6 at limit 2.967", "WN13 Held at workspace edge."]
+        );
+    }
 }

@@ -378,6 +378,11 @@ impl CartesianGenerator {
         }
     }
 
+    /// True while a shape runs (its path was not checked before it started).
+    pub fn runs_shape(&self) -> bool {
+        matches!(self.motion, Some(Motion::Shape { .. }))
+    }
+
     /// Motion time reached so far (s); 0 when idle.
     pub fn elapsed(&self) -> f64 {
         self.motion.as_ref().map_or(0.0, Motion::elapsed)

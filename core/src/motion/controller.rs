@@ -106,6 +106,9 @@ pub struct Controller {
     /// Cartesian limits (x, y, z, rx, ry, rz): acceleration, and jerk if set.
     cartesian_acceleration: [f64; 6],
     cartesian_jerk: Option<[f64; 6]>,
+    /// Cartesian speed limits, and the joints' rate limits (for the line check).
+    cartesian_speed: [f64; 6],
+    max_rate: Joints,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
 }
@@ -144,6 +147,8 @@ impl Controller {
             cartesian_nominal: [0.0; 6],
             cartesian_acceleration: cartesian.max_acceleration,
             cartesian_jerk: cartesian_j_max,
+            cartesian_speed: cartesian.max_velocity,
+            max_rate: config.per_joint(|j| j.max_rate),
             fixed_point: FixedPoint::default(),
         }
     }
@@ -169,7 +174,7 @@ impl Controller {
         };
         let mut stream_finished = false;
         let running = match self.mode {
-            _ if self.supervisor.stopping().is_some() => None,
+            _ if self.supervisor.is_stopping() => None,
             Mode::Off => Some((None, None)),
             Mode::Joint | Mode::Cartesian if self.stream.expires() => {
                 // A silent client: the supervisor brings the arm to rest.
@@ -384,7 +389,8 @@ impl Controller {
                         cartesian_velocity(&before, &setpoint, self.period * scale);
                     self.cartesian_generator.commit(t, sample);
                     events.motion_finished |= finished && !self.cartesian_sequence.is_running();
-                    if moving && !finished && self.boundary_ahead(&before, &setpoint, t, scale) {
+                    let unchecked = !self.ik.check_lines || self.cartesian_generator.runs_shape();
+                    if moving && !finished && unchecked && self.boundary_ahead(&setpoint, t) {
                         events.workspace_limit = true;
                         self.supervisor.begin(StopCause::Workspace, Along::Path);
                         self.cartesian_sequence.halt();
@@ -407,14 +413,15 @@ impl Controller {
         None
     }
 
-    /// True if the Cartesian motion, at `setpoint` (motion time `t`, one tick after `before`
-    /// at a time scale `scale`), would leave the workspace or enter an exclusion box within
-    /// its stopping distance along the path: the point where a stop along the path beginning
-    /// next tick would end (half the stopping time at the present speed, plus two ticks, of
-    /// motion time) and the straight way there.
-    fn boundary_ahead(&self, before: &Frame, setpoint: &Frame, t: f64, scale: f64) -> bool {
-        let nominal = cartesian_velocity(before, setpoint, self.period * scale);
-        let stop_time = nominal
+    /// True if the Cartesian motion, at `setpoint` (motion time `t`), would leave the
+    /// workspace or enter an exclusion box within its stopping distance along the path: the
+    /// point where a stop along the path beginning next tick would end (half the stopping time
+    /// at the present full-scale speed, plus the jerk ramp and two ticks, of motion time) and
+    /// the straight way there. Only for what was not checked before it started (shapes, and
+    /// lines when the robot file turns the check off).
+    fn boundary_ahead(&self, setpoint: &Frame, t: f64) -> bool {
+        let stop_time = self
+            .cartesian_nominal
             .iter()
             .zip(self.cartesian_acceleration.iter())
             .map(|(v, a)| libm::fabs(*v) / a)
@@ -440,7 +447,7 @@ impl Controller {
         q_m: &Joints,
         events: &mut Events,
     ) -> (Option<Joints>, Option<Frame>) {
-        let Some(stop) = self.supervisor.stopping() else {
+        let Some(stop) = self.supervisor.stopping().copied() else {
             return (None, None);
         };
         let q_cmd = self.command.unwrap_or(*q_m);
@@ -557,6 +564,9 @@ impl Controller {
         }
         if self.limiter.rate_ratio(&s.q, seed) > 1.0 {
             return Tracking::TooFast;
+        }
+        if !self.supervisor.can_stop_within_range(seed, &s.q) {
+            return Tracking::Unreachable;
         }
         let velocity = self.supervisor.velocity();
         if self.limiter.acceleration_ratio(&s.q, seed, velocity) > 1.0 + 1e-9 {
@@ -702,7 +712,7 @@ impl Controller {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
         if let Some(mut reach) = self.reach() {
             let (start, seed) = self.cartesian_start();
-            reach.line(&start, &goal, &seed)?;
+            reach.line(&start, &goal, &seed, min_duration)?;
         }
         self.supervisor.clear_cause();
         self.cartesian_generator
@@ -726,6 +736,8 @@ impl Controller {
             workspace: &self.workspace,
             tolerance: REACH_TOLERANCE,
             iterations_left: check_iterations(self.period),
+            speed: &self.cartesian_speed,
+            max_rate: &self.max_rate,
         })
     }
 
@@ -828,7 +840,7 @@ impl Controller {
         if let Some(mut reach) = self.reach() {
             let (mut from, mut q) = self.cartesian_start();
             for via in self.cartesian_sequence.ready() {
-                q = reach.line(&from, &via.point, &q)?;
+                q = reach.line(&from, &via.point, &q, via.min_duration)?;
                 from = via.point;
             }
         }
@@ -929,7 +941,7 @@ impl Controller {
 
     /// True while a move, shape or sequence of the active mode runs.
     pub fn is_moving(&self) -> bool {
-        if self.supervisor.stopping().is_some() {
+        if self.supervisor.is_stopping() {
             return true;
         }
         match self.mode {
@@ -945,7 +957,7 @@ impl Controller {
     /// What the arm is doing: which kind of motion runs in the active mode.
     pub fn motion(&self) -> Motion {
         match self.mode {
-            _ if self.supervisor.stopping().is_some() => Motion::Stopping,
+            _ if self.supervisor.is_stopping() => Motion::Stopping,
             Mode::Off => Motion::Holding,
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => Motion::Streaming,
             Mode::Joint if self.joint_sequence.is_running() => Motion::JointSequence,

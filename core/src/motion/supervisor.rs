@@ -85,7 +85,7 @@ impl Supervisor {
                 brake: Brake::default(),
             });
         }
-        self.cause = Some(self.stopping.map_or(cause, |s| s.cause));
+        self.cause = Some(self.stopping.as_ref().map_or(cause, |s| s.cause));
         self.held_joint = None;
         self.holding = false;
     }
@@ -101,8 +101,13 @@ impl Supervisor {
     }
 
     /// The stop in progress, if any.
-    pub fn stopping(&self) -> Option<Stopping> {
-        self.stopping
+    pub fn stopping(&self) -> Option<&Stopping> {
+        self.stopping.as_ref()
+    }
+
+    /// True while a stop is in progress.
+    pub fn is_stopping(&self) -> bool {
+        self.stopping.is_some()
     }
 
     /// The stop in progress, to advance its brake.
@@ -188,6 +193,22 @@ impl Supervisor {
                 *v = libm::copysign(slower.min(libm::fabs(*v)), *v);
             }
         }
+    }
+
+    /// True if every joint, stepping from `q` to `next` this tick, can still stop before its
+    /// range at its acceleration limit: a set-point that could not would end on the range
+    /// clamp, a dead stop.
+    pub fn can_stop_within_range(&self, q: &Joints, next: &Joints) -> bool {
+        let t = self.period;
+        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        q.iter()
+            .zip(next.iter())
+            .zip(limits)
+            .all(|((q, n), ((lo, hi), a))| {
+                let v = (n - q) / t;
+                let left = if v > 0.0 { hi - n } else { n - lo };
+                v * v <= 2.0 * a * left.max(0.0) + 1e-12
+            })
     }
 
     /// The brake's budgets for a joint velocity `nominal` at scale 1: the largest fall of the

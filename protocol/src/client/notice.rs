@@ -267,10 +267,10 @@ mod tests {
                 Notice::Held(Hold::JointLimit(JointBound::new(
                     5,
                     true,
-                    3.142,
+                    2.967,
                     PathPoint::Goal,
                 ))),
-                "WN12 j6 at limit 3.142",
+                "WN12 j6 at limit 2.967",
             ),
             (
                 Notice::Held(Hold::JointLimit(JointBound::new(

@@ -139,6 +139,9 @@ pub enum WorkspaceReason {
     Unreachable(PathPoint),
     /// `arm outside`: the arm itself is outside the workspace (drive it back in joint mode).
     ArmOutside,
+    /// `jN too fast at NN%`: joint N would need more than its rate limit there at the
+    /// planned speed (the IK solution jumps to another branch, or a singularity).
+    TooFast(u8, PathPoint),
 }
 
 impl fmt::Display for WorkspaceReason {
@@ -148,6 +151,7 @@ impl fmt::Display for WorkspaceReason {
             Self::CrossesBox(percent) => write!(f, "crosses box at {percent}%"),
             Self::Unreachable(at) => write!(f, "unreachable{}", At(at)),
             Self::ArmOutside => f.write_str("arm outside"),
+            Self::TooFast(joint, at) => write!(f, "j{joint} too fast{}", At(at)),
         }
     }
 }
