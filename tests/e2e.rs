@@ -1505,3 +1505,23 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
     assert_eq!(stop_cause(&sim)[0], 3.0);
     wait_drives(&sim, 0.0);
 }
+
+#[test]
+fn a_jog_into_a_joint_limit_is_announced() {
+    // Joint 6 at 3.09 rad, 52 mrad short of its 3.142 limit (inside the 2 % margin's reach).
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,3.09"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    let (result, out) = armgate(
+        &sim,
+        &[
+            "jog", "--rates", "0", "0", "0", "0", "0", "0.1", "--for", "1",
+        ],
+    );
+    result.unwrap();
+    assert!(out.contains("notice: WN12 j6 at limit 3.142"), "{out}");
+}

@@ -45,7 +45,7 @@ from .errors import (
     WorkspaceLimit,
 )
 from .pose import Pose
-from .status import DriveState, Mode, Motion, Status
+from .status import DriveState, Mode, Motion, Status, StopCause
 
 __all__ = [
     "DEFAULT_PORT",
@@ -77,6 +77,7 @@ __all__ = [
     "ReplyTimeout",
     "Stalled",
     "Status",
+    "StopCause",
     "Undersized",
     "ViaPointMissed",
     "WaitFailed",
