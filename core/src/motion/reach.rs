@@ -69,7 +69,18 @@ pub(super) struct Reach<'a> {
     pub speed: &'a [f64; 6],
     /// The joints' rate limits.
     pub max_rate: &'a Joints,
+    /// How much slower than its cruise speed a line may be planned so that the joints keep
+    /// within their rates (1: not at all, the line is refused instead).
+    pub max_slowdown: f64,
+    /// The longest a checked line must last so that the joints keep within their rates (s;
+    /// 0 if its cruise speed is fine).
+    pub needed_duration: f64,
 }
+
+/// How much slower than cruise a single move (`BG`) may be planned to keep the joints within
+/// their rates; a line that needs more (a joint swinging far for a short way of the tool, as
+/// near a joint's axis) is refused.
+pub const MAX_SLOWDOWN: f64 = 10.0;
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
@@ -78,9 +89,10 @@ impl Reach<'_> {
     /// so far are returned.)
     ///
     /// Between two samples no joint may need more than its rate limit at the line's cruise
-    /// speed: a line on which the IK solution jumps to another branch (the base swinging half
-    /// a turn for a few centimetres of the tool) needs far more, and is refused with the joint
-    /// and where, rather than started and aborted halfway.
+    /// speed slowed down by at most `max_slowdown` (`needed_duration` is how long the line
+    /// must then last): a line on which the IK solution jumps to another branch (the base
+    /// swinging half a turn for a few centimetres of the tool) needs far more, and is refused
+    /// with the joint and where, rather than started and aborted halfway.
     pub fn line(
         &mut self,
         start: &Frame,
@@ -122,7 +134,11 @@ impl Reach<'_> {
             let next = (done + step).min(1.0);
             match self.solve(&point(next), &q, PathPoint::at(next)) {
                 Ok(solved) => {
-                    self.within_rates(&q, &solved, step * duration, PathPoint::at(next))?;
+                    let slowdown =
+                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))?;
+                    if slowdown > 1.0 {
+                        self.needed_duration = self.needed_duration.max(slowdown * duration);
+                    }
                     (done, q) = (next, solved);
                     step = (step * 2.0).min(full_step);
                 }
@@ -133,27 +149,31 @@ impl Reach<'_> {
         Ok(q)
     }
 
-    /// Refuses a step from `q` to `next` that takes `time` (s) at cruise if a joint would need
-    /// more than its rate limit.
+    /// How much slower than `time` (s, at cruise) the step from `q` to `next` must be for
+    /// every joint to keep within its rate; refused beyond `max_slowdown`, with the joint.
     fn within_rates(
         &self,
         q: &Joints,
         next: &Joints,
         time: f64,
         at: PathPoint,
-    ) -> Result<(), Refusal> {
-        let too_fast = q
+    ) -> Result<f64, Refusal> {
+        let mut slowdown = 0.0f64;
+        for (joint, ((a, b), rate)) in q
             .iter()
             .zip(next.iter())
             .zip(self.max_rate.iter())
-            .position(|((a, b), rate)| libm::fabs(b - a) > rate * time);
-        match too_fast {
-            Some(joint) => Err(Refusal::TooFast(
-                u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX),
-                at,
-            )),
-            None => Ok(()),
+            .enumerate()
+        {
+            let ratio = libm::fabs(b - a) / (rate * time);
+            // A NaN ratio is refused too.
+            if ratio.is_nan() || ratio > self.max_slowdown {
+                let joint = u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
+                return Err(Refusal::TooFast(joint, at));
+            }
+            slowdown = slowdown.max(ratio);
         }
+        Ok(slowdown)
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
