@@ -87,7 +87,10 @@ impl Sim {
             .replace(
                 "max_acceleration = [0.01, 0.01, 0.01, 0.05, 0.05, 0.05]",
                 "max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5]",
-            );
+            )
+            // Joints that can follow those Cartesian accelerations: every command is held to
+            // the joints' acceleration limits, and ranger-mk1's 0.5 rad/s² cannot.
+            .replace("max_acceleration = 0.5\n", "max_acceleration = 4.0\n");
         let file = dir.join("robot.toml");
         std::fs::write(&file, edit(fast)).unwrap();
         let mut child = match firmware() {
@@ -1012,7 +1015,7 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     name[..12].copy_from_slice(b"QSranger-mk1");
     name[30] = 1;
     assert_eq!(buf[..31], name);
-    assert_eq!(sim.text("SQ", [0.0; 7], 2), "ER24 Cmd SQ bad index");
+    assert_eq!(sim.text("SQ", [0.0; 7], 9), "ER24 Cmd SQ bad index");
 
     // jP/TM bank 2 on a six-joint arm (docs/protocol.md).
     assert_eq!(sim.text("jP", [0.0; 7], 0x80), "ER24 Cmd jP bad index");
@@ -1408,7 +1411,7 @@ fn st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits() {
     goal[2] -= 0.3;
     sim.ok("jG", with_joints(&goal, 0.0), 0);
     sim.start_motion("jB");
-    // At cruise (0.07 rad/s on joint 1 after 0.14 s), then ST: the arm decelerates.
+    // At cruise (0.07 rad/s on joint 1 after 18 ms), then ST: the arm decelerates.
     std::thread::sleep(Duration::from_millis(800));
     sim.null("ST");
     assert!(
@@ -1447,12 +1450,13 @@ fn st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits() {
     for w in commands.windows(3) {
         for j in 0..6 {
             let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (period * period);
-            peak = peak.max(a.abs() / 0.5);
+            peak = peak.max(a.abs() / 4.0);
         }
     }
     eprintln!("peak commanded acceleration / max_acceleration: {peak:.4}");
-    // The log holds the commands as f64 text: rounding only.
-    assert!(peak <= 1.0 + 1e-6, "{peak}");
+    // The log's decimal text rounds the commands: its second differences carry that rounding
+    // divided by the period squared.
+    assert!(peak <= 1.0 + 1e-4, "{peak}");
 }
 
 #[test]
@@ -1464,6 +1468,8 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
     if !knows_status(&probe) {
         return;
     }
+    armgate(&probe, &["on"]).0.unwrap();
+    wait_drives(&probe, 2.0);
     let pose = probe.ok("PS", [0.0; 7], 0);
     drop(probe);
     // A box around the tool's way halfway through a 0.5 rad turn of joint 1.

@@ -5,7 +5,7 @@ use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
 use super::joint_path::check_joint_path;
-use super::reach::{MAX_SLOWDOWN, Reach, check_iterations, joint_beyond_limit};
+use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
 use super::supervisor::{Along, StopCause, Supervisor, budget};
@@ -710,13 +710,10 @@ impl Controller {
     /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
-        let mut min_duration = min_duration.max(0.0);
+        let min_duration = min_duration.max(0.0);
         if let Some(mut reach) = self.reach() {
-            // A single move may be planned slower, so that the joints keep within their rates.
-            reach.max_slowdown = MAX_SLOWDOWN;
             let (start, seed) = self.cartesian_start();
             reach.line(&start, &goal, &seed, min_duration)?;
-            min_duration = min_duration.max(reach.needed_duration);
         }
         self.supervisor.clear_cause();
         self.cartesian_generator.move_to(goal, min_duration)
@@ -741,8 +738,6 @@ impl Controller {
             iterations_left: check_iterations(self.period),
             speed: &self.cartesian_speed,
             max_rate: &self.max_rate,
-            max_slowdown: 1.0,
-            needed_duration: 0.0,
         })
     }
 

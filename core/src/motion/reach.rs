@@ -69,18 +69,13 @@ pub(super) struct Reach<'a> {
     pub speed: &'a [f64; 6],
     /// The joints' rate limits.
     pub max_rate: &'a Joints,
-    /// How much slower than its cruise speed a line may be planned so that the joints keep
-    /// within their rates (1: not at all, the line is refused instead).
-    pub max_slowdown: f64,
-    /// The longest a checked line must last so that the joints keep within their rates (s;
-    /// 0 if its cruise speed is fine).
-    pub needed_duration: f64,
 }
 
-/// How much slower than cruise a single move (`BG`) may be planned to keep the joints within
-/// their rates; a line that needs more (a joint swinging far for a short way of the tool, as
-/// near a joint's axis) is refused.
-pub const MAX_SLOWDOWN: f64 = 10.0;
+/// How much faster than its rate limit a joint may need to move at a line's cruise speed: up
+/// to this the tick slows the motion down where it must (within the acceleration limits); a
+/// line that needs more — a jump to another IK branch, the base swinging half a turn for a
+/// few centimetres of the tool — is refused.
+pub const MAX_SLOWDOWN: f64 = 100.0;
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
@@ -88,11 +83,10 @@ impl Reach<'_> {
     /// (If the budget runs out the move gets the benefit of the doubt, and the joints reached
     /// so far are returned.)
     ///
-    /// Between two samples no joint may need more than its rate limit at the line's cruise
-    /// speed slowed down by at most `max_slowdown` (`needed_duration` is how long the line
-    /// must then last): a line on which the IK solution jumps to another branch (the base
-    /// swinging half a turn for a few centimetres of the tool) needs far more, and is refused
-    /// with the joint and where, rather than started and aborted halfway.
+    /// Between two samples no joint may need more than [`MAX_SLOWDOWN`] times its rate limit
+    /// at the line's cruise speed: a line on which the IK solution jumps to another branch
+    /// needs far more, and is refused with the joint and where, rather than started and
+    /// aborted halfway.
     pub fn line(
         &mut self,
         start: &Frame,
@@ -127,6 +121,7 @@ impl Reach<'_> {
             .fold(min_duration.max(0.0), f64::max);
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step, mut q) = (0.0, full_step, *seed);
+        let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
                 break;
@@ -134,10 +129,12 @@ impl Reach<'_> {
             let next = (done + step).min(1.0);
             match self.solve(&point(next), &q, PathPoint::at(next)) {
                 Ok(solved) => {
-                    let slowdown =
-                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))?;
-                    if slowdown > 1.0 {
-                        self.needed_duration = self.needed_duration.max(slowdown * duration);
+                    // A line that also fails for another reason (a joint limit, out of reach)
+                    // is refused for that: it says more.
+                    if let Err(refusal) =
+                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))
+                    {
+                        too_fast.get_or_insert(refusal);
                     }
                     (done, q) = (next, solved);
                     step = (step * 2.0).min(full_step);
@@ -146,19 +143,18 @@ impl Reach<'_> {
                 Err(_) => step *= 0.5,
             }
         }
-        Ok(q)
+        too_fast.map_or(Ok(q), Err)
     }
 
-    /// How much slower than `time` (s, at cruise) the step from `q` to `next` must be for
-    /// every joint to keep within its rate; refused beyond `max_slowdown`, with the joint.
+    /// Refuses the step from `q` to `next`, which takes `time` (s) at cruise, if a joint would
+    /// need more than [`MAX_SLOWDOWN`] times its rate limit.
     fn within_rates(
         &self,
         q: &Joints,
         next: &Joints,
         time: f64,
         at: PathPoint,
-    ) -> Result<f64, Refusal> {
-        let mut slowdown = 0.0f64;
+    ) -> Result<(), Refusal> {
         for (joint, ((a, b), rate)) in q
             .iter()
             .zip(next.iter())
@@ -167,13 +163,12 @@ impl Reach<'_> {
         {
             let ratio = libm::fabs(b - a) / (rate * time);
             // A NaN ratio is refused too.
-            if ratio.is_nan() || ratio > self.max_slowdown {
+            if ratio.is_nan() || ratio > MAX_SLOWDOWN {
                 let joint = u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
                 return Err(Refusal::TooFast(joint, at));
             }
-            slowdown = slowdown.max(ratio);
         }
-        Ok(slowdown)
+        Ok(())
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
