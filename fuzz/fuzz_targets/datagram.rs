@@ -25,8 +25,10 @@
 //!   the protocol defines for that request (exact bytes: NUL-terminated, zero-filled). A
 //!   datagram that is not a request gets exactly `ER00`/`ER01`.
 //!
-//! and for every tick: every joint command is finite and within the joint limits, and every
-//! unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27` or a drive fault `ER3x`.
+//! and for every tick: every joint command is finite and within the joint limits, its
+//! acceleration (against the two commands before it) within `max_acceleration` (+1e-9
+//! relative), and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`, `WN27` or
+//! a drive fault `ER3x`.
 #![no_main]
 
 use std::collections::VecDeque;
@@ -35,10 +37,11 @@ use std::sync::OnceLock;
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
+use armgate_core::kinematics::Joints;
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{
-    Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
+    Command, Hold, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -82,6 +85,8 @@ type FuzzCycle = Cycle<CanDrives<FuzzBus>, ()>;
 /// The client: datagrams waiting, and the answers checked as they come.
 #[derive(Default)]
 struct Client {
+    /// The last two joint commands (cleared when none is sent).
+    commands: Vec<Joints>,
     waiting: VecDeque<Datagram<()>>,
     /// Requests sent and not yet answered, with what the parsers made of them.
     unanswered: VecDeque<(Vec<u8>, Result<Request, Notice>)>,
@@ -105,16 +110,22 @@ impl Link<()> for Client {
     }
 }
 
+/// The robot of every run.
+fn robot() -> &'static ValidRobot {
+    static ROBOT_CONFIG: OnceLock<ValidRobot> = OnceLock::new();
+    ROBOT_CONFIG.get_or_init(|| load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}")))
+}
+
 fn start() -> &'static FuzzCycle {
     static START: OnceLock<FuzzCycle> = OnceLock::new();
     START.get_or_init(|| {
-        let config: ValidRobot = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
+        let config = robot();
         let bus = FuzzBus {
-            bus: VirtualBus::for_robot(&config),
+            bus: VirtualBus::for_robot(config),
             injected: VecDeque::new(),
         };
-        let drives = CanDrives::started(&config, &DriveSettings::default(), bus).expect("drives");
-        let mut cycle = Cycle::new(&config, drives);
+        let drives = CanDrives::started(config, &DriveSettings::default(), bus).expect("drives");
+        let mut cycle = Cycle::new(config, drives);
         let mut client = Client::default();
         for _ in 0..START_TICKS {
             if cycle.drives().manager().is_operational() {
@@ -140,6 +151,24 @@ fn tick(cycle: &mut FuzzCycle, client: &mut Client) {
             "t {}: command beyond the joint limits {cmd:?}",
             outcome.time
         );
+        if let [a, b] = client.commands[..] {
+            let config = robot();
+            let dt = config.control_period;
+            for (j, joint) in config.joints.iter().enumerate() {
+                let acc = (cmd[j] - 2.0 * b[j] + a[j]) / (dt * dt);
+                assert!(
+                    acc.abs() <= joint.max_acceleration * (1.0 + 1e-9),
+                    "t {}: joint {j} accelerates at {acc}",
+                    outcome.time
+                );
+            }
+        }
+        client.commands.push(*cmd);
+        if client.commands.len() > 2 {
+            client.commands.remove(0);
+        }
+    } else {
+        client.commands.clear();
     }
 }
 
@@ -275,9 +304,12 @@ fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::WorkspaceLimit,
         Notice::IkDivergence,
         Notice::ViaPointMissed,
+        Notice::Held(Hold::Workspace),
     ];
+    // A stream held at a joint limit names the joint and the limit.
+    let held_at_limit = text.as_str().starts_with("WN12 j");
     assert!(
-        allowed.iter().any(|n| n.text() == text),
+        held_at_limit || allowed.iter().any(|n| n.text() == text),
         "unexpected unsolicited text {:?}",
         text.as_str()
     );

@@ -677,12 +677,23 @@ impl Controller {
         Ok(())
     }
 
-    fn ready_for_stream(&self, mode: Mode) -> Result<(), Refusal> {
+    /// A stream may start, or resume while its own stop (`ST`, its timeout) is under way: it
+    /// then takes over from the velocity commanded last, within the same limits.
+    fn ready_for_stream(&mut self, mode: Mode) -> Result<(), Refusal> {
         if self.mode != mode {
             return Err(Refusal::WrongMode);
         }
         if self.measured.is_none() {
             return Err(Refusal::NotReady);
+        }
+        let stream_stopping = self.supervisor.stopping().is_some_and(|stop| {
+            matches!(stop.along, Along::Joints(_))
+                && matches!(stop.cause, StopCause::Stop | StopCause::StreamTimeout)
+        });
+        if stream_stopping {
+            self.supervisor.finish();
+            self.stream.resume(self.supervisor.velocity());
+            return Ok(());
         }
         if self.is_moving() && !self.stream.is_active() {
             return Err(Refusal::Busy);

@@ -145,6 +145,11 @@ impl VelocityStream {
         self.velocity.iter_mut().for_each(|v| *v = 0.0);
     }
 
+    /// Takes over an arm moving at `velocity` (a stream resumed while it was being stopped).
+    pub fn resume(&mut self, velocity: &Joints) {
+        self.velocity = *velocity;
+    }
+
     /// True if the command is too old to hold on the next step: the client has gone quiet.
     pub fn expires(&self) -> bool {
         self.command.is_some() && self.age >= TIMEOUT_PERIODS
