@@ -7,7 +7,8 @@
 //!   `OUT_DIR/robot.postcard`, which `src/config.rs` embeds. A refused robot file fails the
 //!   build with the error naming the field;
 //! * parses the network settings (`ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT`,
-//!   `ARMGATE_ALLOW`; see `docs/firmware.md`) and writes them
+//!   `ARMGATE_ALLOW`) and the signing settings (`ARMGATE_KEY_FILE`, `ARMGATE_ALLOW_UNSIGNED`;
+//!   see `docs/firmware.md`) and writes them
 //!   as Rust constants to `OUT_DIR/settings.rs`, which `src/settings.rs` includes. A malformed
 //!   value fails the build with a message naming the variable;
 //! * sets `DEFMT_LOG=info` for this crate unless the user set `DEFMT_LOG`.
@@ -17,6 +18,8 @@ use std::net::{IpAddr, Ipv4Addr};
 use std::path::{Path, PathBuf};
 
 use armgate_core::command::{Network, NetworkError};
+use armgate_core::cycle::UnsignedAccess;
+use armgate_protocol::client::signed::parse_key;
 
 include!("../tools/embed_robot.rs");
 
@@ -193,6 +196,57 @@ fn settings() -> Result<String, String> {
         );
     }
     let _ = writeln!(out, "];");
+    out.push_str(&signing_settings()?);
+    Ok(out)
+}
+
+/// The signing constants: the key of the file `ARMGATE_KEY_FILE` names (none: unsigned, as
+/// the seed), and what unsigned datagrams may do (`ARMGATE_ALLOW_UNSIGNED`: no, read, all).
+fn signing_settings() -> Result<String, String> {
+    let key = match env("ARMGATE_KEY_FILE") {
+        None => None,
+        Some(path) => {
+            println!("cargo:rerun-if-changed={path}");
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| format!("ARMGATE_KEY_FILE: {path}: {e}"))?;
+            Some(parse_key(&text).map_err(|e| format!("ARMGATE_KEY_FILE: {path}: {e}"))?)
+        }
+    };
+    let unsigned: UnsignedAccess = match env("ARMGATE_ALLOW_UNSIGNED") {
+        None => UnsignedAccess::default(),
+        Some(text) => text
+            .parse()
+            .map_err(|e| format!("ARMGATE_ALLOW_UNSIGNED: `{text}`: {e}"))?,
+    };
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "/// The signing key (`ARMGATE_KEY_FILE`): only datagrams signed with it are served."
+    );
+    match key {
+        Some(bytes) => {
+            let _ = writeln!(
+                out,
+                "pub const SIGNING_KEY: Option<[u8; 32]> = Some({bytes:?});"
+            );
+        }
+        None => {
+            let _ = writeln!(out, "pub const SIGNING_KEY: Option<[u8; 32]> = None;");
+        }
+    }
+    let variant = match unsigned {
+        UnsignedAccess::Refused => "Refused",
+        UnsignedAccess::Read => "Read",
+        UnsignedAccess::All => "All",
+    };
+    let _ = writeln!(
+        out,
+        "/// What unsigned datagrams may do while a key is set (`ARMGATE_ALLOW_UNSIGNED`)."
+    );
+    let _ = writeln!(
+        out,
+        "pub const ALLOW_UNSIGNED: UnsignedAccess = UnsignedAccess::{variant};"
+    );
     Ok(out)
 }
 

@@ -3,7 +3,8 @@
 
 Input format (see fuzz_targets/datagram.rs): chunks of one header byte (bits 0-1: ticks after
 it, 0/1/8/64; bit 2 clear: a datagram; bits 3-7: its length) followed by the datagram. (Bit 2
-set makes a chunk a CAN frame; the seeds are datagrams.) The poses are the
+set makes a chunk a CAN frame, or with bits 3-6 all set a signed datagram: a control byte and
+the 31-byte message, which the target signs.) The poses are the
 ranger-mk1 home pose (drives' home angles) and small moves from it.
 """
 import os
@@ -23,6 +24,13 @@ def dgram(cmd, values=(), index=0):
 def chunk(data, ticks=0):
     assert len(data) <= 31
     return bytes([(len(data) << 3) | TICKS[ticks]]) + data
+
+
+def signed(data, control=1, ticks=0):
+    """A signed-datagram chunk: control byte bits 0-2 the link id, 3-5 the timestamp step
+    (+ 0..7 - 2 over the link's last), bit 6 a forged tag, bit 7 a cut-off block."""
+    assert len(data) == 31
+    return bytes([0b1111_100 | TICKS[ticks]]) + bytes([control]) + data
 
 
 def moved(xyz, dx=0.0, dy=0.0, dz=0.0):
@@ -84,6 +92,16 @@ SEEDS = {
     + chunk(dgram("jP"))
     + chunk(dgram("TM"))
     + chunk(dgram("ST"), 1),
+    # Signed: a move with a replay of its BG (step 2 - 2 = 0: the same timestamp), a forged tag,
+    # a cut-off block and the controller's own link 0 among the fresh datagrams.
+    "signed_move": signed(dgram("CM", [2.0]), 0b011_001, 1)
+    + signed(dgram("GT", [*moved(HOME_XYZ, dz=0.002), *HOME_RPY, 0.5]), 0b011_001)
+    + signed(dgram("BG"), 0b011_001, 8)
+    + signed(dgram("BG"), 0b010_001, 1)
+    + signed(dgram("ST"), 0b0100_0000 | 0b011_001, 1)
+    + signed(dgram("ST"), 0b1000_0000 | 0b011_010, 1)
+    + signed(dgram("PS"), 0b011_000, 1)
+    + signed(dgram("PS"), 0b011_010, 64),
 }
 
 # Inputs that fail a check of the target in some configuration (see README.md, "Findings").

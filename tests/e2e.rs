@@ -14,6 +14,8 @@
     clippy::approx_constant
 )]
 
+mod e2e_signing;
+
 use std::io::{BufRead, BufReader};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::PathBuf;
@@ -107,6 +109,10 @@ impl Sim {
                 while let Some(arg) = args.next() {
                     match (*arg, args.next()) {
                         ("--start", Some(q)) => command.env("ARMGATE_START", q),
+                        ("--key", Some(file)) => command.env("ARMGATE_KEY_FILE", file),
+                        ("--allow-unsigned", Some(access)) => {
+                            command.env("ARMGATE_ALLOW_UNSIGNED", access)
+                        }
                         _ => panic!("{arg}: armgate-sim only"),
                     };
                 }

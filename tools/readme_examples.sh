@@ -5,9 +5,17 @@
 # drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
 # ranger-mk1's 3 cm/s).
 #
+# Then the lines of "See the arm" (`armgate urdf`, `armgate record`, the recipe's move).
+#
+# With ARMGATE_SIGNED=1 the same examples run signed (docs/safety.md, "Signing"): armgate-sim
+# gets a fresh key (--key), the client signs with it (ARMGATE_KEY_FILE), the Python client's
+# README line runs with `key=`, and at the end the simulator must have dropped nothing.
+#
 # Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
-# terminal; tests cover it at the state level) and `armgate plot` (it needs the logs of a
-# `--log-dir` session; tests/plot_e2e.rs makes one and plots it).
+# terminal; tests cover it at the state level), `armgate plot` (it needs the logs of a
+# `--log-dir` session; tests/plot_e2e.rs makes one and plots it) and the other armgate-sim
+# lines (python/tests/test_mcap.py records with --mcap, tests/foxglove_live.rs views
+# --foxglove).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +25,7 @@ target=${CARGO_TARGET_DIR:-target}
 # call), so that the README's commands find them built.
 cargo build -q -p armgate-sim
 cargo build -q -p armgate-client
+cargo build -q -p armgate-viz
 
 # `armgate` as the README writes it: the binary just built.
 shim=$(mktemp -d)
@@ -30,6 +39,15 @@ cleanup() {
 trap cleanup EXIT
 ln -s "$(realpath "$target/debug/armgate")" "$shim/armgate"
 export PATH="$shim:$PATH"
+
+sim_key=
+if [[ ${ARMGATE_SIGNED:-} == 1 ]]; then
+    key=$shim/arm.key
+    (umask 077 && od -An -N32 -tx1 /dev/urandom | tr -d ' \n' >"$key" && echo >>"$key")
+    sim_key="--key $key"
+    export ARMGATE_KEY_FILE=$key
+    echo "signed pass: key file $key"
+fi
 
 # The non-empty lines of the ```sh blocks under the heading `## $1`, comments removed.
 examples() {
@@ -62,14 +80,15 @@ run() {
 
 quick=$(examples "Quick start")
 client=$(examples 'Client: `armgate`')
-[[ -n $quick && -n $client ]] || { echo "no examples found in $readme" >&2; exit 1; }
+viz=$(examples 'See the arm: Foxglove, MCAP and URDF')
+[[ -n $quick && -n $client && -n $viz ]] || { echo "no examples found in $readme" >&2; exit 1; }
 
 # The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
 # itself by the binary, so $! is the simulator).
 sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
 log=$shim/sim.log
-echo "\$ $sim --listen 127.0.0.1:0"
-bash -c "exec $sim --listen 127.0.0.1:0" 2>"$log" &
+echo "\$ $sim --listen 127.0.0.1:0 $sim_key"
+bash -c "exec $sim --listen 127.0.0.1:0 $sim_key" 2>"$log" &
 sim_pid=$!
 for _ in $(seq 600); do
     grep -q 'udp://' "$log" && break
@@ -108,6 +127,13 @@ while IFS= read -r line; do
     done
 done <<<"$client"
 
+# The signed pass: the Python client's README line, with the key.
+if [[ -n $sim_key ]]; then
+    python=$(examples "Python client" | grep -m1 '^python3') || { echo "no python3 line" >&2; exit 1; }
+    port=${ARMGATE_ADDR##*:}
+    run "PYTHONPATH=python ${python/port=7031)/port=$port, key=\"$key\")}"
+fi
+
 # Ctrl-C during a wait sends ST: the arm stops and holds. (A background job of a script
 # ignores SIGINT until armgate installs its handler, as it does before its first request.)
 echo
@@ -135,6 +161,19 @@ else
     echo "(exit 130; the arm holds)"
 fi
 
+# "See the arm": the files they write are removed afterwards.
+while IFS= read -r line; do
+    IFS=';' read -ra commands <<<"$line"
+    for cmd in "${commands[@]}"; do
+        cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
+        case $cmd in
+            *armgate-sim*) echo "skipped: $cmd (the simulator runs; tests record and view it)" ;;
+            *) run "$cmd" ;;
+        esac
+    done
+done <<<"$viz"
+rm -f ur5.urdf run.mcap
+
 # The simulator ends cleanly on SIGTERM, with its summary.
 kill -TERM "$sim_pid"
 set +e
@@ -142,9 +181,13 @@ wait "$sim_pid"
 status=$?
 set -e
 sim_pid=
-tail -n 1 "$log"
+tail -n 2 "$log"
 if [[ $status -ne 0 ]]; then
     echo "FAILED: armgate-sim exited with $status on SIGTERM" >&2
+    failures=$((failures + 1))
+fi
+if [[ -n $sim_key ]] && ! grep -q 'dropped: 0 unsigned, 0 truncated, 0 forged, 0 replayed' "$log"; then
+    echo "FAILED: the signed clients' datagrams were not all served" >&2
     failures=$((failures + 1))
 fi
 

@@ -9,9 +9,9 @@
 //! Run: `cargo run -p armgate-calibrate --example seed_e2_e3`
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // an example: a failure should be loud
 
-use armgate_calibrate::calibration::{Calibration, Validation, calibrate};
+use armgate_calibrate::calibration::{Calibration, Options, Validation, calibrate};
 use armgate_calibrate::fit::Residuals;
-use armgate_calibrate::model::{FitSet, Geometry, Param};
+use armgate_calibrate::model::{FitSet, Geometry, MeasuredIn, Param};
 use armgate_calibrate::{plan, sim};
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, IkResult};
@@ -103,6 +103,16 @@ fn result_row(label: &str, c: &Calibration) {
     row(label, &c.after, &after, Some(c.analysis.condition));
 }
 
+/// The seed's Faro arm was registered to the robot's base: its positions are in the robot's
+/// world frame, and no instrument frame is fitted.
+fn faro(set: FitSet) -> Options {
+    Options {
+        set,
+        measured_in: MeasuredIn::World,
+        noise: None,
+    }
+}
+
 fn main() {
     let nominal = nominal();
     let truth = truth();
@@ -135,21 +145,21 @@ fn main() {
     );
 
     // E3 (a): joint offsets only; (b): then lengths only, offsets held; (c): all together.
-    let a = calibrate(&nominal, &e2, &check, FitSet::Offsets).unwrap();
+    let a = calibrate(&nominal, &e2, &check, &faro(FitSet::Offsets)).unwrap();
     result_row("E3 (a) offsets only", &a);
     let after_a = nominal
         .clone()
         .edit(|config| a.fit.geometry.apply_to(config))
         .unwrap();
-    let b = calibrate(&after_a, &e2, &check, FitSet::Lengths).unwrap();
+    let b = calibrate(&after_a, &e2, &check, &faro(FitSet::Lengths)).unwrap();
     result_row("E3 (b) then lengths, offsets held", &b);
-    let c = calibrate(&nominal, &e2, &check, FitSet::All).unwrap();
+    let c = calibrate(&nominal, &e2, &check, &faro(FitSet::All)).unwrap();
     result_row("E3 (c) everything identifiable, same data", &c);
 
     // armgate: 50 planned poses instead of 10 repeated ones.
-    let planned = plan::plan(&nominal, FitSet::All, 50, 1000, 1).unwrap();
+    let planned = plan::plan(&nominal, FitSet::All, MeasuredIn::Instrument, 50, 1000, 1).unwrap();
     let measured = sim::measure(&truth, &planned.poses, NOISE, 4);
-    let full = calibrate(&nominal, &measured, &check, FitSet::All).unwrap();
+    let full = calibrate(&nominal, &measured, &check, &faro(FitSet::All)).unwrap();
     result_row("armgate: 50 planned poses, all parameters", &full);
     println!("\nE3 (c) report:\n{}", c.report());
     println!("\narmgate report:\n{}", full.report());

@@ -19,6 +19,19 @@ pub struct Measurement {
     pub position: Vector3<f64>,
     /// Relative weight of this pose (1 = normal); e.g. the inverse variance of the instrument.
     pub weight: f64,
+    /// Its line in the file it was read from (1-based; 0 if it was not read from a file).
+    pub line: usize,
+}
+
+impl Measurement {
+    /// How reports name it: its line, or its position in the list (1-based).
+    pub fn name(&self, index: usize) -> String {
+        if self.line > 0 {
+            format!("line {}", self.line)
+        } else {
+            format!("measurement {}", index + 1)
+        }
+    }
 }
 
 /// Distances between measured and predicted tool positions.
@@ -76,6 +89,8 @@ pub struct Fit {
     /// Their standard deviations (same units), from the covariance `s² (JᵀWJ)⁻¹` with `s²`
     /// the a-posteriori variance of unit weight.
     pub std_dev: Vec<f64>,
+    /// That covariance (rows and columns in the order of `params`).
+    pub covariance: DMatrix<f64>,
     /// `s`: the RMS weighted residual per coordinate (m), an estimate of the instrument noise.
     pub sigma: f64,
     /// Iterations used.
@@ -101,6 +116,9 @@ pub enum FitError {
     },
     /// The normal equations are singular: the parameters are not identifiable from these poses.
     Singular,
+    /// The measured positions do not fix the instrument's orientation (fewer than three poses,
+    /// or all on one line).
+    Unregistrable,
 }
 
 impl std::fmt::Display for FitError {
@@ -116,6 +134,10 @@ impl std::fmt::Display for FitError {
                 write!(f, "measurement {} has the wrong number of joints", pose + 1)
             }
             Self::Singular => f.write_str("the parameters are not identifiable from these poses"),
+            Self::Unregistrable => f.write_str(
+                "the measured positions do not fix the instrument's frame (fewer than three, or \
+                 all on one line)",
+            ),
         }
     }
 }
@@ -204,17 +226,18 @@ pub fn fit(
     }
     let j = weighted_jacobian(&geometry, params, measurements);
     let information = j.transpose() * &j;
-    let covariance = information.try_inverse().ok_or(FitError::Singular)?;
     let variance = cost / (rows - params.len()) as f64;
+    let covariance = information.try_inverse().ok_or(FitError::Singular)? * variance;
     let std_dev = covariance
         .diagonal()
         .iter()
-        .map(|c| (c.max(0.0) * variance).sqrt())
+        .map(|c| c.max(0.0).sqrt())
         .collect();
     Ok(Fit {
         geometry,
         params: params.to_vec(),
         std_dev,
+        covariance,
         sigma: variance.sqrt(),
         iterations,
     })

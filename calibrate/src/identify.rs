@@ -34,11 +34,11 @@ pub fn jacobian(geometry: &Geometry, params: &[Param], poses: &[Vec<f64>]) -> DM
 }
 
 /// The characteristic length that makes angles comparable with lengths: the RMS distance of
-/// the tool from the world origin over the poses (at least 0.1 m).
+/// the tool from the robot's world origin over the poses (at least 0.1 m).
 pub fn reach(geometry: &Geometry, poses: &[Vec<f64>]) -> f64 {
     let sum: f64 = poses
         .iter()
-        .map(|q| geometry.position(q).norm_squared())
+        .map(|q| geometry.robot_position(q).norm_squared())
         .sum();
     (sum / poses.len().max(1) as f64).sqrt().max(0.1)
 }

@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use armgate_calibrate::calibration::{self, Calibration, Validation};
-use armgate_calibrate::model::{self, FitSet};
-use armgate_calibrate::{measurements, plan, robot_file, sim};
+use armgate_calibrate::instrument::Placement;
+use armgate_calibrate::model::{self, FitSet, MeasuredIn, Param};
+use armgate_calibrate::{measurements, plan, robot_file, sim, world};
 use armgate_core::config::{ValidRobot, load_file};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
@@ -17,7 +18,13 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
     name = "armgate-calibrate",
     args_conflicts_with_subcommands = true,
     subcommand_negates_reqs = true,
-    after_help = "Example: armgate calibrate --robot robots/ur5.toml --measurements m.csv --out robots/ur5-calibrated.toml"
+    after_help = "Example: armgate calibrate --robot robots/ur5.toml --measurements m.csv \
+--out robots/ur5-calibrated.toml --instrument-out tracker.toml --noise-mm 0.05
+
+The measurements are in the instrument's frame; its placement is fitted with the robot and \
+written apart (--instrument-out). The calibrated file keeps the robot's own base frame and its \
+workspace unless --world-base. Exit status: 0 written, 1 refused (worse than nominal, a \
+residual far above --noise-mm, too many outliers; --force writes anyway), 2 bad input."
 )]
 struct Cli {
     #[command(flatten)]
@@ -35,15 +42,38 @@ struct FitArgs {
     /// Measured poses: `q1,…,qn,x,y,z[,weight]` per line (rad, m).
     #[arg(long, required = true)]
     measurements: Option<PathBuf>,
-    /// Poses to check the result on (same format); without them, 5-fold cross-validation.
+    /// Poses to check the result on (same format, same instrument in the same place: they are
+    /// predicted through the fitted instrument frame); without them, 5-fold cross-validation.
     #[arg(long)]
     held_out: Option<PathBuf>,
     /// Where to write the calibrated robot file.
     #[arg(long, required = true)]
     out: Option<PathBuf>,
-    /// Which parameters to fit.
+    /// Where to write the instrument's fitted frame (TOML: its pose in the robot's base frame
+    /// with σ; `simulate --instrument` reads it).
+    #[arg(long)]
+    instrument_out: Option<PathBuf>,
+    /// The instrument's noise per coordinate (mm, 1σ): a fit whose residual is more than 3
+    /// times this is refused, and outliers are judged against at least this.
+    #[arg(long)]
+    noise_mm: Option<f64>,
+    /// Write the files even if the result is refused (worse than nominal, residual far above
+    /// the noise, too many outliers).
+    #[arg(long)]
+    force: bool,
+    /// Make the instrument's frame the robot file's world frame: write a `[base]` placing the
+    /// robot in it, and carry the workspace into it (exclusion boxes enlarged, bounds shrunk
+    /// where the turn is not a quarter turn). Default: the robot's own frames, unchanged.
+    #[arg(long)]
+    world_base: bool,
+    /// Which parameters to fit (the instrument's frame always is, when measured in it).
     #[arg(long, value_enum, default_value_t = FitSet::All)]
     fit: FitSet,
+    /// The frame of the measured positions: the instrument's own (its placement is fitted, the
+    /// robot file keeps its frames), or the robot file's world frame (an instrument registered
+    /// to it beforehand; joint 1's constants and the [base] are fitted).
+    #[arg(long, value_enum, default_value_t = MeasuredIn::Instrument)]
+    measured_in: MeasuredIn,
 }
 
 #[derive(Debug, Subcommand)]
@@ -66,6 +96,10 @@ enum Cmd {
         /// Which parameters the poses should determine.
         #[arg(long, value_enum, default_value_t = FitSet::All)]
         fit: FitSet,
+        /// The frame the positions will be measured in: an instrument's own frame is six more
+        /// parameters to determine.
+        #[arg(long, value_enum, default_value_t = MeasuredIn::Instrument)]
+        measured_in: MeasuredIn,
         /// Write the poses here (CSV, one per line) instead of to standard output.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -89,6 +123,10 @@ enum Cmd {
         /// base and tool ±1 mm, twists ±0.05°) drawn with this seed.
         #[arg(long)]
         perturb: Option<u64>,
+        /// Measure with an instrument placed as this file states (the format of
+        /// `--instrument-out`); without it, in the robot's world frame.
+        #[arg(long)]
+        instrument: Option<PathBuf>,
         /// Where to write the measurements.
         #[arg(long)]
         out: PathBuf,
@@ -104,26 +142,59 @@ fn main() -> ExitCode {
             candidates,
             seed,
             fit,
+            measured_in,
             out,
-        }) => run_plan(&robot, poses, candidates, seed, fit, out.as_deref()),
+        }) => run_plan(
+            &robot,
+            poses,
+            candidates,
+            seed,
+            (fit, measured_in),
+            out.as_deref(),
+        ),
         Some(Cmd::Simulate {
             truth,
             poses,
             noise_mm,
             seed,
             perturb,
+            instrument,
             out,
-        }) => run_simulate(&truth, &poses, noise_mm * 1e-3, seed, perturb, &out),
+        }) => run_simulate(
+            &truth,
+            &poses,
+            noise_mm * 1e-3,
+            seed,
+            perturb,
+            instrument.as_deref(),
+            &out,
+        ),
         None => run_fit(&cli.fit),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("armgate-calibrate: {e}");
-            ExitCode::from(2)
+            ExitCode::from(if e.is::<Refused>() { 1 } else { 2 })
         }
     }
 }
+
+/// A calibration whose result is not to be used (`Calibration::problems`); nothing written.
+#[derive(Debug)]
+struct Refused(Vec<String>);
+
+impl std::fmt::Display for Refused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "result refused, nothing written (--force writes it): {}",
+            self.0.join("; ")
+        )
+    }
+}
+
+impl std::error::Error for Refused {}
 
 /// Prints to standard output; a closed pipe (`| head`) is not an error.
 fn say(text: &str) {
@@ -154,20 +225,65 @@ fn run_fit(args: &FitArgs) -> Result<()> {
             .map_err(|e| format!("{}: {e}", path.display()))?,
         None => Vec::new(),
     };
-    let result = calibration::calibrate(&config, &measured, &held_out, args.fit)?;
-    let report = result.report();
+    let noise = match args.noise_mm {
+        Some(mm) if mm.is_finite() && mm > 0.0 => Some(mm * 1e-3),
+        Some(_) => return Err("--noise-mm must be a positive number".into()),
+        None => None,
+    };
+    let options = calibration::Options {
+        set: args.fit,
+        measured_in: args.measured_in,
+        noise,
+    };
+    if args.world_base && args.measured_in == MeasuredIn::World {
+        return Err("--world-base needs measurements in the instrument's frame".into());
+    }
+    let result = calibration::calibrate(&config, &measured, &held_out, &options)?;
+    let mut report = result.report();
+    let problems = result.problems();
+    if !problems.is_empty() && !args.force {
+        say(&report);
+        return Err(Refused(problems).into());
+    }
+    let fitted = &result.fit;
+    let (geometry, mut params, workspace) = if args.world_base {
+        let carried = world::carry(&config.workspace, &fitted.geometry.instrument());
+        let world = fitted.geometry.instrument() * fitted.geometry.base();
+        report += &format!(
+            "\n[base] written: the instrument's frame is the robot file's world frame; the \
+             workspace is carried into it {}\n",
+            if carried.exact {
+                "exactly"
+            } else {
+                "(exclusion boxes enlarged, bounds shrunk: the turn is not a quarter turn)"
+            }
+        );
+        let base = (0..3).map(Param::BaseXyz).chain((0..3).map(Param::BaseRpy));
+        let params: Vec<Param> = fitted.params.iter().copied().chain(base).collect();
+        let geometry = fitted.geometry.with_base(&world);
+        (geometry, params, Some(carried.workspace))
+    } else {
+        (fitted.geometry.clone(), fitted.params.clone(), None)
+    };
+    params.retain(|p| !p.is_instrument());
     say(&report);
     let comment = comment_block(&result, args, &report);
     let text = robot_file::edit(
         &read(robot_path)?,
-        &result.fit.geometry,
-        &result.fit.params,
+        &geometry,
+        &params,
+        workspace.as_ref(),
         &comment,
     )?;
     armgate_core::config::parse_toml(&text)
         .map_err(|e| format!("the calibrated file does not load ({e}); not written"))?;
     std::fs::write(out, text).map_err(|e| format!("{}: {e}", out.display()))?;
     say(&format!("\nwrote {}\n", out.display()));
+    if let Some(path) = &args.instrument_out {
+        std::fs::write(path, result.instrument.to_toml())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        say(&format!("wrote {}\n", path.display()));
+    }
     Ok(())
 }
 
@@ -183,13 +299,20 @@ fn comment_block(result: &Calibration, args: &FitArgs, report: &str) -> String {
         .fit
         .to_possible_value()
         .map(|v| v.get_name().to_string());
+    let instrument = match (&args.instrument_out, args.measured_in) {
+        (_, MeasuredIn::World) => "; measured in the world frame".to_string(),
+        (Some(path), _) => format!("; the instrument's frame is in {}", path.display()),
+        (None, _) => String::new(),
+    };
     format!(
         "Calibrated by armgate-calibrate (--fit {}) from {} with the measurements {} ({} \
-         poses); checked by {check}.\nOnly the fitted values below differ from {}.\n\n{report}",
+         poses, {} set aside); checked by {check}{instrument}.\nOnly the fitted values below \
+         differ from {}.\n\n{report}",
         fit.unwrap_or_default(),
         show(&args.robot),
         show(&args.measurements),
-        result.before.count,
+        result.before.count + result.rejected.len(),
+        result.rejected.len(),
         show(&args.robot),
     )
 }
@@ -199,18 +322,19 @@ fn run_plan(
     poses: usize,
     candidates: usize,
     seed: u64,
-    fit: FitSet,
+    (fit, measured_in): (FitSet, MeasuredIn),
     out: Option<&Path>,
 ) -> Result<()> {
     if poses == 0 {
         return Err("--poses must be at least 1".into());
     }
     let config = robot(robot_path)?;
-    let plan = plan::plan(&config, fit, poses, candidates, seed)?;
+    let plan = plan::plan(&config, fit, measured_in, poses, candidates, seed)?;
     let a = &plan.analysis;
     let mut text = format!(
         "# {} poses for {} chosen from {} random candidates (seed {seed}) for observability\n\
-         # O1 {:.4} m, condition number {:.1}; {} parameters identifiable; not identifiable: {}\n\
+         # O1 {:.4} m, condition number {:.1}; {} parameters identifiable ({} of the robot, the \
+         rest the instrument's frame); not identifiable: {}\n\
          # measure the tool position at each and append x,y,z (m) to its line\n",
         plan.poses.len(),
         robot_path.display(),
@@ -218,6 +342,7 @@ fn run_plan(
         a.observability,
         a.condition,
         a.identified.len(),
+        a.identified.iter().filter(|p| !p.is_instrument()).count(),
         model::list(&a.unidentifiable)
     );
     text += &measurements::format_poses(&plan.poses, config.dof());
@@ -243,6 +368,7 @@ fn run_simulate(
     noise: f64,
     seed: u64,
     perturb: Option<u64>,
+    instrument: Option<&Path>,
     out: &Path,
 ) -> Result<()> {
     let mut config = robot(truth)?;
@@ -251,7 +377,14 @@ fn run_simulate(
     }
     let poses = measurements::parse_poses(&read(poses)?, config.dof())
         .map_err(|e| format!("{}: {e}", poses.display()))?;
-    let measured = sim::measure(&config, &poses, noise, seed);
+    let measured = match instrument {
+        Some(path) => {
+            let placement =
+                Placement::parse(&read(path)?).map_err(|e| format!("{}: {e}", path.display()))?;
+            sim::measure_from(&config, &placement.pose, &poses, noise, seed)
+        }
+        None => sim::measure(&config, &poses, noise, seed),
+    };
     std::fs::write(out, measurements::format(&measured, config.dof()))
         .map_err(|e| format!("{}: {e}", out.display()))?;
     eprintln!(

@@ -3,7 +3,10 @@
 //! `q1, …, qn, x, y, z[, weight]`: the joint values (rad, or m for a prismatic joint) the
 //! controller reported and the tool position the instrument measured (m, in the instrument's
 //! frame). Blank lines, lines starting with `#` and a header line that is not numbers are
-//! skipped. The optional weight is relative (default 1).
+//! skipped. The optional weight is relative (default 1). Every line of a file has the same
+//! fields (all a weight, or none) — those the header names if it names x, y, z, else those of
+//! most lines — so a line missing a value is refused with its number, not read with its weight
+//! as z.
 
 use std::fmt::Write as _;
 
@@ -28,9 +31,18 @@ impl std::fmt::Display for ParseError {
 
 impl std::error::Error for ParseError {}
 
+/// The data lines of a file.
+struct Rows {
+    /// The number of fields of the header line, if there is one.
+    header: Option<usize>,
+    /// The numbers of each data line, with its line number.
+    data: Vec<(usize, Vec<f64>)>,
+}
+
 /// The numbers of each data line, with its line number.
-fn rows(text: &str) -> Result<Vec<(usize, Vec<f64>)>, ParseError> {
+fn rows(text: &str) -> Result<Rows, ParseError> {
     let mut rows = Vec::new();
+    let mut header = None;
     for (k, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -46,7 +58,7 @@ fn rows(text: &str) -> Result<Vec<(usize, Vec<f64>)>, ParseError> {
                 });
             }
             // A header: only before the first data line.
-            Err(_) if rows.is_empty() => {}
+            Err(_) if rows.is_empty() => header = Some(line.split(',').count()),
             Err(e) => {
                 return Err(ParseError {
                     line: k + 1,
@@ -55,14 +67,64 @@ fn rows(text: &str) -> Result<Vec<(usize, Vec<f64>)>, ParseError> {
             }
         }
     }
-    Ok(rows)
+    Ok(Rows { header, data: rows })
+}
+
+/// The number of fields every measurement line of a robot with `dof` joints must have: the
+/// header's if it names the measurement columns (a plan's header names only the joints), else
+/// the most common (the larger on a tie); and whether the header gave it.
+fn field_count(rows: &Rows, dof: usize) -> (usize, bool) {
+    if let Some(n) = rows.header.filter(|n| *n == dof + 3 || *n == dof + 4) {
+        return (n, true);
+    }
+    let mut counts: Vec<(usize, usize)> = Vec::new();
+    for (_, v) in &rows.data {
+        match counts.iter_mut().find(|(len, _)| *len == v.len()) {
+            Some((_, c)) => *c += 1,
+            None => counts.push((v.len(), 1)),
+        }
+    }
+    counts
+        .into_iter()
+        .max_by_key(|(len, c)| (*c, *len))
+        .map_or((0, false), |(len, _)| (len, false))
 }
 
 /// Parses measurements of a robot with `dof` joints.
 pub fn parse(text: &str, dof: usize) -> Result<Vec<Measurement>, ParseError> {
-    rows(text)?
+    let rows = rows(text)?;
+    let (fields, from_header) = field_count(&rows, dof);
+    let expected = format!("{dof} joints, x, y, z and an optional weight");
+    rows.data
         .into_iter()
         .map(|(line, v)| {
+            if fields != dof + 3 && fields != dof + 4 {
+                let source = if from_header {
+                    "the header has"
+                } else {
+                    "most lines have"
+                };
+                return Err(ParseError {
+                    line,
+                    reason: format!("{source} {fields} fields; expected {expected}"),
+                });
+            }
+            if v.len() != fields {
+                return Err(ParseError {
+                    line,
+                    reason: format!(
+                        "{} values where {} has {fields} ({dof} joints, x, y, z{}): a value is \
+                         missing or extra",
+                        v.len(),
+                        if from_header {
+                            "the header"
+                        } else {
+                            "every other line"
+                        },
+                        if fields == dof + 4 { ", weight" } else { "" }
+                    ),
+                });
+            }
             let (q, rest) = v.split_at(dof.min(v.len()));
             let (position, weight) = match *rest {
                 [x, y, z] => (Vector3::new(x, y, z), 1.0),
@@ -76,10 +138,7 @@ pub fn parse(text: &str, dof: usize) -> Result<Vec<Measurement>, ParseError> {
                 _ => {
                     return Err(ParseError {
                         line,
-                        reason: format!(
-                            "{} values; expected {dof} joints, x, y, z and an optional weight",
-                            v.len()
-                        ),
+                        reason: format!("{} values; expected {expected}", v.len()),
                     });
                 }
             };
@@ -87,6 +146,7 @@ pub fn parse(text: &str, dof: usize) -> Result<Vec<Measurement>, ParseError> {
                 q: q.to_vec(),
                 position,
                 weight,
+                line,
             })
         })
         .collect()
@@ -95,6 +155,7 @@ pub fn parse(text: &str, dof: usize) -> Result<Vec<Measurement>, ParseError> {
 /// Parses a list of joint configurations (`q1, …, qn` per line; extra columns ignored).
 pub fn parse_poses(text: &str, dof: usize) -> Result<Vec<Vec<f64>>, ParseError> {
     rows(text)?
+        .data
         .into_iter()
         .map(|(line, v)| {
             v.get(..dof).map(<[f64]>::to_vec).ok_or(ParseError {

@@ -4,6 +4,8 @@
 //! The transform is the one `armgate_core::kinematics::Chain` evaluates (a test checks that they
 //! agree): `Base · Π RotX(α)·TransX(a)·RotY(β)·RotZ(θ)·TransZ(d) · Tool`, with the joint variable
 //! added to θ (revolute) or d (prismatic). Here every constant is a variable that can be fitted.
+//! The instrument sees that position in its own frame, through one more rigid transform: the
+//! robot's world frame in the instrument's, which calibration fits as well.
 
 use std::fmt;
 
@@ -33,6 +35,11 @@ pub enum Param {
     Beta(usize),
     /// `[tool] xyz[k]` (m).
     ToolXyz(usize),
+    /// A correction to the instrument's frame, applied in the robot's world frame: k = 0..3 a
+    /// translation (m), k = 3..6 a rotation vector (rad). Fitted from 0 after the registration;
+    /// parametrised at the robot, not at the instrument, so that the identification Jacobian
+    /// (and the condition number) does not depend on where the instrument stands.
+    Instrument(usize),
 }
 
 impl Param {
@@ -41,7 +48,12 @@ impl Param {
         matches!(
             self,
             Self::BaseRpy(_) | Self::Theta(_) | Self::Alpha(_) | Self::Beta(_)
-        )
+        ) || matches!(self, Self::Instrument(k) if k >= 3)
+    }
+
+    /// True for the parameters of the instrument's frame (not the robot's).
+    pub fn is_instrument(self) -> bool {
+        matches!(self, Self::Instrument(_))
     }
 
     /// The unit the report prints the parameter in, and the factor from SI to it.
@@ -68,6 +80,8 @@ impl fmt::Display for Param {
             Self::Alpha(i) => write!(f, "J{}.alpha", i + 1),
             Self::Beta(i) => write!(f, "J{}.beta", i + 1),
             Self::ToolXyz(k) => write!(f, "tool.{}", axis(XYZ, k)),
+            Self::Instrument(k) if k < 3 => write!(f, "instrument.{}", axis(XYZ, k)),
+            Self::Instrument(k) => write!(f, "instrument.r{}", axis(XYZ, k - 3)),
         }
     }
 }
@@ -93,6 +107,18 @@ pub enum FitSet {
     Lengths,
 }
 
+/// The frame the measured positions are in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeasuredIn {
+    /// The instrument's own frame, wherever it stands: its placement is fitted too.
+    #[default]
+    Instrument,
+    /// The robot file's world frame (the instrument registered to the robot's world beforehand,
+    /// as the seed's Faro arm was): no instrument frame is fitted; joint 1's constants and what
+    /// they leave of the `[base]` are.
+    World,
+}
+
 /// One link's constants.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Link {
@@ -114,6 +140,10 @@ pub struct Geometry {
     tool_dh: Isometry3<f64>,
     tool_rpy: [f64; 3],
     tool_xyz: [f64; 3],
+    /// The robot's world frame in the instrument's (registration), before the correction.
+    instrument: Isometry3<f64>,
+    /// The fitted correction [`Param::Instrument`].
+    instrument_correction: [f64; 6],
 }
 
 impl Geometry {
@@ -139,9 +169,46 @@ impl Geometry {
             tool_dh: link_transform(t.alpha, 0.0, t.a, t.theta, t.d),
             tool_rpy: t.rpy,
             tool_xyz: t.xyz,
+            instrument: Isometry3::identity(),
+            instrument_correction: [0.0; 6],
         }
     }
 
+    /// A copy seen by an instrument whose frame holds the robot's world frame at `registration`
+    /// (maps world coordinates to instrument coordinates), with no correction.
+    pub fn registered(&self, registration: Isometry3<f64>) -> Self {
+        Self {
+            instrument: registration,
+            instrument_correction: [0.0; 6],
+            ..self.clone()
+        }
+    }
+
+    /// The robot's world frame in the instrument's frame, correction included: instrument
+    /// coordinates = this · world coordinates.
+    pub fn instrument(&self) -> Isometry3<f64> {
+        let [x, y, z, rx, ry, rz] = self.instrument_correction;
+        self.instrument * Isometry3::new(Vector3::new(x, y, z), Vector3::new(rx, ry, rz))
+    }
+
+    /// The `[base]` frame: the robot's base {0} in its world frame.
+    pub fn base(&self) -> Isometry3<f64> {
+        let [roll, pitch, yaw] = self.base_rpy;
+        Isometry3::from_parts(
+            Translation3::from(Vector3::from(self.base_xyz)),
+            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+        )
+    }
+
+    /// A copy whose `[base]` is `base` (translation and roll, pitch, yaw).
+    pub fn with_base(&self, base: &Isometry3<f64>) -> Self {
+        let (roll, pitch, yaw) = base.rotation.euler_angles();
+        Self {
+            base_xyz: base.translation.vector.into(),
+            base_rpy: [roll, pitch, yaw],
+            ..self.clone()
+        }
+    }
     /// Number of joints.
     pub fn dof(&self) -> usize {
         self.links.len()
@@ -154,6 +221,7 @@ impl Geometry {
             Param::BaseXyz(k) => self.base_xyz.get(k),
             Param::BaseRpy(k) => self.base_rpy.get(k),
             Param::ToolXyz(k) => self.tool_xyz.get(k),
+            Param::Instrument(k) => self.instrument_correction.get(k),
             Param::Theta(i) => link(i).map(|l| &l.theta),
             Param::D(i) => link(i).map(|l| &l.d),
             Param::A(i) => link(i).map(|l| &l.a),
@@ -169,6 +237,7 @@ impl Geometry {
             Param::BaseXyz(k) => self.base_xyz.get_mut(k),
             Param::BaseRpy(k) => self.base_rpy.get_mut(k),
             Param::ToolXyz(k) => self.tool_xyz.get_mut(k),
+            Param::Instrument(k) => self.instrument_correction.get_mut(k),
             Param::Theta(i) => self.links.get_mut(i).map(|l| &mut l.theta),
             Param::D(i) => self.links.get_mut(i).map(|l| &mut l.d),
             Param::A(i) => self.links.get_mut(i).map(|l| &mut l.a),
@@ -194,13 +263,17 @@ impl Geometry {
         g
     }
 
-    /// The tool position in the world frame at joint values `q` (one per joint).
+    /// The tool position in the instrument's frame at joint values `q` (one per joint): what
+    /// the instrument measures.
     pub fn position(&self, q: &[f64]) -> Vector3<f64> {
-        let [roll, pitch, yaw] = self.base_rpy;
-        let mut frame = Isometry3::from_parts(
-            Translation3::from(Vector3::from(self.base_xyz)),
-            UnitQuaternion::from_euler_angles(roll, pitch, yaw),
-        );
+        self.instrument()
+            .transform_point(&self.robot_position(q).into())
+            .coords
+    }
+
+    /// The tool position in the robot's world frame (as the controller computes it).
+    pub fn robot_position(&self, q: &[f64]) -> Vector3<f64> {
+        let mut frame = self.base();
         for (link, &qi) in self.links.iter().zip(q) {
             let (theta, d) = if link.prismatic {
                 (link.theta, link.d + qi)
@@ -228,10 +301,31 @@ impl Geometry {
             .collect()
     }
 
-    /// The parameters `set` may fit, most meaningful first: where parameters are redundant,
-    /// identifiability analysis keeps the earlier one. Joint offsets come first, then DH lengths
-    /// and the tool position, DH angles, Hayati angles and last the base frame.
-    pub fn candidates(&self, set: FitSet) -> Vec<Param> {
+    /// The parameters a calibration of `set` may fit, most meaningful first: where parameters
+    /// are redundant, identifiability analysis keeps the earlier one. The instrument's frame
+    /// comes first: it takes whatever the robot's base frame and joint 1's constants could
+    /// also explain (the `[base]` frame is not a candidate at all, and joint 1's offset, `d`,
+    /// `a` and `alpha` stay nominal), so the robot's constants stay relative to its own base.
+    /// Then the robot's [`constants`](Self::constants) in their order. Measured in the world
+    /// frame there is no instrument frame: the candidates are the constants, the `[base]` (the
+    /// robot's place in that world) last.
+    pub fn candidates(&self, set: FitSet, measured_in: MeasuredIn) -> Vec<Param> {
+        match measured_in {
+            MeasuredIn::World => self.constants(set),
+            MeasuredIn::Instrument => (0..6)
+                .map(Param::Instrument)
+                .chain(
+                    self.constants(set)
+                        .into_iter()
+                        .filter(|p| !matches!(p, Param::BaseXyz(_) | Param::BaseRpy(_))),
+                )
+                .collect(),
+        }
+    }
+
+    /// The robot file's constants of `set`: joint offsets first, then DH lengths and the tool
+    /// position, DH angles, Hayati angles and last the base frame.
+    pub fn constants(&self, set: FitSet) -> Vec<Param> {
         let n = self.dof();
         let offset = |i: usize| {
             if self.links.get(i).is_some_and(|l| l.prismatic) {

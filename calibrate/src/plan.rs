@@ -15,7 +15,7 @@ use armgate_core::rng::SplitMix64;
 use nalgebra::DMatrix;
 
 use crate::identify::{self, Identifiability};
-use crate::model::{FitSet, Geometry};
+use crate::model::{FitSet, Geometry, MeasuredIn};
 
 /// Draws before giving up, per pose wanted (a robot whose workspace excludes nearly every
 /// configuration is misconfigured).
@@ -92,17 +92,18 @@ pub struct Plan {
 }
 
 /// Chooses `count` poses out of `candidates` random ones (seeded) that best determine the
-/// parameters of `set`.
+/// parameters of `set` — and, measured in an instrument's frame, that frame's six.
 pub fn plan(
     config: &ValidRobot,
     set: FitSet,
+    measured_in: MeasuredIn,
     count: usize,
     candidates: usize,
     seed: u64,
 ) -> Result<Plan, PlanError> {
     let pool = random_poses(config, candidates.max(count), seed)?;
     let geometry = Geometry::new(config);
-    let all = identify::analyse(&geometry, &geometry.candidates(set), &pool);
+    let all = identify::analyse(&geometry, &geometry.candidates(set, measured_in), &pool);
     let params = &all.identified;
     let j = identify::scaled(
         &identify::jacobian(&geometry, params, &pool),
@@ -114,7 +115,7 @@ pub fn plan(
         .iter()
         .filter_map(|&k| pool.get(k).cloned())
         .collect();
-    let analysis = identify::analyse(&geometry, &geometry.candidates(set), &poses);
+    let analysis = identify::analyse(&geometry, &geometry.candidates(set, measured_in), &poses);
     Ok(Plan {
         poses,
         analysis,

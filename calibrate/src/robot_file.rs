@@ -1,10 +1,12 @@
 //! Writing the calibrated robot file: the input text with only the fitted values changed.
 //!
 //! The TOML is edited in place (`toml_edit`), so comments, order and formatting survive. Keys
-//! the input lacks (`beta`, `[base]`, `[tool] xyz`) are added where a fitted value needs them.
+//! the input lacks (`beta`, `[base]`, `[tool] xyz`) are added where a fitted value needs them;
+//! a workspace carried into a new world frame replaces the old one.
 //! A comment block at the top, between [`BEGIN`] and [`END`], records the calibration; it
 //! replaces the block of an earlier calibration.
 
+use armgate_core::config::WorkspaceConfig;
 use toml_edit::{Array, DocumentMut, Item, TableLike, Value};
 
 use crate::model::{Geometry, Param};
@@ -29,15 +31,25 @@ impl std::fmt::Display for EditError {
 
 impl std::error::Error for EditError {}
 
-/// `original` with the `fitted` parameters set to their values in `geometry` and `comment`
-/// (lines without `#`) as the calibration block at the top.
+/// `original` with the `fitted` parameters set to their values in `geometry`, the `[workspace]`
+/// replaced by `workspace` if given, and `comment` (lines without `#`) as the calibration block
+/// at the top.
 pub fn edit(
     original: &str,
     geometry: &Geometry,
     fitted: &[Param],
+    workspace: Option<&WorkspaceConfig>,
     comment: &str,
 ) -> Result<String, EditError> {
     let mut doc: DocumentMut = without_block(original).parse().map_err(EditError)?;
+    if let Some(w) = workspace {
+        let row = |b: &[f64; 6]| Value::Array(b.iter().map(|v| rounded(*v)).collect::<Array>());
+        let boxes = Value::Array(w.boxes.iter().map(row).collect::<Array>());
+        set(table(&mut doc, "workspace"), "bounds", row(&w.bounds));
+        if !w.boxes.is_empty() {
+            set(table(&mut doc, "workspace"), "boxes", boxes);
+        }
+    }
     for &p in fitted {
         let number = |p: Param| Value::from(rounded(geometry.get(p)));
         let triple = |make: fn(usize) -> Param| {
@@ -52,6 +64,8 @@ pub fn edit(
             Param::A(i) => set_joint(&mut doc, i, "a", number(p)),
             Param::Alpha(i) => set_joint(&mut doc, i, "alpha", number(p)),
             Param::Beta(i) => set_joint(&mut doc, i, "beta", number(p)),
+            // Not the robot's: written to its own file (`instrument`).
+            Param::Instrument(_) => {}
         }
     }
     let mut out = String::from(BEGIN);

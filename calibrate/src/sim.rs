@@ -5,7 +5,7 @@
 use armgate_core::config::{ConfigError, ValidRobot};
 use armgate_core::kinematics::Chain;
 use armgate_core::rng::SplitMix64;
-use nalgebra::Vector3;
+use nalgebra::{Isometry3, Vector3};
 
 use crate::fit::Measurement;
 use crate::model::{FitSet, Geometry, Param};
@@ -49,13 +49,14 @@ impl Errors {
 pub fn perturb(config: &ValidRobot, errors: &Errors, seed: u64) -> Result<ValidRobot, ConfigError> {
     let mut rng = SplitMix64::new(seed);
     let mut geometry = Geometry::new(config);
-    for p in geometry.candidates(FitSet::All) {
+    for p in geometry.constants(FitSet::All) {
         let bound = match p {
             Param::Theta(_) => errors.offset,
             Param::D(_) | Param::A(_) => errors.length,
             Param::Alpha(_) | Param::Beta(_) => errors.twist,
             Param::BaseXyz(_) | Param::ToolXyz(_) => errors.frame,
             Param::BaseRpy(_) => errors.frame_angle,
+            Param::Instrument(_) => 0.0,
         };
         let value = geometry.get(p) + rng.uniform(-bound, bound);
         geometry.set(p, value);
@@ -63,20 +64,37 @@ pub fn perturb(config: &ValidRobot, errors: &Errors, seed: u64) -> Result<ValidR
     config.clone().edit(|truth| geometry.apply_to(truth))
 }
 
-/// Measures the tool position of `truth` at each pose with Gaussian noise of standard
-/// deviation `noise` (m) per coordinate.
+/// Measures the tool position of `truth` at each pose, in its world frame, with Gaussian noise
+/// of standard deviation `noise` (m) per coordinate.
 pub fn measure(truth: &ValidRobot, poses: &[Vec<f64>], noise: f64, seed: u64) -> Vec<Measurement> {
+    // An instrument whose frame is the world frame lies at the base's inverse in {0}.
+    let world = Geometry::new(truth).base().inverse();
+    measure_from(truth, &world, poses, noise, seed)
+}
+
+/// [`measure`] by an instrument whose frame lies at `instrument` in `truth`'s base frame {0}
+/// (as `--instrument-out` states it): the positions are in the instrument's frame.
+pub fn measure_from(
+    truth: &ValidRobot,
+    instrument: &Isometry3<f64>,
+    poses: &[Vec<f64>],
+    noise: f64,
+    seed: u64,
+) -> Vec<Measurement> {
+    let world_to_instrument = (Geometry::new(truth).base() * instrument).inverse();
     let chain = Chain::new(truth);
     let mut rng = SplitMix64::new(seed);
     poses
         .iter()
         .filter_map(|q| {
-            let p = chain.forward(q).ok()?.translation.vector;
+            let world = chain.forward(q).ok()?.translation.vector;
+            let p = world_to_instrument.transform_point(&world.into()).coords;
             let n = Vector3::from_fn(|_, _| noise * gaussian(&mut rng));
             Some(Measurement {
                 q: q.clone(),
                 position: p + n,
                 weight: 1.0,
+                line: 0,
             })
         })
         .collect()

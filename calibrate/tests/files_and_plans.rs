@@ -3,7 +3,7 @@
 
 use armgate_calibrate::identify;
 use armgate_calibrate::measurements::{format, format_poses, parse, parse_poses};
-use armgate_calibrate::model::{FitSet, Geometry, Param};
+use armgate_calibrate::model::{FitSet, Geometry, MeasuredIn, Param};
 use armgate_calibrate::robot_file::{BEGIN, END, edit};
 use armgate_calibrate::{plan, sim};
 use armgate_core::config::{ValidRobot, parse_toml};
@@ -27,11 +27,12 @@ fn the_written_file_changes_only_the_fitted_values() {
     let original = text("ranger-mk1");
     let nominal = robot("ranger-mk1");
     let truth = sim::perturb(&nominal, &sim::Errors::TYPICAL, 9).unwrap();
-    let fitted = Geometry::new(&nominal).candidates(FitSet::All);
+    let fitted = Geometry::new(&nominal).constants(FitSet::All);
     let written = edit(
         &original,
         &Geometry::new(&truth),
         &fitted,
+        None,
         "line one\n\nline two",
     )
     .unwrap();
@@ -77,8 +78,8 @@ fn the_written_file_changes_only_the_fitted_values() {
 fn calibrating_again_replaces_the_comment_block() {
     let nominal = robot("ur5");
     let g = Geometry::new(&nominal);
-    let once = edit(&text("ur5"), &g, &[Param::Theta(0)], "first").unwrap();
-    let twice = edit(&once, &g, &[Param::Theta(0)], "second").unwrap();
+    let once = edit(&text("ur5"), &g, &[Param::Theta(0)], None, "first").unwrap();
+    let twice = edit(&once, &g, &[Param::Theta(0)], None, "second").unwrap();
     assert_eq!(twice.matches(BEGIN).count(), 1);
     assert!(twice.contains("# second") && !twice.contains("# first"));
     assert_eq!(twice.replace("# second", "# first"), once);
@@ -97,10 +98,20 @@ fn measurements_round_trip() {
     }
     assert_eq!(parse_poses(&format_poses(&poses, 6), 6).unwrap().len(), 4);
     // Comments, a header, blank lines, an optional weight; errors name the line.
-    let text = "# a comment\nq1,q2,x,y,z\n\n0,1,2,3,4\n0,1,2,3,4,0.5\n";
+    let text = "# a comment\nq1,q2,x,y,z,w\n\n0,1,2,3,4,1\n0,1,2,3,4,0.5\n";
     let two = parse(text, 2).unwrap();
     assert_eq!((two[0].weight, two[1].weight), (1.0, 0.5));
+    assert_eq!((two[0].line, two[1].line), (4, 5));
+    // A plan's header names only the joints; x, y, z appended to each line.
+    assert_eq!(parse("q1,q2\n0,1,2,3,4\n0,1,2,3,4\n", 2).unwrap().len(), 2);
     assert_eq!(parse("0,1,2,3\n", 2).unwrap_err().line, 1);
+    // A missing z with the weight kept is not read as z = weight: the line is named.
+    let missing = "0,1,2,3,4,1\n0,1,2,3,1\n0,1,2,3,4,1\n";
+    let err = parse(missing, 2).unwrap_err();
+    assert_eq!(err.line, 2, "{err}");
+    assert!(err.reason.contains("missing"), "{err}");
+    let err = parse("q1,q2,x,y,z,weight\n0,1,2,3,1\n", 2).unwrap_err();
+    assert_eq!(err.line, 2, "{err}");
     assert_eq!(parse("0,1,2,3,4\n0,x,2,3,4\n", 2).unwrap_err().line, 2);
     assert_eq!(parse("0,1,2,3,4,-1\n", 2).unwrap_err().line, 1);
 }
@@ -111,19 +122,23 @@ fn planned_poses_are_reachable_deterministic_and_better_than_random() {
         let config = robot(name);
         let chain = Chain::new(&config);
         let workspace = Workspace::new(&config.workspace);
-        let planned = plan::plan(&config, FitSet::All, 30, 600, 4).unwrap();
+        let planned = plan::plan(&config, FitSet::All, MeasuredIn::Instrument, 30, 600, 4).unwrap();
         assert_eq!(planned.poses.len(), 30);
         for q in &planned.poses {
             assert!(chain.within_limits(q));
             assert!(workspace.allows(&chain.forward(q).unwrap().translation.vector));
         }
-        let again = plan::plan(&config, FitSet::All, 30, 600, 4).unwrap();
+        let again = plan::plan(&config, FitSet::All, MeasuredIn::Instrument, 30, 600, 4).unwrap();
         assert_eq!(planned.poses, again.poses);
 
         // Against 30 random poses: better observability and conditioning.
         let random = plan::random_poses(&config, 30, 99).unwrap();
         let g = Geometry::new(&config);
-        let chance = identify::analyse(&g, &g.candidates(FitSet::All), &random);
+        let chance = identify::analyse(
+            &g,
+            &g.candidates(FitSet::All, MeasuredIn::Instrument),
+            &random,
+        );
         let a = &planned.analysis;
         println!(
             "{name}: planned O1 {:.3} cond {:.1}; random O1 {:.3} cond {:.1}",
@@ -141,7 +156,11 @@ fn a_redundant_parameter_has_a_zero_singular_value() {
     let config = robot("ur5");
     let g = Geometry::new(&config);
     let poses = plan::random_poses(&config, 40, 3).unwrap();
-    let a = identify::analyse(&g, &g.candidates(FitSet::All), &poses);
+    let a = identify::analyse(
+        &g,
+        &g.candidates(FitSet::All, MeasuredIn::Instrument),
+        &poses,
+    );
     let largest = a.singular_values[0];
     let zero = a
         .singular_values

@@ -47,6 +47,10 @@ Examples:
   armgate teleop                             keyboard client (Fig. 3.3 of the thesis)
   armgate calibrate plan --robot robots/ur5.toml --poses 50
                                              poses to measure for kinematic calibration
+  armgate urdf robots/ur5.toml --out ur5.urdf
+                                             the arm for URDF tools (Foxglove, RViz)
+  armgate record run.mcap --robot robots/ranger-mk1.toml --duration 60
+                                             the controller in MCAP for Foxglove
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
 WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
@@ -127,6 +131,14 @@ pub struct Cli {
     /// use the two-bank requests.
     #[arg(long, global = true, value_parser = parse_joints)]
     pub joints: Option<usize>,
+    /// Sign every request with the key in this file (64 hex digits on one line) and accept
+    /// only answers signed with it, for a controller that has the key (docs/safety.md).
+    #[arg(long, global = true, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
+    pub key: Option<std::path::PathBuf>,
+    /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
+    /// their own (teleop also uses the next one, for its jog stream).
+    #[arg(long, global = true, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
+    pub link_id: u8,
     /// What to do.
     #[command(subcommand)]
     pub command: Cmd,
@@ -265,8 +277,24 @@ pub enum Cmd {
     /// explains them; docs/calibration.md). Needs no controller.
     #[command(disable_help_flag = true)]
     Calibrate {
-        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml` or
-        /// `plan --robot R.toml --poses 50`.
+        /// Passed on unchanged, e.g. `--robot R.toml --measurements M.csv --out C.toml
+        /// --instrument-out I.toml` or `plan --robot R.toml --poses 50`.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
+    /// Write the URDF of a robot file, whose link frames are armgate's kinematics (runs
+    /// `armgate-viz urdf`; docs/visualisation.md). Needs no controller.
+    #[command(disable_help_flag = true)]
+    Urdf {
+        /// Passed on unchanged, e.g. `robots/ur5.toml --out ur5.urdf` (`--help` for more).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<std::ffi::OsString>,
+    },
+    /// Record this controller into an MCAP file for Foxglove (runs `armgate-viz record --addr
+    /// ADDR`; docs/visualisation.md): jP and PS at --rate, SQ once a second, every notice.
+    #[command(disable_help_flag = true)]
+    Record {
+        /// Passed on unchanged, e.g. `run.mcap --robot robots/ranger-mk1.toml --rate 20`.
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
@@ -438,8 +466,17 @@ fn parse_joints(s: &str) -> Result<usize, String> {
 /// Runs the command line (parsed from the process's arguments) and returns the exit status.
 pub fn main() -> u8 {
     let cli = Cli::parse();
-    if let Cmd::Calibrate { args } = &cli.command {
-        return crate::calibrate::run(args);
+    match &cli.command {
+        Cmd::Calibrate { args } => return crate::tools::run(crate::tools::CALIBRATE, args),
+        Cmd::Urdf { args } => {
+            let args = [&[std::ffi::OsString::from("urdf")], args.as_slice()].concat();
+            return crate::tools::run(crate::tools::VIZ, &args);
+        }
+        Cmd::Record { args } => {
+            let head = ["record", "--addr", cli.addr.as_str()].map(std::ffi::OsString::from);
+            return crate::tools::run(crate::tools::VIZ, &[&head[..], args].concat());
+        }
+        _ => {}
     }
     let mut out = std::io::stdout().lock();
     let result = run(&cli, &mut out).and_then(|()| out.flush().map_err(CliError::Output));
@@ -455,6 +492,12 @@ pub fn main() -> u8 {
             } = &e
             {
                 eprintln!("hint: {hint}");
+            }
+            if matches!(e, CliError::Client(ClientError::Timeout { .. })) && cli.key.is_none() {
+                eprintln!(
+                    "hint: a controller with a signing key never answers unsigned requests: \
+                     --key FILE (or ARMGATE_KEY_FILE)"
+                );
             }
             e.exit_code()
         }
@@ -487,6 +530,9 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
         ..ClientConfig::default()
     };
     let mut client = Client::connect_with(cli.addr.as_str(), config)?;
+    if let Some(path) = &cli.key {
+        client.set_signer(Some(crate::Signer::from_file(path, cli.link_id)?));
+    }
     if let Cmd::Teleop { live, step, rate } = &cli.command {
         let poll = Some(1.0 / rate)
             .filter(|p| p.is_finite() && *p > 0.0)
@@ -640,6 +686,20 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             let mut status = client.status()?;
             status.cause = client.stop_cause()?;
             writeln!(out, "{status}")?;
+            if cli.key.is_some() {
+                let s = client.signing_report()?;
+                writeln!(
+                    out,
+                    "signing    {} signed, {} unsigned served; dropped {} unsigned, {} truncated, \
+                     {} forged, {} replayed",
+                    s.signed,
+                    s.unsigned,
+                    s.dropped_unsigned,
+                    s.dropped_truncated,
+                    s.dropped_forged,
+                    s.dropped_replayed
+                )?;
+            }
             Ok(())
         }
         Cmd::Pose => print_pose(&client.pose()?, out),
@@ -799,8 +859,12 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             }
             Ok(())
         }
-        // Handled in `run`: teleop takes the client over; calibrate and plot need none.
-        Cmd::Teleop { .. } | Cmd::Calibrate { .. } | Cmd::Plot(_) => Ok(()),
+        // Handled in `run`: teleop takes the client over; calibrate, urdf, record and plot need none.
+        Cmd::Teleop { .. }
+        | Cmd::Calibrate { .. }
+        | Cmd::Urdf { .. }
+        | Cmd::Record { .. }
+        | Cmd::Plot(_) => Ok(()),
     }
 }
 

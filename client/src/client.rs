@@ -9,6 +9,7 @@ use armgate_protocol::client::{MESSAGE_LEN, Message, Reply, Request, Text, VALUE
 
 use crate::ClientError;
 use crate::matching::{Expect, Incoming, classify_unsolicited};
+use crate::signer::Signer;
 
 /// The controller's default address (`armgate-sim` listens here).
 pub const DEFAULT_ADDR: &str = "127.0.0.1:7031";
@@ -74,6 +75,12 @@ pub struct Client {
     notices: VecDeque<Text>,
     dropped_notices: u64,
     stale_replies: u64,
+    /// Signs requests and checks answers, if set.
+    signer: Option<Signer>,
+    /// The timestamp of the last request signed: no answer may be older.
+    signed_at: u64,
+    /// Datagrams dropped because they were not signed with the key, or older.
+    unverified: u64,
 }
 
 impl Client {
@@ -108,7 +115,27 @@ impl Client {
             notices: VecDeque::new(),
             dropped_notices: 0,
             stale_replies: 0,
+            signer: None,
+            signed_at: 0,
+            unverified: 0,
         })
+    }
+
+    /// Signs every request from now on with `signer`, and accepts only answers signed with
+    /// its key (`None`: unsigned, as the seed's protocol).
+    pub fn set_signer(&mut self, signer: Option<Signer>) {
+        self.signer = signer;
+    }
+
+    /// The signer, if requests are signed.
+    pub fn signer(&self) -> Option<&Signer> {
+        self.signer.as_ref()
+    }
+
+    /// How many datagrams were dropped because they were not signed with the key, or were
+    /// older than the request they could answer (forged, replayed, another key).
+    pub fn unverified(&self) -> u64 {
+        self.unverified
     }
 
     /// The controller's address.
@@ -200,8 +227,9 @@ impl Client {
         loop {
             match self.socket.recv(&mut buf) {
                 Ok(n) => {
-                    let incoming = classify_unsolicited(buf.get(..n).unwrap_or_default());
-                    self.file(incoming);
+                    if let Some(message) = self.verified(buf.get(..n).unwrap_or_default()) {
+                        self.file(classify_unsolicited(&message));
+                    }
                 }
                 Err(e) if e.kind() == ErrorKind::WouldBlock => return Ok(()),
                 // An ICMP error left over from an earlier send.
@@ -242,8 +270,20 @@ impl Client {
         self.poll_notices()?;
         let attempts = self.config.retries.saturating_add(1);
         let mut refused = false;
-        for _ in 0..attempts {
-            match self.socket.send(datagram) {
+        let unverified = self.unverified;
+        for attempt in 0..attempts {
+            // Each attempt signed anew: the controller serves a timestamp once.
+            let signed = self.signer.as_mut().map(|s| s.sign(datagram));
+            let bytes = match &signed {
+                Some((bytes, timestamp)) => {
+                    if attempt == 0 {
+                        self.signed_at = *timestamp;
+                    }
+                    &bytes[..]
+                }
+                None => &datagram[..],
+            };
+            match self.socket.send(bytes) {
                 Ok(_) => {}
                 Err(e) if e.kind() == ErrorKind::ConnectionRefused => {
                     refused = true;
@@ -257,11 +297,17 @@ impl Client {
                 Awaited::TimedOut => refused = false,
             }
         }
+        let command = String::from_utf8_lossy(&expect.chars).into_owned();
         if refused {
             Err(ClientError::Refused(self.peer))
+        } else if self.unverified > unverified {
+            Err(ClientError::Unverified {
+                command,
+                count: self.unverified - unverified,
+            })
         } else {
             Err(ClientError::Timeout {
-                command: String::from_utf8_lossy(&expect.chars).into_owned(),
+                command,
                 attempts,
                 timeout: self.config.timeout,
             })
@@ -280,11 +326,13 @@ impl Client {
             self.socket.set_read_timeout(Some(left))?;
             match self.socket.recv(&mut buf) {
                 Ok(n) => {
-                    let datagram = buf.get(..n).unwrap_or_default();
-                    match expect.classify(datagram) {
+                    let Some(datagram) = self.verified(buf.get(..n).unwrap_or_default()) else {
+                        continue;
+                    };
+                    match expect.classify(&datagram) {
                         Incoming::Reply => {
                             let mut reply = [0; MESSAGE_LEN];
-                            reply.iter_mut().zip(datagram).for_each(|(r, b)| *r = *b);
+                            reply.iter_mut().zip(&datagram).for_each(|(r, b)| *r = *b);
                             return Ok(Awaited::Reply(reply));
                         }
                         Incoming::Rejected(text) => return Err(ClientError::Rejected(text)),
@@ -299,6 +347,21 @@ impl Client {
                 Err(e) => return Err(e.into()),
             }
         }
+    }
+}
+
+impl Client {
+    /// The message of a datagram from the controller: as it is without a signer; with one,
+    /// only if signed with the key and not older than the last request (else counted).
+    fn verified(&mut self, datagram: &[u8]) -> Option<Vec<u8>> {
+        let Some(signer) = &self.signer else {
+            return Some(datagram.to_vec());
+        };
+        let message = signer.open(datagram, self.signed_at).map(|m| m.to_vec());
+        if message.is_none() {
+            self.unverified += 1;
+        }
+        message
     }
 }
 

@@ -29,6 +29,18 @@ pub enum ClientError {
         /// The time waited after each send.
         timeout: Duration,
     },
+    /// No answer signed with the key came, but other datagrams did: the controller has no key
+    /// or another one, or someone else answers.
+    #[error(
+        "no signed answer to {command}: {count} datagram(s) came unsigned or not signed with \
+         the key (has the controller this key?)"
+    )]
+    Unverified {
+        /// The request's two characters.
+        command: String,
+        /// Datagrams dropped while waiting.
+        count: u64,
+    },
     /// The operating system reported the controller's port as closed (ICMP port unreachable).
     #[error("nothing listens at {0} (connection refused); is the controller running?")]
     Refused(SocketAddr),

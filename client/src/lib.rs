@@ -29,10 +29,10 @@
 //! * [`runfile`]: TOML via-point sequences.
 //! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name);
 //!   [`Client::start_drives`] and [`Client::wait_motion_ended`] poll it.
+//! * [`Signer`]: signed requests and checked answers (a key file, a link id).
 //! * [`cli`]: the `armgate` tool; [`teleop`]: its keyboard client; [`plot`]: `armgate plot`.
 
 pub mod banks;
-pub mod calibrate;
 pub mod cli;
 mod client;
 mod commands;
@@ -46,8 +46,10 @@ pub mod matching;
 pub mod plot;
 mod pose;
 pub mod runfile;
+mod signer;
 pub mod status;
 pub mod teleop;
+pub mod tools;
 pub mod velocity;
 pub mod wait;
 
@@ -61,6 +63,7 @@ pub use drives::DrivesOn;
 pub use error::ClientError;
 pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
+pub use signer::{DEFAULT_LINK, Signer};
 pub use status::{DriveStatus, Motion, Status};
 pub use velocity::{StreamEvent, Velocity, VelocityStreamer};
 pub use wait::{Progress, WaitOptions};

@@ -9,6 +9,7 @@
 
 use std::fmt;
 
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
     STATUS_INDEX, StatusReport, VALUES,
@@ -177,6 +178,18 @@ impl Client {
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
             Err(e) => Err(e),
         }
+    }
+
+    /// `SQ` index 4: the controller's signing policy and counters (docs/protocol.md).
+    pub fn signing_report(&mut self) -> Result<SigningReport, ClientError> {
+        let raw = self.status_part(SIGNING_INDEX)?;
+        let reply = Reply {
+            command: Command::Status,
+            values: raw.values,
+            index: raw.index,
+        };
+        SigningReport::from_reply(&reply)
+            .ok_or_else(|| ClientError::InvalidArgument("a malformed SQ 4 reply".into()))
     }
 
     fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {

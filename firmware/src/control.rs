@@ -10,7 +10,7 @@
 //! `armgate_core::cycle` and docs/architecture.md.
 
 use armgate_core::config::ValidRobot;
-use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing, Signing};
 use embassy_net::IpEndpoint;
 use embassy_time::{Duration, Instant, Timer};
 
@@ -82,13 +82,20 @@ impl Interval {
             relay_dropped: cycle.handler().dropped_notices(),
             drives: manager.state(),
             fault: manager.fault().map(|f| f.text()),
+            signing: cycle.signing(),
         }
     }
 }
 
-/// The control task: one tick every `robot.control_period`, forever. Starts the watchdog.
+/// The control task: one tick every `robot.control_period`, forever, checking signatures as
+/// `signing` says. Starts the watchdog.
 #[embassy_executor::task]
-pub async fn run(robot: &'static ValidRobot, drives: BoardDrives, mut watchdog: Watchdog) {
+pub async fn run(
+    robot: &'static ValidRobot,
+    drives: BoardDrives,
+    mut watchdog: Watchdog,
+    signing: Signing,
+) {
     let period = period(robot);
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",
@@ -97,7 +104,7 @@ pub async fn run(robot: &'static ValidRobot, drives: BoardDrives, mut watchdog: 
         period.as_micros(),
         watchdog_timeout(period).as_millis()
     );
-    let mut cycle = BoardCycle::new(robot, drives);
+    let mut cycle = BoardCycle::new(robot, drives).with_signing(signing);
     let mut interval = Interval::default();
     let epoch = Instant::now();
     let mut next_report = epoch + REPORT_INTERVAL;

@@ -9,8 +9,9 @@
 //! * clocks → embassy-time's std driver; the chip's unique id → a fixed one ([`HOST_UID`]);
 //! * the robot embedded in flash → the same, unless `ARMGATE_ROBOT_FILE` names a robot file to
 //!   load instead, and `ARMGATE_START` (comma-separated joint values) puts the simulated drives'
-//!   encoders somewhere else than home: what the end-to-end tests need to run the same session
-//!   against this and against `armgate-sim`.
+//!   encoders somewhere else than home, and `ARMGATE_KEY_FILE` / `ARMGATE_ALLOW_UNSIGNED`
+//!   replace the build's signing settings: what the end-to-end tests need to run the same
+//!   sessions against this and against `armgate-sim`.
 //!
 //! One difference from the board remains: the control task shares the single executor thread
 //! with the network tasks instead of preempting them from an interrupt executor, which changes
@@ -18,9 +19,10 @@
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::cycle::Cycle;
 use armgate_core::cycle::replay::{self, Replay};
+use armgate_core::cycle::{Cycle, Signing};
 use armgate_core::kinematics::{Chain, Joints};
+use armgate_protocol::client::signed::SigningKey;
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;
@@ -96,6 +98,13 @@ pub fn main() {
             }
         }
     }
+    let signing = match signing() {
+        Ok(signing) => signing,
+        Err(e) => {
+            eprintln!("armgate-firmware: {e}");
+            std::process::exit(1);
+        }
+    };
     let mut device = match TunTapDevice::new(&tap) {
         Ok(device) => device,
         Err(e) => {
@@ -122,7 +131,11 @@ pub fn main() {
     );
     let executor = EXECUTOR.init(Executor::new());
     executor.run(|spawner| {
-        spawn(spawner, "control", control::run(robot, drives, Watchdog));
+        spawn(
+            spawner,
+            "control",
+            control::run(robot, drives, Watchdog, signing),
+        );
         spawn(spawner, "network stack", net::runner(runner));
         spawn(spawner, "UDP server", net::udp_server(stack));
         spawn(spawner, "status", telemetry::run(stack));
@@ -148,6 +161,25 @@ fn replay_exchange(
     });
     print!("{transcript}");
     Ok(())
+}
+
+/// The build's signing settings, or the key file `ARMGATE_KEY_FILE` names and the access
+/// `ARMGATE_ALLOW_UNSIGNED` gives (no, read, all) at run time.
+fn signing() -> Result<Signing, String> {
+    let mut signing = settings::signing();
+    if let Some(path) = std::env::var_os("ARMGATE_KEY_FILE") {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
+        let key = SigningKey::parse(&text)
+            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
+        signing.key = Some(key);
+    }
+    if let Ok(text) = std::env::var("ARMGATE_ALLOW_UNSIGNED") {
+        signing.unsigned = text
+            .parse()
+            .map_err(|e| format!("ARMGATE_ALLOW_UNSIGNED: `{text}`: {e}"))?;
+    }
+    Ok(signing)
 }
 
 /// The embedded robot, or the one `ARMGATE_ROBOT_FILE` names.

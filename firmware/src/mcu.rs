@@ -8,7 +8,7 @@ use embassy_stm32::wdg::IndependentWatchdog;
 use static_cell::StaticCell;
 use {defmt_rtt as _, panic_probe as _};
 
-use crate::{clocks, config, control, drives, eth, net, telemetry};
+use crate::{clocks, config, control, drives, eth, net, settings, telemetry};
 
 /// The network driver of this board.
 pub type NetDevice = eth::Device;
@@ -73,7 +73,7 @@ fn main() -> ! {
     let watchdog = IndependentWatchdog::new(p.IWDG1, timeout_us);
     interrupt::UART4.set_priority(CONTROL_PRIORITY);
     let control_spawner = CONTROL_EXECUTOR.start(interrupt::UART4);
-    match control::run(robot, drives, watchdog) {
+    match control::run(robot, drives, watchdog, settings::signing()) {
         Ok(task) => control_spawner.spawn(task),
         Err(e) => defmt::panic!("cannot spawn the control task: {}", e),
     }

@@ -24,7 +24,7 @@ pub use crate::board::NetDevice as Device;
 /// Datagrams the UDP socket buffers in each direction, before the queues of [`crate::link`].
 pub const SOCKET_PACKETS: usize = 8;
 /// Payload bytes of the UDP socket buffers in each direction (the protocol's datagrams are 31
-/// bytes; a larger datagram that does not fit is dropped by the stack).
+/// bytes, 44 signed; a larger datagram that does not fit is dropped by the stack).
 const SOCKET_BYTES: usize = SOCKET_PACKETS * 64;
 /// Sockets of the stack: the UDP server, and the DHCP client with `dhcp`.
 const SOCKETS: usize = 2;

@@ -1,12 +1,23 @@
-//! Network settings embedded at build time.
+//! Network and signing settings embedded at build time.
 //!
-//! `build.rs` reads `ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT` and `ARMGATE_ALLOW` and
-//! writes the constants below (`OUT_DIR/settings.rs`); a malformed value fails the build.
-//! Defaults: `192.168.1.50/24`, no gateway, port 7031, allow-list `local` (the board's own
-//! network). See `docs/firmware.md`.
+//! `build.rs` reads `ARMGATE_IP`, `ARMGATE_GATEWAY`, `ARMGATE_PORT`, `ARMGATE_ALLOW`,
+//! `ARMGATE_KEY_FILE` and `ARMGATE_ALLOW_UNSIGNED` and writes the constants below
+//! (`OUT_DIR/settings.rs`); a malformed value fails the build. Defaults: `192.168.1.50/24`,
+//! no gateway, port 7031, allow-list `local` (the board's own network), no key. See
+//! `docs/firmware.md`.
 
 use core::net::Ipv4Addr;
 
 pub use armgate_core::command::Network;
+use armgate_core::cycle::{Signing, UnsignedAccess};
+use armgate_protocol::client::signed::SigningKey;
 
 include!(concat!(env!("OUT_DIR"), "/settings.rs"));
+
+/// The signing settings of the build (no key: every datagram unsigned, as the seed).
+pub fn signing() -> Signing {
+    Signing {
+        key: SIGNING_KEY.map(|bytes| SigningKey::new(&bytes)),
+        unsigned: ALLOW_UNSIGNED,
+    }
+}

@@ -7,6 +7,7 @@
 use armgate_core::drives::DriveState;
 use armgate_core::motion::Mode;
 use armgate_protocol::client::Text;
+use armgate_protocol::client::signed::SigningReport;
 use embassy_net::Stack;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::signal::Signal;
@@ -46,6 +47,8 @@ pub struct Status {
     pub drives: DriveState,
     /// Its fault (the client's `ER3x` text), if any.
     pub fault: Option<Text>,
+    /// The signature checks since boot (`SQ` index 4).
+    pub signing: SigningReport,
 }
 
 /// The latest snapshot; a new one replaces an unread one.
@@ -64,6 +67,15 @@ pub async fn run(stack: Stack<'static>) {
             read(&CAN_COUNTERS.bus_errors),
             read(&CAN_COUNTERS.foreign_frames),
             read(&CAN_COUNTERS.bus_offs),
+        );
+        defmt::info!(
+            "signing: {} signed, {} unsigned served; dropped {} unsigned, {} truncated, {} forged, {} replayed",
+            s.signing.signed,
+            s.signing.unsigned,
+            s.signing.dropped_unsigned,
+            s.signing.dropped_truncated,
+            s.signing.dropped_forged,
+            s.signing.dropped_replayed,
         );
         defmt::info!(
             "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} relay",

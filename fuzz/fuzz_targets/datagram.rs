@@ -7,13 +7,19 @@
 //! * bits 0–1: the control ticks run after the chunk: 0, 1, 8 or 64;
 //! * bit 2 clear: a **datagram** of `h >> 3` bytes (0..=31; fewer if the input ends first),
 //!   queued for the cycle (at most 8 are answered per tick, in order);
-//! * bit 2 set: a **CAN frame** the drive manager receives as if from the bus: bits 3–6 are the
-//!   data length (capped at 8), then two bytes of identifier (little-endian, 11 bits), then
-//!   the data.
+//! * bit 2 set, bits 3–6 below 15: a **CAN frame** the drive manager receives as if from the
+//!   bus: bits 3–6 are the data length (capped at 8), then two bytes of identifier
+//!   (little-endian, 11 bits), then the data;
+//! * bit 2 set, bits 3–6 = 15: a **signed datagram**: a control byte `c`, then the 31-byte
+//!   message (zero-filled if the input ends). It is signed with the fuzz key on link `c & 7`
+//!   (0 is the controller's own: refused) at the link's last timestamp + `(c >> 3 & 7)` − 2
+//!   (so 0 or less repeat or go back: refused as replays); `c` bit 6 flips a tag bit (forged),
+//!   bit 7 cuts the block to 40 bytes (truncated).
 //!
 //! Every input starts from the same state: the [`Cycle`] of `robots/ranger-mk1.toml` with the
 //! drive manager on a virtual bus of simulated Whistles at their home angles, the drives
-//! started and streaming. At most [`MAX_TICKS`] ticks run per input; at the end, ticks run
+//! started and streaming, a signing key set and unsigned datagrams allowed to do everything
+//! (so the unsigned chunks exercise the handler as they did without a key). At most [`MAX_TICKS`] ticks run per input; at the end, ticks run
 //! until every datagram is answered.
 //!
 //! Checked, for every datagram:
@@ -25,6 +31,11 @@
 //!   the protocol defines for that request (exact bytes: NUL-terminated, zero-filled). A
 //!   datagram that is not a request gets exactly `ER00`/`ER01`.
 //!
+//! A signed datagram is answered if and only if the target's own model of the rules (a client
+//! link, the right tag, a whole block, a timestamp newer than the link's last one) says so,
+//! and then its answer and the notices after it are signed: the key's tag on the controller's
+//! link, a timestamp not older than the request's. (The answer itself is checked as above.)
+//!
 //! and for every tick: every joint command is finite and within the joint limits, its
 //! acceleration (against the two commands before it) within `max_acceleration` (+1e-9
 //! relative), and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`, `WN27` or
@@ -35,11 +46,16 @@ use std::collections::VecDeque;
 use std::sync::OnceLock;
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{
+    CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing, UnsignedAccess,
+};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
+use armgate_protocol::client::signed::{
+    CONTROLLER_LINK, SIGNED_LEN, Signature, Signed, SigningKey,
+};
 use armgate_protocol::client::{
     Command, Hold, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
 };
@@ -51,6 +67,11 @@ const TICKS: [u32; 4] = [0, 1, 8, 64];
 const MAX_TICKS: u32 = 256;
 /// Ticks the drives may take to start.
 const START_TICKS: u32 = 200;
+
+/// The fuzz target's signing key.
+const KEY: [u8; 32] = [0x42; 32];
+/// The CAN length field that marks a signed datagram instead.
+const SIGNED_CHUNK: u8 = 15;
 
 /// The robot file, relative to the fuzz crate.
 const ROBOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
@@ -83,13 +104,73 @@ impl CanBus for FuzzBus {
 type FuzzCycle = Cycle<CanDrives<FuzzBus>, ()>;
 
 /// The client: datagrams waiting, and the answers checked as they come.
-#[derive(Default)]
 struct Client {
     /// The last two joint commands (cleared when none is sent).
     commands: Vec<Joints>,
     waiting: VecDeque<Datagram<()>>,
-    /// Requests sent and not yet answered, with what the parsers made of them.
-    unanswered: VecDeque<(Vec<u8>, Result<Request, Notice>)>,
+    /// Requests sent and not yet answered, with what the parsers made of them and, for a
+    /// signed one, its timestamp (its answer must be signed and not older).
+    unanswered: VecDeque<(Vec<u8>, Result<Request, Notice>, Option<u64>)>,
+    key: SigningKey,
+    /// Per link id, the last timestamp served (the model of the controller's replay table).
+    last: [Option<u64>; 8],
+    /// The timestamp of the last signed request served: notices after it are signed.
+    signed_at: Option<u64>,
+}
+
+impl Default for Client {
+    fn default() -> Self {
+        Self {
+            waiting: VecDeque::new(),
+            unanswered: VecDeque::new(),
+            key: SigningKey::new(&KEY),
+            last: [None; 8],
+            signed_at: None,
+        }
+    }
+}
+
+impl Client {
+    /// Queues the signed datagram of a chunk; it is expected to be answered only if the rules
+    /// let it through.
+    fn push_signed(&mut self, control: u8, message: &[u8]) {
+        let mut bytes = [0u8; MESSAGE_LEN];
+        bytes.iter_mut().zip(message).for_each(|(b, m)| *b = *m);
+        let link = control & 7;
+        let slot = usize::from(link);
+        let base = self.last[slot].unwrap_or(1_000);
+        let timestamp = (base + u64::from(control >> 3 & 7)).saturating_sub(2);
+        let mut signed = Signature { link, timestamp }.emit(&bytes, &self.key);
+        let forged = control & 0x40 != 0;
+        if forged {
+            signed[SIGNED_LEN - 1] ^= 0x10;
+        }
+        let len = if control & 0x80 != 0 { 40 } else { SIGNED_LEN };
+        self.waiting.push_back(Datagram::new(&signed[..len], ()));
+        let fresh = self.last[slot].is_none_or(|last| timestamp > last);
+        if link == CONTROLLER_LINK || forged || len < SIGNED_LEN || !fresh {
+            return;
+        }
+        self.last[slot] = Some(timestamp);
+        let expected = check_parsers(&bytes);
+        self.unanswered
+            .push_back((bytes.to_vec(), expected, Some(timestamp)));
+    }
+
+    /// The 31-byte message of an answer; a signed one is verified (after `not_before`).
+    fn open(&self, payload: &[u8], not_before: Option<u64>) -> [u8; MESSAGE_LEN] {
+        let message = match not_before {
+            None => payload,
+            Some(at) => {
+                let block = Signed::new_checked(payload).expect("a signed answer");
+                let signature = Signature::parse(&block, &self.key).expect("the key's tag");
+                assert_eq!(signature.link, CONTROLLER_LINK);
+                assert!(signature.timestamp >= at, "an answer older than its request");
+                &payload[..MESSAGE_LEN]
+            }
+        };
+        message.try_into().expect("31 bytes")
+    }
 }
 
 impl Link<()> for Client {
@@ -98,13 +179,15 @@ impl Link<()> for Client {
     }
 
     fn send(&mut self, datagram: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
-        let bytes: [u8; MESSAGE_LEN] = datagram.payload().try_into().expect("31 bytes");
         match kind {
             Outgoing::Reply => {
-                let (request, expected) = self.unanswered.pop_front().expect("a reply to nothing");
+                let (request, expected, signed) =
+                    self.unanswered.pop_front().expect("a reply to nothing");
+                let bytes = self.open(datagram.payload(), signed);
+                self.signed_at = signed;
                 check_reply(&request, expected, &bytes);
             }
-            Outgoing::Notice => check_notice(&bytes),
+            Outgoing::Notice => check_notice(&self.open(datagram.payload(), self.signed_at)),
         }
         Ok(())
     }
@@ -125,7 +208,11 @@ fn start() -> &'static FuzzCycle {
             injected: VecDeque::new(),
         };
         let drives = CanDrives::started(config, &DriveSettings::default(), bus).expect("drives");
-        let mut cycle = Cycle::new(config, drives);
+        let signing = Signing {
+            key: Some(SigningKey::new(&KEY)),
+            unsigned: UnsignedAccess::All,
+        };
+        let mut cycle = Cycle::new(config, drives).with_signing(signing);
         let mut client = Client::default();
         for _ in 0..START_TICKS {
             if cycle.drives().manager().is_operational() {
@@ -184,8 +271,14 @@ fuzz_target!(|data: &[u8]| {
             let (datagram, tail) = rest.split_at(len.min(rest.len()));
             rest = tail;
             let expected = check_parsers(datagram);
-            client.unanswered.push_back((datagram.to_vec(), expected));
+            client.unanswered.push_back((datagram.to_vec(), expected, None));
             client.waiting.push_back(Datagram::new(datagram, ()));
+        } else if (header >> 3) & 0x0F == SIGNED_CHUNK {
+            let (chunk, tail) = rest.split_at((1 + MESSAGE_LEN).min(rest.len()));
+            rest = tail;
+            if let Some((&control, message)) = chunk.split_first() {
+                client.push_signed(control, message);
+            }
         } else {
             let len = usize::from((header >> 3) & 0x0F).min(8);
             let (frame, tail) = rest.split_at((2 + len).min(rest.len()));

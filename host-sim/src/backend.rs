@@ -186,6 +186,7 @@ impl CanBus for Bus {
         };
         if sent.is_ok() {
             crate::pcap::can(frame);
+            crate::record::can(frame);
         }
         sent
     }
@@ -195,7 +196,10 @@ impl CanBus for Bus {
             Self::Virtual(bus) => bus.try_receive(),
             Self::Socket(bus) => bus.try_receive(),
         };
-        frame.inspect(crate::pcap::can)
+        frame.inspect(|frame| {
+            crate::pcap::can(frame);
+            crate::record::can(frame);
+        })
     }
 
     fn state(&self) -> BusState {

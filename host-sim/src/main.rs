@@ -7,6 +7,7 @@ mod args;
 mod backend;
 mod log;
 mod pcap;
+mod record;
 mod socketcan;
 mod status;
 mod udp;
@@ -22,12 +23,13 @@ use std::time::{Duration, Instant};
 use armgate_core::command::Network;
 use armgate_core::config::{Streaming, ValidRobot, load_file};
 use armgate_core::cycle::replay::{self, Replay};
-use armgate_core::cycle::{Cycle, DriveSide};
+use armgate_core::cycle::{Cycle, DriveSide, Signing, UnsignedAccess};
 use armgate_core::drives::SAMPLE_TIME;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
 use armgate_core::sim::ArmModel;
 use armgate_core::sim::{IdealArm, RateLimitedArm};
+use armgate_protocol::client::signed::SigningKey;
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
@@ -53,6 +55,19 @@ struct Args {
     /// counted.
     #[arg(long = "allow", value_name = "NETWORK")]
     allow: Vec<Network>,
+    /// The signing key file (64 hex digits on one line; docs/safety.md, "Signing"): only
+    /// datagrams signed with it are served, the rest dropped and counted.
+    #[arg(long, value_name = "FILE")]
+    key: Option<PathBuf>,
+    /// With --key: what unsigned datagrams may do: `no` (dropped), `read` (PS, jP, TM, SQ and
+    /// the stops ST, jR) or `all` (a lab moving its clients to signing).
+    #[arg(
+        long,
+        default_value = "no",
+        value_name = "no|read|all",
+        requires = "key"
+    )]
+    allow_unsigned: UnsignedAccess,
     /// Where set-points go: `sim` = one simulated Elmo Whistle per drive of the robot file on
     /// a virtual CAN bus; `socketcan:IFACE` = real drives through Linux SocketCAN (e.g.
     /// socketcan:can0); `off` = no drives, a simulated arm (see --arm).
@@ -86,6 +101,16 @@ struct Args {
     /// Wireshark with tools/wireshark/armgate.lua).
     #[arg(long, value_name = "FILE")]
     pcap: Option<PathBuf>,
+    /// Record the run into this MCAP file for Foxglove (docs/visualisation.md): joints,
+    /// frames, goals and planned paths, the workspace, every request, reply and notice, the
+    /// raw datagrams and CAN frames, and the URDF; simulation time as log time.
+    #[arg(long, value_name = "FILE")]
+    mcap: Option<PathBuf>,
+    /// Serve the same channels live over the Foxglove WebSocket protocol (Foxglove: Open
+    /// connection, ws://ADDR), on 127.0.0.1:8765 without ADDR. Read-only: a viewer cannot
+    /// command the arm; mind who can reach ADDR all the same.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    foxglove: Option<SocketAddr>,
     /// Exit after this many seconds (default: run until Ctrl-C or SIGTERM).
     #[arg(long, value_name = "SECONDS", value_parser = args::parse_seconds)]
     duration: Option<f64>,
@@ -182,7 +207,12 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     if let Some(replay) = &args.replay {
         return replay_exchange(config, drives, replay);
     }
-    let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives);
+    let signing = signing(args)?;
+    let signing_note = match &signing.key {
+        Some(_) => format!(", signing key set (unsigned: {})", signing.unsigned),
+        None => String::new(),
+    };
+    let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives).with_signing(signing);
     let allow = args::allow_list(&args.allow);
     let logger = match &args.log_dir {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
@@ -193,6 +223,17 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             Some(pcap::Capture::start(path).map_err(|e| format!("{}: {e}", path.display()))?)
         }
         None => None,
+    };
+    let recording = if args.mcap.is_some() || args.foxglove.is_some() {
+        let (recording, live) =
+            record::Recording::start(config, args.mcap.as_deref(), args.foxglove)
+                .map_err(|e| e.to_string())?;
+        if let Some(addr) = live {
+            eprintln!("armgate-sim: Foxglove live view on ws://{addr}");
+        }
+        Some(recording)
+    } else {
+        None
     };
     let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
     let local = socket.local_addr().map_err(|e| e.to_string())?;
@@ -206,7 +247,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
     let allowed: Vec<String> = allow.iter().map(ToString::to_string).collect();
     eprintln!(
-        "armgate-sim: {} ({n} joints, {:.2} ms period, drives: {describe}) on udp://{}, allowing {}",
+        "armgate-sim: {} ({n} joints, {:.2} ms period, drives: {describe}) on udp://{}, allowing {}{signing_note}",
         config.name,
         config.control_period * 1e3,
         socket.local_addr().map_err(|e| e.to_string())?,
@@ -241,6 +282,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             time: elapsed.as_secs_f64(),
             error: None,
         };
+        record::set_time(cycle.next_due_us());
         let outcome = cycle.tick(micros(elapsed), &mut link);
         if let Some(error) = link.error {
             return Err(error);
@@ -256,6 +298,17 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
                 command: out.command,
                 setpoint: out.setpoint,
             })));
+        }
+        if record::enabled()
+            && let Ok(out) = &outcome.step
+        {
+            record::joints(
+                outcome.time,
+                cycle.drives().measured(),
+                out.command,
+                out.setpoint,
+                out.measured_pose,
+            );
         }
         if status && now >= next_status {
             next_status = now + Duration::from_millis(250);
@@ -276,15 +329,37 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             path.display()
         );
     }
+    if let Some(recording) = recording {
+        let dropped = record::dropped();
+        let (written, _) = recording.finish().map_err(|e| format!("record: {e}"))?;
+        eprintln!(
+            "armgate-sim: recorded {written} messages, {dropped} events dropped (queue full)"
+        );
+    }
     let counters = cycle.counters();
     eprintln!(
         "armgate-sim: stopped; {}",
         status::summary(&stats, status::snapshot(&cycle).refused, &counters, dropped)
     );
+    eprintln!("armgate-sim: {}", status::signing(&cycle.signing()));
     if let Some(summary) = cycle.drives().socketcan_summary() {
         eprintln!("armgate-sim: {summary}");
     }
     Ok(())
+}
+
+/// `--key` and `--allow-unsigned`.
+fn signing(args: &Args) -> Result<Signing, String> {
+    let Some(path) = &args.key else {
+        return Ok(Signing::default());
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("--key {}: {e}", path.display()))?;
+    let key = SigningKey::parse(&text).map_err(|e| format!("--key {}: {e}", path.display()))?;
+    Ok(Signing {
+        key: Some(key),
+        unsigned: args.allow_unsigned,
+    })
 }
 
 /// `--replay FILE TICKS`: the cycle as `run` builds it, on the recorded exchange.

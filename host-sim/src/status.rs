@@ -5,6 +5,7 @@ use std::net::SocketAddr;
 use armgate_core::command::Status;
 use armgate_core::cycle::{Cycle, CycleCounters};
 use armgate_protocol::client::DriveStatus;
+use armgate_protocol::client::signed::{SigningPolicy, SigningReport};
 
 use crate::backend::Backend;
 use crate::log::Logger;
@@ -47,8 +48,17 @@ pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) 
     } else {
         "holding"
     };
+    let signing = cycle.signing();
+    let signing = match signing.policy {
+        Some(SigningPolicy::Off) | None => String::new(),
+        Some(_) => format!(
+            " signed {} unverified {}",
+            signing.signed,
+            signing.dropped()
+        ),
+    };
     format!(
-        "mode {:<9} drives {:<8} {motion:<7} {pose} | rx {} refused {} denied {} warnings {} log dropped {}",
+        "mode {:<9} drives {:<8} {motion:<7} {pose} | rx {} refused {} denied {}{signing} warnings {} log dropped {}",
         ctrl.mode().name(),
         drive_state(&status),
         stats.received,
@@ -78,6 +88,31 @@ pub fn summary(stats: &Stats, refused: u32, counters: &CycleCounters, log_droppe
     )
 }
 
+/// The signing line printed at exit: the policy, what was served, what was dropped by cause.
+pub fn signing(report: &SigningReport) -> String {
+    let policy = match report.policy {
+        Some(SigningPolicy::Off) | None => {
+            return format!(
+                "signing off (no key), {} datagrams unsigned",
+                report.unsigned
+            );
+        }
+        Some(SigningPolicy::Required) => "signing required",
+        Some(SigningPolicy::UnsignedRead) => "signing required, unsigned may read",
+        Some(SigningPolicy::UnsignedAll) => "signing on, unsigned allowed",
+    };
+    format!(
+        "{policy}: {} signed and {} unsigned datagrams served; dropped: {} unsigned, \
+         {} truncated, {} forged, {} replayed",
+        report.signed,
+        report.unsigned,
+        report.dropped_unsigned,
+        report.dropped_truncated,
+        report.dropped_forged,
+        report.dropped_replayed
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -101,6 +136,26 @@ mod tests {
         assert!(
             s.contains("50 ticks late (caught up), 103 ticks missed (skipped)"),
             "{s}"
+        );
+    }
+
+    #[test]
+    fn the_signing_line_counts_by_cause() {
+        let report = SigningReport {
+            policy: Some(SigningPolicy::Required),
+            signed: 9,
+            dropped_forged: 2,
+            dropped_replayed: 1,
+            ..SigningReport::default()
+        };
+        assert_eq!(
+            signing(&report),
+            "signing required: 9 signed and 0 unsigned datagrams served; dropped: 0 unsigned, \
+             0 truncated, 2 forged, 1 replayed"
+        );
+        assert_eq!(
+            signing(&SigningReport::default()),
+            "signing off (no key), 0 datagrams unsigned"
         );
     }
 

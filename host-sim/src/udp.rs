@@ -54,6 +54,7 @@ impl Link<SocketAddr> for UdpLink<'_> {
             // Captured before the allow-list: a refused client is what one looks for in a
             // capture.
             crate::pcap::udp(from, self.local, buf.get(..len).unwrap_or(&[]));
+            crate::record::request(from, self.local, buf.get(..len).unwrap_or(&[]));
             if !self.allow.iter().any(|net| net.contains(from.ip())) {
                 self.stats.refused_sources += 1;
                 continue;
@@ -95,6 +96,7 @@ impl Link<SocketAddr> for UdpLink<'_> {
         let sent = self.socket.send_to(bytes, datagram.peer);
         if sent.is_ok() {
             crate::pcap::udp(self.local, datagram.peer, bytes);
+            crate::record::answer(self.local, datagram.peer, bytes);
         }
         sent.map(drop).map_err(|_| Dropped)
     }

@@ -7,9 +7,12 @@ use armgate_core::config::{
     BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
     JointType, MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot, WorkspaceConfig,
 };
-use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{
+    CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing, UnsignedAccess,
+};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_protocol::can::CanFrame;
+use armgate_protocol::client::signed::{KEY_LEN, SigningKey};
 use armgate_protocol::client::{Message, Request};
 
 /// A bus whose every answer is unknown to the optimiser.
@@ -98,7 +101,7 @@ struct OpaqueLink;
 impl Link<()> for OpaqueLink {
     fn receive(&mut self) -> Option<Datagram<()>> {
         let datagram: [u8; 64] = black_box([0; 64]);
-        let bytes = datagram.get(..black_box(31)).unwrap_or(&[]);
+        let bytes = datagram.get(..black_box(44)).unwrap_or(&[]);
         black_box(true).then(|| Datagram::new(bytes, ()))
     }
 
@@ -119,7 +122,12 @@ pub extern "C" fn _start() -> ! {
     let Ok(drives) = CanDrives::started(&robot, &DriveSettings::default(), OpaqueBus) else {
         halt()
     };
-    let mut cycle: Cycle<_, ()> = Cycle::new(&robot, drives);
+    // Signed or not, any policy: the signature checks are under proof too.
+    let signing = Signing {
+        key: black_box(Some(SigningKey::new(&black_box([7; KEY_LEN])))),
+        unsigned: black_box(UnsignedAccess::Read),
+    };
+    let mut cycle: Cycle<_, ()> = Cycle::new(&robot, drives).with_signing(signing);
     let mut link = OpaqueLink;
     loop {
         black_box(cycle.tick(black_box(0), &mut link).time);

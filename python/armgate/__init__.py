@@ -37,6 +37,7 @@ from .errors import (
     NotUnderstood,
     OutsideWorkspace,
     ReplyTimeout,
+    SignatureMismatch,
     Stalled,
     Undersized,
     ViaPointMissed,
@@ -45,6 +46,7 @@ from .errors import (
     WorkspaceLimit,
 )
 from .pose import Pose
+from .signing import Signer
 from .status import DriveState, Mode, Motion, Status, StopCause
 
 __all__ = [
@@ -75,6 +77,8 @@ __all__ = [
     "OutsideWorkspace",
     "Pose",
     "ReplyTimeout",
+    "SignatureMismatch",
+    "Signer",
     "Stalled",
     "Status",
     "StopCause",

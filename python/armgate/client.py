@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 from typing import Callable, Deque, List, Optional, Sequence, Tuple, TypeVar, Union
 
 from . import wire
+from .signing import KeyLike, Signer
 from .errors import (
     BadIndex,
     ControllerMessage,
@@ -18,6 +19,7 @@ from .errors import (
     ControllerUnreachable,
     NotUnderstood,
     ReplyTimeout,
+    SignatureMismatch,
     Stalled,
     WaitTimeout,
 )
@@ -82,6 +84,10 @@ class Arm:
 
     ``joints``: the arm's joint count; by default it is asked of the controller (``SQ``) or, on
     a controller without the status request, read off the ``TM`` reply.
+
+    ``key``: sign every request and accept only answers signed with this key (32 bytes, or the
+    path of a key file: 64 hex digits on one line), on link ``link_id`` (1..255; clients that
+    run at the same time need their own). See docs/safety.md, "Signing".
     """
 
     def __init__(
@@ -94,7 +100,13 @@ class Arm:
         joints: Optional[int] = None,
         on_notice: Optional[NoticeCallback] = None,
         wait_options: WaitOptions = WaitOptions(),
+        key: Optional[KeyLike] = None,
+        link_id: int = 1,
     ) -> None:
+        self._signer = Signer(key, link_id) if key is not None else None
+        self._signed_at = 0
+        self.unverified = 0
+        """Datagrams dropped because they were not signed with the key, or were old."""
         info = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)[0]
         self._socket = socket.socket(info[0], socket.SOCK_DGRAM)
         # A connected socket receives only the controller's datagrams.
@@ -484,7 +496,10 @@ class Arm:
                 except (ConnectionRefusedError, ConnectionResetError):
                     # An ICMP error left over from an earlier send.
                     continue
-                text = wire.text_of(datagram)
+                verified = self._verified(datagram)
+                if verified is None:
+                    continue
+                text = wire.text_of(verified)
                 if text is not None:
                     self._notice(text)
                 else:
@@ -507,9 +522,16 @@ class Arm:
         self._drain()
         attempts = self.retries + 1
         refused = False
-        for _ in range(attempts):
+        unverified = self.unverified
+        for attempt in range(attempts):
+            outgoing = datagram
+            if self._signer is not None:
+                # Each attempt signed anew: the controller serves a timestamp once.
+                outgoing, timestamp = self._signer.sign(datagram)
+                if attempt == 0:
+                    self._signed_at = timestamp
             try:
-                self._socket.send(datagram)
+                self._socket.send(outgoing)
             except (ConnectionRefusedError, ConnectionResetError):
                 refused = True
                 continue
@@ -522,7 +544,19 @@ class Arm:
                 f"nothing listens at {self._socket.getpeername()} (connection refused); "
                 "is the controller running?"
             )
+        if self.unverified > unverified:
+            raise SignatureMismatch(chars, self.unverified - unverified)
         raise ReplyTimeout(chars, attempts, self.timeout)
+
+    def _verified(self, datagram: bytes) -> Optional[bytes]:
+        """The datagram as it is without a key; with one, its message if signed with the key
+        and not older than the last request (else None, counted)."""
+        if self._signer is None:
+            return datagram
+        message = self._signer.open(datagram, self._signed_at)
+        if message is None:
+            self.unverified += 1
+        return message
 
     def _await_reply(self, chars: str, index: int) -> Union[bytes, str]:
         deadline = _time.monotonic() + self.timeout
@@ -541,6 +575,10 @@ class Arm:
                 continue
             finally:
                 self._socket.settimeout(None)
+            verified = self._verified(datagram)
+            if verified is None:
+                continue
+            datagram = verified
             kind, text = wire.classify(chars, index, datagram)
             if kind == wire.REPLY:
                 return datagram[: wire.MESSAGE_LEN]

@@ -34,6 +34,19 @@ class ReplyTimeout(ArmError, TimeoutError):
         self.timeout = timeout
 
 
+class SignatureMismatch(ArmError):
+    """No answer signed with the key came, but other datagrams did: the controller has no key
+    or another one, or someone else answers."""
+
+    def __init__(self, command: str, count: int) -> None:
+        super().__init__(
+            f"no signed answer to {command}: {count} datagram(s) came unsigned or not signed "
+            "with the key (has the controller this key?)"
+        )
+        self.command = command
+        self.count = count
+
+
 class ControllerUnreachable(ArmError, ConnectionError):
     """The operating system reported the controller's port as closed (ICMP port unreachable)."""
 

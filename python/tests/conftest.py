@@ -6,6 +6,7 @@ repository (built with cargo if missing).
 
 from __future__ import annotations
 
+import importlib
 import os
 import re
 import socket
@@ -22,15 +23,37 @@ import armgate
 REPO = Path(__file__).resolve().parents[2]
 
 
-def sim_binary() -> Path:
-    given = os.environ.get("ARMGATE_SIM")
+def built_binary(package: str, variable: str) -> Path:
+    """``$variable`` if set, else ``target/debug/<package>`` of this repository (built with
+    cargo if missing)."""
+    given = os.environ.get(variable)
     if given:
         return Path(given)
     target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
-    binary = target / "debug" / "armgate-sim"
+    binary = target / "debug" / package
     if not binary.exists():
-        subprocess.run(["cargo", "build", "-q", "-p", "armgate-sim"], cwd=REPO, check=True)
+        subprocess.run(["cargo", "build", "-q", "-p", package], cwd=REPO, check=True)
     return binary
+
+
+def sim_binary() -> Path:
+    return built_binary("armgate-sim", "ARMGATE_SIM")
+
+
+def viz_binary() -> Path:
+    """The tool behind ``armgate urdf`` and ``armgate record``."""
+    return built_binary("armgate-viz", "ARMGATE_VIZ")
+
+
+def require_viz_package(name: str):
+    """Imports a PyPI package the URDF and MCAP tests read with: skipped without it, unless
+    ``ARMGATE_REQUIRE_VIZ=1`` (CI sets it): then the test fails."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        if os.environ.get("ARMGATE_REQUIRE_VIZ") == "1":
+            pytest.fail(f"{name} is not installed (pip install {name})")
+        pytest.skip(f"{name} is not installed")
 
 
 def free_port() -> int:
@@ -58,7 +81,12 @@ class Sim:
 
     def wait_ready(self) -> None:
         deadline = time.monotonic() + 20
-        with armgate.Arm("127.0.0.1", self.port, timeout=0.1, retries=0, joints=1) as probe:
+        # A simulator with --key answers only signed requests.
+        args = self.process.args
+        key = args[args.index("--key") + 1] if "--key" in args else None
+        with armgate.Arm(
+            "127.0.0.1", self.port, timeout=0.1, retries=0, joints=1, key=key, link_id=200
+        ) as probe:
             while time.monotonic() < deadline:
                 if self.process.poll() is not None:
                     raise RuntimeError(f"armgate-sim exited: {self.process.stderr.read()!r}")

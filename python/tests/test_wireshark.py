@@ -18,6 +18,7 @@ from typing import List, Optional
 import pytest
 
 import armgate
+from armgate import signing
 from conftest import REPO, Sim
 
 DISSECTOR = REPO / "tools" / "wireshark" / "armgate.lua"
@@ -236,6 +237,16 @@ def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
         _can(0x0E5, bytes([0x00, 0xFF, 0x81, 0x5C, 0x65, 0x04, 0, 0])),  # 13 EMCY PDO not mapped
         _can(0x665, bytes([0x23, 0x02, 0x16, 0x01, 0x20, 0x00, 0x02, 0x20])),  # 14 map 0x2002
         _can(0x100, struct.pack("<I", 4_000_000_123)),                   # 15 Time Stamp
+        # 16: a signed BG (the known answer of protocol/src/client/signed/block.rs), 17: a
+        # signed notice from the controller (link 0) at 2026-01-01 00:00:00 UTC, 18: a cut-off
+        # block, 19: the signing counters (QS index 4).
+        _udp(40000, 7031, signing.sign(bytes(range(32)), armgate.wire.encode("BG"), 1,
+                                       0x0123456789AB)),
+        _udp(7031, 40000, signing.sign(bytes(range(32)),
+                                       b"WN27 Via point missed.".ljust(31, b"\0"), 0,
+                                       (1_767_225_600 - 1_420_070_400) * 100_000)),
+        _udp(40000, 7031, armgate.wire.encode("PS") + b"\x01\x02\x03"),
+        _udp(7031, 40000, wire_reply("QS", [1, 12, 0, 1, 2, 3, 4], 4)),
     ]
     path = tmp_path_factory.mktemp("crafted") / "crafted.pcapng"
     path.write_bytes(_pcapng(packets))
@@ -284,3 +295,18 @@ def test_pdo_streaming_frames_are_decoded(tshark: str, crafted: dict) -> None:
     assert row(14, "armgate_can.sdo.object", "armgate_can.meaning") == ["0x1602", "RPDO3 mapping"]
     assert row(15, "armgate_can.service", "armgate_can.time_stamp.micros") == [
         "Time Stamp", "4000000123"]
+
+
+def test_signature_blocks_are_decoded(tshark: str, crafted: dict) -> None:
+    def row(n: int, *names: str) -> List[str]:
+        return fields(tshark, crafted, f"frame.number == {n}", *names)[0]
+
+    assert row(16, "armgate.command", "armgate.signature.link", "armgate.signature.timestamp",
+               "armgate.signature.tag") == ["BG", "1", str(0x0123456789AB), "b224bae2fc46"]
+    assert row(17, "armgate.text", "armgate.signature.link", "armgate.signature.time") == [
+        "WN27 Via point missed.", "0", "2026-01-01 00:00:00"]
+    info = fields(tshark, crafted, "frame.number == 18", "_ws.col.Info")[0][0]
+    assert "signature truncated" in info
+    assert row(19, "armgate.signing.policy", "armgate.signing.signed",
+               "armgate.signing.dropped_forged", "armgate.signing.dropped_replayed") == [
+        "1", "12", "3", "4"]

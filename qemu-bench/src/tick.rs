@@ -15,11 +15,13 @@
 //!    the link), whole.
 //! 3. **Stack**: the stack is painted below the caller, the move runs again, and the lowest
 //!    word written gives the stack the control work needs.
+//! 4. **Signing** ([`signing`]): one signature check and one signing on their own, and the
+//!    tick that carries a signed `PS` (checked, answered signed) with a key set.
 
 use core::f64::consts::FRAC_PI_2;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
-use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing};
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::math;
@@ -31,6 +33,7 @@ use cortex_m_semihosting::hprintln;
 use crate::counter::{Counter, Timing, measure};
 use crate::stack;
 
+mod signing;
 mod twist;
 
 include!(concat!(env!("OUT_DIR"), "/robots.rs"));
@@ -112,12 +115,21 @@ impl Session {
     /// drive manager at power-up) and streaming, after one more tick (so that the arm's pose is
     /// measured).
     fn new(config: &ValidRobot, start: Option<&[f64]>) -> Result<Self, &'static str> {
+        Self::with_signing(config, start, Signing::default())
+    }
+
+    /// The same, checking signatures as `signing` says.
+    fn with_signing(
+        config: &ValidRobot,
+        start: Option<&[f64]>,
+        signing: Signing,
+    ) -> Result<Self, &'static str> {
         let q = start_joints(config, start)?;
         let bus = BenchBus(VirtualBus::for_robot_at(config, &q));
         let drives = CanDrives::started(config, &DriveSettings::default(), bus)
             .map_err(|_| "the drive manager refused the robot")?;
         let mut session = Self {
-            cycle: Cycle::new(config, drives),
+            cycle: Cycle::new(config, drives).with_signing(signing),
             link: BenchLink::default(),
         };
         for _ in 0..START_TICKS {
@@ -169,8 +181,14 @@ impl Session {
             index: 0,
         }
         .to_bytes();
+        self.exchange(&datagram, expect)
+    }
+
+    /// One tick that carries `datagram`, in a measurement window; the reply must start with
+    /// `expect`.
+    fn exchange(&mut self, datagram: &[u8], expect: &[u8; 2]) -> Result<u32, &'static str> {
         self.advance_bus()?;
-        self.link.waiting = Some(Datagram::new(&datagram, ()));
+        self.link.waiting = Some(Datagram::new(datagram, ()));
         self.link.answer = None;
         let (ticks, ()) = measure(|| self.tick());
         match self.link.answer {
@@ -292,6 +310,7 @@ fn measure_robot(
         None
     };
     let stack_used = stack_high_water(config, start)?;
+    let signing = signing::costs(config, Some(start))?;
 
     let row = |part: &str, timing: &Timing, how: &str| {
         let (mean, max) = timing.instructions(counter);
@@ -360,6 +379,21 @@ fn measure_robot(
     row(
         "tick with request TW, streaming a twist",
         &whole.twist,
+        "window per tick",
+    );
+    row(
+        "signature check of one datagram (goal 20,000)",
+        &signing.verify,
+        "window per check",
+    );
+    row(
+        "signing one answer",
+        &signing.sign,
+        "window per signing",
+    );
+    row(
+        "tick with signed PS, holding (key set)",
+        &signing.pose,
         "window per tick",
     );
     hprintln!(

@@ -2,7 +2,9 @@
 --
 --  * "armgate": the 31-byte client protocol on UDP (docs/protocol.md): command and its meaning,
 --    the seven floats by what they mean for that command, the index (via slot, joint bank bit),
---    ER/WN texts with their codes, and the status reply (SQ -> QS).
+--    ER/WN texts with their codes, the status reply (SQ -> QS), and the signature block of a
+--    signed datagram (docs/protocol.md, "Signed datagrams": link id, timestamp, tag; the tag
+--    is shown, not verified: the dissector has no key).
 --  * "armgate_can": the drives' CAN traffic (docs/drives.md): Elmo SimplIQ binary interpreter
 --    commands (RPDO2, 0x300 + node) and replies (TPDO2, 0x280 + node) with PT writes called out,
 --    NMT, SYNC, EMCY with the meanings the drive manager gives them (ER3x), heartbeats, expedited
@@ -130,6 +132,20 @@ local f = {
     status_refusals = ProtoField.float("armgate.status.refusals", "Refusals since start"),
     status_uptime = ProtoField.float("armgate.status.uptime", "Seconds since start"),
     status_name = ProtoField.string("armgate.status.name", "Robot name"),
+    signing_policy = ProtoField.float("armgate.signing.policy", "Signing policy"),
+    signing_signed = ProtoField.float("armgate.signing.signed", "Signed datagrams served"),
+    signing_unsigned = ProtoField.float("armgate.signing.unsigned", "Unsigned datagrams served"),
+    signing_dropped_unsigned = ProtoField.float("armgate.signing.dropped_unsigned", "Dropped: unsigned"),
+    signing_dropped_truncated = ProtoField.float("armgate.signing.dropped_truncated", "Dropped: block truncated"),
+    signing_dropped_forged = ProtoField.float("armgate.signing.dropped_forged", "Dropped: forged (wrong tag)"),
+    signing_dropped_replayed = ProtoField.float("armgate.signing.dropped_replayed", "Dropped: replayed (old timestamp)"),
+    signature = ProtoField.bytes("armgate.signature", "Signature block"),
+    signature_link = ProtoField.uint8("armgate.signature.link", "Link id", base.DEC,
+        { [0] = "controller" }),
+    signature_timestamp = ProtoField.uint64("armgate.signature.timestamp",
+        "Timestamp (10 us since 2015-01-01 UTC)"),
+    signature_time = ProtoField.string("armgate.signature.time", "Time (UTC)"),
+    signature_tag = ProtoField.bytes("armgate.signature.tag", "Tag (HMAC-SHA256, 48 bits; not verified)"),
 }
 armgate.fields = f
 
@@ -226,7 +242,53 @@ local function summary(tvb, layout)
     return ""
 end
 
+local signing_policies = {
+    [0] = "off (no key)", [1] = "signed only", [2] = "unsigned may read", [3] = "unsigned allowed",
+}
+
+-- QS index 4: the signing counters.
+local function dissect_signing(tree, tvb)
+    local fields = {
+        f.signing_policy, f.signing_signed, f.signing_unsigned, f.signing_dropped_unsigned,
+        f.signing_dropped_truncated, f.signing_dropped_forged, f.signing_dropped_replayed,
+    }
+    local v = {}
+    for k, field in ipairs(fields) do
+        local range = tvb(2 + 4 * (k - 1), 4)
+        v[k] = range:le_float()
+        local item = tree:add_le(field, range)
+        if k == 1 and signing_policies[math.floor(v[k] + 0.5)] then
+            item:append_text(" (" .. signing_policies[math.floor(v[k] + 0.5)] .. ")")
+        end
+    end
+    return string.format(" signing=%s dropped=%d", signing_policies[math.floor(v[1] + 0.5)] or v[1],
+        v[4] + v[5] + v[6] + v[7])
+end
+
+-- The signature block after the 31-byte message (bytes 31..43), if there is one.
+local function dissect_signature(tree, tvb)
+    local len = tvb:len()
+    if len <= 31 then return "" end
+    if len < 44 then
+        tree:add_expert_info(PI_MALFORMED, PI_ERROR,
+            "signature block truncated (the controller drops it)")
+        return " [signature truncated]"
+    end
+    local block = tree:add(f.signature, tvb(31, 13))
+    local link = tvb(31, 1):uint()
+    block:add(f.signature_link, tvb(31, 1))
+    local timestamp = tvb(32, 6):le_uint64()
+    block:add_le(f.signature_timestamp, tvb(32, 6))
+    local seconds = math.floor(timestamp:tonumber() / 100000) + 1420070400
+    block:add(f.signature_time, tvb(32, 6), os.date("!%Y-%m-%d %H:%M:%S", seconds))
+    block:add(f.signature_tag, tvb(38, 6))
+    return string.format(" [signed link=%d t=%s]", link, tostring(timestamp))
+end
+
 local function dissect_status(tree, tvb, index)
+    if index == 4 then
+        return dissect_signing(tree, tvb)
+    end
     if index == 1 then
         local name = tvb(2, 28):stringz()
         tree:add(f.status_name, tvb(2, 28), name)
@@ -265,7 +327,7 @@ function armgate.dissector(tvb, pinfo, root)
         local code = tonumber(text:sub(3, 4))
         if code then tree:add(f.code, tvb(2, 2), code) end
         if #text > 5 then tree:add(f.reason, tvb(5, #text - 5), text:sub(6)) end
-        pinfo.cols.info = text
+        pinfo.cols.info = text .. dissect_signature(tree, tvb)
         return tvb:len()
     end
     if tvb:len() < 31 then
@@ -304,7 +366,7 @@ function armgate.dissector(tvb, pinfo, root)
         index_item:add(f.bank2, tvb(30, 1))
     end
     if bit.band(index, BANK2) ~= 0 then info = info .. " [bank 2]" end
-    pinfo.cols.info = info
+    pinfo.cols.info = info .. dissect_signature(tree, tvb)
     return tvb:len()
 end
 

@@ -133,7 +133,13 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
         retries: 0,
         ..client.config().clone()
     };
+    // Signed on the next link id: its timestamps would race the polls' on one link.
+    let signer = client.signer().map(crate::Signer::next_link);
     let streamer = Client::connect_with(client.peer(), config)
+        .map(|mut streamer| {
+            streamer.set_signer(signer);
+            streamer
+        })
         .map_err(|e| std::io::Error::other(e.to_string()))
         .and_then(VelocityStreamer::spawn)?;
     let io = io::spawn(client, options.joints, options.poll)?;

@@ -1,6 +1,7 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::banks::READ_JOINTS;
+use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
     Message, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName,
@@ -40,6 +41,8 @@ pub struct CommandHandler {
     name: RobotName,
     /// Requests answered with an `ER` text so far.
     refused: u32,
+    /// The cycle's signing counters, for `SQ` index 4.
+    signing: SigningReport,
     /// Time of the last tick (s).
     now: f64,
     /// `OF` while moving: the drives stop when the arm is at rest, or at this time (s).
@@ -61,6 +64,7 @@ impl CommandHandler {
             relay: NoticeRelay::default(),
             name: RobotName::new(&config.name),
             refused: 0,
+            signing: SigningReport::default(),
             now: 0.0,
             power_off_at: None,
             stop_within: stop_time_bound(config),
@@ -78,6 +82,12 @@ impl CommandHandler {
             refused: self.refused,
             uptime: self.now,
         }
+    }
+
+    /// The signing counters `SQ` index 4 reports (kept by the cycle, which checks signatures
+    /// before a datagram reaches the handler).
+    pub fn set_signing_report(&mut self, report: SigningReport) {
+        self.signing = report;
     }
 
     /// The controller.
@@ -349,6 +359,7 @@ impl CommandHandler {
                     let (cause, joint) = self.controller.stop_cause();
                     Ok(CauseReport { cause, joint }.to_reply())
                 }
+                SIGNING_INDEX => Ok(self.signing.to_reply()),
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {

@@ -1,22 +1,22 @@
 //! The client side of a tick: datagrams in, replies and notices out.
 
-use armgate_protocol::client::MESSAGE_LEN;
+use armgate_protocol::client::signed::SIGNED_LEN;
 
-/// A client datagram (its first 31 bytes: the protocol reads no more) and the peer it came
-/// from or goes to. `P` is the shell's address type.
+/// A client datagram (its first 44 bytes: a signed datagram's length; the protocol reads no
+/// more) and the peer it came from or goes to. `P` is the shell's address type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Datagram<P> {
-    bytes: [u8; MESSAGE_LEN],
-    /// How many of `bytes` are valid (≤ 31).
+    bytes: [u8; SIGNED_LEN],
+    /// How many of `bytes` are valid (≤ 44).
     len: u8,
     /// Source of a request, destination of a reply or notice.
     pub peer: P,
 }
 
 impl<P> Datagram<P> {
-    /// The first (at most 31) bytes of `payload`, from or to `peer`.
+    /// The first (at most 44) bytes of `payload`, from or to `peer`.
     pub fn new(payload: &[u8], peer: P) -> Self {
-        let mut bytes = [0; MESSAGE_LEN];
+        let mut bytes = [0; SIGNED_LEN];
         let mut len = 0u8;
         for (b, p) in bytes.iter_mut().zip(payload) {
             *b = *p;

@@ -22,13 +22,14 @@
 //!    not fit the arm (the step's error) makes the drives hold and is counted, never fatal;
 //! 4. **drives out**: the manager queues the cycle's frames (set-points, queries, heartbeat);
 //!    it never waits on the bus;
-//! 5. **requests**: at most [`REQUESTS_PER_TICK`] waiting client datagrams are handled, in
+//! 5. **requests**: the signature checks first ([`Signing`]: with a key, an unsigned, forged,
+//!    replayed or cut-off datagram is dropped and counted, never answered); then at most [`REQUESTS_PER_TICK`] waiting client datagrams are handled, in
 //!    arrival order, each answered at once through the link; more wait for the next tick, so
 //!    a tick's work stays bounded (a reply waits at most about a period). They come after the
 //!    step, so that every reply reflects this tick's measurement (also the very first tick's)
 //!    and a motion they start runs from the next tick on;
 //! 6. **notices**: every unsolicited warning the relay holds goes to the last client that sent
-//!    an allowed request; with none yet, it is counted and dropped.
+//!    an allowed request (signed if its request was); with none yet, it is counted and dropped.
 //!
 //! Bus-off: the drive manager latches it as fault `ER35` and stops; the client's `ON` clears
 //! it — [`CanDrives`] first asks the bus to recover ([`CanBus::recover`](crate::drives::CanBus::recover)),
@@ -40,10 +41,12 @@ mod link;
 #[cfg(feature = "std")]
 pub mod replay;
 mod side;
+mod signing;
 mod tick;
 
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
 pub use link::{Datagram, Dropped, Link, Outgoing};
 pub use side::DriveSide;
+pub use signing::{Signing, UNSIGNED_READS, UnknownAccess, UnsignedAccess};
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

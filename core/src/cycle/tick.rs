@@ -1,12 +1,14 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
 use super::counters::bump;
-use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing};
+use super::signing::Gate;
+use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
 use armgate_protocol::client::MESSAGE_LEN;
+use armgate_protocol::client::signed::SigningReport;
 use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
@@ -45,6 +47,8 @@ pub struct Cycle<D, P> {
     previous: Option<f64>,
     last_sender: Option<P>,
     counters: CycleCounters,
+    /// The signature checks every datagram passes first.
+    gate: Gate,
 }
 
 impl<D: DriveSide, P: Copy> Cycle<D, P> {
@@ -61,7 +65,15 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             previous: None,
             last_sender: None,
             counters: CycleCounters::default(),
+            gate: Gate::new(Signing::default()),
         }
+    }
+
+    /// The same cycle with these signing settings (a key, what unsigned datagrams may do).
+    pub fn with_signing(mut self, signing: Signing) -> Self {
+        self.gate = Gate::new(signing);
+        self.handler.set_signing_report(self.gate.report());
+        self
     }
 
     /// When the next tick is due on the shell's clock (µs since the cycle started).
@@ -142,6 +154,11 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
         self.counters
     }
 
+    /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
+    pub fn signing(&self) -> SigningReport {
+        self.gate.report()
+    }
+
     /// The client that sent the last request: where notices go.
     pub fn last_sender(&self) -> Option<P> {
         self.last_sender
@@ -163,8 +180,18 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             let Some(request) = link.receive() else {
                 break;
             };
-            let reply = self.answer(request.payload(), request.peer);
-            self.send(link, Datagram::new(&reply, request.peer), Outgoing::Reply);
+            // Dropped datagrams are counted by the gate and never answered.
+            let Some(admitted) = self.gate.admit(request.payload()) else {
+                continue;
+            };
+            self.handler.set_signing_report(self.gate.report());
+            let reply = self.answer(admitted.message, request.peer);
+            let sealed = self.gate.seal(&reply, admitted.signed);
+            self.send(
+                link,
+                Datagram::new(sealed.bytes(), request.peer),
+                Outgoing::Reply,
+            );
         }
     }
 
@@ -176,11 +203,8 @@ impl<D: DriveSide, P: Copy> Cycle<D, P> {
             match self.last_sender {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
-                    self.send(
-                        link,
-                        Datagram::new(&text.to_bytes(), peer),
-                        Outgoing::Notice,
-                    );
+                    let sealed = self.gate.seal(&text.to_bytes(), self.gate.last_signed());
+                    self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Notice);
                 }
                 None => bump(&mut self.counters.notices_unaddressed),
             }

@@ -31,6 +31,7 @@
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
 //! * [`BlendTolerance`]: the via points' blend tolerances, `VT` and `jT`.
 //! * [`Twist`] and [`JointRates`]: the velocity-streaming requests `TW` and `jW`.
+//! * [`signed`]: the signed form of every datagram (a key, a link id, a timestamp, a tag).
 
 pub mod banks;
 mod blend;
@@ -43,6 +44,7 @@ mod orientation;
 mod reason;
 mod reply;
 mod request;
+pub mod signed;
 mod status;
 mod stop;
 mod temperature;

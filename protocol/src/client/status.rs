@@ -120,7 +120,7 @@ fn small(v: f32) -> Option<u8> {
 }
 
 /// A float that holds a whole non-negative number.
-fn whole(v: f32) -> Option<u32> {
+pub(super) fn whole(v: f32) -> Option<u32> {
     // The cast saturates; the comparison rejects fractions, NaN and out-of-range values.
     let n = v as u32;
     (v >= 0.0 && n as f32 == v).then_some(n)

@@ -1,0 +1,307 @@
+//! Signed datagrams in the cycle (docs/safety.md, "Signing"): with a key, only validly signed,
+//! fresh datagrams are served and answered signed; everything else is dropped, counted by
+//! cause (`SQ` index 4) and never answered. Without a key, everything works as before.
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::approx_constant
+)]
+
+mod drives_rig;
+
+use armgate_core::config::ValidRobot;
+use armgate_core::cycle::{Cycle, Datagram, Signing, UnsignedAccess};
+use armgate_core::kinematics::Joints;
+use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
+use armgate_protocol::client::signed::{
+    CONTROLLER_LINK, SIGNED_LEN, Signature, Signed, SigningKey, SigningPolicy, SigningReport,
+};
+use armgate_protocol::client::{Command, MESSAGE_LEN, Message, Reply, Request};
+use drives_rig::{Client, request, robot};
+
+const KEY: &str = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
+const OTHER_KEY: &str = "ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
+
+fn key() -> SigningKey {
+    SigningKey::parse(KEY).unwrap()
+}
+
+fn cycle(unsigned: Option<UnsignedAccess>) -> Cycle<SimulatedDrives, ()> {
+    cycle_for(robot("ranger-mk1"), unsigned)
+}
+
+fn cycle_for(config: ValidRobot, unsigned: Option<UnsignedAccess>) -> Cycle<SimulatedDrives, ()> {
+    cycle_at(&config, config.home(), unsigned)
+}
+
+fn cycle_at(
+    config: &ValidRobot,
+    start: Joints,
+    unsigned: Option<UnsignedAccess>,
+) -> Cycle<SimulatedDrives, ()> {
+    let arm = IdealArm::new(start);
+    let cycle = Cycle::new(config, SimulatedDrives::new(ArmModel::Ideal(arm)));
+    match unsigned {
+        None => cycle,
+        Some(unsigned) => cycle.with_signing(Signing {
+            key: Some(key()),
+            unsigned,
+        }),
+    }
+}
+
+fn message(command: Command, values: [f32; 7]) -> [u8; MESSAGE_LEN] {
+    Request {
+        command,
+        values,
+        index: 0,
+    }
+    .to_bytes()
+}
+
+fn signed(command: Command, values: [f32; 7], link: u8, timestamp: u64) -> [u8; SIGNED_LEN] {
+    Signature { link, timestamp }.emit(&message(command, values), &key())
+}
+
+/// Ticks once with `datagrams` waiting; the replies.
+fn exchange(cycle: &mut Cycle<SimulatedDrives, ()>, datagrams: &[&[u8]]) -> Vec<Datagram<()>> {
+    let mut client = Client::default();
+    for d in datagrams {
+        client.requests.push_back(Datagram::new(d, ()));
+    }
+    cycle.tick(cycle.next_due_us(), &mut client);
+    client.replies
+}
+
+/// The signing report as a client reads it with a signed `SQ` index 4.
+fn report(cycle: &mut Cycle<SimulatedDrives, ()>, timestamp: u64) -> SigningReport {
+    let mut sq = message(Command::Status, [0.0; 7]);
+    sq[30] = 4;
+    let request = Signature { link: 9, timestamp }.emit(&sq, &key());
+    let replies = exchange(cycle, &[&request]);
+    let reply = verified(&replies[0], timestamp);
+    SigningReport::from_reply(&reply).unwrap()
+}
+
+/// A signed answer, checked as a client checks it: the key's tag, the controller's link, a
+/// timestamp no older than the request's.
+fn verified(datagram: &Datagram<()>, request_timestamp: u64) -> Reply {
+    let bytes = datagram.payload();
+    assert_eq!(
+        bytes.len(),
+        SIGNED_LEN,
+        "answers to signed requests are signed"
+    );
+    let block = Signed::new_checked(bytes).unwrap();
+    let signature = Signature::parse(&block, &key()).unwrap();
+    assert_eq!(signature.link, CONTROLLER_LINK);
+    assert!(signature.timestamp >= request_timestamp);
+    Reply::parse(&Message::new_checked(&bytes[..MESSAGE_LEN]).unwrap()).unwrap()
+}
+
+#[test]
+fn without_a_key_everything_is_served_unsigned_as_before() {
+    let mut cycle = cycle(None);
+    let replies = exchange(&mut cycle, &[request(Command::Pose).payload()]);
+    assert_eq!(replies[0].payload().len(), MESSAGE_LEN);
+    assert!(replies[0].payload().starts_with(b"SP"));
+    // A signed datagram to a controller without a key: its message is served, unsigned.
+    let replies = exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 1, 5)]);
+    assert_eq!(replies[0].payload().len(), MESSAGE_LEN);
+    let mut sq = message(Command::Status, [0.0; 7]);
+    sq[30] = 4;
+    let replies = exchange(&mut cycle, &[&sq]);
+    let reply = Reply::parse(&Message::new_checked(replies[0].payload()).unwrap()).unwrap();
+    let report = SigningReport::from_reply(&reply).unwrap();
+    assert_eq!(report.policy, Some(SigningPolicy::Off));
+    // Both PS, and the SQ itself.
+    assert_eq!((report.unsigned, report.dropped()), (3, 0));
+}
+
+#[test]
+fn with_a_key_signed_requests_are_answered_signed_and_the_rest_dropped_by_cause() {
+    let mut cycle = cycle(Some(UnsignedAccess::Refused));
+    let t = 1_000_000;
+    let good = signed(Command::Pose, [0.0; 7], 1, t);
+    let replies = exchange(&mut cycle, &[&good]);
+    assert_eq!(verified(&replies[0], t).command, Command::Pose);
+
+    let mut forged = signed(Command::Pose, [0.0; 7], 1, t + 1);
+    forged[40] ^= 0x20;
+    let mut altered = signed(Command::Pose, [0.0; 7], 1, t + 2);
+    altered[3] ^= 0x01;
+    let wrong_key = Signature {
+        link: 1,
+        timestamp: t + 3,
+    }
+    .emit(
+        &message(Command::Pose, [0.0; 7]),
+        &SigningKey::parse(OTHER_KEY).unwrap(),
+    );
+    // The controller's own link: a reflected answer.
+    let reflected = signed(Command::Pose, [0.0; 7], CONTROLLER_LINK, t + 4);
+    let truncated = &good[..SIGNED_LEN - 1];
+    let unsigned = message(Command::Pose, [0.0; 7]);
+    let older = signed(Command::Pose, [0.0; 7], 1, t - 1);
+    let replies = exchange(
+        &mut cycle,
+        &[
+            &forged, &altered, &wrong_key, &reflected, truncated, &unsigned, &good, &older,
+        ],
+    );
+    assert!(replies.is_empty(), "dropped datagrams are never answered");
+    let report = report(&mut cycle, t + 10);
+    assert_eq!(
+        report,
+        SigningReport {
+            policy: Some(SigningPolicy::Required),
+            // The first PS, and the SQ just sent.
+            signed: 2,
+            unsigned: 0,
+            dropped_unsigned: 1,
+            dropped_truncated: 1,
+            dropped_forged: 4,
+            dropped_replayed: 2,
+        }
+    );
+    assert_eq!(cycle.signing(), report);
+}
+
+#[test]
+fn timestamps_count_per_link_and_every_link_has_its_own() {
+    let mut cycle = cycle(Some(UnsignedAccess::Refused));
+    // Link 2 far ahead does not make link 3's earlier timestamps old.
+    let replies = exchange(
+        &mut cycle,
+        &[
+            &signed(Command::Pose, [0.0; 7], 2, 500),
+            &signed(Command::Pose, [0.0; 7], 3, 100),
+            &signed(Command::Pose, [0.0; 7], 3, 101),
+            &signed(Command::Pose, [0.0; 7], 255, 7),
+        ],
+    );
+    assert_eq!(replies.len(), 4);
+    // Answers carry increasing timestamps, none older than a request served.
+    let stamps: Vec<u64> = replies
+        .iter()
+        .map(|r| Signed::new_checked(r.payload()).unwrap().timestamp())
+        .collect();
+    assert!(stamps.windows(2).all(|w| w[0] < w[1]), "{stamps:?}");
+    assert!(stamps[0] >= 500);
+    // Equal is not newer.
+    let replies = exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 3, 101)]);
+    assert!(replies.is_empty());
+    assert_eq!(cycle.signing().dropped_replayed, 1);
+}
+
+#[test]
+fn a_replayed_or_forged_motion_request_does_not_move_the_arm() {
+    let mut cycle = cycle(Some(UnsignedAccess::Refused));
+    let goal = [1.7, 0.1, 1.5, 0.1, 1.2, 0.1, 0.0];
+    let jb = signed(Command::JointBegin, [0.0; 7], 1, 13);
+    let replies = exchange(
+        &mut cycle,
+        &[
+            &signed(
+                Command::ChangeMode,
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                1,
+                10,
+            ),
+            &signed(Command::JointGoal, goal, 1, 11),
+            &jb,
+        ],
+    );
+    assert_eq!(replies.len(), 3);
+    assert_eq!(verified(&replies[2], 13).command, Command::JointBegin);
+    assert!(cycle.handler().controller().is_moving());
+    let replies = exchange(&mut cycle, &[&signed(Command::Stop, [0.0; 7], 1, 14)]);
+    assert_eq!(verified(&replies[0], 14).command, Command::Stop);
+    for _ in 0..200 {
+        exchange(&mut cycle, &[]);
+    }
+    assert!(!cycle.handler().controller().is_moving());
+    let mut forged = signed(Command::JointBegin, [0.0; 7], 1, 20);
+    forged[SIGNED_LEN - 1] ^= 1;
+    let unsigned = message(Command::JointBegin, [0.0; 7]);
+    // The captured jB, sent again.
+    let replies = exchange(&mut cycle, &[&jb, &forged, &unsigned]);
+    assert!(replies.is_empty());
+    for _ in 0..10 {
+        exchange(&mut cycle, &[]);
+        assert!(!cycle.handler().controller().is_moving());
+    }
+    let report = cycle.signing();
+    assert_eq!(
+        (
+            report.dropped_replayed,
+            report.dropped_forged,
+            report.dropped_unsigned
+        ),
+        (1, 1, 1)
+    );
+}
+
+#[test]
+fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
+    let mut cycle = cycle(Some(UnsignedAccess::Read));
+    let reads = [Command::Pose, Command::JointPosition, Command::Stop];
+    let datagrams: Vec<_> = reads.iter().map(|c| message(*c, [0.0; 7])).collect();
+    let mut waiting: Vec<&[u8]> = datagrams.iter().map(|d| &d[..]).collect();
+    let mode = message(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    waiting.push(&mode);
+    let replies = exchange(&mut cycle, &waiting);
+    assert_eq!(replies.len(), 3, "CM is not a read");
+    assert!(replies.iter().all(|r| r.payload().len() == MESSAGE_LEN));
+    assert_eq!(cycle.signing().dropped_unsigned, 1);
+    assert_eq!(cycle.signing().policy, Some(SigningPolicy::UnsignedRead));
+    // A signed client beside it is answered signed.
+    let replies = exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 4, 1)]);
+    verified(&replies[0], 1);
+
+    let mut cycle = cycle_all();
+    let replies = exchange(&mut cycle, &[&mode]);
+    assert!(replies[0].payload().starts_with(b"MC"));
+    assert_eq!(cycle.signing().policy, Some(SigningPolicy::UnsignedAll));
+}
+
+fn cycle_all() -> Cycle<SimulatedDrives, ()> {
+    cycle(Some(UnsignedAccess::All))
+}
+
+#[test]
+fn notices_to_a_signed_client_are_signed() {
+    // Bounds that end at x = 0.3 m: turning the base to q1 = 0.5 takes the tool out, and
+    // ER21 follows, to the last (signed) sender.
+    let config = robot("ranger-mk1")
+        .edit(|config| config.workspace.bounds[1] = 0.3)
+        .unwrap();
+    // The arm ready above the base (as in tests/command.rs), then turned.
+    let ready = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let goal = [0.5, 0.6, -0.4, 0.2, 1.8, 0.1, 0.0];
+    let start = Joints::from_slice(&ready).unwrap();
+    let mut cycle = cycle_at(&config, start, Some(UnsignedAccess::Refused));
+    let mode = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let replies = exchange(
+        &mut cycle,
+        &[
+            &signed(Command::ChangeMode, mode, 1, 10),
+            &signed(Command::JointGoal, goal, 1, 11),
+            &signed(Command::JointBegin, [0.0; 7], 1, 12),
+        ],
+    );
+    assert_eq!(verified(&replies[2], 12).command, Command::JointBegin);
+    let mut client = Client::default();
+    for _ in 0..3000 {
+        cycle.tick(cycle.next_due_us(), &mut client);
+    }
+    assert!(!client.notices.is_empty());
+    for notice in &client.notices {
+        let block = Signed::new_checked(notice.payload()).unwrap();
+        let signature = Signature::parse(&block, &key()).unwrap();
+        assert!(signature.timestamp > 12);
+        assert!(notice.payload().starts_with(b"ER21"));
+    }
+}

@@ -1,0 +1,127 @@
+//! `armgate-viz`: the URDF of a robot file, and recordings of a running controller (`armgate
+//! urdf` and `armgate record` run it). See docs/visualisation.md.
+
+mod record;
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use armgate_core::MAX_JOINTS;
+use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::kinematics::Chain;
+use armgate_core::math::Frame;
+use armgate_core::rng::SplitMix64;
+use armgate_viz::urdf;
+use clap::{Parser, Subcommand};
+
+/// See the arm: URDF export and MCAP recordings for 3-D viewers such as Foxglove.
+#[derive(Debug, Parser)]
+#[command(name = "armgate-viz", version)]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Debug, Subcommand)]
+enum Cmd {
+    /// Write the URDF of a robot file: its DH chain (with Hayati β), [base], tool, joint
+    /// types, limits and speed limits, simple link geometry, and the workspace's exclusion
+    /// boxes as fixed links. Every link frame is the frame armgate's kinematics computes.
+    #[command(after_help = "Example: armgate urdf robots/ur5.toml --out ur5.urdf")]
+    Urdf {
+        /// The robot file (TOML; docs/robot-file.md).
+        robot: PathBuf,
+        /// Write the URDF here instead of to standard output.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+        /// Also write armgate's frames of every link at random joint vectors within the
+        /// limits (CSV), for the independent check in python/tests/test_urdf.py.
+        #[arg(long, value_name = "FILE", hide = true)]
+        fk_csv: Option<PathBuf>,
+        /// How many random joint vectors --fk-csv holds.
+        #[arg(long, default_value_t = 1000, hide = true)]
+        samples: usize,
+    },
+    /// Record a running controller (the firmware, or armgate-sim) into an MCAP file for
+    /// Foxglove, from what the protocol reads: jP and PS at --rate, SQ once a second, and every
+    /// notice. Stop with Ctrl-C or SIGTERM (the file is completed) or --duration.
+    #[command(
+        after_help = "Example: armgate record run.mcap --robot robots/ranger-mk1.toml --rate 20"
+    )]
+    Record(record::RecordArgs),
+}
+
+fn main() -> ExitCode {
+    let result = match Cli::parse().command {
+        Cmd::Urdf {
+            robot,
+            out,
+            fk_csv,
+            samples,
+        } => write_urdf(&robot, out.as_deref(), fk_csv.as_deref(), samples),
+        Cmd::Record(args) => load(args.robot()).and_then(|robot| record::run(&args, &robot)),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("armgate-viz: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<ValidRobot, String> {
+    load_file(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn write_urdf(
+    robot: &Path,
+    out: Option<&Path>,
+    fk_csv: Option<&Path>,
+    samples: usize,
+) -> Result<(), String> {
+    let config = load(robot)?;
+    let text = urdf::urdf(&config);
+    match out {
+        Some(path) => std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?,
+        None => std::io::stdout()
+            .write_all(text.as_bytes())
+            .map_err(|e| e.to_string())?,
+    }
+    if let Some(path) = fk_csv {
+        std::fs::write(path, fk_table(&config, samples))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// `q1..qn` then, for each link of the chain and the tool, its 4×4 frame in the world (row
+/// major) as armgate's FK computes it; one line per random joint vector (seed 1).
+fn fk_table(config: &ValidRobot, samples: usize) -> String {
+    let chain = Chain::new(config);
+    let n = chain.dof();
+    let mut names: Vec<String> = (0..n).map(urdf::link_name).collect();
+    names.push(urdf::TOOL.to_owned());
+    let mut header: Vec<String> = (1..=n).map(|k| format!("q{k}")).collect();
+    for name in &names {
+        header.extend((0..16).map(|k| format!("{name}.{k}")));
+    }
+    let mut text = header.join(",") + "\n";
+    let mut rng = SplitMix64::new(1);
+    for _ in 0..samples {
+        let q = chain.random_joints(&mut rng);
+        let mut links = [Frame::identity(); MAX_JOINTS];
+        let Ok(tool) = chain.link_frames(&q, &mut links) else {
+            continue;
+        };
+        let mut row: Vec<String> = q.iter().map(f64::to_string).collect();
+        for frame in links.iter().take(n).chain([&tool]) {
+            let m = frame.to_homogeneous();
+            row.extend(m.transpose().iter().map(f64::to_string));
+        }
+        text += &row.join(",");
+        text.push('\n');
+    }
+    text
+}
