@@ -1466,8 +1466,8 @@ fn st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits() {
     let period = 0.01944;
     let mut peak = 0.0f64;
     for w in commands.windows(3) {
-        for j in 0..6 {
-            let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (period * period);
+        for ((q2, q1), q0) in w[2].iter().zip(&w[1]).zip(&w[0]) {
+            let a = (q2 - 2.0 * q1 + q0) / (period * period);
             peak = peak.max(a.abs() / 0.5);
         }
     }
