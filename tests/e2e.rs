@@ -1260,27 +1260,11 @@ fn a_blended_joint_sequence_over_udp_passes_its_via_points_without_stopping() {
     }
     // The commanded joints, every tick, from the state log (flushed within a second).
     let last = points[3].map(|v| f64::from(v as f32));
-    let logs = sim._dir.0.join("logs").join("state.csv");
-    let started = Instant::now();
-    let commands = loop {
-        let rows = csv_rows(&logs);
-        let commands: Vec<Vec<f64>> = rows[1..]
-            .iter()
-            .filter(|r| !r[15].is_empty())
-            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
-            .collect();
-        let arrived = commands
+    let commands = logged_commands(&sim, "the last point", |commands| {
+        commands
             .last()
-            .is_some_and(|c| c.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-6));
-        if arrived {
-            break commands;
-        }
-        assert!(
-            started.elapsed() < Duration::from_secs(5),
-            "log never shows the last point"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
+            .is_some_and(|c| c.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-6))
+    });
     let distance = |c: &[f64], p: &[f64; 6]| {
         c.iter()
             .zip(p)
@@ -1406,6 +1390,29 @@ fn a_blended_cartesian_square_over_udp_cuts_its_corners_within_the_tolerance() {
     }
 }
 
+/// The commanded joints of every tick from armgate-sim's state log (flushed within a second),
+/// read again until `done` holds for them (at most 5 s; `what`: what the log should show).
+fn logged_commands(sim: &Sim, what: &str, done: impl Fn(&[Vec<f64>]) -> bool) -> Vec<Vec<f64>> {
+    let logs = sim._dir.0.join("logs").join("state.csv");
+    let started = Instant::now();
+    loop {
+        let rows = csv_rows(&logs);
+        let commands: Vec<Vec<f64>> = rows[1..]
+            .iter()
+            .filter(|r| !r[15].is_empty())
+            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
+            .collect();
+        if done(&commands) {
+            return commands;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "log never shows {what}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
 /// `SQ` index 2: the stop cause in force and its joint.
 fn stop_cause(sim: &Sim) -> [f32; 7] {
     match sim.request("SQ", [0.0; 7], 2) {
@@ -1441,28 +1448,12 @@ fn st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits() {
         return; // the state log is armgate-sim's
     }
     // Every tick's commanded acceleration, from the state log, within max_acceleration.
-    let logs = sim._dir.0.join("logs").join("state.csv");
-    let started = Instant::now();
-    let commands = loop {
-        let rows = csv_rows(&logs);
-        let commands: Vec<Vec<f64>> = rows[1..]
-            .iter()
-            .filter(|r| !r[15].is_empty())
-            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
-            .collect();
-        let still = commands.len() > 3
+    let commands = logged_commands(&sim, "rest", |commands| {
+        commands.len() > 3
             && commands[commands.len() - 3..]
                 .windows(2)
-                .all(|w| w[0] == w[1]);
-        if still {
-            break commands;
-        }
-        assert!(
-            started.elapsed() < Duration::from_secs(5),
-            "log never at rest"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
+                .all(|w| w[0] == w[1])
+    });
     let period = 0.01944;
     let mut peak = 0.0f64;
     for w in commands.windows(3) {
