@@ -231,6 +231,17 @@ fn measure(
     }
 }
 
+/// A planned motion run to its end: whether the tool entered the box across its way.
+fn run_through(run: &mut Run, config: &ValidRobot) -> Figures {
+    settle(run);
+    measure(
+        run,
+        0,
+        None,
+        config.config().workspace.boxes.first().copied(),
+    )
+}
+
 /// A box 2 cm deep across the way ahead of `p`, in direction `dir`, `ahead` metres away.
 fn box_ahead(p: &Vector3<f64>, dir: &Vector3<f64>, ahead: f64) -> [f64; 6] {
     let c = p + dir * (ahead + 0.01);
@@ -289,13 +300,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 return Some(refused());
             };
             if cause == Cause::Boundary {
-                settle(&mut run);
-                return Some(measure(
-                    &run,
-                    0,
-                    None,
-                    config.config().workspace.boxes.first().copied(),
-                ));
+                return Some(run_through(&mut run, &config));
             }
             let ticks = (0.5 * duration / dt) as usize;
             for _ in 0..ticks {
@@ -327,7 +332,6 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
             let q_start = *run.commands.last().unwrap_or(&q0);
             let mut run = Run::new(&config, &q_start);
             run.ctrl.set_mode(Mode::Cartesian).unwrap();
-            let start = run.ctrl.cartesian_setpoint();
             let c = &config.config().cartesian;
             let v = c.max_velocity[0]
                 .min(c.max_velocity[1])
@@ -361,15 +365,8 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 // The stop comes in the blend, near the corner.
                 2.0 * (leg / v + v / a)
             };
-            let _ = start;
             if cause == Cause::Boundary {
-                settle(&mut run);
-                return Some(measure(
-                    &run,
-                    0,
-                    None,
-                    config.config().workspace.boxes.first().copied(),
-                ));
+                return Some(run_through(&mut run, &config));
             }
             for _ in 0..(0.5 * duration / dt) as usize {
                 run.tick();
