@@ -213,6 +213,31 @@ pub enum Cmd {
         #[command(flatten)]
         wait: WaitArgs,
     },
+    /// Print every inverse-kinematics solution of a pose within the joint limits, each with
+    /// its configuration branch (KS; robots with a closed form, docs/kinematics.md).
+    #[command(after_help = "Example: armgate ik 0.5 -0.2 0.4 0 0 -1.5708")]
+    Ik {
+        /// The pose.
+        #[command(flatten)]
+        pose: PoseArgs,
+    },
+    /// Move the joints (joint mode) to the inverse kinematics of a pose on a chosen
+    /// configuration branch, or the solution nearest the present joints (KG), and wait.
+    #[command(after_help = "Example: armgate ik-move 0.5 -0.2 0.4 0 0 -1.5708 --branch 2")]
+    IkMove {
+        /// The pose.
+        #[command(flatten)]
+        pose: PoseArgs,
+        /// Branch bits: 1 shoulder, 2 elbow, 4 wrist (as `armgate ik` prints them).
+        #[arg(long, value_parser = clap::value_parser!(u8).range(0..8))]
+        branch: Option<u8>,
+        /// Minimum duration (s).
+        #[arg(long, default_value_t = 0.0)]
+        time: f64,
+        /// Waiting.
+        #[command(flatten)]
+        wait: WaitArgs,
+    },
     /// Move the joints (joint mode) and wait until within the tolerance (1 mrad).
     ///
     /// Without --time: jG + jB, a minimum-time motion. With --time T: jC, jV slot 0 with T, jE,
@@ -322,6 +347,35 @@ impl From<ModeArg> for Mode {
             ModeArg::Joint => Self::Joint,
             ModeArg::Cart => Self::Cartesian,
         }
+    }
+}
+
+/// A pose: position (m) and roll/pitch/yaw (rad).
+#[derive(Clone, Debug, Args)]
+pub struct PoseArgs {
+    /// x (m).
+    #[arg(allow_negative_numbers = true)]
+    pub x: f64,
+    /// y (m).
+    #[arg(allow_negative_numbers = true)]
+    pub y: f64,
+    /// z (m).
+    #[arg(allow_negative_numbers = true)]
+    pub z: f64,
+    /// Roll, about the base x axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub roll: f64,
+    /// Pitch, about the base y axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub pitch: f64,
+    /// Yaw, about the base z axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub yaw: f64,
+}
+
+impl PoseArgs {
+    fn xyz_rpy(&self) -> ([f64; 3], [f64; 3]) {
+        ([self.x, self.y, self.z], [self.roll, self.pitch, self.yaw])
     }
 }
 
@@ -783,6 +837,49 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 fmt_values(&pose.xyz, 4),
                 pose.distance(&goal) * 1e3
             )?;
+            Ok(())
+        }
+        Cmd::Ik { pose } => {
+            let (xyz, rpy) = pose.xyz_rpy();
+            let Some(solutions) = client.ik_solutions(xyz, rpy)? else {
+                writeln!(out, "no closed-form IK for this robot (docs/kinematics.md)")?;
+                return Ok(());
+            };
+            writeln!(
+                out,
+                "{} solutions (branch: shoulder 1, elbow 2, wrist 4)",
+                solutions.len()
+            )?;
+            for s in &solutions {
+                writeln!(out, "  branch {} {}", s.branch, fmt_values(&s.q, 6))?;
+            }
+            Ok(())
+        }
+        Cmd::IkMove {
+            pose,
+            branch,
+            time,
+            wait,
+        } => {
+            let (xyz, rpy) = pose.xyz_rpy();
+            let interrupt = wait.interrupt();
+            let goal = client.ik_move(xyz, rpy, *branch, *time)?;
+            writeln!(
+                out,
+                "moving to {} (branch {})",
+                fmt_values(&goal.q, 4),
+                goal.branch
+            )?;
+            if wait.no_wait {
+                return Ok(());
+            }
+            let options = wait.options(*time, interrupt.as_ref());
+            let reached = client
+                .wait_until_joints(&goal.q, &options, joint_progress)
+                .map_err(|e| stop_if_interrupted(client, e))?;
+            finish_progress();
+            settle(client)?;
+            writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
         Cmd::Jmove { q, time, wait } => {

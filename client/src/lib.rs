@@ -41,6 +41,7 @@ mod error;
 #[cfg(test)]
 mod fake;
 mod hints;
+mod ik;
 pub mod interrupt;
 pub mod matching;
 pub mod plot;
@@ -61,6 +62,7 @@ pub use client::{
 pub use commands::NO_READING;
 pub use drives::DrivesOn;
 pub use error::ClientError;
+pub use ik::IkSolution;
 pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
 pub use signer::{DEFAULT_LINK, Signer};

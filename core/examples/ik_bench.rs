@@ -8,7 +8,11 @@
 //!
 //! Success: position error < 1e-5 m, orientation error < 1e-5 rad and all joints within limits.
 //!
-//! A second table times global solves of unreachable targets (10 m from the base, random
+//! * all: every solution in closed form (`Chain::solve_all`, robots of a closed-form family),
+//!   reference at the middle of the joint ranges; success = the configuration the target came
+//!   from is among the solutions (up to whole turns); `sols` is the mean number of solutions.
+//!
+//! A further table times global solves of unreachable targets (10 m from the base, random
 //! orientation): every one spends the whole `ik.global_iterations` budget, so its maximum is
 //! the worst case of a global solve.
 #![allow(missing_docs, clippy::indexing_slicing, clippy::unwrap_used)]
@@ -17,7 +21,9 @@ use std::time::Instant;
 
 use armgate_core::config::IkConfig;
 use armgate_core::config::load_file;
-use armgate_core::kinematics::{Chain, IkResult};
+use std::f64::consts::TAU;
+
+use armgate_core::kinematics::{Chain, Family, IkResult};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::rng::SplitMix64;
 
@@ -68,6 +74,7 @@ fn main() {
         .collect();
     files.sort();
     let mut unreachable = Vec::new();
+    let mut closed = Vec::new();
     println!("{samples} samples per robot and mode, seed {SEED:#x}");
     println!(
         "| robot              | mode     | success% | mean µs   | median µs | p99 µs    | iters  |"
@@ -108,6 +115,9 @@ fn main() {
             tracking.iterations += u64::from(r.solution().iterations);
             tracking.successes += usize::from(success(&chain, &target, &r));
         }
+        if chain.family().family != Family::Numeric {
+            closed.push((config.name.to_string(), all_solutions(&chain, samples)));
+        }
         let name = config.name.as_str();
         global.row(name, "global");
         tracking.row(name, "tracking");
@@ -118,12 +128,50 @@ fn main() {
         ));
     }
     println!();
+    println!("every solution in closed form, {samples} samples per robot, seed {SEED:#x}");
+    println!(
+        "| robot              | family           | success% | mean µs   | median µs | p99 µs    | sols   |"
+    );
+    println!(
+        "|--------------------|------------------|----------|-----------|-----------|-----------|--------|"
+    );
+    for (name, (family, mut stats)) in closed {
+        stats.row(&name, &format!("{:<16}", format!("{family:?}")));
+    }
+    println!();
     println!("global IK on unreachable targets, {UNREACHABLE_SAMPLES} samples per robot");
     println!("| robot              | budget | iterations | mean µs   | max µs    |");
     println!("|--------------------|--------|------------|-----------|-----------|");
     for (name, budget, (iterations, mean, max)) in unreachable {
         println!("| {name:<18} | {budget:>6} | {iterations:>10} | {mean:>9.2} | {max:>9.2} |");
     }
+}
+
+/// All-solutions solves of random reachable targets; `iterations` counts the solutions.
+fn all_solutions(chain: &Chain, samples: usize) -> (Family, Stats) {
+    let mut rng = SplitMix64::new(SEED);
+    let mid = chain.mid_range();
+    let mut stats = Stats {
+        successes: 0,
+        micros: Vec::new(),
+        iterations: 0,
+    };
+    for _ in 0..samples {
+        let q = chain.random_joints(&mut rng);
+        let target = chain.forward(&q).unwrap();
+        let t0 = Instant::now();
+        let solutions = chain.solve_all(&target, &mid).unwrap();
+        stats.micros.push(t0.elapsed().as_secs_f64() * 1e6);
+        stats.iterations += solutions.len() as u64;
+        let found = solutions.iter().any(|s| {
+            s.q.iter().zip(q.iter()).all(|(a, b)| {
+                let d = a - b;
+                (d - TAU * (d / TAU).round()).abs() < 1e-6
+            })
+        });
+        stats.successes += usize::from(found);
+    }
+    (chain.family().family, stats)
 }
 
 const UNREACHABLE_SAMPLES: usize = 200;

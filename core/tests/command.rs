@@ -405,3 +405,74 @@ fn bank_2_reads_are_refused_on_a_six_joint_arm() {
     let pj = rig.request("jP", [0.0; 7], 0);
     assert_eq!((&pj[..2], pj[30]), (&b"Pj"[..], 0));
 }
+
+/// `SQ` 5 reports the present branch; `KS` lists every closed-form solution of a pose; `KG`
+/// moves the joints to the solution on a chosen branch (joint mode).
+#[test]
+fn closed_form_requests_list_choose_and_report_branches() {
+    use armgate_core::kinematics::Chain;
+    use armgate_core::math;
+    let config = common::robot("ranger-mk1");
+    let chain = Chain::new(&config);
+    let mut rig = mk1();
+    let ready = Joints::from_slice(&MK1_READY).unwrap();
+    let sq = rig.request("SQ", [0.0; 7], 5);
+    assert_eq!((&sq[..2], sq[30]), (&b"QS"[..], 5));
+    let present = chain.branch_of(&ready).unwrap();
+    assert_eq!(floats(&sq)[0], f32::from(present.bits()));
+
+    let target_q: Vec<f64> = MK1_READY.iter().map(|q| q + 0.1).collect();
+    let pose = chain.forward(&target_q).unwrap();
+    let [r, p, y] = math::rpy(&pose.rotation);
+    let t = pose.translation.vector;
+    let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
+    let first = rig.request("KS", values, 0);
+    assert_eq!(&first[..2], b"SK");
+    let count = floats(&first)[6] as u8;
+    assert!(count >= 2, "{count}");
+    let mut branches = Vec::new();
+    let mut target_branch = None;
+    for k in 0..count {
+        let sk = rig.request("KS", values, k);
+        let q = floats(&sk);
+        assert!(!branches.contains(&sk[30]));
+        branches.push(sk[30]);
+        if q.iter()
+            .zip(&target_q)
+            .all(|(a, b)| (f64::from(*a) - b).abs() < 1e-4)
+        {
+            target_branch = Some(sk[30]);
+        }
+    }
+    let target_branch = target_branch.expect("the configuration is among the solutions");
+    assert_eq!(rig.request("KS", values, count)[30], 0xFF);
+    // KG needs joint mode and a branch 0..=7 or 8 (nearest).
+    assert!(
+        rig.text("KG", values, target_branch)
+            .starts_with("ER20 Cmd KG needs mode 1")
+    );
+    rig.request("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    rig.tick();
+    assert!(rig.text("KG", values, 9).starts_with("ER24"));
+    let gk = rig.request("KG", values, target_branch);
+    assert_eq!((&gk[..2], gk[30]), (&b"GK"[..], target_branch));
+    for (a, b) in floats(&gk).iter().zip(&target_q) {
+        assert!((f64::from(*a) - b).abs() < 1e-4);
+    }
+    for _ in 0..1000 {
+        rig.tick();
+    }
+    let jp = floats(&rig.request("jP", [0.0; 7], 0));
+    for (a, b) in jp.iter().zip(&target_q) {
+        assert!((f64::from(*a) - b).abs() < 1e-4, "{jp:?}");
+    }
+    let sq = rig.request("SQ", [0.0; 7], 5);
+    assert_eq!(floats(&sq)[0], f32::from(target_branch));
+    // A robot without a closed form: KS answers f6 = −1.
+    let mut iiwa = Rig::new(
+        &common::robot("iiwa14"),
+        &[0.1, 0.5, 0.0, -1.0, 0.0, 0.8, 0.0],
+    );
+    let sk = iiwa.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
+    assert_eq!((floats(&sk)[6], sk[30]), (-1.0, 0xFF));
+}

@@ -91,7 +91,9 @@ fn tracking_ik_round_trips_within_limits() {
                         && reached.fixed_rows::<3>(3).norm() < 1e-9,
                     "{name}"
                 );
-                assert_eq!(s.position_error, reached.fixed_rows::<3>(0).norm());
+                // The closed form reports the error of FK on the sines and cosines it solved
+                // for, which FK on the values reproduces up to rounding.
+                assert!((s.position_error - reached.fixed_rows::<3>(0).norm()).abs() < 1e-14);
             }
         }
         assert!(converged >= trials - 1, "{name}: {converged}/{trials}");

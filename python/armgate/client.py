@@ -288,6 +288,41 @@ class Arm:
             return None
         return self.wait_for_joints([q], self._options(time or 0.0))
 
+    def ik_solutions(self, pose: PoseLike) -> Optional[List[Tuple[int, List[float]]]]:
+        """Every closed-form IK solution of ``pose`` within the joint limits (``KS``), as
+        (branch bits, joints) pairs; branch bit 1 shoulder, 2 elbow, 4 wrist. None if the robot
+        has no closed form (docs/kinematics.md)."""
+        goal = as_pose(pose)
+        values = goal.xyz + goal.rpy
+        first = self.request("KS", values, 0)
+        count = int(first.values[6])
+        if count < 0:
+            return None
+        solutions = []
+        for k in range(count):
+            reply = first if k == 0 else self.request("KS", values, k)
+            solutions.append((reply.index, list(reply.values[:6])))
+        return solutions
+
+    def move_j_to_pose(
+        self,
+        pose: PoseLike,
+        branch: Optional[int] = None,
+        time: Optional[float] = None,
+        wait: bool = True,
+    ) -> Tuple[List[float], int]:
+        """A joint move (joint mode) to the IK solution of ``pose`` on configuration ``branch``
+        (bits 1 shoulder, 2 elbow, 4 wrist), or without one the solution nearest the present
+        joints (``KG``). Returns the goal joints and the branch taken (8: none, a robot
+        without a closed form); with ``wait`` the joints are polled until reached."""
+        goal = as_pose(pose)
+        index = 8 if branch is None else int(branch)
+        reply = self.request("KG", goal.xyz + goal.rpy + (float(time or 0.0),), index)
+        q = list(reply.values[:6])
+        if wait:
+            self.wait_for_joints([q], self._options(time or 0.0))
+        return q, reply.index
+
     def set_via_tolerance(self, cartesian: bool, slot: int, tolerance: Optional[float]) -> float:
         """``VT`` (Cartesian slots, m + rad) or ``jT`` (joint slots, rad): the blend tolerance of
         via point ``slot`` (0..19). The sequence passes that point within it without stopping;

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -126,6 +127,23 @@ def test_joint_moves_arrive(mk1) -> None:  # type: ignore[no-untyped-def]
         reached = arm.move_j(q, time=1.0)
         assert reached is not None and math.dist(reached, q) <= 0.001
         assert time.monotonic() - started >= 0.9
+
+
+def test_ik_solutions_and_a_joint_move_on_a_chosen_branch(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        assert arm.set_mode(armgate.Mode.JOINT) == armgate.Mode.JOINT
+        pose = arm.get_tcp_pose()
+        q = arm.get_joints()
+        solutions = arm.ik_solutions(pose)
+        assert solutions is not None and len(solutions) >= 1
+        branches = [b for b, _ in solutions]
+        assert len(set(branches)) == len(branches)
+        present = [b for b, s in solutions if math.dist(s, q) < 1e-3]
+        assert len(present) == 1
+        goal = dataclasses.replace(pose, z=pose.z + 0.02)
+        target, branch = arm.move_j_to_pose(goal, branch=present[0])
+        assert branch == present[0]
+        assert math.dist(arm.get_joints(), target) <= 0.001
 
 
 def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-untyped-def]

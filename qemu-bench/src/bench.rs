@@ -1,6 +1,7 @@
 //! The measurements on every embedded robot: `libm`'s `sincos` and `sqrt`, forward kinematics,
-//! the Jacobian, joint rates (one damped least-squares solve), tracking IK, and the worst case
-//! of global IK (an unreachable target, which spends the whole budget).
+//! the Jacobian, joint rates (one damped least-squares solve), tracking IK (and, on a chain of
+//! a closed-form family, Newton's tracking alone and the all-solutions closed form), and the
+//! worst case of global IK (an unreachable target, which spends the whole budget).
 //!
 //! The samples follow the host benchmark (`core/examples/ik_bench.rs`, tracking mode) draw for
 //! draw: the same generator and seed, a configuration uniform within the joint limits, its tool
@@ -16,7 +17,7 @@
 use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
-use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::kinematics::{Chain, Family, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
@@ -48,6 +49,9 @@ struct Results {
     jacobian: Timing,
     joint_rates: Timing,
     tracking: Timing,
+    newton_tracking: Timing,
+    all_solutions: Timing,
+    solutions: u64,
     line_check: Timing,
     lines_refused: u32,
     unreachable: Timing,
@@ -127,6 +131,15 @@ fn measure_robot(config: &ValidRobot) -> Results {
         let mut seed = q;
         for v in seed.iter_mut() {
             *v += rng.uniform(-PERTURBATION, PERTURBATION);
+        }
+        if chain.family().family != Family::Numeric {
+            let reference = chain.mid_range();
+            let (ticks, all) = measure(|| chain.solve_all(&target, black_box(&reference)));
+            results.all_solutions.add(ticks);
+            results.solutions += all.map_or(0, |a| a.len() as u64);
+            let (ticks, _) =
+                measure(|| chain.newton_tracking(&target, black_box(&seed), &config.ik));
+            results.newton_tracking.add(ticks);
         }
         let (ticks, solved) =
             measure(|| chain.solve_tracking(&target, black_box(&seed), &config.ik));
@@ -236,6 +249,18 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         results.iterations as f64 / calls,
         100.0 * f64::from(results.successes) / calls
     );
+    if results.all_solutions.calls > 0 {
+        row("Newton tracking IK", &results.newton_tracking);
+        let (mean, max) = results.all_solutions.instructions(counter);
+        hprintln!(
+            "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>9.2} sols |         - |",
+            name,
+            "all solutions",
+            mean,
+            max,
+            results.solutions as f64 / f64::from(results.all_solutions.calls)
+        );
+    }
     let (mean, max) = results.line_check.instructions(counter);
     hprintln!(
         "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - | {:>6.1} refused |",

@@ -1,6 +1,7 @@
 //! The command handler: one client datagram in, one reply out.
 
 use armgate_protocol::client::banks::READ_JOINTS;
+use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
@@ -10,6 +11,7 @@ use armgate_protocol::client::{
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
 use super::drives::Drives;
+use super::ik::{self, IkRequestError};
 use super::relay::NoticeRelay;
 use super::status::Status;
 use crate::config::ValidRobot;
@@ -234,6 +236,33 @@ impl CommandHandler {
                 self.goal = Some((goal, duration));
                 Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
             }
+            Command::IkGoal => {
+                let duration = non_negative(v[6]).ok_or(Notice::BadNumber(cmd))?;
+                self.in_mode(cmd)?;
+                operational(drives, cmd)?;
+                let (present, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
+                let chain = self.controller.chain();
+                let ik = self.controller.ik_config();
+                let (goal, branch) =
+                    ik::goal(chain, ik, &present, &v, req.index).map_err(|e| ik_notice(cmd, e))?;
+                self.controller
+                    .move_joints(&goal, duration)
+                    .map_err(refused)?;
+                let mut values = [0.0; VALUES];
+                for (o, q) in values.iter_mut().zip(goal.iter()) {
+                    *o = *q;
+                }
+                values[VALUES - 1] = duration;
+                Ok(values_reply(cmd, &values, branch))
+            }
+            Command::IkSolution => {
+                let reference = self
+                    .controller
+                    .measured()
+                    .map_or_else(|| self.controller.chain().mid_range(), |(q, _)| q);
+                ik::solution(self.controller.chain(), &reference, &v, req.index)
+                    .map_err(|e| ik_notice(cmd, e))
+            }
             Command::JointBegin => {
                 let goal = self
                     .joint_goal
@@ -360,6 +389,13 @@ impl CommandHandler {
                     Ok(CauseReport { cause, joint }.to_reply())
                 }
                 SIGNING_INDEX => Ok(self.signing.to_reply()),
+                BRANCH_INDEX => {
+                    let present = self.controller.measured().map(|(q, _)| q);
+                    Ok(ik::present_branch(
+                        self.controller.chain(),
+                        present.as_ref(),
+                    ))
+                }
                 _ => Err(Notice::BadIndex(cmd)),
             },
             Command::Temperature => {
@@ -483,8 +519,19 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
 fn required_mode(cmd: Command) -> Mode {
     match cmd {
         Command::Begin | Command::ViaExecute | Command::Twist => Mode::Cartesian,
-        Command::JointBegin | Command::JointExecute | Command::JointVelocity => Mode::Joint,
+        Command::JointBegin | Command::JointExecute | Command::JointVelocity | Command::IkGoal => {
+            Mode::Joint
+        }
         _ => Mode::Off,
+    }
+}
+
+/// The client text for a refused `KG`/`KS`.
+fn ik_notice(cmd: Command, error: IkRequestError) -> Notice {
+    match error {
+        IkRequestError::BadNumber => Notice::BadNumber(cmd),
+        IkRequestError::BadIndex => Notice::BadIndex(cmd),
+        IkRequestError::Refused(r) => refusal_notice(cmd, r),
     }
 }
 

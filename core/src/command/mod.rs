@@ -8,6 +8,7 @@ mod allow;
 mod banks;
 mod drives;
 mod handler;
+mod ik;
 mod relay;
 mod status;
 

@@ -2,6 +2,7 @@
 
 use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 
+use super::family::ClosedForm;
 use super::jacobian::Jacobian;
 use super::joints::Joints;
 use crate::MAX_JOINTS;
@@ -40,6 +41,8 @@ struct Link {
     a: f64,
     d: f64,
     theta: f64,
+    cos_theta: f64,
+    sin_theta: f64,
 }
 
 /// A serial chain of up to [`MAX_JOINTS`] revolute or prismatic joints with a tool frame.
@@ -51,6 +54,8 @@ pub struct Chain {
     tool: Frame,
     min: [f64; MAX_JOINTS],
     max: [f64; MAX_JOINTS],
+    /// The closed-form family, if the geometry has one.
+    closed_form: Option<ClosedForm>,
 }
 
 /// The joint axes (z of each joint frame) and their origins from one evaluation, base
@@ -71,6 +76,7 @@ impl Chain {
             tool: tool_frame(config),
             min: [0.0; MAX_JOINTS],
             max: [0.0; MAX_JOINTS],
+            closed_form: None,
         };
         let slots = chain
             .links
@@ -79,6 +85,7 @@ impl Chain {
         for (joint, (link, (min, max))) in config.joints.iter().zip(slots) {
             let (sin_alpha, cos_alpha) = libm::sincos(joint.alpha);
             let (sin_beta, cos_beta) = libm::sincos(joint.beta);
+            let (sin_theta, cos_theta) = libm::sincos(joint.theta);
             *link = Link {
                 prismatic: joint.kind == JointType::Prismatic,
                 cos_alpha,
@@ -89,11 +96,19 @@ impl Chain {
                 a: joint.a,
                 d: joint.d,
                 theta: joint.theta,
+                cos_theta,
+                sin_theta,
             };
             *min = joint.min;
             *max = joint.max;
         }
+        chain.closed_form = ClosedForm::detect(&chain);
         chain
+    }
+
+    /// The closed-form family detected when the chain was built.
+    pub(super) fn closed_form(&self) -> Option<&ClosedForm> {
+        self.closed_form.as_ref()
     }
 
     /// Number of joints.
@@ -232,6 +247,45 @@ impl Chain {
     fn walk(
         &self,
         q: &[f64; MAX_JOINTS],
+        visit: impl FnMut(usize, [&Vector3<f64>; 3], Vector3<f64>),
+    ) -> Frame {
+        self.walk_by(
+            |_, link, qi| {
+                let (theta, d) = if link.prismatic {
+                    (link.theta, link.d + qi)
+                } else {
+                    (link.theta + qi, link.d)
+                };
+                let (st, ct) = libm::sincos(theta);
+                (st, ct, d)
+            },
+            q,
+            visit,
+        )
+    }
+
+    /// The tool frame of a revolute chain from the sine and cosine of each joint value
+    /// (prismatic joints keep their offset): FK without recomputing the sines and cosines a
+    /// closed-form solver already has.
+    pub(super) fn pose_by_trig(&self, sin_cos: &[(f64, f64); MAX_JOINTS]) -> Frame {
+        self.walk_by(
+            |i, link, _| {
+                let (sq, cq) = sin_cos.get(i).copied().unwrap_or((0.0, 1.0));
+                let st = link.sin_theta * cq + link.cos_theta * sq;
+                let ct = link.cos_theta * cq - link.sin_theta * sq;
+                (st, ct, link.d)
+            },
+            &[0.0; MAX_JOINTS],
+            |_, _, _| {},
+        )
+    }
+
+    /// The walk, with `joint(i, link, q_i)` giving each joint's `sin θ`, `cos θ` and `d`.
+    #[inline(always)]
+    fn walk_by(
+        &self,
+        joint: impl Fn(usize, &Link, f64) -> (f64, f64, f64),
+        q: &[f64; MAX_JOINTS],
         mut visit: impl FnMut(usize, [&Vector3<f64>; 3], Vector3<f64>),
     ) -> Frame {
         // The rotation is kept as its three columns (the joint frame's axes), starting from the
@@ -244,12 +298,7 @@ impl Chain {
         ];
         let mut pos = self.base.translation.vector;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
-            let (theta, d) = if link.prismatic {
-                (link.theta, link.d + qi)
-            } else {
-                (link.theta + qi, link.d)
-            };
-            let (st, ct) = libm::sincos(theta);
+            let (st, ct, d) = joint(i, link, qi);
             // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
             pos += x * link.a;
             let y1 = y * link.cos_alpha + z * link.sin_alpha;

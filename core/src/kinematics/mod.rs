@@ -4,16 +4,26 @@
 //!   and manipulability.
 //! * [`Chain::solve_tracking`] / [`Chain::solve_global`]: inverse position kinematics from a
 //!   nearby seed (the per-tick case) or from anywhere (deterministic random restarts).
+//! * [`Chain::solve_all`] / [`Chain::solve_nearest`]: every solution in closed form, for the
+//!   [`Family`] detected from the geometry (subproblem decomposition).
 //! * [`diverges`]: the seed's divergence guard.
 //! * [`Chain::joint_rates`]: inverse velocity kinematics with a null-space term.
 
 mod chain;
+mod closed_form;
+mod family;
 mod ik;
 mod jacobian;
 mod joints;
+mod screws;
+mod spherical_wrist;
+mod subproblems;
+mod three_parallel;
 mod velocity;
 
 pub use chain::{Chain, KinematicsError};
-pub use ik::{IkError, IkResult, IkSolution, diverges};
+pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
+pub use family::{Family, FamilyFit};
+pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;
 pub use joints::Joints;

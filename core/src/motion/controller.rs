@@ -1005,6 +1005,11 @@ impl Controller {
         &self.stream
     }
 
+    /// The IK settings of the robot file.
+    pub fn ik_config(&self) -> &IkConfig {
+        &self.ik
+    }
+
     /// The kinematic chain.
     pub fn chain(&self) -> &Chain {
         &self.chain

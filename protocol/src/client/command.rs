@@ -12,6 +12,14 @@ pub enum Command {
     GoalQuaternion,
     /// `GT`: store the Cartesian goal: position f0..f2, roll/pitch/yaw f3..f5, duration f6.
     GoalRpy,
+    /// `KG`: move the joints (joint mode) to the inverse kinematics of the pose f0..f2,
+    /// roll/pitch/yaw f3..f5, in at least f6 s, on the configuration branch `index` (bits:
+    /// [`branch`](super::branch)); [`NEAREST_BRANCH`](super::branch::NEAREST_BRANCH): the
+    /// solution nearest the present joints.
+    IkGoal,
+    /// `KS`: read the `index`-th closed-form IK solution of the pose f0..f2, roll/pitch/yaw
+    /// f3..f5 (0 first).
+    IkSolution,
     /// `jB`: begin the joint motion to the stored joint goal.
     JointBegin,
     /// `jC`: clear the joint via points.
@@ -40,7 +48,8 @@ pub enum Command {
     Pose,
     /// `RC`: recalibrate: the current joint angles are f0..f5.
     Recalibrate,
-    /// `SQ`: report the status (index 0) or the robot's name (index 1).
+    /// `SQ`: report the status (index 0), the robot's name (index 1) or the present IK
+    /// configuration branch (index 5).
     Status,
     /// `ST`: stop all motion.
     Stop,
@@ -63,11 +72,13 @@ pub enum Command {
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 25] = [
+    pub const ALL: [Self; 27] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
         Self::GoalRpy,
+        Self::IkGoal,
+        Self::IkSolution,
         Self::JointBegin,
         Self::JointClear,
         Self::JointExecute,
@@ -98,6 +109,8 @@ impl Command {
             Self::ChangeMode => b"CM",
             Self::GoalQuaternion => b"GL",
             Self::GoalRpy => b"GT",
+            Self::IkGoal => b"KG",
+            Self::IkSolution => b"KS",
             Self::JointBegin => b"jB",
             Self::JointClear => b"jC",
             Self::JointExecute => b"jE",

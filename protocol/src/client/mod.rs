@@ -35,6 +35,7 @@
 
 pub mod banks;
 mod blend;
+pub mod branch;
 mod command;
 mod error;
 mod message;

@@ -1,0 +1,103 @@
+//! The closed-form IK requests: `KG` (a joint move to a Cartesian goal on a chosen branch),
+//! `KS` (read one of a pose's solutions) and `SQ` 5 (the present branch).
+
+use armgate_protocol::client::branch::{BRANCH_INDEX, NEAREST_BRANCH, NO_CLOSED_FORM, NO_SOLUTION};
+use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
+
+use crate::config::IkConfig;
+use crate::kinematics::{Branch, Chain, Family, IkResult, Joints};
+use crate::math::{Frame, Rotation3, Vector3};
+use crate::motion::Refusal;
+
+/// Why a `KG` or `KS` is refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum IkRequestError {
+    /// A value is NaN or infinite.
+    BadNumber,
+    /// The index names no branch (or a branch on a robot without a closed form).
+    BadIndex,
+    /// The controller refuses it (no solution: the goal is out of reach).
+    Refused(Refusal),
+}
+
+/// The pose in f0..f5 (position, roll/pitch/yaw), if finite.
+fn pose(v: &[f64; VALUES]) -> Result<Frame, IkRequestError> {
+    let [x, y, z, roll, pitch, yaw, _] = *v;
+    if ![x, y, z, roll, pitch, yaw].iter().all(|c| c.is_finite()) {
+        return Err(IkRequestError::BadNumber);
+    }
+    let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
+    Ok(Frame::from_parts(Vector3::new(x, y, z).into(), rotation))
+}
+
+/// The joints of `KG`'s goal and the branch bits they lie on ([`NEAREST_BRANCH`] on a robot
+/// without a closed form, solved by global IK from the present joints).
+pub(super) fn goal(
+    chain: &Chain,
+    ik: &IkConfig,
+    present: &Joints,
+    v: &[f64; VALUES],
+    index: u8,
+) -> Result<(Joints, u8), IkRequestError> {
+    let target = pose(v)?;
+    let out_of_reach = IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
+    let branch = match index {
+        NEAREST_BRANCH => None,
+        bits => Some(Branch::from_bits(bits).ok_or(IkRequestError::BadIndex)?),
+    };
+    if chain.family().family == Family::Numeric {
+        if branch.is_some() {
+            return Err(IkRequestError::BadIndex);
+        }
+        return match chain.solve_global(&target, present, ik, 0) {
+            Ok(IkResult::Converged(s)) => Ok((s.q, NEAREST_BRANCH)),
+            _ => Err(out_of_reach),
+        };
+    }
+    match chain.solve_nearest(&target, present, branch) {
+        Ok(Some(found)) => Ok((found.q, found.branch.bits())),
+        _ => Err(out_of_reach),
+    }
+}
+
+/// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the
+/// branch in the index), each joint on the turn nearest `reference`.
+pub(super) fn solution(
+    chain: &Chain,
+    reference: &Joints,
+    v: &[f64; VALUES],
+    k: u8,
+) -> Result<Reply, IkRequestError> {
+    let target = pose(v)?;
+    let mut values = [0.0f32; VALUES];
+    let Ok(solutions) = chain.solve_all(&target, reference) else {
+        values[VALUES - 1] = NO_CLOSED_FORM;
+        return Ok(reply(Command::IkSolution, values, NO_SOLUTION));
+    };
+    values[VALUES - 1] = solutions.len() as f32;
+    let Some(found) = solutions.get(usize::from(k)) else {
+        return Ok(reply(Command::IkSolution, values, NO_SOLUTION));
+    };
+    for (o, q) in values.iter_mut().zip(found.q.iter()).take(VALUES - 1) {
+        *o = *q as f32;
+    }
+    Ok(reply(Command::IkSolution, values, found.branch.bits()))
+}
+
+/// `QS` index 5: the branch of the present joints in f0 (−1: none, or no closed form).
+pub(super) fn present_branch(chain: &Chain, present: Option<&Joints>) -> Reply {
+    let bits = present
+        .and_then(|q| chain.branch_of(q))
+        .map_or(-1.0, |b| f32::from(b.bits()));
+    let mut values = [0.0f32; VALUES];
+    values[0] = bits;
+    reply(Command::Status, values, BRANCH_INDEX)
+}
+
+fn reply(command: Command, values: [f32; VALUES], index: u8) -> Reply {
+    Reply {
+        command,
+        values,
+        index,
+    }
+}

@@ -1,0 +1,386 @@
+//! Every inverse-kinematics solution in closed form, for chains of a known [`Family`].
+//!
+//! A family solver ([`spherical_wrist`](super::spherical_wrist),
+//! [`three_parallel`](super::three_parallel)) lists candidate solutions as angles with their
+//! [`Branch`]. Each candidate is then taken to the 2π turn of every revolute joint that lies
+//! within the limits nearest to a reference configuration (the present joints), polished by
+//! Newton steps on the true chain if the chain only approximately belongs to its family, and
+//! kept only if forward kinematics reproduces the target within [`CHECK`]. So every solution
+//! returned is exact and admissible; a pose with none returns an empty list.
+
+use heapless::Vec;
+use nalgebra::{Matrix3, Vector3};
+
+use super::chain::Chain;
+use super::family::{ClosedForm, Family, FamilyFit};
+use super::ik::{IkError, IkSolution};
+use super::joints::Joints;
+use super::subproblems::{Angle, sp4};
+use super::{spherical_wrist, three_parallel};
+use crate::MAX_JOINTS;
+use crate::config::IkConfig;
+use crate::math::Frame;
+use crate::saturate::saturate;
+
+/// Most solutions of a closed-form solve (2 shoulders · 2 elbows · 2 wrists).
+pub const MAX_SOLUTIONS: usize = 8;
+/// Position (m) and orientation (rad) error up to which a solution counts as reproducing the
+/// target.
+pub const CHECK: f64 = 1e-9;
+/// A candidate this close to the target (m, rad) but not within [`CHECK`] is polished.
+const POLISH_FROM: f64 = 1e-5;
+/// Newton steps that polish a solution of the ideal model on a calibrated chain.
+const POLISH_ITERATIONS: u16 = 20;
+
+/// A configuration branch of a closed-form family: which root each of the three two-way
+/// choices took. Bit 0 is the shoulder (the second root of θ1), bit 1 the elbow (of θ3), bit
+/// 2 the wrist (of θ4, θ5 for a spherical wrist; of θ5 for three parallel axes). Flipping a bit
+/// gives the mirrored configuration: shoulder left/right, elbow up/down, wrist flipped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Branch(u8);
+
+impl Branch {
+    /// Shoulder bit.
+    pub const SHOULDER: u8 = 1;
+    /// Elbow bit.
+    pub const ELBOW: u8 = 2;
+    /// Wrist bit.
+    pub const WRIST: u8 = 4;
+
+    /// The branch with these bits; `None` above 7.
+    pub const fn from_bits(bits: u8) -> Option<Self> {
+        if bits < 8 { Some(Self(bits)) } else { None }
+    }
+
+    /// Its bits.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// The branch of the roots taken (each 0 or 1).
+    pub(super) fn from_roots(shoulder: u8, elbow: u8, wrist: u8) -> Self {
+        Self((shoulder & 1) | (elbow & 1) << 1 | (wrist & 1) << 2)
+    }
+
+    /// This branch with the wrist root `wrist`.
+    pub(super) fn with_wrist(self, wrist: u8) -> Self {
+        Self(self.0 & !Self::WRIST | (wrist & 1) << 2)
+    }
+}
+
+/// One exact solution and its branch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BranchSolution {
+    /// Joint values within the limits.
+    pub q: Joints,
+    /// The branch it lies on.
+    pub branch: Branch,
+}
+
+/// Every solution of a closed-form solve.
+pub type Solutions = Vec<BranchSolution, MAX_SOLUTIONS>;
+
+/// A candidate of a family solver: angles of the six joints and the branch.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Candidate {
+    pub angles: [Angle; 6],
+    /// The values of the angles a solver already took (`atan2` once for a root that several
+    /// candidates share); NaN where not.
+    pub values: [f64; 6],
+    pub branch: Branch,
+}
+
+impl Candidate {
+    /// A candidate of `angles` on `branch`, with the `known` values (NaN: not taken yet).
+    pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch) -> Self {
+        Self {
+            angles,
+            values: known,
+            branch,
+        }
+    }
+}
+
+/// Where both families start: the target's rotation relative to the tool's at q = 0
+/// (`R1 ⋯ R6`), the target's place for the form's centre (which moves with the joints before
+/// the last two or three only) relative to axis 1's point, and the roots of θ1 that keep its
+/// component along axis 2 (subproblem 4: rotations about axis 2 and the axes parallel to it
+/// keep it).
+pub(super) struct Shoulder {
+    pub tool: Matrix3<f64>,
+    pub v: Vector3<f64>,
+    pub roots: ([(Angle, u8); 2], usize),
+}
+
+impl Shoulder {
+    /// The start of `form`'s solve for `target` (`nearest`: only the root nearest `free`).
+    pub fn of(form: &ClosedForm, target: &Frame, free: f64, nearest: bool) -> Self {
+        let s = &form.screws;
+        let [h1, h2, _, _, _, _, _, _] = &s.axis;
+        let o1 = &s.point[0];
+        let c = &form.centre;
+        let tool = target.rotation.matrix() * s.tool_rotation.transpose();
+        let v = target.translation.vector - tool * (s.tool_position - c) - o1;
+        let roots = sp4(&v, h1, h2, h2.dot(&(c - o1)), form.slack()).list(free, nearest);
+        Self { tool, v, roots }
+    }
+}
+
+/// A checked solution with its errors.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Exact {
+    pub solution: BranchSolution,
+    /// Distance from the target position (m).
+    pub position_error: f64,
+    /// Rotation angle from the target orientation (rad).
+    pub orientation_error: f64,
+}
+
+impl Exact {
+    /// As an [`IkSolution`] (no Newton steps), if both errors are below `tolerance`.
+    pub fn within(&self, tolerance: f64) -> Option<IkSolution> {
+        (self.position_error < tolerance && self.orientation_error < tolerance).then_some(
+            IkSolution {
+                q: self.solution.q,
+                iterations: 0,
+                position_error: self.position_error,
+                orientation_error: self.orientation_error,
+            },
+        )
+    }
+}
+
+/// The candidates of one solve.
+pub(super) type Candidates = Vec<Candidate, MAX_SOLUTIONS>;
+
+impl Chain {
+    /// The closed-form family this chain belongs to, detected when it was built.
+    pub fn family(&self) -> FamilyFit {
+        self.closed_form().map_or(
+            FamilyFit {
+                family: Family::Numeric,
+                deviation: f64::INFINITY,
+            },
+            |form| form.fit,
+        )
+    }
+
+    /// Every solution for `target` within the joint limits, each on its own branch, each
+    /// revolute joint on the 2π turn nearest to `reference` (the present joints; also the
+    /// value kept by a joint a singularity leaves free). Refused with
+    /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
+    pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
+        let (form, reference, candidates) = self.candidates(target, reference, false)?;
+        let mut solutions = Solutions::new();
+        for candidate in &candidates {
+            if let Some(exact) = self.finish(form, candidate, target, &reference) {
+                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+                let _ = solutions.push(exact.solution);
+            }
+        }
+        Ok(solutions)
+    }
+
+    /// The solution nearest to `reference` (on `branch` if given): the candidates are tried
+    /// from the nearest, so usually only one is checked. `None` if there is none.
+    pub fn solve_nearest(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Result<Option<BranchSolution>, IkError> {
+        Ok(self
+            .nearest_exact(target, reference, branch)?
+            .map(|e| e.solution))
+    }
+
+    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors.
+    pub(super) fn nearest_exact(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Result<Option<Exact>, IkError> {
+        let (form, reference, candidates) = self.candidates(target, reference, false)?;
+        let mut near = [Angle::of(0.0); 6];
+        for (a, r) in near.iter_mut().zip(&reference) {
+            *a = Angle::of(*r);
+        }
+        // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
+        let mut distance = [f64::INFINITY; MAX_SOLUTIONS];
+        for (d, c) in distance.iter_mut().zip(&candidates) {
+            if branch.is_none_or(|b| b == c.branch) {
+                *d = c
+                    .angles
+                    .iter()
+                    .zip(&near)
+                    .map(|(a, r)| 1.0 - a.closeness(r))
+                    .sum();
+            }
+        }
+        // Nearest first (a selection, not a sort: a sort's code would cost the firmware
+        // kilobytes for eight entries).
+        for _ in 0..MAX_SOLUTIONS {
+            let Some((k, _)) = distance
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| d.is_finite())
+                .min_by(|(_, a), (_, b)| a.total_cmp(b))
+            else {
+                break;
+            };
+            if let Some(d) = distance.get_mut(k) {
+                *d = f64::INFINITY;
+            }
+            let found = candidates
+                .get(k)
+                .and_then(|c| self.finish(form, c, target, &reference));
+            if found.is_some() {
+                return Ok(found);
+            }
+        }
+        Ok(None)
+    }
+
+    /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
+    /// two-way choice the root nearest the seed, so one candidate is built and checked.
+    pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
+        let (form, reference, candidates) = self.candidates(target, seed, true)?;
+        Ok(candidates
+            .first()
+            .and_then(|c| self.finish(form, c, target, &reference)))
+    }
+
+    /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
+    /// lies at `q`. `None` for a numeric chain or at a configuration no branch reproduces
+    /// (within 1e-6 per joint).
+    pub fn branch_of(&self, q: &[f64]) -> Option<Branch> {
+        let pose = self.forward(q).ok()?;
+        let found = self.solve_nearest(&pose, q, None).ok()??;
+        let same = found.q.iter().zip(q).all(|(a, b)| (a - b).abs() <= 1e-6);
+        same.then_some(found.branch)
+    }
+
+    /// The family, the checked reference and the family solver's candidates (with `nearest`,
+    /// only the one nearest `reference` at every choice).
+    fn candidates(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        nearest: bool,
+    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
+        let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
+        let reference = self.prepare(target, reference)?;
+        let mut candidates = Candidates::new();
+        match form.fit.family {
+            Family::SphericalWrist => {
+                spherical_wrist::solve(form, target, &reference, nearest, &mut candidates);
+            }
+            Family::ThreeParallel => {
+                three_parallel::solve(form, target, &reference, nearest, &mut candidates);
+            }
+            Family::Numeric => {}
+        }
+        Ok((form, reference, candidates))
+    }
+
+    /// A candidate on the turns nearest `reference`, polished if the family fit is
+    /// approximate, if it is within the limits and reproduces `target`.
+    fn finish(
+        &self,
+        form: &ClosedForm,
+        candidate: &Candidate,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+    ) -> Option<Exact> {
+        let (min, max) = self.limits();
+        let mut q = Joints::zeros(self.dof());
+        let angles = candidate.angles.iter().zip(&candidate.values);
+        let joints = q.iter_mut().zip(angles).zip(reference);
+        // An ideal model's root may lie a little beyond a limit the true chain's is within:
+        // widened limits, then Newton from the nearest point within them.
+        let widen = if form.fit.is_exact() {
+            0.0
+        } else {
+            form.slack()
+        };
+        for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
+            let value = if known.is_nan() {
+                angle.value()
+            } else {
+                *known
+            };
+            let turned = nearest_turn(value, *r, lo - widen, hi + widen)?;
+            *v = saturate(turned, *lo, *hi);
+        }
+        if !form.fit.is_exact() {
+            q = self.polish(target, &q)?;
+        }
+        let mut sin_cos = [(0.0, 1.0); MAX_JOINTS];
+        for (sc, a) in sin_cos.iter_mut().zip(&candidate.angles) {
+            *sc = (a.sin, a.cos);
+        }
+        let reached = if form.fit.is_exact() {
+            self.pose_by_trig(&sin_cos)
+        } else {
+            self.pose(&q)
+        };
+        let mut errors = misses(&reached, target);
+        if errors.0.max(errors.1) > CHECK {
+            // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
+            // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
+            if errors.0.max(errors.1) > POLISH_FROM {
+                return None;
+            }
+            q = self.polish(target, &q)?;
+            errors = misses(&self.pose(&q), target);
+            if errors.0.max(errors.1) > CHECK {
+                return None;
+            }
+        }
+        Some(Exact {
+            solution: BranchSolution {
+                q,
+                branch: candidate.branch,
+            },
+            position_error: errors.0,
+            orientation_error: errors.1,
+        })
+    }
+
+    /// Newton steps on the true chain from a solution of its ideal model (or from a root known
+    /// only to √ε); the best pose reached.
+    fn polish(&self, target: &Frame, q: &Joints) -> Option<Joints> {
+        let config = IkConfig {
+            tolerance: 0.1 * CHECK,
+            tracking_iterations: POLISH_ITERATIONS,
+            ..IkConfig::default()
+        };
+        // Aiming below CHECK, Newton may stall on rounding just above its tolerance: its best
+        // pose goes to the caller's check either way.
+        Some(self.newton_tracking(target, q, &config).ok()?.solution().q)
+    }
+}
+
+/// How far `reached` misses `target`: the position error (m) and the rotation angle between
+/// them (rad), the angle read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
+/// `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter), which needs no logarithm.
+fn misses(reached: &Frame, target: &Frame) -> (f64, f64) {
+    let position = (reached.translation.vector - target.translation.vector).norm();
+    let rotation = (reached.rotation.matrix() - target.rotation.matrix()).norm();
+    (position, rotation * core::f64::consts::FRAC_1_SQRT_2)
+}
+
+/// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
+/// `reference`; `None` if no turn fits.
+fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
+    const TAU: f64 = core::f64::consts::TAU;
+    // Within π of the reference: if it fits, no other turn is nearer.
+    let near = angle + TAU * libm::round((reference - angle) / TAU);
+    if lo <= near && near <= hi {
+        return Some(near);
+    }
+    // Outside on one side: the next turn towards the range is the only nearer candidate.
+    let next = if near > hi { near - TAU } else { near + TAU };
+    (lo <= next && next <= hi).then_some(next)
+}

@@ -1,0 +1,166 @@
+//! Which closed-form family a chain belongs to, detected from its geometry when the chain is
+//! built (so at validation time), and the ideal model of that family nearest to it.
+//!
+//! The test is on the joint axes at the zero configuration ([`Screws`]), not on DH numbers, so
+//! it does not matter how the file spells the geometry (rounded twists such as 1.5708, offsets,
+//! base and tool frames). A chain within [`EXACT`] of the family is solved in closed form
+//! directly; one within [`NEAR`] (a calibrated arm: β ≠ 0, fitted twists and lengths) is solved
+//! on its ideal model and every solution polished by Newton steps on the true chain.
+
+use nalgebra::Vector3;
+
+use super::chain::Chain;
+use super::screws::{Screws, closest_meeting, distance_to_line, misalignment};
+use super::subproblems::TANGENT;
+
+/// Deviation (m, or the sine of an angle) up to which the chain is the family's ideal model.
+const EXACT: f64 = 1e-9;
+/// Deviation up to which the chain is solved on its ideal model and polished.
+const NEAR: f64 = 1e-2;
+/// The subproblems' slack beyond a tangency on an ideal model ([`ClosedForm::slack`]).
+const NEAR_SLACK: f64 = 0.05;
+/// Two axes at least this far from parallel (sine) count as distinct directions.
+const DISTINCT: f64 = 0.1;
+
+/// The closed-form families of six-revolute-joint arms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// Axes 2 and 3 parallel, axes 4, 5 and 6 meeting in one point (the wrist centre); any
+    /// offsets elsewhere (ranger-mk1, puma560). Up to 8 solutions.
+    SphericalWrist,
+    /// Axes 2, 3 and 4 parallel, axes 5 and 6 meeting (ur5). Up to 8 solutions.
+    ThreeParallel,
+    /// No closed form here (prismatic joints, not six joints, or other geometry): the numeric
+    /// solver only.
+    Numeric,
+}
+
+/// The family of a chain and how closely the chain fits it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FamilyFit {
+    /// The family.
+    pub family: Family,
+    /// The largest distance (m) or sine of an angle by which the chain misses the family's
+    /// ideal model: 0 up to rounding for a nominal robot file, small for a calibrated one.
+    pub deviation: f64,
+}
+
+impl FamilyFit {
+    /// True if the chain is solved in closed form without Newton polishing.
+    pub fn is_exact(&self) -> bool {
+        self.family != Family::Numeric && self.deviation <= EXACT
+    }
+}
+
+/// A detected family: the ideal model the closed form solves and the point it is built on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct ClosedForm {
+    pub fit: FamilyFit,
+    /// The ideal model: the chain's screws with the family's conditions made exact.
+    pub screws: Screws,
+    /// Where the last axes meet: the wrist centre, or the point on axes 5 and 6.
+    pub centre: Vector3<f64>,
+}
+
+impl ClosedForm {
+    /// How far beyond a tangency the subproblems accept data: rounding for an exact model;
+    /// for an ideal model of a calibrated arm, enough that a target the true arm reaches at the
+    /// edge of its workspace still gives the ideal model's tangent root, which Newton polishes.
+    pub fn slack(&self) -> f64 {
+        if self.fit.is_exact() {
+            TANGENT
+        } else {
+            NEAR_SLACK
+        }
+    }
+
+    /// The family `chain` belongs to, if any.
+    pub fn detect(chain: &Chain) -> Option<Self> {
+        if chain.dof() != 6 || (0..6).any(|i| chain.is_prismatic(i)) {
+            return None;
+        }
+        let screws = Screws::of(chain);
+        spherical_wrist(&screws).or_else(|| three_parallel(&screws))
+    }
+}
+
+/// Axes `first..=last` made parallel to `axis[first]` (each keeps its sense); the largest
+/// misalignment. `None` if any is not nearly parallel.
+fn make_parallel(screws: &mut Screws, first: usize, last: usize) -> Option<f64> {
+    let h = *screws.axis.get(first)?;
+    let mut worst = 0.0f64;
+    for axis in screws.axis.iter_mut().take(last + 1).skip(first + 1) {
+        let sin = misalignment(&h, axis);
+        if sin > NEAR {
+            return None;
+        }
+        worst = worst.max(sin);
+        *axis = if h.dot(axis) >= 0.0 { h } else { -h };
+    }
+    Some(worst)
+}
+
+/// Axes `a` and `b` meet (within [`NEAR`]): their meeting point and the gap.
+fn meeting(screws: &Screws, a: usize, b: usize) -> Option<(Vector3<f64>, f64)> {
+    let (pa, ha) = (screws.point.get(a)?, screws.axis.get(a)?);
+    let (pb, hb) = (screws.point.get(b)?, screws.axis.get(b)?);
+    if misalignment(ha, hb) < DISTINCT {
+        return None;
+    }
+    closest_meeting(pa, ha, pb, hb).filter(|(_, gap)| *gap <= NEAR)
+}
+
+/// Every axis from `first` to `last` moved (parallel to itself) through `centre`.
+fn through(screws: &mut Screws, first: usize, last: usize, centre: &Vector3<f64>) {
+    for point in screws.point.iter_mut().take(last + 1).skip(first) {
+        *point = *centre;
+    }
+}
+
+fn distinct(screws: &Screws, a: usize, b: usize) -> bool {
+    match (screws.axis.get(a), screws.axis.get(b)) {
+        (Some(x), Some(y)) => misalignment(x, y) >= DISTINCT,
+        _ => false,
+    }
+}
+
+fn fit(family: Family, deviation: f64, screws: Screws, centre: Vector3<f64>) -> Option<ClosedForm> {
+    (deviation <= NEAR).then_some(ClosedForm {
+        fit: FamilyFit { family, deviation },
+        screws,
+        centre,
+    })
+}
+
+/// Axes 2 ∥ 3, axes 4, 5, 6 through one point.
+fn spherical_wrist(chain: &Screws) -> Option<ClosedForm> {
+    if !distinct(chain, 0, 1) {
+        return None;
+    }
+    let mut ideal = *chain;
+    let parallel = make_parallel(&mut ideal, 1, 2)?;
+    let (centre, gap) = meeting(chain, 3, 4)?;
+    if !distinct(chain, 4, 5) {
+        return None;
+    }
+    let off = distance_to_line(&centre, &chain.point[5], &chain.axis[5]);
+    through(&mut ideal, 3, 5, &centre);
+    fit(
+        Family::SphericalWrist,
+        parallel.max(gap).max(off),
+        ideal,
+        centre,
+    )
+}
+
+/// Axes 2 ∥ 3 ∥ 4, axes 5 and 6 meeting, axis 5 not parallel to the others.
+fn three_parallel(chain: &Screws) -> Option<ClosedForm> {
+    if !distinct(chain, 0, 1) || !distinct(chain, 1, 4) {
+        return None;
+    }
+    let mut ideal = *chain;
+    let parallel = make_parallel(&mut ideal, 1, 3)?;
+    let (centre, gap) = meeting(chain, 4, 5)?;
+    through(&mut ideal, 4, 5, &centre);
+    fit(Family::ThreeParallel, parallel.max(gap), ideal, centre)
+}

@@ -1,0 +1,117 @@
+//! The closed form of [`Family::SphericalWrist`](super::Family::SphericalWrist): axes 2 and 3
+//! parallel, axes 4–6 meeting in the wrist centre.
+//!
+//! The wrist centre moves with joints 1–3 only, so the position is solved first: rotations
+//! about axes 2 and 3 keep the component along their common direction, which gives θ1
+//! (subproblem 4); the distance from axis 2's point to the wrist centre depends on θ3 alone
+//! (subproblem 3); θ2 turns one known vector onto another (subproblem 1). The wrist then
+//! produces the remaining rotation: θ4, θ5 from where axis 6 must point (subproblem 2), θ6
+//! from what is left (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
+
+use nalgebra::Vector3;
+
+use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
+use super::family::ClosedForm;
+use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
+use crate::MAX_JOINTS;
+use crate::math::Frame;
+
+/// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
+/// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
+/// gives the value of a joint left free by a singularity.
+pub(super) fn solve(
+    form: &ClosedForm,
+    target: &Frame,
+    free: &[f64; MAX_JOINTS],
+    nearest: bool,
+    out: &mut Candidates,
+) {
+    let s = &form.screws;
+    let slack = form.slack();
+    let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
+    let [o1, o2, o3, _, _, _, _, _] = &s.point;
+    let w = &form.centre;
+    let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
+    // Only the action of R1 ⋯ R6 on h5 and h6 is needed.
+    let (tool_h5, tool_h6) = (tool * h5, tool * h6);
+    let (shoulders, n1) = roots;
+    for &(a1, b1) in shoulders.iter().take(n1) {
+        let v1 = a1.value();
+        let back1 = a1.negated();
+        let u = rotate(h1, &back1, &v) - (o2 - o1);
+        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
+        for &(a3, b3) in elbows.iter().take(n3) {
+            let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
+            let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+            // (R1 R2 R3)ᵀ applied to the tool's h5 and h6: what the wrist must produce.
+            let back = |x: &Vector3<f64>| {
+                let x = rotate(h1, &back1, x);
+                rotate(h3, &a3.negated(), &rotate(h2, &a2.negated(), &x))
+            };
+            let arm = ([a1, a2, a3], [v1, a2.value(), a3.value()]);
+            let branch = Branch::from_roots(b1, b3, 0);
+            wrist(
+                form,
+                [back(&tool_h5), back(&tool_h6)],
+                arm,
+                branch,
+                (free, nearest),
+                out,
+            );
+        }
+    }
+}
+
+/// Joints 4–6 producing the rotation `m = R4 R5 R6`, given as `[m h5, m h6]`, appended to the
+/// arm's `[θ1, θ2, θ3]` (angles and values).
+fn wrist(
+    form: &ClosedForm,
+    [turned_h5, pointing]: [Vector3<f64>; 2],
+    arm: ([Angle; 3], [f64; 3]),
+    branch: Branch,
+    (free, nearest): (&[f64; MAX_JOINTS], bool),
+    out: &mut Candidates,
+) {
+    let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
+    // R6 = R5ᵀ R4ᵀ m: where it takes h5.
+    let last = |a4: &Angle, a5: &Angle| {
+        let back = rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5));
+        sp1(h6, h5, &back)
+    };
+    let ([a1, a2, a3], [v1, v2, v3]) = arm;
+    let mut push = |a4: Angle, a5: Angle, wrist: u8| {
+        if let Some(a6) = last(&a4, &a5) {
+            let known = [v1, v2, v3, f64::NAN, f64::NAN, f64::NAN];
+            let angles = [a1, a2, a3, a4, a5, a6];
+            // A full list only drops further roots, which cannot occur (8 at most).
+            let _ = out.push(Candidate::new(angles, known, branch.with_wrist(wrist)));
+        }
+    };
+    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
+    match sp2(h4, &pointing, h5, h6, form.slack()) {
+        PairRoots::Some(pairs, count) => {
+            let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
+            let closeness = |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
+            let skip = match pairs {
+                [first, second] if nearest && count == 2 => {
+                    usize::from(closeness(&second) > closeness(&first))
+                }
+                _ => 0,
+            };
+            let take = if nearest { 1 } else { count };
+            let roots = (0u8..).zip(pairs.iter()).skip(skip).take(take);
+            for (bw, (t4, t5)) in roots {
+                push(t4.negated(), *t5, bw);
+            }
+        }
+        PairRoots::FreeFirst => {
+            // Axis 6 along axis 4 (θ5 = 0 on most arms): θ4 + θ6 is fixed, θ4 keeps `free`.
+            let a4 = Angle::of(free[3]);
+            let turned = rotate(h4, &a4.negated(), &pointing);
+            if let Some(a5) = sp1(h5, h6, &turned) {
+                push(a4, a5, 0);
+            }
+        }
+        PairRoots::None => {}
+    }
+}
