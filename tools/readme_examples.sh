@@ -5,17 +5,19 @@
 # drift from what it says. Run by .ci/run; takes about a minute and a half (the moves run at
 # ranger-mk1's 3 cm/s).
 #
+# The simulator's logs go to a temporary directory instead of logs/, and `armgate plot logs`
+# runs on them after the simulator has stopped (its logs are flushed then).
+#
 # Then the lines of "See the arm" (`armgate urdf`, `armgate record`, the recipe's move).
 #
 # With ARMGATE_SIGNED=1 the same examples run signed (docs/safety.md, "Signing"): armgate-sim
 # gets a fresh key (--key), the client signs with it (ARMGATE_KEY_FILE), the Python client's
 # README line runs with `key=`, and at the end the simulator must have dropped nothing.
 #
-# Not run: `cargo test` (CI's own step), the nightly fuzzer, `armgate teleop` (it needs a
-# terminal; tests cover it at the state level), `armgate plot` (it needs the logs of a
-# `--log-dir` session; tests/plot_e2e.rs makes one and plots it) and the other armgate-sim
-# lines (python/tests/test_mcap.py records with --mcap, tests/foxglove_live.rs views
-# --foxglove).
+# Not run: `cargo test` (CI's own step), the nightly fuzzer (.ci/run runs it where a nightly
+# toolchain and cargo-fuzz are installed), `armgate teleop` (it needs a terminal; tests cover it
+# at the state level) and the other armgate-sim lines (python/tests/test_mcap.py records with
+# --mcap, tests/foxglove_live.rs views --foxglove).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -83,10 +85,30 @@ client=$(examples 'Client: `armgate`')
 viz=$(examples 'See the arm: Foxglove, MCAP and URDF')
 [[ -n $quick && -n $client && -n $viz ]] || { echo "no examples found in $readme" >&2; exit 1; }
 
+# `armgate calibrate` is how its help names it (it runs armgate-calibrate).
+if ! armgate calibrate --help | grep -q '^Usage: armgate calibrate '; then
+    echo "FAILED: armgate calibrate --help does not say armgate calibrate" >&2
+    failures=$((failures + 1))
+fi
+
+# Every `Example:` of a subcommand's --help is one of the README's client or "See the arm"
+# examples, so it runs below on the robot the README names.
+for sub in $(armgate --help | awk '/^Commands:/ { on = 1; next } /^$/ { on = 0 } on { print $1 }'); do
+    # calibrate needs measurements (its own tests run it), help has no --help.
+    [[ $sub == calibrate || $sub == help ]] && continue
+    example=$(armgate "$sub" --help | sed -n 's/^Example: //p')
+    [[ -z $example ]] && continue
+    if ! grep -qxF -- "$example" <<<"$(printf '%s\n%s\n' "$client" "$viz" | tr ';' '\n' | sed 's/^ *//; s/ *$//')"; then
+        echo "FAILED: the example of \`armgate $sub --help\` is not among the README's: $example" >&2
+        failures=$((failures + 1))
+    fi
+done
+
 # The simulator line of the quick start, on a free port instead of 7031 (`cargo run` replaces
 # itself by the binary, so $! is the simulator).
 sim=$(grep -m1 -- '-p armgate-sim' <<<"$quick") || { echo "no armgate-sim line" >&2; exit 1; }
 log=$shim/sim.log
+sim=${sim/--log-dir logs/--log-dir $shim/logs}
 echo "\$ $sim --listen 127.0.0.1:0 $sim_key"
 bash -c "exec $sim --listen 127.0.0.1:0 $sim_key" 2>"$log" &
 sim_pid=$!
@@ -115,13 +137,14 @@ while IFS= read -r line; do
 done <<<"$quick"
 
 # Client lines may hold several commands separated by `;`; each runs on its own.
+plots=()
 while IFS= read -r line; do
     IFS=';' read -ra commands <<<"$line"
     for cmd in "${commands[@]}"; do
         cmd=$(sed 's/^ *//; s/ *$//' <<<"$cmd")
         case $cmd in
             *teleop*) echo "skipped: $cmd (needs a terminal)" ;;
-            "armgate plot"*) echo "skipped: $cmd (needs a --log-dir session: tests/plot_e2e.rs runs one and plots it)" ;;
+            "armgate plot logs"*) plots+=("${cmd/plot logs/plot $shim/logs}") ;;
             *) run "$cmd" ;;
         esac
     done
@@ -190,6 +213,11 @@ if [[ -n $sim_key ]] && ! grep -q 'dropped: 0 unsigned, 0 truncated, 0 forged, 0
     echo "FAILED: the signed clients' datagrams were not all served" >&2
     failures=$((failures + 1))
 fi
+
+# The plots of the session's logs, now complete.
+for cmd in "${plots[@]}"; do
+    run "$cmd"
+done
 
 if [[ $failures -ne 0 ]]; then
     echo "$failures README example(s) failed" >&2

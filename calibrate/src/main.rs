@@ -16,6 +16,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 #[derive(Debug, Parser)]
 #[command(
     name = "armgate-calibrate",
+    // Run as `armgate calibrate` (the client passes the arguments on): its usage says so.
+    bin_name = "armgate calibrate",
     args_conflicts_with_subcommands = true,
     subcommand_negates_reqs = true,
     after_help = "Example: armgate calibrate --robot robots/ur5.toml --measurements m.csv \

@@ -107,7 +107,7 @@ press sends).
                  joint keys: jG + jB.
                  If BG (jB) is refused, e.g. a motion still runs: ST, then BG (jB) once more.
   j              switch between Cartesian and joint keys
-  m              next mode via CM: off -> joint -> cart -> off (the first m selects joint)
+  m              next mode via CM, from the present one: off -> joint -> cart -> off
   v              jog keys <-> step keys
   q, Esc         quit (the terminal is restored)
 
@@ -149,7 +149,7 @@ pub struct Cli {
 pub enum Cmd {
     /// Send any request and print the reply: its characters, 7 floats and the index, or the
     /// ER/WN text (the seed's text client).
-    #[command(after_help = "Example: armgate send GT 0.5 0.2 0.1 0 0 0 5")]
+    #[command(after_help = "Example: armgate send GT 0 0.2 0.8 0 0 -1.5708 5")]
     Send {
         /// The two command characters, case-sensitive (PS, GT, jV, ...).
         chars: String,
@@ -186,7 +186,7 @@ pub enum Cmd {
     Stop,
     /// Move the tool to a pose (GT + BG, Cartesian mode) and wait until it is within the
     /// tolerance (1 mm, 0.01 rad), showing the remaining distance.
-    #[command(after_help = "Example: armgate move 0.5 -0.2 0.4 0 0 -1.5708 --time 4")]
+    #[command(after_help = "Example: armgate move 0 0.2 0.8 0 0 -1.5708 --time 5")]
     Move {
         /// x (m).
         #[arg(allow_negative_numbers = true)]
@@ -242,7 +242,7 @@ pub enum Cmd {
     ///
     /// Without --time: jG + jB, a minimum-time motion. With --time T: jC, jV slot 0 with T, jE,
     /// since jB takes no duration (this clears the joint via points).
-    #[command(after_help = "Example: armgate jmove 1.5708 0.4 1.2 0 1.2 0 --time 10")]
+    #[command(after_help = "Example: armgate jmove 1.5708 0.4 1.2 0 1.2 0")]
     Jmove {
         /// One value per joint (rad, or m for prismatic joints), as many as the arm has.
         #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
@@ -257,7 +257,7 @@ pub enum Cmd {
     /// Stream a velocity for a while, then let the arm ramp to rest: a tool twist (TW,
     /// Cartesian mode: vx vy vz in m/s, optionally wx wy wz in rad/s, base frame unless
     /// --tool) or, with --rates, one rate per joint (jW, joint mode: rad/s).
-    #[command(after_help = "Example: armgate jog 0 0 0.01 --for 2")]
+    #[command(after_help = "Example: armgate jog 0 0 -0.01 --for 1")]
     Jog {
         /// The twist (3 or 6 values) or the joint rates (one per joint).
         #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
@@ -332,11 +332,13 @@ pub enum Cmd {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ModeArg {
     /// 0: no generator drives the arm.
+    #[value(alias = "0")]
     Off,
     /// 1: joint mode.
+    #[value(alias = "1")]
     Joint,
     /// 2: Cartesian mode (also `cartesian`, as the status shows it).
-    #[value(alias = "cartesian")]
+    #[value(aliases = ["cartesian", "2"])]
     Cart,
 }
 
@@ -402,7 +404,9 @@ impl WaitArgs {
         let extra = Duration::try_from_secs_f64(requested).unwrap_or_default();
         WaitOptions {
             tolerance: self.tolerance * 1e-3,
-            timeout: self.wait_timeout.unwrap_or(Duration::from_secs(30) + extra),
+            timeout: self
+                .wait_timeout
+                .unwrap_or(Duration::from_secs(30).saturating_add(extra)),
             interrupt: interrupt.cloned(),
             ..WaitOptions::default()
         }
@@ -1333,14 +1337,20 @@ mod tests {
         assert!(parse_timeout("0ms").is_err());
         assert_eq!(parse_timeout("1ms"), Ok(Duration::from_millis(1)));
         assert!(Cli::try_parse_from(["armgate", "--timeout", "0s", "pose"]).is_err());
-        // The mode as the status shows it is accepted too.
-        let cli = Cli::try_parse_from(["armgate", "mode", "cartesian"]).unwrap();
-        assert!(matches!(
-            cli.command,
-            Cmd::Mode {
-                mode: ModeArg::Cart
-            }
-        ));
+        // The mode as the status shows it, and as the help numbers it, is accepted too.
+        for (typed, mode) in [
+            ("cartesian", ModeArg::Cart),
+            ("2", ModeArg::Cart),
+            ("1", ModeArg::Joint),
+            ("0", ModeArg::Off),
+        ] {
+            let cli = Cli::try_parse_from(["armgate", "mode", typed]).unwrap();
+            assert!(
+                matches!(cli.command, Cmd::Mode { mode: m } if m == mode),
+                "{typed}"
+            );
+        }
+        assert!(Cli::try_parse_from(["armgate", "mode", "3"]).is_err());
     }
 
     fn run_with(fake: &FakeController, args: &[&str]) -> (Result<(), CliError>, String) {

@@ -97,7 +97,9 @@ impl Client {
     ) -> Result<Self, ClientError> {
         let peer = addr
             .to_socket_addrs()
-            .map_err(|e| ClientError::Address(e.to_string()))?
+            .map_err(|e| {
+                ClientError::Address(format!("{e}: expected host:port, e.g. {DEFAULT_ADDR}"))
+            })?
             .next()
             .ok_or_else(|| ClientError::Address("the address resolves to nothing".into()))?;
         let local: SocketAddr = if peer.is_ipv4() {
@@ -316,10 +318,13 @@ impl Client {
 
     /// Waits up to the timeout for the reply to one send.
     fn await_reply(&mut self, expect: Expect) -> Result<Awaited, ClientError> {
-        let deadline = Instant::now() + self.config.timeout;
+        // None: a timeout beyond the clock's range, never reached.
+        let deadline = Instant::now().checked_add(self.config.timeout);
         let mut buf = [0; 2 * MESSAGE_LEN];
         loop {
-            let left = deadline.saturating_duration_since(Instant::now());
+            let left = deadline.map_or(self.config.timeout, |deadline| {
+                deadline.saturating_duration_since(Instant::now())
+            });
             if left.is_zero() {
                 return Ok(Awaited::TimedOut);
             }
@@ -403,6 +408,15 @@ mod tests {
         }
     }
 
+    /// A host without its port says what form the address takes.
+    #[test]
+    fn an_address_without_a_port_says_host_port() {
+        let Err(ClientError::Address(why)) = Client::connect("127.0.0.1") else {
+            panic!("127.0.0.1 without a port was taken");
+        };
+        assert!(why.contains("expected host:port"), "{why}");
+    }
+
     #[test]
     fn normal_reply_is_returned() {
         let fake = FakeController::spawn(|request| {
@@ -417,6 +431,16 @@ mod tests {
         assert_eq!(reply.values, [0.5, 0.2, 0.1, 0.0, 0.0, 0.0, 1.0]);
         assert_eq!(fake.received().len(), 1);
         assert!(client.take_notices().is_empty());
+        // A timeout beyond the clock's range waits as long as it takes, without an overflow.
+        let endless = ClientConfig {
+            timeout: Duration::MAX,
+            ..patient()
+        };
+        let mut client = Client::connect_with(fake.addr(), endless).unwrap();
+        assert_eq!(
+            client.request(bare(Command::Pose)).unwrap().command,
+            Command::Pose
+        );
     }
 
     #[test]

@@ -100,9 +100,10 @@ impl Client {
         duration: Duration,
         interrupted: impl Fn() -> bool,
     ) -> Result<u32, ClientError> {
-        let end = Instant::now() + duration;
+        // None: a duration beyond the clock's range, streamed until interrupted.
+        let end = Instant::now().checked_add(duration);
         let mut sent = 0u32;
-        while Instant::now() < end {
+        while end.is_none_or(|end| Instant::now() < end) {
             if interrupted() {
                 return Err(ClientError::Interrupted);
             }
@@ -110,7 +111,7 @@ impl Client {
             let interval = self.velocity(velocity)?.map_or(DEFAULT_INTERVAL, |h| h / 3);
             sent = sent.saturating_add(1);
             // Once per period from send to send, the reply's wait included.
-            let next = (sent_at + interval).min(end);
+            let next = end.map_or(sent_at + interval, |end| (sent_at + interval).min(end));
             std::thread::sleep(next.saturating_duration_since(Instant::now()));
         }
         Ok(sent)
@@ -282,6 +283,9 @@ mod tests {
         assert_eq!(fake.received().len(), sent as usize);
         let stopped = c.stream_for(&rates, Duration::from_secs(5), || true);
         assert!(matches!(stopped, Err(ClientError::Interrupted)));
+        // A duration beyond the clock's range streams (until interrupted) instead of panicking.
+        let endless = c.stream_for(&rates, Duration::MAX, || true);
+        assert!(matches!(endless, Err(ClientError::Interrupted)));
     }
 
     #[test]

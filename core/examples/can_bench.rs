@@ -7,7 +7,7 @@
 //! cargo run --release -p armgate-core --example can_bench [-- --plots DIR] [-- --soak SECONDS]
 //! ```
 //!
-//! For each row the load model ([`armgate_core::drives::load`]) picks the fastest period
+//! For each row the load model ([`armgate_core::config::bus_load`]) picks the fastest period
 //! (a whole number of 360 µs drive samples) whose worst-case load stays under 70 %; the
 //! controller then drives the arm through a joint move (and on ranger-mk1 a Cartesian circle)
 //! for 30 s of simulated time on the virtual bus, and the table reports what the bus and the
@@ -32,9 +32,10 @@ use std::path::{Path, PathBuf};
 mod drives_rig;
 use drives_rig::Rig;
 
+use armgate_core::config::bus_load::DEFAULT_CEILING;
+use armgate_core::config::{PDO_TARGET_LEAD, TIME_STAMP_EVERY};
 use armgate_core::config::{Streaming, ValidRobot, load_file};
-use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
-use armgate_core::drives::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD, TIME_STAMP_EVERY};
+use armgate_core::drives::streaming::PDO_LEAD_RAISE;
 use armgate_core::drives::{DriveSettings, DriveState, DriveStats};
 use armgate_core::motion::{Mode, Shape};
 use armgate_core::sim::{BusStats, VirtualBus};
@@ -50,7 +51,7 @@ fn main() {
     let mut header = true;
     let mut runs = Vec::new();
     for streaming in [Streaming::Interpreter, Streaming::Pdo] {
-        let model = LoadModel::new(&robot("ranger-mk1", streaming), &settings);
+        let model = settings.load_model(&robot("ranger-mk1", streaming));
         println!(
             "{streaming:?} schedule: per drive and cycle {} bits worst case, plus {:.1} per cycle{}",
             model.bits_per_drive(),
@@ -69,7 +70,7 @@ fn main() {
         for bitrate in BITRATES {
             for streaming in [Streaming::Interpreter, Streaming::Pdo] {
                 let base = robot(name, streaming);
-                let model = LoadModel::new(&base, &settings);
+                let model = settings.load_model(&base);
                 let fastest = model.fastest_period(bitrate, DEFAULT_CEILING).unwrap();
                 let config = base
                     .edit(|config| {
@@ -170,7 +171,8 @@ fn main() {
             let base = robot(name, Streaming::Pdo)
                 .edit(|config| config.drives.time_stamp_every = stamps)
                 .unwrap();
-            let fastest = LoadModel::new(&base, &settings)
+            let fastest = settings
+                .load_model(&base)
                 .fastest_period(bitrate, DEFAULT_CEILING)
                 .unwrap();
             let config = base

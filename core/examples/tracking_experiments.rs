@@ -51,9 +51,9 @@ use std::path::{Path, PathBuf};
 mod drives_rig;
 use drives_rig::Rig;
 
+use armgate_core::config::bus_load::DEFAULT_CEILING;
 use armgate_core::config::{Streaming, ValidRobot, load_file};
 use armgate_core::drives::DriveSettings;
-use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
 use armgate_core::kinematics::{Chain, IkResult, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, Mode, Shape};
@@ -186,7 +186,8 @@ fn config() -> ValidRobot {
             config.drives.can_bitrate = bitrate;
         })
         .expect("the PDO schedule at the seed's period");
-    let fastest = LoadModel::new(&pdo, &DriveSettings::default())
+    let fastest = DriveSettings::default()
+        .load_model(&pdo)
         .fastest_period(bitrate, DEFAULT_CEILING)
         .expect("a period under the ceiling");
     pdo.edit(|config| config.control_period = fastest.period)

@@ -15,7 +15,8 @@
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
 //! * [`motion`]: generators, sequences, limiters, the mode switch and the control step.
 //! * [`drives`]: the servo drives on the CAN bus (start-up, PT streaming, faults).
-//! * [`sim`]: the simulations, kept apart from product code: arms, drives, the CAN bus.
+//! * `sim` (feature `sim`): the simulations, kept apart from product code: arms, drives,
+//!   the CAN bus.
 //! * [`rng`]: the small deterministic random generator used by global IK and by tests.
 #![cfg_attr(not(any(test, feature = "std")), no_std)]
 
@@ -28,6 +29,7 @@ pub mod math;
 pub mod motion;
 pub mod rng;
 mod saturate;
+#[cfg(feature = "sim")]
 pub mod sim;
 
 /// The largest number of joints a robot may have (the seed's Ranger Mark II has 8): as many

@@ -13,14 +13,14 @@
 mod common;
 
 use armgate_core::command::{CommandHandler, DriveStatus, Drives, Motion};
-use armgate_core::drives::{DriveManager, DriveSettings};
+use armgate_core::cycle::CanDrives;
+use armgate_core::drives::DriveSettings;
 use armgate_core::motion::Mode;
 use armgate_core::sim::VirtualBus;
 
 struct Rig {
     handler: CommandHandler,
-    manager: DriveManager,
-    bus: VirtualBus,
+    drives: CanDrives<VirtualBus>,
     period: f64,
     now: f64,
     notices: Vec<String>,
@@ -30,12 +30,11 @@ impl Rig {
     /// ranger-mk1 at home, its drives just told to start (as at power-up), one tick done.
     fn new() -> Self {
         let config = common::robot("ranger-mk1");
-        let mut manager = DriveManager::new(&config, &DriveSettings::default()).unwrap();
-        manager.start().unwrap();
+        let bus = VirtualBus::for_robot(&config);
+        let drives = CanDrives::started(&config, &DriveSettings::default(), bus).unwrap();
         let mut rig = Self {
             handler: CommandHandler::new(&config),
-            manager,
-            bus: VirtualBus::for_robot(&config),
+            drives,
             period: config.control_period,
             now: 0.0,
             notices: Vec::new(),
@@ -46,14 +45,16 @@ impl Rig {
 
     /// One cycle as the firmware and armgate-sim run it; the first at t = 0.
     fn tick(&mut self) {
-        self.bus.advance(self.now).unwrap();
-        self.manager.receive(&mut self.bus);
+        let (manager, bus) = self.drives.split_mut();
+        bus.advance(self.now).unwrap();
+        manager.receive(bus);
+        let measured = manager.measured();
         let out = self
             .handler
-            .tick(self.now, &self.manager.measured(), &mut self.manager)
+            .tick(self.now, &measured, &mut self.drives)
             .unwrap();
-        self.manager
-            .transmit(self.now, out.command.as_ref(), &mut self.bus);
+        let (manager, bus) = self.drives.split_mut();
+        manager.transmit(self.now, out.command.as_ref(), bus);
         while let Some(text) = self.handler.next_notice() {
             self.notices.push(text.as_str().to_owned());
         }
@@ -67,7 +68,7 @@ impl Rig {
             }
             self.tick();
         }
-        panic!("never happened; drives {:?}", self.manager.status());
+        panic!("never happened; drives {:?}", self.drives.status());
     }
 
     fn request(&mut self, cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
@@ -77,7 +78,7 @@ impl Rig {
             d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
         }
         d[30] = index;
-        self.handler.handle(&d, &mut self.manager)
+        self.handler.handle(&d, &mut self.drives)
     }
 
     fn text(&mut self, cmd: &str, values: [f32; 7]) -> String {
@@ -116,7 +117,7 @@ fn sq_reports_booting_drives_in_literal_bytes() {
     bad[..21].copy_from_slice(b"ER24 Cmd SQ bad index");
     assert_eq!(rig.request("SQ", [0.0; 7], 7), bad);
     // The refusal counted, and the snapshot a shell reads agrees with the wire.
-    let status = rig.handler.status(&rig.manager);
+    let status = rig.handler.status(&rig.drives);
     assert_eq!(
         (status.mode, status.drives, status.fault, status.joints),
         (Mode::Off, DriveStatus::Starting, None, 6)
@@ -133,22 +134,22 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     // Booting: BG says why, ON is accepted (already starting), OF could stop it.
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives starting");
     assert_eq!(&rig.request("ON", [0.0; 7], 0)[..2], b"NO");
-    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Running);
     assert_eq!(rig.status()[..3], [2.0, 2.0, 0.0]);
     assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm already on");
 
     // A drive stops answering: ER30 once, then every motion request names the fault.
-    rig.bus.drive_mut(103).unwrap().faults.silent = true;
-    rig.ticks_until(|r| r.manager.status() == DriveStatus::Faulted);
+    rig.drives.bus_mut().drive_mut(103).unwrap().faults.silent = true;
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Faulted);
     assert_eq!(rig.notices, ["ER30 J3 drive not answering"]);
     assert_eq!(rig.status()[1..3], [4.0, 30.0]);
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drive fault 30");
     assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm stopped by fault");
 
     // ON clears the fault; once running, the move is accepted and SQ shows it.
-    rig.bus.drive_mut(103).unwrap().faults.silent = false;
+    rig.drives.bus_mut().drive_mut(103).unwrap().faults.silent = false;
     assert_eq!(&rig.request("ON", [0.0; 7], 0)[..2], b"NO");
-    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Running);
     assert_eq!(rig.status()[2], 0.0);
     assert_eq!(&rig.request("BG", [0.0; 7], 0)[..2], b"GB");
     rig.tick();
@@ -166,7 +167,7 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives stopping");
     assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm still stopping");
     assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm already stopping");
-    rig.ticks_until(|r| r.manager.status() == DriveStatus::Off);
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Off);
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives off");
     assert_eq!(rig.text("OF", [0.0; 7]), "ER10 Arm already off");
 }
@@ -174,7 +175,7 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
 #[test]
 fn recalibration_waits_until_the_drives_settle_after_mode_off() {
     let mut rig = Rig::new();
-    rig.ticks_until(|r| r.manager.status() == DriveStatus::Running);
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Running);
     let here: [f32; 7] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0, 0.0];
     assert_eq!(&rig.request("CM", CARTESIAN, 0)[..2], b"MC");
     rig.tick();

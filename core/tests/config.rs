@@ -300,3 +300,50 @@ fn workspace_boxes_must_be_ordered() {
 fn syntax_errors_are_load_errors() {
     assert!(matches!(parse_toml("name = "), Err(LoadError::Syntax(_))));
 }
+
+/// A tick runs a few tracking solves: a robot file may not let each take 65,535 iterations.
+#[test]
+fn tracking_iterations_are_bounded() {
+    for (value, accepted) in [
+        (0, false),
+        (1, true),
+        (100, true),
+        (101, false),
+        (65535, false),
+    ] {
+        let text = mk1_text().replacen(
+            "[drives]",
+            &format!("[ik]\ntracking_iterations = {value}\n\n[drives]"),
+            1,
+        );
+        match parse_toml(&text) {
+            Ok(_) => assert!(accepted, "{value} accepted"),
+            Err(e) => {
+                assert!(!accepted, "{value} refused: {e}");
+                assert!(
+                    e.to_string()
+                        .contains("ik.tracking_iterations: must be 1 to 100"),
+                    "{e}"
+                );
+            }
+        }
+    }
+}
+
+/// A joint whose limits, in encoder counts, do not fit the drive's 32 bits is refused: the
+/// drive manager would otherwise drop every set-point near them with only a counter.
+#[test]
+fn limits_beyond_the_drives_counts_are_refused() {
+    let robot = common::robot("ranger-mk1");
+    let e = robot.clone().edit(|c| c.joints[0].max = 1e5).unwrap_err();
+    assert_eq!(
+        (e.joint, e.field, e.reason),
+        (
+            Some(0),
+            "drive.counts_per_rev",
+            ConfigReason::CountsOverflow
+        )
+    );
+    // The shipped counts fit.
+    assert!(robot.edit(|_| ()).is_ok());
+}

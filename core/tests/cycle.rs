@@ -151,7 +151,7 @@ fn bus_off_faults_until_the_clients_on_recovers_the_bus() {
 
 #[test]
 fn a_replay_offers_each_datagram_to_the_first_tick_due_after_it_arrives() {
-    use armgate_core::cycle::replay::Replay;
+    use armgate_core::sim::replay::Replay;
     let ps = request(Command::Pose);
     let hex: String = ps.payload().iter().map(|b| format!("{b:02x}")).collect();
     let mut text = String::from("# ten PS in one tick, then an undersized one\n");

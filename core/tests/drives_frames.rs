@@ -11,8 +11,8 @@
 
 mod drives_rig;
 
+use armgate_core::config::bus_load::DEFAULT_CEILING;
 use armgate_core::config::{JointType, ValidRobot};
-use armgate_core::drives::load::{DEFAULT_CEILING, LoadModel};
 use armgate_core::drives::streaming::{FlowError, PtStream, Query, Schedule};
 use armgate_core::drives::{
     BusFault, DriveEmergency, DriveFault, DriveManager, DriveSettings, DriveState, JointUnits,
@@ -342,7 +342,7 @@ fn fault_codes_and_texts() {
 #[test]
 fn load_model_counts_worst_case_frames() {
     let config = robot("ranger-mk1");
-    let model = LoadModel::new(&config, &DriveSettings::default());
+    let model = DriveSettings::default().load_model(&config);
     assert_eq!(model.drives, 6);
     // QP 135 + echo 135 + query 95 + answer 135.
     assert_eq!(model.bits_per_drive(), 500);
@@ -356,7 +356,7 @@ fn load_model_counts_worst_case_frames() {
     let fast = model.fastest_period(1_000_000, DEFAULT_CEILING).unwrap();
     assert_eq!(fast.samples, 12); // 4.32 ms, 231.5 Hz
     // Eight drives (ranger-mk2) need longer periods.
-    let mk2 = LoadModel::new(&robot("ranger-mk2"), &DriveSettings::default());
+    let mk2 = DriveSettings::default().load_model(&robot("ranger-mk2"));
     assert_eq!(
         mk2.fastest_period(500_000, DEFAULT_CEILING)
             .unwrap()
@@ -370,7 +370,7 @@ fn load_model_counts_worst_case_frames() {
         16
     );
     // Joints without a drive cost nothing.
-    let hybrid = LoadModel::new(&robot("hybrid"), &DriveSettings::default());
+    let hybrid = DriveSettings::default().load_model(&robot("hybrid"));
     assert_eq!(hybrid.bits_per_cycle(0.01), 0.0);
 }
 
@@ -521,6 +521,9 @@ fn start_sequence_frame_by_frame() {
     };
     bus.inbox.push_back(stranger.to_frame(node(55)));
     bus.inbox.push_back(stranger.to_frame(node(101)));
+    // A one-byte interpreter answer (TPDO2) from the drive: malformed, not of no interest.
+    bus.inbox
+        .push_back(CanFrame::new(0x280 + 101, &[0x50]).unwrap());
     // The drive answers UM = 2 (speed): motor off, position mode, settle, check, motor on.
     let mut log = Vec::new();
     let mut unit_mode = 2;
@@ -545,6 +548,7 @@ fn start_sequence_frame_by_frame() {
         }
     }
     assert_eq!(manager.stats().frames_ignored, 1);
+    assert_eq!(manager.stats().frames_malformed, 1);
     let flat: Vec<_> = log.iter().flatten().copied().collect();
     let expected = [
         (Mnemonic::UM, 0, None),

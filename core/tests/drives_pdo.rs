@@ -11,10 +11,10 @@
 
 mod drives_rig;
 
+use armgate_core::config::PDO_TARGET_LEAD;
 use armgate_core::config::{Streaming, ValidRobot, parse_toml};
 use armgate_core::cycle::Datagram;
-use armgate_core::drives::load::LoadModel;
-use armgate_core::drives::streaming::{PDO_LEAD_RAISE, PDO_TARGET_LEAD};
+use armgate_core::drives::streaming::PDO_LEAD_RAISE;
 use armgate_core::drives::{BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Mode;
@@ -444,7 +444,8 @@ fn shipped_arms_stream_on_the_pdo_schedule() {
             .edit(|config| config.drives.streaming = Streaming::Pdo)
             .unwrap();
         let settings = DriveSettings::default();
-        let fastest = LoadModel::new(&base, &settings)
+        let fastest = settings
+            .load_model(&base)
             .fastest_period(base.drives.can_bitrate, base.drives.max_bus_load)
             .unwrap();
         assert_eq!(fastest.samples, samples, "{name}");

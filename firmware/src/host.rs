@@ -19,9 +19,9 @@
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::cycle::{Cycle, Signing};
 use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::sim::replay::{self, Replay};
 use armgate_protocol::client::signed::SigningKey;
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;

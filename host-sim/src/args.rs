@@ -17,7 +17,7 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
 /// The allow-list: loopback always, plus the `--allow` networks (as the README says).
 pub fn allow_list(extra: &[Network]) -> Vec<Network> {
     let mut allow = vec![
-        Network::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 8),
+        Network::new(IpAddr::V4(Ipv4Addr::new(127, 0, 0, 0)), 8),
         Network::new(IpAddr::V6(Ipv6Addr::LOCALHOST), 128),
     ];
     allow.extend_from_slice(extra);
@@ -72,6 +72,8 @@ mod tests {
         let lab: Network = "192.168.1.0/24".parse().unwrap();
         let list = allow_list(&[lab]);
         assert_eq!(list.len(), 3);
+        // Printed as the README writes it.
+        assert_eq!(list[0].to_string(), "127.0.0.0/8");
         for ip in ["127.0.0.1", "::1", "192.168.1.7"] {
             let ip: IpAddr = ip.parse().unwrap();
             assert!(list.iter().any(|n| n.contains(ip)), "{ip}");

@@ -6,7 +6,7 @@ use std::str::FromStr;
 use armgate_core::command::Drives;
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{CanDrives, DriveSide};
-use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
+use armgate_core::drives::{BusState, CanBus, DriveSettings, LifecycleError, TxError};
 use armgate_core::kinematics::Joints;
 use armgate_core::motion::Refusal;
 use armgate_core::sim::VirtualBus;
@@ -123,11 +123,11 @@ impl Backend {
 }
 
 impl Drives for Backend {
-    fn start(&mut self) -> bool {
+    fn start(&mut self) -> Result<(), LifecycleError> {
         self.side_mut().start()
     }
 
-    fn stop(&mut self) -> bool {
+    fn stop(&mut self) -> Result<(), LifecycleError> {
         self.side_mut().stop()
     }
 

@@ -21,13 +21,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use armgate_core::command::Network;
+use armgate_core::config::SAMPLE_TIME;
 use armgate_core::config::{Streaming, ValidRobot, load_file};
-use armgate_core::cycle::replay::{self, Replay};
 use armgate_core::cycle::{Cycle, DriveSide, Signing, UnsignedAccess};
-use armgate_core::drives::SAMPLE_TIME;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
 use armgate_core::sim::ArmModel;
+use armgate_core::sim::replay::{self, Replay};
 use armgate_core::sim::{IdealArm, RateLimitedArm};
 use armgate_protocol::client::signed::SigningKey;
 use backend::{Backend, CanChoice};

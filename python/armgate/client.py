@@ -72,6 +72,18 @@ class WaitOptions:
 _STILL = 1e-6
 
 
+def _split_host_port(host: str, port: int) -> Tuple[str, int]:
+    """``"host:port"`` or ``"[v6]:port"`` given as ``host`` while ``port`` is the default."""
+    name, colon, number = host.rpartition(":")
+    if port != DEFAULT_PORT or not colon or not number.isdigit():
+        return host, port
+    if name.startswith("[") and name.endswith("]"):
+        return name[1:-1], int(number)
+    if ":" in name:  # a bare IPv6 address: its last group is not a port
+        return host, port
+    return name, int(number)
+
+
 class Arm:
     """A client of one armgate controller.
 
@@ -84,6 +96,9 @@ class Arm:
 
     ``joints``: the arm's joint count; by default it is asked of the controller (``SQ``) or, on
     a controller without the status request, read off the ``TM`` reply.
+
+    ``host`` may also be ``"host:port"`` (as the Rust client's ``--addr``) when ``port`` is left
+    at its default. An address that does not resolve raises :class:`ValueError`.
 
     ``key``: sign every request and accept only answers signed with this key (32 bytes, or the
     path of a key file: 64 hex digits on one line), on link ``link_id`` (1..255; clients that
@@ -107,7 +122,14 @@ class Arm:
         self._signed_at = 0
         self.unverified = 0
         """Datagrams dropped because they were not signed with the key, or were old."""
-        info = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)[0]
+        host, port = _split_host_port(host, port)
+        try:
+            info = socket.getaddrinfo(host, port, type=socket.SOCK_DGRAM)[0]
+        except socket.gaierror as e:
+            raise ValueError(
+                f"cannot resolve the controller address {host!r} port {port}: {e.strerror}"
+                f" (expected Arm('127.0.0.1', port=7031) or Arm('127.0.0.1:7031'))"
+            ) from e
         self._socket = socket.socket(info[0], socket.SOCK_DGRAM)
         # A connected socket receives only the controller's datagrams.
         self._socket.connect(info[4])

@@ -17,6 +17,15 @@ def echo(datagram: bytes) -> List[bytes]:
     return [reply(datagram[:2].decode()[::-1], index=datagram[30])]
 
 
+def test_an_address_may_be_host_port_and_a_bad_one_says_so() -> None:
+    with armgate.Arm("127.0.0.1:7203") as arm:
+        assert arm._socket.getpeername() == ("127.0.0.1", 7203)
+    with armgate.Arm("[::1]:7203") as arm:
+        assert arm._socket.getpeername()[:2] == ("::1", 7203)
+    with pytest.raises(ValueError, match="expected Arm"):
+        armgate.Arm("no-such-host.invalid")
+
+
 def test_messages_are_31_bytes_little_endian() -> None:
     datagram = wire.encode("jV", [1.5, -2.0], index=0x83)
     assert len(datagram) == 31

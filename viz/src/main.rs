@@ -47,7 +47,7 @@ enum Cmd {
     /// Foxglove, from what the protocol reads: jP and PS at --rate, SQ once a second, and every
     /// notice. Stop with Ctrl-C or SIGTERM (the file is completed) or --duration.
     #[command(
-        after_help = "Example: armgate record run.mcap --robot robots/ranger-mk1.toml --rate 20"
+        after_help = "Example: armgate record run.mcap --robot robots/ranger-mk1.toml --duration 5"
     )]
     Record(record::RecordArgs),
 }

@@ -35,9 +35,10 @@ impl Network {
     }
 
     /// True if `ip` lies in this network (an IPv4 address never lies in an IPv6 network, nor
-    /// the reverse).
+    /// the reverse). An IPv4-mapped IPv6 address (`::ffff:a.b.c.d`, what a socket bound to
+    /// `[::]` reports for an IPv4 sender) is the IPv4 address it maps.
     pub fn contains(&self, ip: IpAddr) -> bool {
-        let (net, ip) = match (self.addr, ip) {
+        let (net, ip) = match (self.addr, ip.to_canonical()) {
             (IpAddr::V4(net), IpAddr::V4(ip)) => (u32::from(net).into(), u32::from(ip).into()),
             (IpAddr::V6(net), IpAddr::V6(ip)) => (u128::from(net), u128::from(ip)),
             _ => return false,
@@ -124,6 +125,9 @@ mod tests {
         assert!(all.contains("8.8.8.8".parse().unwrap()));
         let v6: Network = "::1/128".parse().unwrap();
         assert!(v6.contains("::1".parse().unwrap()));
+        // An IPv4 sender seen through a dual-stack socket.
+        assert!(lo.contains("::ffff:127.0.0.1".parse().unwrap()));
+        assert!(!lo.contains("::ffff:128.0.0.1".parse().unwrap()));
         assert_eq!(
             "10.0.0.0/33".parse::<Network>(),
             Err(NetworkError::BadPrefix { max: 32 })

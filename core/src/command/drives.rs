@@ -2,19 +2,20 @@
 
 use armgate_protocol::client::{DriveStatus, Text};
 
+use crate::drives::LifecycleError;
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
 /// The drive side of the arm as the client commands see it (ON, OF, RC, TM): the CAN drive
 /// manager on the board, or a simulated arm.
 pub trait Drives {
-    /// Starts the drives (motor on, set-point streaming); false if they cannot start now, e.g.
-    /// because they already run. Starting may take several cycles: a drive that then fails to
+    /// Starts the drives (motor on, set-point streaming); [`LifecycleError::Running`] if they
+    /// cannot start now because they already run. Starting may take several cycles: a drive that then fails to
     /// answer shows as a [`fault`](Self::fault), and motion stays refused until
     /// [`is_operational`](Self::is_operational).
-    fn start(&mut self) -> bool;
-    /// Stops the drives; false if they were not running.
-    fn stop(&mut self) -> bool;
+    fn start(&mut self) -> Result<(), LifecycleError>;
+    /// Stops the drives; [`LifecycleError::NotRunning`] if they were not running.
+    fn stop(&mut self) -> Result<(), LifecycleError>;
     /// Declares the current joint positions to be `q` (one value per joint). Refused with
     /// [`Refusal::Busy`] while set-points still move the joints (or the drives start or
     /// stop), [`Refusal::NotReady`] before every position has been read.

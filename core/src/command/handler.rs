@@ -339,7 +339,7 @@ impl CommandHandler {
                 if drives.status() == DriveStatus::Starting {
                     return Ok(null);
                 }
-                if !drives.start() {
+                if drives.start().is_err() {
                     return Err(Notice::ArmDidNotStart(drives.status()));
                 }
                 self.power_off_at = None;
@@ -353,7 +353,7 @@ impl CommandHandler {
                     self.power_off_at = Some(self.now + self.stop_within);
                     return Ok(null);
                 }
-                if !drives.stop() {
+                if drives.stop().is_err() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
                 self.controller.release();

@@ -54,10 +54,14 @@ pub enum ConfigReason {
     Negative,
     /// `[motion] profile = "jerk-limited"` needs this jerk limit.
     MissingJerkLimit,
-    /// The PDO schedule's lead must be 1 to 8 points (`drives::streaming::MAX_PDO_LEAD`).
+    /// The PDO schedule's lead must be 1 to 8 points (`config::MAX_PDO_LEAD`).
     PdoLead,
     /// The PDO lead raised by `drives.pdo_lead_raise` must stay at most 8 points.
     PdoLeadRaise,
+    /// The joint's limits, in encoder counts, do not fit the drive's 32-bit positions.
+    CountsOverflow,
+    /// One tracking solve may take 1 to 100 iterations (`config::MAX_TRACKING_ITERATIONS`).
+    TrackingIterations,
 }
 
 impl ConfigError {
@@ -108,6 +112,10 @@ impl fmt::Display for ConfigReason {
             Self::MissingJerkLimit => "is required by [motion] profile = \"jerk-limited\"",
             Self::PdoLead => "must be 1 to 8 points",
             Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
+            Self::TrackingIterations => "must be 1 to 100",
+            Self::CountsOverflow => {
+                "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
+            }
         })
     }
 }

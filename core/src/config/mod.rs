@@ -7,20 +7,26 @@
 //! controller, the chain and the drive manager accept.
 
 mod bounded;
+pub mod bus_load;
+mod drives;
 mod error;
 mod motion;
 mod robot;
 #[cfg(feature = "std")]
 mod toml_file;
+mod units;
 mod valid;
 
+pub use bus_load::SAMPLE_TIME;
+pub use drives::{DrivesConfig, MAX_PDO_LEAD, PDO_TARGET_LEAD, Streaming, TIME_STAMP_EVERY};
 pub use error::{ConfigError, ConfigReason};
 pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{
-    BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
-    JointType, MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MIN_PERIOD_SAMPLES, RobotConfig,
-    Streaming, ToolConfig, WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, IkConfig, JointConfig, JointDrive, JointType,
+    MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MAX_TRACKING_ITERATIONS, MIN_PERIOD_SAMPLES,
+    RobotConfig, ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};
+pub use units::JointUnits;
 pub use valid::ValidRobot;

@@ -3,14 +3,14 @@
 use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
+use super::bus_load::whole_samples;
+use super::drives::DrivesConfig;
 use super::error::{ConfigError, ConfigReason};
 use super::motion::{MotionConfig, ProfileKind};
+use super::units::JointUnits;
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
-use crate::drives::load::{DEFAULT_CEILING, LoadModel};
-use crate::drives::streaming::{MAX_PDO_LEAD, PDO_TARGET_LEAD};
-use crate::drives::{DriveSettings, whole_samples};
-use crate::kinematics::Joints;
+use crate::math::Joints;
 
 /// Longest robot name, in bytes.
 pub const MAX_NAME_LEN: usize = 32;
@@ -121,65 +121,6 @@ pub struct JointDrive {
     pub home: f64,
 }
 
-/// Settings shared by all drives on the bus.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DrivesConfig {
-    /// CAN bit rate in bit/s: 125 000, 250 000, 500 000 or 1 000 000.
-    pub can_bitrate: u32,
-    /// Elmo unit mode: 5 = position (the only mode the seed used), 2 = speed, 1 = torque.
-    pub unit_mode: u8,
-    /// The largest fraction of the bus the drives' worst-case streaming traffic may take
-    /// (0 < x ≤ 1; default 0.7, [`DEFAULT_CEILING`]).
-    #[serde(default = "default_ceiling")]
-    pub max_bus_load: f64,
-    /// How set-points reach the drives (default [`Streaming::Interpreter`]).
-    #[serde(default)]
-    pub streaming: Streaming,
-    /// With `streaming = "pdo"`: a drive that refuses the PDO mapping makes the manager fall
-    /// back to the interpreter schedule (reported as a warning) instead of a start-up fault.
-    /// The period must then fit the interpreter schedule's load too.
-    #[serde(default)]
-    pub pdo_fallback: bool,
-    /// With `streaming = "pdo"`: the PT points kept beyond each drive's read pointer at every
-    /// SYNC, 1..=[`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead` (2). More tolerates lost
-    /// frames, less is less latency (docs/drives.md, "The lead").
-    #[serde(default)]
-    pub pdo_lead: Option<u16>,
-    /// With `streaming = "pdo"`: the most points the stream may raise the lead above
-    /// `pdo_lead` while the drives' reports show points lost on the bus, lowering it again
-    /// after a quiet interval; 0 keeps the lead fixed. The sum must stay at most
-    /// [`MAX_PDO_LEAD`]; none: `DriveSettings::pdo_lead_raise` (3), up to [`MAX_PDO_LEAD`]
-    /// (docs/drives.md, "The lead").
-    #[serde(default)]
-    pub pdo_lead_raise: Option<u16>,
-    /// With `streaming = "pdo"`: a Time Stamp after every n-th SYNC, which locks the drives'
-    /// motion clocks to the controller's (Elmo MAN-CAN301IG ch. 8), so that their PT segments
-    /// stop drifting against the control cycle; 0 sends none. None:
-    /// [`TIME_STAMP_EVERY`](crate::drives::streaming::TIME_STAMP_EVERY) (2)
-    /// (docs/drives.md, "SYNC locking").
-    #[serde(default)]
-    pub time_stamp_every: Option<u16>,
-}
-
-/// The streaming schedule: which frames carry the set-points and the feedback (docs/drives.md).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Streaming {
-    /// Binary-interpreter frames: per drive and cycle a `QP` write and one query, both
-    /// answered (the seed's way, 500 bits per drive worst case).
-    #[default]
-    Interpreter,
-    /// Process data: one SYNC per cycle, per drive one receive PDO carrying the next PT point
-    /// and one synchronous transmit PDO with the position and the PT pointers (230 bits per
-    /// drive worst case).
-    Pdo,
-}
-
-fn default_ceiling() -> f64 {
-    DEFAULT_CEILING
-}
-
 /// The tool frame relative to the last link frame:
 /// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)`.
 ///
@@ -251,13 +192,17 @@ pub struct BlendConfig {
     pub joint: f64,
 }
 
+/// The most iterations one tracking solve may take (`ik.tracking_iterations`): a tick runs a
+/// few solves, and 65,535 each would not end within any control period.
+pub const MAX_TRACKING_ITERATIONS: u16 = 100;
+
 /// Inverse-kinematics tuning.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct IkConfig {
     /// Convergence tolerance on position (m) and on orientation (rad).
     pub tolerance: f64,
-    /// Iteration limit of one tracking solve.
+    /// Iteration limit of one tracking solve, 1..=[`MAX_TRACKING_ITERATIONS`].
     pub tracking_iterations: u16,
     /// Total iteration budget of one global solve, over all restarts.
     pub global_iterations: u16,
@@ -352,7 +297,7 @@ impl RobotConfig {
             return Err(top("base", ConfigReason::NotFinite));
         }
         self.drives.validate().map_err(|(f, r)| top(f, r))?;
-        self.check_bus_load()?;
+        super::bus_load::check(self)?;
         for (v, a) in self
             .cartesian
             .max_velocity
@@ -407,31 +352,6 @@ impl RobotConfig {
             None
         }
     }
-
-    /// The drives' worst-case streaming load (drives/load.rs, with the default settings) must
-    /// stay at or under `drives.max_bus_load` with the chosen schedule, and with the
-    /// interpreter schedule too if the PDO schedule may fall back to it.
-    fn check_bus_load(&self) -> Result<(), ConfigError> {
-        let settings = DriveSettings::default();
-        let model = LoadModel::new(self, &settings);
-        let mut load = model.load(self.control_period, self.drives.can_bitrate);
-        if self.drives.streaming == Streaming::Pdo && self.drives.pdo_fallback {
-            let fallback = LoadModel {
-                streaming: Streaming::Interpreter,
-                ..model
-            };
-            load = load.max(fallback.load(self.control_period, self.drives.can_bitrate));
-        }
-        if load <= self.drives.max_bus_load {
-            return Ok(());
-        }
-        // A float-to-integer `as` saturates (and gives 0 for NaN): it cannot fail.
-        let percent = libm::ceil(load * 100.0) as u16;
-        Err(ConfigError::top(
-            "control_period",
-            ConfigReason::BusOverloaded { percent },
-        ))
-    }
 }
 
 impl JointConfig {
@@ -464,6 +384,14 @@ impl JointConfig {
         if self.drive.node_id != 0 && self.drive.counts_per_rev == 0 {
             return Err(("drive.counts_per_rev", ConfigReason::ZeroCounts));
         }
+        // Every position within the limits must be a set-point the drive can take.
+        if self.drive.node_id != 0 {
+            let units =
+                JointUnits::new(self).ok_or(("drive.counts_per_rev", ConfigReason::ZeroCounts))?;
+            if units.counts(self.min).is_none() || units.counts(self.max).is_none() {
+                return Err(("drive.counts_per_rev", ConfigReason::CountsOverflow));
+            }
+        }
         Ok(())
     }
 }
@@ -484,38 +412,11 @@ impl ToolConfig {
     }
 }
 
-impl DrivesConfig {
-    fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
-        if !matches!(self.can_bitrate, 125_000 | 250_000 | 500_000 | 1_000_000) {
-            return Err(("drives.can_bitrate", ConfigReason::UnsupportedBitRate));
-        }
-        if !matches!(self.unit_mode, 1 | 2 | 5) {
-            return Err(("drives.unit_mode", ConfigReason::UnsupportedUnitMode));
-        }
-        if !(self.max_bus_load > 0.0 && self.max_bus_load <= 1.0) {
-            return Err(("drives.max_bus_load", ConfigReason::NotAFraction));
-        }
-        if self
-            .pdo_lead
-            .is_some_and(|lead| !(1..=MAX_PDO_LEAD).contains(&lead))
-        {
-            return Err(("drives.pdo_lead", ConfigReason::PdoLead));
-        }
-        let lead = self.pdo_lead.unwrap_or(PDO_TARGET_LEAD);
-        // Without the key the default raise stops at the highest lead.
-        let raise = self.pdo_lead_raise.unwrap_or(0);
-        if lead.saturating_add(raise) > MAX_PDO_LEAD {
-            return Err(("drives.pdo_lead_raise", ConfigReason::PdoLeadRaise));
-        }
-        Ok(())
-    }
-}
-
 impl IkConfig {
     fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
         positive(self.tolerance).map_err(|r| ("ik.tolerance", r))?;
-        if self.tracking_iterations == 0 {
-            return Err(("ik.tracking_iterations", ConfigReason::NotPositive));
+        if !(1..=MAX_TRACKING_ITERATIONS).contains(&self.tracking_iterations) {
+            return Err(("ik.tracking_iterations", ConfigReason::TrackingIterations));
         }
         if self.global_iterations == 0 {
             return Err(("ik.global_iterations", ConfigReason::NotPositive));

@@ -1,11 +1,13 @@
 //! The CANopen drive manager on its bus, as one [`DriveSide`].
 
-use armgate_protocol::client::{DriveStatus, Text};
+use armgate_protocol::client::{DriveStatus, Severity, Text};
 
 use super::DriveSide;
 use crate::command::Drives;
 use crate::config::ValidRobot;
-use crate::drives::{CanBus, DriveManager, DriveSettings, SetupError};
+use crate::drives::{
+    CanBus, DriveFault, DriveManager, DriveSettings, DriveState, LifecycleError, SetupError,
+};
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -64,22 +66,22 @@ impl<B: CanBus> CanDrives<B> {
     }
 }
 
-/// `ON` also asks the bus to leave bus-off: the policy of docs/architecture.md.
+/// `start` and `stop` only begin the transition: a start that later fails shows as a fault
+/// (its `ER3x` text), and motion stays refused until [`Drives::is_operational`]. `ON` also asks
+/// the bus to leave bus-off: the policy of docs/architecture.md.
 impl<B: CanBus> Drives for CanDrives<B> {
-    fn start(&mut self) -> bool {
-        if self.manager.start().is_err() {
-            return false;
-        }
+    fn start(&mut self) -> Result<(), LifecycleError> {
+        self.manager.start()?;
         self.bus.recover();
-        true
+        Ok(())
     }
 
-    fn stop(&mut self) -> bool {
-        Drives::stop(&mut self.manager)
+    fn stop(&mut self) -> Result<(), LifecycleError> {
+        self.manager.stop()
     }
 
     fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
-        Drives::recalibrate(&mut self.manager, q)
+        self.manager.recalibrate(q)
     }
 
     fn temperatures(&self) -> Joints {
@@ -91,23 +93,48 @@ impl<B: CanBus> Drives for CanDrives<B> {
     }
 
     fn status(&self) -> DriveStatus {
-        Drives::status(&self.manager)
+        match self.manager.state() {
+            DriveState::Idle | DriveState::Stopped => DriveStatus::Off,
+            DriveState::Starting => DriveStatus::Starting,
+            DriveState::Operational => DriveStatus::Running,
+            DriveState::Stopping => DriveStatus::Stopping,
+            DriveState::Faulted => DriveStatus::Faulted,
+        }
     }
 
     fn fault_code(&self) -> Option<u8> {
-        Drives::fault_code(&self.manager)
+        self.manager.fault().map(|fault| fault.code())
     }
 
     fn fault(&self) -> Option<Text> {
-        Drives::fault(&self.manager)
+        self.manager.fault().map(|fault| fault.text())
     }
 
     fn has_fault(&self) -> bool {
         self.manager.fault().is_some()
     }
 
+    /// `WN39` with the refusal's text: the PDO mapping was refused and the interpreter
+    /// schedule runs instead.
     fn notice(&self) -> Option<Text> {
-        Drives::notice(&self.manager)
+        self.manager
+            .fallback()
+            .map(|refusal| refusal.text_as(Severity::Warning))
+    }
+}
+
+/// A drive fault as the client reads it: here, above the drives, which know nothing of the
+/// client's protocol.
+impl DriveFault {
+    /// The text for the client, e.g. `ER30 J3 drive not answering`.
+    pub fn text(&self) -> Text {
+        self.text_as(Severity::Error)
+    }
+
+    /// The same text as an error (`ER`) or, for what is reported but does not stop the arm (a
+    /// refused PDO mapping with the fallback), a warning (`WN`).
+    pub fn text_as(&self, severity: Severity) -> Text {
+        Text::new(severity, self.code(), self)
     }
 }
 

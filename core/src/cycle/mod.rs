@@ -38,8 +38,6 @@
 mod can_drives;
 mod counters;
 mod link;
-#[cfg(feature = "std")]
-pub mod replay;
 mod side;
 mod signing;
 mod tick;

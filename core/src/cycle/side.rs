@@ -2,7 +2,6 @@
 
 use crate::command::Drives;
 use crate::kinematics::Joints;
-use crate::sim::SimulatedDrives;
 
 /// The drives as the cycle runs them: the [`Drives`] the client's requests act on, plus the
 /// two halves of a tick around the control step.
@@ -15,19 +14,4 @@ pub trait DriveSide: Drives {
     fn measured(&self) -> Joints;
     /// After the step: sends `command` (`None`: hold), `elapsed` (s) after the previous tick.
     fn transmit(&mut self, now: f64, elapsed: f64, command: Option<&Joints>);
-}
-
-/// A simulated arm without a bus: commands reach the arm model directly.
-impl DriveSide for SimulatedDrives {
-    fn receive(&mut self, _now: f64) -> bool {
-        true
-    }
-
-    fn measured(&self) -> Joints {
-        SimulatedDrives::measured(self)
-    }
-
-    fn transmit(&mut self, _now: f64, elapsed: f64, command: Option<&Joints>) {
-        self.apply(command, elapsed);
-    }
 }

@@ -6,8 +6,8 @@ use heapless::Vec;
 use super::link::Link;
 use super::retry::Retry;
 use super::startup::{Outgoing, StartStep};
-use super::streaming::{PdoStream, PtStream};
-use super::units::JointUnits;
+use super::streaming::Stream;
+use crate::config::JointUnits;
 
 /// One joint: a real drive on the bus, or none (node id 0, the seed's "pretend" joint).
 #[derive(Clone, Debug, PartialEq)]
@@ -47,10 +47,8 @@ pub struct Drive {
     pub step_sent: bool,
     /// When they went out, and how often they were repeated.
     pub retry: Retry,
-    /// The PT writer, from `BG` until the motion stops (interpreter schedule).
-    pub stream: Option<PtStream>,
-    /// The PT writer, from `BG` until the motion stops (PDO schedule).
-    pub pdo: Option<PdoStream>,
+    /// The PT writer of the start's schedule, from `BG` until the motion stops.
+    pub stream: Option<Stream>,
 }
 
 impl Drive {
@@ -69,7 +67,6 @@ impl Drive {
             step_sent: false,
             retry: Retry::default(),
             stream: None,
-            pdo: None,
         }
     }
 
@@ -79,6 +76,5 @@ impl Drive {
         self.awaiting.clear();
         self.step_sent = false;
         self.stream = None;
-        self.pdo = None;
     }
 }

@@ -1,8 +1,7 @@
-//! Why the drives were stopped, and what the client is told.
+//! Why the drives were stopped.
 
 use armgate_protocol::can::interpreter::Mnemonic;
 use armgate_protocol::can::{Emcy, Object};
-use armgate_protocol::client::{Severity, Text};
 
 use super::settings::POSITION_MODE;
 
@@ -121,17 +120,13 @@ impl DriveFault {
             Self::SdoAbort { .. } | Self::MappingRefused { .. } => 39,
         }
     }
+}
 
-    /// The text for the client, e.g. `ER30 J3 drive not answering`.
-    pub fn text(&self) -> Text {
-        self.text_as(Severity::Error)
-    }
-
-    /// The same text as an error (`ER`) or, for what is reported but does not stop the arm (a
-    /// refused PDO mapping with the fallback), a warning (`WN`).
-    pub fn text_as(&self, severity: Severity) -> Text {
-        let code = self.code();
-        let text = |body: core::fmt::Arguments<'_>| Text::new(severity, code, body);
+/// The fault's description, e.g. `J3 drive not answering`: the body of the client's `ER3x`
+/// text (`crate::cycle::can_drives` puts the code before it).
+impl core::fmt::Display for DriveFault {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut text = |body: core::fmt::Arguments<'_>| f.write_fmt(body);
         match *self {
             Self::NotAnswering { joint } => {
                 text(format_args!("J{} drive not answering", joint + 1))

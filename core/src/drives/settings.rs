@@ -3,22 +3,9 @@
 
 use armgate_protocol::can::NodeId;
 
-use super::load::LoadModel;
-use super::streaming::{MAX_PDO_LEAD, PDO_LEAD_RAISE, PDO_TARGET_LEAD, Schedule, TIME_STAMP_EVERY};
-use crate::config::ValidRobot;
-
-/// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
-/// number of these (`MP[4]`).
-pub const SAMPLE_TIME: f64 = 360e-6;
-
-/// The number of 360 µs drive samples in `period` seconds, if it is a whole number that fits a
-/// `u16` (to 1e-3 of a sample: periods are written in decimal).
-pub(crate) fn whole_samples(period: f64) -> Option<u16> {
-    let samples = libm::round(period / SAMPLE_TIME);
-    let whole = libm::fabs(period / SAMPLE_TIME - samples) < 1e-3;
-    // Checked to fit, so the cast is exact.
-    (whole && (1.0..=f64::from(u16::MAX)).contains(&samples)).then_some(samples as u16)
-}
+use super::streaming::{PDO_LEAD_RAISE, Schedule};
+use crate::config::bus_load::{HEARTBEAT_PERIOD, LoadModel, whole_samples};
+use crate::config::{MAX_PDO_LEAD, PDO_TARGET_LEAD, RobotConfig, TIME_STAMP_EVERY, ValidRobot};
 
 /// The only unit mode the manager streams to: position (PT motion).
 pub const POSITION_MODE: i32 = 5;
@@ -70,7 +57,7 @@ impl Default for DriveSettings {
         Self {
             // The highest node id: the drives use 101 and up (spec §6.1).
             controller_node: 127,
-            heartbeat_period: 0.1,
+            heartbeat_period: HEARTBEAT_PERIOD,
             heartbeat_timeout: 0.3,
             reply_timeout: 0.05,
             nmt_settle: 0.012,
@@ -84,6 +71,17 @@ impl Default for DriveSettings {
             pdo_missing_cycles: 4,
             group_node: 126,
         }
+    }
+}
+
+impl DriveSettings {
+    /// The worst-case streaming traffic of `config`'s drives with these settings.
+    pub fn load_model(&self, config: &RobotConfig) -> LoadModel {
+        LoadModel::new(
+            config,
+            self.heartbeat_period,
+            self.schedule.temperature_every,
+        )
     }
 }
 
@@ -171,7 +169,9 @@ impl Timing {
         let period = config.control_period;
         // Validation refuses any other period; kept as the manager's own precondition.
         let samples = whole_samples(period).ok_or(SetupError::PeriodNotWholeSamples)?;
-        let load = LoadModel::new(config, settings).load(period, config.drives.can_bitrate);
+        let load = settings
+            .load_model(config)
+            .load(period, config.drives.can_bitrate);
         let fits = load <= config.drives.max_bus_load; // false for NaN too
         if !fits {
             return Err(SetupError::BusOverloaded);

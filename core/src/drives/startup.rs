@@ -43,6 +43,7 @@ use armgate_protocol::can::{
 use heapless::Vec;
 
 use super::settings::POSITION_MODE;
+use crate::config::Streaming;
 
 /// Where one drive is in its start sequence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -118,6 +119,15 @@ pub struct StepContext {
 }
 
 impl StartStep {
+    /// The first step of a start on `streaming`: the PDO schedule first gives every drive the
+    /// group id.
+    pub fn first(streaming: Streaming) -> Self {
+        match streaming {
+            Streaming::Interpreter => Self::ConsumerHeartbeat,
+            Streaming::Pdo => Self::GroupId,
+        }
+    }
+
     /// The frames this step sends (at most two).
     pub fn frames(&self, ctx: &StepContext) -> Vec<Outgoing, 2> {
         let set = |command, index: u8, value: i32| {
@@ -190,16 +200,17 @@ impl StartStep {
     }
 
     /// The step after this one, given the unit mode the drive reported; `Err(found)` if the
-    /// drive is still not in position mode after the change. `pdo`: the PDO schedule's steps
-    /// are included; `filled`: the points the ring is filled with.
+    /// drive is still not in position mode after the change. `streaming`: the PDO schedule
+    /// has steps of its own; `filled`: the points the ring is filled with.
     pub fn next(
         &self,
         unit_mode: Option<i32>,
         settle: u32,
-        pdo: bool,
+        streaming: Streaming,
         filled: u16,
     ) -> Result<Self, i32> {
         let in_position_mode = unit_mode == Some(POSITION_MODE);
+        let pdo = streaming == Streaming::Pdo;
         Ok(match *self {
             Self::GroupId => Self::CheckGroupId,
             Self::CheckGroupId | Self::Regroup => Self::Regroup,

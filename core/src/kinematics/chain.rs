@@ -4,9 +4,9 @@ use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 
 use super::family::ClosedForm;
 use super::jacobian::Jacobian;
-use super::joints::Joints;
 use crate::MAX_JOINTS;
 use crate::config::{JointType, RobotConfig, ValidRobot};
+use crate::math::Joints;
 use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
 

@@ -14,12 +14,12 @@ use nalgebra::{Matrix3, Vector3};
 use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
-use super::joints::Joints;
 use super::subproblems::{Angle, sp4};
 use super::{spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::Frame;
+use crate::math::Joints;
 use crate::saturate::saturate;
 
 /// Most solutions of a closed-form solve (2 shoulders · 2 elbows · 2 wrists).

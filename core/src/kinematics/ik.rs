@@ -18,9 +18,9 @@ use nalgebra::Vector6;
 
 use super::chain::{Axes, Chain};
 use super::jacobian::{Jacobian, JointVector, damped_least_squares};
-use super::joints::Joints;
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
+use crate::math::Joints;
 use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
 use crate::saturate::saturate;

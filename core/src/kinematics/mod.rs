@@ -14,16 +14,15 @@ mod closed_form;
 mod family;
 mod ik;
 mod jacobian;
-mod joints;
 mod screws;
 mod spherical_wrist;
 mod subproblems;
 mod three_parallel;
 mod velocity;
 
+pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;
-pub use joints::Joints;

@@ -2,8 +2,8 @@
 
 use super::chain::{Chain, KinematicsError};
 use super::jacobian::{JointVector, damped_least_squares};
-use super::joints::Joints;
 use crate::MAX_JOINTS;
+use crate::math::Joints;
 use crate::math::Twist;
 
 impl Chain {

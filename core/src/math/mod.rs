@@ -14,9 +14,11 @@
 //!   they live in `armgate_protocol::client` (shared with the client) and are re-exported here.
 
 mod frame;
+mod joints;
 mod rotation;
 
 pub use armgate_protocol::client::{Quaternion, rpy};
 pub use frame::{Frame, Twist, dh, diff, dist, is_finite};
+pub use joints::Joints;
 pub use nalgebra::{Rotation3, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
 pub use rotation::rotation_vector;

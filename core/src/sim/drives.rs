@@ -4,6 +4,8 @@ use armgate_protocol::client::{DriveStatus, Text};
 
 use super::arm::{IdealArm, RateLimitedArm};
 use crate::command::Drives;
+use crate::cycle::DriveSide;
+use crate::drives::LifecycleError;
 use crate::kinematics::Joints;
 use crate::motion::Refusal;
 
@@ -75,12 +77,18 @@ impl SimulatedDrives {
 }
 
 impl Drives for SimulatedDrives {
-    fn start(&mut self) -> bool {
-        !core::mem::replace(&mut self.running, true)
+    fn start(&mut self) -> Result<(), LifecycleError> {
+        match core::mem::replace(&mut self.running, true) {
+            false => Ok(()),
+            true => Err(LifecycleError::Running),
+        }
     }
 
-    fn stop(&mut self) -> bool {
-        core::mem::replace(&mut self.running, false)
+    fn stop(&mut self) -> Result<(), LifecycleError> {
+        match core::mem::replace(&mut self.running, false) {
+            true => Ok(()),
+            false => Err(LifecycleError::NotRunning),
+        }
     }
 
     fn recalibrate(&mut self, q: &[f64]) -> Result<(), Refusal> {
@@ -117,5 +125,20 @@ impl Drives for SimulatedDrives {
 
     fn fault_code(&self) -> Option<u8> {
         None
+    }
+}
+
+/// A simulated arm without a bus: commands reach the arm model directly.
+impl DriveSide for SimulatedDrives {
+    fn receive(&mut self, _now: f64) -> bool {
+        true
+    }
+
+    fn measured(&self) -> Joints {
+        SimulatedDrives::measured(self)
+    }
+
+    fn transmit(&mut self, _now: f64, elapsed: f64, command: Option<&Joints>) {
+        self.apply(command, elapsed);
     }
 }

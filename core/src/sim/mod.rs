@@ -14,6 +14,8 @@
 mod arm;
 mod bus;
 mod drives;
+#[cfg(feature = "std")]
+pub mod replay;
 pub mod whistle;
 
 pub use arm::{IdealArm, RateLimitedArm};

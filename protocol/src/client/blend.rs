@@ -37,7 +37,8 @@ pub struct BlendTolerance {
     /// The slot (0..20; the controller refuses others, as for `VP`).
     pub slot: u8,
     /// The slot's own tolerance (≥ 0; 0 stops there), or `None` for the robot file's default
-    /// (sent as −1). Kept as received: NaN is the controller's to refuse.
+    /// (sent as −1: any finite negative value). Kept as received otherwise: NaN and the
+    /// infinities, −∞ too, are the controller's to refuse (`ER23`).
     pub tolerance: Option<f32>,
 }
 
@@ -53,7 +54,11 @@ impl BlendTolerance {
         Some(Self {
             kind,
             slot: request.index,
-            tolerance: if value < 0.0 { None } else { Some(value) },
+            tolerance: if value < 0.0 && value.is_finite() {
+                None
+            } else {
+                Some(value)
+            },
         })
     }
 
@@ -111,6 +116,17 @@ mod tests {
         };
         assert_eq!(parsed, expected);
         assert_eq!(expected.to_request().to_bytes(), VT_SLOT_2);
+    }
+
+    /// −∞ is not "the default" but a number the controller refuses, as it does NaN and +∞.
+    #[test]
+    fn an_infinite_tolerance_is_kept_for_the_controller_to_refuse() {
+        for value in [f32::NEG_INFINITY, f32::INFINITY] {
+            let mut request = request(&VT_SLOT_2);
+            request.values[0] = value;
+            let parsed = BlendTolerance::parse(&request).unwrap();
+            assert_eq!(parsed.tolerance, Some(value));
+        }
     }
 
     #[test]

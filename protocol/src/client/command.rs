@@ -30,7 +30,8 @@ pub enum Command {
     JointGoal,
     /// `jP`: read the measured joints.
     JointPosition,
-    /// `jR`: reset the joint generator to the measured joints.
+    /// `jR`: stop a joint motion, as `ST`: the arm holds its commanded position (the seed reset
+    /// the joint generator to the measured joints).
     JointReset,
     /// `jV`: store joint via point `index`: joints f0..f5, duration f6.
     JointVia,

@@ -15,7 +15,7 @@ use crate::drives::drive::{Drive, Joint};
 use crate::drives::fault::DriveFault;
 use crate::drives::startup::{Outgoing, StartStep};
 use crate::drives::state::Phase;
-use crate::drives::streaming::{FlowError, LeadChange, Query};
+use crate::drives::streaming::{FlowError, LeadChange, Query, Stream};
 
 impl DriveManager {
     /// A stop just begun, with as many hold cycles as the schedule needs: as on the
@@ -31,11 +31,21 @@ impl DriveManager {
         }
     }
 
+    /// PDO schedule, before a cycle's frames: the SYNC on time, and every drive's feedback.
+    pub(super) fn check_pdo(&mut self, now: f64) {
+        if matches!(self.phase, Phase::Streaming(_) | Phase::Stopping(_)) {
+            self.check_sync(now);
+        }
+        if matches!(self.phase, Phase::Streaming(_)) {
+            self.check_feedback();
+        }
+    }
+
     /// PDO schedule: a SYNC more than half a period late (the control cycle skipped ticks)
     /// is a fault: the drives' queues ran on without points. It is the cause of what the
     /// drives reported meanwhile (their underflows), so it replaces a fault raised by this
     /// cycle's receive.
-    pub(super) fn check_sync(&mut self, now: f64) {
+    fn check_sync(&mut self, now: f64) {
         let period = self.timing.period;
         let Some(last) = self.last_sync else { return };
         let late = now - last - period;
@@ -51,7 +61,7 @@ impl DriveManager {
 
     /// PDO schedule: faults the first drive whose transmit PDO has been missing for more than
     /// `DriveSettings::pdo_missing_cycles` SYNCs in a row.
-    pub(super) fn check_feedback(&mut self) {
+    fn check_feedback(&mut self) {
         let missing = self.pdo_missing_cycles;
         let silent = self
             .joints
@@ -59,7 +69,8 @@ impl DriveManager {
             .enumerate()
             .find_map(|(joint, entry)| match entry {
                 Joint::Real(Drive {
-                    pdo: Some(stream), ..
+                    stream: Some(Stream::Pdo(stream)),
+                    ..
                 }) if stream.unreported() > missing => Some(DriveFault::NoFeedback {
                     joint,
                     cycles: stream.unreported(),
@@ -145,7 +156,8 @@ impl DriveManager {
         let stats = &mut self.stats;
         for joint in self.joints.iter_mut() {
             let Joint::Real(drive) = joint else { continue };
-            if let (Some(target), Some(stream)) = (drive.target, drive.pdo.as_mut()) {
+            let stream = drive.stream.as_mut().and_then(Stream::pdo);
+            if let (Some(target), Some(stream)) = (drive.target, stream) {
                 let points = stream.points_with(target, change);
                 for &position in &points {
                     out.send(&PtPoint { position }.to_frame(drive.node));
@@ -162,7 +174,7 @@ impl DriveManager {
         let schedule = self.schedule;
         for (index, joint) in self.joints.iter_mut().enumerate() {
             let Joint::Real(drive) = joint else { continue };
-            let running = drive.target.is_some() && drive.pdo.is_some();
+            let running = drive.target.is_some() && drive.stream.is_some();
             let query = match schedule.query(streamed, index, false) {
                 Query::Position if running => continue,
                 query => query,
@@ -190,7 +202,7 @@ impl DriveManager {
         // losing frames: raising on it too often comes before the first point lost.
         let mut missing = false;
         self.for_each_drive(|drive| {
-            if let Some(stream) = drive.pdo.as_ref() {
+            if let Some(Stream::Pdo(stream)) = &drive.stream {
                 missing |= stream.unreported() > 0;
             }
         });
@@ -221,7 +233,7 @@ impl DriveManager {
         // The drive is alive: a lost answer to a temperature query is not a silent drive.
         drive.link.heard(cycle);
         let mut lost = 0;
-        let flow = drive.pdo.as_mut().map(|stream| {
+        let flow = drive.stream.as_mut().and_then(Stream::pdo).map(|stream| {
             let flow = stream.feedback(feedback.head, feedback.tail);
             lost = stream.take_lost();
             flow

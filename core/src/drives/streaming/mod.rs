@@ -7,8 +7,10 @@ mod adaptive;
 mod pdo;
 mod pt;
 mod schedule;
+mod stream;
 
 pub use adaptive::{AdaptiveLead, LeadChange, PDO_LEAD_RAISE};
-pub use pdo::{MAX_PDO_LEAD, PDO_TARGET_LEAD, PdoStream, TIME_STAMP_EVERY};
+pub use pdo::PdoStream;
 pub use pt::{FILLED_POINTS, FlowError, PtStream, TARGET_LEAD};
 pub use schedule::{Query, Schedule};
+pub use stream::Stream;

@@ -14,7 +14,7 @@
 //! falls between the cycle's PT point and the next SYNC (the point is fetched at that very
 //! boundary), 2 when it falls between the SYNC and the point (the point then comes too late
 //! for that boundary). The phase drifts with the drive's clock, and SYNC samples cannot see
-//! where it is, so the stream keeps [`PDO_TARGET_LEAD`] = 2 at every SYNC: safe in both
+//! where it is, so the stream keeps [`PDO_TARGET_LEAD`](crate::config::PDO_TARGET_LEAD) = 2 at every SYNC: safe in both
 //! phases, and a point lost on the bus or a clock slip costs one insertion, not an underflow.
 //! Either way a point is fetched at the first segment start after it arrives and reached one
 //! segment later: under two set-points from write to reached.
@@ -33,21 +33,6 @@
 use heapless::Vec;
 
 use super::{FlowError, LeadChange};
-
-/// The lead (points beyond the read pointer) the stream keeps at every SYNC by default, for a
-/// drive whose segment boundary follows the SYNC; one less for a drive whose boundary precedes
-/// it.
-pub const PDO_TARGET_LEAD: u16 = 2;
-
-/// Cycles between two Time Stamps by default (`drives.time_stamp_every`): one after every
-/// second SYNC locks the drives' clocks within about 400 cycles (200 pairs, Elmo's figure)
-/// and keeps six drives at 231.5 Hz under 70 % of a 500 kbit/s bus (one after every SYNC
-/// would take them to 71.6 %).
-pub const TIME_STAMP_EVERY: u16 = 2;
-
-/// The largest lead a robot file may ask for (`drives.pdo_lead`): the default 16-entry ring
-/// then still holds a correction and a margin that makes a wrong pointer show as an overrun.
-pub const MAX_PDO_LEAD: u16 = 8;
 
 /// The writer side of one drive's PT ring on the PDO schedule.
 #[derive(Clone, Debug, PartialEq)]
@@ -217,6 +202,7 @@ impl PdoStream {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::PDO_TARGET_LEAD;
 
     /// A drive that consumes one segment per cycle and answers every SYNC: the stream settles
     /// on the target lead and stays there.

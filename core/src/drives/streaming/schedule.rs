@@ -9,6 +9,8 @@
 
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request};
 
+use crate::config::bus_load::TEMPERATURE_EVERY;
+
 /// What a drive is asked for in one cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Query {
@@ -52,7 +54,7 @@ impl Default for Schedule {
     fn default() -> Self {
         Self {
             read_index_every: 6,
-            temperature_every: 100,
+            temperature_every: TEMPERATURE_EVERY,
             settle_cycles: 8,
         }
     }

@@ -13,9 +13,9 @@ use std::fmt::Write as _;
 use std::string::String;
 use std::vec::Vec;
 
-use super::{Cycle, Datagram, DriveSide, Dropped, Link, Outgoing};
+use super::{SimWhistle, VirtualBus};
+use crate::cycle::{Cycle, Datagram, DriveSide, Dropped, Link, Outgoing};
 use crate::drives::DriveManager;
-use crate::sim::{SimWhistle, VirtualBus};
 use std::format;
 
 /// A recorded exchange.

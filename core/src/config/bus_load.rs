@@ -21,12 +21,33 @@ use armgate_protocol::can::{
     bits_on_wire,
 };
 
-use super::settings::{DriveSettings, SAMPLE_TIME};
-use super::streaming::{Query, TIME_STAMP_EVERY};
-use crate::config::{RobotConfig, Streaming};
+use super::drives::{Streaming, TIME_STAMP_EVERY};
+use super::error::{ConfigError, ConfigReason};
+use super::robot::RobotConfig;
+
+/// The Whistle's position-loop sample time (SimplIQ default): PT points are spaced by a whole
+/// number of these (`MP[4]`), so the control period is one too.
+pub const SAMPLE_TIME: f64 = 360e-6;
+
+/// The number of 360 µs drive samples in `period` seconds, if it is a whole number that fits a
+/// `u16` (to 1e-3 of a sample: periods are written in decimal).
+pub(crate) fn whole_samples(period: f64) -> Option<u16> {
+    let samples = libm::round(period / SAMPLE_TIME);
+    let whole = libm::fabs(period / SAMPLE_TIME - samples) < 1e-3;
+    // Checked to fit, so the cast is exact.
+    (whole && (1.0..=f64::from(u16::MAX)).contains(&samples)).then_some(samples as u16)
+}
 
 /// The load ceiling the fastest period keeps under by default.
 pub const DEFAULT_CEILING: f64 = 0.7;
+
+/// Seconds between the controller's heartbeats by default (`DriveSettings::heartbeat_period`);
+/// validation checks the bus load with it.
+pub const HEARTBEAT_PERIOD: f64 = 0.1;
+
+/// Cycles between two temperature queries of one drive by default
+/// (`Schedule::temperature_every`); validation checks the bus load with it.
+pub const TEMPERATURE_EVERY: u16 = 100;
 
 /// Longest PT segment considered (samples): 655 ms.
 const MAX_SAMPLES: u16 = 1820;
@@ -58,17 +79,18 @@ pub struct PeriodLoad {
 }
 
 impl LoadModel {
-    /// The traffic of `config`'s drives with `settings`.
-    pub fn new(config: &RobotConfig, settings: &DriveSettings) -> Self {
+    /// The traffic of `config`'s drives with the controller's heartbeat every
+    /// `heartbeat_period` seconds and a temperature query every `temperature_every` cycles.
+    pub fn new(config: &RobotConfig, heartbeat_period: f64, temperature_every: u16) -> Self {
         Self {
             drives: config
                 .joints
                 .iter()
                 .filter(|j| j.drive.node_id != 0)
                 .count(),
-            heartbeat_period: settings.heartbeat_period,
+            heartbeat_period,
             streaming: config.drives.streaming,
-            temperature_every: settings.schedule.temperature_every,
+            temperature_every,
             time_stamp_every: config.drives.time_stamp_every.unwrap_or(TIME_STAMP_EVERY),
         }
     }
@@ -118,7 +140,10 @@ impl LoadModel {
                 index: Index::from(1),
                 value: Value::Int(0),
             };
-            let query = Query::Position.request();
+            let query = Request::Query {
+                command: Mnemonic::PX,
+                index: Index::ZERO,
+            };
             let answer = |command| Reply::Value {
                 command,
                 index: Index::ZERO,
@@ -218,7 +243,34 @@ fn temperature_query_bits() -> u32 {
             index: Index::from(1),
             value: Value::Int(0),
         };
-        bits_on_wire(&Query::Temperature.request().to_frame(node))
-            + bits_on_wire(&answer.to_frame(node))
+        let query = Request::Query {
+            command: Mnemonic::TI,
+            index: Index::from(1),
+        };
+        bits_on_wire(&query.to_frame(node)) + bits_on_wire(&answer.to_frame(node))
     })
+}
+
+/// The drives' worst-case streaming load (with the default heartbeat and temperature queries)
+/// must stay at or under `drives.max_bus_load` with the chosen schedule, and with the
+/// interpreter schedule too if the PDO schedule may fall back to it.
+pub(super) fn check(config: &RobotConfig) -> Result<(), ConfigError> {
+    let model = LoadModel::new(config, HEARTBEAT_PERIOD, TEMPERATURE_EVERY);
+    let mut load = model.load(config.control_period, config.drives.can_bitrate);
+    if config.drives.streaming == Streaming::Pdo && config.drives.pdo_fallback {
+        let fallback = LoadModel {
+            streaming: Streaming::Interpreter,
+            ..model
+        };
+        load = load.max(fallback.load(config.control_period, config.drives.can_bitrate));
+    }
+    if load <= config.drives.max_bus_load {
+        return Ok(());
+    }
+    // A float-to-integer `as` saturates (and gives 0 for NaN): it cannot fail.
+    let percent = libm::ceil(load * 100.0) as u16;
+    Err(ConfigError::top(
+        "control_period",
+        ConfigReason::BusOverloaded { percent },
+    ))
 }

@@ -1,25 +1,30 @@
 //! The drive manager: the drives' life cycle (spec §6.4), advanced once per control cycle.
 
-use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
-use armgate_protocol::can::{
-    CanFrame, Heartbeat, Incoming, MappingRefusal, Nmt, NmtCommand, NmtState, NodeId, NodeMessage,
-    SdoResponse,
-};
+//!
+//! This file is the life cycle (start, stop, recalibration, the phases of a cycle) and the
+//! dispatch to the rest: `start.rs` the start sequence, `interpreter.rs` and `pdo.rs` the two
+//! streaming schedules, `receive.rs` the frames received, `outbox.rs` the frames sent.
+
+mod interpreter;
+mod outbox;
+mod pdo;
+mod receive;
+mod start;
+
+use armgate_protocol::can::interpreter::{Index, Mnemonic, Request};
+use armgate_protocol::can::{Heartbeat, Nmt, NmtState, NodeId, NodeMessage};
 use heapless::Vec;
 
 use super::bus::{BusState, CanBus, TxError};
 use super::drive::{Drive, Joint};
-use super::emergency::{DriveEmergency, REASON_UNDERFLOW};
 use super::fault::{BusFault, DriveFault};
 use super::link::Link;
 use super::settings::{DriveSettings, SetupError, Timing};
-use super::startup::{Outgoing, StartStep, StepContext};
+use super::startup::{Outgoing, StartStep};
 use super::state::{DriveState, Phase};
-use super::streaming::{
-    AdaptiveLead, FILLED_POINTS, FlowError, PdoStream, PtStream, Query, Schedule,
-};
-use super::units::JointUnits;
-mod pdo;
+use super::streaming::{AdaptiveLead, Schedule};
+use crate::config::JointUnits;
+use outbox::Outbox;
 
 use crate::MAX_JOINTS;
 use crate::config::{Streaming, ValidRobot};
@@ -58,6 +63,8 @@ pub struct DriveStats {
     pub commands_rejected: u32,
     /// Frames received from unknown nodes or of no interest.
     pub frames_ignored: u32,
+    /// Frames with the COB-ID of a kind the manager reads that did not decode as one.
+    pub frames_malformed: u32,
     /// Start-step requests sent again because their answer did not come.
     pub requests_repeated: u32,
     /// PDO schedule: PT points the drives' reports showed lost on the bus.
@@ -174,13 +181,11 @@ impl DriveManager {
         self.fallback = None;
         self.last_sync = None;
         self.lead_policy.restart();
-        let pdo = self.streaming == Streaming::Pdo;
+        let first = StartStep::first(self.streaming);
         self.for_each_drive(|drive| {
             drive.link = Link::default();
             drive.reset_steps();
-            if pdo {
-                drive.step = StartStep::GroupId;
-            }
+            drive.step = first;
         });
         if !self.has_drives() {
             self.phase = Phase::Streaming(0);
@@ -265,12 +270,7 @@ impl DriveManager {
         }
         self.check_links();
         if self.streaming == Streaming::Pdo {
-            if matches!(self.phase, Phase::Streaming(_) | Phase::Stopping(_)) {
-                self.check_sync(now);
-            }
-            if matches!(self.phase, Phase::Streaming(_)) {
-                self.check_feedback();
-            }
+            self.check_pdo(now);
         }
         let mut out = Outbox {
             bus,
@@ -291,11 +291,11 @@ impl DriveManager {
             Phase::Starting => self.start_steps(&mut out),
             Phase::Streaming(n) => {
                 self.accept(command);
-                self.stream_any(now, n, &mut out);
+                self.stream(now, n, &mut out);
                 self.phase = Phase::Streaming(n.wrapping_add(1));
             }
             Phase::Stopping(left) if left > 0 => {
-                self.stream_any(now, self.cycle, &mut out);
+                self.stream(now, self.cycle, &mut out);
                 self.phase = Phase::Stopping(left - 1);
             }
             Phase::Stopping(_) => {
@@ -390,11 +390,7 @@ impl DriveManager {
     /// without a drive.
     pub fn lead(&self, joint: usize) -> Option<u32> {
         match self.joints.get(joint) {
-            Some(Joint::Real(drive)) => match (&drive.stream, &drive.pdo) {
-                (Some(stream), _) => stream.lead(),
-                (_, Some(pdo)) => pdo.lead(),
-                _ => None,
-            },
+            Some(Joint::Real(drive)) => drive.stream.as_ref().and_then(|stream| stream.lead()),
             _ => None,
         }
     }
@@ -470,120 +466,6 @@ impl DriveManager {
         });
     }
 
-    /// One cycle of the start sequence: each drive advances when its step is answered and
-    /// sends the next step's frames; when every drive is ready, all get `BG` in one cycle.
-    fn start_steps<B: CanBus>(&mut self, out: &mut Outbox<'_, B>) {
-        let (pdo, pdo_lead) = (self.streaming == Streaming::Pdo, self.pdo_lead_now());
-        let timing = self.timing;
-        // One point more than the lead, and at least FILLED_POINTS: the first point streamed
-        // after `BG` is then due at the second segment start, not the first.
-        let (ring_len, filled) = if pdo {
-            (
-                self.pdo_ring_len,
-                pdo_lead.saturating_add(1).max(FILLED_POINTS),
-            )
-        } else {
-            (self.ring_len, FILLED_POINTS)
-        };
-        let context = |drive: &Drive| StepContext {
-            controller: timing.controller,
-            heartbeat_timeout_ms: timing.heartbeat_timeout_ms,
-            ring_len,
-            samples_per_point: timing.samples_per_point,
-            position: drive.target,
-            filled,
-            node: drive.node,
-            group: timing.group,
-        };
-        let mut fault = None;
-        for (index, joint) in self.joints.iter_mut().enumerate() {
-            let Joint::Real(drive) = joint else { continue };
-            let answered = drive.step_sent && drive.awaiting.is_empty();
-            let position_known = drive.step != StartStep::ReadPosition || drive.position.is_some();
-            if answered && position_known {
-                match drive
-                    .step
-                    .next(drive.unit_mode, timing.unit_mode_settle, pdo, filled)
-                {
-                    Ok(next) => {
-                        if next == StartStep::Configure(0) {
-                            drive.target = drive.position;
-                        }
-                        drive.step = next;
-                        drive.step_sent = false;
-                    }
-                    Err(found) => {
-                        fault.get_or_insert(DriveFault::WrongUnitMode {
-                            joint: index,
-                            found,
-                        });
-                    }
-                }
-            }
-            if !drive.step_sent {
-                let ctx = context(drive);
-                send_step(drive, &ctx, out);
-            } else if !drive.awaiting.is_empty() && drive.retry.due(out.cycle, timing.reply_timeout)
-            {
-                let ctx = context(drive);
-                resend_step(drive, &ctx, out);
-                self.stats.requests_repeated = self.stats.requests_repeated.saturating_add(1);
-                self.lead_policy.saw_loss();
-            }
-        }
-        if let Some(fault) = fault {
-            self.raise(fault);
-            return;
-        }
-        self.regroup(out);
-        let ready = |joint: &Joint| match joint {
-            Joint::Real(drive) => drive.step == StartStep::Ready && drive.target.is_some(),
-            Joint::Pretend { .. } => true,
-        };
-        if self.joints.iter().all(ready) {
-            if pdo {
-                // One `BG` to the group: every drive begins at once, and answers it.
-                let begin = Request::Query {
-                    command: Mnemonic::BG,
-                    index: Index::ZERO,
-                };
-                out.send(&begin.to_frame(timing.group));
-            }
-            // A request repeated in this start (its answer lost) is the bus losing frames
-            // before any point is streamed: the streams begin `START_RAISE` points higher,
-            // instead of learning it from the first lost point, which at the least lead
-            // underflows its drive before any report can show it. The ring was filled for the
-            // lower lead; the streams make up the points in their first cycles.
-            self.lead_policy.restart();
-            let pdo_lead = self.pdo_lead_now();
-            let cycle = out.cycle;
-            self.for_each_drive(|drive| {
-                if let Some(position) = drive.target {
-                    if pdo {
-                        let stream = PdoStream::new(ring_len, pdo_lead, filled, position);
-                        drive.pdo = Some(stream);
-                    } else {
-                        drive.stream = Some(PtStream::new(ring_len, position));
-                    }
-                    drive.step = StartStep::Begin;
-                    let ctx = context(drive);
-                    if pdo {
-                        // The group `BG` went out: each drive owes its answer.
-                        drive.awaiting.clear();
-                        for frame in &drive.step.frames(&ctx) {
-                            let _ = drive.awaiting.push(*frame);
-                            drive.link.sent(cycle);
-                        }
-                        drive.step_sent = true;
-                    } else {
-                        send_step(drive, &ctx, out);
-                    }
-                }
-            });
-            self.phase = Phase::Streaming(0);
-        }
-    }
-
     /// Takes a command, all joints or none: each drive's target and each pretend joint's
     /// position.
     fn accept(&mut self, command: Option<&Joints>) {
@@ -612,52 +494,14 @@ impl DriveManager {
         }
     }
 
-    /// One streaming cycle on the schedule of this start.
-    fn stream_any<B: CanBus>(&mut self, now: f64, streamed: u32, out: &mut Outbox<'_, B>) {
+    /// One streaming cycle on the schedule of this start (`streamed`: the cycle count the
+    /// query schedule staggers by).
+    fn stream<B: CanBus>(&mut self, now: f64, streamed: u32, out: &mut Outbox<'_, B>) {
         match self.streaming {
-            Streaming::Interpreter => self.stream(streamed, out),
+            Streaming::Interpreter => self.stream_interpreter(streamed, out),
             Streaming::Pdo => {
                 self.last_sync = Some(now);
                 self.stream_pdo(now, streamed, out);
-            }
-        }
-    }
-
-    /// One streaming cycle (`streamed`: the cycle count the schedule staggers by): every
-    /// running drive gets its point(s) towards its target and one query; drives not yet
-    /// running (a stop during the start) only the query.
-    fn stream<B: CanBus>(&mut self, streamed: u32, out: &mut Outbox<'_, B>) {
-        let schedule = self.schedule;
-        let stats = &mut self.stats;
-        for (index, joint) in self.joints.iter_mut().enumerate() {
-            let Joint::Real(drive) = joint else { continue };
-            let points = match (drive.target, drive.stream.as_mut()) {
-                (Some(target), Some(stream)) => stream.points(target),
-                _ => Vec::new(),
-            };
-            for &(slot, value) in &points {
-                let point = Request::Set {
-                    command: Mnemonic::QP,
-                    index: slot,
-                    value: Value::Int(value),
-                };
-                out.request(drive, &Outgoing::Interpreter(point));
-            }
-            match points.len() {
-                0 if drive.stream.is_some() => {
-                    stats.points_skipped = stats.points_skipped.saturating_add(1);
-                }
-                2 => {
-                    stats.points_inserted = stats.points_inserted.saturating_add(1);
-                    continue; // two frames already: no query this cycle
-                }
-                _ => {}
-            }
-            let pacing = points.len() == 1;
-            let query = schedule.query(streamed, index, pacing);
-            out.request(drive, &Outgoing::Interpreter(query.request()));
-            if let (Query::ReadIndex, Some(stream)) = (query, drive.stream.as_mut()) {
-                stream.asked();
             }
         }
     }
@@ -683,247 +527,6 @@ impl DriveManager {
                 let query = schedule.query(cycle, index, false);
                 out.request(drive, &Outgoing::Interpreter(query.request()));
             }
-        }
-    }
-
-    /// One received frame. Its sender is its own COB-ID's node (the seed kept the previous
-    /// frame's sender for unknown nodes and gave up on the cycle at an unknown SDO, spec §9
-    /// item 33).
-    fn handle(&mut self, frame: &CanFrame) {
-        match Incoming::classify(frame) {
-            Incoming::Interpreter { node, reply } => self.on_reply(node, reply),
-            Incoming::Emcy { node, emcy } => self.on_emergency(node, DriveEmergency::decode(&emcy)),
-            Incoming::SdoResponse { node, response } => self.on_sdo(node, response),
-            Incoming::Feedback { node, feedback } => self.on_feedback(node, feedback),
-            Incoming::Heartbeat { .. }
-            | Incoming::Sync
-            | Incoming::Malformed { .. }
-            | Incoming::Other => {
-                self.ignored();
-            }
-        }
-    }
-
-    fn ignored(&mut self) {
-        self.stats.frames_ignored = self.stats.frames_ignored.saturating_add(1);
-    }
-
-    /// The joint and drive of `node`.
-    fn drive_mut(&mut self, node: NodeId) -> Option<(usize, &mut Drive)> {
-        self.joints
-            .iter_mut()
-            .enumerate()
-            .find_map(|(index, joint)| match joint {
-                Joint::Real(drive) if drive.node == node => Some((index, drive)),
-                _ => None,
-            })
-    }
-
-    fn on_reply(&mut self, node: NodeId, reply: Reply) {
-        let cycle = self.cycle;
-        let Some((joint, drive)) = self.drive_mut(node) else {
-            self.ignored();
-            return;
-        };
-        drive.link.heard(cycle);
-        let fault = match reply {
-            Reply::Error { command, code, .. } => Some(DriveFault::ErrorReply {
-                joint,
-                command,
-                code,
-            }),
-            Reply::Value {
-                command,
-                index,
-                value,
-            } => {
-                if let Some(at) = drive
-                    .awaiting
-                    .iter()
-                    .position(|frame| frame.answered_by(command, index))
-                {
-                    drive.awaiting.swap_remove(at);
-                }
-                // Every command used here answers an integer; the seed read floats only for
-                // TC and IQ, which position mode does not use.
-                let value = match value {
-                    Value::Int(v) => v,
-                    Value::Float(_) => return,
-                };
-                match command {
-                    Mnemonic::PX => drive.position = Some(value),
-                    Mnemonic::TI => drive.temperature = Some(value),
-                    Mnemonic::UM => drive.unit_mode = Some(value),
-                    _ => {}
-                }
-                match (command, drive.stream.as_mut()) {
-                    (Mnemonic::PT, Some(stream)) => {
-                        stream.read_index(value).err().map(|e| match e {
-                            FlowError::Underflow => DriveFault::Underflow { joint },
-                            FlowError::Overrun => DriveFault::Overrun { joint },
-                        })
-                    }
-                    (Mnemonic::BG, _) if value != 0 => {
-                        Some(DriveFault::BeginRefused { joint, value })
-                    }
-                    _ => None,
-                }
-            }
-        };
-        if let Some(fault) = fault {
-            self.raise(fault);
-        }
-    }
-
-    fn on_emergency(&mut self, node: NodeId, emergency: DriveEmergency) {
-        let Some((joint, _)) = self.drive_mut(node) else {
-            self.ignored();
-            return;
-        };
-        let count = |n: &mut u32| *n = n.saturating_add(1);
-        // Only faults stop the arm. The seed stopped on every emergency but the Hall one,
-        // including the queue-low warning it had armed itself (spec §9 item 35).
-        let fault = match emergency {
-            DriveEmergency::ErrorReset => return,
-            DriveEmergency::DigitalHall => return count(&mut self.stats.hall_warnings),
-            DriveEmergency::QueueLow { .. } => return count(&mut self.stats.queue_low_warnings),
-            DriveEmergency::QueueFull { .. } => DriveFault::Overrun { joint },
-            DriveEmergency::MotionTerminated {
-                reason: REASON_UNDERFLOW,
-                ..
-            } => DriveFault::Underflow { joint },
-            DriveEmergency::HeartbeatLost => DriveFault::HeartbeatLost { joint },
-            DriveEmergency::MotionTerminated { .. }
-            | DriveEmergency::MessageLost
-            | DriveEmergency::WritePointerOutOfRange { .. }
-            | DriveEmergency::PdoNotMapped { .. }
-            | DriveEmergency::Other(_) => DriveFault::Emergency {
-                joint,
-                emcy: emergency.encode(),
-            },
-        };
-        self.raise(fault);
-    }
-
-    fn on_sdo(&mut self, node: NodeId, response: SdoResponse) {
-        let (cycle, group) = (self.cycle, self.timing.group);
-        let Some((joint, drive)) = self.drive_mut(node) else {
-            self.ignored();
-            return;
-        };
-        drive.link.heard(cycle);
-        let mapping = drive.step.configuration(drive.node, group);
-        let fault = match mapping {
-            // An answer to this drive's mapping transfer: checked.
-            Some((step, read_back)) if response.object() == step.object => {
-                let checked = if read_back {
-                    step.check_read_back(&response)
-                } else {
-                    step.check_write(&response)
-                };
-                match checked {
-                    Ok(()) => {
-                        drive.awaiting.clear();
-                        None
-                    }
-                    Err(refusal) => Some(DriveFault::MappingRefused {
-                        joint,
-                        object: step.object,
-                        code: match refusal {
-                            MappingRefusal::Abort(code) => Some(code),
-                            MappingRefusal::Mismatch { .. } | MappingRefusal::Unexpected => None,
-                        },
-                    }),
-                }
-            }
-            _ => {
-                let object = response.object();
-                let Some(at) = drive
-                    .awaiting
-                    .iter()
-                    .position(|frame| frame.answered_by_sdo(object))
-                else {
-                    // Not awaited: the answer to a mapping transfer after a fallback.
-                    return self.ignored();
-                };
-                drive.awaiting.swap_remove(at);
-                if let SdoResponse::Abort { code, .. } = response {
-                    return self.raise(DriveFault::SdoAbort { joint, code });
-                }
-                None
-            }
-        };
-        if let Some(fault) = fault {
-            self.refuse_mapping(fault);
-        }
-    }
-}
-
-/// Sends the frames of `drive`'s current start step; the step now waits for their answers.
-fn send_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'_, B>) {
-    drive.awaiting.clear();
-    // By reference: dropping heapless's by-value iterator has a panic path.
-    for frame in &drive.step.frames(ctx) {
-        out.request(drive, frame);
-        let _ = drive.awaiting.push(*frame);
-    }
-    drive.step_sent = true;
-    drive.retry.sent(out.cycle);
-}
-
-/// Sends all the frames of `drive`'s current start step again, in their order (see
-/// [`super::retry`]; an `MP` write forgets the points written before it): the drive now owes
-/// only their answers.
-fn resend_step<B: CanBus>(drive: &mut Drive, ctx: &StepContext, out: &mut Outbox<'_, B>) {
-    let frames = drive.step.frames(ctx);
-    // A drive answers the interpreter only when operational: its NMT start may have been the
-    // frame lost. Starting a started node changes nothing.
-    if frames
-        .iter()
-        .any(|frame| matches!(frame, Outgoing::Interpreter(_)))
-    {
-        let start = Nmt {
-            command: NmtCommand::Start,
-            node: Some(drive.node),
-        };
-        out.send(&start.to_frame());
-    }
-    drive.awaiting.clear();
-    for frame in &frames {
-        out.request(drive, frame);
-        let _ = drive.awaiting.push(*frame);
-    }
-    drive.link.resent(frames.len() as u32, out.cycle);
-}
-
-/// This cycle's sending: frames go to the bus, requests are counted on their drive's link,
-/// and the first failure is kept.
-struct Outbox<'a, B: CanBus> {
-    bus: &'a mut B,
-    cycle: u32,
-    error: Option<TxError>,
-}
-
-impl<B: CanBus> Outbox<'_, B> {
-    /// Sends `frame`; false if the bus refused it.
-    fn send(&mut self, frame: &CanFrame) -> bool {
-        match self.bus.try_transmit(frame) {
-            Ok(()) => true,
-            Err(error) => {
-                self.error.get_or_insert(error);
-                false
-            }
-        }
-    }
-
-    /// Sends a request to `drive`, which now owes an answer.
-    fn request(&mut self, drive: &mut Drive, frame: &Outgoing) {
-        let frame = match *frame {
-            Outgoing::Interpreter(request) => request.to_frame(drive.node),
-            Outgoing::Sdo(request) => request.to_frame(drive.node),
-        };
-        if self.send(&frame) {
-            drive.link.sent(self.cycle);
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use core::f64::consts::TAU;
 
-use crate::config::{JointConfig, JointType};
+use super::robot::{JointConfig, JointType};
 
 /// How one joint's position maps to its drive's encoder counts: `position = counts / scale +
 /// home`, where `scale` is counts per radian (`counts_per_rev / 2π`) for a revolute joint and

@@ -1,0 +1,129 @@
+//! What both fuzz targets check of every datagram's answer and every unsolicited notice.
+
+use armgate_protocol::client::{
+    Hold,
+    Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
+};
+
+/// The parsers on a datagram: what the handler must answer it with.
+pub fn check_parsers(datagram: &[u8]) -> Result<Request, Notice> {
+    let message = match Message::new_checked(datagram) {
+        Ok(message) => message,
+        Err(e) => {
+            assert!(datagram.len() < MIN_LEN);
+            return Err(Notice::from(e));
+        }
+    };
+    assert!(datagram.len() >= MIN_LEN);
+    // The client-side parsers, on whatever arrived.
+    let _ = Reply::parse(&message);
+    if let Some(text) = Text::parse(&message) {
+        let s = text.as_str();
+        assert!(s.len() <= TEXT_CAPACITY);
+        assert!(s.bytes().all(|b| b == b' ' || b.is_ascii_graphic()));
+        check_text_bytes(&text.to_bytes());
+    }
+    let request = Request::parse(&message).map_err(Notice::from)?;
+    let bytes = request.to_bytes();
+    let mut original = [0u8; MESSAGE_LEN];
+    for (o, b) in original.iter_mut().zip(datagram) {
+        *o = *b;
+    }
+    assert_eq!(
+        bytes, original,
+        "request does not re-encode to its datagram"
+    );
+    Ok(request)
+}
+
+/// The handler's answer to one datagram.
+pub fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[u8; MESSAGE_LEN]) {
+    let request = match expected {
+        Ok(request) => request,
+        Err(notice) => {
+            assert_eq!(
+                reply,
+                &notice.text().to_bytes(),
+                "datagram {datagram:02x?}: wrong answer to a non-request"
+            );
+            return;
+        }
+    };
+    let message = Message::new_checked(&reply[..]).expect("31 bytes");
+    if let Ok(r) = Reply::parse(&message) {
+        assert_eq!(
+            r.command, request.command,
+            "reply {reply:02x?} to another command than {request:?}"
+        );
+        assert!(
+            r.values.iter().all(|v| v.is_finite()),
+            "non-finite value in reply {r:?} to {request:?}"
+        );
+        assert!(
+            r.index == 0 || r.index == request.index || r.index == request.index & 0x80,
+            "reply index {} to {request:?}",
+            r.index
+        );
+        return;
+    }
+    check_text_bytes(reply);
+    // A refusal: `ERnn Cmd XX <reason>` with a code that answers requests, or `ER10`/`ER11`
+    // for OF/ON (the reasons are checked by the unit and end-to-end tests).
+    let text = String::from_utf8_lossy(reply);
+    let [a, b] = request.command.chars();
+    let named = format!("Cmd {}{} ", char::from(a), char::from(b));
+    let refusal = ["ER20 ", "ER23 ", "ER24 ", "ER25 ", "ER26 "]
+        .iter()
+        .any(|code| text.starts_with(&format!("{code}{named}")));
+    let lifecycle = match request.command {
+        Command::On => text.starts_with("ER11 Arm "),
+        Command::Off => text.starts_with("ER10 Arm "),
+        _ => false,
+    };
+    assert!(
+        refusal || lifecycle,
+        "answer {text:?} to {request:?} is neither its reply nor one of its error texts"
+    );
+}
+
+/// An unsolicited notice from the relay: a motion warning, or a drive fault (`ER3x`).
+pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
+    check_text_bytes(bytes);
+    if bytes.starts_with(b"ER3") {
+        return;
+    }
+    let text = Text::parse(&Message::new_checked(&bytes[..]).expect("31 bytes")).expect("a text");
+    let allowed = [
+        Notice::JointLimit,
+        Notice::WorkspaceLimit,
+        Notice::IkDivergence,
+        Notice::ViaPointMissed,
+        Notice::Held(Hold::Workspace),
+    ];
+    // A stream held at a joint limit names the joint and the limit.
+    let held_at_limit = text.as_str().starts_with("WN12 j");
+    assert!(
+        held_at_limit || allowed.iter().any(|n| n.text() == text),
+        "unexpected unsolicited text {:?}",
+        text.as_str()
+    );
+}
+
+/// `ER`/`WN`, two digits, a space, printable ASCII, a NUL, zeros to the end.
+pub fn check_text_bytes(bytes: &[u8; MESSAGE_LEN]) {
+    let end = bytes.iter().position(|&b| b == 0).expect("no NUL");
+    assert!(end <= TEXT_CAPACITY, "text {bytes:02x?} too long");
+    let (text, tail) = bytes.split_at(end);
+    assert!(
+        tail.iter().all(|&b| b == 0),
+        "text {bytes:02x?} not zero-filled"
+    );
+    assert!(
+        text.iter().all(|&b| b == b' ' || b.is_ascii_graphic()),
+        "text {bytes:02x?} not printable"
+    );
+    assert!(
+        text.starts_with(b"ER") || text.starts_with(b"WN"),
+        "text {bytes:02x?} is neither ER nor WN"
+    );
+}
