@@ -162,7 +162,7 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     assert_eq!(rig.status()[1], 2.0);
     assert_eq!(rig.status()[4], 6.0);
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
-    rig.ticks_until(|r| r.manager.status() != DriveStatus::Running);
+    rig.ticks_until(|r| r.drives.status() != DriveStatus::Running);
     assert_eq!(rig.status()[1], 3.0);
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives stopping");
     assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm still stopping");
