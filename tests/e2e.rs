@@ -62,6 +62,13 @@ enum Answer {
     Text(String),
 }
 
+/// ranger-mk1's joints made able to follow the faster Cartesian accelerations of [`Sim`]:
+/// every command is held to the joints' acceleration limits, and 0.5 rad/s² cannot follow
+/// 0.2 m/s² on every line (a Cartesian sequence would slow down, or stop with `WN22`).
+fn agile_joints(text: String) -> String {
+    text.replace("max_acceleration = 0.5\n", "max_acceleration = 4.0\n")
+}
+
 impl Sim {
     /// Starts the simulator for `robot` with faster Cartesian limits than the seed's deployed
     /// 0.03 m/s, so that the test's moves take a second or two.
@@ -352,7 +359,11 @@ fn a_full_session_over_udp() {
     // A well-conditioned start: the home pose of ranger-mk1 is nearly singular (manipulability
     // 0.0017), where a sideways move needs joint speeds beyond the rate limit (WN22, hold).
     let start = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
-    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        agile_joints,
+        &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"],
+    );
     assert_eq!(
         sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0),
         [2.0, 0., 0., 0., 0., 0., 0.]
@@ -1022,7 +1033,7 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     name[..12].copy_from_slice(b"QSranger-mk1");
     name[30] = 1;
     assert_eq!(buf[..31], name);
-    assert_eq!(sim.text("SQ", [0.0; 7], 2), "ER24 Cmd SQ bad index");
+    assert_eq!(sim.text("SQ", [0.0; 7], 9), "ER24 Cmd SQ bad index");
 
     // jP/TM bank 2 on a six-joint arm (docs/protocol.md).
     assert_eq!(sim.text("jP", [0.0; 7], 0x80), "ER24 Cmd jP bad index");
@@ -1255,27 +1266,11 @@ fn a_blended_joint_sequence_over_udp_passes_its_via_points_without_stopping() {
     }
     // The commanded joints, every tick, from the state log (flushed within a second).
     let last = points[3].map(|v| f64::from(v as f32));
-    let logs = sim._dir.0.join("logs").join("state.csv");
-    let started = Instant::now();
-    let commands = loop {
-        let rows = csv_rows(&logs);
-        let commands: Vec<Vec<f64>> = rows[1..]
-            .iter()
-            .filter(|r| !r[15].is_empty())
-            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
-            .collect();
-        let arrived = commands
+    let commands = logged_commands(&sim, "the last point", |commands| {
+        commands
             .last()
-            .is_some_and(|c| c.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-6));
-        if arrived {
-            break commands;
-        }
-        assert!(
-            started.elapsed() < Duration::from_secs(5),
-            "log never shows the last point"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    };
+            .is_some_and(|c| c.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-6))
+    });
     let distance = |c: &[f64], p: &[f64; 6]| {
         c.iter()
             .zip(p)
@@ -1313,7 +1308,11 @@ fn a_blended_joint_sequence_over_udp_passes_its_via_points_without_stopping() {
 
 #[test]
 fn a_blended_cartesian_square_over_udp_cuts_its_corners_within_the_tolerance() {
-    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        agile_joints,
+        &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"],
+    );
     if !knows_status(&sim) {
         return;
     }
@@ -1395,4 +1394,155 @@ fn a_blended_cartesian_square_over_udp_cuts_its_corners_within_the_tolerance() {
             "corner {c:?} passed at {closest} m"
         );
     }
+}
+
+/// The commanded joints of every tick from armgate-sim's state log (flushed within a second),
+/// read again until `done` holds for them (at most 5 s; `what`: what the log should show).
+fn logged_commands(sim: &Sim, what: &str, done: impl Fn(&[Vec<f64>]) -> bool) -> Vec<Vec<f64>> {
+    let logs = sim._dir.0.join("logs").join("state.csv");
+    let started = Instant::now();
+    loop {
+        let rows = csv_rows(&logs);
+        let commands: Vec<Vec<f64>> = rows[1..]
+            .iter()
+            .filter(|r| !r[15].is_empty())
+            .map(|r| (15..21).map(|k| r[k].parse().unwrap()).collect())
+            .collect();
+        if done(&commands) {
+            return commands;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "log never shows {what}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// `SQ` index 2: the stop cause in force and its joint.
+fn stop_cause(sim: &Sim) -> [f32; 7] {
+    match sim.request("SQ", [0.0; 7], 2) {
+        Answer::Reply(chars, v, 2) if &chars == b"QS" => v,
+        other => panic!("SQ 2: {other:?}"),
+    }
+}
+
+#[test]
+fn st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits() {
+    let ready = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    sim.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let mut goal = ready;
+    goal[0] += 0.5;
+    goal[2] -= 0.3;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    // At cruise (0.07 rad/s on joint 1 after 0.14 s), then ST: the arm decelerates.
+    std::thread::sleep(Duration::from_millis(800));
+    sim.null("ST");
+    assert!(
+        poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0),
+        "never came to rest"
+    );
+    assert_eq!(stop_cause(&sim)[..2], [1.0, 0.0], "SQ 2 reports ST");
+    if firmware().is_some() {
+        return; // the state log is armgate-sim's
+    }
+    // Every tick's commanded acceleration, from the state log, within max_acceleration.
+    let commands = logged_commands(&sim, "rest", |commands| {
+        commands.len() > 3
+            && commands[commands.len() - 3..]
+                .windows(2)
+                .all(|w| w[0] == w[1])
+    });
+    let period = 0.01944;
+    let mut peak = 0.0f64;
+    for w in commands.windows(3) {
+        for ((q2, q1), q0) in w[2].iter().zip(&w[1]).zip(&w[0]) {
+            let a = (q2 - 2.0 * q1 + q0) / (period * period);
+            peak = peak.max(a.abs() / 0.5);
+        }
+    }
+    eprintln!("peak commanded acceleration / max_acceleration: {peak:.4}");
+    // The log's decimal text rounds the commands: its second differences carry that rounding
+    // divided by the period squared.
+    assert!(peak <= 1.0 + 1e-4, "{peak}");
+}
+
+#[test]
+fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first() {
+    let ready = [1.5708f32, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let start = ["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"];
+    // Where the tool is at the ready pose (joint 1 turns the arm about the base's z axis).
+    let probe = Sim::start_with("ranger-mk1", &start);
+    if !knows_status(&probe) {
+        return;
+    }
+    armgate(&probe, &["on"]).0.unwrap();
+    wait_drives(&probe, 2.0);
+    let pose = probe.ok("PS", [0.0; 7], 0);
+    drop(probe);
+    // A box around the tool's way halfway through a 0.5 rad turn of joint 1.
+    let (s, c) = (0.25f32.sin(), 0.25f32.cos());
+    let (x, y, z) = (
+        pose[0] * c - pose[1] * s,
+        pose[0] * s + pose[1] * c,
+        pose[2],
+    );
+    let b = [x - 0.05, x + 0.05, y - 0.05, y + 0.05, z - 0.05, z + 0.05];
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        |text| {
+            text.replace(
+                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]]",
+                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4], {b:?}]"),
+            )
+        },
+        &start,
+    );
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    sim.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let mut goal = ready;
+    goal[0] += 0.5;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    let text = sim.text("jB", [0.0; 7], 0);
+    assert!(text.starts_with("ER25 Cmd jB crosses box at "), "{text}");
+    assert!(status(&sim)[4] == 0.0, "nothing moves");
+    // The other way is free; OF while it moves decelerates first (drives still running,
+    // motion 6, cause 3), then the drives stop.
+    goal[0] = ready[0] - 0.5;
+    sim.ok("jG", with_joints(&goal, 0.0), 0);
+    sim.start_motion("jB");
+    std::thread::sleep(Duration::from_millis(500));
+    sim.null("OF");
+    let s = status(&sim);
+    assert_eq!((s[1], s[4]), (2.0, 6.0), "{s:?}");
+    assert_eq!(stop_cause(&sim)[0], 3.0);
+    wait_drives(&sim, 0.0);
+}
+
+#[test]
+fn a_jog_into_a_joint_limit_is_announced() {
+    // Joint 6 at 3.09 rad, 52 mrad short of its 3.142 limit (inside the 2 % margin's reach).
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,3.09"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    let (result, out) = armgate(
+        &sim,
+        &[
+            "jog", "--rates", "0", "0", "0", "0", "0", "0.1", "--for", "1",
+        ],
+    );
+    result.unwrap();
+    assert!(out.contains("notice: WN12 j6 at limit 3.142"), "{out}");
 }

@@ -698,6 +698,12 @@ fn jog(
         }
         Err(e) => return Err(e.into()),
     }
+    // Why the arm held where the stream would have driven it on (`WN12 jN at limit L`, `WN13`),
+    // said here rather than only on stderr: otherwise a jog at a limit looks like nothing.
+    let _ = client.poll_notices();
+    for notice in client.take_notices() {
+        writeln!(out, "notice: {notice}")?;
+    }
     settle(client)?;
     writeln!(out, "at rest")?;
     Ok(())
@@ -735,7 +741,9 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             index,
         } => send(client, chars, values, *index, out),
         Cmd::Status => {
-            writeln!(out, "{}", client.status()?)?;
+            let mut status = client.status()?;
+            status.cause = client.stop_cause()?;
+            writeln!(out, "{status}")?;
             if cli.key.is_some() {
                 let s = client.signing_report()?;
                 writeln!(

@@ -171,6 +171,7 @@ mod tests {
             refused: 1,
             uptime: 3.0,
             name: "ranger-mk1".into(),
+            cause: None,
         }
     }
 

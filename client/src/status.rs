@@ -1,18 +1,20 @@
 //! The status request `SQ` (docs/protocol.md, "Status"): mode, drive state, drive fault, joint
 //! count, motion, refusals, uptime and the robot's name.
 //!
-//! Two requests: index 0 answers the numbers in f0..f6, index 1 the robot's name as ASCII in
-//! bytes 2..30, NUL-padded. A controller older than the request answers
-//! `ER00 Cmd SQ not understood`, which [`Client::status`] turns into
-//! [`ClientError::TooOld`].
+//! Index 0 answers the numbers in f0..f6, index 1 the robot's name as ASCII in bytes 2..30,
+//! NUL-padded ([`Client::status`]), index 2 why the arm last stopped or is held
+//! ([`Client::stop_cause`]). A controller older than the request answers
+//! `ER00 Cmd SQ not understood`, which becomes [`ClientError::TooOld`]; one without index 2
+//! (`ER24`) reports no cause.
 
 use std::fmt;
 
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
-    Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName, STATUS_INDEX, StatusReport, VALUES,
+    CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
+    STATUS_INDEX, StatusReport, VALUES,
 };
-pub use armgate_protocol::client::{DriveStatus, Motion};
+pub use armgate_protocol::client::{DriveStatus, Motion, StopCause};
 
 use crate::{Client, ClientError, Mode, matching};
 
@@ -43,6 +45,22 @@ impl Name for Motion {
             Self::JointSequence => "joint sequence",
             Self::CartesianSequence => "Cartesian sequence",
             Self::Streaming => "velocity stream",
+            Self::Stopping => "stopping",
+        }
+    }
+}
+
+impl Name for StopCause {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Stop => "ST",
+            Self::ModeChange => "mode change",
+            Self::PowerOff => "OF",
+            Self::Workspace => "workspace limit",
+            Self::IkDivergence => "IK divergence",
+            Self::StreamTimeout => "stream timeout",
+            Self::JointLimit => "joint limit",
+            Self::ClientSilent => "client silent",
         }
     }
 }
@@ -66,6 +84,9 @@ pub struct Status {
     pub uptime: f64,
     /// The robot's name (from its robot file).
     pub name: String,
+    /// Why the arm last stopped, or is held (`SQ` index 2, asked by [`Client::stop_cause`];
+    /// none if not asked, or from older controllers).
+    pub cause: Option<CauseReport>,
 }
 
 impl Status {
@@ -96,7 +117,22 @@ impl Status {
             refused: u64::from(report.refused),
             uptime: f64::from(report.uptime),
             name: name.as_str().to_owned(),
+            cause: None,
         })
+    }
+
+    /// The stop or hold cause: `ST`, `joint limit (j6)`, `none`.
+    pub fn cause_text(&self) -> String {
+        match self.cause {
+            Some(CauseReport {
+                cause: Some(cause),
+                joint,
+            }) => match joint {
+                Some(j) => format!("{} (j{})", cause.name(), u16::from(j) + 1),
+                None => cause.name().to_owned(),
+            },
+            _ => "none".to_owned(),
+        }
     }
 
     /// The drive state with its fault: `running`, `faulted (ER31)`.
@@ -115,6 +151,9 @@ impl fmt::Display for Status {
         writeln!(f, "mode       {} ({})", self.mode.name(), self.mode.value())?;
         writeln!(f, "drives     {}", self.drives_text())?;
         writeln!(f, "motion     {}", self.motion.name())?;
+        if self.cause.is_some() {
+            writeln!(f, "stopped by {}", self.cause_text())?;
+        }
         writeln!(f, "refused    {} requests", self.refused)?;
         write!(f, "uptime     {:.1} s", self.uptime)
     }
@@ -127,6 +166,19 @@ impl Client {
         let numbers = self.status_part(STATUS_INDEX)?;
         let name = self.status_part(NAME_INDEX)?;
         Status::decode(&numbers.values, &name.bytes)
+    }
+
+    /// `SQ` index 2: why the arm last stopped or is held; `None` from a controller without it.
+    pub fn stop_cause(&mut self) -> Result<Option<CauseReport>, ClientError> {
+        match self.status_part(CAUSE_INDEX) {
+            Ok(reply) => Ok(CauseReport::from_reply(&Reply {
+                command: Command::Status,
+                values: reply.values,
+                index: CAUSE_INDEX,
+            })),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
     }
 
     /// `SQ` index 4: the controller's signing policy and counters (docs/protocol.md).
@@ -188,7 +240,9 @@ pub(crate) mod tests {
                 "ranger-mk2",
             )]
         });
-        let s = client(&fake).status().unwrap();
+        let mut c = client(&fake);
+        let mut s = c.status().unwrap();
+        s.cause = c.stop_cause().unwrap();
         assert_eq!(
             s,
             Status {
@@ -200,13 +254,20 @@ pub(crate) mod tests {
                 refused: 17,
                 uptime: 12.5,
                 name: "ranger-mk2".into(),
+                // The fake answers index 2 with the same numbers: cause 2, joint 4.
+                cause: Some(CauseReport {
+                    cause: Some(StopCause::ModeChange),
+                    joint: Some(3),
+                }),
             }
         );
         assert_eq!(s.drives_text(), "faulted (ER31)");
+        assert_eq!(s.cause_text(), "mode change (j4)");
         let sent = fake.received();
-        assert_eq!(sent.len(), 2);
+        assert_eq!(sent.len(), 3);
         assert_eq!((&sent[0][..2], sent[0][30]), (&b"SQ"[..], 0));
         assert_eq!((&sent[1][..2], sent[1][30]), (&b"SQ"[..], 1));
+        assert_eq!((&sent[2][..2], sent[2][30]), (&b"SQ"[..], 2));
         assert!(s.to_string().contains("drives     faulted (ER31)"));
     }
 

@@ -16,7 +16,7 @@ use std::time::Instant;
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE, check_iterations};
+use armgate_core::motion::{Controller, Mode, SOLVES_PER_LINE, StopCause, check_iterations};
 use armgate_core::rng::SplitMix64;
 
 const SEED: u64 = 0x5EED_0016;
@@ -65,7 +65,7 @@ fn bench(name: &str, moves: usize) {
             if ctrl.move_cartesian(start, 0.0).is_err() {
                 continue; // the start itself is outside the workspace
             }
-            ctrl.stop();
+            ctrl.stop(StopCause::Stop);
             let dir = Vector3::new(
                 rng.next_f64() - 0.5,
                 rng.next_f64() - 0.5,

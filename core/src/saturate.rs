@@ -18,8 +18,8 @@ pub(crate) fn saturate(v: f64, lo: f64, hi: f64) -> f64 {
 }
 
 /// `delta` limited to `[-step, step]` (a rate limit): a negative or NaN `step` allows no
-/// movement at all. Never panics. (Only the simulations rate-limit this way.)
-#[cfg(any(test, feature = "sim"))]
+/// movement at all. Never panics. (The simulations, and the joint limiter's acceleration
+/// clamp.)
 pub(crate) fn limit_step(delta: f64, step: f64) -> f64 {
     let step = step.max(0.0);
     saturate(delta, -step, step)

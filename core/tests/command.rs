@@ -339,16 +339,20 @@ fn unsolicited_warnings_are_relayed_and_rate_limited() {
     let config = common::robot("ranger-mk1")
         .edit(|config| config.workspace.bounds[1] = 0.3)
         .unwrap();
+    // Joint moves out of the workspace are refused up front now; an arm already outside (after
+    // a recalibration, at start-up) is reported (ER21), not stopped.
+    let mut outside = MK1_READY;
+    outside[0] = 0.5;
     let mut rig = Rig::new(&config, &MK1_READY);
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
-    // Joint mode may leave the workspace: reported (ER21), not stopped.
     let mut v = [0.0f32; 7];
-    for (d, q) in v.iter_mut().zip(MK1_READY) {
+    for (d, q) in v.iter_mut().zip(outside) {
         *d = q as f32;
     }
-    v[0] = 0.5;
     assert_eq!(&rig.request("jG", v, 0)[..2], b"Gj");
-    assert_eq!(&rig.request("jB", [0.0; 7], 0)[..2], b"Bj");
+    assert_eq!(rig.text("jB", [0.0; 7], 0), "ER25 Cmd jB outside workspace");
+    let mut rig = Rig::new(&config, &outside);
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
     let mut texts = Vec::new();
     for _ in 0..3000 {
         rig.tick();

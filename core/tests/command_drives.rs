@@ -51,7 +51,7 @@ impl Rig {
         let measured = manager.measured();
         let out = self
             .handler
-            .tick(self.now, &measured, &self.drives)
+            .tick(self.now, &measured, &mut self.drives)
             .unwrap();
         let (manager, bus) = self.drives.split_mut();
         manager.transmit(self.now, out.command.as_ref(), bus);
@@ -156,8 +156,13 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     assert_eq!(rig.status()[4], 2.0, "a Cartesian move runs");
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
 
-    // OF: stopping, then off.
+    // OF while moving, a category-1 stop: the arm decelerates (SQ motion 6, index 2 cause 3),
+    // then the drives stop.
     assert_eq!(&rig.request("OF", [0.0; 7], 0)[..2], b"FO");
+    assert_eq!(rig.status()[1], 2.0);
+    assert_eq!(rig.status()[4], 6.0);
+    assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
+    rig.ticks_until(|r| r.drives.status() != DriveStatus::Running);
     assert_eq!(rig.status()[1], 3.0);
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG drives stopping");
     assert_eq!(rig.text("ON", [0.0; 7]), "ER11 Arm still stopping");

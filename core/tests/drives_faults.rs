@@ -14,7 +14,7 @@ mod drives_rig;
 use armgate_core::config::ValidRobot;
 use armgate_core::drives::{BusFault, DriveEmergency, DriveFault, DriveSettings, DriveState};
 use armgate_core::kinematics::Joints;
-use armgate_core::motion::Mode;
+use armgate_core::motion::{Mode, StopCause};
 use armgate_core::sim::{SimWhistle, VirtualBus, WhistleConfig};
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Request, Value};
 use armgate_protocol::can::{CanFrame, Emcy, Nmt, NodeId, NodeMessage};
@@ -95,7 +95,7 @@ fn fault_case(
     }
     // Cleared and started again (ON), everything streams.
     clear(&mut rig);
-    rig.ctrl_mut().stop();
+    rig.ctrl_mut().stop(StopCause::Stop);
     rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     rig.start();
     assert_eq!(rig.manager().fault(), None);

@@ -18,7 +18,7 @@ use armgate_core::drives::{
     DriveFault, DriveSettings, DriveState, LifecycleError, UNKNOWN_TEMPERATURE,
 };
 use armgate_core::kinematics::Joints;
-use armgate_core::motion::{Mode, Refusal, Shape};
+use armgate_core::motion::{Mode, Refusal, Shape, StopCause};
 use armgate_protocol::can::interpreter::Request;
 use armgate_protocol::can::{NmtState, NodeMessage};
 use drives_rig::{Rig, robot};
@@ -233,7 +233,7 @@ fn stop_holds_the_last_command_and_start_resumes_without_a_jump() {
         assert!((p - h).abs() < 2e-5);
     }
     // ON again: the stream resumes where the arm is, nothing jumps.
-    rig.ctrl_mut().stop();
+    rig.ctrl_mut().stop(StopCause::Stop);
     rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     let before = rig.drive_positions();
     rig.start();
@@ -480,7 +480,7 @@ fn drives_stop_by_themselves_when_the_controller_dies() {
     }
     // ON brings everything back (NMT start first).
     rig.until(20, |r| r.manager().state() == DriveState::Faulted);
-    rig.ctrl_mut().stop();
+    rig.ctrl_mut().stop(StopCause::Stop);
     rig.ctrl_mut().set_mode(Mode::Off).unwrap();
     rig.start();
     rig.bus_mut().reset_stats();

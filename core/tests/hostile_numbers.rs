@@ -147,7 +147,7 @@ fn the_limiter_never_outputs_a_non_finite_or_out_of_range_value() {
     for joint in 0..6 {
         for value in HOSTILE {
             let request = Joints::from_slice(&with(&MK1_READY, joint, value)).unwrap();
-            let limited = limiter.limit(&request, &previous);
+            let limited = limiter.limit(&request, &previous, &Joints::zeros(6));
             assert!(limited.q.is_finite(), "{value}: {:?}", limited.q);
             assert!(limited.position_clamped, "{value}");
             for ((q, p), (step, j)) in limited

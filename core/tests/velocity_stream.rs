@@ -18,7 +18,7 @@ use armgate_core::math::{self, Frame, Vector3};
 use armgate_core::motion::{MARGIN_SHARE, Mode, TIMEOUT_PERIODS};
 use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::{
-    Command, JointRates, Message, Motion, Request, Text, Twist, TwistFrame, VALUES,
+    Command, Hold, JointRates, Message, Motion, Notice, Request, Text, Twist, TwistFrame, VALUES,
 };
 
 /// No datagrams through the link: the tests answer requests between ticks, which is where the
@@ -40,6 +40,8 @@ struct Stream {
     config: ValidRobot,
     chain: Chain,
     setpoints: Vec<Joints>,
+    /// Every tick's hold, as the warning relay sees it.
+    holds: Vec<Option<Hold>>,
 }
 
 impl Stream {
@@ -50,6 +52,7 @@ impl Stream {
             chain: Chain::new(&config),
             config,
             setpoints: Vec::new(),
+            holds: Vec::new(),
         };
         stream.tick();
         let mut values = [0.0; VALUES];
@@ -66,6 +69,7 @@ impl Stream {
     fn tick(&mut self) {
         let due = self.cycle.next_due_us();
         let out = self.cycle.tick(due, &mut Silent).step.unwrap();
+        self.holds.push(out.events.hold);
         if let Some(q) = out.command {
             self.setpoints.push(q);
         }
@@ -325,6 +329,23 @@ fn a_joint_slows_down_before_its_limit_and_stops_at_the_margin() {
         s.joint_rates(&[0.0, 0.0, 0.0, 0.0, -0.1, 0.0]);
         s.tick();
     }
+    // Held at the margin from some tick on, naming the joint and its limit (the relay tells
+    // the client once: `WN12 j5 at limit 0.785`); SQ 2 says so too.
+    let held = s
+        .holds
+        .iter()
+        .position(Option::is_some)
+        .expect("never held");
+    let text = Notice::Held(s.holds[held].unwrap()).text();
+    assert_eq!(text.as_str(), "WN12 j5 at limit 0.785");
+    assert!(s.holds[held..].iter().all(|h| *h == s.holds[held]));
+    let cause = s.ok(Request {
+        command: Command::Status,
+        values: [0.0; VALUES],
+        index: 2,
+    });
+    let cause = Message::new_checked(&cause[..]).unwrap();
+    assert_eq!(cause.values()[..2], [7.0, 5.0]);
     let q5: Vec<f64> = s.setpoints.iter().map(|q| q[4]).collect();
     let t = s.period();
     let speeds: Vec<f64> = q5.windows(2).map(|w| (w[1] - w[0]) / t).collect();

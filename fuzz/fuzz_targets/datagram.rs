@@ -36,8 +36,10 @@
 //! and then its answer and the notices after it are signed: the key's tag on the controller's
 //! link, a timestamp not older than the request's. (The answer itself is checked as above.)
 //!
-//! and for every tick: every joint command is finite and within the joint limits, and every
-//! unsolicited notice is one of `WN12`, `ER21`, `WN22`, `WN27` or a drive fault `ER3x`.
+//! and for every tick: every joint command is finite and within the joint limits, its
+//! acceleration (against the two commands before it) within `max_acceleration` (+1e-9
+//! relative), and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`, `WN27` or
+//! a drive fault `ER3x`.
 #![no_main]
 
 use std::collections::VecDeque;
@@ -48,6 +50,7 @@ use armgate_core::cycle::{
     CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing, UnsignedAccess,
 };
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
+use armgate_core::kinematics::Joints;
 use armgate_core::sim::VirtualBus;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::signed::{
@@ -103,6 +106,8 @@ type FuzzCycle = Cycle<CanDrives<FuzzBus>, ()>;
 
 /// The client: datagrams waiting, and the answers checked as they come.
 struct Client {
+    /// The last two joint commands (cleared when none is sent).
+    commands: Vec<Joints>,
     waiting: VecDeque<Datagram<()>>,
     /// Requests sent and not yet answered, with what the parsers made of them and, for a
     /// signed one, its timestamp (its answer must be signed and not older).
@@ -117,6 +122,7 @@ struct Client {
 impl Default for Client {
     fn default() -> Self {
         Self {
+            commands: Vec::new(),
             waiting: VecDeque::new(),
             unanswered: VecDeque::new(),
             key: SigningKey::new(&KEY),
@@ -192,20 +198,26 @@ impl Link<()> for Client {
     }
 }
 
+/// The robot of every run.
+fn robot() -> &'static ValidRobot {
+    static ROBOT_CONFIG: OnceLock<ValidRobot> = OnceLock::new();
+    ROBOT_CONFIG.get_or_init(|| load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}")))
+}
+
 fn start() -> &'static FuzzCycle {
     static START: OnceLock<FuzzCycle> = OnceLock::new();
     START.get_or_init(|| {
-        let config: ValidRobot = load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}"));
+        let config = robot();
         let bus = FuzzBus {
-            bus: VirtualBus::for_robot(&config),
+            bus: VirtualBus::for_robot(config),
             injected: VecDeque::new(),
         };
-        let drives = CanDrives::started(&config, &DriveSettings::default(), bus).expect("drives");
+        let drives = CanDrives::started(config, &DriveSettings::default(), bus).expect("drives");
         let signing = Signing {
             key: Some(SigningKey::new(&KEY)),
             unsigned: UnsignedAccess::All,
         };
-        let mut cycle = Cycle::new(&config, drives).with_signing(signing);
+        let mut cycle = Cycle::new(config, drives).with_signing(signing);
         let mut client = Client::default();
         for _ in 0..START_TICKS {
             if cycle.drives().manager().is_operational() {
@@ -238,6 +250,24 @@ fn tick(cycle: &mut FuzzCycle, client: &mut Client) {
             "t {}: command beyond the joint limits {cmd:?}",
             outcome.time
         );
+        if let [a, b] = client.commands[..] {
+            let config = robot();
+            let dt = config.control_period;
+            for (j, joint) in config.joints.iter().enumerate() {
+                let acc = (cmd[j] - 2.0 * b[j] + a[j]) / (dt * dt);
+                assert!(
+                    acc.abs() <= joint.max_acceleration * (1.0 + 1e-9),
+                    "t {}: joint {j} accelerates at {acc}",
+                    outcome.time
+                );
+            }
+        }
+        client.commands.push(*cmd);
+        if client.commands.len() > 2 {
+            client.commands.remove(0);
+        }
+    } else {
+        client.commands.clear();
     }
 }
 

@@ -121,7 +121,7 @@ impl State {
         let (manager, bus) = self.drives.split_mut();
         manager.receive(bus);
         let measured = manager.measured();
-        let out = self.handler.tick(self.now, &measured, &self.drives);
+        let out = self.handler.tick(self.now, &measured, &mut self.drives);
         let command = out.ok().and_then(|out| out.command);
         if let Some(cmd) = &command {
             assert!(

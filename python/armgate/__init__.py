@@ -47,7 +47,7 @@ from .errors import (
 )
 from .pose import Pose
 from .signing import Signer
-from .status import DriveState, Mode, Motion, Status
+from .status import DriveState, Mode, Motion, Status, StopCause
 
 __all__ = [
     "DEFAULT_PORT",
@@ -81,6 +81,7 @@ __all__ = [
     "Signer",
     "Stalled",
     "Status",
+    "StopCause",
     "Undersized",
     "ViaPointMissed",
     "WaitFailed",

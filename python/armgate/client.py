@@ -24,6 +24,7 @@ from typing import (
 from . import wire
 from .signing import KeyLike, Signer
 from .errors import (
+    BadIndex,
     ControllerMessage,
     ControllerTooOld,
     ControllerUnreachable,
@@ -34,7 +35,7 @@ from .errors import (
     WaitTimeout,
 )
 from .pose import Pose, PoseLike, as_pose
-from .status import Mode, Motion, Status
+from .status import Mode, Motion, Status, StopCause
 
 DEFAULT_PORT = 7031
 """The controller's UDP port (``armgate-sim`` listens on 127.0.0.1:7031)."""
@@ -195,6 +196,20 @@ class Arm:
                 f"the controller does not know the status request SQ ({e.text}); update it"
             ) from e
         return Status.from_replies(numbers.values, named[2:30])
+
+    def get_stop_cause(self) -> Tuple[Optional[StopCause], Optional[int]]:
+        """``SQ`` index 2: why the arm last stopped or is held, and the joint (1-based) of a
+        joint-limit hold; ``(None, None)`` for none (or from a controller without index 2)."""
+        try:
+            values = self.request("SQ", index=2).values
+        except (BadIndex, NotUnderstood):
+            return (None, None)
+        cause = int(round(values[0]))
+        joint = int(round(values[1]))
+        return (
+            StopCause(cause) if cause in StopCause._value2member_map_ else None,
+            joint or None,
+        )
 
     @property
     def joint_count(self) -> int:

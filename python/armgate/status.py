@@ -49,6 +49,24 @@ class Motion(enum.IntEnum):
     JOINT_SEQUENCE = 3
     CARTESIAN_SEQUENCE = 4
     STREAMING = 5
+    STOPPING = 6
+    """Coming to rest after a stop; :meth:`~armgate.Client.get_stop_cause` says why."""
+
+
+class StopCause(enum.IntEnum):
+    """Why the arm last stopped or is held (``SQ`` index 2, f0; 0 is none)."""
+
+    STOP = 1
+    """``ST`` or ``jR``."""
+    MODE_CHANGE = 2
+    POWER_OFF = 3
+    WORKSPACE = 4
+    IK_DIVERGENCE = 5
+    STREAM_TIMEOUT = 6
+    JOINT_LIMIT = 7
+    """A stream holds a joint at its limit (the joint is reported with it)."""
+    CLIENT_SILENT = 8
+    """The controlling client was silent for longer than its watchdog (``WD``)."""
 
 
 def _enum(kind, value: float):  # type: ignore[no-untyped-def]

@@ -303,6 +303,7 @@ fn measure_robot(
     counter: &Counter,
 ) -> Result<(), &'static str> {
     let whole = whole_ticks(config, Some(start))?;
+    let stopping = stopping_ticks(config, start, whole.moving.calls / 2)?;
     let home = if name == HOME_ROBOT {
         Some(whole_ticks(config, None)?)
     } else {
@@ -336,6 +337,11 @@ fn measure_robot(
         "whole tick + virtual bus (sim-drives board)",
         mean(&whole.moving) + mean(&whole.bus_moving),
         "the two windows per tick (means)"
+    );
+    row(
+        "whole tick, stopping (ST halfway, along the line)",
+        &stopping,
+        "window per tick",
     );
     row(
         "whole tick, holding after the move",
@@ -441,6 +447,25 @@ fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'st
         pose,
         twist,
     })
+}
+
+/// The whole tick while the supervisor stops the move along its line: `ST` after `after`
+/// moving ticks, then one window per tick until the arm is at rest.
+fn stopping_ticks(config: &ValidRobot, start: &[f64], after: u32) -> Result<Timing, &'static str> {
+    let mut session = Session::new(config, Some(start))?;
+    session.start_move()?;
+    for _ in 0..after {
+        session.advance_bus()?;
+        session.tick();
+    }
+    session.request(Command::Stop, [0.0; VALUES], b"TS")?;
+    let mut stopping = Timing::default();
+    while session.moving() && stopping.calls < MAX_TICKS {
+        session.advance_bus()?;
+        let (ticks, ()) = measure(|| session.tick());
+        stopping.add(ticks);
+    }
+    Ok(stopping)
 }
 
 /// The stack the requests and ticks of the move need, below this function's frame.

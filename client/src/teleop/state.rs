@@ -789,6 +789,7 @@ mod tests {
             refused: 0,
             uptime: 1.0,
             name: "ranger-mk1".into(),
+            cause: None,
         }
     }
 

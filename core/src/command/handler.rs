@@ -6,8 +6,9 @@ use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use core::net::{Ipv4Addr, SocketAddr};
 
 use armgate_protocol::client::{
-    BlendTolerance, Command, DriveStatus, JointRates, MESSAGE_LEN, Message, Motion, NAME_INDEX,
-    NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName, SESSION_INDEX,
+    BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
+    Message, Motion, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName,
+    SESSION_INDEX,
     STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
 };
 
@@ -20,7 +21,7 @@ use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
-use crate::motion::{Controller, Mode, Refusal, StepOutput};
+use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -53,6 +54,10 @@ pub struct CommandHandler {
     now: f64,
     /// The client whose request is being handled.
     client: SocketAddr,
+    /// `OF` while moving: the drives stop when the arm is at rest, or at this time (s).
+    power_off_at: Option<f64>,
+    /// The longest a stop from full speed may take (s), with a margin: the bound on `OF`'s wait.
+    stop_within: f64,
 }
 
 impl CommandHandler {
@@ -72,6 +77,8 @@ impl CommandHandler {
             signing: SigningReport::default(),
             now: 0.0,
             client: ANONYMOUS,
+            power_off_at: None,
+            stop_within: stop_time_bound(config),
         }
     }
 
@@ -110,18 +117,23 @@ impl CommandHandler {
     /// hold their last point) the controller holds the measured position, so motion resumes
     /// from where the arm is; motion requests are refused meanwhile
     /// ([`Drives::is_operational`]).
+    ///
+    /// An `OF` that came while the arm moved stops the drives here, once the supervisor has
+    /// brought the arm to rest (or the bound on a stop's time has passed).
     pub fn tick(
         &mut self,
         now: f64,
         measured: &[f64],
-        drives: &(impl Drives + ?Sized),
+        drives: &mut (impl Drives + ?Sized),
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
         self.now = now;
-        if self.controller.motion() != Motion::Holding
-            && let Some(ms) = self.session.silent(now)
+        if !matches!(
+            self.controller.motion(),
+            Motion::Holding | Motion::Stopping
+        ) && let Some(ms) = self.session.silent(now)
         {
-            self.stop();
+            self.stop(StopCause::ClientSilent);
             self.relay.announce(Notice::ClientSilent(ms).text());
         }
         // The step's result is returned as it is, not unwrapped and wrapped again: the
@@ -131,6 +143,12 @@ impl CommandHandler {
         let Ok(step) = &out else {
             return out;
         };
+        if let Some(deadline) = self.power_off_at
+            && (!self.controller.is_moving() || now >= deadline)
+        {
+            self.power_off_at = None;
+            let _ = drives.stop();
+        }
         if !drives.is_operational() {
             self.controller.release();
         }
@@ -358,7 +376,7 @@ impl CommandHandler {
                 Ok(values_reply(cmd, &values, req.index))
             }
             Command::JointReset | Command::Stop => {
-                self.stop();
+                self.stop(StopCause::Stop);
                 Ok(null)
             }
             Command::Watchdog => {
@@ -396,15 +414,22 @@ impl CommandHandler {
                 if drives.start().is_err() {
                     return Err(Notice::ArmDidNotStart(drives.status()));
                 }
-                self.controller.stop();
+                self.power_off_at = None;
+                self.controller.release();
                 Ok(null)
             }
             Command::Off => {
                 self.banks.clear();
+                // A category-1 stop: decelerate, then remove power (in `tick`).
+                if self.controller.is_moving() && drives.is_operational() {
+                    self.controller.stop(StopCause::PowerOff);
+                    self.power_off_at = Some(self.now + self.stop_within);
+                    return Ok(null);
+                }
                 if drives.stop().is_err() {
                     return Err(Notice::ArmDidNotStop(drives.status()));
                 }
-                self.controller.stop();
+                self.controller.release();
                 Ok(null)
             }
             Command::Pose => {
@@ -432,6 +457,10 @@ impl CommandHandler {
             }
             Command::Status => match req.index {
                 STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
+                CAUSE_INDEX => {
+                    let (cause, joint) = self.controller.stop_cause();
+                    Ok(CauseReport { cause, joint }.to_reply())
+                }
                 SIGNING_INDEX => Ok(self.signing.to_reply()),
                 BRANCH_INDEX => {
                     let present = self.controller.measured().map(|(q, _)| q);
@@ -511,9 +540,11 @@ impl CommandHandler {
     }
 
     /// Stops the arm: `ST`, `jR`, and the client watchdog (one path for all of them).
-    fn stop(&mut self) {
+    /// Every stop from the command layer: the staged banks go, the supervisor brings the arm
+    /// to rest.
+    fn stop(&mut self, cause: StopCause) {
         self.banks.clear();
-        self.controller.stop();
+        self.controller.stop(cause);
     }
 
     /// A wrong mode is reported before the drives' state: it outlasts it.
@@ -559,6 +590,7 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
         Refusal::CrossesBox(percent) => workspace(WorkspaceReason::CrossesBox(percent)),
         Refusal::Unreachable(at) => workspace(WorkspaceReason::Unreachable(at)),
         Refusal::ArmOutsideWorkspace => workspace(WorkspaceReason::ArmOutside),
+        Refusal::TooFast(joint, at) => workspace(WorkspaceReason::TooFast(joint, at)),
         Refusal::OutsideJointLimits(bound) => Notice::BeyondJointLimit(cmd, bound),
         Refusal::NoGoal => rejected(match cmd {
             Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,
@@ -665,4 +697,25 @@ fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Res
         values,
         index: if bank_2 { BANK_2 } else { 0 },
     })
+}
+
+/// The longest a stop from full speed may take (s): every joint from its top speed at its
+/// acceleration (plus the jerk ramp), and the Cartesian components likewise, doubled, plus
+/// half a second.
+fn stop_time_bound(config: &ValidRobot) -> f64 {
+    let ramp = |v: f64, a: f64, j: Option<f64>| v / a + j.map_or(0.0, |j| a / j);
+    let joints = config.joints.iter().map(|j| {
+        ramp(
+            j.max_velocity.min(j.max_rate),
+            j.max_acceleration,
+            j.max_jerk,
+        )
+    });
+    let c = &config.cartesian;
+    let cartesian = (0..6).map(|k| {
+        let at = |v: &[f64; 6]| v.get(k).copied().unwrap_or(0.0);
+        let jerk = c.max_jerk.as_ref().map(at);
+        ramp(at(&c.max_velocity), at(&c.max_acceleration), jerk)
+    });
+    2.0 * joints.chain(cartesian).fold(0.0, f64::max) + 0.5
 }

@@ -1,6 +1,6 @@
 //! Unsolicited warnings to the client (spec §2.6), with a rate limit that cannot skip.
 
-use armgate_protocol::client::{Notice, Text};
+use armgate_protocol::client::{Hold, Notice, Text};
 use heapless::Deque;
 
 use crate::motion::Events;
@@ -19,6 +19,8 @@ pub struct NoticeRelay {
     channels: [Channel; 4],
     fault_reported: bool,
     drive_notice_reported: bool,
+    /// The stream's hold last told (a new cause is told once, when it begins).
+    hold: Option<Hold>,
     outbox: Deque<Text, NOTICE_CAPACITY>,
     dropped: u32,
 }
@@ -46,6 +48,7 @@ impl Default for NoticeRelay {
             ],
             fault_reported: false,
             drive_notice_reported: false,
+            hold: None,
             outbox: Deque::new(),
             dropped: 0,
         }
@@ -69,6 +72,14 @@ impl NoticeRelay {
                 }
             }
             channel.active = raised;
+        }
+        if events.hold != self.hold {
+            self.hold = events.hold;
+            if let Some(hold) = events.hold
+                && self.outbox.push_back(Notice::Held(hold).text()).is_err()
+            {
+                self.dropped = self.dropped.saturating_add(1);
+            }
         }
     }
 
@@ -182,5 +193,34 @@ mod tests {
         }
         assert_eq!(relay.dropped(), 4);
         assert_eq!(drain(&mut relay).len(), 8);
+    }
+
+    #[test]
+    fn a_hold_is_told_once_per_cause() {
+        use armgate_protocol::client::{JointBound, PathPoint};
+        let mut relay = NoticeRelay::default();
+        let at_limit = Hold::JointLimit(JointBound::new(5, true, 2.967, PathPoint::Goal));
+        let mut texts = Vec::new();
+        for (k, hold) in [
+            None,
+            Some(at_limit),
+            Some(at_limit),
+            Some(Hold::Workspace),
+            None,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let events = Events {
+                hold,
+                ..Events::default()
+            };
+            relay.observe(k as f64, &events);
+            texts.extend(drain(&mut relay));
+        }
+        assert_eq!(
+            texts,
+            ["WN12 j6 at limit 2.967", "WN13 Held at workspace edge."]
+        );
     }
 }

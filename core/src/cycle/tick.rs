@@ -115,7 +115,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
         }
         let step = self
             .handler
-            .tick(time, &self.drives.measured(), &self.drives);
+            .tick(time, &self.drives.measured(), &mut self.drives);
         let command = step.as_ref().map(|out| out.command.as_ref());
         if command.is_err() {
             bump(&mut self.counters.tick_errors);

@@ -364,6 +364,25 @@ impl CartesianGenerator {
         }
     }
 
+    /// Motion time left (s) until a motion that ends at speed stops: a shape asked to finish
+    /// ends at its start point with its velocity, so the controller slows its time down before
+    /// then. `None` for moves (they end at rest) and for shapes not asked to finish.
+    pub fn time_to_abrupt_end(&self) -> Option<f64> {
+        match &self.motion {
+            Some(Motion::Shape {
+                elapsed,
+                end_time: Some(end),
+                ..
+            }) => Some((end - elapsed).max(0.0)),
+            _ => None,
+        }
+    }
+
+    /// True while a shape runs (its path was not checked before it started).
+    pub fn runs_shape(&self) -> bool {
+        matches!(self.motion, Some(Motion::Shape { .. }))
+    }
+
     /// Motion time reached so far (s); 0 when idle.
     pub fn elapsed(&self) -> f64 {
         self.motion.as_ref().map_or(0.0, Motion::elapsed)

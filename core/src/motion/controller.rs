@@ -4,16 +4,18 @@ use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
+use super::joint_path::check_joint_path;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
+use super::supervisor::{Along, StopCause, Supervisor, budget};
 use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError};
 use crate::math::{self, Frame, Twist};
-use armgate_protocol::client::{Motion, TwistFrame};
+use armgate_protocol::client::{Hold, JointBound, Motion, PathPoint, TwistFrame};
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -30,19 +32,16 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
     fine: 0.001,
     coarse: 0.05,
 };
-/// Attempts per tick at a smaller step when the full one is too fast for the joints.
-const SLOWDOWN_ATTEMPTS: usize = 4;
-/// Below this fraction of real time a motion counts as stalled rather than slowed down.
-const MIN_TIME_SCALE: f64 = 0.01;
-/// A Cartesian motion that cannot advance for this long (s) is aborted.
-pub const STALL_TIME: f64 = 0.5;
 
 /// How a Cartesian set-point can be tracked this tick.
 enum Tracking {
     /// Reached within the tolerance and the rate limits.
     Reached(Joints),
-    /// Reached, but some joint would exceed its rate limit by this factor.
-    TooFast(f64),
+    /// Reached within the rate limits, but some joint would exceed its acceleration limit
+    /// (the limiter then eases the step, and the tool leaves the path a little).
+    Abrupt(Joints),
+    /// Reached, but some joint would exceed its rate limit.
+    TooFast,
     /// Not reached within the tolerance.
     Unreachable,
 }
@@ -97,8 +96,19 @@ pub struct Controller {
     measured: Option<(Joints, Frame)>,
     /// Control period (s): each tick advances the motion by at most this much motion time.
     period: f64,
-    /// Consecutive ticks in which a Cartesian motion could not advance.
-    stalled_ticks: u32,
+    /// Every transition to rest, and the commanded velocity.
+    supervisor: Supervisor,
+    /// The Cartesian motion's time scale (1: as planned), kept from tick to tick: a slow-down
+    /// near a singularity or a joint limit changes it within the joints' acceleration limits.
+    time_scale: f64,
+    /// The Cartesian set-point's velocity at full time scale, from the last tick's step.
+    cartesian_nominal: [f64; 6],
+    /// Cartesian limits (x, y, z, rx, ry, rz): acceleration, and jerk if set.
+    cartesian_acceleration: [f64; 6],
+    cartesian_jerk: Option<[f64; 6]>,
+    /// Cartesian speed limits, and the joints' rate limits (for the line check).
+    cartesian_speed: [f64; 6],
+    max_rate: Joints,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
 }
@@ -132,7 +142,13 @@ impl Controller {
             command: None,
             measured: None,
             period: config.control_period,
-            stalled_ticks: 0,
+            supervisor: Supervisor::new(config),
+            time_scale: 1.0,
+            cartesian_nominal: [0.0; 6],
+            cartesian_acceleration: cartesian.max_acceleration,
+            cartesian_jerk: cartesian_j_max,
+            cartesian_speed: cartesian.max_velocity,
+            max_rate: config.per_joint(|j| j.max_rate),
             fixed_point: FixedPoint::default(),
         }
     }
@@ -157,30 +173,52 @@ impl Controller {
             ..Events::default()
         };
         let mut stream_finished = false;
-        let (request, setpoint) = match self.mode {
-            Mode::Off => (None, None),
+        let running = match self.mode {
+            _ if self.supervisor.is_stopping() => None,
+            Mode::Off => Some((None, None)),
+            Mode::Joint | Mode::Cartesian if self.stream.expires() => {
+                // A silent client: the supervisor brings the arm to rest.
+                self.stream.halt();
+                let velocity = *self.supervisor.velocity();
+                self.supervisor
+                    .begin(StopCause::StreamTimeout, Along::Joints(velocity));
+                None
+            }
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
                 let step = self.stream_tick(&q_m, &mut events);
                 stream_finished = step.finished;
                 let setpoint = (self.mode == Mode::Cartesian).then_some(step.pose);
-                (Some(step.q), setpoint)
+                Some((Some(step.q), setpoint))
             }
-            Mode::Joint => (Some(self.joint_tick(&q_m, &mut events)), None),
-            Mode::Cartesian => {
-                let (q, sp) = self.cartesian_tick(&q_m, &f_m, &mut events);
-                (Some(q), Some(sp))
-            }
+            Mode::Joint => Some((Some(self.joint_tick(&q_m, &mut events)), None)),
+            Mode::Cartesian => self
+                .cartesian_tick(&q_m, &f_m, &mut events)
+                .map(|(q, sp)| (Some(q), Some(sp))),
         };
+        // A stop in progress, or one that began this tick: the supervisor commands.
+        let (request, setpoint) = match running {
+            Some(out) => out,
+            None => self.stopping_tick(&q_m, &mut events),
+        };
+        let previous = self.command.unwrap_or(q_m);
         let command = request.map(|r| {
             let limited = self
                 .limiter
-                .limit(&r, self.command.as_ref().unwrap_or(&q_m));
+                .limit(&r, &previous, self.supervisor.velocity());
             events.joint_limit = limited.position_clamped;
-            events.rate_limit = limited.rate_clamped;
+            events.rate_limit = limited.rate_clamped || limited.acceleration_clamped;
             limited.q
         });
-        if command.is_some() {
-            self.command = command;
+        match &command {
+            Some(q) => {
+                self.supervisor.observe(q, &previous);
+                self.command = command;
+            }
+            None => {
+                // Nothing commanded (mode off): the next command starts from rest.
+                self.supervisor.reset();
+                self.command = None;
+            }
         }
         if stream_finished {
             // The generators take over where the stream came to rest.
@@ -200,7 +238,21 @@ impl Controller {
         let q = self.command.unwrap_or(*q_m);
         let step = self.stream.step(&self.chain, &self.workspace, &q);
         events.workspace_limit |= step.workspace_limit;
-        events.joint_limit |= step.joint_limit;
+        events.hold = match step.held_joint {
+            Some((i, upper)) => {
+                let limits = if upper {
+                    self.chain.max()
+                } else {
+                    self.chain.min()
+                };
+                let limit = limits.get(i).copied().unwrap_or(0.0);
+                let bound = JointBound::new(i, upper, limit, PathPoint::Goal);
+                Some(Hold::JointLimit(bound))
+            }
+            None if step.workspace_limit => Some(Hold::Workspace),
+            None => None,
+        };
+        self.supervisor.hold(events.hold);
         step
     }
 
@@ -239,14 +291,17 @@ impl Controller {
     /// the full step would need a joint to move faster than its rate limit: the path stays exact
     /// and the motion slows down (the seed enforced no rate in position mode, spec §9 item 27).
     /// A set-point that cannot be tracked even at a much smaller step (out of reach, or at a
-    /// singularity) holds the arm and raises [`Events::ik_divergence`]; a motion stalled like
-    /// this for [`STALL_TIME`] is aborted.
+    /// singularity) raises [`Events::ik_divergence`] and the supervisor brings the arm to rest
+    /// in joint space. So does a measured pose outside the workspace (`ER21`); a set-point
+    /// that would come within the stopping distance of the workspace's edge or a box starts a
+    /// stop along the path, which ends before it. `None`: a stop began, the supervisor
+    /// commands this tick.
     fn cartesian_tick(
         &mut self,
         q_m: &Joints,
         f_m: &Frame,
         events: &mut Events,
-    ) -> (Joints, Frame) {
+    ) -> Option<(Joints, Frame)> {
         let leg_done = !self.cartesian_generator.is_moving();
         let step = self
             .cartesian_sequence
@@ -271,38 +326,223 @@ impl Controller {
         );
 
         let seed = self.command.unwrap_or(*q_m);
+        let moving = self.cartesian_generator.is_moving();
         let t0 = self.cartesian_generator.elapsed();
-        let mut scale = 1.0;
-        for _ in 0..SLOWDOWN_ATTEMPTS {
+        let before = self.cartesian_generator.setpoint();
+        // The time scale may change by as much as the joints' and the Cartesian acceleration
+        // limits allow at the speeds of full scale: up first, then the same, then down. A
+        // motion that starts at speed (a shape) starts from scale 0.
+        let (s, cartesian_nominal) = match (moving, t0 > 0.0) {
+            (false, _) => (1.0, [0.0; 6]),
+            (true, true) => (self.time_scale, self.cartesian_nominal),
+            (true, false) => {
+                let (ahead, _) = self.cartesian_generator.sample(self.period);
+                (0.0, cartesian_velocity(&before, &ahead, self.period))
+            }
+        };
+        let mut nominal = *self.supervisor.velocity();
+        if s > 0.0 {
+            nominal.iter_mut().for_each(|v| *v /= s);
+        }
+        let (joint_delta, _) = self.supervisor.joint_budget(&nominal);
+        let c_a = &self.cartesian_acceleration;
+        let delta = joint_delta.min(budget(&cartesian_nominal, c_a, self.period));
+        // A shape that ends at speed: slow down so that the scale is down to about one step's
+        // change when the end comes (the scale s covers s²/2δ + s/2 periods while it falls).
+        let cap = self
+            .cartesian_generator
+            .time_to_abrupt_end()
+            .map_or(1.0, |left| {
+                let n = left / self.period;
+                -0.5 * delta + libm::sqrt(0.25 * delta * delta + 2.0 * delta * n)
+            });
+        // The slowest step that only the acceleration clamp keeps from being reached.
+        let mut abrupt = None;
+        let down = (s - delta).max(0.0);
+        let up = (s + delta).min(1.0).min(cap).max(down);
+        for scale in [up, s.min(cap).max(down), down] {
+            if scale <= 0.0 {
+                break;
+            }
             let t = t0 + self.period * scale;
             let sample = self.cartesian_generator.sample(t);
             let (setpoint, finished) = sample;
             if events.workspace_limit || !self.workspace.allows(&setpoint.translation.vector) {
-                // An illegal set-point never reaches the IK: abort and hold the commanded pose.
+                // An illegal set-point never reaches the IK: the arm comes to rest in joint
+                // space and the motion is aborted.
                 events.workspace_limit = true;
-                return (seed, self.abort_cartesian_motion(&seed, f_m, events));
+                self.abort_cartesian_motion(StopCause::Workspace, events);
+                return None;
             }
-            match self.track(&setpoint, &seed) {
+            let tracked = match self.track(&setpoint, &seed) {
+                Tracking::Abrupt(q) => {
+                    abrupt = Some((q, scale, t, sample));
+                    continue;
+                }
+                other => other,
+            };
+            match tracked {
+                Tracking::Abrupt(_) | Tracking::TooFast => {}
                 Tracking::Reached(q) => {
-                    self.stalled_ticks = 0;
+                    self.time_scale = scale;
+                    self.cartesian_nominal =
+                        cartesian_velocity(&before, &setpoint, self.period * scale);
                     self.cartesian_generator.commit(t, sample);
                     events.motion_finished |= finished && !self.cartesian_sequence.is_running();
-                    return (q, setpoint);
+                    let unchecked = !self.ik.check_lines || self.cartesian_generator.runs_shape();
+                    if moving && !finished && unchecked && self.boundary_ahead(&setpoint, t) {
+                        events.workspace_limit = true;
+                        self.supervisor.begin(StopCause::Workspace, Along::Path);
+                        self.cartesian_sequence.halt();
+                    }
+                    return Some((q, setpoint));
                 }
-                Tracking::TooFast(ratio) if scale / ratio >= MIN_TIME_SCALE => {
-                    // Joint steps grow about linearly with the step along the path.
-                    scale /= ratio * 1.05;
-                }
-                Tracking::TooFast(_) | Tracking::Unreachable => break,
+                Tracking::Unreachable => break,
             }
         }
-        events.ik_divergence = true;
-        self.stalled_ticks = self.stalled_ticks.saturating_add(1);
-        let stalled = f64::from(self.stalled_ticks) * self.period >= STALL_TIME;
-        if !self.cartesian_generator.is_moving() || stalled {
-            return (seed, self.abort_cartesian_motion(&seed, f_m, events));
+        if let Some((q, scale, t, sample)) = abrupt {
+            self.time_scale = scale;
+            self.cartesian_nominal = cartesian_velocity(&before, &sample.0, self.period * scale);
+            self.cartesian_generator.commit(t, sample);
+            events.motion_finished |= sample.1 && !self.cartesian_sequence.is_running();
+            return Some((q, sample.0));
         }
-        (seed, self.cartesian_generator.setpoint())
+        events.ik_divergence = true;
+        let _ = f_m;
+        self.abort_cartesian_motion(StopCause::IkDivergence, events);
+        None
+    }
+
+    /// True if the Cartesian motion, at `setpoint` (motion time `t`), would leave the
+    /// workspace or enter an exclusion box within its stopping distance along the path: the
+    /// point where a stop along the path beginning next tick would end (half the stopping time
+    /// at the present full-scale speed, plus the jerk ramp and two ticks, of motion time) and
+    /// the straight way there. Only for what was not checked before it started (shapes, and
+    /// lines when the robot file turns the check off).
+    fn boundary_ahead(&self, setpoint: &Frame, t: f64) -> bool {
+        let stop_time = self
+            .cartesian_nominal
+            .iter()
+            .zip(self.cartesian_acceleration.iter())
+            .map(|(v, a)| libm::fabs(*v) / a)
+            .fold(0.0, f64::max);
+        let ramp = self.cartesian_jerk.map_or(0.0, |j| {
+            self.cartesian_acceleration
+                .iter()
+                .zip(j.iter())
+                .map(|(a, j)| a / j)
+                .fold(0.0, f64::max)
+        });
+        let horizon = 0.5 * stop_time + ramp + 2.0 * self.period;
+        let (ahead, _) = self.cartesian_generator.sample(t + horizon);
+        let (here, there) = (&setpoint.translation.vector, &ahead.translation.vector);
+        !self.workspace.allows(there) || self.workspace.first_box_crossing(here, there).is_some()
+    }
+
+    /// One tick of the stop in progress (begun earlier or this tick): its command, and the
+    /// Cartesian set-point of a stop along a Cartesian path. At rest the generators hold where
+    /// it ended and the stop is over.
+    fn stopping_tick(
+        &mut self,
+        q_m: &Joints,
+        events: &mut Events,
+    ) -> (Option<Joints>, Option<Frame>) {
+        let Some(stop) = self.supervisor.stopping().copied() else {
+            return (None, None);
+        };
+        let q_cmd = self.command.unwrap_or(*q_m);
+        if stop.along == Along::Path && self.mode == Mode::Cartesian {
+            if let Some(out) = self.cartesian_path_stop(&q_cmd) {
+                return out;
+            }
+            // The path cannot be followed: on in joint space.
+            events.ik_divergence = true;
+            self.supervisor.leave_path();
+        } else if stop.along == Along::Path && self.mode == Mode::Joint {
+            let mut peek = self.joint_generator.clone();
+            let before = self.joint_generator.setpoint();
+            let (ahead, _) = peek.advance(self.period);
+            let nominal = joint_velocity(&before, &ahead, self.period);
+            let (rate, change) = self.supervisor.joint_budget(&nominal);
+            let scale = self.brake(rate, change);
+            let (q, finished) = self.joint_generator.advance(scale * self.period);
+            if finished || scale <= 0.0 {
+                self.finish_stop(&q);
+            }
+            return (Some(q), None);
+        }
+        let Some(Along::Joints(v0)) = self.supervisor.stopping().map(|s| s.along) else {
+            self.finish_stop(&q_cmd);
+            return (Some(q_cmd), None);
+        };
+        let (rate, change) = self.supervisor.joint_budget(&v0);
+        let scale = self.brake(rate, change);
+        let mut v = v0;
+        v.iter_mut().for_each(|v| *v *= scale);
+        self.supervisor.keep_within_range(&q_cmd, &mut v);
+        let mut q = q_cmd;
+        for (q, v) in q.iter_mut().zip(v.iter()) {
+            *q += v * self.period;
+        }
+        if scale <= 0.0 {
+            self.finish_stop(&q);
+        }
+        (Some(q), None)
+    }
+
+    /// A stop along a Cartesian path: the motion time advances by the brake's scale of a
+    /// period, within the Cartesian limits at the path's nominal speed and the joints' at the
+    /// speed they were commanded. `None` if the IK cannot follow the path.
+    fn cartesian_path_stop(&mut self, q_cmd: &Joints) -> Option<(Option<Joints>, Option<Frame>)> {
+        let t0 = self.cartesian_generator.elapsed();
+        let before = self.cartesian_generator.setpoint();
+        let (ahead, _) = self.cartesian_generator.sample(t0 + self.period);
+        let nominal = cartesian_velocity(&before, &ahead, self.period);
+        let t = self.period;
+        let mut rate = budget(&nominal, &self.cartesian_acceleration, t);
+        let mut change = self
+            .cartesian_jerk
+            .map_or(f64::INFINITY, |j| budget(&nominal, &j, t * t));
+        // The joints at the speed the scale stands for now.
+        let scale_now = self.supervisor.stopping().map_or(1.0, |s| s.brake.scale());
+        if scale_now > 0.0 {
+            let mut joints = *self.supervisor.velocity();
+            joints.iter_mut().for_each(|v| *v /= scale_now);
+            let (r, c) = self.supervisor.joint_budget(&joints);
+            (rate, change) = (rate.min(r), change.min(c));
+        }
+        let mut brake = self.supervisor.stopping()?.brake;
+        let scale = brake.next(rate, change);
+        let t_next = t0 + scale * self.period;
+        let sample = self.cartesian_generator.sample(t_next);
+        let (setpoint, finished) = sample;
+        let Tracking::Reached(q) = self.track(&setpoint, q_cmd) else {
+            return None;
+        };
+        if let Some(stop) = self.supervisor.stopping_mut() {
+            stop.brake = brake;
+        }
+        self.cartesian_generator.commit(t_next, sample);
+        if finished || scale <= 0.0 {
+            self.supervisor.finish();
+            self.joint_generator.hold(q);
+            self.cartesian_generator.hold(setpoint);
+            self.cartesian_sequence.halt();
+        }
+        Some((Some(q), Some(setpoint)))
+    }
+
+    /// The next scale of the stop in progress (0 if none).
+    fn brake(&mut self, rate: f64, change: f64) -> f64 {
+        self.supervisor
+            .stopping_mut()
+            .map_or(0.0, |stop| stop.brake.next(rate, change))
+    }
+
+    /// The stop has come to rest at `q`: the generators hold there.
+    fn finish_stop(&mut self, q: &Joints) {
+        self.supervisor.finish();
+        self.hold_at(*q);
     }
 
     /// Tracking IK from `seed` to `setpoint`, checked against the reach tolerance and the
@@ -322,35 +562,47 @@ impl Controller {
         if !reached {
             return Tracking::Unreachable;
         }
-        match self.limiter.rate_ratio(&s.q, seed) {
-            ratio if ratio <= 1.0 => {
-                self.fixed_point.note(setpoint, seed, &s.q);
-                Tracking::Reached(s.q)
-            }
-            ratio => Tracking::TooFast(ratio),
+        if self.limiter.rate_ratio(&s.q, seed) > 1.0 {
+            return Tracking::TooFast;
         }
+        if !self.supervisor.can_stop_within_range(seed, &s.q) {
+            return Tracking::Unreachable;
+        }
+        let velocity = self.supervisor.velocity();
+        if self.limiter.acceleration_ratio(&s.q, seed, velocity) > 1.0 + 1e-9 {
+            return Tracking::Abrupt(s.q);
+        }
+        self.fixed_point.note(setpoint, seed, &s.q);
+        Tracking::Reached(s.q)
     }
 
-    /// Stops the Cartesian motion (and its sequence) and holds the commanded pose.
-    fn abort_cartesian_motion(&mut self, seed: &Joints, f_m: &Frame, events: &mut Events) -> Frame {
-        self.stalled_ticks = 0;
+    /// Aborts the Cartesian motion (and its sequence): the supervisor brings the arm to rest
+    /// in joint space from the commanded velocity, and the generators then hold there.
+    fn abort_cartesian_motion(&mut self, cause: StopCause, events: &mut Events) {
         events.sequence_aborted |= self.cartesian_sequence.is_running();
         self.cartesian_sequence.halt();
-        let hold = self.chain.forward(seed).unwrap_or(*f_m);
-        self.cartesian_generator.hold(hold);
-        hold
+        let setpoint = self.cartesian_generator.setpoint();
+        self.cartesian_generator.hold(setpoint);
+        self.supervisor
+            .begin(cause, Along::Joints(*self.supervisor.velocity()));
     }
 
     /// Switches the control mode. The newly active generator holds the last command (or the
     /// measured joints when coming from off), so the switch itself never moves the arm.
-    /// Selecting the current mode again stops any motion.
+    /// Selecting the current mode again stops any motion. While the arm moves, the supervisor
+    /// first brings it to rest in joint space (cause [`StopCause::ModeChange`]); the new mode
+    /// holds where it stops (mode off: no command from then on).
     pub fn set_mode(&mut self, mode: Mode) -> Result<(), Refusal> {
         let (q_m, _) = self.measured.ok_or(Refusal::NotReady)?;
+        let moving = self.is_moving() && self.command.is_some();
         self.mode = mode;
         self.stream.halt();
         self.hold(q_m);
-        if mode == Mode::Off {
-            self.command = None;
+        if moving {
+            let velocity = *self.supervisor.velocity();
+            self.supervisor.finish();
+            self.supervisor
+                .begin(StopCause::ModeChange, Along::Joints(velocity));
         }
         Ok(())
     }
@@ -362,16 +614,40 @@ impl Controller {
     pub fn release(&mut self) {
         self.command = None;
         self.stream.halt();
-        self.stop();
-    }
-
-    /// Stops every motion and sequence; the arm holds its commanded position. A velocity
-    /// stream instead ramps to rest within the acceleration limits.
-    pub fn stop(&mut self) {
-        self.stream.ramp_to_rest();
+        self.supervisor.reset();
         if let Some((q_m, _)) = self.measured {
             self.hold(q_m);
         }
+    }
+
+    /// Stops every motion and sequence, for `cause` (`ST`, `OF`, a client's watchdog, …): the
+    /// one way to rest. A moving arm decelerates within every joint's acceleration (and jerk)
+    /// limits — a move or sequence along its path, a stream in joint space — and then holds;
+    /// [`is_moving`](Self::is_moving) stays true until it is at rest. A held arm just stays.
+    pub fn stop(&mut self, cause: StopCause) {
+        if !self.is_moving() || self.command.is_none() {
+            if let Some((q_m, _)) = self.measured {
+                self.hold(q_m);
+            }
+            return;
+        }
+        if self.stream.is_active() {
+            self.stream.halt();
+            self.supervisor
+                .begin(cause, Along::Joints(*self.supervisor.velocity()));
+            if let Some(q) = self.command {
+                self.hold_at(q);
+            }
+            return;
+        }
+        self.joint_sequence.halt();
+        self.cartesian_sequence.halt();
+        self.supervisor.begin(cause, Along::Path);
+    }
+
+    /// The stop or hold cause in force (`SQ` index 2), and the joint of a joint-limit hold.
+    pub fn stop_cause(&self) -> (Option<StopCause>, Option<u8>) {
+        (self.supervisor.cause(), self.supervisor.held_joint())
     }
 
     /// Streams a tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in `frame`, valid for
@@ -382,6 +658,7 @@ impl Controller {
             return Err(Refusal::InvalidNumber);
         }
         self.ready_for_stream(Mode::Cartesian)?;
+        self.supervisor.clear_cause();
         self.stream.command(StreamCommand::Twist(twist, frame));
         Ok(())
     }
@@ -395,16 +672,28 @@ impl Controller {
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
         self.ready_for_stream(Mode::Joint)?;
+        self.supervisor.clear_cause();
         self.stream.command(StreamCommand::JointRates(rates));
         Ok(())
     }
 
-    fn ready_for_stream(&self, mode: Mode) -> Result<(), Refusal> {
+    /// A stream may start, or resume while its own stop (`ST`, its timeout) is under way: it
+    /// then takes over from the velocity commanded last, within the same limits.
+    fn ready_for_stream(&mut self, mode: Mode) -> Result<(), Refusal> {
         if self.mode != mode {
             return Err(Refusal::WrongMode);
         }
         if self.measured.is_none() {
             return Err(Refusal::NotReady);
+        }
+        let stream_stopping = self.supervisor.stopping().is_some_and(|stop| {
+            matches!(stop.along, Along::Joints(_))
+                && matches!(stop.cause, StopCause::Stop | StopCause::StreamTimeout)
+        });
+        if stream_stopping {
+            self.supervisor.finish();
+            self.stream.resume(self.supervisor.velocity());
+            return Ok(());
         }
         if self.is_moving() && !self.stream.is_active() {
             return Err(Refusal::Busy);
@@ -413,7 +702,11 @@ impl Controller {
     }
 
     fn hold(&mut self, q_m: Joints) {
-        let q = self.command.unwrap_or(q_m);
+        self.hold_at(self.command.unwrap_or(q_m));
+    }
+
+    /// Every generator holds `q` (the Cartesian one its tool pose); sequences end.
+    fn hold_at(&mut self, q: Joints) {
         self.joint_generator.hold(q);
         if let Ok(pose) = self.chain.forward(&q) {
             self.cartesian_generator.hold(pose);
@@ -428,12 +721,13 @@ impl Controller {
     /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
+        let min_duration = min_duration.max(0.0);
         if let Some(mut reach) = self.reach() {
             let (start, seed) = self.cartesian_start();
-            reach.line(&start, &goal, &seed)?;
+            reach.line(&start, &goal, &seed, min_duration)?;
         }
-        self.cartesian_generator
-            .move_to(goal, min_duration.max(0.0))
+        self.supervisor.clear_cause();
+        self.cartesian_generator.move_to(goal, min_duration)
     }
 
     /// The pose a Cartesian motion starts from and the joints commanded there.
@@ -453,18 +747,26 @@ impl Controller {
             workspace: &self.workspace,
             tolerance: REACH_TOLERANCE,
             iterations_left: check_iterations(self.period),
+            speed: &self.cartesian_speed,
+            max_rate: &self.max_rate,
         })
     }
 
-    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only.
+    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only. The
+    /// tool's way is checked first: a move into an exclusion box or out of the workspace is
+    /// refused with where (driving out of a box the tool is in stays possible).
     pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
+        let start = self.joint_generator.setpoint();
+        check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
+        self.supervisor.clear_cause();
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
 
     /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
     pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        self.supervisor.clear_cause();
         self.cartesian_generator.start_shape(shape)
     }
 
@@ -549,11 +851,12 @@ impl Controller {
         if let Some(mut reach) = self.reach() {
             let (mut from, mut q) = self.cartesian_start();
             for via in self.cartesian_sequence.ready() {
-                q = reach.line(&from, &via.point, &q)?;
+                q = reach.line(&from, &via.point, &q, via.min_duration)?;
                 from = via.point;
             }
         }
         let first = self.cartesian_sequence.start()?;
+        self.supervisor.clear_cause();
         let then = self.cartesian_sequence.towards();
         self.cartesian_generator
             .move_towards(first.point, first.min_duration, then)
@@ -568,7 +871,13 @@ impl Controller {
         if self.is_moving() {
             return Err(Refusal::Busy);
         }
+        let mut from = self.joint_generator.setpoint();
+        for via in self.joint_sequence.ready() {
+            check_joint_path(&self.chain, &self.workspace, &from, &via.point)?;
+            from = via.point;
+        }
         let first = self.joint_sequence.start()?;
+        self.supervisor.clear_cause();
         let then = self.joint_sequence.towards();
         self.joint_generator
             .move_towards(first.point, first.min_duration, then)
@@ -643,6 +952,9 @@ impl Controller {
 
     /// True while a move, shape or sequence of the active mode runs.
     pub fn is_moving(&self) -> bool {
+        if self.supervisor.is_stopping() {
+            return true;
+        }
         match self.mode {
             Mode::Off => false,
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => true,
@@ -656,6 +968,7 @@ impl Controller {
     /// What the arm is doing: which kind of motion runs in the active mode.
     pub fn motion(&self) -> Motion {
         match self.mode {
+            _ if self.supervisor.is_stopping() => Motion::Stopping,
             Mode::Off => Motion::Holding,
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => Motion::Streaming,
             Mode::Joint if self.joint_sequence.is_running() => Motion::JointSequence,
@@ -723,4 +1036,19 @@ fn limit_margin(chain: &Chain, q: &Joints) -> f64 {
 /// Euclidean distance between joint vectors (the joint sequence's reach metric).
 fn joint_distance(a: &Joints, b: &Joints) -> f64 {
     libm::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
+}
+
+/// Joint velocity of the step from `a` to `b` over `dt`.
+fn joint_velocity(a: &Joints, b: &Joints, dt: f64) -> Joints {
+    let mut v = *b;
+    for (v, a) in v.iter_mut().zip(a.iter()) {
+        *v = (*v - a) / dt;
+    }
+    v
+}
+
+/// Cartesian velocity (x, y, z, rx, ry, rz) of the step from `a` to `b` over `dt`.
+fn cartesian_velocity(a: &Frame, b: &Frame, dt: f64) -> [f64; 6] {
+    let d: [f64; 6] = math::diff(a, b).into();
+    d.map(|x| if dt > 0.0 { x / dt } else { 0.0 })
 }

@@ -1,5 +1,7 @@
 //! What happened during one control tick.
 
+use armgate_protocol::client::Hold;
+
 /// Conditions and happenings of one tick. Conditions (limits, divergence) are raised on every
 /// tick while they hold; the message relay decides how often to tell the client.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -18,4 +20,7 @@ pub struct Events {
     pub sequence_finished: bool,
     /// A via-point sequence stopped because a via point was not reached.
     pub sequence_aborted: bool,
+    /// A velocity stream holds the arm where its command would drive it on (`WN12 jN at limit
+    /// L`, `WN13`): told once when the hold begins.
+    pub hold: Option<Hold>,
 }

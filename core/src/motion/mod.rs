@@ -7,22 +7,26 @@
 //! * [`Sequence`]: via points (§4.4), stopping at each or blending through it within a
 //!   tolerance (`blend.rs`, beyond the seed: the next leg superposed on the running one).
 //! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
-//! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4).
+//! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4); its supervisor
+//!   (`supervisor.rs`) owns every transition to rest ([`StopCause`]).
 //! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
 
 mod blend;
+mod brake;
 mod cartesian_generator;
 mod controller;
 mod events;
 mod fixed_point;
 mod joint_generator;
 mod joint_limiter;
+mod joint_path;
 mod profile;
 mod reach;
 mod refusal;
 mod sequence;
 mod shape;
 mod straight_line;
+mod supervisor;
 mod trapezoid;
 mod velocity_stream;
 mod workspace;
@@ -33,11 +37,12 @@ pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
 pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
-pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, SOLVES_PER_LINE, check_iterations};
+pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, MAX_SLOWDOWN, SOLVES_PER_LINE, check_iterations};
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
 pub use straight_line::StraightLine;
+pub use supervisor::StopCause;
 pub use trapezoid::Trapezoid;
 pub use velocity_stream::{
     MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,

@@ -65,13 +65,35 @@ pub(super) struct Reach<'a> {
     pub workspace: &'a Workspace,
     pub tolerance: f64,
     pub iterations_left: u32,
+    /// The Cartesian speed limits (x, y, z, rx, ry, rz): how fast the line is planned.
+    pub speed: &'a [f64; 6],
+    /// The joints' rate limits.
+    pub max_rate: &'a Joints,
 }
+
+/// How much faster than its rate limit a joint may need to move at a line's cruise speed: up
+/// to this the tick slows the motion down where it must (within the acceleration limits); a
+/// line that needs more — a jump to another IK branch, the base swinging half a turn for a
+/// few centimetres of the tool — is refused.
+pub const MAX_SLOWDOWN: f64 = 100.0;
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
-    /// `goal`; returns the joints at the goal. (If the budget runs out the move gets the
-    /// benefit of the doubt, and the joints reached so far are returned.)
-    pub fn line(&mut self, start: &Frame, goal: &Frame, seed: &Joints) -> Result<Joints, Refusal> {
+    /// `goal`, planned to last at least `min_duration` (s); returns the joints at the goal.
+    /// (If the budget runs out the move gets the benefit of the doubt, and the joints reached
+    /// so far are returned.)
+    ///
+    /// Between two samples no joint may need more than [`MAX_SLOWDOWN`] times its rate limit
+    /// at the line's cruise speed: a line on which the IK solution jumps to another branch
+    /// needs far more, and is refused with the joint and where, rather than started and
+    /// aborted halfway.
+    pub fn line(
+        &mut self,
+        start: &Frame,
+        goal: &Frame,
+        seed: &Joints,
+        min_duration: f64,
+    ) -> Result<Joints, Refusal> {
         let (from, to) = (&start.translation.vector, &goal.translation.vector);
         if let Some(entry) = self.workspace.first_box_crossing(from, to) {
             return match PathPoint::at(entry) {
@@ -90,8 +112,16 @@ impl Reach<'_> {
                 Rotation3::new(turn * s) * start.rotation,
             )
         };
+        // The time the whole line takes at cruise speed (s): the slowest component.
+        let delta: [f64; 6] = math::diff(start, goal).into();
+        let duration = delta
+            .iter()
+            .zip(self.speed.iter())
+            .map(|(d, v)| libm::fabs(*d) / v)
+            .fold(min_duration.max(0.0), f64::max);
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step, mut q) = (0.0, full_step, *seed);
+        let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
                 break;
@@ -99,6 +129,13 @@ impl Reach<'_> {
             let next = (done + step).min(1.0);
             match self.solve(&point(next), &q, PathPoint::at(next)) {
                 Ok(solved) => {
+                    // A line that also fails for another reason (a joint limit, out of reach)
+                    // is refused for that: it says more.
+                    if let Err(refusal) =
+                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))
+                    {
+                        too_fast.get_or_insert(refusal);
+                    }
                     (done, q) = (next, solved);
                     step = (step * 2.0).min(full_step);
                 }
@@ -106,7 +143,32 @@ impl Reach<'_> {
                 Err(_) => step *= 0.5,
             }
         }
-        Ok(q)
+        too_fast.map_or(Ok(q), Err)
+    }
+
+    /// Refuses the step from `q` to `next`, which takes `time` (s) at cruise, if a joint would
+    /// need more than [`MAX_SLOWDOWN`] times its rate limit.
+    fn within_rates(
+        &self,
+        q: &Joints,
+        next: &Joints,
+        time: f64,
+        at: PathPoint,
+    ) -> Result<(), Refusal> {
+        for (joint, ((a, b), rate)) in q
+            .iter()
+            .zip(next.iter())
+            .zip(self.max_rate.iter())
+            .enumerate()
+        {
+            let ratio = libm::fabs(b - a) / (rate * time);
+            // A NaN ratio is refused too.
+            if ratio.is_nan() || ratio > MAX_SLOWDOWN {
+                let joint = u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
+                return Err(Refusal::TooFast(joint, at));
+            }
+        }
+        Ok(())
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a

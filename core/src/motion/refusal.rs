@@ -25,6 +25,10 @@ pub enum Refusal {
     /// No joint configuration within the limits follows the straight line to a Cartesian goal
     /// from the current one at this point (out of reach, or a singularity).
     Unreachable(PathPoint),
+    /// Joint N (1-based) would need more than its rate limit at this point of the straight
+    /// line to a Cartesian goal at the planned speed (a jump to another IK branch, or a
+    /// singularity).
+    TooFast(u8, PathPoint),
     /// The arm itself is in a forbidden region (drive it out in joint mode).
     ArmOutsideWorkspace,
     /// A via-point index is not below the number of slots.
@@ -49,6 +53,12 @@ impl core::fmt::Display for Refusal {
             Self::Unreachable(PathPoint::Goal) => f.write_str("goal out of reach"),
             Self::Unreachable(PathPoint::Along(percent)) => {
                 write!(f, "out of reach at {percent}% of the line")
+            }
+            Self::TooFast(joint, PathPoint::Goal) => {
+                write!(f, "joint {joint} too fast at the goal")
+            }
+            Self::TooFast(joint, PathPoint::Along(percent)) => {
+                write!(f, "joint {joint} too fast at {percent}% of the line")
             }
             Self::ArmOutsideWorkspace => f.write_str("the arm is outside the workspace"),
             Self::IndexOutOfRange => f.write_str("via-point index out of range"),

@@ -24,12 +24,7 @@ impl Workspace {
 
     /// True if the tool origin may be at `p`.
     pub fn allows(&self, p: &Vector3<f64>) -> bool {
-        let [x0, x1, y0, y1, z0, z1] = self.bounds;
-        let within = x0 <= p.x && p.x <= x1 && y0 <= p.y && p.y <= y1 && z0 <= p.z && p.z <= z1;
-        within
-            && !self.boxes.iter().any(|&[x0, x1, y0, y1, z0, z1]| {
-                x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
-            })
+        self.within_bounds(p) && !self.boxes.iter().any(|bx| strictly_inside(bx, p))
     }
 
     /// How far `p` may move in any direction and stay allowed: its distance to the nearest face
@@ -61,6 +56,32 @@ impl Workspace {
             .filter_map(|bx| segment_enters(bx, a, b))
             .reduce(f64::min)
     }
+
+    /// [`first_box_crossing`](Self::first_box_crossing) for the boxes that do not hold
+    /// `origin`: a motion that starts inside a box may drive out of it, never into another.
+    pub fn first_new_box(
+        &self,
+        a: &Vector3<f64>,
+        b: &Vector3<f64>,
+        origin: &Vector3<f64>,
+    ) -> Option<f64> {
+        self.boxes
+            .iter()
+            .filter(|bx| !strictly_inside(bx, origin))
+            .filter_map(|bx| segment_enters(bx, a, b))
+            .reduce(f64::min)
+    }
+
+    /// True if `p` lies within the bounds (inclusive), boxes aside.
+    pub fn within_bounds(&self, p: &Vector3<f64>) -> bool {
+        let [x0, x1, y0, y1, z0, z1] = self.bounds;
+        x0 <= p.x && p.x <= x1 && y0 <= p.y && p.y <= y1 && z0 <= p.z && p.z <= z1
+    }
+}
+
+/// True if `p` lies strictly inside the open box `bx`.
+fn strictly_inside(&[x0, x1, y0, y1, z0, z1]: &[f64; 6], p: &Vector3<f64>) -> bool {
+    x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
 }
 
 /// The fraction of the way from `a` to `b` at which the segment enters the open box `bx`

@@ -24,8 +24,8 @@
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
 //!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
-//! * [`StatusReport`], [`RobotName`] and [`SessionReport`]: the replies to the status request
-//!   `SQ`.
+//! * [`StatusReport`], [`RobotName`], [`CauseReport`] and [`SessionReport`]: the replies to the
+//!   status request `SQ` (indices 0, 1, 2, 3).
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
@@ -48,6 +48,7 @@ mod request;
 mod session;
 pub mod signed;
 mod status;
+mod stop;
 mod temperature;
 mod text;
 #[cfg(test)]
@@ -61,11 +62,12 @@ pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;
 pub use orientation::{Quaternion, rpy};
-pub use reason::{DriveStatus, JointBound, PathPoint, Rejection, WorkspaceReason};
+pub use reason::{DriveStatus, Hold, JointBound, PathPoint, Rejection, WorkspaceReason};
 pub use reply::Reply;
 pub use request::Request;
 pub use session::{Holder, SESSION_INDEX, SessionReport};
 pub use status::{Motion, NAME_INDEX, NAME_LEN, RobotName, STATUS_INDEX, StatusReport};
+pub use stop::{CAUSE_INDEX, CauseReport, StopCause};
 pub use temperature::{NO_JOINT_TEMPERATURE, UNKNOWN_TEMPERATURE};
 pub use text::{Severity, TEXT_CAPACITY, Text};
 pub use velocity::{JointRates, TOOL_FRAME, Twist, TwistFrame, VelocityError};

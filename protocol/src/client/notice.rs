@@ -2,7 +2,11 @@
 
 use core::fmt::{self, Write as _};
 
-use super::{Command, DriveStatus, Error, JointBound, Rejection, Severity, Text, WorkspaceReason};
+use super::reason::Milli;
+
+use super::{
+    Command, DriveStatus, Error, Hold, JointBound, Rejection, Severity, Text, WorkspaceReason,
+};
 
 /// A fixed error or warning. Add a variant (with its [`code`](Self::code), severity and body) for
 /// every new text, so that the codes stay in one place.
@@ -47,13 +51,17 @@ pub enum Notice {
     /// `ER42 Cmd XX cancelled by ST`: a planning request that waited for a later tick (the
     /// per-tick work budget) was cancelled by a stop that arrived after it.
     Cancelled(Command),
+    /// `WN12 jN at limit L` / `WN13 Held at workspace edge.`: a stream holds the arm there.
+    Held(Hold),
 }
 
 impl Notice {
     /// Error or warning.
     pub const fn severity(self) -> Severity {
         match self {
-            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed => Severity::Warning,
+            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed | Self::Held(_) => {
+                Severity::Warning
+            }
             _ => Severity::Error,
         }
     }
@@ -77,6 +85,8 @@ impl Notice {
             Self::HeldBy(..) => 40,
             Self::ClientSilent(_) => 41,
             Self::Cancelled(_) => 42,
+            Self::Held(Hold::JointLimit(_)) => 12,
+            Self::Held(Hold::Workspace) => 13,
         }
     }
 
@@ -138,6 +148,10 @@ impl fmt::Display for Body {
             Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
             Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
             Notice::Cancelled(c) => write!(f, "Cmd {} cancelled by ST", Pair(c.chars())),
+            Notice::Held(Hold::JointLimit(bound)) => {
+                write!(f, "j{} at limit {}", bound.joint, Milli(bound.limit_milli))
+            }
+            Notice::Held(Hold::Workspace) => f.write_str("Held at workspace edge."),
         }
     }
 }
@@ -287,6 +301,28 @@ mod tests {
                 "ER26 Cmd BG j3 > 1.600 at 12%",
             ),
             (Notice::ViaPointMissed, "WN27 Via point missed."),
+            (
+                Notice::Held(Hold::JointLimit(JointBound::new(
+                    5,
+                    true,
+                    2.967,
+                    PathPoint::Goal,
+                ))),
+                "WN12 j6 at limit 2.967",
+            ),
+            (
+                Notice::Held(Hold::JointLimit(JointBound::new(
+                    4,
+                    false,
+                    -1.745,
+                    PathPoint::Goal,
+                ))),
+                "WN12 j5 at limit -1.745",
+            ),
+            (
+                Notice::Held(Hold::Workspace),
+                "WN13 Held at workspace edge.",
+            ),
         ];
         for (notice, expected) in cases {
             assert!(expected.len() <= super::super::TEXT_CAPACITY, "{expected}");

@@ -139,6 +139,9 @@ pub enum WorkspaceReason {
     Unreachable(PathPoint),
     /// `arm outside`: the arm itself is outside the workspace (drive it back in joint mode).
     ArmOutside,
+    /// `jN too fast at NN%`: joint N would need more than its rate limit there at the
+    /// planned speed (the IK solution jumps to another branch, or a singularity).
+    TooFast(u8, PathPoint),
 }
 
 impl fmt::Display for WorkspaceReason {
@@ -148,6 +151,7 @@ impl fmt::Display for WorkspaceReason {
             Self::CrossesBox(percent) => write!(f, "crosses box at {percent}%"),
             Self::Unreachable(at) => write!(f, "unreachable{}", At(at)),
             Self::ArmOutside => f.write_str("arm outside"),
+            Self::TooFast(joint, at) => write!(f, "j{joint} too fast{}", At(at)),
         }
     }
 }
@@ -188,17 +192,25 @@ fn round_half_away(x: f64) -> f64 {
 
 impl fmt::Display for JointBound {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let sign = if self.limit_milli < 0 { "-" } else { "" };
-        let magnitude = self.limit_milli.unsigned_abs();
         write!(
             f,
-            "j{} {} {sign}{}.{:03}{}",
+            "j{} {} {}{}",
             self.joint,
             if self.above_max { '>' } else { '<' },
-            magnitude / 1000,
-            magnitude % 1000,
+            Milli(self.limit_milli),
             At(self.at)
         )
+    }
+}
+
+/// A value in thousandths, printed with three decimals (`-1.745`).
+pub(super) struct Milli(pub(super) i32);
+
+impl fmt::Display for Milli {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let sign = if self.0 < 0 { "-" } else { "" };
+        let magnitude = self.0.unsigned_abs();
+        write!(f, "{sign}{}.{:03}", magnitude / 1000, magnitude % 1000)
     }
 }
 
@@ -234,4 +246,15 @@ mod tests {
         }
         assert_eq!(DriveStatus::from_code(5), None);
     }
+}
+
+/// Why a velocity stream holds the arm where the client's command would drive it on: the
+/// detail of a `WN12`/`WN13` notice, sent once when the hold begins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Hold {
+    /// `WN12 jN at limit L`: joint N is held at the margin before its limit L (rad or m).
+    JointLimit(JointBound),
+    /// `WN13 Held at workspace edge.`: the tool would leave the workspace or enter a box.
+    Workspace,
 }

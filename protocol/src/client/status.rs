@@ -30,17 +30,21 @@ pub enum Motion {
     CartesianSequence = 4,
     /// A twist or joint-rate stream (`TW`, `jW`), until it has ramped to rest.
     Streaming = 5,
+    /// Coming to rest after a stop (`ST`, `CM` or `OF` while moving, a workspace limit, IK
+    /// divergence); `SQ` index 2 says why.
+    Stopping = 6,
 }
 
 impl Motion {
     /// Every motion, by code.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::Holding,
         Self::JointMove,
         Self::CartesianMove,
         Self::JointSequence,
         Self::CartesianSequence,
         Self::Streaming,
+        Self::Stopping,
     ];
 
     /// The motion with this code.

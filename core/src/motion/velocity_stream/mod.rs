@@ -72,8 +72,9 @@ pub struct StreamStep {
     pub finished: bool,
     /// The workspace made the arm slow down or hold.
     pub workspace_limit: bool,
-    /// A joint was held at the margin before its limit.
-    pub joint_limit: bool,
+    /// A joint held at the margin before its limit: its index, and whether the limit is its
+    /// maximum.
+    pub held_joint: Option<(usize, bool)>,
 }
 
 /// The state of a velocity stream: the latest command, its age and the joint velocity.
@@ -144,6 +145,16 @@ impl VelocityStream {
         self.velocity.iter_mut().for_each(|v| *v = 0.0);
     }
 
+    /// Takes over an arm moving at `velocity` (a stream resumed while it was being stopped).
+    pub fn resume(&mut self, velocity: &Joints) {
+        self.velocity = *velocity;
+    }
+
+    /// True if the command is too old to hold on the next step: the client has gone quiet.
+    pub fn expires(&self) -> bool {
+        self.command.is_some() && self.age >= TIMEOUT_PERIODS
+    }
+
     /// True while a command holds or the arm has not yet ramped to rest.
     pub fn is_active(&self) -> bool {
         self.command.is_some() || self.velocity.iter().any(|v| *v != 0.0)
@@ -160,7 +171,7 @@ impl VelocityStream {
             self.command = None;
         }
         self.age = self.age.saturating_add(1);
-        let mut joint_limit = false;
+        let mut held_joint = None;
         // A twist's intended base-frame twist and the pose it starts from.
         let mut path = None;
         let target = match self.command {
@@ -172,7 +183,9 @@ impl VelocityStream {
                     *t = crate::saturate::saturate(*t, -cap, cap);
                     let brake = self.braking_speed(q, i, *t);
                     if brake < libm::fabs(*t) {
-                        joint_limit |= brake == 0.0;
+                        if brake == 0.0 {
+                            held_joint = Some((i, *t > 0.0));
+                        }
                         *t = libm::copysign(brake, *t);
                     }
                 }
@@ -191,14 +204,23 @@ impl VelocityStream {
                 // The null space pulls only while the client asks for motion: a zero twist holds.
                 let pull = intended.iter().any(|v| *v != 0.0);
                 let rates = self.twist_rates(chain, q, &(intended + correction), pull);
-                let brake = (0..rates.len())
+                // The tightest joint, and whether it heads for its maximum.
+                let (brake, tightest) = (0..rates.len())
                     .map(|i| {
                         let rate = rates.get(i).copied().unwrap_or(0.0);
                         let ratio = self.braking_speed(q, i, rate) / libm::fabs(rate);
-                        if ratio.is_nan() { 1.0 } else { ratio }
+                        (if ratio.is_nan() { 1.0 } else { ratio }, (i, rate > 0.0))
                     })
-                    .fold(1.0, f64::min);
-                joint_limit |= brake == 0.0;
+                    .fold((1.0, None), |(low, at), (ratio, joint)| {
+                        if ratio < low {
+                            (ratio, Some(joint))
+                        } else {
+                            (low, at)
+                        }
+                    });
+                if brake == 0.0 {
+                    held_joint = tightest;
+                }
                 scaled(&rates, brake)
             }
         };
@@ -232,7 +254,7 @@ impl VelocityStream {
             pose,
             finished: !self.is_active(),
             workspace_limit,
-            joint_limit,
+            held_joint,
         }
     }
 

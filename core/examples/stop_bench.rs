@@ -1,0 +1,514 @@
+//! How every shipped robot comes to rest: each motion at cruise, stopped by each cause.
+//!
+//! `cargo run --release -p armgate-core --example stop_bench`
+//!
+//! For every robot file in `robots/` × {joint move, Cartesian line, blended sequence, twist
+//! stream, joint-velocity stream} × {ST, CM, OF, workspace boundary, stream timeout}, an ideal
+//! arm follows the commands; from the stop's cause on, per tick of commanded joints: the peak
+//! acceleration over `max_acceleration` (the worst joint), the peak jerk over `max_jerk` (where
+//! the robot file sets one), the time and tool distance to rest, and the tool's largest
+//! distance from the path (Cartesian line and twist stream: the straight line). "refused":
+//! the motion was refused up front (boundary case); "entered box": the tool was strictly inside
+//! the box put across its way on some tick.
+#![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
+
+use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::kinematics::Joints;
+use armgate_core::math::{Frame, Twist, Vector3};
+use armgate_core::motion::{Controller, Mode, StopCause};
+use armgate_core::sim::IdealArm;
+use armgate_protocol::client::TwistFrame;
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Motion {
+    JointMove,
+    Line,
+    Blended,
+    Twist,
+    JointRates,
+}
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Cause {
+    St,
+    Cm,
+    Of,
+    Boundary,
+    Timeout,
+}
+
+const MOTIONS: [Motion; 5] = [
+    Motion::JointMove,
+    Motion::Line,
+    Motion::Blended,
+    Motion::Twist,
+    Motion::JointRates,
+];
+const CAUSES: [Cause; 5] = [
+    Cause::St,
+    Cause::Cm,
+    Cause::Of,
+    Cause::Boundary,
+    Cause::Timeout,
+];
+/// Ticks after the cause at most (rest is normally reached much earlier).
+const MAX_TICKS: usize = 20_000;
+
+struct Run {
+    config: ValidRobot,
+    ctrl: Controller,
+    arm: IdealArm,
+    now: f64,
+    /// Commanded joints, one per tick.
+    commands: Vec<Joints>,
+}
+
+impl Run {
+    fn new(config: &ValidRobot, q0: &Joints) -> Self {
+        let mut run = Self {
+            config: config.clone(),
+            ctrl: Controller::new(config),
+            arm: IdealArm::new(*q0),
+            now: 0.0,
+            commands: Vec::new(),
+        };
+        run.tick();
+        run
+    }
+
+    fn tick(&mut self) {
+        self.now += self.config.control_period;
+        let out = self.ctrl.step(self.now, &self.arm.measured()).unwrap();
+        self.arm.step(out.command.as_ref());
+        self.commands
+            .push(out.command.unwrap_or(self.arm.measured()));
+    }
+
+    fn pose(&self, q: &Joints) -> Vector3<f64> {
+        self.ctrl.chain().forward(q).unwrap().translation.vector
+    }
+}
+
+/// A comfortable start: mid-range, nudged, with the tool inside the workspace.
+fn start_pose(config: &ValidRobot) -> Joints {
+    let ctrl = Controller::new(config);
+    let chain = ctrl.chain();
+    let mut q = chain.mid_range();
+    let (min, max) = (chain.min().to_vec(), chain.max().to_vec());
+    for (i, v) in q.iter_mut().enumerate() {
+        *v += 0.12 * (max[i] - min[i]).min(2.0) * if i % 2 == 0 { 0.5 } else { -0.5 };
+    }
+    q
+}
+
+/// A straight Cartesian line from the start that the controller accepts: the first of ±x, ±y,
+/// ±z, of a length that reaches cruise.
+fn line_goal(run: &mut Run, length: f64) -> Option<(Frame, Vector3<f64>)> {
+    let start = run.ctrl.cartesian_setpoint();
+    for dir in [
+        Vector3::x(),
+        -Vector3::x(),
+        Vector3::z(),
+        -Vector3::z(),
+        Vector3::y(),
+        -Vector3::y(),
+    ] {
+        for scale in [1.0, 0.5, 0.25] {
+            let mut goal = start;
+            goal.translation.vector += dir * length * scale;
+            if run.ctrl.move_cartesian(goal, 0.0).is_ok() {
+                stop_now(run, Cause::St);
+                settle(run);
+                run.commands.clear();
+                return Some((goal, dir));
+            }
+        }
+    }
+    None
+}
+
+fn settle(run: &mut Run) {
+    for _ in 0..MAX_TICKS {
+        run.tick();
+        if !run.ctrl.is_moving() {
+            break;
+        }
+    }
+}
+
+fn stop_now(run: &mut Run, cause: Cause) {
+    match cause {
+        Cause::St => run.ctrl.stop(StopCause::Stop),
+        Cause::Cm => {
+            let other = if run.ctrl.mode() == Mode::Joint {
+                Mode::Cartesian
+            } else {
+                Mode::Joint
+            };
+            run.ctrl.set_mode(other).unwrap();
+        }
+        Cause::Of => run.ctrl.stop(StopCause::PowerOff),
+        Cause::Boundary | Cause::Timeout => {}
+    }
+}
+
+/// The cruise length of a Cartesian line along one axis: twice the distance to reach cruise.
+fn cruise_length(config: &ValidRobot) -> f64 {
+    let c = &config.config().cartesian;
+    (3.0 * c.max_velocity[0] * c.max_velocity[0] / c.max_acceleration[0]).clamp(0.06, 0.3)
+}
+
+struct Figures {
+    accel: f64,
+    jerk: Option<f64>,
+    time: f64,
+    distance: f64,
+    deviation: Option<f64>,
+    note: &'static str,
+}
+
+fn measure(
+    run: &Run,
+    from: usize,
+    line: Option<(Vector3<f64>, Vector3<f64>)>,
+    boxed: Option<[f64; 6]>,
+) -> Figures {
+    let dt = run.config.control_period;
+    let joints = &run.config.config().joints;
+    let c = &run.commands;
+    let vel = |k: usize| -> Vec<f64> {
+        (0..c[k].len())
+            .map(|j| (c[k][j] - c[k - 1][j]) / dt)
+            .collect()
+    };
+    let acc = |k: usize| -> Vec<f64> {
+        let (v1, v0) = (vel(k), vel(k - 1));
+        v1.iter().zip(&v0).map(|(a, b)| (a - b) / dt).collect()
+    };
+    let (mut accel, mut jerk) = (0.0f64, 0.0f64);
+    let mut rest = c.len() - 1;
+    for k in from.max(3)..c.len() {
+        let a = acc(k);
+        let a0 = acc(k - 1);
+        for j in 0..a.len() {
+            accel = accel.max(a[j].abs() / joints[j].max_acceleration);
+            if let Some(jm) = joints[j].max_jerk {
+                jerk = jerk.max((a[j] - a0[j]).abs() / dt / jm);
+            }
+        }
+    }
+    for k in (from.max(2)..c.len()).rev() {
+        if vel(k).iter().any(|v| v.abs() > 1e-9) {
+            rest = k;
+            break;
+        }
+        rest = k;
+    }
+    let mut distance = 0.0;
+    let mut deviation = 0.0f64;
+    for k in from.max(1)..=rest.min(c.len() - 1) {
+        let (p0, p1) = (run.pose(&c[k - 1]), run.pose(&c[k]));
+        distance += (p1 - p0).norm();
+        if let Some((origin, dir)) = line {
+            let d = p1 - origin;
+            deviation = deviation.max((d - dir * d.dot(&dir)).norm());
+        }
+    }
+    // Any tick's tool position strictly inside the box put across the way.
+    let inside = boxed.is_some_and(|[x0, x1, y0, y1, z0, z1]| {
+        c.iter().any(|q| {
+            let p = run.pose(q);
+            x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
+        })
+    });
+    Figures {
+        accel,
+        jerk: joints.iter().any(|j| j.max_jerk.is_some()).then_some(jerk),
+        time: (rest.saturating_sub(from)) as f64 * dt,
+        distance,
+        deviation: line.map(|_| deviation),
+        note: if inside { "entered box" } else { "" },
+    }
+}
+
+/// A planned motion run to its end: whether the tool entered the box across its way.
+fn run_through(run: &mut Run, config: &ValidRobot) -> Figures {
+    settle(run);
+    measure(
+        run,
+        0,
+        None,
+        config.config().workspace.boxes.first().copied(),
+    )
+}
+
+/// A box 2 cm deep across the way ahead of `p`, in direction `dir`, `ahead` metres away.
+fn box_ahead(p: &Vector3<f64>, dir: &Vector3<f64>, ahead: f64) -> [f64; 6] {
+    let c = p + dir * (ahead + 0.01);
+    let half = |i: usize| if dir[i].abs() > 0.5 { 0.01 } else { 0.2 };
+    [
+        c.x - half(0),
+        c.x + half(0),
+        c.y - half(1),
+        c.y + half(1),
+        c.z - half(2),
+        c.z + half(2),
+    ]
+}
+
+fn with_box(config: &ValidRobot, bx: [f64; 6]) -> ValidRobot {
+    config
+        .clone()
+        .edit(|c| {
+            c.workspace.boxes.clear();
+            c.workspace.boxes.push(bx).unwrap();
+        })
+        .unwrap()
+}
+
+fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures> {
+    let q0 = start_pose(config);
+    let dt = config.control_period;
+    if cause == Cause::Timeout && !matches!(motion, Motion::Twist | Motion::JointRates) {
+        return None;
+    }
+    let probe = Run::new(config, &q0);
+    let p0 = probe.pose(&q0);
+    match motion {
+        Motion::JointMove => {
+            let chain = probe.ctrl.chain();
+            let mut goal = q0;
+            for (i, g) in goal.iter_mut().enumerate() {
+                let room = if i % 2 == 0 {
+                    chain.max()[i] - *g
+                } else {
+                    *g - chain.min()[i]
+                };
+                *g += if i % 2 == 0 { 1.0 } else { -1.0 } * (0.5 * room).min(0.6);
+            }
+            let config = if cause == Cause::Boundary {
+                let p1 = probe.pose(&goal);
+                let dir = (p1 - p0).normalize();
+                // Across the tool's way, 3/4 of the straight distance ahead.
+                with_box(config, box_ahead(&p0, &dir, 0.75 * (p1 - p0).norm() - 0.01))
+            } else {
+                config.clone()
+            };
+            let mut run = Run::new(&config, &q0);
+            run.ctrl.set_mode(Mode::Joint).unwrap();
+            let Ok(duration) = run.ctrl.move_joints(&goal, 0.0) else {
+                return Some(refused());
+            };
+            if cause == Cause::Boundary {
+                return Some(run_through(&mut run, &config));
+            }
+            let ticks = (0.5 * duration / dt) as usize;
+            for _ in 0..ticks {
+                run.tick();
+            }
+            let from = run.commands.len();
+            stop_now(&mut run, cause);
+            settle(&mut run);
+            Some(measure(&run, from, None, None))
+        }
+        Motion::Line | Motion::Blended => {
+            let length = cruise_length(config);
+            let mut run = Run::new(config, &q0);
+            run.ctrl.set_mode(Mode::Cartesian).unwrap();
+            let (goal, dir) = line_goal(&mut run, length)?;
+            let origin = run.ctrl.cartesian_setpoint().translation.vector;
+            let config = if cause == Cause::Boundary {
+                with_box(
+                    config,
+                    box_ahead(
+                        &origin,
+                        &dir,
+                        0.75 * (goal.translation.vector - origin).norm(),
+                    ),
+                )
+            } else {
+                config.clone()
+            };
+            let q_start = *run.commands.last().unwrap_or(&q0);
+            let mut run = Run::new(&config, &q_start);
+            run.ctrl.set_mode(Mode::Cartesian).unwrap();
+            let c = &config.config().cartesian;
+            let v = c.max_velocity[0]
+                .min(c.max_velocity[1])
+                .min(c.max_velocity[2]);
+            let a = c.max_acceleration[0]
+                .min(c.max_acceleration[1])
+                .min(c.max_acceleration[2]);
+            let leg = (goal.translation.vector - origin).norm();
+            let duration = if motion == Motion::Line {
+                match run.ctrl.move_cartesian(goal, 0.0) {
+                    Ok(d) => d,
+                    Err(_) => return Some(refused()),
+                }
+            } else {
+                // Two legs with a corner blended within 1 cm: along the line, then sideways.
+                let side = if dir.z.abs() > 0.5 {
+                    Vector3::x()
+                } else {
+                    Vector3::z()
+                };
+                let mut corner = goal;
+                corner.translation.vector = origin + dir * leg;
+                let mut end = corner;
+                end.translation.vector += side * 0.5 * leg;
+                run.ctrl.set_cartesian_via(0, corner, 0.0).ok()?;
+                run.ctrl.set_cartesian_via(1, end, 0.0).ok()?;
+                run.ctrl.set_cartesian_blend(0, Some(0.01)).unwrap();
+                if run.ctrl.start_cartesian_sequence().is_err() {
+                    return Some(refused());
+                }
+                // The stop comes in the blend, near the corner.
+                2.0 * (leg / v + v / a)
+            };
+            if cause == Cause::Boundary {
+                return Some(run_through(&mut run, &config));
+            }
+            for _ in 0..(0.5 * duration / dt) as usize {
+                run.tick();
+            }
+            let from = run.commands.len();
+            stop_now(&mut run, cause);
+            settle(&mut run);
+            let line = (motion == Motion::Line).then_some((origin, dir));
+            Some(measure(&run, from, line, None))
+        }
+        Motion::Twist | Motion::JointRates => {
+            let mut run = Run::new(config, &q0);
+            let c = &config.config().cartesian;
+            let (mode, dir) = if motion == Motion::Twist {
+                run.ctrl.set_mode(Mode::Cartesian).unwrap();
+                let (_, dir) = line_goal(&mut run, cruise_length(config))?;
+                (Mode::Cartesian, dir)
+            } else {
+                (Mode::Joint, Vector3::x())
+            };
+            let chain = run.ctrl.chain().clone();
+            let q_start = *run.commands.last().unwrap_or(&q0);
+            let speed = 0.8
+                * c.max_velocity[0]
+                    .min(c.max_velocity[1])
+                    .min(c.max_velocity[2]);
+            let rates: Joints = {
+                let mut r = q_start;
+                for (i, v) in r.iter_mut().enumerate() {
+                    let j = &config.config().joints[i];
+                    let up = chain.max()[i] - q_start[i] > q_start[i] - chain.min()[i];
+                    *v = 0.8 * j.max_velocity.min(j.max_rate) * if up { 1.0 } else { -1.0 };
+                }
+                r
+            };
+            // Cruise for 2 s or the time to reach it, whichever is longer.
+            let accel_time = config
+                .config()
+                .joints
+                .iter()
+                .map(|j| j.max_velocity.min(j.max_rate) / j.max_acceleration)
+                .fold(speed / c.max_acceleration[0], f64::max);
+            let cruise_ticks = ((accel_time + 1.0) / dt) as usize;
+            let config = if cause == Cause::Boundary {
+                // Ahead of the tool where it will be at the end of the cruise, plus 2 cm.
+                let mut probe = Run::new(config, &q_start);
+                probe.ctrl.set_mode(mode).unwrap();
+                for _ in 0..cruise_ticks {
+                    send(&mut probe, motion, speed, &dir, &rates);
+                    probe.tick();
+                }
+                let p1 = probe.pose(probe.commands.last().unwrap());
+                let p_start = probe.pose(&q_start);
+                let way = (p1 - p_start).normalize();
+                with_box(config, box_ahead(&p1, &way, 0.02))
+            } else {
+                config.clone()
+            };
+            let mut run = Run::new(&config, &q_start);
+            run.ctrl.set_mode(mode).unwrap();
+            let origin = run.pose(&q_start);
+            for _ in 0..cruise_ticks {
+                send(&mut run, motion, speed, &dir, &rates);
+                run.tick();
+            }
+            let from = run.commands.len();
+            if cause == Cause::Boundary {
+                for _ in 0..MAX_TICKS / 4 {
+                    send(&mut run, motion, speed, &dir, &rates);
+                    run.tick();
+                }
+                run.ctrl.stop(StopCause::Stop);
+                settle(&mut run);
+                let boxed = config.config().workspace.boxes.first().copied();
+                let line = (motion == Motion::Twist).then_some((origin, dir));
+                return Some(measure(&run, from, line, boxed));
+            }
+            stop_now(&mut run, cause);
+            settle(&mut run);
+            let line = (motion == Motion::Twist).then_some((origin, dir));
+            Some(measure(&run, from, line, None))
+        }
+    }
+}
+
+fn send(run: &mut Run, motion: Motion, speed: f64, dir: &Vector3<f64>, rates: &Joints) {
+    if motion == Motion::Twist {
+        let v = dir * speed;
+        let twist = Twist::new(v.x, v.y, v.z, 0.0, 0.0, 0.0);
+        let _ = run.ctrl.stream_twist(twist, TwistFrame::Base);
+    } else {
+        let _ = run.ctrl.stream_joint_rates(rates);
+    }
+}
+
+fn refused() -> Figures {
+    Figures {
+        accel: 0.0,
+        jerk: None,
+        time: 0.0,
+        distance: 0.0,
+        deviation: None,
+        note: "refused",
+    }
+}
+
+fn main() {
+    let dir = format!("{}/../robots", env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    println!(
+        "| robot | motion | cause | accel/max | jerk/max | stop s | dist mm | dev mm | note |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut worst = 0.0f64;
+    for path in files {
+        let config = load_file(&path).unwrap();
+        let name = config.config().name.clone();
+        for motion in MOTIONS {
+            for cause in CAUSES {
+                let Some(f) = run_case(&config, motion, cause) else {
+                    continue;
+                };
+                worst = worst.max(f.accel);
+                let opt = |v: Option<f64>, scale: f64| {
+                    v.map_or("-".to_string(), |v| format!("{:.3}", v * scale))
+                };
+                println!(
+                    "| {name} | {motion:?} | {cause:?} | {:.2} | {} | {:.2} | {:.1} | {} | {} |",
+                    f.accel,
+                    opt(f.jerk, 1.0),
+                    f.time,
+                    f.distance * 1e3,
+                    opt(f.deviation, 1e3),
+                    f.note,
+                );
+            }
+        }
+    }
+    println!("\nworst accel/max over every case: {worst:.2}");
+}

@@ -1,0 +1,240 @@
+//! The motion supervisor: the end of the pipeline, which owns every transition to rest.
+//!
+//! Every stop — `ST`, a mode change or `OF` while moving, the workspace, IK divergence — goes
+//! through [`Supervisor::begin`] and then one [`Brake`] per tick until the arm is at rest:
+//!
+//! * **along the path** while the generator can still be followed: its motion time advances
+//!   by `scale × period`, the scale falling within the joints' acceleration (and jerk) limits
+//!   and, for Cartesian motions, the Cartesian ones, so the tool stays on its line or shape;
+//! * **in joint space** otherwise (a mode change, IK divergence, a stream): the last
+//!   commanded joint velocity is scaled down to zero, every joint by the same fraction.
+//!
+//! The supervisor also remembers the last commanded joint velocity, which the joint limiter
+//! needs for its acceleration clamp, the last clamp before the drives.
+
+use super::brake::Brake;
+use crate::config::ValidRobot;
+use crate::kinematics::Joints;
+use armgate_protocol::client::Hold;
+pub use armgate_protocol::client::StopCause;
+
+/// How a stop in progress brings the arm to rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Along {
+    /// The running generator's path: its motion time is scaled down.
+    Path,
+    /// The joint velocity at the start of the stop, scaled down.
+    Joints(Joints),
+}
+
+/// A stop in progress.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stopping {
+    /// Why.
+    pub cause: StopCause,
+    /// How.
+    pub along: Along,
+    /// The speed scale.
+    pub brake: Brake,
+}
+
+/// Stops and the memory of the commanded velocity.
+#[derive(Clone, Debug)]
+pub struct Supervisor {
+    /// The last commanded joint velocity (zero while nothing is commanded).
+    velocity: Joints,
+    a_max: Joints,
+    j_max: Option<Joints>,
+    /// Joint ranges.
+    min: Joints,
+    max: Joints,
+    period: f64,
+    stopping: Option<Stopping>,
+    /// The cause in force: the last stop's, until the next motion starts.
+    cause: Option<StopCause>,
+    /// The joint (0-based) a stream holds at its limit.
+    held_joint: Option<u8>,
+    /// The cause in force is a stream's hold: it ends with the hold.
+    holding: bool,
+}
+
+impl Supervisor {
+    /// The supervisor of a robot, at rest.
+    pub fn new(config: &ValidRobot) -> Self {
+        Self {
+            velocity: Joints::zeros(config.dof()),
+            a_max: config.per_joint(|j| j.max_acceleration),
+            j_max: config.joint_jerk_limits(),
+            min: config.per_joint(|j| j.min),
+            max: config.per_joint(|j| j.max),
+            period: config.control_period,
+            stopping: None,
+            cause: None,
+            held_joint: None,
+            holding: false,
+        }
+    }
+
+    /// Starts a stop (a stop already under way keeps its way and takes the new cause only if
+    /// it has none of its own to report: the first cause is the one that matters).
+    pub fn begin(&mut self, cause: StopCause, along: Along) {
+        if self.stopping.is_none() {
+            self.stopping = Some(Stopping {
+                cause,
+                along,
+                brake: Brake::default(),
+            });
+        }
+        self.cause = Some(self.stopping.as_ref().map_or(cause, |s| s.cause));
+        self.held_joint = None;
+        self.holding = false;
+    }
+
+    /// A stop along the path that cannot follow it any more goes on in joint space, from the
+    /// velocity commanded last.
+    pub fn leave_path(&mut self) {
+        let velocity = self.velocity;
+        if let Some(stop) = &mut self.stopping {
+            stop.along = Along::Joints(velocity);
+            stop.brake = Brake::default();
+        }
+    }
+
+    /// The stop in progress, if any.
+    pub fn stopping(&self) -> Option<&Stopping> {
+        self.stopping.as_ref()
+    }
+
+    /// True while a stop is in progress.
+    pub fn is_stopping(&self) -> bool {
+        self.stopping.is_some()
+    }
+
+    /// The stop in progress, to advance its brake.
+    pub fn stopping_mut(&mut self) -> Option<&mut Stopping> {
+        self.stopping.as_mut()
+    }
+
+    /// The stop has brought the arm to rest.
+    pub fn finish(&mut self) {
+        self.stopping = None;
+    }
+
+    /// Clears the cause in force: a new motion starts.
+    pub fn clear_cause(&mut self) {
+        if self.stopping.is_none() {
+            self.cause = None;
+            self.held_joint = None;
+        }
+    }
+
+    /// Takes note of a stream's hold this tick (or none): the cause in force while it lasts.
+    pub fn hold(&mut self, hold: Option<Hold>) {
+        if self.stopping.is_some() || (hold.is_none() && !self.holding) {
+            return;
+        }
+        (self.cause, self.held_joint) = match hold {
+            Some(Hold::JointLimit(bound)) => {
+                (Some(StopCause::JointLimit), bound.joint.checked_sub(1))
+            }
+            Some(Hold::Workspace) => (Some(StopCause::Workspace), None),
+            None => (None, None),
+        };
+        self.holding = hold.is_some();
+    }
+
+    /// The cause in force.
+    pub fn cause(&self) -> Option<StopCause> {
+        self.cause
+    }
+
+    /// The joint (0-based) a stream holds at its limit.
+    pub fn held_joint(&self) -> Option<u8> {
+        self.held_joint
+    }
+
+    /// Forgets the velocity and any stop: nothing is commanded (mode off, drives not taking
+    /// set-points), so the next command starts from rest.
+    pub fn reset(&mut self) {
+        self.velocity.fill(0.0);
+        self.stopping = None;
+    }
+
+    /// Takes note of the command sent this tick after `previous`.
+    pub fn observe(&mut self, command: &Joints, previous: &Joints) {
+        let period = self.period;
+        for ((v, c), p) in self
+            .velocity
+            .iter_mut()
+            .zip(command.iter())
+            .zip(previous.iter())
+        {
+            *v = (c - p) / period;
+        }
+    }
+
+    /// The last commanded joint velocity.
+    pub fn velocity(&self) -> &Joints {
+        &self.velocity
+    }
+
+    /// Eases a joint-space stop's next velocity `v` (from the command `q`) where a joint
+    /// decelerating by the common fraction would not stop before its limit: that joint brakes
+    /// at its own acceleration limit instead, so the range clamp never has to stop it dead.
+    /// The direction of motion gives way; in joint space there is no path to keep.
+    pub fn keep_within_range(&self, q: &Joints, v: &mut Joints) {
+        let t = self.period;
+        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        let state = q.iter().zip(self.velocity.iter());
+        for ((v, (q, last)), ((lo, hi), a)) in v.iter_mut().zip(state).zip(limits) {
+            let left = if *v > 0.0 { hi - q } else { q - lo } - libm::fabs(*v) * t;
+            if *v * *v > 2.0 * a * left.max(0.0) {
+                let slower = (libm::fabs(*last) - a * t).max(0.0);
+                *v = libm::copysign(slower.min(libm::fabs(*v)), *v);
+            }
+        }
+    }
+
+    /// True if every joint, stepping from `q` to `next` this tick, can still stop before its
+    /// range at its acceleration limit: a set-point that could not would end on the range
+    /// clamp, a dead stop.
+    pub fn can_stop_within_range(&self, q: &Joints, next: &Joints) -> bool {
+        let t = self.period;
+        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        q.iter()
+            .zip(next.iter())
+            .zip(limits)
+            .all(|((q, n), ((lo, hi), a))| {
+                let v = (n - q) / t;
+                let left = if v > 0.0 { hi - n } else { n - lo };
+                v * v <= 2.0 * a * left.max(0.0) + 1e-12
+            })
+    }
+
+    /// The brake's budgets for a joint velocity `nominal` at scale 1: the largest fall of the
+    /// scale per tick within every joint's acceleration limit, and the largest change of that
+    /// fall within the jerk limits (infinite without them).
+    pub fn joint_budget(&self, nominal: &Joints) -> (f64, f64) {
+        let t = self.period;
+        let rate = budget(nominal, &self.a_max, t);
+        let change = self
+            .j_max
+            .map_or(f64::INFINITY, |j| budget(nominal, &j, t * t));
+        (rate, change)
+    }
+}
+
+/// `min_k limit_k · t / |v_k|`: how far a scale of `v` may change in a tick (∞ at rest).
+pub fn budget(v: &[f64], limit: &[f64], t: f64) -> f64 {
+    v.iter()
+        .zip(limit)
+        .map(|(v, l)| {
+            let speed = libm::fabs(*v);
+            if speed > 0.0 {
+                l * t / speed
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}

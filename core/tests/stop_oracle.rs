@@ -1,0 +1,175 @@
+//! The supervisor's oracle: on every tick of seeded random request sequences, the commanded
+//! joint acceleration is within `max_acceleration` (+1e-9 relative), and the tool never gets
+//! strictly inside an exclusion box it was not already in.
+#![allow(
+    clippy::approx_constant,
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::indexing_slicing
+)]
+
+mod common;
+
+use armgate_core::config::ValidRobot;
+use armgate_core::kinematics::Joints;
+use armgate_core::math::{Frame, Twist, Vector3};
+use armgate_core::motion::{Controller, Mode, StopCause};
+use armgate_core::rng::SplitMix64;
+use armgate_core::sim::IdealArm;
+use armgate_protocol::client::TwistFrame;
+
+/// Checks every tick's command against the previous two.
+struct Oracle {
+    config: ValidRobot,
+    last: Vec<Joints>,
+    inside: Vec<bool>,
+    ticks: usize,
+}
+
+impl Oracle {
+    fn boxes_holding(&self, p: &Vector3<f64>) -> Vec<bool> {
+        self.config
+            .workspace
+            .boxes
+            .iter()
+            .map(|&[x0, x1, y0, y1, z0, z1]| {
+                x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
+            })
+            .collect()
+    }
+
+    fn check(&mut self, ctrl: &Controller, command: Option<Joints>) {
+        self.ticks += 1;
+        let Some(q) = command else {
+            self.last.clear();
+            return;
+        };
+        let dt = self.config.control_period;
+        if let [a, b] = self.last[..] {
+            for j in 0..q.len() {
+                let acc = (q[j] - 2.0 * b[j] + a[j]) / (dt * dt);
+                let limit = self.config.joints[j].max_acceleration;
+                assert!(
+                    acc.abs() <= limit * (1.0 + 1e-9),
+                    "tick {}: joint {j} at {acc} rad/s² (limit {limit})",
+                    self.ticks
+                );
+            }
+        }
+        self.last.push(q);
+        if self.last.len() > 2 {
+            self.last.remove(0);
+        }
+        let p = ctrl.chain().forward(&q).unwrap().translation.vector;
+        let now = self.boxes_holding(&p);
+        for (k, (was, is)) in self.inside.iter().zip(&now).enumerate() {
+            assert!(
+                !is || *was,
+                "tick {}: the tool entered box {k} at {p:?}",
+                self.ticks
+            );
+        }
+        self.inside = now;
+    }
+}
+
+fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
+    let mut ctrl = Controller::new(&config);
+    let mut arm = IdealArm::new(Joints::from_slice(start).unwrap());
+    let mut rng = SplitMix64::new(seed);
+    let chain = ctrl.chain().clone();
+    let p0 = chain.forward(&arm.measured()).unwrap().translation.vector;
+    let mut oracle = Oracle {
+        inside: Vec::new(),
+        last: Vec::new(),
+        ticks: 0,
+        config: config.clone(),
+    };
+    oracle.inside = oracle.boxes_holding(&p0);
+    let dt = config.control_period;
+    let mut now = 0.0;
+    let mut step = |ctrl: &mut Controller, arm: &mut IdealArm, oracle: &mut Oracle| {
+        now += dt;
+        let out = ctrl.step(now, &arm.measured()).unwrap();
+        oracle.check(ctrl, out.command);
+        arm.step(out.command.as_ref());
+    };
+    step(&mut ctrl, &mut arm, &mut oracle);
+    let c = &config.cartesian;
+    for _ in 0..requests {
+        match rng.next_u64() % 9 {
+            0 => {
+                let mode = [Mode::Off, Mode::Joint, Mode::Cartesian][(rng.next_u64() % 3) as usize];
+                let _ = ctrl.set_mode(mode);
+            }
+            1 | 2 => {
+                let q = arm.measured();
+                let mut goal = q;
+                for (j, g) in goal.iter_mut().enumerate() {
+                    let (lo, hi) = (chain.min()[j], chain.max()[j]);
+                    *g = (*g + rng.uniform(-0.5, 0.5)).clamp(lo, hi);
+                }
+                let _ = ctrl.move_joints(&goal, 0.0);
+            }
+            3 | 4 => {
+                let pose = chain.forward(&arm.measured()).unwrap();
+                let offset = Vector3::new(
+                    rng.uniform(-0.15, 0.15),
+                    rng.uniform(-0.15, 0.15),
+                    rng.uniform(-0.15, 0.15),
+                );
+                let goal =
+                    Frame::from_parts((pose.translation.vector + offset).into(), pose.rotation);
+                let _ = ctrl.move_cartesian(goal, 0.0);
+            }
+            5 => {
+                let mut v = |k: usize| rng.uniform(-1.0, 1.0) * c.max_velocity[k];
+                let twist = Twist::new(v(0), v(1), v(2), 0.0, 0.0, 0.0);
+                for _ in 0..(rng.next_u64() % 60) {
+                    let _ = ctrl.stream_twist(twist, TwistFrame::Base);
+                    step(&mut ctrl, &mut arm, &mut oracle);
+                }
+            }
+            6 => {
+                let rates: Vec<f64> = config
+                    .joints
+                    .iter()
+                    .map(|j| rng.uniform(-1.0, 1.0) * j.max_velocity.min(j.max_rate))
+                    .collect();
+                for _ in 0..(rng.next_u64() % 60) {
+                    let _ = ctrl.stream_joint_rates(&rates);
+                    step(&mut ctrl, &mut arm, &mut oracle);
+                }
+            }
+            7 => ctrl.stop(StopCause::Stop),
+            _ => ctrl.stop(StopCause::PowerOff),
+        }
+        for _ in 0..(rng.next_u64() % 120) {
+            step(&mut ctrl, &mut arm, &mut oracle);
+        }
+    }
+}
+
+#[test]
+fn random_requests_never_exceed_the_acceleration_or_enter_a_box() {
+    // ranger-mk1 with a box in front of the ready pose's tool, besides its column.
+    const READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+    let ranger = common::robot("ranger-mk1")
+        .edit(|c| {
+            c.cartesian.max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3];
+            c.cartesian.max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5];
+            c.workspace
+                .boxes
+                .push([-0.15, 0.05, 0.85, 0.95, 1.1, 1.4])
+                .unwrap();
+        })
+        .unwrap();
+    for seed in 0..6 {
+        run(ranger.clone(), &READY, seed, 60);
+    }
+    let ur5 = common::robot("ur5");
+    let mid = Controller::new(&ur5).chain().mid_range();
+    for seed in 0..3 {
+        run(ur5.clone(), &mid, 100 + seed, 60);
+    }
+}

@@ -1,0 +1,105 @@
+//! Why the arm stopped or holds: what `SQ` index 2 reports (docs/protocol.md).
+
+use super::{Command, Reply};
+
+/// `SQ` index of the stop or hold cause in force.
+pub const CAUSE_INDEX: u8 = 2;
+
+/// Why the controller brought the arm to rest, or holds it where a command would drive it on.
+/// The code is `QS` index 2's f0; [`joint`](CauseReport::joint) names the joint of a limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StopCause {
+    /// `ST` or `jR`.
+    Stop = 1,
+    /// `CM` while moving: the arm decelerates, then the new mode holds.
+    ModeChange = 2,
+    /// `OF` while moving: the arm decelerates, then the drives stop.
+    PowerOff = 3,
+    /// The tool would leave the workspace or enter an exclusion box (`ER21`).
+    Workspace = 4,
+    /// The tracking IK lost the Cartesian set-point (`WN22`).
+    IkDivergence = 5,
+    /// A velocity stream's command timed out.
+    StreamTimeout = 6,
+    /// A stream holds a joint at the margin before its limit (`WN12 jN at limit`).
+    JointLimit = 7,
+    /// The controlling client was silent for longer than its watchdog (`ER41`).
+    ClientSilent = 8,
+}
+
+impl StopCause {
+    /// Every cause, by code.
+    pub const ALL: [Self; 8] = [
+        Self::Stop,
+        Self::ModeChange,
+        Self::PowerOff,
+        Self::Workspace,
+        Self::IkDivergence,
+        Self::StreamTimeout,
+        Self::JointLimit,
+        Self::ClientSilent,
+    ];
+
+    /// The cause with this code.
+    pub fn from_code(code: u8) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| *c as u8 == code)
+    }
+}
+
+/// The `QS` reply to `SQ` index 2: the cause in force (f0, 0 for none) and, for a joint limit,
+/// the joint (f1, 1-based; 0 otherwise).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CauseReport {
+    /// The cause in force: the last stop's until the next motion starts, or a stream's hold.
+    pub cause: Option<StopCause>,
+    /// The joint a [`StopCause::JointLimit`] holds (0-based).
+    pub joint: Option<u8>,
+}
+
+impl CauseReport {
+    /// The reply, index 2.
+    pub fn to_reply(&self) -> Reply {
+        let code = self.cause.map_or(0, |c| c as u8);
+        let joint = self.joint.map_or(0, |j| j.saturating_add(1));
+        Reply {
+            command: Command::Status,
+            values: [f32::from(code), f32::from(joint), 0.0, 0.0, 0.0, 0.0, 0.0],
+            index: CAUSE_INDEX,
+        }
+    }
+
+    /// Decodes a `QS` index-2 reply (on the client side); `None` if it is not one.
+    pub fn from_reply(reply: &Reply) -> Option<Self> {
+        if reply.command != Command::Status || reply.index != CAUSE_INDEX {
+            return None;
+        }
+        let [code, joint, ..] = reply.values;
+        let (code, joint) = (code as u8, joint as u8);
+        Some(Self {
+            cause: StopCause::from_code(code),
+            joint: joint.checked_sub(1),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reports_round_trip() {
+        let report = CauseReport {
+            cause: Some(StopCause::JointLimit),
+            joint: Some(5),
+        };
+        let reply = report.to_reply();
+        assert_eq!(reply.values[..2], [7.0, 6.0]);
+        assert_eq!(CauseReport::from_reply(&reply), Some(report));
+        let none = CauseReport {
+            cause: None,
+            joint: None,
+        };
+        assert_eq!(CauseReport::from_reply(&none.to_reply()), Some(none));
+    }
+}
