@@ -7,9 +7,8 @@ use core::net::{Ipv4Addr, SocketAddr};
 
 use armgate_protocol::client::{
     BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
-    Message, Motion, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request, RobotName,
-    SESSION_INDEX,
-    STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
+    Message, Motion, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request,
+    RobotName, SESSION_INDEX, STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
 };
 
 use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
@@ -128,10 +127,8 @@ impl CommandHandler {
     ) -> Result<StepOutput, KinematicsError> {
         let faulted = drives.has_fault();
         self.now = now;
-        if !matches!(
-            self.controller.motion(),
-            Motion::Holding | Motion::Stopping
-        ) && let Some(ms) = self.session.silent(now)
+        if !matches!(self.controller.motion(), Motion::Holding | Motion::Stopping)
+            && let Some(ms) = self.session.silent(now)
         {
             self.stop(StopCause::ClientSilent);
             self.relay.announce(Notice::ClientSilent(ms).text());
