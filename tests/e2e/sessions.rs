@@ -283,6 +283,12 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
     assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
     assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
     assert_eq!(session(&sim.socket)[0], 1.0);
+    // The arm decelerates (SQ f4 = 6) and then holds (0).
+    let start = Instant::now();
+    while status(&sim)[4] != 0.0 {
+        assert!(start.elapsed() < Duration::from_secs(5), "the arm came to rest");
+        std::thread::sleep(Duration::from_millis(20));
+    }
     // At rest, B takes control with its next command request.
     match ask(&b, "CM", [2.0, 0., 0., 0., 0., 0., 0.], 0) {
         Answer::Reply(c, v, 0) if &c == b"MC" => assert_eq!(v[0], 2.0),
