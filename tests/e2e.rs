@@ -1100,7 +1100,10 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     // The same datagram again within a second is a resend (its reply lost): answered again,
     // not carried out twice. Another BG datagram is a new request, refused while the arm moves.
     sim.null("BG");
-    assert_eq!(sim.text("BG", [1.0, 0., 0., 0., 0., 0., 0.], 0), "ER20 Cmd BG busy");
+    assert_eq!(
+        sim.text("BG", [1.0, 0., 0., 0., 0., 0., 0.], 0),
+        "ER20 Cmd BG busy"
+    );
 }
 
 #[test]

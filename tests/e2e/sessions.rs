@@ -286,7 +286,10 @@ fn one_client_commands_the_moving_arm_and_any_client_stops_it() {
     // The arm decelerates (SQ f4 = 6) and then holds (0).
     let start = Instant::now();
     while status(&sim)[4] != 0.0 {
-        assert!(start.elapsed() < Duration::from_secs(5), "the arm came to rest");
+        assert!(
+            start.elapsed() < Duration::from_secs(5),
+            "the arm came to rest"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     // At rest, B takes control with its next command request.
