@@ -17,6 +17,9 @@
 //!    word written gives the stack the control work needs.
 //! 4. **Signing** ([`signing`]): one signature check and one signing on their own, and the
 //!    tick that carries a signed `PS` (checked, answered signed) with a key set.
+//! 5. **Planning burst** ([`planning`]): eight planning requests to unreachable goals in one
+//!    tick, served one a tick; the worst of those ticks, also as a share of the control period
+//!    at 480 MHz ([`BOARD_HZ`], one instruction a cycle assumed).
 
 use core::f64::consts::FRAC_PI_2;
 
@@ -33,6 +36,7 @@ use cortex_m_semihosting::hprintln;
 use crate::counter::{Counter, Timing, measure};
 use crate::stack;
 
+mod planning;
 mod signing;
 mod twist;
 
@@ -63,6 +67,8 @@ const HOLD_TICKS: u32 = 50;
 const POSE_REQUESTS: u32 = 20;
 /// Ticks the drives may take to start (12 with drives already in position mode).
 const START_TICKS: u32 = 100;
+/// The board's core clock (STM32H743), for the planning burst's share of the period.
+const BOARD_HZ: f64 = 480e6;
 /// Stack painted below the caller for the high-water mark (bytes).
 const STACK_DEPTH: usize = 32 * 1024;
 
@@ -311,6 +317,7 @@ fn measure_robot(
     };
     let stack_used = stack_high_water(config, start)?;
     let signing = signing::costs(config, Some(start))?;
+    let burst = planning::burst_ticks(&mut Session::new(config, Some(start))?)?;
 
     let row = |part: &str, timing: &Timing, how: &str| {
         let (mean, max) = timing.instructions(counter);
@@ -395,6 +402,18 @@ fn measure_robot(
         "tick with signed PS, holding (key set)",
         &signing.pose,
         "window per tick",
+    );
+    row(
+        "ticks serving 8 plans to unreachable goals",
+        &burst,
+        "window per tick",
+    );
+    hprintln!(
+        "{}: worst tick serving the planning burst: {:.0} instructions = {:.1} % of the {:.2} ms period at 480 MHz (1 instruction a cycle assumed; goal <= 50 %)",
+        name,
+        burst.instructions(counter).1,
+        100.0 * burst.instructions(counter).1 / (config.control_period * BOARD_HZ),
+        config.control_period * 1e3
     );
     hprintln!(
         "{}: {} moving ticks ({:.2} s); stack high-water of requests + ticks: {} bytes",
