@@ -1095,6 +1095,8 @@ fn refusals_say_why_at_each_moment_and_sq_reports_the_state() {
     assert!(refused >= 11.0, "refused {refused}");
     sim.null("ON");
     wait_drives(&sim, 2.0);
+    // The README's move (at least 5 s), so that it still runs when asked again.
+    sim.ok("GT", [0.0, 0.2, 0.8, 0.0, 0.0, -1.5708, 5.0], 0);
     sim.start_motion("BG");
     assert_eq!(status(&sim)[4], 2.0, "a Cartesian move runs");
     // Another BG datagram (not a resend of the last one, which would be answered again: see
