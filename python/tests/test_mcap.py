@@ -45,26 +45,35 @@ def mcap_reader():
 
 @pytest.fixture(scope="module")
 def recording(mcap_reader, tmp_path_factory: pytest.TempPathFactory) -> dict:
-    """20 s of ranger-mk1: a Cartesian move, a joint move, a refused request, pose polls;
+    """20 s of ranger-mk1: a Cartesian move (stopped), a joint move, a refused request, pose polls;
     then SIGTERM (the file must be complete all the same)."""
     path = tmp_path_factory.mktemp("mcap") / "run.mcap"
     started = time.monotonic()
     sim = Sim("ranger-mk1", ["--mcap", str(path)])
     sent = 0
     with armgate.Arm("127.0.0.1", port=sim.port, retries=0, timeout=1.0) as arm:
-        def request(chars: str, values=(), index: int = 0) -> None:
+        def request(chars: str, values=(), index: int = 0):
             nonlocal sent
             sent += 1
             try:
-                arm.request(chars, values, index)
+                return arm.request(chars, values, index)
             except armgate.ControllerMessage:
-                pass
+                return None
 
         request("CM", [2])
         request("GT", [0.0, 0.3, 0.8, 0.0, 1.5708, 0.0, 3.0])
         request("BG")
         request("XY")  # unknown: an ER00 reply
         time.sleep(4.0)
+        # The move (30 s at ranger-mk1's speed limits) is stopped; the supervisor brings the
+        # arm to rest along the path (SQ f4 = 0: holding), at most 8 s.
+        request("ST")
+        deadline = time.monotonic() + 8.0
+        while time.monotonic() < deadline:
+            time.sleep(0.25)
+            status = request("SQ")
+            if status is not None and status.values[4] == 0:
+                break
         request("CM", [1])
         request("jG", [1.5708, 0.1, 1.5, 0.0, 1.2, 0.0])
         request("jB")
