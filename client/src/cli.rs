@@ -215,7 +215,7 @@ pub enum Cmd {
     },
     /// Print every inverse-kinematics solution of a pose within the joint limits, each with
     /// its configuration branch (KS; robots with a closed form, docs/kinematics.md).
-    #[command(after_help = "Example: armgate ik 0.5 -0.2 0.4 0 0 -1.5708")]
+    #[command(after_help = "Example: armgate ik 0 0.2 0.8 0 0 -1.5708")]
     Ik {
         /// The pose.
         #[command(flatten)]
@@ -223,7 +223,7 @@ pub enum Cmd {
     },
     /// Move the joints (joint mode) to the inverse kinematics of a pose on a chosen
     /// configuration branch, or the solution nearest the present joints (KG), and wait.
-    #[command(after_help = "Example: armgate ik-move 0.5 -0.2 0.4 0 0 -1.5708 --branch 2")]
+    #[command(after_help = "Example: armgate ik-move 0 0.2 0.8 0 0 -1.5708")]
     IkMove {
         /// The pose.
         #[command(flatten)]
