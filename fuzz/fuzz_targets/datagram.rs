@@ -6,7 +6,7 @@
 //!
 //! * bits 0–1: the control ticks run after the chunk: 0, 1, 8 or 64;
 //! * bit 2 clear: a **datagram** of `h >> 3` bytes (0..=31; fewer if the input ends first),
-//!   queued for the cycle (at most 8 are answered per tick, in order);
+//!   queued for the cycle (at most 8 are answered per tick, one of them planning, in order);
 //! * bit 2 set, bits 3–6 below 15: a **CAN frame** the drive manager receives as if from the
 //!   bus: bits 3–6 are the data length (capped at 8), then two bytes of identifier
 //!   (little-endian, 11 bits), then the data;
@@ -312,8 +312,12 @@ fuzz_target!(|data: &[u8]| {
             tick(&mut cycle, &mut client);
         }
     }
-    // Answer what still waits (8 per tick).
-    for _ in 0..client.waiting.len().div_ceil(8) + 1 {
+    // Answer what still waits: the cycle handles at least one request a tick (more wait for
+    // its planning budget), so one tick per request left, plus one, is enough.
+    for _ in 0..client.waiting.len() + client.unanswered.len() + 1 {
+        if client.waiting.is_empty() && client.unanswered.is_empty() {
+            break;
+        }
         tick(&mut cycle, &mut client);
     }
     assert!(client.unanswered.is_empty(), "requests left unanswered");
