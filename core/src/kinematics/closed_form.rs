@@ -15,7 +15,7 @@ use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
 use super::subproblems::{Angle, sp4};
-use super::{spherical_wrist, three_parallel};
+use super::{spherical_shoulder, spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::Frame;
@@ -80,19 +80,35 @@ pub struct BranchSolution {
 /// Every solution of a closed-form solve.
 pub type Solutions = Vec<BranchSolution, MAX_SOLUTIONS>;
 
-/// A candidate of a family solver: angles of the six joints and the branch.
+/// A candidate of a family solver: angles of the joints (zero past the last) and the branch.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Candidate {
-    pub angles: [Angle; 6],
+    pub angles: [Angle; MAX_JOINTS],
     /// The values of the angles a solver already took (`atan2` once for a root that several
     /// candidates share); NaN where not.
-    pub values: [f64; 6],
+    pub values: [f64; MAX_JOINTS],
     pub branch: Branch,
 }
 
 impl Candidate {
-    /// A candidate of `angles` on `branch`, with the `known` values (NaN: not taken yet).
+    /// A candidate of a six-joint arm's `angles` on `branch`, with the `known` values (NaN:
+    /// not taken yet).
     pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch) -> Self {
+        let zero = Angle { cos: 1.0, sin: 0.0 };
+        let mut all = Self::of_joints([zero; MAX_JOINTS], [0.0; MAX_JOINTS], branch);
+        let slots = all.angles.iter_mut().zip(all.values.iter_mut());
+        for ((a, v), (x, k)) in slots.zip(angles.into_iter().zip(known)) {
+            (*a, *v) = (x, k);
+        }
+        all
+    }
+
+    /// A candidate of every joint's `angles` (and `known` values, NaN where not taken).
+    pub fn of_joints(
+        angles: [Angle; MAX_JOINTS],
+        known: [f64; MAX_JOINTS],
+        branch: Branch,
+    ) -> Self {
         Self {
             angles,
             values: known,
@@ -194,15 +210,40 @@ impl Chain {
             .map(|e| e.solution))
     }
 
-    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors.
+    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors. A redundant chain
+    /// whose parameters have no solution at the reference's values takes the first values of a
+    /// sweep across their ranges that has one.
     pub(super) fn nearest_exact(
         &self,
         target: &Frame,
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference, false)?;
-        let mut near = [Angle::of(0.0); 6];
+        let reference = self.prepare(target, reference)?;
+        if self.family().family != Family::SphericalShoulder {
+            return self.nearest_for(target, &reference, branch);
+        }
+        for k in 0..spherical_shoulder::SWEEP_TRIES {
+            let Some(values) = spherical_shoulder::swept(self, &reference, k) else {
+                break;
+            };
+            if let Some(found) = self.nearest_for(target, &values, branch)? {
+                return Ok(Some(found));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The nearest solution for `reference`'s redundancy parameters.
+    fn nearest_for(
+        &self,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+        branch: Option<Branch>,
+    ) -> Result<Option<Exact>, IkError> {
+        let dof = reference.get(..self.dof()).unwrap_or(&[]);
+        let (form, reference, candidates) = self.candidates(target, dof, false)?;
+        let mut near = [Angle::of(0.0); MAX_JOINTS];
         for (a, r) in near.iter_mut().zip(&reference) {
             *a = Angle::of(*r);
         }
@@ -278,6 +319,10 @@ impl Chain {
             }
             Family::ThreeParallel => {
                 three_parallel::solve(form, target, &reference, nearest, &mut candidates);
+            }
+            Family::SphericalShoulder => {
+                let dof = self.dof();
+                spherical_shoulder::solve(form, dof, target, &reference, nearest, &mut candidates);
             }
             Family::Numeric => {}
         }
