@@ -480,10 +480,22 @@ fn closed_form_requests_list_choose_and_report_branches() {
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!(floats(&sq)[0], f32::from(target_branch));
     // A robot without a closed form: KS answers f6 = −1.
-    let mut iiwa = Rig::new(
-        &common::robot("iiwa14"),
-        &[0.1, 0.5, 0.0, -1.0, 0.0, 0.8, 0.0],
-    );
-    let sk = iiwa.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
+    let mut hybrid = Rig::new(&common::robot("hybrid"), &[0.0; 6]);
+    let sk = hybrid.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
     assert_eq!((floats(&sk)[6], sk[30]), (-1.0, 0xFF));
+    // A redundant arm: the solutions for the present θ3.
+    let present = [0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1];
+    let iiwa_chain = Chain::new(&common::robot("iiwa14"));
+    let mut iiwa = Rig::new(&common::robot("iiwa14"), &present);
+    let pose = iiwa_chain.forward(&present).unwrap();
+    let [r, p, y] = math::rpy(&pose.rotation);
+    let t = pose.translation.vector;
+    let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
+    let sk = iiwa.request("KS", values, 0);
+    assert!(floats(&sk)[6] >= 1.0, "{:?}", floats(&sk));
+    let branch = iiwa_chain.branch_of(&present).unwrap();
+    assert_eq!(
+        floats(&iiwa.request("SQ", [0.0; 7], 5))[0],
+        f32::from(branch.bits())
+    );
 }
