@@ -31,6 +31,10 @@ pub const CHECK: f64 = 1e-9;
 const POLISH_FROM: f64 = 1e-5;
 /// Newton steps that polish a solution of the ideal model on a calibrated chain.
 const POLISH_ITERATIONS: u16 = 20;
+/// Most re-solves of the ideal model that carry a root to a calibrated chain ([`Chain::refine`]).
+const REFINE_STEPS: usize = 4;
+/// A miss (m, rad) below which a carried root is left to Newton's polish.
+const REFINED: f64 = 1e-7;
 
 /// A configuration branch of a closed-form family: which root each of the three two-way
 /// choices took. Bit 0 is the shoulder (the second root of θ1), bit 1 the elbow (of θ3), bit
@@ -101,6 +105,15 @@ impl Candidate {
             (*a, *v) = (x, k);
         }
         all
+    }
+
+    /// The sine and cosine of every angle, as FK by trigonometry takes them.
+    pub fn sin_cos(&self) -> [(f64, f64); MAX_JOINTS] {
+        let mut out = [(0.0, 1.0); MAX_JOINTS];
+        for (sc, a) in out.iter_mut().zip(&self.angles) {
+            *sc = (a.sin, a.cos);
+        }
+        out
     }
 
     /// A candidate of every joint's `angles` (and `known` values, NaN where not taken).
@@ -313,25 +326,84 @@ impl Chain {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         let reference = self.prepare(target, reference)?;
         let mut candidates = Candidates::new();
+        self.family_candidates(form, target, &reference, nearest, &mut candidates);
+        Ok((form, reference, candidates))
+    }
+
+    /// The family solver's candidates for `target`.
+    fn family_candidates(
+        &self,
+        form: &ClosedForm,
+        target: &Frame,
+        free: &[f64; MAX_JOINTS],
+        nearest: bool,
+        out: &mut Candidates,
+    ) {
         match form.fit.family {
-            Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &reference, nearest, &mut candidates);
-            }
-            Family::ThreeParallel => {
-                three_parallel::solve(form, target, &reference, nearest, &mut candidates);
-            }
+            Family::SphericalWrist => spherical_wrist::solve(form, target, free, nearest, out),
+            Family::ThreeParallel => three_parallel::solve(form, target, free, nearest, out),
             Family::SphericalShoulder => {
-                let dof = self.dof();
-                spherical_shoulder::solve(form, dof, target, &reference, nearest, &mut candidates);
+                spherical_shoulder::solve(form, self.dof(), target, free, nearest, out);
             }
             Family::Numeric => {}
         }
-        Ok((form, reference, candidates))
+    }
+
+    /// A chain only near its family: `candidate`, a root of the ideal model, carried towards
+    /// the true chain's root on the same branch. With `D(q)` the true chain's pose relative to
+    /// the ideal model's at `q` (slowly varying: the deviation is small), the true chain
+    /// reaches `target` where the ideal model reaches `target · D(q)⁻¹`; so the ideal model is
+    /// solved again for that corrected target, following the previous root at every choice.
+    /// Each step shrinks the miss about a hundredfold. Unlike Newton steps on the true chain,
+    /// this cannot slide to another branch near a singularity, where the ideal model's wrist
+    /// angles can be ~0.1 rad off the true ones.
+    fn refine(&self, form: &ClosedForm, candidate: &Candidate, target: &Frame) -> Candidate {
+        let mut current = *candidate;
+        let mut ideal = *target;
+        for _ in 0..REFINE_STEPS {
+            let reached = self.pose_by_trig(&current.sin_cos());
+            let (position, rotation) = misses(&reached, target);
+            if position.max(rotation) <= REFINED {
+                break;
+            }
+            ideal = target * reached.inverse() * ideal;
+            let mut free = [0.0; MAX_JOINTS];
+            for (f, a) in free.iter_mut().zip(&current.angles) {
+                *f = a.value();
+            }
+            let mut next = Candidates::new();
+            self.family_candidates(form, &ideal, &free, true, &mut next);
+            let Some(found) = next.first() else {
+                break;
+            };
+            current = Candidate {
+                branch: candidate.branch,
+                ..*found
+            };
+        }
+        current
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
     /// approximate, if it is within the limits and reproduces `target`.
     fn finish(
+        &self,
+        form: &ClosedForm,
+        candidate: &Candidate,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+    ) -> Option<Exact> {
+        if form.fit.is_exact() {
+            return self.verify(form, candidate, target, reference);
+        }
+        // The carried root; failing that, Newton steps from the ideal model's own.
+        let refined = self.refine(form, candidate, target);
+        self.verify(form, &refined, target, reference)
+            .or_else(|| self.verify(form, candidate, target, reference))
+    }
+
+    /// [`finish`](Self::finish) of a candidate as it is.
+    fn verify(
         &self,
         form: &ClosedForm,
         candidate: &Candidate,
@@ -361,12 +433,8 @@ impl Chain {
         if !form.fit.is_exact() {
             q = self.polish(target, &q)?;
         }
-        let mut sin_cos = [(0.0, 1.0); MAX_JOINTS];
-        for (sc, a) in sin_cos.iter_mut().zip(&candidate.angles) {
-            *sc = (a.sin, a.cos);
-        }
         let reached = if form.fit.is_exact() {
-            self.pose_by_trig(&sin_cos)
+            self.pose_by_trig(&candidate.sin_cos())
         } else {
             self.pose(&q)
         };
