@@ -845,7 +845,8 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         }
         Cmd::Ik { pose } => {
             let (xyz, rpy) = pose.xyz_rpy();
-            let Some(solutions) = client.ik_solutions(xyz, rpy)? else {
+            let joints = joint_count(cli, client)?;
+            let Some(solutions) = client.ik_solutions(xyz, rpy, joints)? else {
                 writeln!(out, "no closed-form IK for this robot (docs/kinematics.md)")?;
                 return Ok(());
             };
