@@ -132,13 +132,13 @@ fn main() {
     println!();
     println!("every solution in closed form, {samples} samples per robot, seed {SEED:#x}");
     println!(
-        "| robot              | family           | success% | mean µs   | median µs | p99 µs    | sols   |"
+        "| robot              | family            | success% | mean µs   | median µs | p99 µs    | sols   |"
     );
     println!(
-        "|--------------------|------------------|----------|-----------|-----------|-----------|--------|"
+        "|--------------------|-------------------|----------|-----------|-----------|-----------|--------|"
     );
     for (name, (family, mut stats)) in closed {
-        stats.row(&name, &format!("{:<16}", format!("{family:?}")));
+        stats.row(&name, &format!("{:<17}", format!("{family:?}")));
     }
     println!();
     println!("global IK on unreachable targets, {UNREACHABLE_SAMPLES} samples per robot");

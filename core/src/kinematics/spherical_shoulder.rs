@@ -68,9 +68,8 @@ pub(super) fn solve(
                 a5.map_or(x, |a5| rotate(h5, &a5.negated(), &x))
             };
             let first = if a5.is_some() { 5 } else { 4 };
-            let wrists = wrist_roots(form, first, &back, free, nearest);
-            let (roots, n6) = wrists;
-            for &(wa, wb, wc, bw) in roots.iter().take(n6) {
+            let (wrists, n6) = wrist_roots(form, first, &back, free, nearest);
+            for &(wa, wb, wc, bw) in wrists.iter().take(n6) {
                 let mut angles = [a1, a2, a3, a4, wa, wb, wc, unit];
                 let mut known = [f64::NAN; MAX_JOINTS];
                 known[2] = free[2];
@@ -193,8 +192,8 @@ fn wrist_roots(
     out
 }
 
-/// Steps of a sweep across one redundancy parameter's range: 16 for one parameter, 8 · 8 for
-/// two.
+/// Steps of a sweep across one redundancy parameter's range: 16 for θ3 alone, 8 · 8 for θ3
+/// and θ5.
 const SWEEP: [usize; 2] = [16, 8];
 
 /// How many references [`swept`] gives at most.
@@ -208,19 +207,18 @@ pub(super) fn swept(
     reference: &[f64; MAX_JOINTS],
     k: usize,
 ) -> Option<[f64; MAX_JOINTS]> {
-    let two = chain.dof() == 8;
-    let steps = if two { SWEEP[1] } else { SWEEP[0] };
-    let (first, second) = (k % steps, k / steps);
-    if second >= if two { steps } else { 1 } {
-        return None;
-    }
+    let (parameters, steps): (&[usize], _) = if chain.dof() == 8 {
+        (&[2, 4], SWEEP[1])
+    } else {
+        (&[2], SWEEP[0])
+    };
     let (min, max) = (chain.min(), chain.max());
     let mut out = *reference;
-    for (param, i) in [(2, first), (4, second)]
-        .into_iter()
-        .take(if two { 2 } else { 1 })
-    {
-        let (lo, hi) = (*min.get(param)?, *max.get(param)?);
+    let mut rest = k;
+    for &p in parameters {
+        let i = rest % steps;
+        rest /= steps;
+        let (lo, hi) = (*min.get(p)?, *max.get(p)?);
         let range = (hi - lo).min(core::f64::consts::TAU);
         // 0, +1, −1, +2, −2, …
         let offset = if i % 2 == 1 {
@@ -228,9 +226,8 @@ pub(super) fn swept(
         } else {
             -((i / 2) as f64)
         };
-        let v = out.get(param)? + offset * range / steps as f64;
-        let wrapped = lo + (v - lo) - range * libm::floor((v - lo) / range);
-        *out.get_mut(param)? = wrapped;
+        let v = out.get(p)? + offset * range / steps as f64;
+        *out.get_mut(p)? = v - range * libm::floor((v - lo) / range);
     }
-    Some(out)
+    (rest == 0).then_some(out)
 }
