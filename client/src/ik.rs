@@ -54,7 +54,7 @@ impl Client {
                     values,
                     index: k | BANK_2,
                 })?;
-                q.extend(upper.values[..joints - 6].iter().map(|v| f64::from(*v)));
+                q.extend(upper.values.iter().take(joints - 6).map(|v| f64::from(*v)));
             }
             solutions.push(IkSolution {
                 branch: reply.index,

@@ -161,7 +161,7 @@ fn all_solutions(chain: &Chain, samples: usize) -> (Family, Stats) {
     for _ in 0..samples {
         let q = chain.random_joints(&mut rng);
         let target = chain.forward(&q).unwrap();
-        let mut reference = mid.clone();
+        let mut reference = mid;
         if chain.family().family == Family::SphericalShoulder {
             let parameters: &[usize] = if chain.dof() == 8 { &[2, 4] } else { &[2] };
             for &p in parameters {
