@@ -1,6 +1,8 @@
-//! Closed-form IK of the redundant arms (iiwa14: 7 joints, ranger-mk2: 8): detection, and for
-//! a given value of the redundancy parameters (θ3, and θ5 on eight joints) every solution
-//! exact, within the limits and complete, including round angles and singular configurations.
+//! Closed-form IK of the redundant arms (iiwa14: 7 joints, ranger-mk2: 8) beyond what
+//! `closed_form.rs` checks for every family: the singular configurations of a spherical
+//! shoulder (the arm stretched along axis 1, the elbow stretched, the wrist's axes in line, and
+//! pairs of them), and global IK finding a value of the redundancy parameters (θ3, and θ5 on
+//! eight joints) with a solution when the seed's have none.
 #![allow(
     missing_docs,
     clippy::unwrap_used,
@@ -10,7 +12,7 @@
 
 mod common;
 
-use armgate_core::kinematics::{CHECK, Chain, Family, IkResult, Joints, Solutions};
+use armgate_core::kinematics::{CHECK, Chain, IkResult, Joints, Solutions};
 use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
 
@@ -66,42 +68,7 @@ fn assert_recovered(chain: &Chain, q: &Joints, others: &[f64], tol: f64, what: &
 }
 
 #[test]
-fn the_redundant_arms_are_detected() {
-    for name in REDUNDANT {
-        let fit = chain(name).family();
-        assert_eq!(fit.family, Family::SphericalShoulder, "{name}");
-        assert!(fit.is_exact(), "{name}: {fit:?}");
-    }
-}
-
-#[test]
-fn random_configurations_are_among_the_solutions_for_their_parameters() {
-    let mut rng = SplitMix64::new(0x7a);
-    for name in REDUNDANT {
-        let chain = chain(name);
-        let mut counts = [0usize; 9];
-        for k in 0..2000 {
-            let q = chain.random_joints(&mut rng);
-            assert_recovered(
-                &chain,
-                &q,
-                &chain.mid_range(),
-                1e-7,
-                &format!("{name} #{k}"),
-            );
-            let target = chain.forward(&q).unwrap();
-            counts[chain.solve_all(&target, &q).unwrap().len()] += 1;
-        }
-        assert!(
-            counts[2..].iter().sum::<usize>() > 1000,
-            "{name}: {counts:?}"
-        );
-    }
-}
-
-#[test]
-fn round_angles_and_singular_configurations_are_solved() {
-    let quarter = core::f64::consts::FRAC_PI_2;
+fn the_stretched_arm_and_its_singular_configurations_are_solved() {
     let mut rng = SplitMix64::new(7);
     for name in REDUNDANT {
         let chain = chain(name);
@@ -109,18 +76,6 @@ fn round_angles_and_singular_configurations_are_solved() {
         // The zero configuration: on iiwa14 the arm straight up, every other axis in line.
         let zero = Joints::zeros(n);
         assert_recovered(&chain, &zero, &zero, 1e-7, &format!("{name} zero"));
-        for k in 0..300 {
-            let mut q = chain.random_joints(&mut rng);
-            for (i, v) in q.iter_mut().enumerate() {
-                let round = (*v / quarter).round() * quarter;
-                let (lo, hi) = (chain.min()[i], chain.max()[i]);
-                if lo <= round && round <= hi && rng.next_f64() < 0.8 {
-                    *v = round;
-                }
-            }
-            // A joint a singularity leaves free keeps the reference's value.
-            assert_recovered(&chain, &q, &q, 1e-7, &format!("{name} round #{k}"));
-        }
         // The elbow stretched (θ4 = 0 on both), the wrist stretched (its middle solved joint
         // at 0), and the shoulder stretched (θ2 = 0) with either.
         for k in 0..200 {
@@ -135,7 +90,10 @@ fn round_angles_and_singular_configurations_are_solved() {
             if pick > 0.5 {
                 q[1] = 0.0;
             }
-            assert_recovered(&chain, &q, &q, 1e-6, &format!("{name} singular #{k}"));
+            // A tangent root (the stretched elbow) is known to √ε ≈ 1.5e-8; near the arm
+            // stretched along axis 1 (θ2 → 0) θ1 and the wrist amplify that by ~1/|θ2|, so
+            // at θ2 = 0.003 the configuration is only known to ~5e-6 (its pose to 1e-9).
+            assert_recovered(&chain, &q, &q, 2e-5, &format!("{name} singular #{k}"));
         }
     }
 }
