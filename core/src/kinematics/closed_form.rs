@@ -326,24 +326,28 @@ impl Chain {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         let reference = self.prepare(target, reference)?;
         let mut candidates = Candidates::new();
-        self.family_candidates(form, target, &reference, nearest, &mut candidates);
+        self.candidates_of(form, target, &reference, nearest, &mut candidates);
         Ok((form, reference, candidates))
     }
 
-    /// The family solver's candidates for `target`.
-    fn family_candidates(
+    /// The candidates of `form` for a checked `reference`, written to `out`.
+    fn candidates_of(
         &self,
         form: &ClosedForm,
         target: &Frame,
-        free: &[f64; MAX_JOINTS],
+        reference: &[f64; MAX_JOINTS],
         nearest: bool,
         out: &mut Candidates,
     ) {
         match form.fit.family {
-            Family::SphericalWrist => spherical_wrist::solve(form, target, free, nearest, out),
-            Family::ThreeParallel => three_parallel::solve(form, target, free, nearest, out),
+            Family::SphericalWrist => {
+                spherical_wrist::solve(form, target, reference, nearest, out);
+            }
+            Family::ThreeParallel => {
+                three_parallel::solve(form, target, reference, nearest, out);
+            }
             Family::SphericalShoulder => {
-                spherical_shoulder::solve(form, self.dof(), target, free, nearest, out);
+                spherical_shoulder::solve(form, self.dof(), target, reference, nearest, out);
             }
             Family::Numeric => {}
         }
@@ -372,7 +376,7 @@ impl Chain {
                 *f = a.value();
             }
             let mut next = Candidates::new();
-            self.family_candidates(form, &ideal, &free, true, &mut next);
+            self.candidates_of(form, &ideal, &free, true, &mut next);
             let Some(found) = next.first() else {
                 break;
             };
