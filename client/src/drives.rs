@@ -4,8 +4,21 @@
 
 use std::time::{Duration, Instant};
 
-use crate::status::DriveStatus;
-use crate::{Client, ClientError, Motion, WaitOptions, matching};
+use armgate_protocol::client::Notice;
+
+use crate::status::{DriveStatus, Name};
+use crate::{Client, ClientError, Motion, Text, WaitOptions, matching};
+
+/// The state named by an `OF` refused because the drives already are where it would take them
+/// (`ER10 Arm already off` → `off`, `already stopping` → `stopping`).
+pub fn already_stopped(text: &Text) -> Option<&'static str> {
+    match Notice::parse(text) {
+        Ok(Notice::ArmDidNotStop(state @ (DriveStatus::Off | DriveStatus::Stopping))) => {
+            Some(state.name())
+        }
+        _ => None,
+    }
+}
 
 /// How often the status is polled.
 const POLL: Duration = Duration::from_millis(50);
