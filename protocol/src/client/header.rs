@@ -133,11 +133,18 @@ mod tests {
     use super::*;
     use crate::client::{MESSAGE_LEN, Message};
 
-    fn parse(s: &str) -> Result<(Severity, u8, Option<[u8; 2]>, String), NoticeError> {
+    /// Severity, code, named command and detail.
+    type Parts = (Severity, u8, Option<[u8; 2]>, String);
+
+    /// The text a datagram carries.
+    fn text(s: &str) -> Text {
         let mut datagram = [0; MESSAGE_LEN];
         datagram[..s.len()].copy_from_slice(s.as_bytes());
-        let text = Text::parse(&Message::new_checked(&datagram[..]).unwrap()).unwrap();
-        Header::parse(&text).map(|h| (h.severity, h.code, h.command, h.detail.to_owned()))
+        Text::parse(&Message::new_checked(&datagram[..]).unwrap()).unwrap()
+    }
+
+    fn parse(s: &str) -> Result<Parts, NoticeError> {
+        Header::parse(&text(s)).map(|h| (h.severity, h.code, h.command, h.detail.to_owned()))
     }
 
     #[test]
@@ -180,9 +187,7 @@ mod tests {
     #[test]
     fn refusals_name_their_request_and_some_notices_end_motions() {
         let header = |s: &str| {
-            let mut datagram = [0; MESSAGE_LEN];
-            datagram[..s.len()].copy_from_slice(s.as_bytes());
-            let text = Text::parse(&Message::new_checked(&datagram[..]).unwrap()).unwrap();
+            let text = text(s);
             let h = Header::parse(&text).unwrap();
             (h.refuses(), h.ends_motion())
         };
