@@ -24,6 +24,8 @@ import struct
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
 
+from .errors import ControllerMessage
+
 MESSAGE_LEN = 31
 """Bytes in every datagram."""
 
@@ -95,13 +97,7 @@ def _index_matches(chars: str, request: int, reply: int) -> bool:
 
 def answers(chars: str, text: str) -> bool:
     """Whether the error ``text`` answers a request with characters ``chars``."""
-    if not text.startswith("ER"):
-        return False
-    code = text[2:4]
-    if (chars, code) in (("OF", "10"), ("ON", "11")):
-        return True
-    body = text[5:]
-    return any(body.startswith(f"{word} {chars}") for word in ("Cmd", "Msg"))
+    return text.startswith("ER") and ControllerMessage(text).refuses == chars
 
 
 # What a received datagram is, relative to the request being waited for.

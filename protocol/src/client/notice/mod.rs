@@ -2,6 +2,10 @@
 //! ([`Notice::text`]) and read back ([`Notice::parse`], in `parse.rs`) from the same phrases.
 
 mod parse;
+#[cfg(test)]
+mod samples;
+#[cfg(test)]
+mod table;
 
 use core::fmt::{self, Write as _};
 

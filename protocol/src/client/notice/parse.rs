@@ -88,6 +88,7 @@ fn held_at_limit(body: &str) -> Option<Notice> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use super::super::samples::samples;
     use crate::client::{MESSAGE_LEN, Message, Mode, PathPoint};
 
     /// The text a datagram carries.
@@ -95,61 +96,6 @@ mod tests {
         let mut datagram = [0; MESSAGE_LEN];
         datagram[..bytes.len()].copy_from_slice(bytes);
         Text::parse(&Message::new_checked(&datagram[..]).unwrap()).unwrap()
-    }
-
-    /// At least one of every variant and every reason, each distinct in its text.
-    pub(crate) fn samples() -> impl Iterator<Item = Notice> {
-        use Command::*;
-        let bound = |joint, above, limit, at| JointBound::new(joint, above, limit, at);
-        let rejections = DriveStatus::ALL
-            .into_iter()
-            .map(Rejection::Drives)
-            .chain([
-                Rejection::Busy,
-                Rejection::DriveFault(33),
-                Rejection::DriveFault(5),
-                Rejection::DrivesSettling,
-                Rejection::NoGoal,
-                Rejection::NoViaPoint,
-                Rejection::NoMeasurement,
-            ])
-            .chain(Mode::ALL.map(Rejection::NeedsMode))
-            .map(|why| Notice::Rejected(Begin, why));
-        let reasons = [
-            WorkspaceReason::Goal,
-            WorkspaceReason::CrossesBox(40),
-            WorkspaceReason::Unreachable(PathPoint::Goal),
-            WorkspaceReason::Unreachable(PathPoint::Along(99)),
-            WorkspaceReason::ArmOutside,
-            WorkspaceReason::TooFast(3, PathPoint::Goal),
-            WorkspaceReason::TooFast(6, PathPoint::Along(1)),
-        ]
-        .map(|why| Notice::OutsideWorkspace(ViaExecute, why));
-        let states = DriveStatus::ALL
-            .into_iter()
-            .flat_map(|s| [Notice::ArmDidNotStop(s), Notice::ArmDidNotStart(s)]);
-        [
-            Notice::NotUnderstood(*b"XY"),
-            Notice::Undersized(*b"B?"),
-            Notice::WorkspaceLimit,
-            Notice::JointLimit,
-            Notice::IkDivergence,
-            Notice::BadNumber(GoalQuaternion),
-            Notice::BadIndex(JointVia),
-            Notice::BeyondJointLimit(JointGoal, bound(4, false, 0.785, PathPoint::Goal)),
-            Notice::BeyondJointLimit(Begin, bound(2, true, -1.6, PathPoint::Along(12))),
-            Notice::ViaPointMissed,
-            Notice::HeldBy(Twist, Some([192, 168, 100, 200])),
-            Notice::HeldBy(Begin, None),
-            Notice::ClientSilent(60_000),
-            Notice::Cancelled(IkGoal),
-            Notice::Held(Hold::JointLimit(bound(5, true, 2.967, PathPoint::Goal))),
-            Notice::Held(Hold::Workspace),
-        ]
-        .into_iter()
-        .chain(rejections)
-        .chain(reasons)
-        .chain(states)
     }
 
     /// The value a text reads back as, where the text stands for several.
