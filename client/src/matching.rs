@@ -62,7 +62,7 @@ impl Expect {
         let Ok(message) = Message::new_checked(datagram) else {
             return Incoming::Other;
         };
-        if let Some(text) = Text::parse(&message) {
+        if let Ok(text) = Text::parse(&message) {
             return if self.is_answered_by(&text) {
                 Incoming::Rejected(text)
             } else {
@@ -82,7 +82,7 @@ impl Expect {
 pub fn classify_unsolicited(datagram: &[u8]) -> Incoming {
     match Message::new_checked(datagram)
         .ok()
-        .and_then(|m| Text::parse(&m))
+        .and_then(|m| Text::parse(&m).ok())
     {
         Some(text) => Incoming::Notice(text),
         None => Incoming::Other,

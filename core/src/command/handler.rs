@@ -508,6 +508,7 @@ impl CommandHandler {
                 // The slot is the whole index byte: 20 and above (bank bit included) are
                 // refused with ER24, as for VP.
                 let tolerance = BlendTolerance::parse(req)
+                    .ok()
                     .and_then(|t| t.tolerance)
                     .map(f64::from);
                 let slot = usize::from(req.index);

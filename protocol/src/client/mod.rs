@@ -61,7 +61,7 @@ mod words;
 
 pub use blend::{BlendTolerance, ViaKind};
 pub use command::Command;
-pub use error::Error;
+pub use error::{DecodeError, Error};
 pub use header::{DRIVE_FAULT_CODES, Header, NoticeError};
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;

@@ -87,8 +87,8 @@ fn held_at_limit(body: &str) -> Option<Notice> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use super::super::samples::samples;
+    use super::*;
     use crate::client::{MESSAGE_LEN, Message, Mode, PathPoint};
 
     /// The text a datagram carries.
