@@ -121,3 +121,27 @@ impl Client {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fake::parsed_text;
+
+    #[test]
+    fn an_off_refused_because_the_drives_already_stop_names_their_state() {
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm already off")),
+            Some("off")
+        );
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm already stopping")),
+            Some("stopping")
+        );
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm stopped by fault")),
+            None
+        );
+        assert_eq!(already_stopped(&parsed_text("ER10 Arm did not stop")), None);
+        assert_eq!(already_stopped(&parsed_text("ER11 Arm already on")), None);
+    }
+}

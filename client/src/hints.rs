@@ -208,6 +208,20 @@ mod tests {
     }
 
     #[test]
+    fn the_mode_a_request_needs_is_the_controllers_rule() {
+        let s = status(Mode::Off, DriveStatus::Running, 0, Motion::Holding);
+        let tw = hint_for("ER20 Cmd TW rejected", Some(s.clone()));
+        assert_eq!(
+            tw,
+            "TW needs mode cartesian, the mode is off: `armgate mode cartesian`"
+        );
+        assert!(hint_for("ER20 Cmd KG rejected", Some(s.clone())).contains("`armgate mode joint`"));
+        // GT and jG only store a goal: they need no mode.
+        assert_eq!(hint(&parsed_text("ER20 Cmd GT rejected"), Some(&s)), None);
+        assert_eq!(hint(&parsed_text("ER20 Cmd jG rejected"), None), None);
+    }
+
+    #[test]
     fn without_status_the_reason_text_decides() {
         // Texts are at most 30 characters on the wire (docs/protocol.md lists the reasons).
         assert!(hint_for("ER20 Cmd BG drives off", None).contains("`armgate on`"));

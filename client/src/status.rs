@@ -98,8 +98,8 @@ impl Status {
             index: STATUS_INDEX,
         };
         let bad = |what: &str| ClientError::InvalidArgument(format!("the status reply has {what}"));
-        let report = StatusReport::from_reply(&reply)
-            .map_err(|e| bad(&format!("{e}: {values:?}")))?;
+        let report =
+            StatusReport::from_reply(&reply).map_err(|e| bad(&format!("{e}: {values:?}")))?;
         let name = Message::new_checked(&name[..])
             .ok()
             .and_then(|m| RobotName::parse(&m).ok())

@@ -11,9 +11,7 @@ use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Frame;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::banks::{WRITE_JOINTS, is_bank_2};
-use armgate_protocol::client::{
-    Command, MESSAGE_LEN, Message as Wire, Request, Severity, Text,
-};
+use armgate_protocol::client::{Command, MESSAGE_LEN, Message as Wire, Request, Severity, Text};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{Value, json};
 
