@@ -15,7 +15,8 @@ The protocol has no sequence numbers. A datagram answers a request if
 
 Every other ``ER``/``WN`` text is an unsolicited notice; every other normal reply is stale (the
 late answer to an earlier, retried request). These are the Rust client's rules
-(client/src/matching.rs).
+(client/src/matching.rs); which request a text refuses is the grammar's (errors.py's
+``refuses``, checked against protocol/grammar.json).
 """
 
 from __future__ import annotations
