@@ -20,10 +20,10 @@ use armgate_core::drives::{
 };
 use armgate_core::kinematics::Joints;
 use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value};
-use armgate_protocol::client::Header;
 use armgate_protocol::can::{
     CanFrame, Emcy, Heartbeat, Nmt, NmtState, NodeId, NodeMessage, Object, SdoRequest, SdoResponse,
 };
+use armgate_protocol::client::Header;
 use drives_rig::{ScriptedBus, robot};
 
 fn node(id: u8) -> NodeId {

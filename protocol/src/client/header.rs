@@ -63,7 +63,7 @@ impl<'a> Header<'a> {
             Some(rest) => rest.strip_prefix(' ').ok_or(NoticeError::Malformed)?,
             None => return Err(NoticeError::Malformed),
         };
-        let (command, detail) = match named(body, "Cmd").or_else(|| named(body, "Msg")) {
+        let (command, detail) = match named(body, CMD).or_else(|| named(body, MSG)) {
             Some((chars, detail)) => (Some(chars), detail),
             None => (None, body),
         };
@@ -114,6 +114,10 @@ impl<'a> Header<'a> {
         self.severity == Severity::Error && DRIVE_FAULT_CODES.contains(&self.code)
     }
 }
+
+/// The words before the command characters a text names: `Cmd BG`, `Msg B?` (undersized).
+pub(super) const CMD: &str = "Cmd";
+pub(super) const MSG: &str = "Msg";
 
 /// `word XX` at the start of `body` (then the end, or a space and the rest): the two
 /// characters, and the rest.

@@ -9,6 +9,7 @@ mod table;
 
 use core::fmt::{self, Write as _};
 
+use super::header::{CMD, MSG};
 use super::words::{Milli, phrase};
 
 use super::{
@@ -146,8 +147,6 @@ const ARM_DID_NOT_START: [(DriveStatus, &str); 5] = [
 ];
 
 /// The words around the parts that vary.
-const CMD: &str = "Cmd";
-const MSG: &str = "Msg";
 const NOT_UNDERSTOOD: &str = "not understood";
 const UNDERSIZED: &str = "undersized.";
 const BAD_NUMBER: &str = "bad number";
