@@ -116,7 +116,12 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
 fn read_back(text: &Text) -> Notice {
     let notice = Notice::parse(text)
         .unwrap_or_else(|e| panic!("text {:?} is not of the grammar: {e}", text.as_str()));
-    assert_eq!(notice.text(), *text, "text {:?} reads back as another", text.as_str());
+    assert_eq!(
+        notice.text(),
+        *text,
+        "text {:?} reads back as another",
+        text.as_str()
+    );
     notice
 }
 
