@@ -351,3 +351,40 @@ fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
     assert_eq!(notice.as_deref(), Some("ER41 client silent 300 ms"));
     assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
 }
+
+#[test]
+fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_control() {
+    // `armgate jmove` of 0.3 rad on the first joint (about 5 s at 0.07 rad/s), waiting 500 ms.
+    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    wait_drives(&sim, 2.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.3;
+    let q: Vec<String> = goal[..6].iter().map(f32::to_string).collect();
+    let mut args = vec!["jmove"];
+    args.extend(q.iter().map(String::as_str));
+    args.extend(["--wait-timeout", "500ms"]);
+    let (result, out) = armgate(&sim, &args);
+    assert_eq!(out, "moving\n");
+    let err = result.unwrap_err();
+    let message = err.to_string();
+    assert_eq!(err.exit_code(), 2, "{message}");
+    assert!(
+        message.starts_with("target 1 not reached within 500ms")
+            && message.ends_with("; sent ST: the arm stops and holds"),
+        "{message}"
+    );
+    // Stopped at once (no longer a joint move), and soon at rest, well short of the goal.
+    assert_ne!(status(&sim)[4], 1.0, "the move runs on");
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0));
+    let rest = sim.ok("jP", [0.0; 7], 0);
+    assert!(goal[0] - rest[0] > 0.2, "{rest:?} (goal {goal:?})");
+    // Another client takes control with its next request.
+    let b = second_client(&sim);
+    match ask(&b, "CM", [2.0, 0., 0., 0., 0., 0., 0.], 0) {
+        Answer::Reply(c, v, 0) if &c == b"MC" => assert_eq!(v[0], 2.0),
+        other => panic!("CM from the next client: {other:?}"),
+    }
+    assert_eq!(session(&b)[0], 1.0);
+}
