@@ -388,3 +388,69 @@ fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_contro
     }
     assert_eq!(session(&b)[0], 1.0);
 }
+
+/// Every ER/WN text among the datagrams waiting on `socket` (read until none comes within
+/// 20 ms); the rest are replies.
+fn texts_waiting(socket: &UdpSocket) -> Vec<String> {
+    let timeout = socket.read_timeout().unwrap();
+    socket
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut texts = Vec::new();
+    let mut buf = [0u8; 64];
+    while let Ok(n) = socket.recv(&mut buf) {
+        assert_eq!(n, 31);
+        if let Answer::Text(t) = decode(&buf) {
+            texts.push(t);
+        }
+    }
+    socket.set_read_timeout(timeout).unwrap();
+    texts
+}
+
+#[test]
+fn notices_of_a_motion_go_to_the_client_that_holds_the_arm_not_to_a_poller() {
+    // Joint 6 52 mrad short of its 3.142 limit; A streams it towards the limit at 0.1 rad/s
+    // (a jW every 20 ms for 1.2 s) while B polls PS and SQ as often: the stream reaches the
+    // limit after about 0.5 s and is held there with `WN12 j6 at limit 3.142`.
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,3.09"]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    wait_drives(&sim, 2.0);
+    let b = second_client(&sim);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let poller = std::thread::spawn({
+        let stop = stop.clone();
+        move || {
+            let mut texts = Vec::new();
+            let mut polls = 0;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                for cmd in ["PS", "SQ"] {
+                    b.send(&datagram(cmd, [0.0; 7], 0)).unwrap();
+                    texts.extend(texts_waiting(&b));
+                    polls += 1;
+                }
+            }
+            (texts, polls)
+        }
+    });
+    let rate = [0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.0];
+    let started = Instant::now();
+    let mut notices = Vec::new();
+    while started.elapsed() < Duration::from_millis(1200) {
+        sim.socket.send(&datagram("jW", rate, 0)).unwrap();
+        notices.extend(texts_waiting(&sim.socket));
+    }
+    // The stream ends; the arm ramps to rest.
+    std::thread::sleep(Duration::from_millis(500));
+    notices.extend(texts_waiting(&sim.socket));
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let (theirs, polls) = poller.join().unwrap();
+    eprintln!("A got {notices:?}; B got {theirs:?} in {polls} polls");
+    assert!(
+        notices.iter().any(|t| t == "WN12 j6 at limit 3.142"),
+        "{notices:?}"
+    );
+    assert!(polls > 20, "{polls}");
+    assert_eq!(theirs, Vec::<String>::new(), "notices sent to the poller");
+}
