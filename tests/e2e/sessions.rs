@@ -454,3 +454,74 @@ fn notices_of_a_motion_go_to_the_client_that_holds_the_arm_not_to_a_poller() {
     assert!(polls > 20, "{polls}");
     assert_eq!(theirs, Vec::<String>::new(), "notices sent to the poller");
 }
+
+/// A UDP relay between one client (on loopback) and the controller that drops the first
+/// answer whose characters are `lost`; it runs until `stop` is set and returns the commands
+/// it passed on, in order.
+fn relay_losing_first(
+    sim: &Sim,
+    lost: [u8; 2],
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> (SocketAddr, std::thread::JoinHandle<Vec<String>>) {
+    let front = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let back = UdpSocket::bind((sim.socket.local_addr().unwrap().ip(), 0)).unwrap();
+    back.connect(sim.socket.peer_addr().unwrap()).unwrap();
+    for socket in [&front, &back] {
+        socket
+            .set_read_timeout(Some(Duration::from_millis(2)))
+            .unwrap();
+    }
+    let addr = front.local_addr().unwrap();
+    let relay = std::thread::spawn(move || {
+        let mut client = None;
+        let mut dropped = false;
+        let mut passed = Vec::new();
+        let mut buf = [0u8; 64];
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Ok((n, from)) = front.recv_from(&mut buf) {
+                client = Some(from);
+                passed.push(String::from_utf8_lossy(&buf[..2]).into_owned());
+                back.send(&buf[..n]).unwrap();
+            }
+            if let (Ok(n), Some(client)) = (back.recv(&mut buf), client) {
+                if !dropped && buf[..2] == lost {
+                    dropped = true;
+                    continue;
+                }
+                front.send_to(&buf[..n], client).unwrap();
+            }
+        }
+        passed
+    });
+    (addr, relay)
+}
+
+#[test]
+fn armgate_move_whose_begin_reply_is_lost_gets_it_again_and_arrives() {
+    // ranger-mk1 from a well-conditioned pose, in Cartesian mode: `armgate move` by 3 cm in z,
+    // through a relay that loses the first reply to BG.
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.8,0.5,0.5,1.5,0.5"]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0)[0], 2.0);
+    wait_drives(&sim, 2.0);
+    let ps = sim.ok("PS", [0.0; 7], 0);
+    let [roll, pitch, yaw] = rpy_of(&ps[3..]);
+    let goal = [ps[0], ps[1], ps[2] + 0.03, roll, pitch, yaw].map(|v| v.to_string());
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let (addr, relay) = relay_losing_first(&sim, *b"GB", stop.clone());
+    let mut args = vec!["move"];
+    args.extend(goal.iter().map(String::as_str));
+    args.extend(["--timeout", "300ms"]);
+    let (result, out) = armgate_at(addr, &args);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let passed = relay.join().unwrap();
+    let begins = passed.iter().filter(|c| *c == "BG").count();
+    eprintln!("{out}; the client sent {passed:?}");
+    // The resend got the reply again (not `ER20 Cmd BG busy`), and the move arrived.
+    result.unwrap();
+    assert!(out.starts_with("moving\narrived: "), "{out}");
+    assert_eq!(begins, 2, "{passed:?}");
+    assert!(!passed.iter().any(|c| c == "ST"), "{passed:?}");
+    let now = sim.ok("PS", [0.0; 7], 0);
+    assert!((now[2] - ps[2] - 0.03).abs() < 0.002, "{now:?}");
+}
