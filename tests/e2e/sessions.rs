@@ -1,4 +1,5 @@
-//! Who is talking: a network path that cannot wedge (spoofed sources, floods).
+//! Who is talking: one controlling client, notices to it, a stop from anyone, clients that leave
+//! stopping what they started, and a network path that cannot wedge (spoofed sources, floods).
 
 use super::*;
 
@@ -76,9 +77,18 @@ fn answered_of(sim: &Sim, n: usize) -> usize {
 #[test]
 fn replies_to_a_source_nobody_owns_do_not_silence_the_controller() {
     if firmware().is_none() {
-        // armgate-sim sends through the host's socket, which never waits on a neighbour; the
-        // forged source needs the firmware's namespace (root, a raw socket).
-        eprintln!("skipped for armgate-sim: a test of the firmware's network path");
+        // armgate-sim sends through the host's socket, which never waits on a neighbour, and a
+        // forged source needs the firmware's namespace (root, a raw socket): here the nearest
+        // case, replies to a client that has gone (its port closed: ICMP port unreachable).
+        let sim = Sim::start("ranger-mk1");
+        assert!(knows_status(&sim));
+        let gone = UdpSocket::bind("127.0.0.77:0").unwrap();
+        gone.connect(sim.socket.peer_addr().unwrap()).unwrap();
+        for _ in 0..40 {
+            gone.send(&datagram("PS", [0.0; 7], 0)).unwrap();
+        }
+        drop(gone);
+        assert_eq!(answered_of(&sim, 40), 40, "after a client that left");
         return;
     }
     let sim = Sim::start("ranger-mk1");
