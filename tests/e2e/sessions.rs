@@ -362,13 +362,20 @@ fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
     assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
 }
 
+/// ranger-mk1 from `start` (joint angles) in mode `mode` (1 joint, 2 Cartesian), the drives
+/// running.
+fn ready(start: &str, mode: f32) -> Sim {
+    let sim = Sim::start_with("ranger-mk1", &["--start", start]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [mode, 0., 0., 0., 0., 0., 0.], 0)[0], mode);
+    wait_drives(&sim, 2.0);
+    sim
+}
+
 #[test]
 fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_control() {
     // `armgate jmove` of 0.3 rad on the first joint (about 5 s at 0.07 rad/s), waiting 500 ms.
-    let sim = Sim::start_with("ranger-mk1", &["--start", START]);
-    assert!(knows_status(&sim));
-    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
-    wait_drives(&sim, 2.0);
+    let sim = ready(START, 1.0);
     let mut goal = sim.ok("jP", [0.0; 7], 0);
     goal[0] += 0.3;
     let q: Vec<String> = goal[..6].iter().map(f32::to_string).collect();
@@ -423,10 +430,7 @@ fn notices_of_a_motion_go_to_the_client_that_holds_the_arm_not_to_a_poller() {
     // Joint 6 52 mrad short of its 3.142 limit; A streams it towards the limit at 0.1 rad/s
     // (a jW every 20 ms for 1.2 s) while B polls PS and SQ as often: the stream reaches the
     // limit after about 0.5 s and is held there with `WN12 j6 at limit 3.142`.
-    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,3.09"]);
-    assert!(knows_status(&sim));
-    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
-    wait_drives(&sim, 2.0);
+    let sim = ready("1.5708,0.6,-0.4,0.2,1.8,3.09", 1.0);
     let b = second_client(&sim);
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let poller = std::thread::spawn({
@@ -510,10 +514,7 @@ fn relay_losing_first(
 fn armgate_move_whose_begin_reply_is_lost_gets_it_again_and_arrives() {
     // ranger-mk1 from a well-conditioned pose, in Cartesian mode: `armgate move` by 3 cm in z,
     // through a relay that loses the first reply to BG.
-    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.8,0.5,0.5,1.5,0.5"]);
-    assert!(knows_status(&sim));
-    assert_eq!(sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0)[0], 2.0);
-    wait_drives(&sim, 2.0);
+    let sim = ready("1.5708,0.8,0.5,0.5,1.5,0.5", 2.0);
     let ps = sim.ok("PS", [0.0; 7], 0);
     let [roll, pitch, yaw] = rpy_of(&ps[3..]);
     let goal = [ps[0], ps[1], ps[2] + 0.03, roll, pitch, yaw].map(|v| v.to_string());
