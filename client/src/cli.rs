@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::banks::MAX_JOINTS;
+use crate::drives;
 use crate::hints;
 use crate::interrupt;
-use crate::matching;
 use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
@@ -832,10 +832,8 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         Cmd::On { wait_timeout } => drives_on(client, *wait_timeout, out),
         Cmd::Off => match client.off() {
             // `ER10 Arm already off` / `already stopping`: what was asked for.
-            Err(ClientError::Rejected(text))
-                if matching::code(&text) == Some(10) && text.as_str().contains(" already ") =>
-            {
-                let state = text.as_str().rsplit(' ').next().unwrap_or("off");
+            Err(ClientError::Rejected(text)) if drives::already_stopped(&text).is_some() => {
+                let state = drives::already_stopped(&text).unwrap_or_default();
                 writeln!(out, "drives already {state}")?;
                 Ok(())
             }
