@@ -233,10 +233,18 @@ impl Chain {
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
         let reference = self.prepare(target, reference)?;
-        if self.family().family != Family::SphericalShoulder {
-            return self.nearest_for(target, &reference, branch);
+        let found = self.nearest_for(target, &reference, branch)?;
+        let redundant = self
+            .closed_form()
+            .filter(|form| form.fit.family == Family::SphericalShoulder);
+        let Some(form) = redundant.filter(|_| found.is_none()) else {
+            return Ok(found);
+        };
+        if !spherical_shoulder::elbow_reaches(form, target) {
+            return Ok(None);
         }
-        for k in 0..spherical_shoulder::SWEEP_TRIES {
+        // The first reference of the sweep is the one just tried.
+        for k in 1..spherical_shoulder::SWEEP_TRIES {
             let Some(values) = spherical_shoulder::swept(self, &reference, k) else {
                 break;
             };

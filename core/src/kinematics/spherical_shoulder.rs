@@ -11,13 +11,13 @@
 //! 2), the last turns about it (subproblem 1). Up to 2 · 2 · 2 = 8 solutions for each value of
 //! the parameters.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 use super::chain::Chain;
 use super::closed_form::{Branch, Candidate, Candidates};
 use super::family::ClosedForm;
 use super::screws::misalignment;
-use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
+use super::subproblems::{Angle, PairRoots, Roots, rotate, sp1, sp2, sp3};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -47,10 +47,8 @@ pub(super) fn solve(
     let slack = form.slack();
     let [h1, h2, h3, h4, h5, _, _, _] = &s.axis;
     let (shoulder, o4, w) = (&s.point[0], &s.point[3], &form.centre);
-    // R1 ⋯ Rn, and the target's place for the wrist centre.
-    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
-    let d = target.translation.vector - tool * (s.tool_position - w) - shoulder;
-    let (elbows, n4) = sp3(h4, &(w - o4), &(shoulder - o4), d.norm(), slack).list(free[3], nearest);
+    let (tool, d) = wrist_target(form, target);
+    let (elbows, n4) = elbow_roots(form, &d).list(free[3], nearest);
     let a3 = Angle::of(free[2]);
     // Eight joints: θ5 is a parameter too, and the wrist's last three joints are 6–8.
     let a5 = (dof == 8).then(|| Angle::of(free[4]));
@@ -83,6 +81,36 @@ pub(super) fn solve(
             }
         }
     }
+}
+
+/// `R1 ⋯ Rn` (the target's rotation relative to the tool's at q = 0), and where the target
+/// puts the wrist centre relative to the shoulder point.
+fn wrist_target(form: &ClosedForm, target: &Frame) -> (Matrix3<f64>, Vector3<f64>) {
+    let s = &form.screws;
+    let tool = target.rotation.matrix() * s.tool_rotation.transpose();
+    let d = target.translation.vector - tool * (s.tool_position - form.centre) - s.point[0];
+    (tool, d)
+}
+
+/// θ4 with `‖W(θ4) − S‖ = ‖d‖` (subproblem 3).
+fn elbow_roots(form: &ClosedForm, d: &Vector3<f64>) -> Roots {
+    let s = &form.screws;
+    let (shoulder, h4, o4) = (&s.point[0], &s.axis[3], &s.point[3]);
+    sp3(
+        h4,
+        &(form.centre - o4),
+        &(shoulder - o4),
+        d.norm(),
+        form.slack(),
+    )
+}
+
+/// False if no value of the redundancy parameters gives `target` a solution because the
+/// elbow cannot set the shoulder–wrist distance it needs (which no parameter changes): then
+/// a sweep of the parameters is futile.
+pub(super) fn elbow_reaches(form: &ClosedForm, target: &Frame) -> bool {
+    let (_, d) = wrist_target(form, target);
+    elbow_roots(form, &d) != Roots::None
 }
 
 /// θ1, θ2 with `R1 R2 u = d` (subproblem 2 as `R2 u = R1ᵀ d`). A `d` along axis 1 leaves θ1
