@@ -1,6 +1,7 @@
 //! The `armgate` command line: the options every controller command shares, the subcommands
 //! (one module per subcommand or group of them) and a thin dispatch.
 
+mod controller;
 mod drives;
 mod error;
 mod ik;
@@ -16,14 +17,13 @@ mod teleop;
 mod testing;
 mod tools;
 
-use std::io::Write;
-use std::time::Duration;
-
 use clap::{Parser, Subcommand};
+use std::io::Write;
 
 use crate::hints;
-use crate::{Client, ClientConfig, ClientError, DEFAULT_ADDR, DEFAULT_RETRIES};
+use crate::{Client, ClientConfig, ClientError};
 
+pub use controller::ControllerArgs;
 pub use drives::{ModeArg, ModeArgs, OnArgs};
 pub use error::CliError;
 pub use ik::{IkArgs, IkMoveArgs};
@@ -34,8 +34,6 @@ pub use read::print_pose;
 pub use run_file::RunArgs;
 pub use send::SendArgs;
 pub use teleop::TeleopArgs;
-
-use options::parse_joints;
 
 const ABOUT: &str = "Command an armgate robot-arm controller over UDP";
 
@@ -77,35 +75,26 @@ WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interru
 (Ctrl-C during move, jmove or run sends ST first: the arm stops and holds).
 Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
 
-/// The `armgate` command line.
+/// The `armgate` command line: how to reach the controller, and what to do.
+#[derive(Debug)]
+pub struct Cli {
+    /// The controller options, as given before the subcommand and overridden by those after it.
+    pub controller: ControllerArgs,
+    /// What to do.
+    pub command: Cmd,
+}
+
+/// The command line as clap derives it: [`Cli`] adds the controller options to the
+/// subcommands that use them.
 #[derive(Debug, Parser)]
 #[command(name = "armgate", version, about = ABOUT, long_about = LONG_ABOUT, after_help = AFTER_HELP)]
-pub struct Cli {
-    /// The controller's address, host:port.
-    #[arg(long, global = true, env = "ARMGATE_ADDR", default_value = DEFAULT_ADDR)]
-    pub addr: String,
-    /// How long to wait for each reply: 200ms, 1s, 1.5s, or a number of milliseconds (> 0).
-    #[arg(long, global = true, default_value = "200ms", value_parser = parse_timeout)]
-    pub timeout: Duration,
-    /// How many times a request is sent again when no reply came.
-    #[arg(long, global = true, default_value_t = DEFAULT_RETRIES)]
-    pub retries: u32,
-    /// How many joints the arm has, 1 to 8. Default: what the controller's status (SQ) says,
-    /// 6 if it is too old to say. Joint lists must have this many values; more than 6 joints
-    /// use the two-bank requests.
-    #[arg(long, global = true, value_parser = parse_joints)]
-    pub joints: Option<usize>,
-    /// Sign every request with the key in this file (64 hex digits on one line) and accept
-    /// only answers signed with it, for a controller that has the key (docs/safety.md).
-    #[arg(long, global = true, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
-    pub key: Option<std::path::PathBuf>,
-    /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
-    /// their own (teleop also uses the next one, for its jog stream).
-    #[arg(long, global = true, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
-    pub link_id: u8,
+struct Parsed {
+    /// How to reach the controller.
+    #[command(flatten)]
+    controller: ControllerArgs,
     /// What to do.
     #[command(subcommand)]
-    pub command: Cmd,
+    command: Cmd,
 }
 
 /// The subcommands.
@@ -178,8 +167,9 @@ pub enum Cmd {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         args: Vec<std::ffi::OsString>,
     },
-    /// Record this controller into an MCAP file for Foxglove (runs `armgate-viz record --addr
-    /// ADDR`; docs/visualisation.md): jP and PS at --rate, SQ once a second, every notice.
+    /// Record this controller into an MCAP file for Foxglove (runs `armgate-viz record`, with
+    /// the --addr, --key and --link-id given before `record`; docs/visualisation.md): jP and PS
+    /// at --rate, SQ once a second, every notice.
     #[command(disable_help_flag = true)]
     Record {
         /// Passed on unchanged, e.g. `run.mcap --robot robots/ranger-mk1.toml --rate 20`.
@@ -194,7 +184,7 @@ pub enum Cmd {
 /// Runs the command line (parsed from the process's arguments) and returns the exit status.
 pub fn main() -> u8 {
     let cli = Cli::parse();
-    if let Some(status) = tools::run(&cli) {
+    if let Some(status) = tools::run(&cli.command) {
         return status;
     }
     let mut out = std::io::stdout().lock();
@@ -212,7 +202,9 @@ pub fn main() -> u8 {
             {
                 eprintln!("hint: {hint}");
             }
-            if matches!(e, CliError::Client(ClientError::Timeout { .. })) && cli.key.is_none() {
+            if matches!(e, CliError::Client(ClientError::Timeout { .. }))
+                && cli.controller.key.is_none()
+            {
                 eprintln!(
                     "hint: a controller with a signing key never answers unsigned requests: \
                      --key FILE (or ARMGATE_KEY_FILE)"
@@ -244,13 +236,16 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
             .map_err(CliError::from);
     }
     let config = ClientConfig {
-        timeout: cli.timeout,
-        retries: cli.retries,
+        timeout: cli.controller.timeout,
+        retries: cli.controller.retries,
         ..ClientConfig::default()
     };
-    let mut client = Client::connect_with(cli.addr.as_str(), config)?;
-    if let Some(path) = &cli.key {
-        client.set_signer(Some(crate::Signer::from_file(path, cli.link_id)?));
+    let mut client = Client::connect_with(cli.controller.addr.as_str(), config)?;
+    if let Some(path) = &cli.controller.key {
+        client.set_signer(Some(crate::Signer::from_file(
+            path,
+            cli.controller.link_id,
+        )?));
     }
     if let Cmd::Teleop(args) = &cli.command {
         return teleop::run(args, cli, client);
@@ -262,7 +257,7 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
 
 /// `--joints`, else the joint count the controller reports, else (a controller without `SQ`) 6.
 fn joint_count(cli: &Cli, client: &mut Client) -> Result<usize, CliError> {
-    if let Some(n) = cli.joints {
+    if let Some(n) = cli.controller.joints {
         return Ok(n);
     }
     match client.status() {
@@ -324,15 +319,15 @@ mod tests {
             "armgate", "move", "0.5", "-0.2", "0.4", "0", "0", "-1.25", "--time", "4",
         ])
         .unwrap();
-        let Cmd::Move(MoveArgs { y, yaw, time, .. }) = cli.command else {
+        let Cmd::Move(MoveArgs { pose, time, .. }) = cli.command else {
             panic!()
         };
-        assert_eq!((y, yaw, time), (-0.2, -1.25, 4.0));
+        assert_eq!((pose.y, pose.yaw, time), (-0.2, -1.25, 4.0));
         let cli = Cli::try_parse_from([
             "armgate", "--joints", "8", "jmove", "-1", "0", "0", "0", "0", "0", "0", "-0.5",
         ])
         .unwrap();
-        assert_eq!(cli.joints, Some(8));
+        assert_eq!(cli.controller.joints, Some(8));
         let Cmd::Jmove(JmoveArgs { q, time: None, .. }) = cli.command else {
             panic!()
         };

@@ -5,7 +5,7 @@ use std::io::Write;
 
 use clap::Args;
 
-use super::options::WaitArgs;
+use super::options::{PoseArgs, WaitArgs};
 use super::output::finish_progress;
 use super::output::{fmt_values, joint_progress, pose_progress, settle, stop_if_interrupted};
 use super::{Cli, CliError, joint_count};
@@ -15,24 +15,9 @@ use crate::{Client, Pose};
 /// `armgate move` arguments.
 #[derive(Debug, Args)]
 pub struct MoveArgs {
-    /// x (m).
-    #[arg(allow_negative_numbers = true)]
-    pub x: f64,
-    /// y (m).
-    #[arg(allow_negative_numbers = true)]
-    pub y: f64,
-    /// z (m).
-    #[arg(allow_negative_numbers = true)]
-    pub z: f64,
-    /// Roll, about the base x axis (rad).
-    #[arg(allow_negative_numbers = true)]
-    pub roll: f64,
-    /// Pitch, about the base y axis (rad).
-    #[arg(allow_negative_numbers = true)]
-    pub pitch: f64,
-    /// Yaw, about the base z axis (rad).
-    #[arg(allow_negative_numbers = true)]
-    pub yaw: f64,
+    /// The goal.
+    #[command(flatten)]
+    pub pose: PoseArgs,
     /// Minimum duration (s); 0 = as fast as the controller's limits allow.
     #[arg(long, default_value_t = 0.0)]
     pub time: f64,
@@ -61,17 +46,8 @@ pub(super) fn move_to(
     client: &mut Client,
     out: &mut impl Write,
 ) -> Result<(), CliError> {
-    let MoveArgs {
-        x,
-        y,
-        z,
-        roll,
-        pitch,
-        yaw,
-        time,
-        wait,
-    } = args;
-    let (xyz, rpy) = ([*x, *y, *z], [*roll, *pitch, *yaw]);
+    let MoveArgs { pose, time, wait } = args;
+    let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
     client.goal_rpy(xyz, rpy, *time)?;
     client.begin()?;

@@ -10,7 +10,7 @@ pub(super) fn status(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Re
     let mut status = client.status()?;
     status.cause = client.stop_cause()?;
     writeln!(out, "{status}")?;
-    if cli.key.is_some() {
+    if cli.controller.key.is_some() {
         let s = client.signing_report()?;
         writeln!(
             out,

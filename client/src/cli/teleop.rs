@@ -65,7 +65,7 @@ pub(super) fn run(args: &TeleopArgs, cli: &Cli, mut client: Client) -> Result<()
         live: *live,
         jog: !*step,
         poll,
-        addr: cli.addr.clone(),
+        addr: cli.controller.addr.clone(),
     };
     teleop::run(client, options).map_err(CliError::Output)
 }
