@@ -181,25 +181,17 @@ mod tests {
     #[test]
     fn options_after_the_subcommand_override_those_before_it() {
         let parse = |argv: &[&str]| Cli::try_parse_from(argv).unwrap().controller;
-        let c = parse(&[
+        let before = [
             "armgate",
             "--addr",
             "10.0.0.1:7031",
             "--retries",
             "5",
             "pose",
-        ]);
+        ];
+        let c = parse(&before);
         assert_eq!((c.addr.as_str(), c.retries), ("10.0.0.1:7031", 5));
-        let c = parse(&[
-            "armgate",
-            "--addr",
-            "10.0.0.1:7031",
-            "--retries",
-            "5",
-            "pose",
-            "--addr",
-            "10.0.0.2:7031",
-        ]);
+        let c = parse(&[&before[..], &["--addr", "10.0.0.2:7031"]].concat());
         assert_eq!((c.addr.as_str(), c.retries), ("10.0.0.2:7031", 5));
         let c = parse(&["armgate", "joints", "--timeout", "1s", "--joints", "7"]);
         assert_eq!((c.timeout, c.joints), (Duration::from_secs(1), Some(7)));

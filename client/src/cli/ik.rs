@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::CliError;
 use super::options::{PoseArgs, WaitArgs};
-use super::output::{finish_progress, fmt_values, joint_progress, settle, stop_if_interrupted};
+use super::output::{fmt_values, joint_progress, wait_for};
 use crate::Client;
 
 /// `armgate ik` arguments.
@@ -78,11 +78,9 @@ pub(super) fn ik_move(
         return Ok(());
     }
     let options = wait.options(*time, interrupt.as_ref());
-    let reached = client
-        .wait_until_joints(&goal.q, &options, joint_progress)
-        .map_err(|e| stop_if_interrupted(client, e))?;
-    finish_progress();
-    settle(client)?;
+    let reached = wait_for(client, |c| {
+        c.wait_until_joints(&goal.q, &options, joint_progress)
+    })?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())
 }

@@ -6,8 +6,7 @@ use std::io::Write;
 use clap::Args;
 
 use super::options::{PoseArgs, WaitArgs};
-use super::output::finish_progress;
-use super::output::{fmt_values, joint_progress, pose_progress, settle, stop_if_interrupted};
+use super::output::{fmt_values, joint_progress, pose_progress, wait_for};
 use super::{Cli, CliError, joint_count};
 use crate::banks::MAX_JOINTS;
 use crate::{Client, Pose};
@@ -56,15 +55,10 @@ pub(super) fn move_to(
         return Ok(());
     }
     let goal = Pose::from_xyz_rpy(xyz, rpy);
-    let pose = client
-        .wait_until_pose(
-            &goal,
-            &wait.options(*time, interrupt.as_ref()),
-            pose_progress,
-        )
-        .map_err(|e| stop_if_interrupted(client, e))?;
-    finish_progress();
-    settle(client)?;
+    let options = wait.options(*time, interrupt.as_ref());
+    let pose = wait_for(client, |c| {
+        c.wait_until_pose(&goal, &options, pose_progress)
+    })?;
     writeln!(
         out,
         "arrived: {} ({:.2} mm from the goal)",
@@ -100,11 +94,7 @@ pub(super) fn jmove(
         return Ok(());
     }
     let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
-    let reached = client
-        .wait_until_joints(q, &options, joint_progress)
-        .map_err(|e| stop_if_interrupted(client, e))?;
-    finish_progress();
-    settle(client)?;
+    let reached = wait_for(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())
 }

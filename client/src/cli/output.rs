@@ -7,6 +7,18 @@ use std::time::{Duration, Instant};
 use super::CliError;
 use crate::{Client, ClientError, Pose, Progress, Text};
 
+/// Runs a wait for a motion (`wait`, whose progress goes to the progress line): after Ctrl-C
+/// ended it ST is sent; otherwise the progress line ends and the motion's end is awaited.
+pub(super) fn wait_for<T>(
+    client: &mut Client,
+    wait: impl FnOnce(&mut Client) -> Result<T, ClientError>,
+) -> Result<T, CliError> {
+    let reached = wait(client).map_err(|e| stop_if_interrupted(client, e))?;
+    finish_progress();
+    settle(client)?;
+    Ok(reached)
+}
+
 /// After Ctrl-C ended a wait: ST (unless the wait ended otherwise).
 pub(super) fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
     if !matches!(error, ClientError::Interrupted) {
@@ -64,7 +76,7 @@ fn progress_line(line: &str, notices: &[Text]) {
 }
 
 /// Ends the progress line.
-pub(super) fn finish_progress() {
+fn finish_progress() {
     PROGRESS.with_borrow_mut(|p| {
         if p.tty && p.last.is_some() {
             eprintln!();

@@ -6,9 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::options::WaitArgs;
-use super::output::{
-    finish_progress, fmt_values, joint_progress, pose_progress, settle, stop_if_interrupted,
-};
+use super::output::{fmt_values, joint_progress, pose_progress, wait_for};
 use super::{Cli, CliError, joint_count};
 use crate::{Client, RunFile};
 
@@ -87,22 +85,18 @@ pub(super) fn run(
             let total = points.iter().map(|p| p.time).sum();
             let goals = RunFile::poses(points);
             let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-            let pose = client
-                .wait_through_poses(&goals, &options, pose_progress)
-                .map_err(|e| stop_if_interrupted(client, e))?;
-            finish_progress();
-            settle(client)?;
+            let pose = wait_for(client, |c| {
+                c.wait_through_poses(&goals, &options, pose_progress)
+            })?;
             writeln!(out, "done: {}", fmt_values(&pose.xyz, 4))?;
         }
         RunFile::Joint(points) => {
             let total = points.iter().map(|p| p.time).sum();
             let goals: Vec<Vec<f64>> = points.iter().map(|p| p.q.clone()).collect();
             let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-            let q = client
-                .wait_through_joints(&goals, &options, joint_progress)
-                .map_err(|e| stop_if_interrupted(client, e))?;
-            finish_progress();
-            settle(client)?;
+            let q = wait_for(client, |c| {
+                c.wait_through_joints(&goals, &options, joint_progress)
+            })?;
             writeln!(out, "done: {}", fmt_values(&q, 4))?;
         }
     }
