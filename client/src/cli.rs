@@ -71,8 +71,9 @@ Examples:
                                              the controller in MCAP for Foxglove
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
-WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
-(Ctrl-C during move, jmove or run sends ST first: the arm stops and holds).
+WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted.
+A move, ik-move, jmove or run that fails after starting its motion (Ctrl-C, --wait-timeout,
+a stall, an abort, no reply) sends ST first and says so: the arm stops and holds.
 Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
 
 /// The `armgate` command line: how to reach the controller, and what to do.

@@ -31,6 +31,14 @@ pub enum CliError {
     /// Ctrl-C during a wait; says whether ST was sent.
     #[error("interrupted: {0}")]
     Interrupted(String),
+    /// A command that started a motion failed before it saw it end; ST was sent first.
+    #[error("{error}; {stop}")]
+    Stopped {
+        /// Why the command failed.
+        error: ClientError,
+        /// Whether ST was sent.
+        stop: String,
+    },
 }
 
 impl CliError {
@@ -40,6 +48,7 @@ impl CliError {
             Self::Client(e) => e.exit_code(),
             Self::Refused { .. } => 1,
             Self::Interrupted(_) => ClientError::Interrupted.exit_code(),
+            Self::Stopped { error, .. } => error.exit_code(),
             _ => 2,
         }
     }

@@ -6,7 +6,7 @@ use clap::Args;
 
 use super::CliError;
 use super::options::{PoseArgs, WaitArgs};
-use super::output::{fmt_values, joint_progress, wait_for};
+use super::output::{fmt_values, follow, joint_progress, start};
 use crate::Client;
 
 /// `armgate ik` arguments.
@@ -67,7 +67,7 @@ pub(super) fn ik_move(
     } = args;
     let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
-    let goal = client.ik_move(xyz, rpy, *branch, *time)?;
+    let goal = start(client, |c| c.ik_move(xyz, rpy, *branch, *time))?;
     writeln!(
         out,
         "moving to {} (branch {})",
@@ -78,7 +78,7 @@ pub(super) fn ik_move(
         return Ok(());
     }
     let options = wait.options(*time, interrupt.as_ref());
-    let reached = wait_for(client, |c| {
+    let reached = follow(client, |c| {
         c.wait_until_joints(&goal.q, &options, joint_progress)
     })?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;

@@ -6,7 +6,7 @@ use std::io::Write;
 use clap::Args;
 
 use super::options::{PoseArgs, WaitArgs};
-use super::output::{fmt_values, joint_progress, pose_progress, wait_for};
+use super::output::{fmt_values, follow, joint_progress, pose_progress, start};
 use super::{Cli, CliError, joint_count};
 use crate::banks::MAX_JOINTS;
 use crate::{Client, Pose};
@@ -49,14 +49,14 @@ pub(super) fn move_to(
     let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
     client.goal_rpy(xyz, rpy, *time)?;
-    client.begin()?;
+    start(client, Client::begin)?;
     writeln!(out, "moving")?;
     if wait.no_wait {
         return Ok(());
     }
     let goal = Pose::from_xyz_rpy(xyz, rpy);
     let options = wait.options(*time, interrupt.as_ref());
-    let pose = wait_for(client, |c| {
+    let pose = follow(client, |c| {
         c.wait_until_pose(&goal, &options, pose_progress)
     })?;
     writeln!(
@@ -81,12 +81,12 @@ pub(super) fn jmove(
     match time {
         None => {
             client.joint_goal(q)?;
-            client.joint_begin()?;
+            start(client, Client::joint_begin)?;
         }
         Some(t) => {
             client.joint_via_clear()?;
             client.via_joint(0, q, *t)?;
-            client.run_joint_sequence()?;
+            start(client, Client::run_joint_sequence)?;
         }
     }
     writeln!(out, "moving")?;
@@ -94,7 +94,7 @@ pub(super) fn jmove(
         return Ok(());
     }
     let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
-    let reached = wait_for(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
+    let reached = follow(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())
 }
@@ -156,6 +156,26 @@ mod tests {
         assert_eq!(text.as_str(), "ER20 Cmd BG rejected");
         // No status from this fake: the hint lists what BG needs.
         assert!(hint.unwrap().contains("mode cart"));
+    }
+
+    #[test]
+    fn a_begin_without_a_reply_may_have_started_the_motion_and_is_stopped() {
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"BG" => vec![],
+            _ => vec![echo(d)],
+        });
+        let args = ["move", "0.5", "0.2", "0.1", "0", "0", "0"];
+        let retry = ["--timeout", "50ms", "--retries", "1"];
+        let (result, _) = run_with(&fake, &[&args[..], &retry].concat());
+        let err = result.unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.to_string()
+                .ends_with("; sent ST: the arm stops and holds"),
+            "{err}"
+        );
+        let sent: Vec<_> = fake.received().iter().map(|d| d[..2].to_vec()).collect();
+        assert_eq!(sent, [b"GT", b"BG", b"BG", b"ST"]);
     }
 
     #[test]

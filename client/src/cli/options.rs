@@ -42,7 +42,7 @@ pub struct WaitArgs {
     /// Return as soon as the motion has started.
     #[arg(long)]
     pub no_wait: bool,
-    /// Give up waiting after this long (default: 30 s plus the requested times).
+    /// Give up waiting after this long (default: 30 s plus the requested times); then ST.
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
     /// Arrival tolerance, mm (joints: mrad).

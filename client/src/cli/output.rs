@@ -1,5 +1,6 @@
 //! What the motion commands print while and after they wait: the progress line on stderr,
-//! joint and position values, and the end of a wait (ST after Ctrl-C, the motion's end).
+//! joint and position values, and the start and end of a motion's wait (ST when a command
+//! leaves before the motion it started has ended).
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
@@ -7,33 +8,52 @@ use std::time::{Duration, Instant};
 use super::CliError;
 use crate::{Client, ClientError, Pose, Progress, Text};
 
-/// Runs a wait for a motion (`wait`, whose progress goes to the progress line): after Ctrl-C
-/// ended it ST is sent; otherwise the progress line ends and the motion's end is awaited.
-pub(super) fn wait_for<T>(
-    client: &mut Client,
-    wait: impl FnOnce(&mut Client) -> Result<T, ClientError>,
-) -> Result<T, CliError> {
-    let reached = wait(client).map_err(|e| stop_if_interrupted(client, e))?;
+/// A command that leaves before it saw the motion it started end (a wait that timed out,
+/// stalled, was aborted or interrupted; a controller that stopped answering) sends ST first:
+/// otherwise the arm goes on alone, and the next client is refused (`ER40`) until it ends.
+pub(super) fn stop_started(client: &mut Client, error: ClientError) -> CliError {
     finish_progress();
-    settle(client)?;
-    Ok(reached)
-}
-
-/// After Ctrl-C ended a wait: ST (unless the wait ended otherwise).
-pub(super) fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
-    if !matches!(error, ClientError::Interrupted) {
-        return error.into();
-    }
-    finish_progress();
-    CliError::Interrupted(match client.stop() {
+    let stop = match client.stop() {
         Ok(()) => "sent ST: the arm stops and holds".to_owned(),
         Err(e) => format!("ST failed ({e}): the arm may still be moving"),
+    };
+    match error {
+        ClientError::Interrupted => CliError::Interrupted(stop),
+        error => CliError::Stopped { error, stop },
+    }
+}
+
+/// Sends the request(s) that start a motion. When the starting request's replies are all lost,
+/// the motion may have started: [`stop_started`].
+pub(super) fn start<T>(
+    client: &mut Client,
+    request: impl FnOnce(&mut Client) -> Result<T, ClientError>,
+) -> Result<T, CliError> {
+    request(client).map_err(|e| match e {
+        ClientError::Timeout { .. } | ClientError::Unverified { .. } => stop_started(client, e),
+        e => e.into(),
     })
 }
 
-/// After a wait: until the motion has ended (see [`Client::wait_motion_ended`]).
+/// Waits for the motion this command started (`wait`, whose progress goes to the progress
+/// line), then until it has ended ([`settle`]); on any failure [`stop_started`].
+pub(super) fn follow<T>(
+    client: &mut Client,
+    wait: impl FnOnce(&mut Client) -> Result<T, ClientError>,
+) -> Result<T, CliError> {
+    let result = wait(client).and_then(|reached| {
+        finish_progress();
+        client.wait_motion_ended(SETTLE).map(|()| reached)
+    });
+    result.map_err(|e| stop_started(client, e))
+}
+
+/// After a wait: how long to wait until the motion has ended (see [`Client::wait_motion_ended`]).
+const SETTLE: Duration = Duration::from_secs(5);
+
+/// After a wait: until the motion has ended.
 pub(super) fn settle(client: &mut Client) -> Result<(), CliError> {
-    Ok(client.wait_motion_ended(Duration::from_secs(5))?)
+    Ok(client.wait_motion_ended(SETTLE)?)
 }
 
 pub(super) fn fmt_values(values: &[f64], decimals: usize) -> String {
@@ -126,22 +146,35 @@ mod tests {
     use crate::fake::{FakeController, echo};
 
     #[test]
-    fn an_interrupted_wait_sends_st() {
+    fn a_wait_that_fails_sends_st_and_keeps_its_exit_status() {
         let fake = FakeController::spawn(|d| vec![echo(d)]);
         let mut client = Client::connect(fake.addr()).unwrap();
-        let err = stop_if_interrupted(&mut client, ClientError::Interrupted);
+        let err = stop_started(&mut client, ClientError::Interrupted);
         assert_eq!(
             err.to_string(),
             "interrupted: sent ST: the arm stops and holds"
         );
         assert_eq!(err.exit_code(), 130);
         assert_eq!(&fake.received()[0][..2], b"ST");
-        // Any other end of a wait is passed on, and nothing is sent.
-        let err = stop_if_interrupted(
+        let timeout = ClientError::WaitTimeout {
+            target: 0,
+            distance: 0.25,
+            angle: None,
+            timeout: Duration::from_secs(1),
+        };
+        let err = stop_started(&mut client, timeout);
+        assert_eq!(
+            err.to_string(),
+            "target 1 not reached within 1s (still 0.2500 (joint norm) from it); sent ST: the arm \
+             stops and holds"
+        );
+        assert_eq!(err.exit_code(), 2);
+        let err = stop_started(
             &mut client,
             ClientError::Aborted(crate::fake::parsed_text("WN22 Inv Kin Divergence.")),
         );
         assert_eq!(err.exit_code(), 1);
-        assert_eq!(fake.received().len(), 1);
+        assert_eq!(fake.received().len(), 3);
+        assert!(fake.received().iter().all(|d| &d[..2] == b"ST"));
     }
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::options::WaitArgs;
-use super::output::{fmt_values, joint_progress, pose_progress, wait_for};
+use super::output::{fmt_values, follow, joint_progress, pose_progress, start};
 use super::{Cli, CliError, joint_count};
 use crate::{Client, RunFile};
 
@@ -70,7 +70,7 @@ pub(super) fn run(
         run.set_default_blend(blend * 1e-3);
     }
     let interrupt = wait.interrupt();
-    client.start_run(&run)?;
+    start(client, |c| c.start_run(&run))?;
     writeln!(
         out,
         "running {} via points from {}",
@@ -85,7 +85,7 @@ pub(super) fn run(
             let total = points.iter().map(|p| p.time).sum();
             let goals = RunFile::poses(points);
             let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-            let pose = wait_for(client, |c| {
+            let pose = follow(client, |c| {
                 c.wait_through_poses(&goals, &options, pose_progress)
             })?;
             writeln!(out, "done: {}", fmt_values(&pose.xyz, 4))?;
@@ -94,7 +94,7 @@ pub(super) fn run(
             let total = points.iter().map(|p| p.time).sum();
             let goals: Vec<Vec<f64>> = points.iter().map(|p| p.q.clone()).collect();
             let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-            let q = wait_for(client, |c| {
+            let q = follow(client, |c| {
                 c.wait_through_joints(&goals, &options, joint_progress)
             })?;
             writeln!(out, "done: {}", fmt_values(&q, 4))?;
