@@ -31,13 +31,13 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use armgate_protocol::can::CanFrame;
 use etherparse::PacketBuilder;
-use pcap_file::{DataLink, Endianness};
 use pcap_file::pcapng::PcapNgWriter;
 use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketBlock;
 use pcap_file::pcapng::blocks::interface_description::{
     InterfaceDescriptionBlock, InterfaceDescriptionOption,
 };
 use pcap_file::pcapng::blocks::section_header::{SectionHeaderBlock, SectionHeaderOption};
+use pcap_file::{DataLink, Endianness};
 
 /// Records queued for the writer at most (at most 192 bytes each, so about 1.5 MiB).
 const QUEUE: usize = 8192;
