@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 
 use super::CliError;
 use super::options::parse_duration;
-use crate::{Client, ClientError, DrivesOn, Mode, matching};
+use crate::{Client, ClientError, DrivesOn, Mode};
 
 /// `armgate mode` arguments.
 #[derive(Debug, Args)]
@@ -76,10 +76,8 @@ pub(super) fn on(args: &OnArgs, client: &mut Client, out: &mut impl Write) -> Re
 pub(super) fn off(client: &mut Client, out: &mut impl Write) -> Result<(), CliError> {
     match client.off() {
         // `ER10 Arm already off` / `already stopping`: what was asked for.
-        Err(ClientError::Rejected(text))
-            if matching::code(&text) == Some(10) && text.as_str().contains(" already ") =>
-        {
-            let state = text.as_str().rsplit(' ').next().unwrap_or("off");
+        Err(ClientError::Rejected(text)) if crate::drives::already_stopped(&text).is_some() => {
+            let state = crate::drives::already_stopped(&text).unwrap_or_default();
             writeln!(out, "drives already {state}")?;
             Ok(())
         }
