@@ -1,7 +1,8 @@
 //! What both fuzz targets check of every datagram's answer and every unsolicited notice.
 
 use armgate_protocol::client::{
-    Header, Hold, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
+    Command, Header, Hold, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY,
+    Text,
 };
 
 /// The parsers on a datagram: what the handler must answer it with.
