@@ -11,6 +11,7 @@
 
 mod chain;
 mod closed_form;
+mod evaluation;
 mod family;
 mod ik;
 mod jacobian;
@@ -22,6 +23,7 @@ mod velocity;
 
 pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
+pub use evaluation::LastEvaluation;
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};

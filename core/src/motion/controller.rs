@@ -13,7 +13,7 @@ use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
-use crate::kinematics::{Chain, Joints, KinematicsError};
+use crate::kinematics::{Chain, Joints, KinematicsError, LastEvaluation};
 use crate::math::{self, Frame, Twist};
 use armgate_protocol::client::{Hold, JointBound, Motion, PathPoint, TwistFrame};
 
@@ -111,6 +111,8 @@ pub struct Controller {
     max_rate: Joints,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
+    /// The tracking solves' last pose evaluation: the next tick's seed, evaluated already.
+    last_evaluation: LastEvaluation,
 }
 
 impl Controller {
@@ -150,6 +152,7 @@ impl Controller {
             cartesian_speed: cartesian.max_velocity,
             max_rate: config.per_joint(|j| j.max_rate),
             fixed_point: FixedPoint::default(),
+            last_evaluation: LastEvaluation::default(),
         }
     }
 
@@ -551,7 +554,10 @@ impl Controller {
         if self.fixed_point.holds(setpoint, seed) {
             return Tracking::Reached(*seed);
         }
-        let Ok(result) = self.chain.solve_tracking(setpoint, seed, &self.ik) else {
+        let solved =
+            self.chain
+                .solve_tracking_after(setpoint, seed, &self.ik, &mut self.last_evaluation);
+        let Ok(result) = solved else {
             return Tracking::Unreachable;
         };
         let s = result.solution();
