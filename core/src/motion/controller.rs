@@ -8,7 +8,8 @@ use super::joint_path::check_joint_path;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
-use super::supervisor::{Along, StopCause, Supervisor, budget};
+use super::brake::budget;
+use super::supervisor::{Along, StopCause, Supervisor};
 use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
 use super::workspace::Workspace;
 use super::{Events, Refusal};
@@ -182,9 +183,8 @@ impl Controller {
             Mode::Joint | Mode::Cartesian if self.stream.expires() => {
                 // A silent client: the supervisor brings the arm to rest.
                 self.stream.halt();
-                let velocity = *self.supervisor.velocity();
-                self.supervisor
-                    .begin(StopCause::StreamTimeout, Along::Joints(velocity));
+                let along = self.supervisor.in_joint_space();
+                self.supervisor.begin(StopCause::StreamTimeout, along);
                 None
             }
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
@@ -474,14 +474,10 @@ impl Controller {
             }
             return (Some(q), None);
         }
-        let Some(Along::Joints(v0)) = self.supervisor.stopping().map(|s| s.along) else {
+        let Some((mut v, scale)) = self.supervisor.next_joint_velocity() else {
             self.finish_stop(&q_cmd);
             return (Some(q_cmd), None);
         };
-        let (rate, change) = self.supervisor.joint_budget(&v0);
-        let scale = self.brake(rate, change);
-        let mut v = v0;
-        v.iter_mut().for_each(|v| *v *= scale);
         self.supervisor.keep_within_range(&q_cmd, &mut v);
         let mut q = q_cmd;
         for (q, v) in q.iter_mut().zip(v.iter()) {
@@ -589,8 +585,8 @@ impl Controller {
         self.cartesian_sequence.halt();
         let setpoint = self.cartesian_generator.setpoint();
         self.cartesian_generator.hold(setpoint);
-        self.supervisor
-            .begin(cause, Along::Joints(*self.supervisor.velocity()));
+        let along = self.supervisor.in_joint_space();
+        self.supervisor.begin(cause, along);
     }
 
     /// Switches the control mode. The newly active generator holds the last command (or the
@@ -605,10 +601,9 @@ impl Controller {
         self.stream.halt();
         self.hold(q_m);
         if moving {
-            let velocity = *self.supervisor.velocity();
+            let along = self.supervisor.in_joint_space();
             self.supervisor.finish();
-            self.supervisor
-                .begin(StopCause::ModeChange, Along::Joints(velocity));
+            self.supervisor.begin(StopCause::ModeChange, along);
         }
         Ok(())
     }
@@ -639,8 +634,8 @@ impl Controller {
         }
         if self.stream.is_active() {
             self.stream.halt();
-            self.supervisor
-                .begin(cause, Along::Joints(*self.supervisor.velocity()));
+            let along = self.supervisor.in_joint_space();
+            self.supervisor.begin(cause, along);
             if let Some(q) = self.command {
                 self.hold_at(q);
             }
