@@ -693,7 +693,8 @@ impl Controller {
         });
         if stream_stopping {
             self.supervisor.finish();
-            self.stream.resume(self.supervisor.velocity());
+            self.stream
+                .resume(self.supervisor.velocity(), self.supervisor.acceleration());
             return Ok(());
         }
         if self.is_moving() && !self.stream.is_active() {

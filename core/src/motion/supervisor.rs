@@ -200,6 +200,11 @@ impl Supervisor {
         &self.velocity
     }
 
+    /// The last commanded joint acceleration.
+    pub fn acceleration(&self) -> &Joints {
+        &self.acceleration
+    }
+
     /// Eases a joint-space stop's next velocity `v` (from the command `q`) where a joint
     /// decelerating by the common fraction would not stop before its limit: that joint brakes
     /// at its own acceleration limit instead, so the range clamp never has to stop it dead.
