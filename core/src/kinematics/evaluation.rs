@@ -35,11 +35,10 @@ impl LastEvaluation {
     /// The tool pose at `q` on `chain`, evaluated unless `q` is the joints evaluated last; the
     /// joint axes are then [`axes`](Self::axes).
     pub(super) fn at(&mut self, chain: &Chain, q: &[f64; MAX_JOINTS]) -> Frame {
-        let same = self.q.as_ref().is_some_and(|last| {
-            last.iter()
-                .zip(q)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-        });
+        let same = self
+            .q
+            .as_ref()
+            .is_some_and(|last| last.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits()));
         if !same {
             self.tool = chain.tool_and_axes(q, &mut self.axes);
             self.q = Some(*q);

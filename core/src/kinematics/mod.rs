@@ -23,8 +23,8 @@ mod velocity;
 
 pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
-pub use evaluation::LastEvaluation;
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
+pub use evaluation::LastEvaluation;
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;

@@ -211,7 +211,11 @@ impl Supervisor {
     /// The direction of motion gives way; in joint space there is no path to keep.
     pub fn keep_within_range(&self, q: &Joints, v: &mut Joints) {
         let t = self.limits.period;
-        let limits = self.min.iter().zip(self.max.iter()).zip(self.limits.a_max.iter());
+        let limits = self
+            .min
+            .iter()
+            .zip(self.max.iter())
+            .zip(self.limits.a_max.iter());
         let state = q.iter().zip(self.velocity.iter());
         for ((v, (q, last)), ((lo, hi), a)) in v.iter_mut().zip(state).zip(limits) {
             let left = if *v > 0.0 { hi - q } else { q - lo } - libm::fabs(*v) * t;
@@ -227,7 +231,11 @@ impl Supervisor {
     /// clamp, a dead stop.
     pub fn can_stop_within_range(&self, q: &Joints, next: &Joints) -> bool {
         let t = self.limits.period;
-        let limits = self.min.iter().zip(self.max.iter()).zip(self.limits.a_max.iter());
+        let limits = self
+            .min
+            .iter()
+            .zip(self.max.iter())
+            .zip(self.limits.a_max.iter());
         q.iter()
             .zip(next.iter())
             .zip(limits)

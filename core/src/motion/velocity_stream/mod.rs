@@ -372,8 +372,10 @@ impl VelocityStream {
             ramps.fold(0.0, f64::max)
         });
         let mut v = *velocity;
-        for (v, last) in v.iter_mut().zip(self.velocity.iter()) {
-            *v += (*v - last) / self.period * ramp;
+        if ramp > 0.0 {
+            for (v, last) in v.iter_mut().zip(self.velocity.iter()) {
+                *v += (*v - last) / self.period * ramp;
+            }
         }
         let stop_time = v
             .iter()

@@ -77,7 +77,11 @@ pub fn accelerate_within_jerk(
         norm += w * u(i) * u(i);
     }
     let rate = if norm > 0.0 { along / norm } else { 0.0 };
-    let rate = if rate.is_finite() { rate.clamp(-1.0, 1.0) } else { 0.0 };
+    let rate = if rate.is_finite() {
+        rate.clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
     // The largest change of the rate per tick within every joint's jerk limit.
     let change = a_max
         .iter()
