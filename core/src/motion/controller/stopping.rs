@@ -1,5 +1,5 @@
 //! A stop in progress, one tick at a time: along a Cartesian or joint path (the brake scales
-X
+//! the generator's motion time), or in joint space (`joint_stop.rs`).
 
 use super::cartesian_tick::{Tracking, cartesian_velocity};
 use super::{Controller, Mode};
