@@ -13,22 +13,12 @@ use crate::math::Frame;
 
 /// The tool pose and joint axes at one joint vector of one chain: the solver's working buffer,
 /// which keeps the last evaluation. Use one per chain.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct LastEvaluation {
     /// The joints evaluated; `None` before the first evaluation.
     q: Option<[f64; MAX_JOINTS]>,
     tool: Frame,
     axes: Axes,
-}
-
-impl Default for LastEvaluation {
-    fn default() -> Self {
-        Self {
-            q: None,
-            tool: Frame::identity(),
-            axes: Axes::default(),
-        }
-    }
 }
 
 impl LastEvaluation {
