@@ -211,11 +211,7 @@ impl Supervisor {
     /// The direction of motion gives way; in joint space there is no path to keep.
     pub fn keep_within_range(&self, q: &Joints, v: &mut Joints) {
         let t = self.limits.period;
-        let limits = self
-            .min
-            .iter()
-            .zip(self.max.iter())
-            .zip(self.limits.a_max.iter());
+        let limits = self.ranges();
         let state = q.iter().zip(self.velocity.iter());
         for ((v, (q, last)), ((lo, hi), a)) in v.iter_mut().zip(state).zip(limits) {
             let left = if *v > 0.0 { hi - q } else { q - lo } - libm::fabs(*v) * t;
@@ -226,16 +222,18 @@ impl Supervisor {
         }
     }
 
+    /// Each joint's range and acceleration limit.
+    fn ranges(&self) -> impl Iterator<Item = ((&f64, &f64), &f64)> {
+        let ranges = self.min.iter().zip(self.max.iter());
+        ranges.zip(self.limits.a_max.iter())
+    }
+
     /// True if every joint, stepping from `q` to `next` this tick, can still stop before its
     /// range at its acceleration limit: a set-point that could not would end on the range
     /// clamp, a dead stop.
     pub fn can_stop_within_range(&self, q: &Joints, next: &Joints) -> bool {
         let t = self.limits.period;
-        let limits = self
-            .min
-            .iter()
-            .zip(self.max.iter())
-            .zip(self.limits.a_max.iter());
+        let limits = self.ranges();
         q.iter()
             .zip(next.iter())
             .zip(limits)
