@@ -3,7 +3,9 @@
 //! * [`Chain`]: forward kinematics of the tool and of every link frame, the geometric Jacobian
 //!   and manipulability.
 //! * [`Chain::solve_tracking`] / [`Chain::solve_global`]: inverse position kinematics from a
-//!   nearby seed (the per-tick case) or from anywhere (deterministic random restarts).
+//!   nearby seed (the per-tick case) or from anywhere (deterministic random restarts);
+//!   [`Chain::solve_tracking_after`] reuses the last solve's final pose evaluation
+//!   ([`LastEvaluation`]) when the seed is that solve's answer, as in the control tick.
 //! * [`Chain::solve_all`] / [`Chain::solve_nearest`]: every solution in closed form, for the
 //!   [`Family`] detected from the geometry (subproblem decomposition).
 //! * [`diverges`]: the seed's divergence guard.
