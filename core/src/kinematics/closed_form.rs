@@ -234,7 +234,9 @@ impl Chain {
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let reference = self.prepare(target, reference)?;
+        let mut clamped = [0.0; MAX_JOINTS];
+        self.prepare(target, reference, &mut clamped)?;
+        let reference = clamped;
         let found = self.nearest_for(target, &reference, branch)?;
         let redundant = self
             .closed_form()
@@ -334,10 +336,11 @@ impl Chain {
         nearest: bool,
     ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
-        let reference = self.prepare(target, reference)?;
+        let mut clamped = [0.0; MAX_JOINTS];
+        self.prepare(target, reference, &mut clamped)?;
         let mut candidates = Candidates::new();
-        self.candidates_of(form, target, &reference, nearest, &mut candidates);
-        Ok((form, reference, candidates))
+        self.candidates_of(form, target, &clamped, nearest, &mut candidates);
+        Ok((form, clamped, candidates))
     }
 
     /// The candidates of `form` for a checked `reference`, written to `out`.
