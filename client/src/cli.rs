@@ -291,7 +291,10 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         Cmd::Stop => drives::stop(client, out),
         Cmd::Jog(args) => jog::jog(args, cli, client, out),
         Cmd::Move(args) => motion::move_to(args, client, out),
-        Cmd::Ik(args) => ik::ik(args, client, out),
+        Cmd::Ik(args) => {
+            let joints = joint_count(cli, client)?;
+            ik::ik(args, joints, client, out)
+        }
         Cmd::IkMove(args) => ik::ik_move(args, client, out),
         Cmd::Jmove(args) => motion::jmove(args, cli, client, out),
         Cmd::Run(args) => run_file::run(args, cli, client, out),

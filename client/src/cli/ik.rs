@@ -34,11 +34,17 @@ pub struct IkMoveArgs {
     pub wait: WaitArgs,
 }
 
-/// `armgate ik`: KS, every solution with its branch.
-pub(super) fn ik(args: &IkArgs, client: &mut Client, out: &mut impl Write) -> Result<(), CliError> {
+/// `armgate ik`: KS, every solution with its branch (and its joints 7.. on an arm of more than
+/// six `joints`).
+pub(super) fn ik(
+    args: &IkArgs,
+    joints: usize,
+    client: &mut Client,
+    out: &mut impl Write,
+) -> Result<(), CliError> {
     let IkArgs { pose } = args;
     let (xyz, rpy) = pose.xyz_rpy();
-    let Some(solutions) = client.ik_solutions(xyz, rpy)? else {
+    let Some(solutions) = client.ik_solutions(xyz, rpy, joints)? else {
         writeln!(out, "no closed-form IK for this robot (docs/kinematics.md)")?;
         return Ok(());
     };
