@@ -126,27 +126,25 @@ impl Shoulder {
     }
 }
 
-/// A checked solution with its errors.
+/// A checked solution with its errors, squared (the square roots are taken only for the
+/// one answer that reports them: on the Cortex-M7 each is a software `sqrt`).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Exact {
     pub solution: BranchSolution,
-    /// Distance from the target position (m).
-    pub position_error: f64,
-    /// Rotation angle from the target orientation (rad).
-    pub orientation_error: f64,
+    errors: Misses,
 }
 
 impl Exact {
     /// As an [`IkSolution`] (no Newton steps), if both errors are below `tolerance`.
     pub fn within(&self, tolerance: f64) -> Option<IkSolution> {
-        (self.position_error < tolerance && self.orientation_error < tolerance).then_some(
-            IkSolution {
-                q: self.solution.q,
-                iterations: 0,
-                position_error: self.position_error,
-                orientation_error: self.orientation_error,
-            },
-        )
+        let limit = tolerance * tolerance;
+        let Misses { position, rotation } = self.errors;
+        (position < limit && rotation < limit).then(|| IkSolution {
+            q: self.solution.q,
+            iterations: 0,
+            position_error: libm::sqrt(position),
+            orientation_error: libm::sqrt(rotation),
+        })
     }
 }
 
@@ -170,15 +168,20 @@ impl Chain {
     /// value kept by a joint a singularity leaves free). Refused with
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference, false)?;
-        let mut solutions = Solutions::new();
-        for candidate in &candidates {
-            if let Some(exact) = self.finish(form, candidate, target, &reference) {
-                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                let _ = solutions.push(exact.solution);
+        let mut candidates = Candidates::new();
+        let (form, reference) = self.candidates(target, reference, false, &mut candidates)?;
+        // Filled in place: `Ok(list)` of a finished list copied its 650 bytes (byte by byte
+        // on the Cortex-M7, about 2,400 instructions).
+        let mut all = Ok(Solutions::new());
+        if let Ok(solutions) = &mut all {
+            for candidate in &candidates {
+                if let Some(exact) = self.finish(form, candidate, target, &reference) {
+                    // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+                    let _ = solutions.push(exact.solution);
+                }
             }
         }
-        Ok(solutions)
+        all
     }
 
     /// The solution nearest to `reference` (on `branch` if given): the candidates are tried
@@ -201,7 +204,8 @@ impl Chain {
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference, false)?;
+        let mut candidates = Candidates::new();
+        let (form, reference) = self.candidates(target, reference, false, &mut candidates)?;
         let mut near = [Angle::of(0.0); 6];
         for (a, r) in near.iter_mut().zip(&reference) {
             *a = Angle::of(*r);
@@ -245,7 +249,8 @@ impl Chain {
     /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
     /// two-way choice the root nearest the seed, so one candidate is built and checked.
     pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
-        let (form, reference, candidates) = self.candidates(target, seed, true)?;
+        let mut candidates = Candidates::new();
+        let (form, reference) = self.candidates(target, seed, true, &mut candidates)?;
         Ok(candidates
             .first()
             .and_then(|c| self.finish(form, c, target, &reference)))
@@ -261,27 +266,28 @@ impl Chain {
         same.then_some(found.branch)
     }
 
-    /// The family, the checked reference and the family solver's candidates (with `nearest`,
-    /// only the one nearest `reference` at every choice).
+    /// The family and the checked reference; the family solver's candidates (with `nearest`,
+    /// only the one nearest `reference` at every choice) are written to `out`, which the
+    /// caller owns: returned by value, the 1.2 KB list was copied several times per solve.
     fn candidates(
         &self,
         target: &Frame,
         reference: &[f64],
         nearest: bool,
-    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
+        out: &mut Candidates,
+    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS]), IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         let reference = self.prepare(target, reference)?;
-        let mut candidates = Candidates::new();
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &reference, nearest, &mut candidates);
+                spherical_wrist::solve(form, target, &reference, nearest, out);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, &reference, nearest, &mut candidates);
+                three_parallel::solve(form, target, &reference, nearest, out);
             }
             Family::Numeric => {}
         }
-        Ok((form, reference, candidates))
+        Ok((form, reference))
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
@@ -325,16 +331,16 @@ impl Chain {
         } else {
             self.pose(&q)
         };
-        let mut errors = misses(&reached, target);
-        if errors.0.max(errors.1) > CHECK {
+        let mut errors = Misses::of(&reached, target);
+        if errors.largest() > CHECK * CHECK {
             // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
             // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
-            if errors.0.max(errors.1) > POLISH_FROM {
+            if errors.largest() > POLISH_FROM * POLISH_FROM {
                 return None;
             }
             q = self.polish(target, &q)?;
-            errors = misses(&self.pose(&q), target);
-            if errors.0.max(errors.1) > CHECK {
+            errors = Misses::of(&self.pose(&q), target);
+            if errors.largest() > CHECK * CHECK {
                 return None;
             }
         }
@@ -343,8 +349,7 @@ impl Chain {
                 q,
                 branch: candidate.branch,
             },
-            position_error: errors.0,
-            orientation_error: errors.1,
+            errors,
         })
     }
 
@@ -362,13 +367,28 @@ impl Chain {
     }
 }
 
-/// How far `reached` misses `target`: the position error (m) and the rotation angle between
-/// them (rad), the angle read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
-/// `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter), which needs no logarithm.
-fn misses(reached: &Frame, target: &Frame) -> (f64, f64) {
-    let position = (reached.translation.vector - target.translation.vector).norm();
-    let rotation = (reached.rotation.matrix() - target.rotation.matrix()).norm();
-    (position, rotation * core::f64::consts::FRAC_1_SQRT_2)
+/// How far a pose misses a target, squared: the position error (m²) and the rotation angle
+/// between them (rad²).
+#[derive(Clone, Copy, Debug)]
+struct Misses {
+    position: f64,
+    rotation: f64,
+}
+
+impl Misses {
+    /// The angle is read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
+    /// `θ² ≈ ‖R₁ − R₂‖²_F / 2` for the small angles that matter), which needs no logarithm.
+    fn of(reached: &Frame, target: &Frame) -> Self {
+        Self {
+            position: (reached.translation.vector - target.translation.vector).norm_squared(),
+            rotation: 0.5 * (reached.rotation.matrix() - target.rotation.matrix()).norm_squared(),
+        }
+    }
+
+    /// The larger of the two.
+    fn largest(&self) -> f64 {
+        self.position.max(self.rotation)
+    }
 }
 
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to

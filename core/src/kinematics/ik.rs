@@ -156,12 +156,14 @@ impl Chain {
         let tool = self.tool_and_axes(&start, &mut axes);
         let e = math::diff(&tool, target);
         let here = e.fixed_rows::<3>(0).norm() + e.fixed_rows::<3>(3).norm();
-        let first = Some((tool, axes));
+        // By reference: the axes are 384 bytes, copied by value they cost the Cortex-M7 more
+        // than the arithmetic that uses them.
+        let first = Some((&tool, &axes));
         // Close to the target (the control tick's case, and a seed that already reaches it:
         // returned bit for bit) Newton converges in two or three steps, fewer instructions
         // than the closed form; farther out the closed form wins.
         if here < NEWTON_NEAR {
-            return Ok(self.newton_from(target, start, config, first.as_ref()));
+            return Ok(self.newton_from(target, start, config, first));
         }
         let close = |q: &[f64]| {
             q.iter()
@@ -174,7 +176,7 @@ impl Chain {
         {
             return Ok(IkResult::Converged(solution));
         }
-        Ok(self.newton_from(target, start, config, first.as_ref()))
+        Ok(self.newton_from(target, start, config, first))
     }
 
     /// Tracking IK by damped Newton steps alone from a nearby `seed`, typically the previous
@@ -203,7 +205,7 @@ impl Chain {
         target: &Frame,
         q: [f64; MAX_JOINTS],
         config: &IkConfig,
-        first: Option<&(Frame, Axes)>,
+        first: Option<(&Frame, &Axes)>,
     ) -> IkResult {
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
         let no_hook = &mut || {};
@@ -395,7 +397,7 @@ impl Chain {
         mut q: [f64; MAX_JOINTS],
         iterations: u16,
         tolerance: f64,
-        (bounds, first): (Bounds, Option<&(Frame, Axes)>),
+        (bounds, first): (Bounds, Option<(&Frame, &Axes)>),
         on_step: &mut impl FnMut(),
     ) -> Descent {
         // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
@@ -406,17 +408,14 @@ impl Chain {
             orientation_error: f64::INFINITY,
         };
         // Reused across iterations: on the Cortex-M7 rebuilding them costs more than the maths.
-        let mut axes = Axes::default();
+        let mut own_axes = Axes::default();
         let mut jacobian = Jacobian::zeros();
         let mut steps = 0;
         let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
-            let tool = match first {
-                Some((tool, evaluated)) if it == 0 => {
-                    axes = *evaluated;
-                    *tool
-                }
-                _ => self.tool_and_axes(&q, &mut axes),
+            let (tool, axes) = match first {
+                Some((tool, evaluated)) if it == 0 => (*tool, evaluated),
+                _ => (self.tool_and_axes(&q, &mut own_axes), &own_axes),
             };
             let e = math::diff(&tool, target);
             let pose = Pose {
@@ -439,7 +438,7 @@ impl Chain {
                 break;
             }
             let energy = 0.5 * e.norm_squared();
-            self.jacobian_into(&axes, &tool.translation.vector, &mut jacobian);
+            self.jacobian_into(axes, &tool.translation.vector, &mut jacobian);
             let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q, bounds);
             steps += 1;
             on_step();

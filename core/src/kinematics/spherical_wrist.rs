@@ -90,10 +90,11 @@ fn wrist(
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
     match sp2(h4, &pointing, h5, h6, form.slack()) {
         PairRoots::Some(pairs, count) => {
-            let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
-            let closeness = |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
+                    let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
+                    let closeness =
+                        |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
                     usize::from(closeness(&second) > closeness(&first))
                 }
                 _ => 0,
