@@ -168,14 +168,14 @@ impl Chain {
     /// value kept by a joint a singularity leaves free). Refused with
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
-        let mut candidates = Candidates::new();
-        let (form, reference) = self.candidates(target, reference, false, &mut candidates)?;
+        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
+        let form = self.candidates(target, reference, false, (&mut checked, &mut candidates))?;
         // Filled in place: `Ok(list)` of a finished list copied its 650 bytes (byte by byte
         // on the Cortex-M7, about 2,400 instructions).
         let mut all = Ok(Solutions::new());
         if let Ok(solutions) = &mut all {
             for candidate in &candidates {
-                if let Some(exact) = self.finish(form, candidate, target, &reference) {
+                if let Some(exact) = self.finish(form, candidate, target, &checked) {
                     // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
                     let _ = solutions.push(exact.solution);
                 }
@@ -204,10 +204,10 @@ impl Chain {
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let mut candidates = Candidates::new();
-        let (form, reference) = self.candidates(target, reference, false, &mut candidates)?;
+        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
+        let form = self.candidates(target, reference, false, (&mut checked, &mut candidates))?;
         let mut near = [Angle::of(0.0); 6];
-        for (a, r) in near.iter_mut().zip(&reference) {
+        for (a, r) in near.iter_mut().zip(&checked) {
             *a = Angle::of(*r);
         }
         // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
@@ -238,7 +238,7 @@ impl Chain {
             }
             let found = candidates
                 .get(k)
-                .and_then(|c| self.finish(form, c, target, &reference));
+                .and_then(|c| self.finish(form, c, target, &checked));
             if found.is_some() {
                 return Ok(found);
             }
@@ -249,11 +249,11 @@ impl Chain {
     /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
     /// two-way choice the root nearest the seed, so one candidate is built and checked.
     pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
-        let mut candidates = Candidates::new();
-        let (form, reference) = self.candidates(target, seed, true, &mut candidates)?;
+        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
+        let form = self.candidates(target, seed, true, (&mut checked, &mut candidates))?;
         Ok(candidates
             .first()
-            .and_then(|c| self.finish(form, c, target, &reference)))
+            .and_then(|c| self.finish(form, c, target, &checked)))
     }
 
     /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
@@ -266,28 +266,29 @@ impl Chain {
         same.then_some(found.branch)
     }
 
-    /// The family and the checked reference; the family solver's candidates (with `nearest`,
-    /// only the one nearest `reference` at every choice) are written to `out`, which the
-    /// caller owns: returned by value, the 1.2 KB list was copied several times per solve.
+    /// The family; the checked reference is written to `checked` and the family solver's
+    /// candidates (with `nearest`, only the one nearest `reference` at every choice) to `out`,
+    /// both owned by the caller: returned by value, they were copied several times per solve
+    /// (the candidate list is 1.2 KB).
     fn candidates(
         &self,
         target: &Frame,
         reference: &[f64],
         nearest: bool,
-        out: &mut Candidates,
-    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS]), IkError> {
+        (checked, out): (&mut [f64; MAX_JOINTS], &mut Candidates),
+    ) -> Result<&ClosedForm, IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
-        let reference = self.prepare(target, reference)?;
+        self.prepare(target, reference, checked)?;
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &reference, nearest, out);
+                spherical_wrist::solve(form, target, checked, nearest, out);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, &reference, nearest, out);
+                three_parallel::solve(form, target, checked, nearest, out);
             }
             Family::Numeric => {}
         }
-        Ok((form, reference))
+        Ok(form)
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is

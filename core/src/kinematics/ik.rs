@@ -147,7 +147,8 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        let start = self.prepare(target, seed)?;
+        let mut start = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut start)?;
         if self.closed_form().is_none() {
             return Ok(self.newton_from(target, start, config, None));
         }
@@ -194,7 +195,8 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        let q = self.prepare(target, seed)?;
+        let mut q = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut q)?;
         Ok(self.newton_from(target, q, config, None))
     }
 
@@ -278,7 +280,8 @@ impl Chain {
         rng_seed: u64,
         on_step: &mut impl FnMut(),
     ) -> Result<IkResult, IkError> {
-        let start = self.prepare(target, seed)?;
+        let mut start = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut start)?;
         let mut q = start;
         let mut rng = SplitMix64::new(rng_seed);
         let mut budget = config.global_iterations;
@@ -346,19 +349,20 @@ impl Chain {
         out
     }
 
-    /// Validates the inputs and returns the seed clamped into the limits.
+    /// Validates the inputs and writes the seed clamped into the limits to `q` (an out
+    /// parameter: a `Result` of the array was copied twice per call on the Cortex-M7).
     pub(super) fn prepare(
         &self,
         target: &Frame,
         seed: &[f64],
-    ) -> Result<[f64; MAX_JOINTS], IkError> {
+        q: &mut [f64; MAX_JOINTS],
+    ) -> Result<(), IkError> {
         if !math::is_finite(target) {
             return Err(IkError::NonFiniteTarget);
         }
         if seed.len() != self.dof() {
             return Err(IkError::WrongJointCount);
         }
-        let mut q = [0.0; MAX_JOINTS];
         let (min, max) = self.limits();
         for ((v, s), (lo, hi)) in q.iter_mut().zip(seed).zip(min.iter().zip(max)) {
             if !s.is_finite() {
@@ -366,7 +370,7 @@ impl Chain {
             }
             *v = saturate(*s, *lo, *hi);
         }
-        Ok(q)
+        Ok(())
     }
 
     /// A configuration drawn uniformly within the limits (revolute ranges capped at ±π about
