@@ -137,14 +137,15 @@ pub(super) struct Exact {
 impl Exact {
     /// As an [`IkSolution`] (no Newton steps), if both errors are below `tolerance`.
     pub fn within(&self, tolerance: f64) -> Option<IkSolution> {
-        let limit = tolerance * tolerance;
-        let Misses { position, rotation } = self.errors;
-        (position < limit && rotation < limit).then(|| IkSolution {
+        let mut solution = IkSolution {
             q: self.solution.q,
             iterations: 0,
-            position_error: libm::sqrt(position),
-            orientation_error: libm::sqrt(rotation),
-        })
+            position_error: 0.0,
+            orientation_error: 0.0,
+        };
+        self.errors
+            .report_within(tolerance, &mut solution)
+            .then_some(solution)
     }
 }
 
@@ -174,10 +175,12 @@ impl Chain {
         // on the Cortex-M7, about 2,400 instructions).
         let mut all = Ok(Solutions::new());
         if let Ok(solutions) = &mut all {
+            let mut q = Joints::zeros(self.dof());
             for candidate in &candidates {
-                if let Some(exact) = self.finish(form, candidate, target, &checked) {
+                if self.finish(form, candidate, target, (&checked, &mut q)).is_some() {
+                    let branch = candidate.branch;
                     // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                    let _ = solutions.push(exact.solution);
+                    let _ = solutions.push(BranchSolution { q, branch });
                 }
             }
         }
@@ -236,11 +239,13 @@ impl Chain {
             if let Some(d) = distance.get_mut(k) {
                 *d = f64::INFINITY;
             }
-            let found = candidates
-                .get(k)
-                .and_then(|c| self.finish(form, c, target, &checked));
-            if found.is_some() {
-                return Ok(found);
+            let mut q = Joints::zeros(self.dof());
+            if let Some(candidate) = candidates.get(k)
+                && let Some(errors) = self.finish(form, candidate, target, (&checked, &mut q))
+            {
+                let branch = candidate.branch;
+                let solution = BranchSolution { q, branch };
+                return Ok(Some(Exact { solution, errors }));
             }
         }
         Ok(None)
@@ -248,12 +253,25 @@ impl Chain {
 
     /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
     /// two-way choice the root nearest the seed, so one candidate is built and checked.
-    pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
-        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
-        let form = self.candidates(target, seed, true, (&mut checked, &mut candidates))?;
-        Ok(candidates
-            .first()
-            .and_then(|c| self.finish(form, c, target, &checked)))
+    /// Written to `solution` (whose joint count must be the chain's) if it reaches `target`
+    /// within `tolerance`: returned by value, it was copied three times on the Cortex-M7.
+    /// `seed` is one that [`prepare`](Self::prepare) checked for `target`.
+    pub(super) fn follow(
+        &self,
+        target: &Frame,
+        seed: &[f64; MAX_JOINTS],
+        tolerance: f64,
+        solution: &mut IkSolution,
+    ) -> bool {
+        let mut candidates = Candidates::new();
+        let Some(form) = self.closed_form() else {
+            return false;
+        };
+        self.candidates_of(form, target, seed, true, &mut candidates);
+        candidates.first().is_some_and(|candidate| {
+            self.finish(form, candidate, target, (seed, &mut solution.q))
+                .is_some_and(|errors| errors.report_within(tolerance, solution))
+        })
     }
 
     /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
@@ -279,29 +297,41 @@ impl Chain {
     ) -> Result<&ClosedForm, IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         self.prepare(target, reference, checked)?;
-        match form.fit.family {
-            Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, checked, nearest, out);
-            }
-            Family::ThreeParallel => {
-                three_parallel::solve(form, target, checked, nearest, out);
-            }
-            Family::Numeric => {}
-        }
+        self.candidates_of(form, target, checked, nearest, out);
         Ok(form)
     }
 
+    /// The candidates of `form` for a checked `reference`, written to `out`.
+    fn candidates_of(
+        &self,
+        form: &ClosedForm,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+        nearest: bool,
+        out: &mut Candidates,
+    ) {
+        match form.fit.family {
+            Family::SphericalWrist => {
+                spherical_wrist::solve(form, target, reference, nearest, out);
+            }
+            Family::ThreeParallel => {
+                three_parallel::solve(form, target, reference, nearest, out);
+            }
+            Family::Numeric => {}
+        }
+    }
+
     /// A candidate on the turns nearest `reference`, polished if the family fit is
-    /// approximate, if it is within the limits and reproduces `target`.
+    /// approximate, written to `q` (of the chain's joint count); its errors if it is within
+    /// the limits and reproduces `target`.
     fn finish(
         &self,
         form: &ClosedForm,
         candidate: &Candidate,
         target: &Frame,
-        reference: &[f64; MAX_JOINTS],
-    ) -> Option<Exact> {
+        (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
+    ) -> Option<Misses> {
         let (min, max) = self.limits();
-        let mut q = Joints::zeros(self.dof());
         let angles = candidate.angles.iter().zip(&candidate.values);
         let joints = q.iter_mut().zip(angles).zip(reference);
         // An ideal model's root may lie a little beyond a limit the true chain's is within:
@@ -321,7 +351,7 @@ impl Chain {
             *v = saturate(turned, *lo, *hi);
         }
         if !form.fit.is_exact() {
-            q = self.polish(target, &q)?;
+            *q = self.polish(target, q)?;
         }
         let mut sin_cos = [(0.0, 1.0); MAX_JOINTS];
         for (sc, a) in sin_cos.iter_mut().zip(&candidate.angles) {
@@ -330,7 +360,7 @@ impl Chain {
         let reached = if form.fit.is_exact() {
             self.pose_by_trig(&sin_cos)
         } else {
-            self.pose(&q)
+            self.pose(q)
         };
         let mut errors = Misses::of(&reached, target);
         if errors.largest() > CHECK * CHECK {
@@ -339,19 +369,13 @@ impl Chain {
             if errors.largest() > POLISH_FROM * POLISH_FROM {
                 return None;
             }
-            q = self.polish(target, &q)?;
-            errors = Misses::of(&self.pose(&q), target);
+            *q = self.polish(target, q)?;
+            errors = Misses::of(&self.pose(q), target);
             if errors.largest() > CHECK * CHECK {
                 return None;
             }
         }
-        Some(Exact {
-            solution: BranchSolution {
-                q,
-                branch: candidate.branch,
-            },
-            errors,
-        })
+        Some(errors)
     }
 
     /// Newton steps on the true chain from a solution of its ideal model (or from a root known
@@ -371,7 +395,7 @@ impl Chain {
 /// How far a pose misses a target, squared: the position error (m²) and the rotation angle
 /// between them (rad²).
 #[derive(Clone, Copy, Debug)]
-struct Misses {
+pub(super) struct Misses {
     position: f64,
     rotation: f64,
 }
@@ -379,16 +403,38 @@ struct Misses {
 impl Misses {
     /// The angle is read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
     /// `θ² ≈ ‖R₁ − R₂‖²_F / 2` for the small angles that matter), which needs no logarithm.
-    fn of(reached: &Frame, target: &Frame) -> Self {
+    pub fn of(reached: &Frame, target: &Frame) -> Self {
         Self {
             position: (reached.translation.vector - target.translation.vector).norm_squared(),
             rotation: 0.5 * (reached.rotation.matrix() - target.rotation.matrix()).norm_squared(),
         }
     }
 
+    /// True if their square roots sum (m + rad) to less than `limit`; the roots are taken
+    /// only if neither alone reaches it.
+    pub fn closer_than(&self, limit: f64) -> bool {
+        let square = limit * limit;
+        self.position < square
+            && self.rotation < square
+            && libm::sqrt(self.position) + libm::sqrt(self.rotation) < limit
+    }
+
     /// The larger of the two.
     fn largest(&self) -> f64 {
         self.position.max(self.rotation)
+    }
+
+    /// True if both errors are below `tolerance`; then written (unsquared) to `solution`, as
+    /// reached without Newton steps.
+    fn report_within(&self, tolerance: f64, solution: &mut IkSolution) -> bool {
+        let limit = tolerance * tolerance;
+        let within = self.position < limit && self.rotation < limit;
+        if within {
+            solution.iterations = 0;
+            solution.position_error = libm::sqrt(self.position);
+            solution.orientation_error = libm::sqrt(self.rotation);
+        }
+        within
     }
 }
 

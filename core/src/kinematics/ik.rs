@@ -17,6 +17,7 @@
 use nalgebra::Vector6;
 
 use super::chain::{Axes, Chain};
+use super::closed_form::Misses;
 use super::jacobian::{Jacobian, JointVector, damped_least_squares};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
@@ -147,35 +148,68 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
+        self.track(target, (seed, None), config)
+    }
+
+    /// [`solve_tracking`](Self::solve_tracking) for a caller that knows the pose at `seed`
+    /// (`seed_pose`; a Cartesian line's previous point). It only chooses between Newton and
+    /// the closed form, so an approximate pose does no harm; the seed's forward kinematics,
+    /// a sixth of the closed form's cost on the Cortex-M7, is then spared unless Newton runs.
+    pub fn solve_tracking_from(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        seed_pose: &Frame,
+        config: &IkConfig,
+    ) -> Result<IkResult, IkError> {
+        self.track(target, (seed, Some(seed_pose)), config)
+    }
+
+    /// Tracking IK from `seed`, whose pose may be known.
+    fn track(
+        &self,
+        target: &Frame,
+        (seed, seed_pose): (&[f64], Option<&Frame>),
+        config: &IkConfig,
+    ) -> Result<IkResult, IkError> {
         let mut start = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut start)?;
         if self.closed_form().is_none() {
             return Ok(self.newton_from(target, start, config, None));
         }
-        // The seed's pose, evaluated once: Newton's first step reuses it.
-        let mut axes = Axes::default();
-        let tool = self.tool_and_axes(&start, &mut axes);
-        let e = math::diff(&tool, target);
-        let here = e.fixed_rows::<3>(0).norm() + e.fixed_rows::<3>(3).norm();
-        // By reference: the axes are 384 bytes, copied by value they cost the Cortex-M7 more
-        // than the arithmetic that uses them.
-        let first = Some((&tool, &axes));
+        // m + rad, the angle read without a logarithm (it only chooses the method).
+        let near = |pose: &Frame| Misses::of(pose, target).closer_than(NEWTON_NEAR);
+        // The seed's pose, unless known, evaluated once: Newton's first step reuses it (by
+        // reference: the axes are 384 bytes, copied by value they cost the Cortex-M7 more
+        // than the arithmetic that uses them).
+        let (tool, mut axes);
+        let (close, first) = match seed_pose {
+            Some(pose) => (near(pose), None),
+            None => {
+                axes = Axes::default();
+                tool = self.tool_and_axes(&start, &mut axes);
+                (near(&tool), Some((&tool, &axes)))
+            }
+        };
         // Close to the target (the control tick's case, and a seed that already reaches it:
         // returned bit for bit) Newton converges in two or three steps, fewer instructions
         // than the closed form; farther out the closed form wins.
-        if here < NEWTON_NEAR {
+        if close {
             return Ok(self.newton_from(target, start, config, first));
         }
-        let close = |q: &[f64]| {
+        let within_jump = |q: &[f64]| {
             q.iter()
                 .zip(seed)
                 .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
         };
-        if let Some(found) = self.follow(target, seed)?
-            && close(&found.solution.q)
-            && let Some(solution) = found.within(config.tolerance)
-        {
-            return Ok(IkResult::Converged(solution));
+        let mut found = IkSolution {
+            q: Joints::zeros(self.dof()),
+            iterations: 0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+        };
+        if self.follow(target, &start, config.tolerance, &mut found) && within_jump(&found.q) {
+            return Ok(IkResult::Converged(found));
         }
         Ok(self.newton_from(target, start, config, first))
     }
