@@ -442,8 +442,11 @@ impl Misses {
 /// `reference`; `None` if no turn fits.
 fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
     const TAU: f64 = core::f64::consts::TAU;
-    // Within π of the reference: if it fits, no other turn is nearer.
-    let near = angle + TAU * libm::round((reference - angle) / TAU);
+    // Within π of the reference: if it fits, no other turn is nearer. The turns rounded by a
+    // saturating conversion (one instruction on the Cortex-M7; `libm::round` is about 35):
+    // whole turns beyond ±2³¹ only saturate, and no such angle fits any limit anyway.
+    let turns = (reference - angle) / TAU;
+    let near = angle + TAU * f64::from((turns + 0.5f64.copysign(turns)) as i32);
     if lo <= near && near <= hi {
         return Some(near);
     }
