@@ -177,7 +177,10 @@ impl Chain {
         if let Ok(solutions) = &mut all {
             let mut q = Joints::zeros(self.dof());
             for candidate in &candidates {
-                if self.finish(form, candidate, target, (&checked, &mut q)).is_some() {
+                if self
+                    .finish(form, candidate, target, (&checked, &mut q))
+                    .is_some()
+                {
                     let branch = candidate.branch;
                     // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
                     let _ = solutions.push(BranchSolution { q, branch });

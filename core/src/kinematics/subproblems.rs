@@ -46,6 +46,19 @@ impl Angle {
             sin: -self.sin,
         }
     }
+
+    /// The sum of the two angles.
+    pub fn plus(&self, other: &Angle) -> Self {
+        Self {
+            cos: self.cos * other.cos - self.sin * other.sin,
+            sin: self.sin * other.cos + self.cos * other.sin,
+        }
+    }
+
+    /// This angle about an axis of sense `sign` (+1 or −1) relative to the reference axis.
+    pub fn signed(&self, sign: f64) -> Self {
+        if sign < 0.0 { self.negated() } else { *self }
+    }
 }
 
 /// The roots of a subproblem with at most two.
@@ -237,12 +250,8 @@ pub(super) fn sp2(
     for (pair, sign) in pairs.iter_mut().zip([1.0, -1.0]).take(count) {
         let z = base + n * (sign * gamma);
         let ((x1, y1), (x2, y2)) = (sp1_scaled(k1, p1, &z), sp1_scaled(k2, p2, &z));
-        let (r1, r2) = *lengths.get_or_insert_with(|| {
-            (
-                libm::sqrt(x1 * x1 + y1 * y1),
-                libm::sqrt(x2 * x2 + y2 * y2),
-            )
-        });
+        let (r1, r2) = *lengths
+            .get_or_insert_with(|| (libm::sqrt(x1 * x1 + y1 * y1), libm::sqrt(x2 * x2 + y2 * y2)));
         match (unit(x1, y1, r1), unit(x2, y2, r2)) {
             (Some(t1), Some(t2)) => *pair = (t1, t2),
             _ => return PairRoots::None,
