@@ -60,6 +60,7 @@ pub(super) fn solve(
             let Some(sum) = sp1(h, h5, &planar_h5) else {
                 continue;
             };
+            let sum_value = sum.value();
             let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
             let (elbows, n3) =
                 sp3(h3, &(o4 - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
@@ -68,7 +69,11 @@ pub(super) fn solve(
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
                 let arm = a2.plus(&a3.signed(sense3));
                 let a4 = sum.plus(&arm.negated()).signed(sense4);
-                let known = [v1, f64::NAN, f64::NAN, f64::NAN, v5, v6];
+                // θ4's value by the same arithmetic: one `atan2` per wrist, not per elbow
+                // (the turn is the caller's to choose).
+                let (v2, v3) = (a2.value(), a3.value());
+                let v4 = sense4 * (sum_value - v2 - sense3 * v3);
+                let known = [v1, v2, v3, v4, v5, v6];
                 let angles = [a1, a2, a3, a4, a5, a6];
                 let branch = Branch::from_roots(b1, b3, b5);
                 // A full list only drops further roots, which cannot occur (8 at most).
