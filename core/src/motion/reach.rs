@@ -192,10 +192,12 @@ impl Reach<'_> {
         at: PathPoint,
     ) -> Result<Joints, Refusal> {
         let unreachable = Refusal::Unreachable(at);
-        let result = self
-            .chain
-            .solve_tracking_from(target, seed, seed_pose, &self.solve_config())
-            .map_err(|_| unreachable)?;
+        // Read in place: moving the answer out of its `Result` copied it.
+        let outcome =
+            (self.chain).solve_tracking_from(target, seed, seed_pose, &self.solve_config());
+        let Ok(result) = &outcome else {
+            return Err(unreachable);
+        };
         let s = result.solution();
         self.iterations_left = self.iterations_left.saturating_sub(s.iterations);
         if s.position_error <= self.tolerance && s.orientation_error <= self.tolerance {
