@@ -16,8 +16,9 @@
 
 use nalgebra::Vector6;
 
-use super::chain::{Axes, Chain};
+use super::chain::Chain;
 use super::closed_form::Misses;
+use super::evaluation::LastEvaluation;
 use super::jacobian::{Jacobian, JointVector, damped_least_squares};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
@@ -149,7 +150,20 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        self.track(target, (seed, None), config)
+        self.solve_tracking_after(target, seed, config, &mut LastEvaluation::default())
+    }
+
+    /// [`solve_tracking`](Self::solve_tracking), reusing `last` (this chain's last pose
+    /// evaluation) if the seed is the joints it evaluated, and leaving this solve's last one
+    /// there: a control tick seeds each solve with the answer of the one before.
+    pub fn solve_tracking_after(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+        last: &mut LastEvaluation,
+    ) -> Result<IkResult, IkError> {
+        self.track(target, (seed, None), config, Some(last))
     }
 
     /// [`solve_tracking`](Self::solve_tracking) for a caller that knows the pose at `seed`
@@ -163,56 +177,53 @@ impl Chain {
         seed_pose: &Frame,
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        self.track(target, (seed, Some(seed_pose)), config)
+        self.track(target, (seed, Some(seed_pose)), config, None)
     }
 
-    /// Tracking IK from `seed`, whose pose may be known.
+    /// Tracking IK from `seed`, whose pose may be known, with the last evaluation if the
+    /// caller keeps one (else a buffer of Newton's own, built only if Newton runs: zeroing
+    /// its 560 bytes is a tenth of a closed-form solve on the Cortex-M7).
     fn track(
         &self,
         target: &Frame,
         (seed, seed_pose): (&[f64], Option<&Frame>),
         config: &IkConfig,
+        mut last: Option<&mut LastEvaluation>,
     ) -> Result<IkResult, IkError> {
         let mut start = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut start)?;
-        if self.closed_form().is_none() {
-            return Ok(self.newton_from(target, start, config, None));
-        }
         // m + rad, the angle read without a logarithm (it only chooses the method).
         let near = |pose: &Frame| Misses::of(pose, target).closer_than(NEWTON_NEAR);
-        // The seed's pose, unless known, evaluated once: Newton's first step reuses it (by
-        // reference: the axes are 384 bytes, copied by value they cost the Cortex-M7 more
-        // than the arithmetic that uses them).
-        let (tool, mut axes);
-        let (close, first) = match seed_pose {
-            Some(pose) => (near(pose), None),
-            None => {
-                axes = Axes::default();
-                tool = self.tool_and_axes(&start, &mut axes);
-                (near(&tool), Some((&tool, &axes)))
-            }
-        };
         // Close to the target (the control tick's case, and a seed that already reaches it:
         // returned bit for bit) Newton converges in two or three steps, fewer instructions
-        // than the closed form; farther out the closed form wins.
-        if close {
-            return Ok(self.newton_from(target, start, config, first));
-        }
-        let within_jump = |q: &[f64]| {
-            q.iter()
-                .zip(seed)
-                .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
+        // than the closed form; farther out the closed form wins. The seed's pose, unless
+        // known, is evaluated once: Newton's first step reuses it.
+        let newton = match (self.closed_form(), seed_pose, last.as_deref_mut()) {
+            (None, _, _) => true,
+            (Some(_), Some(pose), _) => near(pose),
+            (Some(_), None, Some(last)) => near(&last.at(self, &start)),
+            (Some(_), None, None) => false,
         };
-        let mut found = IkSolution {
-            q: Joints::zeros(self.dof()),
-            iterations: 0,
-            position_error: 0.0,
-            orientation_error: 0.0,
-        };
-        if self.follow(target, &start, config.tolerance, &mut found) && within_jump(&found.q) {
-            return Ok(IkResult::Converged(found));
+        if !newton {
+            let within_jump = |q: &[f64]| {
+                q.iter()
+                    .zip(seed)
+                    .all(|(a, b)| (a - b).abs() <= TRACKING_JUMP)
+            };
+            let mut found = IkSolution {
+                q: Joints::zeros(self.dof()),
+                iterations: 0,
+                position_error: 0.0,
+                orientation_error: 0.0,
+            };
+            if self.follow(target, &start, config.tolerance, &mut found) && within_jump(&found.q) {
+                return Ok(IkResult::Converged(found));
+            }
         }
-        Ok(self.newton_from(target, start, config, first))
+        Ok(match last {
+            Some(last) => self.newton_from(target, &start, config, last),
+            None => self.newton_from(target, &start, config, &mut LastEvaluation::default()),
+        })
     }
 
     /// Tracking IK by damped Newton steps alone from a nearby `seed`, typically the previous
@@ -232,26 +243,26 @@ impl Chain {
     ) -> Result<IkResult, IkError> {
         let mut q = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut q)?;
-        Ok(self.newton_from(target, q, config, None))
+        Ok(self.newton_from(target, &q, config, &mut LastEvaluation::default()))
     }
 
     /// [`newton_tracking`](Self::newton_tracking) from a checked seed, whose pose and axes may
-    /// have been evaluated already (`first`).
+    /// have been evaluated already (`last`).
     fn newton_from(
         &self,
         target: &Frame,
-        q: [f64; MAX_JOINTS],
+        q: &[f64; MAX_JOINTS],
         config: &IkConfig,
-        first: Option<(&Frame, &Axes)>,
+        last: &mut LastEvaluation,
     ) -> IkResult {
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
         let no_hook = &mut || {};
         let free = self.descend(
             target,
-            q,
+            *q,
             iterations,
             tolerance,
-            (Bounds::Free, first),
+            (Bounds::Free, &mut *last),
             no_hook,
         );
         let mut used = free.steps;
@@ -268,7 +279,7 @@ impl Chain {
                 mirrored,
                 iterations,
                 tolerance,
-                (Bounds::Enforced, None),
+                (Bounds::Enforced, &mut *last),
                 no_hook,
             );
             used += retry.steps;
@@ -278,8 +289,8 @@ impl Chain {
                 return IkResult::Converged(best);
             }
         }
-        let bounds = (Bounds::Enforced, None);
-        let mut bounded = self.descend(target, q, iterations, tolerance, bounds, no_hook);
+        let bounds = (Bounds::Enforced, last);
+        let mut bounded = self.descend(target, *q, iterations, tolerance, bounds, no_hook);
         bounded.best.iterations += used;
         bounded.into_result()
     }
@@ -322,6 +333,7 @@ impl Chain {
         let mut budget = config.global_iterations;
         let mut best: Option<IkSolution> = None;
         let mut used = 0u32;
+        let mut last = LastEvaluation::default();
         // Each attempt spends at least one iteration, so this bound is never the binding one.
         for _ in 0..config.global_iterations {
             let limit = budget.min(ATTEMPT_ITERATIONS);
@@ -330,7 +342,7 @@ impl Chain {
                 q,
                 limit,
                 config.tolerance,
-                (Bounds::Wrapping, None),
+                (Bounds::Wrapping, &mut last),
                 on_step,
             );
             used += descent.steps;
@@ -358,7 +370,7 @@ impl Chain {
                 start,
                 0,
                 config.tolerance,
-                (Bounds::Wrapping, None),
+                (Bounds::Wrapping, &mut last),
                 on_step,
             )
             .best
@@ -384,8 +396,10 @@ impl Chain {
         out
     }
 
-    /// Validates the inputs and writes the seed clamped into the limits to `q` (an out
-    /// parameter: a `Result` of the array was copied twice per call on the Cortex-M7).
+    /// Validates the inputs and writes the seed clamped into the limits to `q` (entries past
+    /// the joint count zero). Written in place: returned inside the `Result`, the array sat
+    /// unaligned and the Cortex-M7 copied it byte by byte, three times (≈ 900 instructions a
+    /// tick in qemu-bench).
     pub(super) fn prepare(
         &self,
         target: &Frame,
@@ -398,6 +412,7 @@ impl Chain {
         if seed.len() != self.dof() {
             return Err(IkError::WrongJointCount);
         }
+        *q = [0.0; MAX_JOINTS];
         let (min, max) = self.limits();
         for ((v, s), (lo, hi)) in q.iter_mut().zip(seed).zip(min.iter().zip(max)) {
             if !s.is_finite() {
@@ -428,15 +443,15 @@ impl Chain {
         q
     }
 
-    /// Damped Newton iterations from `q` (whose pose and axes `first` may give); returns the
-    /// best pose visited.
+    /// Damped Newton iterations from `q` (its pose and axes reused from `last` if evaluated
+    /// there; every evaluation is left there); returns the best pose visited.
     fn descend(
         &self,
         target: &Frame,
         mut q: [f64; MAX_JOINTS],
         iterations: u16,
         tolerance: f64,
-        (bounds, first): (Bounds, Option<(&Frame, &Axes)>),
+        (bounds, last): (Bounds, &mut LastEvaluation),
         on_step: &mut impl FnMut(),
     ) -> Descent {
         // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
@@ -446,16 +461,12 @@ impl Chain {
             position_error: f64::INFINITY,
             orientation_error: f64::INFINITY,
         };
-        // Reused across iterations: on the Cortex-M7 rebuilding them costs more than the maths.
-        let mut own_axes = Axes::default();
+        // Reused across iterations: on the Cortex-M7 rebuilding it costs more than the maths.
         let mut jacobian = Jacobian::zeros();
         let mut steps = 0;
         let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
-            let (tool, axes) = match first {
-                Some((tool, evaluated)) if it == 0 => (*tool, evaluated),
-                _ => (self.tool_and_axes(&q, &mut own_axes), &own_axes),
-            };
+            let tool = last.at(self, &q);
             let e = math::diff(&tool, target);
             let pose = Pose {
                 q,
@@ -477,7 +488,7 @@ impl Chain {
                 break;
             }
             let energy = 0.5 * e.norm_squared();
-            self.jacobian_into(axes, &tool.translation.vector, &mut jacobian);
+            self.jacobian_into(last.axes(), &tool.translation.vector, &mut jacobian);
             let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q, bounds);
             steps += 1;
             on_step();
