@@ -157,27 +157,26 @@ impl Shoulder {
     }
 }
 
-/// A checked solution with its errors.
+/// A checked solution with its errors, squared (the square roots are taken only for the
+/// one answer that reports them: on the Cortex-M7 each is a software `sqrt`).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Exact {
     pub solution: BranchSolution,
-    /// Distance from the target position (m).
-    pub position_error: f64,
-    /// Rotation angle from the target orientation (rad).
-    pub orientation_error: f64,
+    errors: Misses,
 }
 
 impl Exact {
     /// As an [`IkSolution`] (no Newton steps), if both errors are below `tolerance`.
     pub fn within(&self, tolerance: f64) -> Option<IkSolution> {
-        (self.position_error < tolerance && self.orientation_error < tolerance).then_some(
-            IkSolution {
-                q: self.solution.q,
-                iterations: 0,
-                position_error: self.position_error,
-                orientation_error: self.orientation_error,
-            },
-        )
+        let mut solution = IkSolution {
+            q: self.solution.q,
+            iterations: 0,
+            position_error: 0.0,
+            orientation_error: 0.0,
+        };
+        self.errors
+            .report_within(tolerance, &mut solution)
+            .then_some(solution)
     }
 }
 
@@ -201,15 +200,25 @@ impl Chain {
     /// value kept by a joint a singularity leaves free). Refused with
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference, false)?;
-        let mut solutions = Solutions::new();
-        for candidate in &candidates {
-            if let Some(exact) = self.finish(form, candidate, target, &reference) {
-                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                let _ = solutions.push(exact.solution);
+        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
+        let form = self.candidates(target, reference, false, (&mut checked, &mut candidates))?;
+        // Filled in place: `Ok(list)` of a finished list copied its 650 bytes (byte by byte
+        // on the Cortex-M7, about 2,400 instructions).
+        let mut all = Ok(Solutions::new());
+        if let Ok(solutions) = &mut all {
+            let mut q = Joints::zeros(self.dof());
+            for candidate in &candidates {
+                if self
+                    .finish(form, candidate, target, (&checked, &mut q))
+                    .is_some()
+                {
+                    let branch = candidate.branch;
+                    // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+                    let _ = solutions.push(BranchSolution { q, branch });
+                }
             }
         }
-        Ok(solutions)
+        all
     }
 
     /// The solution nearest to `reference` (on `branch` if given): the candidates are tried
@@ -267,9 +276,10 @@ impl Chain {
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
         let dof = reference.get(..self.dof()).unwrap_or(&[]);
-        let (form, reference, candidates) = self.candidates(target, dof, false)?;
+        let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
+        let form = self.candidates(target, dof, false, (&mut checked, &mut candidates))?;
         let mut near = [Angle::of(0.0); MAX_JOINTS];
-        for (a, r) in near.iter_mut().zip(&reference) {
+        for (a, r) in near.iter_mut().zip(&checked) {
             *a = Angle::of(*r);
         }
         // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
@@ -298,11 +308,13 @@ impl Chain {
             if let Some(d) = distance.get_mut(k) {
                 *d = f64::INFINITY;
             }
-            let found = candidates
-                .get(k)
-                .and_then(|c| self.finish(form, c, target, &reference));
-            if found.is_some() {
-                return Ok(found);
+            let mut q = Joints::zeros(self.dof());
+            if let Some(candidate) = candidates.get(k)
+                && let Some(errors) = self.finish(form, candidate, target, (&checked, &mut q))
+            {
+                let branch = candidate.branch;
+                let solution = BranchSolution { q, branch };
+                return Ok(Some(Exact { solution, errors }));
             }
         }
         Ok(None)
@@ -310,11 +322,25 @@ impl Chain {
 
     /// The solution that follows the branch of a nearby `seed` (the tracking case): at each
     /// two-way choice the root nearest the seed, so one candidate is built and checked.
-    pub(super) fn follow(&self, target: &Frame, seed: &[f64]) -> Result<Option<Exact>, IkError> {
-        let (form, reference, candidates) = self.candidates(target, seed, true)?;
-        Ok(candidates
-            .first()
-            .and_then(|c| self.finish(form, c, target, &reference)))
+    /// Written to `solution` (whose joint count must be the chain's) if it reaches `target`
+    /// within `tolerance`: returned by value, it was copied three times on the Cortex-M7.
+    /// `seed` is one that [`prepare`](Self::prepare) checked for `target`.
+    pub(super) fn follow(
+        &self,
+        target: &Frame,
+        seed: &[f64; MAX_JOINTS],
+        tolerance: f64,
+        solution: &mut IkSolution,
+    ) -> bool {
+        let mut candidates = Candidates::new();
+        let Some(form) = self.closed_form() else {
+            return false;
+        };
+        self.candidates_of(form, target, seed, true, &mut candidates);
+        candidates.first().is_some_and(|candidate| {
+            self.finish(form, candidate, target, (seed, &mut solution.q))
+                .is_some_and(|errors| errors.report_within(tolerance, solution))
+        })
     }
 
     /// The branch of configuration `q`: the branch of the solution at `q`'s own pose that
@@ -327,20 +353,21 @@ impl Chain {
         same.then_some(found.branch)
     }
 
-    /// The family, the checked reference and the family solver's candidates (with `nearest`,
-    /// only the one nearest `reference` at every choice).
+    /// The family; the checked reference is written to `checked` and the family solver's
+    /// candidates (with `nearest`, only the one nearest `reference` at every choice) to `out`,
+    /// both owned by the caller: returned by value, they were copied several times per solve
+    /// (the candidate list is 1.2 KB).
     fn candidates(
         &self,
         target: &Frame,
         reference: &[f64],
         nearest: bool,
-    ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
+        (checked, out): (&mut [f64; MAX_JOINTS], &mut Candidates),
+    ) -> Result<&ClosedForm, IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
-        let mut clamped = [0.0; MAX_JOINTS];
-        self.prepare(target, reference, &mut clamped)?;
-        let mut candidates = Candidates::new();
-        self.candidates_of(form, target, &clamped, nearest, &mut candidates);
-        Ok((form, clamped, candidates))
+        self.prepare(target, reference, checked)?;
+        self.candidates_of(form, target, checked, nearest, out);
+        Ok(form)
     }
 
     /// The candidates of `form` for a checked `reference`, written to `out`.
@@ -380,8 +407,7 @@ impl Chain {
         let mut ideal = *target;
         for _ in 0..REFINE_STEPS {
             let reached = self.pose_by_trig(&current.sin_cos());
-            let (position, rotation) = misses(&reached, target);
-            if position.max(rotation) <= REFINED {
+            if Misses::of(&reached, target).largest() <= REFINED * REFINED {
                 break;
             }
             ideal = target * reached.inverse() * ideal;
@@ -403,21 +429,22 @@ impl Chain {
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
-    /// approximate, if it is within the limits and reproduces `target`.
+    /// approximate, written to `q` (of the chain's joint count); its errors if it is within
+    /// the limits and reproduces `target`.
     fn finish(
         &self,
         form: &ClosedForm,
         candidate: &Candidate,
         target: &Frame,
-        reference: &[f64; MAX_JOINTS],
-    ) -> Option<Exact> {
+        (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
+    ) -> Option<Misses> {
         if form.fit.is_exact() {
-            return self.verify(form, candidate, target, reference);
+            return self.verify(form, candidate, target, (reference, q));
         }
         // The carried root; failing that, Newton steps from the ideal model's own.
         let refined = self.refine(form, candidate, target);
-        self.verify(form, &refined, target, reference)
-            .or_else(|| self.verify(form, candidate, target, reference))
+        self.verify(form, &refined, target, (reference, &mut *q))
+            .or_else(|| self.verify(form, candidate, target, (reference, q)))
     }
 
     /// [`finish`](Self::finish) of a candidate as it is.
@@ -426,10 +453,9 @@ impl Chain {
         form: &ClosedForm,
         candidate: &Candidate,
         target: &Frame,
-        reference: &[f64; MAX_JOINTS],
-    ) -> Option<Exact> {
+        (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
+    ) -> Option<Misses> {
         let (min, max) = self.limits();
-        let mut q = Joints::zeros(self.dof());
         let angles = candidate.angles.iter().zip(&candidate.values);
         let joints = q.iter_mut().zip(angles).zip(reference);
         // An ideal model's root may lie a little beyond a limit the true chain's is within:
@@ -449,34 +475,27 @@ impl Chain {
             *v = saturate(turned, *lo, *hi);
         }
         if !form.fit.is_exact() {
-            q = self.polish(target, &q)?;
+            *q = self.polish(target, q)?;
         }
         let reached = if form.fit.is_exact() {
             self.pose_by_trig(&candidate.sin_cos())
         } else {
-            self.pose(&q)
+            self.pose(q)
         };
-        let mut errors = misses(&reached, target);
-        if errors.0.max(errors.1) > CHECK {
+        let mut errors = Misses::of(&reached, target);
+        if errors.largest() > CHECK * CHECK {
             // At a tangency (elbow stretched, wrist aligned) a root is only known to √ε
             // ≈ 1.5e-8 rad: Newton steps on the chain finish it; a miss by more is no root.
-            if errors.0.max(errors.1) > POLISH_FROM {
+            if errors.largest() > POLISH_FROM * POLISH_FROM {
                 return None;
             }
-            q = self.polish(target, &q)?;
-            errors = misses(&self.pose(&q), target);
-            if errors.0.max(errors.1) > CHECK {
+            *q = self.polish(target, q)?;
+            errors = Misses::of(&self.pose(q), target);
+            if errors.largest() > CHECK * CHECK {
                 return None;
             }
         }
-        Some(Exact {
-            solution: BranchSolution {
-                q,
-                branch: candidate.branch,
-            },
-            position_error: errors.0,
-            orientation_error: errors.1,
-        })
+        Some(errors)
     }
 
     /// Newton steps on the true chain from a solution of its ideal model (or from a root known
@@ -493,21 +512,61 @@ impl Chain {
     }
 }
 
-/// How far `reached` misses `target`: the position error (m) and the rotation angle between
-/// them (rad), the angle read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
-/// `θ ≈ ‖R₁ − R₂‖_F / √2` for the small angles that matter), which needs no logarithm.
-fn misses(reached: &Frame, target: &Frame) -> (f64, f64) {
-    let position = (reached.translation.vector - target.translation.vector).norm();
-    let rotation = (reached.rotation.matrix() - target.rotation.matrix()).norm();
-    (position, rotation * core::f64::consts::FRAC_1_SQRT_2)
+/// How far a pose misses a target, squared: the position error (m²) and the rotation angle
+/// between them (rad²).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Misses {
+    position: f64,
+    rotation: f64,
+}
+
+impl Misses {
+    /// The angle is read from the matrices' difference (`‖R₁ − R₂‖_F = 2√2·sin(θ/2)`, so
+    /// `θ² ≈ ‖R₁ − R₂‖²_F / 2` for the small angles that matter), which needs no logarithm.
+    pub fn of(reached: &Frame, target: &Frame) -> Self {
+        Self {
+            position: (reached.translation.vector - target.translation.vector).norm_squared(),
+            rotation: 0.5 * (reached.rotation.matrix() - target.rotation.matrix()).norm_squared(),
+        }
+    }
+
+    /// True if their square roots sum (m + rad) to less than `limit`; the roots are taken
+    /// only if neither alone reaches it.
+    pub fn closer_than(&self, limit: f64) -> bool {
+        let square = limit * limit;
+        self.position < square
+            && self.rotation < square
+            && libm::sqrt(self.position) + libm::sqrt(self.rotation) < limit
+    }
+
+    /// The larger of the two.
+    fn largest(&self) -> f64 {
+        self.position.max(self.rotation)
+    }
+
+    /// True if both errors are below `tolerance`; then written (unsquared) to `solution`, as
+    /// reached without Newton steps.
+    fn report_within(&self, tolerance: f64, solution: &mut IkSolution) -> bool {
+        let limit = tolerance * tolerance;
+        let within = self.position < limit && self.rotation < limit;
+        if within {
+            solution.iterations = 0;
+            solution.position_error = libm::sqrt(self.position);
+            solution.orientation_error = libm::sqrt(self.rotation);
+        }
+        within
+    }
 }
 
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
 /// `reference`; `None` if no turn fits.
 fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
     const TAU: f64 = core::f64::consts::TAU;
-    // Within π of the reference: if it fits, no other turn is nearer.
-    let near = angle + TAU * libm::round((reference - angle) / TAU);
+    // Within π of the reference: if it fits, no other turn is nearer. The turns rounded by a
+    // saturating conversion (one instruction on the Cortex-M7; `libm::round` is about 35):
+    // whole turns beyond ±2³¹ only saturate, and no such angle fits any limit anyway.
+    let turns = (reference - angle) / TAU;
+    let near = angle + TAU * f64::from((turns + 0.5f64.copysign(turns)) as i32);
     if lo <= near && near <= hi {
         return Some(near);
     }

@@ -34,25 +34,28 @@ pub(super) fn solve(
     let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
     // Only the action of R1 ⋯ R6 on h5 and h6 is needed.
     let (tool_h5, tool_h6) = (tool * h5, tool * h6);
+    // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
+    // rotation about h2.
+    let sense3 = h3.dot(h2);
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let v1 = a1.value();
         let back1 = a1.negated();
+        let (shoulder_h5, shoulder_h6) =
+            (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
         let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
         for &(a3, b3) in elbows.iter().take(n3) {
             let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
             // (R1 R2 R3)ᵀ applied to the tool's h5 and h6: what the wrist must produce.
-            let back = |x: &Vector3<f64>| {
-                let x = rotate(h1, &back1, x);
-                rotate(h3, &a3.negated(), &rotate(h2, &a2.negated(), &x))
-            };
+            let back23 = a2.plus(&a3.signed(sense3)).negated();
+            let back = |x: &Vector3<f64>| rotate(h2, &back23, x);
             let arm = ([a1, a2, a3], [v1, a2.value(), a3.value()]);
             let branch = Branch::from_roots(b1, b3, 0);
             wrist(
                 form,
-                [back(&tool_h5), back(&tool_h6)],
+                [back(&shoulder_h5), back(&shoulder_h6)],
                 arm,
                 branch,
                 (free, nearest),
@@ -90,10 +93,11 @@ fn wrist(
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
     match sp2(h4, &pointing, h5, h6, form.slack()) {
         PairRoots::Some(pairs, count) => {
-            let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
-            let closeness = |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
+                    let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
+                    let closeness =
+                        |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
                     usize::from(closeness(&second) > closeness(&first))
                 }
                 _ => 0,

@@ -46,6 +46,19 @@ impl Angle {
             sin: -self.sin,
         }
     }
+
+    /// The sum of the two angles.
+    pub fn plus(&self, other: &Angle) -> Self {
+        Self {
+            cos: self.cos * other.cos - self.sin * other.sin,
+            sin: self.sin * other.cos + self.cos * other.sin,
+        }
+    }
+
+    /// This angle about an axis of sense `sign` (+1 or −1) relative to the reference axis.
+    pub fn signed(&self, sign: f64) -> Self {
+        if sign < 0.0 { self.negated() } else { *self }
+    }
 }
 
 /// The roots of a subproblem with at most two.
@@ -96,11 +109,20 @@ pub(super) fn rotate(k: &Vector3<f64>, a: &Angle, v: &Vector3<f64>) -> Vector3<f
 /// Subproblem 1: the angle that turns `p` about `k` onto `q` (`R(k, θ) p = q`). `None` if `p`
 /// or `q` lies on the axis (every angle, or none, does).
 pub(super) fn sp1(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> Option<Angle> {
+    let (x, y) = sp1_scaled(k, p, q);
+    unit(x, y, libm::sqrt(x * x + y * y))
+}
+
+/// Subproblem 1's cosine and sine times `‖p⊥‖·‖q⊥‖` (the lengths of the projections onto the
+/// plane of `k`), which several solutions of one problem may share.
+fn sp1_scaled(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> (f64, f64) {
     let pp = p - k * k.dot(p);
     let qp = q - k * k.dot(q);
-    let x = pp.dot(&qp);
-    let y = k.dot(&p.cross(q));
-    let r = libm::sqrt(x * x + y * y);
+    (pp.dot(&qp), k.dot(&p.cross(q)))
+}
+
+/// The angle of cosine and sine `(x, y) / r`; `None` if `r` is too small to tell.
+fn unit(x: f64, y: f64, r: f64) -> Option<Angle> {
     (r > DEGENERATE).then(|| Angle {
         cos: x / r,
         sin: y / r,
@@ -122,40 +144,44 @@ pub(super) fn sp4(
     let a = h.dot(&pp);
     let b = h.dot(&k.cross(p));
     let c = d - h.dot(k) * along;
-    let r = libm::sqrt(a * a + b * b);
-    if r <= DEGENERATE {
+    // a cos θ + b sin θ = c. With r² = a² + b², cos φ = a/r, sin φ = b/r: θ = φ ± δ with
+    // cos δ = c/r and sin δ = √(r² − c²)/r. Written over r², one square root is enough.
+    let r2 = a * a + b * b;
+    if r2 <= DEGENERATE * DEGENERATE {
         return if c.abs() <= slack {
             Roots::Any
         } else {
             Roots::None
         };
     }
-    let ratio = c / r;
-    if ratio.abs() > 1.0 + slack {
+    let c2 = c * c;
+    if c2 > r2 * (1.0 + slack) * (1.0 + slack) {
         return Roots::None;
     }
-    let (cos_phi, sin_phi) = (a / r, b / r);
+    let past = c2 > r2;
     // Beyond a tangency on an ideal model (slack above rounding), the true arm's two roots
     // straddle the tangent one about as far as the data overshoot: both are seeded.
-    let beyond = ratio.abs() > 1.0 && slack > TANGENT;
-    let half = libm::sqrt((1.0 - ratio * ratio).abs());
-    let half = if beyond || ratio.abs() < 1.0 {
-        half
+    let half = if !past || slack > TANGENT {
+        libm::sqrt((r2 - c2).abs())
     } else {
         0.0
     };
-    let ratio = ratio.clamp(-1.0, 1.0);
-    // θ = φ ± δ with cos δ = ratio, sin δ = half.
+    // Beyond a tangency, cos δ is 1: c becomes ±r.
+    let c = match (past, c < 0.0) {
+        (false, _) => c,
+        (true, false) => libm::sqrt(r2),
+        (true, true) => -libm::sqrt(r2),
+    };
     let plus = Angle {
-        cos: cos_phi * ratio - sin_phi * half,
-        sin: sin_phi * ratio + cos_phi * half,
+        cos: (a * c - b * half) / r2,
+        sin: (b * c + a * half) / r2,
     };
     if half == 0.0 {
         return Roots::One(plus);
     }
     let minus = Angle {
-        cos: cos_phi * ratio + sin_phi * half,
-        sin: sin_phi * ratio - cos_phi * half,
+        cos: (a * c + b * half) / r2,
+        sin: (b * c - a * half) / r2,
     };
     Roots::Two(plus, minus)
 }
@@ -216,11 +242,17 @@ pub(super) fn sp2(
     let n = k1.cross(k2);
     let base = k1 * alpha + k2 * beta;
     let count = if gamma == 0.0 { 1 } else { 2 };
-    let unit = Angle { cos: 1.0, sin: 0.0 };
-    let mut pairs = [(unit, unit); 2];
+    let zero = Angle { cos: 1.0, sin: 0.0 };
+    let mut pairs = [(zero, zero); 2];
+    // Both points z keep the axial components and the norm, so their projections onto either
+    // axis's plane are as long as each other: the first root's lengths serve the second.
+    let mut lengths = None;
     for (pair, sign) in pairs.iter_mut().zip([1.0, -1.0]).take(count) {
         let z = base + n * (sign * gamma);
-        match (sp1(k1, p1, &z), sp1(k2, p2, &z)) {
+        let ((x1, y1), (x2, y2)) = (sp1_scaled(k1, p1, &z), sp1_scaled(k2, p2, &z));
+        let (r1, r2) = *lengths
+            .get_or_insert_with(|| (libm::sqrt(x1 * x1 + y1 * y1), libm::sqrt(x2 * x2 + y2 * y2)));
+        match (unit(x1, y1, r1), unit(x2, y2, r2)) {
             (Some(t1), Some(t2)) => *pair = (t1, t2),
             _ => return PairRoots::None,
         }

@@ -5,8 +5,10 @@
 //! parallel axes keep its component along their direction: θ1 (subproblem 4). The same
 //! direction is kept by the product `R2 R3 R4`, which gives θ5 (subproblem 4) and then θ6
 //! (subproblem 1) from the orientation. What is left is a planar two-link problem for the
-//! origin of axis 4: θ3 (subproblem 3), θ2 (subproblem 1), and θ4 from the remaining rotation
-//! (subproblem 1). Up to 2 · 2 · 2 = 8 solutions.
+//! origin of axis 4: θ3 (subproblem 3), θ2 (subproblem 1), and θ4 from the remaining rotation:
+//! `R2 R3 R4` turns about the common direction by the (signed) sum of the three angles, found
+//! once per wrist (subproblem 1), so θ4 is that sum less θ2 and θ3. Up to 2 · 2 · 2 = 8
+//! solutions.
 
 use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
 use super::family::ClosedForm;
@@ -31,6 +33,8 @@ pub(super) fn solve(
     let [h1, h, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, o4, _, _, _, _] = &s.point;
     let c = &form.centre;
+    // The senses of axes 3 and 4 along axis 2's (the ideal model's are exactly ±h).
+    let (sense3, sense4) = (h3.dot(h), h4.dot(h));
     // R1 ⋯ R6, used on vectors only.
     let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
     let tool_h6 = tool * h6;
@@ -52,18 +56,24 @@ pub(super) fn solve(
             // planar = R2 R3 R4 = m R6ᵀ R5ᵀ, on the two vectors that matter.
             let planar_c = m(&rotate(h6, &back6, &rotate(h5, &back5, &(c - o4))));
             let planar_h5 = m(&rotate(h6, &back6, h5));
+            // R2 R3 R4 = R(h, θ2 ± θ3 ± θ4).
+            let Some(sum) = sp1(h, h5, &planar_h5) else {
+                continue;
+            };
+            let sum_value = sum.value();
             let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
             let (elbows, n3) =
                 sp3(h3, &(o4 - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
             for &(a3, b3) in elbows.iter().take(n3) {
                 let reach = (o3 - o2) + rotate(h3, &a3, &(o4 - o3));
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
-                // R4 = (R2 R3)ᵀ planar: where it takes h5.
-                let rest = rotate(h3, &a3.negated(), &rotate(h, &a2.negated(), &planar_h5));
-                let Some(a4) = sp1(h4, h5, &rest) else {
-                    continue;
-                };
-                let known = [v1, f64::NAN, f64::NAN, f64::NAN, v5, v6];
+                let arm = a2.plus(&a3.signed(sense3));
+                let a4 = sum.plus(&arm.negated()).signed(sense4);
+                // θ4's value by the same arithmetic: one `atan2` per wrist, not per elbow
+                // (the turn is the caller's to choose).
+                let (v2, v3) = (a2.value(), a3.value());
+                let v4 = sense4 * (sum_value - v2 - sense3 * v3);
+                let known = [v1, v2, v3, v4, v5, v6];
                 let angles = [a1, a2, a3, a4, a5, a6];
                 let branch = Branch::from_roots(b1, b3, b5);
                 // A full list only drops further roots, which cannot occur (8 at most).

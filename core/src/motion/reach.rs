@@ -121,13 +121,16 @@ impl Reach<'_> {
             .fold(min_duration.max(0.0), f64::max);
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step, mut q) = (0.0, full_step, *seed);
+        // The pose at `q`: the line's last point reached (it spares the solver q's FK).
+        let mut here = *start;
         let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
                 break;
             }
             let next = (done + step).min(1.0);
-            match self.solve(&point(next), &q, PathPoint::at(next)) {
+            let there = point(next);
+            match self.solve(&there, (&q, &here), PathPoint::at(next)) {
                 Ok(solved) => {
                     // A line that also fails for another reason (a joint limit, out of reach)
                     // is refused for that: it says more.
@@ -136,7 +139,7 @@ impl Reach<'_> {
                     {
                         too_fast.get_or_insert(refusal);
                     }
-                    (done, q) = (next, solved);
+                    (done, q, here) = (next, solved, there);
                     step = (step * 2.0).min(full_step);
                 }
                 Err(refusal) if step <= MIN_STEP => return Err(refusal),
@@ -180,13 +183,21 @@ impl Reach<'_> {
         }
     }
 
-    /// Tracking IK to `target` from `seed`, within the limits and the tolerance; else why not.
-    fn solve(&mut self, target: &Frame, seed: &Joints, at: PathPoint) -> Result<Joints, Refusal> {
+    /// Tracking IK to `target` from `seed` (at about `seed_pose`), within the limits and the
+    /// tolerance; else why not.
+    fn solve(
+        &mut self,
+        target: &Frame,
+        (seed, seed_pose): (&Joints, &Frame),
+        at: PathPoint,
+    ) -> Result<Joints, Refusal> {
         let unreachable = Refusal::Unreachable(at);
-        let result = self
-            .chain
-            .solve_tracking(target, seed, &self.solve_config())
-            .map_err(|_| unreachable)?;
+        // Read in place: moving the answer out of its `Result` copied it.
+        let outcome =
+            (self.chain).solve_tracking_from(target, seed, seed_pose, &self.solve_config());
+        let Ok(result) = &outcome else {
+            return Err(unreachable);
+        };
         let s = result.solution();
         self.iterations_left = self.iterations_left.saturating_sub(s.iterations);
         if s.position_error <= self.tolerance && s.orientation_error <= self.tolerance {
