@@ -273,7 +273,12 @@ impl Chain {
     /// closed-form solver already has.
     pub(super) fn pose_by_trig(&self, sin_cos: &[(f64, f64); MAX_JOINTS]) -> Frame {
         self.walk_by(
-            |i, link, _| by_trig(link, sin_cos.get(i).copied().unwrap_or((0.0, 1.0))),
+            |i, link, _| {
+                let (sq, cq) = sin_cos.get(i).copied().unwrap_or((0.0, 1.0));
+                let st = link.sin_theta * cq + link.cos_theta * sq;
+                let ct = link.cos_theta * cq - link.sin_theta * sq;
+                (st, ct, link.d)
+            },
             &[0.0; MAX_JOINTS],
             |_, _, _| {},
         )
@@ -298,49 +303,25 @@ impl Chain {
         let mut pos = self.base.translation.vector;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate().take(self.n) {
             let (st, ct, d) = joint(i, link, qi);
-            step(link, (st, ct, d), [&mut x, &mut y, &mut z], &mut pos);
+            // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
+            pos += x * link.a;
+            let y1 = y * link.cos_alpha + z * link.sin_alpha;
+            z = z * link.cos_alpha - y * link.sin_alpha;
+            // RotY(β), Hayati's calibration angle: x, z turn about y (skipped when β = 0, as in
+            // every uncalibrated file, to keep the tick's cost).
+            if link.tilted {
+                (x, z) = (
+                    x * link.cos_beta - z * link.sin_beta,
+                    x * link.sin_beta + z * link.cos_beta,
+                );
+            }
+            // RotZ(θ) · TransZ(d)
+            pos += z * d;
+            (x, y) = (x * ct + y1 * st, y1 * ct - x * st);
             visit(i, [&x, &y, &z], pos);
         }
-        self.tool_frame([x, y, z], pos)
-    }
-
-    /// The tool frame from the last joint frame's axes and origin.
-    #[inline(always)]
-    fn tool_frame(&self, axes: [Vector3<f64>; 3], pos: Vector3<f64>) -> Frame {
-        let rot = Matrix3::from_columns(&axes);
+        let rot = Matrix3::from_columns(&[x, y, z]);
         Frame::from_parts(pos.into(), Rotation3::from_matrix_unchecked(rot)) * self.tool
-    }
-
-    /// [`pose_by_trig`](Self::pose_by_trig) that starts after the joints whose sine and cosine
-    /// equal those of the previous walk in `walk`, and keeps its frames there for the next.
-    pub(super) fn pose_by_trig_after(
-        &self,
-        sin_cos: &[(f64, f64); MAX_JOINTS],
-        walk: &mut TrigWalk,
-    ) -> Frame {
-        let shared = walk
-            .steps
-            .iter()
-            .zip(sin_cos)
-            .take_while(|((kept, _, _), sc)| kept == *sc)
-            .count();
-        walk.steps.truncate(shared);
-        let b = self.base.rotation.matrix();
-        let (mut axes, mut pos) = walk.steps.last().map_or_else(
-            || {
-                let columns = [b.column(0), b.column(1), b.column(2)].map(|c| c.into_owned());
-                (columns, self.base.translation.vector)
-            },
-            |(_, axes, pos)| (*axes, *pos),
-        );
-        let links = self.links.iter().zip(sin_cos).take(self.n).skip(shared);
-        for (link, &sc) in links {
-            let [x, y, z] = &mut axes;
-            step(link, by_trig(link, sc), [x, y, z], &mut pos);
-            // Never full: one frame per joint.
-            let _ = walk.steps.push((sc, axes, pos));
-        }
-        self.tool_frame(axes, pos)
     }
 
     /// The tool frame, with every joint's axis and origin written to `axes`.
@@ -394,47 +375,4 @@ fn tool_frame(config: &RobotConfig) -> Frame {
             Vector3::from(t.xyz).into(),
             Rotation3::from_euler_angles(roll, pitch, yaw),
         )
-}
-
-/// A revolute joint's `sin θ`, `cos θ` and `d` from the sine and cosine `(sq, cq)` of its
-/// value (θ is the link's offset plus the value).
-#[inline(always)]
-fn by_trig(link: &Link, (sq, cq): (f64, f64)) -> (f64, f64, f64) {
-    let st = link.sin_theta * cq + link.cos_theta * sq;
-    let ct = link.cos_theta * cq - link.sin_theta * sq;
-    (st, ct, link.d)
-}
-
-/// One joint of the walk: the frame's axes `x, y, z` and origin `pos` moved by link `link`
-/// at the joint's `sin θ`, `cos θ` and `d`.
-#[inline(always)]
-fn step(
-    link: &Link,
-    (st, ct, d): (f64, f64, f64),
-    [x, y, z]: [&mut Vector3<f64>; 3],
-    pos: &mut Vector3<f64>,
-) {
-    // RotX(α) · TransX(a): origin moves along the old x; y, z turn about x.
-    *pos += *x * link.a;
-    let y1 = *y * link.cos_alpha + *z * link.sin_alpha;
-    *z = *z * link.cos_alpha - *y * link.sin_alpha;
-    // RotY(β), Hayati's calibration angle: x, z turn about y (skipped when β = 0, as in
-    // every uncalibrated file, to keep the tick's cost).
-    if link.tilted {
-        (*x, *z) = (
-            *x * link.cos_beta - *z * link.sin_beta,
-            *x * link.sin_beta + *z * link.cos_beta,
-        );
-    }
-    // RotZ(θ) · TransZ(d)
-    *pos += *z * d;
-    (*x, *y) = (*x * ct + y1 * st, y1 * ct - *x * st);
-}
-
-/// The frames of a trig walk after each joint (with the joint's sine and cosine), so that the
-/// FK check of a candidate sharing its first angles with the previous one (a spherical wrist's
-/// two roots share θ1–θ3, an elbow's two θ1) walks only the joints after them.
-#[derive(Default)]
-pub(super) struct TrigWalk {
-    steps: heapless::Vec<((f64, f64), [Vector3<f64>; 3], Vector3<f64>), MAX_JOINTS>,
 }

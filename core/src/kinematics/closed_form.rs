@@ -11,7 +11,7 @@
 use heapless::Vec;
 use nalgebra::{Matrix3, Vector3};
 
-use super::chain::{Chain, TrigWalk};
+use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
 use super::subproblems::{Angle, sp4};
@@ -206,10 +206,10 @@ impl Chain {
         // on the Cortex-M7, about 2,400 instructions).
         let mut all = Ok(Solutions::new());
         if let Ok(solutions) = &mut all {
-            let (mut q, mut walk) = (Joints::zeros(self.dof()), TrigWalk::default());
+            let mut q = Joints::zeros(self.dof());
             for candidate in &candidates {
                 if self
-                    .finish(form, candidate, target, (&checked, &mut q), Some(&mut walk))
+                    .finish(form, candidate, target, (&checked, &mut q))
                     .is_some()
                 {
                     let branch = candidate.branch;
@@ -294,7 +294,6 @@ impl Chain {
                     .sum();
             }
         }
-        let mut walk = TrigWalk::default();
         // Nearest first (a selection, not a sort: a sort's code would cost the firmware
         // kilobytes for eight entries).
         for _ in 0..MAX_SOLUTIONS {
@@ -311,8 +310,7 @@ impl Chain {
             }
             let mut q = Joints::zeros(self.dof());
             if let Some(candidate) = candidates.get(k)
-                && let Some(errors) =
-                    self.finish(form, candidate, target, (&checked, &mut q), Some(&mut walk))
+                && let Some(errors) = self.finish(form, candidate, target, (&checked, &mut q))
             {
                 let branch = candidate.branch;
                 let solution = BranchSolution { q, branch };
@@ -340,7 +338,7 @@ impl Chain {
         };
         self.candidates_of(form, target, seed, true, &mut candidates);
         candidates.first().is_some_and(|candidate| {
-            self.finish(form, candidate, target, (seed, &mut solution.q), None)
+            self.finish(form, candidate, target, (seed, &mut solution.q))
                 .is_some_and(|errors| errors.report_within(tolerance, solution))
         })
     }
@@ -432,23 +430,21 @@ impl Chain {
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
     /// approximate, written to `q` (of the chain's joint count); its errors if it is within
-    /// the limits and reproduces `target`. `walk`: the FK check's frames kept from the previous
-    /// candidate of a list (one candidate alone keeps none).
+    /// the limits and reproduces `target`.
     fn finish(
         &self,
         form: &ClosedForm,
         candidate: &Candidate,
         target: &Frame,
         (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
-        walk: Option<&mut TrigWalk>,
     ) -> Option<Misses> {
         if form.fit.is_exact() {
-            return self.verify(form, candidate, target, (reference, q), walk);
+            return self.verify(form, candidate, target, (reference, q));
         }
         // The carried root; failing that, Newton steps from the ideal model's own.
         let refined = self.refine(form, candidate, target);
-        self.verify(form, &refined, target, (reference, &mut *q), None)
-            .or_else(|| self.verify(form, candidate, target, (reference, q), None))
+        self.verify(form, &refined, target, (reference, &mut *q))
+            .or_else(|| self.verify(form, candidate, target, (reference, q)))
     }
 
     /// [`finish`](Self::finish) of a candidate as it is.
@@ -458,7 +454,6 @@ impl Chain {
         candidate: &Candidate,
         target: &Frame,
         (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
-        walk: Option<&mut TrigWalk>,
     ) -> Option<Misses> {
         let (min, max) = self.limits();
         let angles = candidate.angles.iter().zip(&candidate.values);
@@ -482,10 +477,10 @@ impl Chain {
         if !form.fit.is_exact() {
             *q = self.polish(target, q)?;
         }
-        let reached = match walk {
-            _ if !form.fit.is_exact() => self.pose(q),
-            Some(walk) => self.pose_by_trig_after(&candidate.sin_cos(), walk),
-            None => self.pose_by_trig(&candidate.sin_cos()),
+        let reached = if form.fit.is_exact() {
+            self.pose_by_trig(&candidate.sin_cos())
+        } else {
+            self.pose(q)
         };
         let mut errors = Misses::of(&reached, target);
         if errors.largest() > CHECK * CHECK {
