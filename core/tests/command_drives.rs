@@ -156,7 +156,7 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     assert_eq!(rig.status()[4], 2.0, "a Cartesian move runs");
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
 
-    // OF while moving, a category-1 stop: the arm decelerates (SQ motion 6, index 2 cause 3),
+    // OF while moving: the arm decelerates (SQ motion 6, index 2 cause 3),
     // then the drives stop.
     assert_eq!(&rig.request("OF", [0.0; 7], 0)[..2], b"FO");
     assert_eq!(rig.status()[1], 2.0);

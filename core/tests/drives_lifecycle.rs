@@ -487,3 +487,33 @@ fn drives_stop_by_themselves_when_the_controller_dies() {
     rig.ticks(20);
     check_healthy(&rig);
 }
+
+/// `OF` (the manager's `stop()`) removes no power: the drives end their PT motion and hold
+/// the last command under servo, motors on (docs/safety.md: a category-2 stop).
+#[test]
+fn stopped_drives_keep_their_motors_on() {
+    use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Value};
+    use drives_rig::frames::{exchange, query};
+    let mut rig = Rig::new(mk1_fast());
+    rig.start();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
+    rig.ticks(60);
+    rig.manager_mut().stop().unwrap();
+    rig.until(20, |r| r.manager().state() == DriveState::Stopped);
+    rig.ticks(10);
+    let nodes: Vec<u8> = rig.bus().drives().map(|d| d.node().get()).collect();
+    for node in nodes {
+        let answers = exchange(rig.bus_mut(), &[query(node, Mnemonic::MO, 0)], 0.01);
+        let motor = answers.iter().map(|f| Reply::parse(f).unwrap().1);
+        let on = Reply::Value {
+            command: Mnemonic::MO,
+            index: Index::ZERO,
+            value: Value::Int(1),
+        };
+        assert!(
+            motor.into_iter().any(|r| r == on),
+            "node {node}: {answers:?}"
+        );
+    }
+}
