@@ -700,6 +700,18 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     rig.ctrl.move_cartesian(goal, 5.0).unwrap();
     let outs = rig.settle(5_000);
     assert!(outs.iter().any(|o| o.events.ik_divergence));
+    assert_eq!(rig.ctrl.stop_cause().0, Some(StopCause::IkDivergence));
+    let commands: Vec<_> = outs.iter().filter_map(|o| o.command).collect();
+    let t = config.control_period;
+    let mut peak = 0.0_f64;
+    for w in commands.windows(3) {
+        for j in 0..6 {
+            let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (t * t);
+            peak = peak.max(a.abs() / config.joints[j].max_acceleration);
+        }
+    }
+    // The stop that WN22 begins, like the run before it, stays within max_acceleration.
+    assert!(peak <= 1.0 + 1e-6, "peak acceleration {peak} × max");
     assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
     assert!((rig.pose().translation.vector - goal.translation.vector).norm() > 0.5);
 }
