@@ -458,6 +458,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
     let outs = rig.settle(20_000);
     assert!(outs.iter().any(|o| o.events.workspace_limit));
+    assert_eq!(rig.ctrl.stop_cause().0, Some(StopCause::Workspace));
     assert!(
         outs.iter()
             .all(|o| !in_box(o.setpoint.unwrap().translation.vector))
