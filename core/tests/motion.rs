@@ -706,9 +706,9 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     let t = config.control_period;
     let mut peak = 0.0_f64;
     for w in commands.windows(3) {
-        for j in 0..6 {
+        for (j, joint) in config.joints.iter().enumerate() {
             let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (t * t);
-            peak = peak.max(a.abs() / config.joints[j].max_acceleration);
+            peak = peak.max(a.abs() / joint.max_acceleration);
         }
     }
     // The stop that WN22 begins, like the run before it, stays within max_acceleration.
