@@ -8,7 +8,10 @@
 //! boxes are checked exactly (segment against box). Reachability is checked at
 //! [`LINE_SAMPLES`] points by tracking IK from one point to the next, seeded with the
 //! commanded joints, as the ticks will; where a step fails the step is halved (down to 1/8),
-//! so that only a real limit refuses the move.
+//! so that only a real limit refuses the move. A step in which a joint moves more than
+//! [`MAX_JOINT_STEP`] is halved too: from afar the nearest solution may lie on another branch
+//! (the tick, following the line, would swing a joint half a turn instead), and a joint that
+//! still moves that much at the shortest step refuses the line.
 //!
 //! The check runs while a request is answered, inside a tick on the firmware, so its work is
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
@@ -71,10 +74,18 @@ pub(super) struct Reach<'a> {
     pub max_rate: &'a Joints,
 }
 
-/// How much faster than its rate limit a joint may need to move at a line's cruise speed: up
-/// to this the tick slows the motion down where it must (within the acceleration limits); a
-/// line that needs more — a jump to another IK branch, the base swinging half a turn for a
-/// few centimetres of the tool — is refused.
+/// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
+/// of a pose a step ahead is not always the one the tick reaches by following the line: where
+/// the line passes close to a singularity (the wrist centre near joint 1's axis), the tick
+/// swings a joint through up to half a turn while the nearest solution lies on another branch,
+/// a small step away. A step in which a joint moves more than this is retried shorter, and one
+/// that still does at the shortest step is refused: the joint would turn this much within 1/128
+/// of the line.
+pub const MAX_JOINT_STEP: f64 = 0.25;
+
+/// How much faster than its rate limit a joint may need to move, averaged over a step of the
+/// check, at a line's cruise speed: up to this the tick slows the motion down where it must
+/// (within the acceleration limits); a line that needs more is refused.
 pub const MAX_SLOWDOWN: f64 = 100.0;
 
 impl Reach<'_> {
@@ -83,10 +94,11 @@ impl Reach<'_> {
     /// (If the budget runs out the move gets the benefit of the doubt, and the joints reached
     /// so far are returned.)
     ///
-    /// Between two samples no joint may need more than [`MAX_SLOWDOWN`] times its rate limit
-    /// at the line's cruise speed: a line on which the IK solution jumps to another branch
-    /// needs far more, and is refused with the joint and where, rather than started and
-    /// aborted halfway.
+    /// Between two samples no joint may move more than [`MAX_JOINT_STEP`] (at the shortest
+    /// step) or need more than [`MAX_SLOWDOWN`] times its rate limit at the line's cruise
+    /// speed: a line on which the IK solution jumps to another branch, or swings a joint
+    /// through a near-singularity, is refused with the joint and where, rather than started
+    /// and aborted halfway.
     pub fn line(
         &mut self,
         start: &Frame,
@@ -127,48 +139,34 @@ impl Reach<'_> {
                 break;
             }
             let next = (done + step).min(1.0);
-            match self.solve(&point(next), &q, PathPoint::at(next)) {
-                Ok(solved) => {
-                    // A line that also fails for another reason (a joint limit, out of reach)
-                    // is refused for that: it says more.
-                    if let Err(refusal) =
-                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))
-                    {
-                        too_fast.get_or_insert(refusal);
-                    }
-                    (done, q) = (next, solved);
-                    step = (step * 2.0).min(full_step);
-                }
+            let at = PathPoint::at(next);
+            let solved = match self.solve(&point(next), &q, at) {
+                Ok(solved) => solved,
                 Err(refusal) if step <= MIN_STEP => return Err(refusal),
-                Err(_) => step *= 0.5,
+                Err(_) => {
+                    step *= 0.5;
+                    continue;
+                }
+            };
+            match fault(&q, &solved, self.max_rate, (next - done) * duration) {
+                // From afar the nearest solution may lie on another branch: retried shorter,
+                // as the tick would follow the line.
+                Some(Fault::Jump(_)) if step > MIN_STEP => {
+                    step *= 0.5;
+                    continue;
+                }
+                Some(Fault::Jump(joint)) => return Err(Refusal::TooFast(joint, at)),
+                // A line that also fails for another reason further along (a joint limit,
+                // out of reach) is refused for that: it says more.
+                Some(Fault::Rate(joint)) => {
+                    too_fast.get_or_insert(Refusal::TooFast(joint, at));
+                }
+                None => {}
             }
+            (done, q) = (next, solved);
+            step = (step * 2.0).min(full_step);
         }
         too_fast.map_or(Ok(q), Err)
-    }
-
-    /// Refuses the step from `q` to `next`, which takes `time` (s) at cruise, if a joint would
-    /// need more than [`MAX_SLOWDOWN`] times its rate limit.
-    fn within_rates(
-        &self,
-        q: &Joints,
-        next: &Joints,
-        time: f64,
-        at: PathPoint,
-    ) -> Result<(), Refusal> {
-        for (joint, ((a, b), rate)) in q
-            .iter()
-            .zip(next.iter())
-            .zip(self.max_rate.iter())
-            .enumerate()
-        {
-            let ratio = libm::fabs(b - a) / (rate * time);
-            // A NaN ratio is refused too.
-            if ratio.is_nan() || ratio > MAX_SLOWDOWN {
-                let joint = u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
-                return Err(Refusal::TooFast(joint, at));
-            }
-        }
-        Ok(())
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
@@ -196,6 +194,31 @@ impl Reach<'_> {
         // what kept the solution from the target.
         Err(pinned_joint(self.chain, &s.q, at).map_or(unreachable, Refusal::OutsideJointLimits))
     }
+}
+
+/// A joint (numbered from 1) that cannot make a step of the check as the tick would.
+enum Fault {
+    /// It would need more than [`MAX_SLOWDOWN`] times its rate limit at the line's cruise
+    /// speed.
+    Rate(u8),
+    /// It would move more than [`MAX_JOINT_STEP`]: a jump to another branch, or a swing
+    /// near a singularity.
+    Jump(u8),
+}
+
+/// The first joint that cannot move from `q` to `next` in `time` (s) at [`MAX_SLOWDOWN`] times
+/// `max_rate`, a jump first (a NaN is a jump).
+fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64) -> Option<Fault> {
+    let number = |joint: usize| u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
+    let moved = q.iter().zip(next.iter()).map(|(a, b)| libm::fabs(b - a));
+    // Written so that a NaN is a jump.
+    if let Some(joint) = moved.clone().position(|m| !(m <= MAX_JOINT_STEP)) {
+        return Some(Fault::Jump(number(joint)));
+    }
+    moved
+        .zip(max_rate.iter())
+        .position(|(m, rate)| m > MAX_SLOWDOWN * rate * time)
+        .map(|joint| Fault::Rate(number(joint)))
 }
 
 /// The first joint of `q` at (within [`PINNED`]) or beyond one of its limits.
