@@ -1557,8 +1557,9 @@ fn a_jog_into_a_joint_limit_is_announced() {
 #[test]
 fn the_half_turn_line_is_refused_before_the_arm_moves() {
     // After the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0` the tool is 6 cm from joint
-    // 1's axis; the help's example move passes the wrist centre within 6 mm of it, where
-    // joint 1 would swing half a turn (and joint 6 into its limit): refused with where.
+    // 1's axis; armgate-sim's help example passes the wrist centre within 6 mm of it, where
+    // joint 1 would swing half a turn and joint 6 with it, into its limit 18 % of the way:
+    // refused with that, before the arm moves.
     let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.4,1.2,0,1.2,0"]);
     if !knows_status(&sim) {
         return;
@@ -1568,7 +1569,7 @@ fn the_half_turn_line_is_refused_before_the_arm_moves() {
     armgate(&sim, &["mode", "cart"]).0.unwrap();
     let before = sim.ok("jP", [0.0; 7], 0);
     let (text, _) = refusal(armgate(&sim, &["move", "0.1", "0.6", "0.9", "0", "1.57", "0"]).0);
-    assert_eq!(text, "ER25 Cmd BG j1 too fast at 2%");
+    assert_eq!(text, "ER26 Cmd BG j6 > 3.142 at 18%");
     assert_eq!(status(&sim)[4], 0.0, "nothing moves");
     assert_eq!(sim.ok("jP", [0.0; 7], 0), before);
 }

@@ -831,10 +831,11 @@ fn the_half_turn_line_is_refused_up_front() {
     // The case: after the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0` the tool is
     // 6 cm from joint 1's axis (its wrist centre 1.5 cm), and the line to (0.1, 0.6, 0.9) with
     // roll-pitch-yaw (0, 1.57, 0) takes the wrist centre within 6 mm of the axis 3 % of the
-    // way. Followed as the tick follows it, joint 1 swings 2.7 rad there (joint 6 with it,
-    // into its limit: the run aborted with WN22); the nearest IK solution a sixteenth of the
-    // line ahead is on the other shoulder branch, 0.4 rad from the start, which the check
-    // took for a step. Now it is refused with joint 1 and where, whatever the joints' rates.
+    // way. Followed as the tick follows it, joint 1 swings 2.7 rad there and joint 6 with it,
+    // into its limit 18 % of the way (the run aborted with WN22). The nearest IK solution a
+    // sixteenth of the line ahead is on the other shoulder branch, 0.4 rad from the start:
+    // the check took it for a step and accepted the line. Now it follows the swing in short
+    // steps, and refuses the line with joint 6's limit and where, whatever the joints' rates.
     let start = [1.5708, 0.4, 1.2, 0.0, 1.2, 0.0];
     let goal = at(
         Rotation3::from_euler_angles(0.0, 1.57, 0.0),
@@ -852,9 +853,10 @@ fn the_half_turn_line_is_refused_up_front() {
         let mut rig = Rig::new(&config, &start);
         assert!((rig.pose().translation.vector.xy().norm() - 0.060).abs() < 1e-3);
         rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+        let j6_max = JointBound::new(5, true, 3.142, PathPoint::Along(18));
         assert_eq!(
             rig.ctrl.move_cartesian(goal, 0.0),
-            Err(Refusal::TooFast(1, PathPoint::Along(2)))
+            Err(Refusal::OutsideJointLimits(j6_max))
         );
         assert!(!rig.ctrl.is_moving());
         // Without the check the tick follows the line: joint 1 swings, within its rate and

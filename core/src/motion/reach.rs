@@ -9,9 +9,11 @@
 //! [`LINE_SAMPLES`] points by tracking IK from one point to the next, seeded with the
 //! commanded joints, as the ticks will; where a step fails the step is halved (down to 1/8),
 //! so that only a real limit refuses the move. A step in which a joint moves more than
-//! [`MAX_JOINT_STEP`] is halved too: from afar the nearest solution may lie on another branch
-//! (the tick, following the line, would swing a joint half a turn instead), and a joint that
-//! still moves that much at the shortest step refuses the line.
+//! [`MAX_JOINT_STEP`] is halved too, down to 1/1024 of the line: from afar the nearest
+//! solution may lie on another branch, where the tick, following the line past a
+//! near-singularity, swings a joint through up to half a turn (and maybe into a limit). The
+//! check follows that swing as the tick would; a joint that still moves that much in the
+//! shortest step jumps, and refuses the line.
 //!
 //! The check runs while a request is answered, inside a tick on the firmware, so its work is
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
@@ -55,6 +57,9 @@ pub fn check_iterations(period: f64) -> u32 {
 }
 /// The smallest step tried, as a fraction of the way.
 const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
+/// The smallest step tried where a joint moves more than [`MAX_JOINT_STEP`]: a swing near a
+/// singularity is followed in steps this short, as the tick follows it.
+const MIN_JUMP_STEP: f64 = MIN_STEP / 8.0;
 /// Iterations of one tracking solve in the check at most.
 const CHECK_SOLVE_ITERATIONS: u16 = 10;
 /// A joint this close to a limit in a non-converged solution is taken as what stopped it.
@@ -79,8 +84,7 @@ pub(super) struct Reach<'a> {
 /// the line passes close to a singularity (the wrist centre near joint 1's axis), the tick
 /// swings a joint through up to half a turn while the nearest solution lies on another branch,
 /// a small step away. A step in which a joint moves more than this is retried shorter, and one
-/// that still does at the shortest step is refused: the joint would turn this much within 1/128
-/// of the line.
+/// that still does at 1/1024 of the line is refused as a jump.
 pub const MAX_JOINT_STEP: f64 = 0.25;
 
 /// How much faster than its rate limit a joint may need to move, averaged over a step of the
@@ -151,7 +155,7 @@ impl Reach<'_> {
             match fault(&q, &solved, self.max_rate, (next - done) * duration) {
                 // From afar the nearest solution may lie on another branch: retried shorter,
                 // as the tick would follow the line.
-                Some(Fault::Jump(_)) if step > MIN_STEP => {
+                Some(Fault::Jump(_)) if step > MIN_JUMP_STEP => {
                     step *= 0.5;
                     continue;
                 }
