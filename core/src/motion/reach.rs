@@ -19,9 +19,9 @@
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
 //! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
 //! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.29–0.55
-//! million instructions per check on average, at most 1.29 million (ranger-mk2, 19.44 ms
-//! period) and 1.47 million (iiwa14, 5.04 ms): within one period at 480 MHz.
+//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.33–0.66
+//! million instructions per check on average, at most 1.82 million (ranger-mk2, 19.44 ms
+//! period) and 1.68 million (iiwa14, 5.04 ms): within one period at 480 MHz.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -260,6 +260,26 @@ fn first_bound(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_step_faults_on_a_jump_first_then_on_a_rate() {
+        let step = |a: f64, b: f64| Joints::from_slice(&[a, b]).unwrap();
+        let (rate, q) = (step(0.2, 0.2), step(0.0, 1.0));
+        // 0.2 rad/s for 1 s: up to 20 rad at MAX_SLOWDOWN, but never more than 0.25 a step.
+        assert!(fault(&q, &step(0.25, 1.0), &rate, 1.0).is_none());
+        assert!(matches!(
+            fault(&q, &step(0.1, 1.26), &rate, 1.0),
+            Some(Fault::Jump(2))
+        ));
+        assert!(matches!(
+            fault(&q, &step(0.21, 1.0), &rate, 0.01),
+            Some(Fault::Rate(1))
+        ));
+        assert!(matches!(
+            fault(&q, &step(0.21, f64::NAN), &rate, 0.01),
+            Some(Fault::Jump(2))
+        ));
+    }
 
     #[test]
     fn the_budget_follows_the_control_period_within_its_bounds() {
