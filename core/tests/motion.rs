@@ -685,21 +685,15 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
         Rotation3::from_euler_angles(0.0, 0.0, 0.0),
         Vector3::new(0.5, 0.2, 0.1),
     );
-    let mut rig = Rig::new(&config, &MK1_HOME);
-    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
-    assert_eq!(
-        rig.ctrl.move_cartesian(goal, 5.0),
-        Err(Refusal::OutsideJointLimits(j3_max))
-    );
-    assert!(!rig.ctrl.is_moving());
     // Without the check the move starts, and stalls with joint 3 on that limit.
-    let config = config.edit(|c| c.ik.check_lines = false).unwrap();
-    let mut rig = Rig::new(&config, &MK1_HOME);
-    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
-    rig.ctrl.move_cartesian(goal, 5.0).unwrap();
-    let outs = rig.settle(5_000);
-    assert!(outs.iter().any(|o| o.events.ik_divergence));
+    let (rig, _) = refused_where_the_unchecked_run_stops(
+        &config,
+        &MK1_HOME,
+        goal,
+        5.0,
+        Refusal::OutsideJointLimits(j3_max),
+    );
     assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
     assert!((rig.pose().translation.vector - goal.translation.vector).norm() > 0.5);
 }
@@ -821,6 +815,29 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
     assert!(accepted >= 5 && refused >= 5, "{accepted} / {refused}");
 }
 
+/// Asserts that the line from joints `start` to `goal` is refused with `refusal` before the arm
+/// moves; then runs it without the check (`ik.check_lines = false`), which must end in a
+/// controlled stop with WN22, and returns that run.
+fn refused_where_the_unchecked_run_stops(
+    config: &ValidRobot,
+    start: &[f64],
+    goal: Frame,
+    min_duration: f64,
+    refusal: Refusal,
+) -> (Rig, Vec<StepOutput>) {
+    let mut rig = Rig::new(config, start);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    assert_eq!(rig.ctrl.move_cartesian(goal, min_duration), Err(refusal));
+    assert!(!rig.ctrl.is_moving());
+    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
+    let mut rig = Rig::new(&unchecked, start);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    rig.ctrl.move_cartesian(goal, min_duration).unwrap();
+    let outs = rig.settle(100_000);
+    assert!(outs.iter().any(|o| o.events.ik_divergence));
+    (rig, outs)
+}
+
 /// The frame with this rotation and position.
 fn at(rotation: Rotation3<f64>, position: Vector3<f64>) -> Frame {
     Frame::from_parts(position.into(), rotation)
@@ -850,23 +867,18 @@ fn the_half_turn_line_is_refused_up_front() {
         })
         .unwrap();
     for config in [common::robot("ranger-mk1"), e2e, mk1_fast()] {
-        let mut rig = Rig::new(&config, &start);
+        let rig = Rig::new(&config, &start);
         assert!((rig.pose().translation.vector.xy().norm() - 0.060).abs() < 1e-3);
-        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
         let j6_max = JointBound::new(5, true, 3.142, PathPoint::Along(18));
-        assert_eq!(
-            rig.ctrl.move_cartesian(goal, 0.0),
-            Err(Refusal::OutsideJointLimits(j6_max))
-        );
-        assert!(!rig.ctrl.is_moving());
         // Without the check the tick follows the line: joint 1 swings, within its rate and
         // acceleration (slowed down), and the motion ends in a controlled stop with WN22.
-        let unchecked = config.edit(|c| c.ik.check_lines = false).unwrap();
-        let mut rig = Rig::new(&unchecked, &start);
-        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
-        rig.ctrl.move_cartesian(goal, 0.0).unwrap();
-        let outs = rig.settle(100_000);
-        assert!(outs.iter().any(|o| o.events.ik_divergence));
+        let (_, outs) = refused_where_the_unchecked_run_stops(
+            &config,
+            &start,
+            goal,
+            0.0,
+            Refusal::OutsideJointLimits(j6_max),
+        );
         let q: Vec<Joints> = outs.iter().filter_map(|o| o.command).collect();
         let swing = q
             .iter()

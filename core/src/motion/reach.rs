@@ -215,8 +215,7 @@ enum Fault {
 fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64) -> Option<Fault> {
     let number = |joint: usize| u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
     let moved = q.iter().zip(next.iter()).map(|(a, b)| libm::fabs(b - a));
-    // Written so that a NaN is a jump.
-    if let Some(joint) = moved.clone().position(|m| !(m <= MAX_JOINT_STEP)) {
+    if let Some(joint) = moved.clone().position(|m| m.is_nan() || m > MAX_JOINT_STEP) {
         return Some(Fault::Jump(number(joint)));
     }
     moved
