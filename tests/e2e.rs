@@ -845,8 +845,16 @@ fn a_two_second_stall_is_reported_as_the_ticks_it_missed() {
 
 /// Runs `armgate ARGS` in-process against the simulator; returns the result and stdout.
 fn armgate(sim: &Sim, args: &[&str]) -> (Result<(), armgate_client::cli::CliError>, String) {
+    armgate_at(sim.socket.peer_addr().unwrap(), args)
+}
+
+/// The same, with the controller at `addr`.
+fn armgate_at(
+    addr: SocketAddr,
+    args: &[&str],
+) -> (Result<(), armgate_client::cli::CliError>, String) {
     use clap::Parser;
-    let addr = sim.socket.peer_addr().unwrap().to_string();
+    let addr = addr.to_string();
     let mut argv = vec!["armgate", "--addr", addr.as_str(), "--timeout", "1s"];
     argv.extend_from_slice(args);
     let cli = armgate_client::cli::Cli::try_parse_from(argv).unwrap();

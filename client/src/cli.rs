@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use crate::banks::MAX_JOINTS;
+use crate::drives;
 use crate::hints;
 use crate::interrupt;
-use crate::matching;
 use crate::runfile::{RunFile, RunFileError};
 use crate::teleop::{self, TeleopOptions};
 use crate::{
@@ -53,8 +53,9 @@ Examples:
                                              the controller in MCAP for Foxglove
 
 Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
-WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted
-(Ctrl-C during move, jmove or run sends ST first: the arm stops and holds).
+WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted.
+A move, ik-move, jmove or run that fails after starting its motion (Ctrl-C, --wait-timeout,
+a stall, an abort, no reply) sends ST first and says so: the arm stops and holds.
 Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
 
 const RUN_LONG: &str = "\
@@ -387,7 +388,7 @@ pub struct WaitArgs {
     /// Return as soon as the motion has started.
     #[arg(long)]
     pub no_wait: bool,
-    /// Give up waiting after this long (default: 30 s plus the requested times).
+    /// Give up waiting after this long (default: 30 s plus the requested times); then ST.
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
     /// Arrival tolerance, mm (joints: mrad).
@@ -469,6 +470,14 @@ pub enum CliError {
     /// Ctrl-C during a wait; says whether ST was sent.
     #[error("interrupted: {0}")]
     Interrupted(String),
+    /// A command that started a motion failed before it saw it end; ST was sent first.
+    #[error("{error}; {stop}")]
+    Stopped {
+        /// Why the command failed.
+        error: ClientError,
+        /// Whether ST was sent.
+        stop: String,
+    },
 }
 
 impl CliError {
@@ -478,6 +487,7 @@ impl CliError {
             Self::Client(e) => e.exit_code(),
             Self::Refused { .. } => 1,
             Self::Interrupted(_) => ClientError::Interrupted.exit_code(),
+            Self::Stopped { error, .. } => error.exit_code(),
             _ => 2,
         }
     }
@@ -625,16 +635,44 @@ fn joint_count(cli: &Cli, client: &mut Client) -> Result<usize, CliError> {
     }
 }
 
-/// After Ctrl-C ended a wait: ST (unless the wait ended otherwise).
-fn stop_if_interrupted(client: &mut Client, error: ClientError) -> CliError {
-    if !matches!(error, ClientError::Interrupted) {
-        return error.into();
-    }
+/// A command that leaves before it saw the motion it started end (a wait that timed out,
+/// stalled, was aborted or interrupted; a controller that stopped answering) sends ST first:
+/// otherwise the arm goes on alone, and the next client is refused (`ER40`) until it ends.
+fn stop_started(client: &mut Client, error: ClientError) -> CliError {
     finish_progress();
-    CliError::Interrupted(match client.stop() {
+    let stop = match client.stop() {
         Ok(()) => "sent ST: the arm stops and holds".to_owned(),
         Err(e) => format!("ST failed ({e}): the arm may still be moving"),
+    };
+    match error {
+        ClientError::Interrupted => CliError::Interrupted(stop),
+        error => CliError::Stopped { error, stop },
+    }
+}
+
+/// Sends the request(s) that start a motion. When the starting request's replies are all lost,
+/// the motion may have started: [`stop_started`].
+fn start<T>(
+    client: &mut Client,
+    request: impl FnOnce(&mut Client) -> Result<T, ClientError>,
+) -> Result<T, CliError> {
+    request(client).map_err(|e| match e {
+        ClientError::Timeout { .. } | ClientError::Unverified { .. } => stop_started(client, e),
+        e => e.into(),
     })
+}
+
+/// Waits for the motion this command started (`wait`), then until it has ended ([`settle`]);
+/// on any failure [`stop_started`].
+fn follow<T>(
+    client: &mut Client,
+    wait: impl FnOnce(&mut Client) -> Result<T, ClientError>,
+) -> Result<T, CliError> {
+    let result = wait(client).and_then(|reached| {
+        finish_progress();
+        client.wait_motion_ended(SETTLE).map(|()| reached)
+    });
+    result.map_err(|e| stop_started(client, e))
 }
 
 /// `armgate jog`: a TW or jW stream for `seconds`, then wait until the arm has ramped to rest.
@@ -721,9 +759,12 @@ fn drives_on(client: &mut Client, timeout: Duration, out: &mut impl Write) -> Re
     Ok(())
 }
 
-/// After a wait: until the motion has ended (see [`Client::wait_motion_ended`]).
+/// After a wait: how long to wait until the motion has ended (see [`Client::wait_motion_ended`]).
+const SETTLE: Duration = Duration::from_secs(5);
+
+/// After a wait: until the motion has ended.
 fn settle(client: &mut Client) -> Result<(), CliError> {
-    Ok(client.wait_motion_ended(Duration::from_secs(5))?)
+    Ok(client.wait_motion_ended(SETTLE)?)
 }
 
 fn print_notices(client: &mut Client) {
@@ -791,10 +832,8 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         Cmd::On { wait_timeout } => drives_on(client, *wait_timeout, out),
         Cmd::Off => match client.off() {
             // `ER10 Arm already off` / `already stopping`: what was asked for.
-            Err(ClientError::Rejected(text))
-                if matching::code(&text) == Some(10) && text.as_str().contains(" already ") =>
-            {
-                let state = text.as_str().rsplit(' ').next().unwrap_or("off");
+            Err(ClientError::Rejected(text)) if drives::already_stopped(&text).is_some() => {
+                let state = drives::already_stopped(&text).unwrap_or_default();
                 writeln!(out, "drives already {state}")?;
                 Ok(())
             }
@@ -820,21 +859,16 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             let (xyz, rpy) = ([*x, *y, *z], [*roll, *pitch, *yaw]);
             let interrupt = wait.interrupt();
             client.goal_rpy(xyz, rpy, *time)?;
-            client.begin()?;
+            start(client, Client::begin)?;
             writeln!(out, "moving")?;
             if wait.no_wait {
                 return Ok(());
             }
             let goal = Pose::from_xyz_rpy(xyz, rpy);
-            let pose = client
-                .wait_until_pose(
-                    &goal,
-                    &wait.options(*time, interrupt.as_ref()),
-                    pose_progress,
-                )
-                .map_err(|e| stop_if_interrupted(client, e))?;
-            finish_progress();
-            settle(client)?;
+            let options = wait.options(*time, interrupt.as_ref());
+            let pose = follow(client, |c| {
+                c.wait_until_pose(&goal, &options, pose_progress)
+            })?;
             writeln!(
                 out,
                 "arrived: {} ({:.2} mm from the goal)",
@@ -867,7 +901,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
         } => {
             let (xyz, rpy) = pose.xyz_rpy();
             let interrupt = wait.interrupt();
-            let goal = client.ik_move(xyz, rpy, *branch, *time)?;
+            let goal = start(client, |c| c.ik_move(xyz, rpy, *branch, *time))?;
             writeln!(
                 out,
                 "moving to {} (branch {})",
@@ -878,11 +912,9 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 return Ok(());
             }
             let options = wait.options(*time, interrupt.as_ref());
-            let reached = client
-                .wait_until_joints(&goal.q, &options, joint_progress)
-                .map_err(|e| stop_if_interrupted(client, e))?;
-            finish_progress();
-            settle(client)?;
+            let reached = follow(client, |c| {
+                c.wait_until_joints(&goal.q, &options, joint_progress)
+            })?;
             writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
@@ -892,12 +924,12 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
             match time {
                 None => {
                     client.joint_goal(q)?;
-                    client.joint_begin()?;
+                    start(client, Client::joint_begin)?;
                 }
                 Some(t) => {
                     client.joint_via_clear()?;
                     client.via_joint(0, q, *t)?;
-                    client.run_joint_sequence()?;
+                    start(client, Client::run_joint_sequence)?;
                 }
             }
             writeln!(out, "moving")?;
@@ -905,11 +937,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 return Ok(());
             }
             let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
-            let reached = client
-                .wait_until_joints(q, &options, joint_progress)
-                .map_err(|e| stop_if_interrupted(client, e))?;
-            finish_progress();
-            settle(client)?;
+            let reached = follow(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
             writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
             Ok(())
         }
@@ -924,7 +952,7 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                 run.set_default_blend(blend * 1e-3);
             }
             let interrupt = wait.interrupt();
-            client.start_run(&run)?;
+            start(client, |c| c.start_run(&run))?;
             writeln!(
                 out,
                 "running {} via points from {}",
@@ -939,22 +967,18 @@ fn dispatch(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), 
                     let total = points.iter().map(|p| p.time).sum();
                     let goals = RunFile::poses(points);
                     let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-                    let pose = client
-                        .wait_through_poses(&goals, &options, pose_progress)
-                        .map_err(|e| stop_if_interrupted(client, e))?;
-                    finish_progress();
-                    settle(client)?;
+                    let pose = follow(client, |c| {
+                        c.wait_through_poses(&goals, &options, pose_progress)
+                    })?;
                     writeln!(out, "done: {}", fmt_values(&pose.xyz, 4))?;
                 }
                 RunFile::Joint(points) => {
                     let total = points.iter().map(|p| p.time).sum();
                     let goals: Vec<Vec<f64>> = points.iter().map(|p| p.q.clone()).collect();
                     let options = wait.passing(total, interrupt.as_ref(), run.largest_blend());
-                    let q = client
-                        .wait_through_joints(&goals, &options, joint_progress)
-                        .map_err(|e| stop_if_interrupted(client, e))?;
-                    finish_progress();
-                    settle(client)?;
+                    let q = follow(client, |c| {
+                        c.wait_through_joints(&goals, &options, joint_progress)
+                    })?;
                     writeln!(out, "done: {}", fmt_values(&q, 4))?;
                 }
             }
@@ -1275,23 +1299,36 @@ mod tests {
     }
 
     #[test]
-    fn an_interrupted_wait_sends_st() {
+    fn a_wait_that_fails_sends_st_and_keeps_its_exit_status() {
         let fake = FakeController::spawn(|d| vec![echo(d)]);
         let mut client = Client::connect(fake.addr()).unwrap();
-        let err = stop_if_interrupted(&mut client, ClientError::Interrupted);
+        let err = stop_started(&mut client, ClientError::Interrupted);
         assert_eq!(
             err.to_string(),
             "interrupted: sent ST: the arm stops and holds"
         );
         assert_eq!(err.exit_code(), 130);
         assert_eq!(&fake.received()[0][..2], b"ST");
-        // Any other end of a wait is passed on, and nothing is sent.
-        let err = stop_if_interrupted(
+        let timeout = ClientError::WaitTimeout {
+            target: 0,
+            distance: 0.25,
+            angle: None,
+            timeout: Duration::from_secs(1),
+        };
+        let err = stop_started(&mut client, timeout);
+        assert_eq!(
+            err.to_string(),
+            "target 1 not reached within 1s (still 0.2500 (joint norm) from it); sent ST: the arm \
+             stops and holds"
+        );
+        assert_eq!(err.exit_code(), 2);
+        let err = stop_started(
             &mut client,
             ClientError::Aborted(crate::fake::parsed_text("WN22 Inv Kin Divergence.")),
         );
         assert_eq!(err.exit_code(), 1);
-        assert_eq!(fake.received().len(), 1);
+        assert_eq!(fake.received().len(), 3);
+        assert!(fake.received().iter().all(|d| &d[..2] == b"ST"));
     }
 
     #[test]
@@ -1429,6 +1466,26 @@ mod tests {
         assert_eq!(text.as_str(), "ER20 Cmd BG rejected");
         // No status from this fake: the hint lists what BG needs.
         assert!(hint.unwrap().contains("mode cart"));
+    }
+
+    #[test]
+    fn a_begin_without_a_reply_may_have_started_the_motion_and_is_stopped() {
+        let fake = FakeController::spawn(|d| match &d[..2] {
+            b"BG" => vec![],
+            _ => vec![echo(d)],
+        });
+        let args = ["move", "0.5", "0.2", "0.1", "0", "0", "0"];
+        let retry = ["--timeout", "50ms", "--retries", "1"];
+        let (result, _) = run_with(&fake, &[&args[..], &retry].concat());
+        let err = result.unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.to_string()
+                .ends_with("; sent ST: the arm stops and holds"),
+            "{err}"
+        );
+        let sent: Vec<_> = fake.received().iter().map(|d| d[..2].to_vec()).collect();
+        assert_eq!(sent, [b"GT", b"BG", b"BG", b"ST"]);
     }
 
     #[test]

@@ -4,8 +4,21 @@
 
 use std::time::{Duration, Instant};
 
-use crate::status::DriveStatus;
-use crate::{Client, ClientError, Motion, WaitOptions, matching};
+use armgate_protocol::client::Notice;
+
+use crate::status::{DriveStatus, Name};
+use crate::{Client, ClientError, Motion, Text, WaitOptions, matching};
+
+/// The state named by an `OF` refused because the drives already are where it would take them
+/// (`ER10 Arm already off` → `off`, `already stopping` → `stopping`).
+pub fn already_stopped(text: &Text) -> Option<&'static str> {
+    match Notice::parse(text) {
+        Ok(Notice::ArmDidNotStop(state @ (DriveStatus::Off | DriveStatus::Stopping))) => {
+            Some(state.name())
+        }
+        _ => None,
+    }
+}
 
 /// How often the status is polled.
 const POLL: Duration = Duration::from_millis(50);
@@ -106,5 +119,29 @@ impl Client {
                 Err(e) => return Err(e),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fake::parsed_text;
+
+    #[test]
+    fn an_off_refused_because_the_drives_already_stop_names_their_state() {
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm already off")),
+            Some("off")
+        );
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm already stopping")),
+            Some("stopping")
+        );
+        assert_eq!(
+            already_stopped(&parsed_text("ER10 Arm stopped by fault")),
+            None
+        );
+        assert_eq!(already_stopped(&parsed_text("ER10 Arm did not stop")), None);
+        assert_eq!(already_stopped(&parsed_text("ER11 Arm already on")), None);
     }
 }

@@ -5,36 +5,33 @@
 //! The reason and the state cannot guess wrong: with the drives off or faulted no motion
 //! starts whatever the mode, so the hint is `armgate on`; while they start, waiting is.
 
+use armgate_protocol::client::{Command, Header, Notice, Rejection};
+
 use crate::status::{DriveStatus, Motion, Name, Status};
-use crate::{Mode, Text, matching};
+use crate::{Mode, Text};
 
-/// The commands that start or load a Cartesian motion, and those of joint mode.
-const CARTESIAN: [&str; 4] = ["BG", "VE", "GT", "GL"];
-const JOINT: [&str; 3] = ["jB", "jE", "jG"];
-
-/// The two command characters a refusal names (`ER20 Cmd BG rejected: …` → `BG`).
-fn named_command(text: &str) -> Option<&str> {
-    text.get(5..)?.strip_prefix("Cmd ")?.get(..2)
-}
+/// The code of `ER20`, the refusals with a reason.
+const REJECTED: u8 = 20;
 
 /// A hint for a refusal, if there is one to give.
 pub fn hint(text: &Text, status: Option<&Status>) -> Option<String> {
-    let code = matching::code(text)?;
-    let s = text.as_str();
-    let command = named_command(s).unwrap_or_default();
-    if let Some(h) = reason_hint(code, &s.to_ascii_lowercase()) {
+    let header = Header::parse(text).ok()?;
+    let command = header.command.and_then(Command::from_chars);
+    if let Ok(Notice::Rejected(_, why)) = Notice::parse(text)
+        && let Some(h) = reason_hint(why)
+    {
         return Some(h);
     }
     if let Some(status) = status {
-        if let Some(h) = drive_hint(status, code) {
+        if let Some(h) = drive_hint(status, header.code) {
             return Some(h);
         }
-        if code == 20 {
+        if header.code == REJECTED {
             return state_hint(command, status);
         }
         return None;
     }
-    text_hint(code, command, &s.to_ascii_lowercase())
+    text_hint(&header, command)
 }
 
 /// The hint when the drives are the reason (any refusal but ON's and OF's own).
@@ -55,17 +52,13 @@ fn drive_hint(status: &Status, code: u8) -> Option<String> {
     }
 }
 
+/// The request's two characters, for a message.
+fn chars(command: Command) -> String {
+    String::from_utf8_lossy(&command.chars()).into_owned()
+}
+
 /// The hint for `ER20` with the drives running: the mode, a running motion, a missing goal.
-fn state_hint(command: &str, status: &Status) -> Option<String> {
-    let needs = |mode: Mode| {
-        (status.mode != mode).then(|| {
-            format!(
-                "{command} needs mode {0}, the mode is {1}: `armgate mode {0}`",
-                mode.name(),
-                status.mode.name()
-            )
-        })
-    };
+fn state_hint(command: Option<Command>, status: &Status) -> Option<String> {
     let busy = || {
         (status.motion != Motion::Holding).then(|| {
             format!(
@@ -74,83 +67,71 @@ fn state_hint(command: &str, status: &Status) -> Option<String> {
             )
         })
     };
-    if CARTESIAN.contains(&command) {
-        needs(Mode::Cartesian)
-            .or_else(busy)
-            .or_else(|| Some("no goal or via point 0 stored (GT / VP 0 first)".into()))
-    } else if JOINT.contains(&command) {
-        needs(Mode::Joint)
-            .or_else(busy)
-            .or_else(|| Some("no joint goal or via point 0 stored (jG / jV 0 first)".into()))
-    } else if command == "RC" {
-        needs(Mode::Off).or_else(busy)
-    } else {
-        busy()
-    }
-}
-
-/// The hint for a reason the refusal's text gives (the `ER20` reasons of docs/protocol.md).
-fn reason_hint(code: u8, reason: &str) -> Option<String> {
-    if code != 20 {
-        return None;
-    }
-    if reason.ends_with("drives off")
-        || reason.contains("drive fault")
-        || reason.ends_with("drives stopping")
-    {
-        return Some("start the drives with `armgate on` (it also clears a fault)".into());
-    }
-    if reason.ends_with("drives starting") {
-        return Some(
-            "the drives are still starting: try again in a moment (`armgate on` waits for them)"
-                .into(),
-        );
-    }
-    if reason.ends_with("drives settling") {
-        return Some("the drives still follow the last set-points: try again in a moment".into());
-    }
-    if let Some(mode) = reason
-        .split_once("needs mode ")
-        .and_then(|(_, m)| m.trim().parse::<f32>().ok())
-        .and_then(Mode::from_value)
-    {
-        return Some(format!(
-            "switch the mode first: `armgate mode {}`",
-            mode.name()
-        ));
-    }
-    if reason.ends_with("busy") {
-        return Some("a motion is running: wait for it or `armgate stop`".into());
-    }
-    if reason.ends_with("no goal") {
-        return Some(
-            "store a goal first (`armgate send GT ...` / jG), or use `armgate move` / `jmove`"
-                .into(),
-        );
-    }
-    if reason.ends_with("no via point 0") {
-        return Some("store via point 0 first (VP / jV), or use `armgate run`".into());
-    }
-    None
-}
-
-/// The hint from the refusal alone (a controller without reasons and without `SQ`).
-fn text_hint(code: u8, command: &str, reason: &str) -> Option<String> {
-    if code != 20 {
-        return None;
-    }
-    let mode = if CARTESIAN.contains(&command) {
-        "Cartesian mode (`armgate mode cart`)"
-    } else if JOINT.contains(&command) {
-        "joint mode (`armgate mode joint`)"
-    } else if command == "RC" {
-        "mode off (`armgate mode off`)"
-    } else {
-        return None;
+    let Some(command) = command else {
+        return busy();
     };
-    if !reason.ends_with("rejected") {
+    let needs = |mode: Mode| {
+        (status.mode != mode).then(|| {
+            format!(
+                "{} needs mode {1}, the mode is {2}: `armgate mode {1}`",
+                chars(command),
+                mode.name(),
+                status.mode.name()
+            )
+        })
+    };
+    let goal = || match command {
+        Command::Begin | Command::ViaExecute => {
+            Some("no goal or via point 0 stored (GT / VP 0 first)".into())
+        }
+        Command::JointBegin | Command::JointExecute => {
+            Some("no joint goal or via point 0 stored (jG / jV 0 first)".into())
+        }
+        _ => None,
+    };
+    match Mode::required_by(command) {
+        Some(mode) => needs(mode).or_else(busy).or_else(goal),
+        None => busy(),
+    }
+}
+
+/// The hint for the reason an `ER20` gives (docs/protocol.md).
+fn reason_hint(why: Rejection) -> Option<String> {
+    Some(match why {
+        Rejection::Drives(DriveStatus::Off | DriveStatus::Stopping | DriveStatus::Faulted)
+        | Rejection::DriveFault(_) => {
+            "start the drives with `armgate on` (it also clears a fault)".into()
+        }
+        Rejection::Drives(DriveStatus::Starting) => {
+            "the drives are still starting: try again in a moment (`armgate on` waits for them)"
+                .into()
+        }
+        Rejection::DrivesSettling => {
+            "the drives still follow the last set-points: try again in a moment".into()
+        }
+        Rejection::NeedsMode(mode) => {
+            format!("switch the mode first: `armgate mode {}`", mode.name())
+        }
+        Rejection::Busy => "a motion is running: wait for it or `armgate stop`".into(),
+        Rejection::NoGoal => {
+            "store a goal first (`armgate send GT ...` / jG), or use `armgate move` / `jmove`"
+                .into()
+        }
+        Rejection::NoViaPoint => "store via point 0 first (VP / jV), or use `armgate run`".into(),
+        Rejection::Drives(DriveStatus::Running) | Rejection::NoMeasurement => return None,
+    })
+}
+
+/// The hint from the refusal alone (an older controller: `ER20 Cmd XX rejected`, no `SQ`).
+fn text_hint(header: &Header<'_>, command: Option<Command>) -> Option<String> {
+    if header.code != REJECTED || header.detail != "rejected" {
         return None;
     }
+    let mode = match Mode::required_by(command?)? {
+        Mode::Cartesian => "Cartesian mode (`armgate mode cart`)",
+        Mode::Joint => "joint mode (`armgate mode joint`)",
+        Mode::Off => "mode off (`armgate mode off`)",
+    };
     Some(format!(
         "needs {mode}, running drives (`armgate on`), a goal, and no motion running (`armgate stop`)"
     ))
@@ -224,6 +205,20 @@ mod tests {
             hint(&parsed_text("ER25 Cmd GT outside workspace"), Some(&idle)),
             None
         );
+    }
+
+    #[test]
+    fn the_mode_a_request_needs_is_the_controllers_rule() {
+        let s = status(Mode::Off, DriveStatus::Running, 0, Motion::Holding);
+        let tw = hint_for("ER20 Cmd TW rejected", Some(s.clone()));
+        assert_eq!(
+            tw,
+            "TW needs mode cartesian, the mode is off: `armgate mode cartesian`"
+        );
+        assert!(hint_for("ER20 Cmd KG rejected", Some(s.clone())).contains("`armgate mode joint`"));
+        // GT and jG only store a goal: they need no mode.
+        assert_eq!(hint(&parsed_text("ER20 Cmd GT rejected"), Some(&s)), None);
+        assert_eq!(hint(&parsed_text("ER20 Cmd jG rejected"), None), None);
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Ctrl-C during a wait: the flag the wait polls, and the process's handler that sets it.
 //!
-//! A client that just exits on Ctrl-C leaves the arm moving. `armgate move`, `jmove` and `run`
-//! install the handler while they wait; the wait then ends with [`ClientError::Interrupted`]
-//! and the command sends `ST` (unless `--no-stop-on-interrupt`).
+//! A client that just exits on Ctrl-C leaves the arm moving. `armgate move`, `ik-move`, `jmove`
+//! and `run` install the handler while they wait; the wait then ends with
+//! [`ClientError::Interrupted`] and the command sends `ST` (unless `--no-stop-on-interrupt`).
 //!
 //! [`ClientError::Interrupted`]: crate::ClientError::Interrupted
 

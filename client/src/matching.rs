@@ -14,7 +14,7 @@
 //! late answer to an earlier, retried request) and is dropped.
 
 use armgate_protocol::client::banks::BANK_2;
-use armgate_protocol::client::{Message, Notice, Severity, Text};
+use armgate_protocol::client::{Header, Message, Text};
 
 /// What a received datagram is, relative to the request being waited for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,25 +52,9 @@ impl Expect {
         }
     }
 
-    /// Whether an error text answers this request.
+    /// Whether an error text answers this request (the grammar's [`Header::refuses`]).
     fn is_answered_by(&self, text: &Text) -> bool {
-        if text.severity() != Severity::Error {
-            return false;
-        }
-        let s = text.as_str();
-        let code = s.get(2..4).unwrap_or_default();
-        match (&self.chars, code) {
-            (b"OF", "10") | (b"ON", "11") => return true,
-            _ => {}
-        }
-        let body = s.get(5..).unwrap_or_default().as_bytes();
-        let named = |word: &[u8]| {
-            body.strip_prefix(word)
-                .and_then(|rest| rest.strip_prefix(b" "))
-                .and_then(|rest| rest.get(..2))
-                .is_some_and(|chars| chars == self.chars)
-        };
-        named(b"Cmd") || named(b"Msg")
+        Header::parse(text).is_ok_and(|h| h.refuses() == Some(self.chars))
     }
 
     /// Classifies a received datagram.
@@ -78,7 +62,7 @@ impl Expect {
         let Ok(message) = Message::new_checked(datagram) else {
             return Incoming::Other;
         };
-        if let Some(text) = Text::parse(&message) {
+        if let Ok(text) = Text::parse(&message) {
             return if self.is_answered_by(&text) {
                 Incoming::Rejected(text)
             } else {
@@ -98,7 +82,7 @@ impl Expect {
 pub fn classify_unsolicited(datagram: &[u8]) -> Incoming {
     match Message::new_checked(datagram)
         .ok()
-        .and_then(|m| Text::parse(&m))
+        .and_then(|m| Text::parse(&m).ok())
     {
         Some(text) => Incoming::Notice(text),
         None => Incoming::Other,
@@ -107,28 +91,13 @@ pub fn classify_unsolicited(datagram: &[u8]) -> Incoming {
 
 /// The two-digit code of a text (`ER21` → 21), if it has one.
 pub fn code(text: &Text) -> Option<u8> {
-    text.as_str().get(2..4)?.parse().ok()
+    Header::parse(text).ok().map(|h| h.code)
 }
 
-/// Whether a notice means that a running motion will not complete: `ER21` (workspace limit,
-/// the generator is reset), `WN22` (IK divergence, the arm holds), `WN27` (via point missed, the
-/// sequence stopped), `ER41` (the client watchdog stopped the arm) and drive faults
-/// `ER30`..`ER39`.
+/// Whether a notice means that a running motion will not complete (the grammar's
+/// [`Header::ends_motion`]: `ER21`, `WN22`, `WN27`, `ER41` and the drive faults `ER3x`).
 pub fn ends_motion(text: &Text) -> bool {
-    const ENDING: [Notice; 4] = [
-        Notice::WorkspaceLimit,
-        Notice::IkDivergence,
-        Notice::ViaPointMissed,
-        Notice::ClientSilent(0),
-    ];
-    let Some(c) = code(text) else {
-        return false;
-    };
-    let severity = text.severity();
-    ENDING
-        .iter()
-        .any(|n| n.severity() == severity && n.code() == c)
-        || (severity == Severity::Error && (30..40).contains(&c))
+    Header::parse(text).is_ok_and(|h| h.ends_motion())
 }
 
 #[cfg(test)]

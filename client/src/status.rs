@@ -98,11 +98,11 @@ impl Status {
             index: STATUS_INDEX,
         };
         let bad = |what: &str| ClientError::InvalidArgument(format!("the status reply has {what}"));
-        let report = StatusReport::from_reply(&reply)
-            .ok_or_else(|| bad(&format!("bad values {values:?}")))?;
+        let report =
+            StatusReport::from_reply(&reply).map_err(|e| bad(&format!("{e}: {values:?}")))?;
         let name = Message::new_checked(&name[..])
             .ok()
-            .and_then(|m| RobotName::parse(&m))
+            .and_then(|m| RobotName::parse(&m).ok())
             .ok_or_else(|| bad("no name"))?;
         let joints = usize::from(report.joints);
         if !(1..=crate::banks::MAX_JOINTS).contains(&joints) {
@@ -175,7 +175,8 @@ impl Client {
                 command: Command::Status,
                 values: reply.values,
                 index: CAUSE_INDEX,
-            })),
+            })
+            .ok()),
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
             Err(e) => Err(e),
         }
@@ -190,7 +191,7 @@ impl Client {
             index: raw.index,
         };
         SigningReport::from_reply(&reply)
-            .ok_or_else(|| ClientError::InvalidArgument("a malformed SQ 4 reply".into()))
+            .map_err(|e| ClientError::InvalidArgument(format!("a malformed SQ 4 reply: {e}")))
     }
 
     fn status_part(&mut self, index: u8) -> Result<crate::RawReply, ClientError> {

@@ -23,6 +23,7 @@ use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Request, Value}
 use armgate_protocol::can::{
     CanFrame, Emcy, Heartbeat, Nmt, NmtState, NodeId, NodeMessage, Object, SdoRequest, SdoResponse,
 };
+use armgate_protocol::client::Header;
 use drives_rig::{ScriptedBus, robot};
 
 fn node(id: u8) -> NodeId {
@@ -329,6 +330,10 @@ fn fault_codes_and_texts() {
     for (fault, text) in cases {
         assert_eq!(fault.text().as_str(), text);
         assert!(text.len() <= 30);
+        // Clients know a drive fault by its code alone (protocol's grammar).
+        let written = fault.text();
+        let header = Header::parse(&written).unwrap();
+        assert!(header.is_drive_fault() && header.ends_motion(), "{text}");
     }
     // The widest joint number still fits.
     assert_eq!(

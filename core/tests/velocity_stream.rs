@@ -150,7 +150,7 @@ impl Stream {
 
 fn text(reply: &[u8; 31]) -> Option<String> {
     let message = Message::new_checked(&reply[..]).ok()?;
-    Text::parse(&message).map(|t| t.as_str().to_owned())
+    Text::parse(&message).ok().map(|t| t.as_str().to_owned())
 }
 
 /// A request without values, index 0.

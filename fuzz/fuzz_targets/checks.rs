@@ -1,8 +1,7 @@
 //! What both fuzz targets check of every datagram's answer and every unsolicited notice.
 
 use armgate_protocol::client::{
-    Hold,
-    Command, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
+    Header, Hold, MESSAGE_LEN, MIN_LEN, Message, Notice, Reply, Request, TEXT_CAPACITY, Text,
 };
 
 /// The parsers on a datagram: what the handler must answer it with.
@@ -17,7 +16,7 @@ pub fn check_parsers(datagram: &[u8]) -> Result<Request, Notice> {
     assert!(datagram.len() >= MIN_LEN);
     // The client-side parsers, on whatever arrived.
     let _ = Reply::parse(&message);
-    if let Some(text) = Text::parse(&message) {
+    if let Ok(text) = Text::parse(&message) {
         let s = text.as_str();
         assert!(s.len() <= TEXT_CAPACITY);
         assert!(s.bytes().all(|b| b == b' ' || b.is_ascii_graphic()));
@@ -67,21 +66,23 @@ pub fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[
         return;
     }
     check_text_bytes(reply);
-    // A refusal: `ERnn Cmd XX <reason>` with a code that answers requests, or `ER10`/`ER11`
-    // for OF/ON (the reasons are checked by the unit and end-to-end tests).
-    let text = String::from_utf8_lossy(reply);
-    let [a, b] = request.command.chars();
-    let named = format!("Cmd {}{} ", char::from(a), char::from(b));
-    let refusal = ["ER20 ", "ER23 ", "ER24 ", "ER25 ", "ER26 "]
-        .iter()
-        .any(|code| text.starts_with(&format!("{code}{named}")));
-    let lifecycle = match request.command {
-        Command::On => text.starts_with("ER11 Arm "),
-        Command::Off => text.starts_with("ER10 Arm "),
-        _ => false,
-    };
+    // A refusal of this request, of the grammar: `ERnn Cmd XX <reason>` with a code that
+    // answers requests, or `ER10`/`ER11` for OF/ON.
+    let text = Text::parse(&message).expect("a text");
+    let notice = read_back(&text);
+    let refusal = matches!(
+        notice,
+        Notice::Rejected(..)
+            | Notice::BadNumber(_)
+            | Notice::BadIndex(_)
+            | Notice::OutsideWorkspace(..)
+            | Notice::BeyondJointLimit(..)
+            | Notice::ArmDidNotStart(_)
+            | Notice::ArmDidNotStop(_)
+    );
+    let refuses = Header::parse(&text).ok().and_then(|h| h.refuses());
     assert!(
-        refusal || lifecycle,
+        refusal && refuses == Some(request.command.chars()),
         "answer {text:?} to {request:?} is neither its reply nor one of its error texts"
     );
 }
@@ -89,10 +90,11 @@ pub fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[
 /// An unsolicited notice from the relay: a motion warning, or a drive fault (`ER3x`).
 pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
     check_text_bytes(bytes);
-    if bytes.starts_with(b"ER3") {
+    let text = Text::parse(&Message::new_checked(&bytes[..]).expect("31 bytes")).expect("a text");
+    if Header::parse(&text).is_ok_and(|h| h.is_drive_fault()) {
         return;
     }
-    let text = Text::parse(&Message::new_checked(&bytes[..]).expect("31 bytes")).expect("a text");
+    let notice = read_back(&text);
     let allowed = [
         Notice::JointLimit,
         Notice::WorkspaceLimit,
@@ -101,12 +103,26 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::Held(Hold::Workspace),
     ];
     // A stream held at a joint limit names the joint and the limit.
-    let held_at_limit = text.as_str().starts_with("WN12 j");
+    let held_at_limit = matches!(notice, Notice::Held(Hold::JointLimit(_)));
     assert!(
-        held_at_limit || allowed.iter().any(|n| n.text() == text),
+        held_at_limit || allowed.contains(&notice),
         "unexpected unsolicited text {:?}",
         text.as_str()
     );
+}
+
+/// The notice a text of the controller's reads back as (protocol's grammar), which writes the
+/// same text again.
+fn read_back(text: &Text) -> Notice {
+    let notice = Notice::parse(text)
+        .unwrap_or_else(|e| panic!("text {:?} is not of the grammar: {e}", text.as_str()));
+    assert_eq!(
+        notice.text(),
+        *text,
+        "text {:?} reads back as another",
+        text.as_str()
+    );
+    notice
 }
 
 /// `ER`/`WN`, two digits, a space, printable ASCII, a NUL, zeros to the end.

@@ -5,8 +5,8 @@
 mod common;
 
 use armgate_protocol::client::{
-    Command, DriveStatus, Error, JointBound, MESSAGE_LEN, Message, Notice, PathPoint, Rejection,
-    Reply, Request, Severity, Text,
+    Command, DecodeError, DriveStatus, Error, JointBound, MESSAGE_LEN, Message, Notice, PathPoint,
+    Rejection, Reply, Request, Severity, Text,
 };
 use common::XorShift;
 
@@ -167,11 +167,14 @@ fn texts_are_zero_filled_over_stale_bytes() {
         assert_eq!(buffer, padded(text.as_str().as_bytes()));
         assert_eq!(
             Text::parse(&Message::new_checked(&buffer[..]).unwrap()),
-            Some(text)
+            Ok(text)
         );
     }
     assert_eq!(Notice::JointLimit.text().severity(), Severity::Warning);
-    assert_eq!(Text::parse(&Message::new_checked(&GT[..]).unwrap()), None);
+    assert_eq!(
+        Text::parse(&Message::new_checked(&GT[..]).unwrap()),
+        Err(DecodeError::WrongCommand)
+    );
 }
 
 #[test]
@@ -251,7 +254,7 @@ fn random_datagrams_never_panic() {
                 if let Ok(reply) = Reply::parse(&message) {
                     assert_eq!(reply.to_bytes(), expected);
                 }
-                if let Some(text) = Text::parse(&message) {
+                if let Ok(text) = Text::parse(&message) {
                     let bytes = text.to_bytes();
                     assert!(text.as_str().len() < MESSAGE_LEN && bytes[MESSAGE_LEN - 1] == 0);
                     assert!(

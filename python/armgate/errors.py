@@ -1,6 +1,10 @@
 """Exceptions: one class per ``ER``/``WN`` code of docs/protocol.md and docs/drives.md, and the
 client's own failures (no reply, a wait that did not arrive).
 
+The texts are read as the Rust grammar reads them (protocol/src/client/header.rs): the table
+``protocol/grammar.json``, generated from it, is what python/tests/test_grammar.py checks this
+module against (every code, and a text of every form).
+
 Every controller text becomes a :class:`ControllerMessage` subclass with the code, the whole
 text and the reason after the prefix::
 
@@ -76,6 +80,21 @@ class WaitTimeout(WaitFailed, TimeoutError):
     """A wait ran out of time."""
 
 
+_NAMED = re.compile(r"(?:Cmd|Msg) (..)(?: |$)")
+"""A command a text names: ``Cmd XX`` or ``Msg XX``, then the end or a space."""
+
+_REFUSES = {10: "OF", 11: "ON"}
+"""The refusals that name no command: of ``OF`` and of ``ON``."""
+
+
+def _code(text: str) -> int:
+    """The two-digit code after ``ER``/``WN``, followed by the end or a space; -1 if none."""
+    code = text[2:4]
+    if len(code) == 2 and code.isdigit() and text[4:5] in ("", " "):
+        return int(code)
+    return -1
+
+
 class ControllerMessage(ArmError):
     """An ``ER``/``WN`` text from the controller.
 
@@ -95,10 +114,9 @@ class ControllerMessage(ArmError):
     def __init__(self, text: str) -> None:
         super().__init__(text)
         self.text = text
-        code = text[2:4]
-        self.code = int(code) if code.isdigit() else -1
+        self.code = _code(text)
         self.reason = text[5:] if len(text) > 4 else ""
-        named = re.match(r"(?:Cmd|Msg) (..)", self.reason)
+        named = _NAMED.match(self.reason)
         self.command = named.group(1) if named else None
 
     @property
@@ -108,6 +126,14 @@ class ControllerMessage(ArmError):
         if self.command is None:
             return self.reason
         return self.reason[len("Cmd XX "):]
+
+    @property
+    def refuses(self) -> Optional[str]:
+        """The request this text refuses, if it refuses one: the command it names, or ``OF``
+        for ``ER10`` and ``ON`` for ``ER11``, which name none. Warnings refuse nothing."""
+        if self.is_warning:
+            return None
+        return _REFUSES.get(self.code, self.command)
 
     @property
     def is_warning(self) -> bool:
@@ -126,8 +152,7 @@ class ControllerMessage(ArmError):
     @classmethod
     def from_text(cls, text: str) -> "ControllerMessage":
         """The exception of the class for this text's prefix and code."""
-        code = text[2:4]
-        number = int(code) if code.isdigit() else -1
+        number = _code(text)
         kind = _WARNINGS if text.startswith("WN") else _ERRORS
         if text.startswith("ER") and 30 <= number <= 39:
             return DriveFault(text)
@@ -196,8 +221,29 @@ class DriveFault(ControllerError):
         return int(named.group(1)) if named else None
 
 
+class HeldByOther(ControllerError):
+    """``ER40 Cmd XX by 192.168.1.2``: another client controls the arm while it moves
+    (``by another client`` for an IPv6 one)."""
+
+
+class ClientSilent(ControllerError):
+    """``ER41 client silent 500 ms``: this client said nothing for longer than its watchdog
+    (``WD``) while the arm moved, and the arm was stopped (ends a motion)."""
+
+
+class Cancelled(ControllerError):
+    """``ER42 Cmd XX cancelled by ST``: a planning request that waited for a later control tick
+    was cancelled by a stop that came after it."""
+
+
 class JointLimitWarning(ControllerWarning):
-    """``WN12 Joint limit.``: a joint set-point was clamped (the motion goes on)."""
+    """``WN12 Joint limit.``: a joint set-point was clamped (the motion goes on); ``WN12 j6 at
+    limit 2.967``: a velocity stream holds joint 6 before its limit."""
+
+
+class HeldAtWorkspaceEdge(ControllerWarning):
+    """``WN13 Held at workspace edge.``: a velocity stream holds the tool at the workspace's
+    edge or before an exclusion box."""
 
 
 class IkDivergence(ControllerWarning):
@@ -219,10 +265,14 @@ _ERRORS: Dict[int, Type[ControllerMessage]] = {
     24: BadIndex,
     25: OutsideWorkspace,
     26: BeyondJointLimit,
+    40: HeldByOther,
+    41: ClientSilent,
+    42: Cancelled,
 }
 
 _WARNINGS: Dict[int, Type[ControllerMessage]] = {
     12: JointLimitWarning,
+    13: HeldAtWorkspaceEdge,
     22: IkDivergence,
     27: ViaPointMissed,
 }

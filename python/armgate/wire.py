@@ -15,7 +15,8 @@ The protocol has no sequence numbers. A datagram answers a request if
 
 Every other ``ER``/``WN`` text is an unsolicited notice; every other normal reply is stale (the
 late answer to an earlier, retried request). These are the Rust client's rules
-(client/src/matching.rs).
+(client/src/matching.rs); which request a text refuses is the grammar's (errors.py's
+``refuses``, checked against protocol/grammar.json).
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple
+
+from .errors import ControllerMessage
 
 MESSAGE_LEN = 31
 """Bytes in every datagram."""
@@ -95,13 +98,7 @@ def _index_matches(chars: str, request: int, reply: int) -> bool:
 
 def answers(chars: str, text: str) -> bool:
     """Whether the error ``text`` answers a request with characters ``chars``."""
-    if not text.startswith("ER"):
-        return False
-    code = text[2:4]
-    if (chars, code) in (("OF", "10"), ("ON", "11")):
-        return True
-    body = text[5:]
-    return any(body.startswith(f"{word} {chars}") for word in ("Cmd", "Msg"))
+    return text.startswith("ER") and ControllerMessage(text).refuses == chars
 
 
 # What a received datagram is, relative to the request being waited for.

@@ -98,7 +98,9 @@ def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: igno
         time.sleep(0.5)  # the hold time and the ramp to rest
         assert arm.get_status().motion == armgate.Motion.IDLE
         moved = arm.get_tcp_pose()
-        assert -0.0055 < moved.z - start.z < -0.003
+        # At most 0.5 s at 1 cm/s; at least some of it (a loaded machine may sleep past the hold
+        # time, and the arm then ramps to rest until the next twist).
+        assert -0.0055 < moved.z - start.z < -0.001
         assert math.hypot(moved.x - start.x, moved.y - start.y) < 2e-5
         with pytest.raises(armgate.CommandRejected):
             arm.joint_velocity([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])  # needs joint mode
@@ -110,7 +112,7 @@ def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: igno
             time.sleep(hold / 3)
         time.sleep(0.5)
         q = arm.get_joints()
-        assert 0.015 < q[2] - q0[2] < 0.0275
+        assert 0.005 < q[2] - q0[2] < 0.0275  # at most 0.5 s at 0.05 rad/s (plus the ramp)
         assert close(q[:2] + q[3:], q0[:2] + q0[3:], 1e-9)
 
 

@@ -1,4 +1,5 @@
-//! Who is talking: a network path that cannot wedge (spoofed sources, floods).
+//! Who is talking: one controlling client, notices to it, a stop from anyone, clients that leave
+//! stopping what they started, and a network path that cannot wedge (spoofed sources, floods).
 
 use super::*;
 
@@ -76,9 +77,18 @@ fn answered_of(sim: &Sim, n: usize) -> usize {
 #[test]
 fn replies_to_a_source_nobody_owns_do_not_silence_the_controller() {
     if firmware().is_none() {
-        // armgate-sim sends through the host's socket, which never waits on a neighbour; the
-        // forged source needs the firmware's namespace (root, a raw socket).
-        eprintln!("skipped for armgate-sim: a test of the firmware's network path");
+        // armgate-sim sends through the host's socket, which never waits on a neighbour, and a
+        // forged source needs the firmware's namespace (root, a raw socket): here the nearest
+        // case, replies to a client that has gone (its port closed: ICMP port unreachable).
+        let sim = Sim::start("ranger-mk1");
+        assert!(knows_status(&sim));
+        let gone = UdpSocket::bind("127.0.0.77:0").unwrap();
+        gone.connect(sim.socket.peer_addr().unwrap()).unwrap();
+        for _ in 0..40 {
+            gone.send(&datagram("PS", [0.0; 7], 0)).unwrap();
+        }
+        drop(gone);
+        assert_eq!(answered_of(&sim, 40), 40, "after a client that left");
         return;
     }
     let sim = Sim::start("ranger-mk1");
@@ -350,4 +360,179 @@ fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
     }
     assert_eq!(notice.as_deref(), Some("ER41 client silent 300 ms"));
     assert_ne!(status(&sim)[4], 1.0, "the move was stopped");
+}
+
+/// ranger-mk1 from `start` (joint angles) in mode `mode` (1 joint, 2 Cartesian), the drives
+/// running.
+fn ready(start: &str, mode: f32) -> Sim {
+    let sim = Sim::start_with("ranger-mk1", &["--start", start]);
+    assert!(knows_status(&sim));
+    assert_eq!(sim.ok("CM", [mode, 0., 0., 0., 0., 0., 0.], 0)[0], mode);
+    wait_drives(&sim, 2.0);
+    sim
+}
+
+#[test]
+fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_control() {
+    // `armgate jmove` of 0.3 rad on the first joint (about 5 s at 0.07 rad/s), waiting 500 ms.
+    let sim = ready(START, 1.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.3;
+    let q: Vec<String> = goal[..6].iter().map(f32::to_string).collect();
+    let mut args = vec!["jmove"];
+    args.extend(q.iter().map(String::as_str));
+    args.extend(["--wait-timeout", "500ms"]);
+    let (result, out) = armgate(&sim, &args);
+    assert_eq!(out, "moving\n");
+    let err = result.unwrap_err();
+    let message = err.to_string();
+    assert_eq!(err.exit_code(), 2, "{message}");
+    assert!(
+        message.starts_with("target 1 not reached within 500ms")
+            && message.ends_with("; sent ST: the arm stops and holds"),
+        "{message}"
+    );
+    // Stopped at once (no longer a joint move), and soon at rest, well short of the goal.
+    assert_ne!(status(&sim)[4], 1.0, "the move runs on");
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0));
+    let rest = sim.ok("jP", [0.0; 7], 0);
+    assert!(goal[0] - rest[0] > 0.2, "{rest:?} (goal {goal:?})");
+    // Another client takes control with its next request.
+    let b = second_client(&sim);
+    match ask(&b, "CM", [2.0, 0., 0., 0., 0., 0., 0.], 0) {
+        Answer::Reply(c, v, 0) if &c == b"MC" => assert_eq!(v[0], 2.0),
+        other => panic!("CM from the next client: {other:?}"),
+    }
+    assert_eq!(session(&b)[0], 1.0);
+}
+
+/// Every ER/WN text among the datagrams waiting on `socket` (read until none comes within
+/// 20 ms); the rest are replies.
+fn texts_waiting(socket: &UdpSocket) -> Vec<String> {
+    let timeout = socket.read_timeout().unwrap();
+    socket
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut texts = Vec::new();
+    let mut buf = [0u8; 64];
+    while let Ok(n) = socket.recv(&mut buf) {
+        assert_eq!(n, 31);
+        if let Answer::Text(t) = decode(&buf) {
+            texts.push(t);
+        }
+    }
+    socket.set_read_timeout(timeout).unwrap();
+    texts
+}
+
+#[test]
+fn notices_of_a_motion_go_to_the_client_that_holds_the_arm_not_to_a_poller() {
+    // Joint 6 52 mrad short of its 3.142 limit; A streams it towards the limit at 0.1 rad/s
+    // (a jW every 20 ms for 1.2 s) while B polls PS and SQ as often: the stream reaches the
+    // limit after about 0.5 s and is held there with `WN12 j6 at limit 3.142`.
+    let sim = ready("1.5708,0.6,-0.4,0.2,1.8,3.09", 1.0);
+    let b = second_client(&sim);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let poller = std::thread::spawn({
+        let stop = stop.clone();
+        move || {
+            let mut texts = Vec::new();
+            let mut polls = 0;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                for cmd in ["PS", "SQ"] {
+                    b.send(&datagram(cmd, [0.0; 7], 0)).unwrap();
+                    texts.extend(texts_waiting(&b));
+                    polls += 1;
+                }
+            }
+            (texts, polls)
+        }
+    });
+    let rate = [0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.0];
+    let started = Instant::now();
+    let mut notices = Vec::new();
+    while started.elapsed() < Duration::from_millis(1200) {
+        sim.socket.send(&datagram("jW", rate, 0)).unwrap();
+        notices.extend(texts_waiting(&sim.socket));
+    }
+    // The stream ends; the arm ramps to rest.
+    std::thread::sleep(Duration::from_millis(500));
+    notices.extend(texts_waiting(&sim.socket));
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let (theirs, polls) = poller.join().unwrap();
+    eprintln!("A got {notices:?}; B got {theirs:?} in {polls} polls");
+    assert!(
+        notices.iter().any(|t| t == "WN12 j6 at limit 3.142"),
+        "{notices:?}"
+    );
+    assert!(polls > 20, "{polls}");
+    assert_eq!(theirs, Vec::<String>::new(), "notices sent to the poller");
+}
+
+/// A UDP relay between one client (on loopback) and the controller that drops the first
+/// answer whose characters are `lost`; it runs until `stop` is set and returns the commands
+/// it passed on, in order.
+fn relay_losing_first(
+    sim: &Sim,
+    lost: [u8; 2],
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> (SocketAddr, std::thread::JoinHandle<Vec<String>>) {
+    let front = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let back = UdpSocket::bind((sim.socket.local_addr().unwrap().ip(), 0)).unwrap();
+    back.connect(sim.socket.peer_addr().unwrap()).unwrap();
+    for socket in [&front, &back] {
+        socket
+            .set_read_timeout(Some(Duration::from_millis(2)))
+            .unwrap();
+    }
+    let addr = front.local_addr().unwrap();
+    let relay = std::thread::spawn(move || {
+        let mut client = None;
+        let mut dropped = false;
+        let mut passed = Vec::new();
+        let mut buf = [0u8; 64];
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Ok((n, from)) = front.recv_from(&mut buf) {
+                client = Some(from);
+                passed.push(String::from_utf8_lossy(&buf[..2]).into_owned());
+                back.send(&buf[..n]).unwrap();
+            }
+            if let (Ok(n), Some(client)) = (back.recv(&mut buf), client) {
+                if !dropped && buf[..2] == lost {
+                    dropped = true;
+                    continue;
+                }
+                front.send_to(&buf[..n], client).unwrap();
+            }
+        }
+        passed
+    });
+    (addr, relay)
+}
+
+#[test]
+fn armgate_move_whose_begin_reply_is_lost_gets_it_again_and_arrives() {
+    // ranger-mk1 from a well-conditioned pose, in Cartesian mode: `armgate move` by 3 cm in z,
+    // through a relay that loses the first reply to BG.
+    let sim = ready("1.5708,0.8,0.5,0.5,1.5,0.5", 2.0);
+    let ps = sim.ok("PS", [0.0; 7], 0);
+    let [roll, pitch, yaw] = rpy_of(&ps[3..]);
+    let goal = [ps[0], ps[1], ps[2] + 0.03, roll, pitch, yaw].map(|v| v.to_string());
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let (addr, relay) = relay_losing_first(&sim, *b"GB", stop.clone());
+    let mut args = vec!["move"];
+    args.extend(goal.iter().map(String::as_str));
+    args.extend(["--timeout", "300ms"]);
+    let (result, out) = armgate_at(addr, &args);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let passed = relay.join().unwrap();
+    let begins = passed.iter().filter(|c| *c == "BG").count();
+    eprintln!("{out}; the client sent {passed:?}");
+    // The resend got the reply again (not `ER20 Cmd BG busy`), and the move arrived.
+    result.unwrap();
+    assert!(out.starts_with("moving\narrived: "), "{out}");
+    assert_eq!(begins, 2, "{passed:?}");
+    assert!(!passed.iter().any(|c| c == "ST"), "{passed:?}");
+    let now = sim.ok("PS", [0.0; 7], 0);
+    assert!((now[2] - ps[2] - 0.03).abs() < 0.002, "{now:?}");
 }

@@ -11,7 +11,7 @@ use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::Frame;
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::banks::{WRITE_JOINTS, is_bank_2};
-use armgate_protocol::client::{Command, MESSAGE_LEN, Message as Wire, Request, Text};
+use armgate_protocol::client::{Command, MESSAGE_LEN, Message as Wire, Request, Severity, Text};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{Value, json};
 
@@ -294,11 +294,11 @@ impl Translator {
             return out;
         };
         let (level, text) = match Text::parse(&message) {
-            Some(text) if text.as_str().starts_with("ER") => {
+            Ok(text) if text.severity() == Severity::Error => {
                 (Level::Error, text.as_str().to_owned())
             }
-            Some(text) => (Level::Warning, text.as_str().to_owned()),
-            None => (
+            Ok(text) => (Level::Warning, text.as_str().to_owned()),
+            Err(_) => (
                 Level::Info,
                 describe(message.command(), &message.values(), message.index()),
             ),

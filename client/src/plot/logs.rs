@@ -4,6 +4,8 @@
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
+use armgate_protocol::client::Severity;
+
 /// What went wrong reading the logs.
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
@@ -90,7 +92,8 @@ impl Logs {
             let (t, reply) = (table.column("t")?, table.column("reply")?);
             for row in &table.rows {
                 let text = field(row, reply);
-                if text.starts_with("ER") || text.starts_with("WN") {
+                let prefix = text.as_bytes().get(..2).and_then(|p| p.try_into().ok());
+                if prefix.and_then(Severity::from_prefix).is_some() {
                     notices.push(Notice {
                         t: number(row, t),
                         text: text.to_owned(),

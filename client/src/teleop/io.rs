@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use super::state::{Action, Event};
 use crate::{Client, ClientError};
+use armgate_protocol::client::{Notice, Rejection};
 
 /// The channels to a running I/O thread.
 #[derive(Debug)]
@@ -130,7 +131,12 @@ fn begin_or_restart(
 ) -> Result<bool, ClientError> {
     match begin(client) {
         Ok(()) => Ok(false),
-        Err(ClientError::Rejected(text)) if text.as_str().ends_with(" busy") => {
+        Err(ClientError::Rejected(text))
+            if matches!(
+                Notice::parse(&text),
+                Ok(Notice::Rejected(_, Rejection::Busy))
+            ) =>
+        {
             client.stop()?;
             begin(client).map(|()| true)
         }

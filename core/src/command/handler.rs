@@ -508,6 +508,7 @@ impl CommandHandler {
                 // The slot is the whole index byte: 20 and above (bank bit included) are
                 // refused with ER24, as for VP.
                 let tolerance = BlendTolerance::parse(req)
+                    .ok()
                     .and_then(|t| t.tolerance)
                     .map(f64::from);
                 let slot = usize::from(req.index);
@@ -546,7 +547,7 @@ impl CommandHandler {
 
     /// A wrong mode is reported before the drives' state: it outlasts it.
     fn in_mode(&self, cmd: Command) -> Result<(), Notice> {
-        if self.controller.mode() == required_mode(cmd) {
+        if Mode::required_by(cmd) == Some(self.controller.mode()) {
             Ok(())
         } else {
             Err(refusal_notice(cmd, Refusal::WrongMode))
@@ -593,20 +594,12 @@ fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
             Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,
             _ => Rejection::NoGoal,
         }),
-        Refusal::WrongMode => rejected(Rejection::NeedsMode(required_mode(cmd))),
+        // Only the requests that need a mode are refused for the wrong one.
+        Refusal::WrongMode => rejected(Rejection::NeedsMode(
+            Mode::required_by(cmd).unwrap_or_default(),
+        )),
         Refusal::Busy => rejected(Rejection::Busy),
         Refusal::NotReady => rejected(Rejection::NoMeasurement),
-    }
-}
-
-/// The mode a motion request needs (RC: off).
-fn required_mode(cmd: Command) -> Mode {
-    match cmd {
-        Command::Begin | Command::ViaExecute | Command::Twist => Mode::Cartesian,
-        Command::JointBegin | Command::JointExecute | Command::JointVelocity | Command::IkGoal => {
-            Mode::Joint
-        }
-        _ => Mode::Off,
     }
 }
 

@@ -51,9 +51,10 @@ impl Function {
         self as u16 | node.0 as u16
     }
 
-    /// The function and node of a COB-ID: the node is `id & 0x7F`, and must not be 0.
-    pub fn split(id: u16) -> Option<(Self, NodeId)> {
-        let node = NodeId::new((id & 0x7F) as u8)?;
+    /// The function and node of a COB-ID: the node is `id & 0x7F`, and must not be 0;
+    /// [`Error::WrongId`] for node 0 or a function not used here (NMT, SYNC, TPDO1, ...).
+    pub fn split(id: u16) -> Result<(Self, NodeId), Error> {
+        let node = NodeId::new((id & 0x7F) as u8).ok_or(Error::WrongId)?;
         let function = match id & 0x780 {
             0x080 => Self::Emcy,
             0x280 => Self::Tpdo2,
@@ -63,9 +64,9 @@ impl Function {
             0x580 => Self::SdoResponse,
             0x600 => Self::SdoRequest,
             0x700 => Self::Heartbeat,
-            _ => return None,
+            _ => return Err(Error::WrongId),
         };
-        Some((function, node))
+        Ok((function, node))
     }
 }
 
@@ -83,10 +84,8 @@ pub trait NodeMessage: Sized {
     /// The sending or addressed node, and the message; [`Error::WrongId`] if the frame's COB-ID
     /// is not this message's function code plus a node ID.
     fn parse(frame: &CanFrame) -> Result<(NodeId, Self), Error> {
-        match Function::split(frame.id()) {
-            Some((function, node)) if function == Self::FUNCTION => {
-                Ok((node, Self::decode(frame)?))
-            }
+        match Function::split(frame.id())? {
+            (function, node) if function == Self::FUNCTION => Ok((node, Self::decode(frame)?)),
             _ => Err(Error::WrongId),
         }
     }
@@ -122,22 +121,19 @@ mod tests {
             Function::SdoRequest,
             Function::Heartbeat,
         ] {
-            assert_eq!(
-                Function::split(function.cob_id(node)),
-                Some((function, node))
-            );
+            assert_eq!(Function::split(function.cob_id(node)), Ok((function, node)));
         }
         assert_eq!(Function::cob_id(Function::Rpdo2, node), 0x365);
         assert_eq!(
             Function::split(0x2EA),
-            Some((Function::Tpdo2, NodeId::new(106).unwrap()))
+            Ok((Function::Tpdo2, NodeId::new(106).unwrap()))
         );
         // The node is the low 7 bits, whatever the function: 0x5E5 is node 101, not 0xE5.
-        assert_eq!(Function::split(0x5E5), Some((Function::SdoResponse, node)));
-        assert_eq!(Function::split(0x000), None); // NMT
-        assert_eq!(Function::split(0x080), None); // SYNC
+        assert_eq!(Function::split(0x5E5), Ok((Function::SdoResponse, node)));
+        assert_eq!(Function::split(0x000), Err(Error::WrongId)); // NMT
+        assert_eq!(Function::split(0x080), Err(Error::WrongId)); // SYNC
         assert_eq!(Function::cob_id(Function::Rpdo3, node), 0x465);
-        assert_eq!(Function::split(0x3E5), Some((Function::Tpdo3, node)));
-        assert_eq!(Function::split(0x1E5), None); // TPDO1: not used
+        assert_eq!(Function::split(0x3E5), Ok((Function::Tpdo3, node)));
+        assert_eq!(Function::split(0x1E5), Err(Error::WrongId)); // TPDO1: not used
     }
 }

@@ -68,7 +68,7 @@ impl Incoming {
                 |SyncObject| Self::Sync,
             );
         }
-        let Some((function, node)) = Function::split(frame.id()) else {
+        let Ok((function, node)) = Function::split(frame.id()) else {
             return Self::Other;
         };
         let decoded = match function {

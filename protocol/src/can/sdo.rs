@@ -142,17 +142,17 @@ impl SdoValue {
         }
     }
 
-    /// The value of an expedited specifier based on `base`; `None` if `specifier` is not one, or
-    /// gives an unsupported size (3 bytes).
-    fn decode(specifier: u8, base: u8, [d0, d1, d2, d3]: [u8; 4]) -> Option<Self> {
+    /// The value of an expedited specifier based on `base`; [`Error::Malformed`] if
+    /// `specifier` is not one, or gives an unsupported size (3 bytes).
+    fn decode(specifier: u8, base: u8, [d0, d1, d2, d3]: [u8; 4]) -> Result<Self, Error> {
         if specifier & !cs::SIZE != base {
-            return None;
+            return Err(Error::Malformed);
         }
         match (specifier & cs::SIZE) >> 2 {
-            3 => Some(Self::U8(d0)),
-            2 => Some(Self::U16(u16::from_le_bytes([d0, d1]))),
-            0 => Some(Self::U32(u32::from_le_bytes([d0, d1, d2, d3]))),
-            _ => None,
+            3 => Ok(Self::U8(d0)),
+            2 => Ok(Self::U16(u16::from_le_bytes([d0, d1]))),
+            0 => Ok(Self::U32(u32::from_le_bytes([d0, d1, d2, d3]))),
+            _ => Err(Error::Malformed),
         }
     }
 }
@@ -210,8 +210,7 @@ impl NodeMessage for SdoRequest {
         match specifier {
             cs::UPLOAD => Ok(Self::Upload { object }),
             _ => SdoValue::decode(specifier, cs::DOWNLOAD, data)
-                .map(|value| Self::Download { object, value })
-                .ok_or(Error::Malformed),
+                .map(|value| Self::Download { object, value }),
         }
     }
 
@@ -273,8 +272,7 @@ impl NodeMessage for SdoResponse {
                 code: u32::from_le_bytes(data),
             }),
             _ => SdoValue::decode(specifier, cs::UPLOADED, data)
-                .map(|value| Self::Uploaded { object, value })
-                .ok_or(Error::Malformed),
+                .map(|value| Self::Uploaded { object, value }),
         }
     }
 

@@ -8,14 +8,14 @@
 //! let tolerance = BlendTolerance { kind: ViaKind::Joint, slot: 3, tolerance: Some(0.05) };
 //! let request = tolerance.to_request();
 //! assert_eq!((request.command, request.index), (Command::JointViaTolerance, 3));
-//! assert_eq!(BlendTolerance::parse(&request), Some(tolerance));
+//! assert_eq!(BlendTolerance::parse(&request), Ok(tolerance));
 //!
 //! // A negative value gives the slot back the robot file's default.
 //! let default = BlendTolerance { kind: ViaKind::Cartesian, slot: 0, tolerance: None };
 //! assert_eq!(default.to_request().values[0], -1.0);
 //! ```
 
-use super::{Command, Request, VALUES};
+use super::{Command, DecodeError, Request, VALUES};
 
 /// Which via-point slots a tolerance is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -43,15 +43,15 @@ pub struct BlendTolerance {
 }
 
 impl BlendTolerance {
-    /// The tolerance of a `VT` or `jT` request; `None` for another command.
-    pub fn parse(request: &Request) -> Option<Self> {
+    /// The tolerance of a `VT` or `jT` request.
+    pub fn parse(request: &Request) -> Result<Self, DecodeError> {
         let kind = match request.command {
             Command::ViaTolerance => ViaKind::Cartesian,
             Command::JointViaTolerance => ViaKind::Joint,
-            _ => return None,
+            _ => return Err(DecodeError::WrongCommand),
         };
         let [value, ..] = request.values;
-        Some(Self {
+        Ok(Self {
             kind,
             slot: request.index,
             tolerance: if value < 0.0 && value.is_finite() {
@@ -141,7 +141,7 @@ mod tests {
         assert_eq!(expected.to_request().to_bytes(), JT_DEFAULT_19);
         let mut minus_two = request(&JT_DEFAULT_19);
         minus_two.values[0] = -2.0;
-        assert_eq!(BlendTolerance::parse(&minus_two), Some(expected));
+        assert_eq!(BlendTolerance::parse(&minus_two), Ok(expected));
     }
 
     #[test]
@@ -158,7 +158,7 @@ mod tests {
     fn other_commands_are_not_tolerances() {
         let mut vp = request(&VT_SLOT_2);
         vp.command = Command::ViaPoint;
-        assert_eq!(BlendTolerance::parse(&vp), None);
+        assert_eq!(BlendTolerance::parse(&vp), Err(DecodeError::WrongCommand));
     }
 
     #[test]

@@ -23,3 +23,25 @@ impl fmt::Display for Error {
 }
 
 impl core::error::Error for Error {}
+
+/// Why a parsed message is not the value it is read as: a text, a report of `SQ`, a blend
+/// tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DecodeError {
+    /// Another command's message, or another `SQ` index.
+    WrongCommand,
+    /// A field that holds none of its values (a code, a whole count, a finite number).
+    BadField,
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::WrongCommand => "another command's message",
+            Self::BadField => "a field out of its range",
+        })
+    }
+}
+
+impl core::error::Error for DecodeError {}

@@ -23,7 +23,9 @@
 //! * [`Command`]: the request command pairs.
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
-//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]).
+//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]), written and read back
+//!   ([`Notice::parse`], [`NoticeError`]); [`Header`]: the parts every text shares, any
+//!   controller's (code, named command, detail; [`DRIVE_FAULT_CODES`]).
 //! * [`StatusReport`], [`RobotName`], [`CauseReport`] and [`SessionReport`]: the replies to the
 //!   status request `SQ` (indices 0, 1, 2, 3).
 //! * [`Error`]: why a datagram is not a request (or reply).
@@ -38,6 +40,7 @@ mod blend;
 pub mod branch;
 mod command;
 mod error;
+mod header;
 mod message;
 mod mode;
 mod notice;
@@ -54,10 +57,12 @@ mod text;
 #[cfg(test)]
 mod vectors;
 mod velocity;
+mod words;
 
 pub use blend::{BlendTolerance, ViaKind};
 pub use command::Command;
-pub use error::Error;
+pub use error::{DecodeError, Error};
+pub use header::{DRIVE_FAULT_CODES, Header, NoticeError};
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;

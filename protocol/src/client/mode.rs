@@ -1,4 +1,7 @@
-//! The control mode as `CM` selects it and `MC` echoes it.
+//! The control mode as `CM` selects it and `MC` echoes it, and the mode each motion request
+//! needs (the controller refuses it in another with `ER20 Cmd XX needs mode N`).
+
+use super::Command;
 
 /// The controller's control mode (the seed's switch: off / joint / Cartesian).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -38,6 +41,20 @@ impl Mode {
         })
     }
 
+    /// The mode `command` needs, if it needs one: the motions and streams of each mode, and
+    /// `RC` (mode off). The controller checks it; clients name it in their hints.
+    pub const fn required_by(command: Command) -> Option<Self> {
+        match command {
+            Command::Begin | Command::ViaExecute | Command::Twist => Some(Self::Cartesian),
+            Command::JointBegin
+            | Command::JointExecute
+            | Command::JointVelocity
+            | Command::IkGoal => Some(Self::Joint),
+            Command::Recalibrate => Some(Self::Off),
+            _ => None,
+        }
+    }
+
     /// The mode's lower-case name, as status lines show it.
     pub const fn name(self) -> &'static str {
         match self {
@@ -50,7 +67,19 @@ impl Mode {
 
 #[cfg(test)]
 mod tests {
-    use super::Mode;
+    use super::{Command, Mode};
+
+    #[test]
+    fn motions_need_their_mode_and_setters_none() {
+        assert_eq!(Mode::required_by(Command::Begin), Some(Mode::Cartesian));
+        assert_eq!(Mode::required_by(Command::Twist), Some(Mode::Cartesian));
+        assert_eq!(Mode::required_by(Command::JointExecute), Some(Mode::Joint));
+        assert_eq!(Mode::required_by(Command::IkGoal), Some(Mode::Joint));
+        assert_eq!(Mode::required_by(Command::Recalibrate), Some(Mode::Off));
+        assert_eq!(Mode::required_by(Command::GoalRpy), None);
+        assert_eq!(Mode::required_by(Command::JointGoal), None);
+        assert_eq!(Mode::required_by(Command::Stop), None);
+    }
 
     #[test]
     fn values_round_half_up_and_refuse_the_rest() {

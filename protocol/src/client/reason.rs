@@ -6,6 +6,7 @@
 use core::fmt;
 
 use super::Mode;
+use super::words::{Milli, decimal, phrase, value_of};
 
 /// The drives' state, as a status reply (`QS` f1) and refusals report it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -64,21 +65,43 @@ pub enum Rejection {
     NoMeasurement,
 }
 
+impl Rejection {
+    /// The reasons that are one fixed phrase.
+    const PHRASES: [(Self, &'static str); 10] = [
+        (Self::Busy, "busy"),
+        (Self::Drives(DriveStatus::Off), "drives off"),
+        (Self::Drives(DriveStatus::Starting), "drives starting"),
+        (Self::Drives(DriveStatus::Running), "drives on"),
+        (Self::Drives(DriveStatus::Stopping), "drives stopping"),
+        (Self::Drives(DriveStatus::Faulted), "drive fault"),
+        (Self::DrivesSettling, "drives settling"),
+        (Self::NoGoal, "no goal"),
+        (Self::NoViaPoint, "no via point 0"),
+        (Self::NoMeasurement, "no measurement"),
+    ];
+    const DRIVE_FAULT: &'static str = "drive fault ";
+    const NEEDS_MODE: &'static str = "needs mode ";
+
+    /// Reads the reason back from the text after `ER20 Cmd XX `.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        if let Some(fixed) = value_of(&Self::PHRASES, s) {
+            return Some(fixed);
+        }
+        if let Some(code) = s.strip_prefix(Self::DRIVE_FAULT) {
+            return decimal(code).map(Self::DriveFault);
+        }
+        let mode: u8 = decimal(s.strip_prefix(Self::NEEDS_MODE)?)?;
+        let mode = Mode::ALL.into_iter().find(|m| m.value() == mode)?;
+        Some(Self::NeedsMode(mode))
+    }
+}
+
 impl fmt::Display for Rejection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::Busy => f.write_str("busy"),
-            Self::Drives(DriveStatus::Off) => f.write_str("drives off"),
-            Self::Drives(DriveStatus::Starting) => f.write_str("drives starting"),
-            Self::Drives(DriveStatus::Running) => f.write_str("drives on"),
-            Self::Drives(DriveStatus::Stopping) => f.write_str("drives stopping"),
-            Self::Drives(DriveStatus::Faulted) => f.write_str("drive fault"),
-            Self::DriveFault(code) => write!(f, "drive fault {code:02}"),
-            Self::DrivesSettling => f.write_str("drives settling"),
-            Self::NeedsMode(mode) => write!(f, "needs mode {}", mode.value()),
-            Self::NoGoal => f.write_str("no goal"),
-            Self::NoViaPoint => f.write_str("no via point 0"),
-            Self::NoMeasurement => f.write_str("no measurement"),
+            Self::DriveFault(code) => write!(f, "{}{code:02}", Self::DRIVE_FAULT),
+            Self::NeedsMode(mode) => write!(f, "{}{}", Self::NEEDS_MODE, mode.value()),
+            fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }
 }
@@ -105,6 +128,16 @@ impl PathPoint {
         Self::Along((fraction * 100.0) as u8).min_one()
     }
 
+    /// Splits ` at NN%` off the end of `s`: the rest and the point (the goal without one).
+    fn split(s: &str) -> Option<(&str, Self)> {
+        match s.strip_suffix('%').and_then(|r| r.rsplit_once(Self::AT)) {
+            Some((head, percent)) => Some((head, Self::Along(decimal(percent)?))),
+            None => Some((s, Self::Goal)),
+        }
+    }
+
+    const AT: &'static str = " at ";
+
     fn min_one(self) -> Self {
         match self {
             Self::Along(0) => Self::Along(1),
@@ -121,7 +154,7 @@ impl fmt::Display for At {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.0 {
             PathPoint::Goal => Ok(()),
-            PathPoint::Along(percent) => write!(f, " at {percent}%"),
+            PathPoint::Along(percent) => write!(f, "{}{percent}%", PathPoint::AT),
         }
     }
 }
@@ -144,14 +177,40 @@ pub enum WorkspaceReason {
     TooFast(u8, PathPoint),
 }
 
+impl WorkspaceReason {
+    /// The reasons that are one fixed phrase.
+    const PHRASES: [(Self, &'static str); 2] = [
+        (Self::Goal, "outside workspace"),
+        (Self::ArmOutside, "arm outside"),
+    ];
+    const CROSSES_BOX: &'static str = "crosses box at ";
+    const UNREACHABLE: &'static str = "unreachable";
+    const TOO_FAST: &'static str = " too fast";
+
+    /// Reads the reason back from the text after `ER25 Cmd XX `.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        if let Some(fixed) = value_of(&Self::PHRASES, s) {
+            return Some(fixed);
+        }
+        if let Some(percent) = s.strip_prefix(Self::CROSSES_BOX) {
+            return decimal(percent.strip_suffix('%')?).map(Self::CrossesBox);
+        }
+        let (head, at) = PathPoint::split(s)?;
+        if head == Self::UNREACHABLE {
+            return Some(Self::Unreachable(at));
+        }
+        let joint = head.strip_prefix('j')?.strip_suffix(Self::TOO_FAST)?;
+        Some(Self::TooFast(decimal(joint)?, at))
+    }
+}
+
 impl fmt::Display for WorkspaceReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::Goal => f.write_str("outside workspace"),
-            Self::CrossesBox(percent) => write!(f, "crosses box at {percent}%"),
-            Self::Unreachable(at) => write!(f, "unreachable{}", At(at)),
-            Self::ArmOutside => f.write_str("arm outside"),
-            Self::TooFast(joint, at) => write!(f, "j{joint} too fast{}", At(at)),
+            Self::CrossesBox(percent) => write!(f, "{}{percent}%", Self::CROSSES_BOX),
+            Self::Unreachable(at) => write!(f, "{}{}", Self::UNREACHABLE, At(at)),
+            Self::TooFast(joint, at) => write!(f, "j{joint}{}{}", Self::TOO_FAST, At(at)),
+            fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }
 }
@@ -185,6 +244,26 @@ impl JointBound {
     }
 }
 
+impl JointBound {
+    /// Reads `j5 < 0.785` / `j3 > 1.600 at 40%` back.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        let (head, at) = PathPoint::split(s)?;
+        let (joint, rest) = head.strip_prefix('j')?.split_once(' ')?;
+        let (side, limit) = rest.split_once(' ')?;
+        let above_max = match side {
+            ">" => true,
+            "<" => false,
+            _ => return None,
+        };
+        Some(Self {
+            joint: decimal(joint)?,
+            above_max,
+            limit_milli: Milli::parse(limit)?.0,
+            at,
+        })
+    }
+}
+
 /// Rounds half away from zero without `std` (the cast then saturates).
 fn round_half_away(x: f64) -> f64 {
     if x >= 0.0 { x + 0.5 } else { x - 0.5 }
@@ -200,17 +279,6 @@ impl fmt::Display for JointBound {
             Milli(self.limit_milli),
             At(self.at)
         )
-    }
-}
-
-/// A value in thousandths, printed with three decimals (`-1.745`).
-pub(super) struct Milli(pub(super) i32);
-
-impl fmt::Display for Milli {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let sign = if self.0 < 0 { "-" } else { "" };
-        let magnitude = self.0.unsigned_abs();
-        write!(f, "{sign}{}.{:03}", magnitude / 1000, magnitude % 1000)
     }
 }
 

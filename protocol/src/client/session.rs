@@ -3,7 +3,7 @@
 
 use core::net::{Ipv4Addr, SocketAddrV4};
 
-use super::{Command, Reply};
+use super::{Command, DecodeError, Reply};
 
 /// `SQ` index of the session report.
 pub const SESSION_INDEX: u8 = 3;
@@ -59,17 +59,18 @@ impl SessionReport {
         }
     }
 
-    /// Decodes a `QS` index-3 reply (on the client side); `None` if it is not one.
-    pub fn from_reply(reply: &Reply) -> Option<Self> {
+    /// Decodes a `QS` index-3 reply (on the client side).
+    pub fn from_reply(reply: &Reply) -> Result<Self, DecodeError> {
         if reply.command != Command::Status || reply.index != SESSION_INDEX {
-            return None;
+            return Err(DecodeError::WrongCommand);
         }
         let [holder, high, low, port, watchdog, drops, clients] = reply.values;
         let holder = [Holder::Nobody, Holder::You, Holder::Other]
             .into_iter()
-            .find(|h| f32::from(*h as u8) == holder)?;
+            .find(|h| f32::from(*h as u8) == holder)
+            .ok_or(DecodeError::BadField)?;
         let ip = (u32::from(high as u16) << 16) | u32::from(low as u16);
-        Some(Self {
+        Ok(Self {
             holder,
             address: (ip != 0).then(|| SocketAddrV4::new(Ipv4Addr::from(ip), port as u16)),
             watchdog_ms: watchdog as u32,
@@ -99,7 +100,7 @@ mod tests {
         );
         let bytes = reply.to_bytes();
         assert_eq!((&bytes[..2], bytes[30]), (&b"QS"[..], 3));
-        assert_eq!(SessionReport::from_reply(&reply), Some(report));
+        assert_eq!(SessionReport::from_reply(&reply), Ok(report));
         let nobody = SessionReport {
             holder: Holder::Nobody,
             address: None,
@@ -107,6 +108,6 @@ mod tests {
             send_drops: 0,
             clients: 0,
         };
-        assert_eq!(SessionReport::from_reply(&nobody.to_reply()), Some(nobody));
+        assert_eq!(SessionReport::from_reply(&nobody.to_reply()), Ok(nobody));
     }
 }

@@ -5,7 +5,7 @@
 //! `ER24 Cmd SQ bad index`.
 
 use super::message::datagram;
-use super::{Command, DriveStatus, MESSAGE_LEN, Message, Mode, Reply, VALUES};
+use super::{Command, DecodeError, DriveStatus, MESSAGE_LEN, Message, Mode, Reply, VALUES};
 
 /// `SQ` index of the state report.
 pub const STATUS_INDEX: u8 = 0;
@@ -93,24 +93,26 @@ impl StatusReport {
         }
     }
 
-    /// Decodes a `QS` index-0 reply (on the client side); `None` if it is not one or a field
-    /// is not a valid code.
-    pub fn from_reply(reply: &Reply) -> Option<Self> {
+    /// Decodes a `QS` index-0 reply (on the client side).
+    pub fn from_reply(reply: &Reply) -> Result<Self, DecodeError> {
         if reply.command != Command::Status || reply.index != STATUS_INDEX {
-            return None;
+            return Err(DecodeError::WrongCommand);
         }
         let [mode, drives, fault, joints, motion, refused, uptime] = reply.values;
-        Some(Self {
-            mode: Mode::ALL
-                .into_iter()
-                .find(|m| Some(m.value()) == small(mode))?,
-            drives: DriveStatus::from_code(small(drives)?)?,
-            fault: small(fault)?,
-            joints: small(joints)?,
-            motion: Motion::from_code(small(motion)?)?,
-            refused: whole(refused)?,
-            uptime: Some(uptime).filter(|t| t.is_finite())?,
-        })
+        let report = || -> Option<Self> {
+            Some(Self {
+                mode: Mode::ALL
+                    .into_iter()
+                    .find(|m| Some(m.value()) == small(mode))?,
+                drives: DriveStatus::from_code(small(drives)?)?,
+                fault: small(fault)?,
+                joints: small(joints)?,
+                motion: Motion::from_code(small(motion)?)?,
+                refused: whole(refused)?,
+                uptime: Some(uptime).filter(|t| t.is_finite())?,
+            })
+        };
+        report().ok_or(DecodeError::BadField)
     }
 }
 
@@ -151,16 +153,16 @@ impl RobotName {
         out
     }
 
-    /// The name's bytes in a received `QS` index-1 reply (up to the first NUL), if it is one.
-    pub fn parse<T: AsRef<[u8]>>(message: &Message<T>) -> Option<Self> {
+    /// The name's bytes in a received `QS` index-1 reply (up to the first NUL).
+    pub fn parse<T: AsRef<[u8]>>(message: &Message<T>) -> Result<Self, DecodeError> {
         if message.command() != Command::Status.reply_chars() || message.index() != NAME_INDEX {
-            return None;
+            return Err(DecodeError::WrongCommand);
         }
         let bytes = message.bytes();
         let name = bytes.get(2..2 + NAME_LEN).unwrap_or_default();
         let end = name.iter().position(|&b| b == 0).unwrap_or(name.len());
         let name = name.get(..end).unwrap_or_default();
-        Some(Self::new(core::str::from_utf8(name).unwrap_or("?")))
+        Ok(Self::new(core::str::from_utf8(name).unwrap_or("?")))
     }
 
     /// The name.
@@ -213,7 +215,7 @@ mod tests {
         // f1 = 4.0 is 00 00 80 40, little-endian.
         assert_eq!(bytes[6..10], [0x00, 0x00, 0x80, 0x40]);
         let reply = Reply::parse(&Message::new_checked(&bytes[..]).unwrap()).unwrap();
-        assert_eq!(StatusReport::from_reply(&reply), Some(report()));
+        assert_eq!(StatusReport::from_reply(&reply), Ok(report()));
     }
 
     #[test]
@@ -228,11 +230,18 @@ mod tests {
         ] {
             let mut reply = report().to_reply();
             reply.values[field] = bad;
-            assert_eq!(StatusReport::from_reply(&reply), None, "f{field} = {bad}");
+            assert_eq!(
+                StatusReport::from_reply(&reply),
+                Err(DecodeError::BadField),
+                "f{field} = {bad}"
+            );
         }
         let mut reply = report().to_reply();
         reply.index = NAME_INDEX;
-        assert_eq!(StatusReport::from_reply(&reply), None);
+        assert_eq!(
+            StatusReport::from_reply(&reply),
+            Err(DecodeError::WrongCommand)
+        );
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! Why the arm stopped or holds: what `SQ` index 2 reports (docs/protocol.md).
 
-use super::{Command, Reply};
+use super::{Command, DecodeError, Reply};
 
 /// `SQ` index of the stop or hold cause in force.
 pub const CAUSE_INDEX: u8 = 2;
@@ -69,14 +69,15 @@ impl CauseReport {
         }
     }
 
-    /// Decodes a `QS` index-2 reply (on the client side); `None` if it is not one.
-    pub fn from_reply(reply: &Reply) -> Option<Self> {
+    /// Decodes a `QS` index-2 reply (on the client side). A cause this client does not know
+    /// (a newer controller's) reads as none.
+    pub fn from_reply(reply: &Reply) -> Result<Self, DecodeError> {
         if reply.command != Command::Status || reply.index != CAUSE_INDEX {
-            return None;
+            return Err(DecodeError::WrongCommand);
         }
         let [code, joint, ..] = reply.values;
         let (code, joint) = (code as u8, joint as u8);
-        Some(Self {
+        Ok(Self {
             cause: StopCause::from_code(code),
             joint: joint.checked_sub(1),
         })
@@ -95,11 +96,11 @@ mod tests {
         };
         let reply = report.to_reply();
         assert_eq!(reply.values[..2], [7.0, 6.0]);
-        assert_eq!(CauseReport::from_reply(&reply), Some(report));
+        assert_eq!(CauseReport::from_reply(&reply), Ok(report));
         let none = CauseReport {
             cause: None,
             joint: None,
         };
-        assert_eq!(CauseReport::from_reply(&none.to_reply()), Some(none));
+        assert_eq!(CauseReport::from_reply(&none.to_reply()), Ok(none));
     }
 }

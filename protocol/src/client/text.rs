@@ -2,7 +2,7 @@
 
 use core::fmt::{self, Write as _};
 
-use super::{MESSAGE_LEN, Message};
+use super::{DecodeError, MESSAGE_LEN, Message};
 
 /// The most characters a text holds; byte 30 always stays NUL.
 pub const TEXT_CAPACITY: usize = MESSAGE_LEN - 1;
@@ -58,15 +58,15 @@ impl Text {
 
     /// The text in a received message, if it starts with `ER` or `WN`: the bytes up to the first
     /// NUL, at most [`TEXT_CAPACITY`] of them.
-    pub fn parse<T: AsRef<[u8]>>(message: &Message<T>) -> Option<Self> {
-        let severity = Severity::from_prefix(message.command())?;
+    pub fn parse<T: AsRef<[u8]>>(message: &Message<T>) -> Result<Self, DecodeError> {
+        let severity = Severity::from_prefix(message.command()).ok_or(DecodeError::WrongCommand)?;
         let mut text = Builder::new(severity);
         message
             .bytes()
             .into_iter()
             .take_while(|&b| b != 0)
             .for_each(|b| text.push(char::from(b)));
-        Some(text.0)
+        Ok(text.0)
     }
 
     /// Error or warning.
@@ -174,7 +174,7 @@ mod tests {
         bytes[..2].copy_from_slice(b"GB");
         assert_eq!(
             Text::parse(&Message::new_checked(&bytes[..]).unwrap()),
-            None
+            Err(DecodeError::WrongCommand)
         );
     }
 

@@ -3,8 +3,9 @@
 //! out of the arm's reach, three `BG`, each checking the line to it (`motion::reach`) and
 //! refused, and the same again to a second such point. The core serves one planning request a
 //! tick, so the burst is spread over eight ticks; the worst of them must stay well inside the
-//! control period (goal: at most 50 % at 480 MHz).
+//! control period (goal: at most 50 % at 480 MHz). Measured on every embedded robot.
 
+use armgate_core::config::{JointType, RobotConfig};
 use armgate_core::cycle::{Datagram, Dropped, Link, Outgoing};
 use armgate_protocol::client::{Command, Request, VALUES};
 
@@ -13,26 +14,71 @@ use crate::counter::{Timing, measure};
 
 /// Planning requests in the burst (the link's requests per tick, `REQUESTS_PER_TICK`).
 const BURST: usize = 8;
-/// The goals (m), each for half the burst: inside every measured robot's workspace bounds, out
-/// of its reach (about 1.7 and 3.3 m from the base), so that the lines cross the reach's edge
-/// at different fractions of the way.
-const GOALS: [[f32; 3]; 2] = [[1.0, 1.0, 1.0], [1.9, 1.9, 1.9]];
 /// Ticks that may serve the burst at most.
 const MAX_TICKS: u32 = 4 * BURST as u32;
+/// The reply of the first `BG` to each goal, kept to show why it was refused.
+const FIRST_BEGINS: [usize; 2] = [1, 1 + BURST / 2];
 
-/// All eight requests waiting in the link at once; replies counted.
-struct Burst {
-    inbox: [Option<Datagram<()>>; BURST],
-    replies: usize,
+/// What the burst cost and why its first `BG`s were refused.
+pub(super) struct Burst {
+    /// One window per tick that served it.
+    pub timing: Timing,
+    /// The goals (m).
+    pub goals: [[f32; 3]; 2],
+    /// The answers to the first `BG` to each goal (31 bytes, an ER text).
+    pub refusals: [[u8; 31]; 2],
 }
 
-impl Link<()> for Burst {
+/// An upper bound on the arm's reach from its base frame's origin (m): every link length and
+/// offset stretched out in a line, a prismatic joint at its longer end.
+fn reach_bound(config: &RobotConfig) -> f64 {
+    let links: f64 = config
+        .joints
+        .iter()
+        .map(|j| match j.kind {
+            JointType::Revolute => j.a.abs() + j.d.abs(),
+            JointType::Prismatic => j.a.abs() + (j.d + j.min).abs().max((j.d + j.max).abs()),
+        })
+        .sum();
+    let [x, y, z] = config.tool.xyz;
+    links + config.tool.a.abs() + config.tool.d.abs() + libm::sqrt(x * x + y * y + z * z)
+}
+
+/// The two goals (m), each for half the burst: on the line from the base frame's origin to the
+/// workspace bounds' upper corner, inside the bounds and out of reach: 5 % beyond
+/// [`reach_bound`] (most of the line is reachable: the check works through most of it before it
+/// fails), and at 95 % of the way to the corner (it fails earlier).
+pub(super) fn goals(config: &RobotConfig) -> [[f32; 3]; 2] {
+    let [x0, y0, z0] = config.base.xyz;
+    let [_, x_max, _, y_max, _, z_max] = config.workspace.bounds;
+    let [dx, dy, dz] = [x_max - x0, y_max - y0, z_max - z0];
+    let length = libm::sqrt(dx * dx + dy * dy + dz * dz);
+    let beyond = (1.05 * reach_bound(config) / length).min(0.9);
+    [beyond, 0.95].map(|f| [x0 + f * dx, y0 + f * dy, z0 + f * dz].map(|v| v as f32))
+}
+
+/// All eight requests waiting in the link at once; replies kept.
+struct BurstLink {
+    inbox: [Option<Datagram<()>>; BURST],
+    replies: usize,
+    refusals: [[u8; 31]; 2],
+}
+
+impl Link<()> for BurstLink {
     fn receive(&mut self) -> Option<Datagram<()>> {
         self.inbox.iter_mut().find_map(Option::take)
     }
 
-    fn send(&mut self, _: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
+    fn send(&mut self, datagram: &Datagram<()>, kind: Outgoing) -> Result<(), Dropped> {
         if kind == Outgoing::Reply {
+            if let Some(k) = FIRST_BEGINS.iter().position(|&n| n == self.replies)
+                && let (Some(kept), Some(bytes)) = (
+                    self.refusals.get_mut(k),
+                    datagram.payload().get(..31),
+                )
+            {
+                kept.copy_from_slice(bytes);
+            }
             self.replies += 1;
         }
         Ok(())
@@ -40,15 +86,19 @@ impl Link<()> for Burst {
 }
 
 /// The ticks that serve the burst, one window each, in Cartesian mode at rest.
-pub(super) fn burst_ticks(session: &mut Session) -> Result<Timing, &'static str> {
+pub(super) fn burst_ticks(
+    session: &mut Session,
+    config: &RobotConfig,
+) -> Result<Burst, &'static str> {
     session.request(
         Command::ChangeMode,
         [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         b"MC",
     )?;
+    let goals = goals(config);
     let half = BURST / 2;
     let inbox = core::array::from_fn(|k| {
-        let (command, values) = match GOALS.get(k / half) {
+        let (command, values) = match goals.get(k / half) {
             Some(&[x, y, z]) if k % half == 0 => {
                 (Command::GoalRpy, [x, y, z, 0.0, 0.0, 0.0, 0.0])
             }
@@ -62,7 +112,11 @@ pub(super) fn burst_ticks(session: &mut Session) -> Result<Timing, &'static str>
         .to_bytes();
         Some(Datagram::new(&bytes, ()))
     });
-    let mut link = Burst { inbox, replies: 0 };
+    let mut link = BurstLink {
+        inbox,
+        replies: 0,
+        refusals: [[0; 31]; 2],
+    };
     let mut timing = Timing::default();
     while link.replies < BURST && timing.calls < MAX_TICKS {
         session.advance_bus()?;
@@ -74,7 +128,11 @@ pub(super) fn burst_ticks(session: &mut Session) -> Result<Timing, &'static str>
         return Err("the burst of planning requests was not all answered");
     }
     if session.moving() {
-        return Err("a BG to the unreachable goal started a move");
+        return Err("a BG to an unreachable goal started a move");
     }
-    Ok(timing)
+    Ok(Burst {
+        timing,
+        goals,
+        refusals: link.refusals,
+    })
 }

@@ -450,18 +450,18 @@ impl SimWhistle {
             return;
         }
         match Function::split(frame.id()) {
-            Some((Function::Rpdo2, to)) if to == node || Some(to) == self.group => {
+            Ok((Function::Rpdo2, to)) if to == node || Some(to) == self.group => {
                 if let (Ok((_, request)), NmtState::Operational) = (Request::parse(frame), self.nmt)
                 {
                     self.command(request);
                 }
             }
-            Some((Function::SdoRequest, to)) if to == node && self.nmt != NmtState::Stopped => {
+            Ok((Function::SdoRequest, to)) if to == node && self.nmt != NmtState::Stopped => {
                 if let Ok((_, request)) = SdoRequest::parse(frame) {
                     self.sdo(request);
                 }
             }
-            Some((Function::Heartbeat, from)) => {
+            Ok((Function::Heartbeat, from)) => {
                 let watched = self.consumer.is_some_and(|(producer, _)| producer == from);
                 if watched && Heartbeat::parse(frame).is_ok() {
                     self.last_beat = Some(self.now);

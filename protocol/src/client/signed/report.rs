@@ -1,7 +1,7 @@
 //! The signing counters: the `QS` reply to `SQ` index 4 (docs/protocol.md).
 
 use crate::client::status::whole;
-use crate::client::{Command, Reply};
+use crate::client::{Command, DecodeError, Reply};
 
 /// `SQ` index of the signing report.
 pub const SIGNING_INDEX: u8 = 4;
@@ -72,24 +72,27 @@ impl SigningReport {
         }
     }
 
-    /// Decodes a `QS` index-4 reply; `None` if it is not one or a field is not a whole count.
-    pub fn from_reply(reply: &Reply) -> Option<Self> {
+    /// Decodes a `QS` index-4 reply.
+    pub fn from_reply(reply: &Reply) -> Result<Self, DecodeError> {
         if reply.command != Command::Status || reply.index != SIGNING_INDEX {
-            return None;
+            return Err(DecodeError::WrongCommand);
         }
         let [policy, signed, unsigned, du, dt, df, dr] = reply.values.map(whole);
-        let policy = SigningPolicy::ALL
-            .into_iter()
-            .find(|p| Some(*p as u32) == policy)?;
-        Some(Self {
-            policy: Some(policy),
-            signed: signed?,
-            unsigned: unsigned?,
-            dropped_unsigned: du?,
-            dropped_truncated: dt?,
-            dropped_forged: df?,
-            dropped_replayed: dr?,
-        })
+        let report = || -> Option<Self> {
+            let policy = SigningPolicy::ALL
+                .into_iter()
+                .find(|p| Some(*p as u32) == policy)?;
+            Some(Self {
+                policy: Some(policy),
+                signed: signed?,
+                unsigned: unsigned?,
+                dropped_unsigned: du?,
+                dropped_truncated: dt?,
+                dropped_forged: df?,
+                dropped_replayed: dr?,
+            })
+        };
+        report().ok_or(DecodeError::BadField)
     }
 
     /// Every datagram dropped.
@@ -140,13 +143,16 @@ mod tests {
         expected[30] = 4;
         assert_eq!(bytes, expected);
         let reply = Reply::parse(&Message::new_checked(&bytes[..]).unwrap()).unwrap();
-        assert_eq!(SigningReport::from_reply(&reply), Some(report));
+        assert_eq!(SigningReport::from_reply(&reply), Ok(report));
         assert_eq!(report.dropped(), 15);
         let mut bad = reply;
         bad.values[0] = 4.0;
-        assert_eq!(SigningReport::from_reply(&bad), None);
+        assert_eq!(SigningReport::from_reply(&bad), Err(DecodeError::BadField));
         bad = reply;
         bad.index = 0;
-        assert_eq!(SigningReport::from_reply(&bad), None);
+        assert_eq!(
+            SigningReport::from_reply(&bad),
+            Err(DecodeError::WrongCommand)
+        );
     }
 }

@@ -1,8 +1,16 @@
-//! The controller's fixed error and warning texts (spec §2.3, §2.5, §2.6).
+//! The controller's fixed error and warning texts (spec §2.3, §2.5, §2.6): written here
+//! ([`Notice::text`]) and read back ([`Notice::parse`], in `parse.rs`) from the same phrases.
+
+mod parse;
+#[cfg(test)]
+mod samples;
+#[cfg(test)]
+mod table;
 
 use core::fmt::{self, Write as _};
 
-use super::reason::Milli;
+use super::header::{CMD, MSG};
+use super::words::{Milli, phrase};
 
 use super::{
     Command, DriveStatus, Error, Hold, JointBound, Rejection, Severity, Text, WorkspaceReason,
@@ -111,47 +119,76 @@ impl fmt::Display for Notice {
     }
 }
 
+/// The texts that are one fixed phrase.
+const PHRASES: [(Notice, &str); 5] = [
+    (Notice::WorkspaceLimit, "Work space limit."),
+    (Notice::JointLimit, "Joint limit."),
+    (Notice::IkDivergence, "Inv Kin Divergence."),
+    (Notice::ViaPointMissed, "Via point missed."),
+    (Notice::Held(Hold::Workspace), "Held at workspace edge."),
+];
+
+/// `ER10`'s phrase for each drive state (`Arm did not stop` read back as running).
+const ARM_DID_NOT_STOP: [(DriveStatus, &str); 5] = [
+    (DriveStatus::Off, "Arm already off"),
+    (DriveStatus::Stopping, "Arm already stopping"),
+    (DriveStatus::Faulted, "Arm stopped by fault"),
+    (DriveStatus::Running, "Arm did not stop"),
+    (DriveStatus::Starting, "Arm did not stop"),
+];
+
+/// `ER11`'s phrase for each drive state (`Arm did not start` read back as off).
+const ARM_DID_NOT_START: [(DriveStatus, &str); 5] = [
+    (DriveStatus::Running, "Arm already on"),
+    (DriveStatus::Starting, "Arm already starting"),
+    (DriveStatus::Stopping, "Arm still stopping"),
+    (DriveStatus::Off, "Arm did not start"),
+    (DriveStatus::Faulted, "Arm did not start"),
+];
+
+/// The words around the parts that vary.
+const NOT_UNDERSTOOD: &str = "not understood";
+const UNDERSIZED: &str = "undersized.";
+const BAD_NUMBER: &str = "bad number";
+const BAD_INDEX: &str = "bad index";
+const BY: &str = "by ";
+const ANOTHER_CLIENT: &str = "another client";
+const CLIENT_SILENT: (&str, &str) = ("client silent ", " ms");
+const CANCELLED: &str = "cancelled by ST";
+const AT_LIMIT: &str = " at limit ";
+
 /// The text after the code.
 struct Body(Notice);
 
 impl fmt::Display for Body {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let cmd = |c: Command| Pair(c.chars());
         match self.0 {
-            Notice::NotUnderstood(c) => write!(f, "Cmd {} not understood", Pair(c)),
-            Notice::Undersized(c) => write!(f, "Msg {} undersized.", Pair(c)),
-            Notice::ArmDidNotStop(state) => f.write_str(match state {
-                DriveStatus::Off => "Arm already off",
-                DriveStatus::Stopping => "Arm already stopping",
-                DriveStatus::Faulted => "Arm stopped by fault",
-                DriveStatus::Starting | DriveStatus::Running => "Arm did not stop",
-            }),
-            Notice::ArmDidNotStart(state) => f.write_str(match state {
-                DriveStatus::Running => "Arm already on",
-                DriveStatus::Starting => "Arm already starting",
-                DriveStatus::Stopping => "Arm still stopping",
-                DriveStatus::Off | DriveStatus::Faulted => "Arm did not start",
-            }),
-            Notice::Rejected(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
-            Notice::WorkspaceLimit => f.write_str("Work space limit."),
-            Notice::JointLimit => f.write_str("Joint limit."),
-            Notice::IkDivergence => f.write_str("Inv Kin Divergence."),
-            Notice::BadNumber(c) => write!(f, "Cmd {} bad number", Pair(c.chars())),
-            Notice::BadIndex(c) => write!(f, "Cmd {} bad index", Pair(c.chars())),
-            Notice::OutsideWorkspace(c, why) => write!(f, "Cmd {} {why}", Pair(c.chars())),
-            Notice::BeyondJointLimit(c, bound) => write!(f, "Cmd {} {bound}", Pair(c.chars())),
-            Notice::ViaPointMissed => f.write_str("Via point missed."),
+            Notice::NotUnderstood(c) => write!(f, "{CMD} {} {NOT_UNDERSTOOD}", Pair(c)),
+            Notice::Undersized(c) => write!(f, "{MSG} {} {UNDERSIZED}", Pair(c)),
+            Notice::ArmDidNotStop(state) => {
+                f.write_str(phrase(&ARM_DID_NOT_STOP, &state).unwrap_or_default())
+            }
+            Notice::ArmDidNotStart(state) => {
+                f.write_str(phrase(&ARM_DID_NOT_START, &state).unwrap_or_default())
+            }
+            Notice::Rejected(c, why) => write!(f, "{CMD} {} {why}", cmd(c)),
+            Notice::BadNumber(c) => write!(f, "{CMD} {} {BAD_NUMBER}", cmd(c)),
+            Notice::BadIndex(c) => write!(f, "{CMD} {} {BAD_INDEX}", cmd(c)),
+            Notice::OutsideWorkspace(c, why) => write!(f, "{CMD} {} {why}", cmd(c)),
+            Notice::BeyondJointLimit(c, bound) => write!(f, "{CMD} {} {bound}", cmd(c)),
             // The octets one by one: `Ipv4Addr`'s Display has a panic path (its padding
             // buffer), which the control tick must not link.
             Notice::HeldBy(c, Some([a, b, x, y])) => {
-                write!(f, "Cmd {} by {a}.{b}.{x}.{y}", Pair(c.chars()))
+                write!(f, "{CMD} {} {BY}{a}.{b}.{x}.{y}", cmd(c))
             }
-            Notice::HeldBy(c, None) => write!(f, "Cmd {} by another client", Pair(c.chars())),
-            Notice::ClientSilent(ms) => write!(f, "client silent {ms} ms"),
-            Notice::Cancelled(c) => write!(f, "Cmd {} cancelled by ST", Pair(c.chars())),
+            Notice::HeldBy(c, None) => write!(f, "{CMD} {} {BY}{ANOTHER_CLIENT}", cmd(c)),
+            Notice::ClientSilent(ms) => write!(f, "{}{ms}{}", CLIENT_SILENT.0, CLIENT_SILENT.1),
+            Notice::Cancelled(c) => write!(f, "{CMD} {} {CANCELLED}", cmd(c)),
             Notice::Held(Hold::JointLimit(bound)) => {
-                write!(f, "j{} at limit {}", bound.joint, Milli(bound.limit_milli))
+                write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))
             }
-            Notice::Held(Hold::Workspace) => f.write_str("Held at workspace edge."),
+            fixed => f.write_str(phrase(&PHRASES, &fixed).unwrap_or_default()),
         }
     }
 }
