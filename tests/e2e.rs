@@ -1542,25 +1542,10 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
     wait_drives(&sim, 0.0);
 }
 
-/// ranger-mk1 started at joints `start` (comma-separated), its drives on, in `mode` (as
-/// `armgate mode` takes it); `None` for a controller that does not know `SQ`.
-fn mk1_running_at(start: &str, mode: &str) -> Option<Sim> {
-    let sim = Sim::start_with("ranger-mk1", &["--start", start]);
-    if !knows_status(&sim) {
-        return None;
-    }
-    armgate(&sim, &["on"]).0.unwrap();
-    wait_drives(&sim, 2.0);
-    armgate(&sim, &["mode", mode]).0.unwrap();
-    Some(sim)
-}
-
 #[test]
 fn a_jog_into_a_joint_limit_is_announced() {
     // Joint 6 at 3.09 rad, 52 mrad short of its 3.142 limit (inside the 2 % margin's reach).
-    let Some(sim) = mk1_running_at("1.5708,0.6,-0.4,0.2,1.8,3.09", "joint") else {
-        return;
-    };
+    let sim = sessions::ready("1.5708,0.6,-0.4,0.2,1.8,3.09", 1.0);
     let (result, out) = armgate(
         &sim,
         &[
@@ -1577,9 +1562,7 @@ fn the_half_turn_line_is_refused_before_the_arm_moves() {
     // 1's axis; armgate-sim's help example passes the wrist centre within 6 mm of it, where
     // joint 1 would swing half a turn and joint 6 with it, into its limit 18 % of the way:
     // refused with that, before the arm moves.
-    let Some(sim) = mk1_running_at("1.5708,0.4,1.2,0,1.2,0", "cart") else {
-        return;
-    };
+    let sim = sessions::ready("1.5708,0.4,1.2,0,1.2,0", 2.0);
     let before = sim.ok("jP", [0.0; 7], 0);
     let (text, _) = refusal(armgate(&sim, &["move", "0.1", "0.6", "0.9", "0", "1.57", "0"]).0);
     assert_eq!(text, "ER26 Cmd BG j6 > 3.142 at 18%");
