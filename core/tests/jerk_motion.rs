@@ -114,6 +114,56 @@ fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
     );
 }
 
+/// A mode change while a joint move accelerates stops the arm in joint space; the stop first
+/// ramps the acceleration out, so no tick steps it (the brake alone starts from none: 1.35 ×
+/// `max_jerk` in stop_bench's blend).
+#[test]
+fn a_stop_that_begins_while_accelerating_keeps_the_jerk_limits() {
+    let config = common::robot("ranger-mk1-jerk");
+    let dt = config.control_period;
+    let goal = [1.2, 0.9, -0.1, -0.3, 1.5, 0.6];
+    for after in [2, 4, 8, 15, 30] {
+        let mut ctrl = Controller::new(&config);
+        let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
+        let mut now = 0.0;
+        let mut commands = Vec::new();
+        let mut tick = |ctrl: &mut Controller, arm: &mut IdealArm| {
+            now += dt;
+            let out = ctrl.step(now, &arm.measured()).unwrap();
+            arm.step(out.command.as_ref());
+            commands.extend(out.command);
+        };
+        tick(&mut ctrl, &mut arm);
+        ctrl.set_mode(Mode::Joint).unwrap();
+        tick(&mut ctrl, &mut arm);
+        ctrl.move_joints(&goal, 0.0).unwrap();
+        for _ in 0..after {
+            tick(&mut ctrl, &mut arm);
+        }
+        ctrl.set_mode(Mode::Cartesian).unwrap();
+        for _ in 0..2000 {
+            tick(&mut ctrl, &mut arm);
+            if !ctrl.is_moving() {
+                break;
+            }
+        }
+        assert!(!ctrl.is_moving(), "after {after}: still moving");
+        let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
+        for (i, joint) in config.joints.iter().enumerate() {
+            let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
+            let [_, a, j] = difference_peaks(&q, dt);
+            assert!(
+                within(a, joint.max_acceleration, 0.0),
+                "after {after}: joint {i}: a {a}"
+            );
+            assert!(
+                within(j, joint.max_jerk.unwrap(), rounding),
+                "after {after}: joint {i}: j {j}"
+            );
+        }
+    }
+}
+
 #[test]
 fn jerk_limited_cartesian_move_arrives_within_every_axis_limit() {
     let config = common::robot("ranger-mk1-jerk");

@@ -270,18 +270,19 @@ impl Chain {
         nearest: bool,
     ) -> Result<(&ClosedForm, [f64; MAX_JOINTS], Candidates), IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
-        let reference = self.prepare(target, reference)?;
+        let mut clamped = [0.0; MAX_JOINTS];
+        self.prepare(target, reference, &mut clamped)?;
         let mut candidates = Candidates::new();
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &reference, nearest, &mut candidates);
+                spherical_wrist::solve(form, target, &clamped, nearest, &mut candidates);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, &reference, nearest, &mut candidates);
+                three_parallel::solve(form, target, &clamped, nearest, &mut candidates);
             }
             Family::Numeric => {}
         }
-        Ok((form, reference, candidates))
+        Ok((form, clamped, candidates))
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is

@@ -16,7 +16,8 @@
 
 use nalgebra::Vector6;
 
-use super::chain::{Axes, Chain};
+use super::chain::Chain;
+use super::evaluation::LastEvaluation;
 use super::jacobian::{Jacobian, JointVector, damped_least_squares};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
@@ -147,21 +148,32 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        let start = self.prepare(target, seed)?;
+        self.solve_tracking_after(target, seed, config, &mut LastEvaluation::default())
+    }
+
+    /// [`solve_tracking`](Self::solve_tracking), reusing `last` (this chain's last pose
+    /// evaluation) if the seed is the joints it evaluated, and leaving this solve's last one
+    /// there: a control tick seeds each solve with the answer of the one before.
+    pub fn solve_tracking_after(
+        &self,
+        target: &Frame,
+        seed: &[f64],
+        config: &IkConfig,
+        last: &mut LastEvaluation,
+    ) -> Result<IkResult, IkError> {
+        let mut start = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut start)?;
         if self.closed_form().is_none() {
-            return Ok(self.newton_from(target, start, config, None));
+            return Ok(self.newton_from(target, &start, config, last));
         }
         // The seed's pose, evaluated once: Newton's first step reuses it.
-        let mut axes = Axes::default();
-        let tool = self.tool_and_axes(&start, &mut axes);
-        let e = math::diff(&tool, target);
+        let e = math::diff(&last.at(self, &start), target);
         let here = e.fixed_rows::<3>(0).norm() + e.fixed_rows::<3>(3).norm();
-        let first = Some((tool, axes));
         // Close to the target (the control tick's case, and a seed that already reaches it:
         // returned bit for bit) Newton converges in two or three steps, fewer instructions
         // than the closed form; farther out the closed form wins.
         if here < NEWTON_NEAR {
-            return Ok(self.newton_from(target, start, config, first.as_ref()));
+            return Ok(self.newton_from(target, &start, config, last));
         }
         let close = |q: &[f64]| {
             q.iter()
@@ -174,7 +186,7 @@ impl Chain {
         {
             return Ok(IkResult::Converged(solution));
         }
-        Ok(self.newton_from(target, start, config, first.as_ref()))
+        Ok(self.newton_from(target, &start, config, last))
     }
 
     /// Tracking IK by damped Newton steps alone from a nearby `seed`, typically the previous
@@ -192,27 +204,28 @@ impl Chain {
         seed: &[f64],
         config: &IkConfig,
     ) -> Result<IkResult, IkError> {
-        let q = self.prepare(target, seed)?;
-        Ok(self.newton_from(target, q, config, None))
+        let mut q = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut q)?;
+        Ok(self.newton_from(target, &q, config, &mut LastEvaluation::default()))
     }
 
     /// [`newton_tracking`](Self::newton_tracking) from a checked seed, whose pose and axes may
-    /// have been evaluated already (`first`).
+    /// have been evaluated already (`last`).
     fn newton_from(
         &self,
         target: &Frame,
-        q: [f64; MAX_JOINTS],
+        q: &[f64; MAX_JOINTS],
         config: &IkConfig,
-        first: Option<&(Frame, Axes)>,
+        last: &mut LastEvaluation,
     ) -> IkResult {
         let (iterations, tolerance) = (config.tracking_iterations, config.tolerance);
         let no_hook = &mut || {};
         let free = self.descend(
             target,
-            q,
+            *q,
             iterations,
             tolerance,
-            (Bounds::Free, first),
+            (Bounds::Free, &mut *last),
             no_hook,
         );
         let mut used = free.steps;
@@ -229,7 +242,7 @@ impl Chain {
                 mirrored,
                 iterations,
                 tolerance,
-                (Bounds::Enforced, None),
+                (Bounds::Enforced, &mut *last),
                 no_hook,
             );
             used += retry.steps;
@@ -239,8 +252,8 @@ impl Chain {
                 return IkResult::Converged(best);
             }
         }
-        let bounds = (Bounds::Enforced, None);
-        let mut bounded = self.descend(target, q, iterations, tolerance, bounds, no_hook);
+        let bounds = (Bounds::Enforced, last);
+        let mut bounded = self.descend(target, *q, iterations, tolerance, bounds, no_hook);
         bounded.best.iterations += used;
         bounded.into_result()
     }
@@ -276,12 +289,14 @@ impl Chain {
         rng_seed: u64,
         on_step: &mut impl FnMut(),
     ) -> Result<IkResult, IkError> {
-        let start = self.prepare(target, seed)?;
+        let mut start = [0.0; MAX_JOINTS];
+        self.prepare(target, seed, &mut start)?;
         let mut q = start;
         let mut rng = SplitMix64::new(rng_seed);
         let mut budget = config.global_iterations;
         let mut best: Option<IkSolution> = None;
         let mut used = 0u32;
+        let mut last = LastEvaluation::default();
         // Each attempt spends at least one iteration, so this bound is never the binding one.
         for _ in 0..config.global_iterations {
             let limit = budget.min(ATTEMPT_ITERATIONS);
@@ -290,7 +305,7 @@ impl Chain {
                 q,
                 limit,
                 config.tolerance,
-                (Bounds::Wrapping, None),
+                (Bounds::Wrapping, &mut last),
                 on_step,
             );
             used += descent.steps;
@@ -318,7 +333,7 @@ impl Chain {
                 start,
                 0,
                 config.tolerance,
-                (Bounds::Wrapping, None),
+                (Bounds::Wrapping, &mut last),
                 on_step,
             )
             .best
@@ -344,19 +359,23 @@ impl Chain {
         out
     }
 
-    /// Validates the inputs and returns the seed clamped into the limits.
+    /// Validates the inputs and writes the seed clamped into the limits to `q` (entries past
+    /// the joint count zero). Written in place: returned inside the `Result`, the array sat
+    /// unaligned and the Cortex-M7 copied it byte by byte, three times (≈ 900 instructions a
+    /// tick in qemu-bench).
     pub(super) fn prepare(
         &self,
         target: &Frame,
         seed: &[f64],
-    ) -> Result<[f64; MAX_JOINTS], IkError> {
+        q: &mut [f64; MAX_JOINTS],
+    ) -> Result<(), IkError> {
         if !math::is_finite(target) {
             return Err(IkError::NonFiniteTarget);
         }
         if seed.len() != self.dof() {
             return Err(IkError::WrongJointCount);
         }
-        let mut q = [0.0; MAX_JOINTS];
+        *q = [0.0; MAX_JOINTS];
         let (min, max) = self.limits();
         for ((v, s), (lo, hi)) in q.iter_mut().zip(seed).zip(min.iter().zip(max)) {
             if !s.is_finite() {
@@ -364,7 +383,7 @@ impl Chain {
             }
             *v = saturate(*s, *lo, *hi);
         }
-        Ok(q)
+        Ok(())
     }
 
     /// A configuration drawn uniformly within the limits (revolute ranges capped at ±π about
@@ -387,15 +406,15 @@ impl Chain {
         q
     }
 
-    /// Damped Newton iterations from `q` (whose pose and axes `first` may give); returns the
-    /// best pose visited.
+    /// Damped Newton iterations from `q` (its pose and axes reused from `last` if evaluated
+    /// there; every evaluation is left there); returns the best pose visited.
     fn descend(
         &self,
         target: &Frame,
         mut q: [f64; MAX_JOINTS],
         iterations: u16,
         tolerance: f64,
-        (bounds, first): (Bounds, Option<&(Frame, Axes)>),
+        (bounds, last): (Bounds, &mut LastEvaluation),
         on_step: &mut impl FnMut(),
     ) -> Descent {
         // The best pose as plain values; the `IkSolution` (a `Joints` inside) is built once, at
@@ -405,19 +424,12 @@ impl Chain {
             position_error: f64::INFINITY,
             orientation_error: f64::INFINITY,
         };
-        // Reused across iterations: on the Cortex-M7 rebuilding them costs more than the maths.
-        let mut axes = Axes::default();
+        // Reused across iterations: on the Cortex-M7 rebuilding it costs more than the maths.
         let mut jacobian = Jacobian::zeros();
         let mut steps = 0;
         let mut checkpoint = f64::INFINITY;
         for it in 0..=u32::from(iterations) {
-            let tool = match first {
-                Some((tool, evaluated)) if it == 0 => {
-                    axes = *evaluated;
-                    *tool
-                }
-                _ => self.tool_and_axes(&q, &mut axes),
-            };
+            let tool = last.at(self, &q);
             let e = math::diff(&tool, target);
             let pose = Pose {
                 q,
@@ -439,7 +451,7 @@ impl Chain {
                 break;
             }
             let energy = 0.5 * e.norm_squared();
-            self.jacobian_into(&axes, &tool.translation.vector, &mut jacobian);
+            self.jacobian_into(last.axes(), &tool.translation.vector, &mut jacobian);
             let step = self.step(&jacobian, &e, energy + LAMBDA_MIN, &q, bounds);
             steps += 1;
             on_step();

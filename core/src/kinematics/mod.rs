@@ -3,7 +3,9 @@
 //! * [`Chain`]: forward kinematics of the tool and of every link frame, the geometric Jacobian
 //!   and manipulability.
 //! * [`Chain::solve_tracking`] / [`Chain::solve_global`]: inverse position kinematics from a
-//!   nearby seed (the per-tick case) or from anywhere (deterministic random restarts).
+//!   nearby seed (the per-tick case) or from anywhere (deterministic random restarts);
+//!   [`Chain::solve_tracking_after`] reuses the last solve's final pose evaluation
+//!   ([`LastEvaluation`]) when the seed is that solve's answer, as in the control tick.
 //! * [`Chain::solve_all`] / [`Chain::solve_nearest`]: every solution in closed form, for the
 //!   [`Family`] detected from the geometry (subproblem decomposition).
 //! * [`diverges`]: the seed's divergence guard.
@@ -11,6 +13,7 @@
 
 mod chain;
 mod closed_form;
+mod evaluation;
 mod family;
 mod ik;
 mod jacobian;
@@ -23,6 +26,7 @@ mod velocity;
 pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
+pub use evaluation::LastEvaluation;
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;

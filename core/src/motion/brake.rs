@@ -61,6 +61,21 @@ impl Brake {
     }
 }
 
+/// `min_k limit_k · t / |v_k|`: how far a scale of `v` may change in a tick (∞ at rest).
+pub fn budget(v: &[f64], limit: &[f64], t: f64) -> f64 {
+    v.iter()
+        .zip(limit)
+        .map(|(v, l)| {
+            let speed = libm::fabs(*v);
+            if speed > 0.0 {
+                l * t / speed
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// A budget that is a positive number; anything else (0, NaN) allows the whole stop at once.
 fn positive(v: f64) -> f64 {
     if v > 0.0 { v } else { f64::INFINITY }

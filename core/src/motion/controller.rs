@@ -1,4 +1,15 @@
-//! The control step: one deterministic tick of the whole motion pipeline (spec §1.4).
+//! The control step: one deterministic tick of the whole motion pipeline (spec §1.4), and the
+//! requests that start, stop and switch motions.
+//!
+//! The tick's parts, one concern a file: `controller/cartesian_tick.rs` (Cartesian mode: time
+//! scale, look-ahead, tracking IK), `controller/joint_tick.rs` (joint mode),
+//! `controller/streaming.rs` (the velocity stream's requests and tick) and
+//! `controller/stopping.rs` (a stop in progress).
+
+mod cartesian_tick;
+mod joint_tick;
+mod stopping;
+mod streaming;
 
 use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
@@ -8,14 +19,14 @@ use super::joint_path::check_joint_path;
 use super::reach::{Reach, check_iterations, joint_beyond_limit};
 use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
 use super::shape::Shape;
-use super::supervisor::{Along, StopCause, Supervisor, budget};
-use super::velocity_stream::{StreamCommand, StreamStep, VelocityStream};
+use super::supervisor::{Along, StopCause, Supervisor};
+use super::velocity_stream::VelocityStream;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
-use crate::kinematics::{Chain, Joints, KinematicsError};
-use crate::math::{self, Frame, Twist};
-use armgate_protocol::client::{Hold, JointBound, Motion, PathPoint, TwistFrame};
+use crate::kinematics::{Chain, Joints, KinematicsError, LastEvaluation};
+use crate::math::{self, Frame};
+use armgate_protocol::client::Motion;
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
 /// reached; above it the tick raises [`Events::ik_divergence`] and holds the last command. This
@@ -32,19 +43,6 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
     fine: 0.001,
     coarse: 0.05,
 };
-
-/// How a Cartesian set-point can be tracked this tick.
-enum Tracking {
-    /// Reached within the tolerance and the rate limits.
-    Reached(Joints),
-    /// Reached within the rate limits, but some joint would exceed its acceleration limit
-    /// (the limiter then eases the step, and the tool leaves the path a little).
-    Abrupt(Joints),
-    /// Reached, but some joint would exceed its rate limit.
-    TooFast,
-    /// Not reached within the tolerance.
-    Unreachable,
-}
 
 /// The control mode: a rule of the wire (`CM`), defined once in the protocol crate.
 pub use armgate_protocol::client::Mode;
@@ -111,6 +109,8 @@ pub struct Controller {
     max_rate: Joints,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
+    /// The tracking solves' last pose evaluation: the next tick's seed, evaluated already.
+    last_evaluation: LastEvaluation,
 }
 
 impl Controller {
@@ -150,6 +150,7 @@ impl Controller {
             cartesian_speed: cartesian.max_velocity,
             max_rate: config.per_joint(|j| j.max_rate),
             fixed_point: FixedPoint::default(),
+            last_evaluation: LastEvaluation::default(),
         }
     }
 
@@ -179,9 +180,8 @@ impl Controller {
             Mode::Joint | Mode::Cartesian if self.stream.expires() => {
                 // A silent client: the supervisor brings the arm to rest.
                 self.stream.halt();
-                let velocity = *self.supervisor.velocity();
-                self.supervisor
-                    .begin(StopCause::StreamTimeout, Along::Joints(velocity));
+                let along = self.supervisor.in_joint_space();
+                self.supervisor.begin(StopCause::StreamTimeout, along);
                 None
             }
             Mode::Joint | Mode::Cartesian if self.stream.is_active() => {
@@ -233,360 +233,6 @@ impl Controller {
         })
     }
 
-    /// Either mode, while a velocity stream runs: its set-point from the last command.
-    fn stream_tick(&mut self, q_m: &Joints, events: &mut Events) -> StreamStep {
-        let q = self.command.unwrap_or(*q_m);
-        let step = self.stream.step(&self.chain, &self.workspace, &q);
-        events.workspace_limit |= step.workspace_limit;
-        events.hold = match step.held_joint {
-            Some((i, upper)) => {
-                let limits = if upper {
-                    self.chain.max()
-                } else {
-                    self.chain.min()
-                };
-                let limit = limits.get(i).copied().unwrap_or(0.0);
-                let bound = JointBound::new(i, upper, limit, PathPoint::Goal);
-                Some(Hold::JointLimit(bound))
-            }
-            None if step.workspace_limit => Some(Hold::Workspace),
-            None => None,
-        };
-        self.supervisor.hold(events.hold);
-        step
-    }
-
-    /// Joint mode: sequence, then generator.
-    fn joint_tick(&mut self, q_m: &Joints, events: &mut Events) -> Joints {
-        let leg_done = !self.joint_generator.is_moving();
-        let step = self
-            .joint_sequence
-            .poll(leg_done, |p| joint_distance(p, q_m));
-        if let SequenceStep::MoveTo(via) = step {
-            // The generator is idle, so the move cannot be refused.
-            let then = self.joint_sequence.towards();
-            let _ = self
-                .joint_generator
-                .move_towards(via.point, via.min_duration, then);
-        }
-        note_sequence(step, events);
-        // A blend stays within the joint limits: its path lies within the tolerance of the via
-        // point, which is kept below the via point's distance to the nearest limit.
-        let (chain, generator, period) = (&self.chain, &mut self.joint_generator, self.period);
-        self.joint_sequence.hand_over(
-            generator.accepts_blend(),
-            |q| limit_margin(chain, q),
-            |via, tolerance, then| {
-                generator.blend_into(via.point, via.min_duration, tolerance, then, period)
-            },
-        );
-        let (setpoint, finished) = self.joint_generator.advance(self.period);
-        events.motion_finished |= finished && !self.joint_sequence.is_running();
-        setpoint
-    }
-
-    /// Cartesian mode: sequence, generator, workspace check, IK.
-    ///
-    /// The generator advances by one period of motion time, or by less when the IK solution of
-    /// the full step would need a joint to move faster than its rate limit: the path stays exact
-    /// and the motion slows down (the seed enforced no rate in position mode, spec §9 item 27).
-    /// A set-point that cannot be tracked even at a much smaller step (out of reach, or at a
-    /// singularity) raises [`Events::ik_divergence`] and the supervisor brings the arm to rest
-    /// in joint space. So does a measured pose outside the workspace (`ER21`); a set-point
-    /// that would come within the stopping distance of the workspace's edge or a box starts a
-    /// stop along the path, which ends before it. `None`: a stop began, the supervisor
-    /// commands this tick.
-    fn cartesian_tick(
-        &mut self,
-        q_m: &Joints,
-        f_m: &Frame,
-        events: &mut Events,
-    ) -> Option<(Joints, Frame)> {
-        let leg_done = !self.cartesian_generator.is_moving();
-        let step = self
-            .cartesian_sequence
-            .poll(leg_done, |p| math::dist(p, f_m));
-        if let SequenceStep::MoveTo(via) = step {
-            let then = self.cartesian_sequence.towards();
-            let _ = self
-                .cartesian_generator
-                .move_towards(via.point, via.min_duration, then);
-        }
-        note_sequence(step, events);
-        // A blend's set-points stay within the tolerance of the via point, kept below its
-        // distance to the workspace's edges and boxes.
-        let (workspace, generator, period) =
-            (&self.workspace, &mut self.cartesian_generator, self.period);
-        self.cartesian_sequence.hand_over(
-            generator.accepts_blend(),
-            |pose| workspace.margin(&pose.translation.vector),
-            |via, tolerance, then| {
-                generator.blend_into(via.point, via.min_duration, tolerance, then, period)
-            },
-        );
-
-        let seed = self.command.unwrap_or(*q_m);
-        let moving = self.cartesian_generator.is_moving();
-        let t0 = self.cartesian_generator.elapsed();
-        let before = self.cartesian_generator.setpoint();
-        // The time scale may change by as much as the joints' and the Cartesian acceleration
-        // limits allow at the speeds of full scale: up first, then the same, then down. A
-        // motion that starts at speed (a shape) starts from scale 0.
-        let (s, cartesian_nominal) = match (moving, t0 > 0.0) {
-            (false, _) => (1.0, [0.0; 6]),
-            (true, true) => (self.time_scale, self.cartesian_nominal),
-            (true, false) => {
-                let (ahead, _) = self.cartesian_generator.sample(self.period);
-                (0.0, cartesian_velocity(&before, &ahead, self.period))
-            }
-        };
-        let mut nominal = *self.supervisor.velocity();
-        if s > 0.0 {
-            nominal.iter_mut().for_each(|v| *v /= s);
-        }
-        let (joint_delta, _) = self.supervisor.joint_budget(&nominal);
-        let c_a = &self.cartesian_acceleration;
-        let delta = joint_delta.min(budget(&cartesian_nominal, c_a, self.period));
-        // A shape that ends at speed: slow down so that the scale is down to about one step's
-        // change when the end comes (the scale s covers s²/2δ + s/2 periods while it falls).
-        let cap = self
-            .cartesian_generator
-            .time_to_abrupt_end()
-            .map_or(1.0, |left| {
-                let n = left / self.period;
-                -0.5 * delta + libm::sqrt(0.25 * delta * delta + 2.0 * delta * n)
-            });
-        // The slowest step that only the acceleration clamp keeps from being reached.
-        let mut abrupt = None;
-        let down = (s - delta).max(0.0);
-        let up = (s + delta).min(1.0).min(cap).max(down);
-        for scale in [up, s.min(cap).max(down), down] {
-            if scale <= 0.0 {
-                break;
-            }
-            let t = t0 + self.period * scale;
-            let sample = self.cartesian_generator.sample(t);
-            let (setpoint, finished) = sample;
-            if events.workspace_limit || !self.workspace.allows(&setpoint.translation.vector) {
-                // An illegal set-point never reaches the IK: the arm comes to rest in joint
-                // space and the motion is aborted.
-                events.workspace_limit = true;
-                self.abort_cartesian_motion(StopCause::Workspace, events);
-                return None;
-            }
-            let tracked = match self.track(&setpoint, &seed) {
-                Tracking::Abrupt(q) => {
-                    abrupt = Some((q, scale, t, sample));
-                    continue;
-                }
-                other => other,
-            };
-            match tracked {
-                Tracking::Abrupt(_) | Tracking::TooFast => {}
-                Tracking::Reached(q) => {
-                    self.time_scale = scale;
-                    self.cartesian_nominal =
-                        cartesian_velocity(&before, &setpoint, self.period * scale);
-                    self.cartesian_generator.commit(t, sample);
-                    events.motion_finished |= finished && !self.cartesian_sequence.is_running();
-                    let unchecked = !self.ik.check_lines || self.cartesian_generator.runs_shape();
-                    if moving && !finished && unchecked && self.boundary_ahead(&setpoint, t) {
-                        events.workspace_limit = true;
-                        self.supervisor.begin(StopCause::Workspace, Along::Path);
-                        self.cartesian_sequence.halt();
-                    }
-                    return Some((q, setpoint));
-                }
-                Tracking::Unreachable => break,
-            }
-        }
-        if let Some((q, scale, t, sample)) = abrupt {
-            self.time_scale = scale;
-            self.cartesian_nominal = cartesian_velocity(&before, &sample.0, self.period * scale);
-            self.cartesian_generator.commit(t, sample);
-            events.motion_finished |= sample.1 && !self.cartesian_sequence.is_running();
-            return Some((q, sample.0));
-        }
-        events.ik_divergence = true;
-        let _ = f_m;
-        self.abort_cartesian_motion(StopCause::IkDivergence, events);
-        None
-    }
-
-    /// True if the Cartesian motion, at `setpoint` (motion time `t`), would leave the
-    /// workspace or enter an exclusion box within its stopping distance along the path: the
-    /// point where a stop along the path beginning next tick would end (half the stopping time
-    /// at the present full-scale speed, plus the jerk ramp and two ticks, of motion time) and
-    /// the straight way there. Only for what was not checked before it started (shapes, and
-    /// lines when the robot file turns the check off).
-    fn boundary_ahead(&self, setpoint: &Frame, t: f64) -> bool {
-        let stop_time = self
-            .cartesian_nominal
-            .iter()
-            .zip(self.cartesian_acceleration.iter())
-            .map(|(v, a)| libm::fabs(*v) / a)
-            .fold(0.0, f64::max);
-        let ramp = self.cartesian_jerk.map_or(0.0, |j| {
-            self.cartesian_acceleration
-                .iter()
-                .zip(j.iter())
-                .map(|(a, j)| a / j)
-                .fold(0.0, f64::max)
-        });
-        let horizon = 0.5 * stop_time + ramp + 2.0 * self.period;
-        let (ahead, _) = self.cartesian_generator.sample(t + horizon);
-        let (here, there) = (&setpoint.translation.vector, &ahead.translation.vector);
-        !self.workspace.allows(there) || self.workspace.first_box_crossing(here, there).is_some()
-    }
-
-    /// One tick of the stop in progress (begun earlier or this tick): its command, and the
-    /// Cartesian set-point of a stop along a Cartesian path. At rest the generators hold where
-    /// it ended and the stop is over.
-    fn stopping_tick(
-        &mut self,
-        q_m: &Joints,
-        events: &mut Events,
-    ) -> (Option<Joints>, Option<Frame>) {
-        let Some(stop) = self.supervisor.stopping().copied() else {
-            return (None, None);
-        };
-        let q_cmd = self.command.unwrap_or(*q_m);
-        if stop.along == Along::Path && self.mode == Mode::Cartesian {
-            if let Some(out) = self.cartesian_path_stop(&q_cmd) {
-                return out;
-            }
-            // The path cannot be followed: on in joint space.
-            events.ik_divergence = true;
-            self.supervisor.leave_path();
-        } else if stop.along == Along::Path && self.mode == Mode::Joint {
-            let mut peek = self.joint_generator.clone();
-            let before = self.joint_generator.setpoint();
-            let (ahead, _) = peek.advance(self.period);
-            let nominal = joint_velocity(&before, &ahead, self.period);
-            let (rate, change) = self.supervisor.joint_budget(&nominal);
-            let scale = self.brake(rate, change);
-            let (q, finished) = self.joint_generator.advance(scale * self.period);
-            if finished || scale <= 0.0 {
-                self.finish_stop(&q);
-            }
-            return (Some(q), None);
-        }
-        let Some(Along::Joints(v0)) = self.supervisor.stopping().map(|s| s.along) else {
-            self.finish_stop(&q_cmd);
-            return (Some(q_cmd), None);
-        };
-        let (rate, change) = self.supervisor.joint_budget(&v0);
-        let scale = self.brake(rate, change);
-        let mut v = v0;
-        v.iter_mut().for_each(|v| *v *= scale);
-        self.supervisor.keep_within_range(&q_cmd, &mut v);
-        let mut q = q_cmd;
-        for (q, v) in q.iter_mut().zip(v.iter()) {
-            *q += v * self.period;
-        }
-        if scale <= 0.0 {
-            self.finish_stop(&q);
-        }
-        (Some(q), None)
-    }
-
-    /// A stop along a Cartesian path: the motion time advances by the brake's scale of a
-    /// period, within the Cartesian limits at the path's nominal speed and the joints' at the
-    /// speed they were commanded. `None` if the IK cannot follow the path.
-    fn cartesian_path_stop(&mut self, q_cmd: &Joints) -> Option<(Option<Joints>, Option<Frame>)> {
-        let t0 = self.cartesian_generator.elapsed();
-        let before = self.cartesian_generator.setpoint();
-        let (ahead, _) = self.cartesian_generator.sample(t0 + self.period);
-        let nominal = cartesian_velocity(&before, &ahead, self.period);
-        let t = self.period;
-        let mut rate = budget(&nominal, &self.cartesian_acceleration, t);
-        let mut change = self
-            .cartesian_jerk
-            .map_or(f64::INFINITY, |j| budget(&nominal, &j, t * t));
-        // The joints at the speed the scale stands for now.
-        let scale_now = self.supervisor.stopping().map_or(1.0, |s| s.brake.scale());
-        if scale_now > 0.0 {
-            let mut joints = *self.supervisor.velocity();
-            joints.iter_mut().for_each(|v| *v /= scale_now);
-            let (r, c) = self.supervisor.joint_budget(&joints);
-            (rate, change) = (rate.min(r), change.min(c));
-        }
-        let mut brake = self.supervisor.stopping()?.brake;
-        let scale = brake.next(rate, change);
-        let t_next = t0 + scale * self.period;
-        let sample = self.cartesian_generator.sample(t_next);
-        let (setpoint, finished) = sample;
-        let Tracking::Reached(q) = self.track(&setpoint, q_cmd) else {
-            return None;
-        };
-        if let Some(stop) = self.supervisor.stopping_mut() {
-            stop.brake = brake;
-        }
-        self.cartesian_generator.commit(t_next, sample);
-        if finished || scale <= 0.0 {
-            self.supervisor.finish();
-            self.joint_generator.hold(q);
-            self.cartesian_generator.hold(setpoint);
-            self.cartesian_sequence.halt();
-        }
-        Some((Some(q), Some(setpoint)))
-    }
-
-    /// The next scale of the stop in progress (0 if none).
-    fn brake(&mut self, rate: f64, change: f64) -> f64 {
-        self.supervisor
-            .stopping_mut()
-            .map_or(0.0, |stop| stop.brake.next(rate, change))
-    }
-
-    /// The stop has come to rest at `q`: the generators hold there.
-    fn finish_stop(&mut self, q: &Joints) {
-        self.supervisor.finish();
-        self.hold_at(*q);
-    }
-
-    /// Tracking IK from `seed` to `setpoint`, checked against the reach tolerance and the
-    /// joints' rate limits. A solve known to return its seed is not repeated ([`FixedPoint`]).
-    fn track(&mut self, setpoint: &Frame, seed: &Joints) -> Tracking {
-        if self.fixed_point.holds(setpoint, seed) {
-            return Tracking::Reached(*seed);
-        }
-        let Ok(result) = self.chain.solve_tracking(setpoint, seed, &self.ik) else {
-            return Tracking::Unreachable;
-        };
-        let s = result.solution();
-        // Written so that a NaN error (or solution) fails: it is not reached.
-        let reached = s.position_error <= REACH_TOLERANCE
-            && s.orientation_error <= REACH_TOLERANCE
-            && s.q.is_finite();
-        if !reached {
-            return Tracking::Unreachable;
-        }
-        if self.limiter.rate_ratio(&s.q, seed) > 1.0 {
-            return Tracking::TooFast;
-        }
-        if !self.supervisor.can_stop_within_range(seed, &s.q) {
-            return Tracking::Unreachable;
-        }
-        let velocity = self.supervisor.velocity();
-        if self.limiter.acceleration_ratio(&s.q, seed, velocity) > 1.0 + 1e-9 {
-            return Tracking::Abrupt(s.q);
-        }
-        self.fixed_point.note(setpoint, seed, &s.q);
-        Tracking::Reached(s.q)
-    }
-
-    /// Aborts the Cartesian motion (and its sequence): the supervisor brings the arm to rest
-    /// in joint space from the commanded velocity, and the generators then hold there.
-    fn abort_cartesian_motion(&mut self, cause: StopCause, events: &mut Events) {
-        events.sequence_aborted |= self.cartesian_sequence.is_running();
-        self.cartesian_sequence.halt();
-        let setpoint = self.cartesian_generator.setpoint();
-        self.cartesian_generator.hold(setpoint);
-        self.supervisor
-            .begin(cause, Along::Joints(*self.supervisor.velocity()));
-    }
-
     /// Switches the control mode. The newly active generator holds the last command (or the
     /// measured joints when coming from off), so the switch itself never moves the arm.
     /// Selecting the current mode again stops any motion. While the arm moves, the supervisor
@@ -599,10 +245,9 @@ impl Controller {
         self.stream.halt();
         self.hold(q_m);
         if moving {
-            let velocity = *self.supervisor.velocity();
+            let along = self.supervisor.in_joint_space();
             self.supervisor.finish();
-            self.supervisor
-                .begin(StopCause::ModeChange, Along::Joints(velocity));
+            self.supervisor.begin(StopCause::ModeChange, along);
         }
         Ok(())
     }
@@ -633,8 +278,8 @@ impl Controller {
         }
         if self.stream.is_active() {
             self.stream.halt();
-            self.supervisor
-                .begin(cause, Along::Joints(*self.supervisor.velocity()));
+            let along = self.supervisor.in_joint_space();
+            self.supervisor.begin(cause, along);
             if let Some(q) = self.command {
                 self.hold_at(q);
             }
@@ -648,57 +293,6 @@ impl Controller {
     /// The stop or hold cause in force (`SQ` index 2), and the joint of a joint-limit hold.
     pub fn stop_cause(&self) -> (Option<StopCause>, Option<u8>) {
         (self.supervisor.cause(), self.supervisor.held_joint())
-    }
-
-    /// Streams a tool twist `[vx, vy, vz, ωx, ωy, ωz]` (m/s, rad/s) in `frame`, valid for
-    /// [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS) ticks from the next one. Cartesian mode
-    /// only; refused while a move or sequence runs.
-    pub fn stream_twist(&mut self, twist: Twist, frame: TwistFrame) -> Result<(), Refusal> {
-        if !twist.iter().all(|v| v.is_finite()) {
-            return Err(Refusal::InvalidNumber);
-        }
-        self.ready_for_stream(Mode::Cartesian)?;
-        self.supervisor.clear_cause();
-        self.stream.command(StreamCommand::Twist(twist, frame));
-        Ok(())
-    }
-
-    /// Streams joint rates (rad/s, or m/s for prismatic joints), one per joint, valid for
-    /// [`TIMEOUT_PERIODS`](super::TIMEOUT_PERIODS) ticks from the next one. Joint mode only;
-    /// refused while a move or sequence runs.
-    pub fn stream_joint_rates(&mut self, rates: &[f64]) -> Result<(), Refusal> {
-        let rates = self.chain.check(rates).map_err(|e| match e {
-            KinematicsError::WrongJointCount => Refusal::WrongJointCount,
-            KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
-        })?;
-        self.ready_for_stream(Mode::Joint)?;
-        self.supervisor.clear_cause();
-        self.stream.command(StreamCommand::JointRates(rates));
-        Ok(())
-    }
-
-    /// A stream may start, or resume while its own stop (`ST`, its timeout) is under way: it
-    /// then takes over from the velocity commanded last, within the same limits.
-    fn ready_for_stream(&mut self, mode: Mode) -> Result<(), Refusal> {
-        if self.mode != mode {
-            return Err(Refusal::WrongMode);
-        }
-        if self.measured.is_none() {
-            return Err(Refusal::NotReady);
-        }
-        let stream_stopping = self.supervisor.stopping().is_some_and(|stop| {
-            matches!(stop.along, Along::Joints(_))
-                && matches!(stop.cause, StopCause::Stop | StopCause::StreamTimeout)
-        });
-        if stream_stopping {
-            self.supervisor.finish();
-            self.stream.resume(self.supervisor.velocity());
-            return Ok(());
-        }
-        if self.is_moving() && !self.stream.is_active() {
-            return Err(Refusal::Busy);
-        }
-        Ok(())
     }
 
     fn hold(&mut self, q_m: Joints) {
@@ -1022,33 +616,4 @@ fn note_sequence<P>(step: SequenceStep<P>, events: &mut Events) {
         SequenceStep::Aborted => events.sequence_aborted = true,
         SequenceStep::Wait | SequenceStep::MoveTo(_) => {}
     }
-}
-
-/// How far `q` lies inside the joint limits: its distance to the nearest one (0 if outside).
-fn limit_margin(chain: &Chain, q: &Joints) -> f64 {
-    q.iter()
-        .zip(chain.min().iter().zip(chain.max()))
-        .map(|(v, (lo, hi))| (v - lo).min(hi - v))
-        .fold(f64::INFINITY, f64::min)
-        .max(0.0)
-}
-
-/// Euclidean distance between joint vectors (the joint sequence's reach metric).
-fn joint_distance(a: &Joints, b: &Joints) -> f64 {
-    libm::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
-}
-
-/// Joint velocity of the step from `a` to `b` over `dt`.
-fn joint_velocity(a: &Joints, b: &Joints, dt: f64) -> Joints {
-    let mut v = *b;
-    for (v, a) in v.iter_mut().zip(a.iter()) {
-        *v = (*v - a) / dt;
-    }
-    v
-}
-
-/// Cartesian velocity (x, y, z, rx, ry, rz) of the step from `a` to `b` over `dt`.
-fn cartesian_velocity(a: &Frame, b: &Frame, dt: f64) -> [f64; 6] {
-    let d: [f64; 6] = math::diff(a, b).into();
-    d.map(|x| if dt > 0.0 { x / dt } else { 0.0 })
 }

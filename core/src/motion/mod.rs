@@ -20,6 +20,7 @@ mod fixed_point;
 mod joint_generator;
 mod joint_limiter;
 mod joint_path;
+mod joint_stop;
 mod profile;
 mod reach;
 mod refusal;

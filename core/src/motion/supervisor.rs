@@ -6,13 +6,15 @@
 //! * **along the path** while the generator can still be followed: its motion time advances
 //!   by `scale × period`, the scale falling within the joints' acceleration (and jerk) limits
 //!   and, for Cartesian motions, the Cartesian ones, so the tool stays on its line or shape;
-//! * **in joint space** otherwise (a mode change, IK divergence, a stream): the last
-//!   commanded joint velocity is scaled down to zero, every joint by the same fraction.
+//! * **in joint space** otherwise (a mode change, IK divergence, a stream): a [`JointStop`]
+//!   ramps out the acceleration the arm had (where jerk is limited) and scales the commanded
+//!   joint velocity down to zero, every joint by the same fraction.
 //!
 //! The supervisor also remembers the last commanded joint velocity, which the joint limiter
 //! needs for its acceleration clamp, the last clamp before the drives.
 
 use super::brake::Brake;
+use super::joint_stop::{JointStop, StopLimits};
 use crate::config::ValidRobot;
 use crate::kinematics::Joints;
 use armgate_protocol::client::Hold;
@@ -23,8 +25,8 @@ pub use armgate_protocol::client::StopCause;
 pub enum Along {
     /// The running generator's path: its motion time is scaled down.
     Path,
-    /// The joint velocity at the start of the stop, scaled down.
-    Joints(Joints),
+    /// In joint space, from the velocity and acceleration at the start of the stop.
+    Joints(JointStop),
 }
 
 /// A stop in progress.
@@ -43,12 +45,12 @@ pub struct Stopping {
 pub struct Supervisor {
     /// The last commanded joint velocity (zero while nothing is commanded).
     velocity: Joints,
-    a_max: Joints,
-    j_max: Option<Joints>,
+    /// The last commanded joint acceleration (the change of `velocity` over a period).
+    acceleration: Joints,
+    limits: StopLimits,
     /// Joint ranges.
     min: Joints,
     max: Joints,
-    period: f64,
     stopping: Option<Stopping>,
     /// The cause in force: the last stop's, until the next motion starts.
     cause: Option<StopCause>,
@@ -63,11 +65,10 @@ impl Supervisor {
     pub fn new(config: &ValidRobot) -> Self {
         Self {
             velocity: Joints::zeros(config.dof()),
-            a_max: config.per_joint(|j| j.max_acceleration),
-            j_max: config.joint_jerk_limits(),
+            acceleration: Joints::zeros(config.dof()),
+            limits: StopLimits::new(config),
             min: config.per_joint(|j| j.min),
             max: config.per_joint(|j| j.max),
-            period: config.control_period,
             stopping: None,
             cause: None,
             held_joint: None,
@@ -93,11 +94,33 @@ impl Supervisor {
     /// A stop along the path that cannot follow it any more goes on in joint space, from the
     /// velocity commanded last.
     pub fn leave_path(&mut self) {
-        let velocity = self.velocity;
+        let along = self.in_joint_space();
         if let Some(stop) = &mut self.stopping {
-            stop.along = Along::Joints(velocity);
+            stop.along = along;
             stop.brake = Brake::default();
         }
+    }
+
+    /// A stop in joint space from the commanded velocity and acceleration.
+    pub fn in_joint_space(&self) -> Along {
+        Along::Joints(JointStop::new(
+            &self.velocity,
+            &self.acceleration,
+            &self.limits,
+        ))
+    }
+
+    /// The next velocity of a stop in joint space, and its brake's scale (0: at rest); `None`
+    /// if no such stop is under way.
+    pub fn next_joint_velocity(&mut self) -> Option<(Joints, f64)> {
+        let Some(Stopping {
+            along: Along::Joints(stop),
+            ..
+        }) = &mut self.stopping
+        else {
+            return None;
+        };
+        Some(stop.next(&self.velocity, &self.acceleration, &self.limits))
     }
 
     /// The stop in progress, if any.
@@ -157,19 +180,18 @@ impl Supervisor {
     /// set-points), so the next command starts from rest.
     pub fn reset(&mut self) {
         self.velocity.fill(0.0);
+        self.acceleration.fill(0.0);
         self.stopping = None;
     }
 
     /// Takes note of the command sent this tick after `previous`.
     pub fn observe(&mut self, command: &Joints, previous: &Joints) {
-        let period = self.period;
-        for ((v, c), p) in self
-            .velocity
-            .iter_mut()
-            .zip(command.iter())
-            .zip(previous.iter())
-        {
-            *v = (c - p) / period;
+        let period = self.limits.period;
+        let memory = self.velocity.iter_mut().zip(self.acceleration.iter_mut());
+        for ((v, a), (c, p)) in memory.zip(command.iter().zip(previous.iter())) {
+            let next = (c - p) / period;
+            *a = (next - *v) / period;
+            *v = next;
         }
     }
 
@@ -178,13 +200,18 @@ impl Supervisor {
         &self.velocity
     }
 
+    /// The last commanded joint acceleration.
+    pub fn acceleration(&self) -> &Joints {
+        &self.acceleration
+    }
+
     /// Eases a joint-space stop's next velocity `v` (from the command `q`) where a joint
     /// decelerating by the common fraction would not stop before its limit: that joint brakes
     /// at its own acceleration limit instead, so the range clamp never has to stop it dead.
     /// The direction of motion gives way; in joint space there is no path to keep.
     pub fn keep_within_range(&self, q: &Joints, v: &mut Joints) {
-        let t = self.period;
-        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        let t = self.limits.period;
+        let limits = self.ranges();
         let state = q.iter().zip(self.velocity.iter());
         for ((v, (q, last)), ((lo, hi), a)) in v.iter_mut().zip(state).zip(limits) {
             let left = if *v > 0.0 { hi - q } else { q - lo } - libm::fabs(*v) * t;
@@ -195,12 +222,18 @@ impl Supervisor {
         }
     }
 
+    /// Each joint's range and acceleration limit.
+    fn ranges(&self) -> impl Iterator<Item = ((&f64, &f64), &f64)> {
+        let ranges = self.min.iter().zip(self.max.iter());
+        ranges.zip(self.limits.a_max.iter())
+    }
+
     /// True if every joint, stepping from `q` to `next` this tick, can still stop before its
     /// range at its acceleration limit: a set-point that could not would end on the range
     /// clamp, a dead stop.
     pub fn can_stop_within_range(&self, q: &Joints, next: &Joints) -> bool {
-        let t = self.period;
-        let limits = self.min.iter().zip(self.max.iter()).zip(self.a_max.iter());
+        let t = self.limits.period;
+        let limits = self.ranges();
         q.iter()
             .zip(next.iter())
             .zip(limits)
@@ -211,30 +244,8 @@ impl Supervisor {
             })
     }
 
-    /// The brake's budgets for a joint velocity `nominal` at scale 1: the largest fall of the
-    /// scale per tick within every joint's acceleration limit, and the largest change of that
-    /// fall within the jerk limits (infinite without them).
+    /// The brake's budgets for a joint velocity `nominal` at scale 1 ([`StopLimits::budget`]).
     pub fn joint_budget(&self, nominal: &Joints) -> (f64, f64) {
-        let t = self.period;
-        let rate = budget(nominal, &self.a_max, t);
-        let change = self
-            .j_max
-            .map_or(f64::INFINITY, |j| budget(nominal, &j, t * t));
-        (rate, change)
+        self.limits.budget(nominal)
     }
-}
-
-/// `min_k limit_k · t / |v_k|`: how far a scale of `v` may change in a tick (∞ at rest).
-pub fn budget(v: &[f64], limit: &[f64], t: f64) -> f64 {
-    v.iter()
-        .zip(limit)
-        .map(|(v, l)| {
-            let speed = libm::fabs(*v);
-            if speed > 0.0 {
-                l * t / speed
-            } else {
-                f64::INFINITY
-            }
-        })
-        .fold(f64::INFINITY, f64::min)
 }

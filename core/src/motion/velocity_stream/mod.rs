@@ -17,7 +17,9 @@
 //!    at a margin before it ([`joint_margin`]): twists scale the whole vector (the path stays),
 //!    joint rates each joint;
 //! 3. **acceleration**: `v` moves towards the target as far as every joint's acceleration
-//!    limit allows, all joints by the same fraction ([`ramp`]);
+//!    limit allows, all joints by the same fraction ([`ramp`]); where the robot file limits
+//!    jerk, the acceleration itself ramps up and down within those limits, so a stream starts,
+//!    turns and comes to rest (at a workspace edge too) without an acceleration step;
 //! 4. **workspace**: if the tool would end outside the workspace or in an exclusion box at
 //!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
 //!    is not commanded at all (the arm holds). An arm already outside moves freely, so that it
@@ -38,6 +40,7 @@ pub use joint_margin::MARGIN_SHARE;
 
 use armgate_protocol::client::TwistFrame;
 
+use super::joint_stop::StopLimits;
 use super::workspace::Workspace;
 use crate::config::ValidRobot;
 use crate::kinematics::{Chain, Joints};
@@ -85,11 +88,14 @@ pub struct VelocityStream {
     age: u32,
     /// The joint velocity of the last set-point step.
     velocity: Joints,
+    /// The change of `velocity` over the last period.
+    acceleration: Joints,
     /// Speed limits: the lower of the joint generator's and the limiter's.
     max_speed: Joints,
     /// Acceleration limit × period: the largest velocity change per tick.
     max_change: Joints,
-    max_acceleration: Joints,
+    /// Acceleration and jerk limits.
+    limits: StopLimits,
     /// The joint limits with the margin kept.
     lower: Joints,
     upper: Joints,
@@ -113,9 +119,10 @@ impl VelocityStream {
             command: None,
             age: 0,
             velocity: Joints::zeros(config.dof()),
+            acceleration: Joints::zeros(config.dof()),
             max_speed: config.per_joint(|j| j.max_velocity.min(j.max_rate)),
             max_change: config.per_joint(|j| j.max_acceleration * period),
-            max_acceleration: config.per_joint(|j| j.max_acceleration),
+            limits: StopLimits::new(config),
             lower: config.per_joint(|j| j.min + margin(j)),
             upper: config.per_joint(|j| j.max - margin(j)),
             mid: config.per_joint(|j| 0.5 * (j.min + j.max)),
@@ -143,11 +150,14 @@ impl VelocityStream {
     pub fn halt(&mut self) {
         self.command = None;
         self.velocity.iter_mut().for_each(|v| *v = 0.0);
+        self.acceleration.iter_mut().for_each(|a| *a = 0.0);
     }
 
-    /// Takes over an arm moving at `velocity` (a stream resumed while it was being stopped).
-    pub fn resume(&mut self, velocity: &Joints) {
+    /// Takes over an arm moving at `velocity` with `acceleration` (a stream resumed while it
+    /// was being stopped).
+    pub fn resume(&mut self, velocity: &Joints, acceleration: &Joints) {
         self.velocity = *velocity;
+        self.acceleration = *acceleration;
     }
 
     /// True if the command is too old to hold on the next step: the client has gone quiet.
@@ -224,7 +234,7 @@ impl VelocityStream {
                 scaled(&rates, brake)
             }
         };
-        let mut velocity = ramp::accelerate(&self.velocity, &target, &self.max_change);
+        let mut velocity = self.ramp(&target);
         // Checked only from inside: an arm already outside (after a recalibration, at start-up)
         // may be driven out, as joint moves may.
         let allowed = |q: &Joints| workspace.allows(&tool_pose(chain, q).translation.vector);
@@ -232,7 +242,7 @@ impl VelocityStream {
         let mut inside_now = None;
         if !allowed(&self.resting_point(q, &velocity)) && *inside_now.get_or_insert(allowed(q)) {
             workspace_limit = true;
-            velocity = ramp::accelerate(&self.velocity, &Joints::zeros(q.len()), &self.max_change);
+            velocity = self.ramp(&Joints::zeros(q.len()));
         }
         let mut next = advance(q, &velocity, self.period);
         let mut pose = tool_pose(chain, &next);
@@ -248,7 +258,11 @@ impl VelocityStream {
             }
             None => self.reference.clear(),
         }
-        self.velocity = velocity;
+        let memory = self.acceleration.iter_mut().zip(self.velocity.iter_mut());
+        for ((a, last), v) in memory.zip(velocity.iter()) {
+            *a = (v - *last) / self.period;
+            *last = *v;
+        }
         StreamStep {
             q: next,
             pose,
@@ -332,20 +346,43 @@ impl VelocityStream {
             at(q),
             rate,
             (at(&self.lower), at(&self.upper)),
-            at(&self.max_acceleration),
+            at(&self.limits.a_max),
             self.period,
         )
     }
 
+    /// One tick's velocity towards `target`: within the acceleration limits, and the jerk
+    /// limits where the robot file sets them.
+    fn ramp(&self, target: &Joints) -> Joints {
+        if self.limits.j_max.is_some() {
+            ramp::accelerate_within_jerk(&self.velocity, &self.acceleration, target, &self.limits)
+        } else {
+            ramp::accelerate(&self.velocity, target, &self.max_change)
+        }
+    }
+
     /// Where the arm would come to rest if it braked from `velocity` after this tick: about
-    /// `q + v·(T + t_stop/2)`.
+    /// `q + v·(T + t_stop/2)`. With jerk limits the acceleration must first ramp out and the
+    /// brake ramps in and out: `v` grows by the step's acceleration over the longest ramp to
+    /// full acceleration, and the time by two such ramps.
     fn resting_point(&self, q: &Joints, velocity: &Joints) -> Joints {
-        let stop_time = velocity
+        let a_max = &self.limits.a_max;
+        let ramp = self.limits.j_max.map_or(0.0, |j_max| {
+            let ramps = a_max.iter().zip(j_max.iter()).map(|(a, j)| a / j);
+            ramps.fold(0.0, f64::max)
+        });
+        let mut v = *velocity;
+        if ramp > 0.0 {
+            for (v, last) in v.iter_mut().zip(self.velocity.iter()) {
+                *v += (*v - last) / self.period * ramp;
+            }
+        }
+        let stop_time = v
             .iter()
-            .zip(self.max_acceleration.iter())
+            .zip(a_max.iter())
             .map(|(v, a)| libm::fabs(*v) / a)
             .fold(0.0, f64::max);
-        advance(q, velocity, self.period + 0.5 * stop_time)
+        advance(q, &v, self.period + 0.5 * stop_time + 2.0 * ramp)
     }
 }
 
