@@ -1,5 +1,6 @@
 //! The closed-form IK requests (`KS`, `KG`): a pose's solutions, and a joint move to one.
 
+use armgate_protocol::client::banks::BANK_2;
 use armgate_protocol::client::branch::{NEAREST_BRANCH, NO_SOLUTION};
 use armgate_protocol::client::{Command, Request, VALUES};
 
@@ -22,11 +23,13 @@ fn pose_values(xyz: [f64; 3], rpy: [f64; 3], f6: f64) -> [f32; VALUES] {
 
 impl Client {
     /// `KS`: every closed-form IK solution of the pose within the joint limits, or `None` if
-    /// the robot has no closed form (docs/kinematics.md).
+    /// the robot has no closed form (docs/kinematics.md). An arm of more than six `joints`
+    /// also reads each solution's joints 7.. (bank 2).
     pub fn ik_solutions(
         &mut self,
         xyz: [f64; 3],
         rpy: [f64; 3],
+        joints: usize,
     ) -> Result<Option<Vec<IkSolution>>, ClientError> {
         let values = pose_values(xyz, rpy, 0.0);
         let mut solutions = Vec::new();
@@ -44,7 +47,15 @@ impl Client {
             if reply.index == NO_SOLUTION || f32::from(k) >= count {
                 break;
             }
-            let q = reply.values[..6].iter().map(|v| f64::from(*v)).collect();
+            let mut q: Vec<f64> = reply.values[..6].iter().map(|v| f64::from(*v)).collect();
+            if joints > 6 {
+                let upper = self.request(Request {
+                    command: Command::IkSolution,
+                    values,
+                    index: k | BANK_2,
+                })?;
+                q.extend(upper.values.iter().take(joints - 6).map(|v| f64::from(*v)));
+            }
             solutions.push(IkSolution {
                 branch: reply.index,
                 q,

@@ -480,10 +480,31 @@ fn closed_form_requests_list_choose_and_report_branches() {
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!(floats(&sq)[0], f32::from(target_branch));
     // A robot without a closed form: KS answers f6 = −1.
-    let mut iiwa = Rig::new(
-        &common::robot("iiwa14"),
-        &[0.1, 0.5, 0.0, -1.0, 0.0, 0.8, 0.0],
-    );
-    let sk = iiwa.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
+    let mut hybrid = Rig::new(&common::robot("hybrid"), &[0.0; 6]);
+    let sk = hybrid.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
     assert_eq!((floats(&sk)[6], sk[30]), (-1.0, 0xFF));
+    // A redundant arm: the solutions for the present θ3.
+    let present = [0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1];
+    let iiwa_chain = Chain::new(&common::robot("iiwa14"));
+    let mut iiwa = Rig::new(&common::robot("iiwa14"), &present);
+    let pose = iiwa_chain.forward(&present).unwrap();
+    let [r, p, y] = math::rpy(&pose.rotation);
+    let t = pose.translation.vector;
+    let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
+    let sk = iiwa.request("KS", values, 0);
+    assert!(floats(&sk)[6] >= 1.0, "{:?}", floats(&sk));
+    // Joints 7.. of the same solution: bank 2. Refused on six joints.
+    let upper = iiwa.request("KS", values, 0x80);
+    assert_eq!((&upper[..2], upper[30]), (&b"SK"[..], sk[30]));
+    let mut q: Vec<f64> = floats(&sk)[..6].iter().map(|v| f64::from(*v)).collect();
+    q.push(f64::from(floats(&upper)[0]));
+    assert!((q[2] - present[2]).abs() < 1e-6, "θ3 kept: {q:?}");
+    let reached = iiwa_chain.forward(&q).unwrap();
+    assert!((reached.translation.vector - t).norm() < 1e-5, "{q:?}");
+    assert!(rig.text("KS", values, 0x80).starts_with("ER24"));
+    let branch = iiwa_chain.branch_of(&present).unwrap();
+    assert_eq!(
+        floats(&iiwa.request("SQ", [0.0; 7], 5))[0],
+        f32::from(branch.bits())
+    );
 }

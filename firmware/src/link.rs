@@ -44,6 +44,13 @@ pub static OUTGOING: Channel<CriticalSectionRawMutex, Datagram, OUTGOING_QUEUE> 
 
 /// Event counters since boot (they wrap after 2^32).
 pub struct Counters {
+    /// Frames with a datagram to the UDP port that the network driver handed the stack
+    /// ([`crate::ingress`]).
+    pub arrived: AtomicU32,
+    /// Of those, the ones the stack dropped before the UDP server took them: its socket was
+    /// full, or it refused the datagram (a bad checksum, another destination address).
+    /// Updated whenever the server has emptied the socket ([`StackDrops`]).
+    pub stack_dropped: AtomicU32,
     /// Requests passed to the control task.
     pub received: AtomicU32,
     /// Datagrams from sources not on the allow-list (dropped).
@@ -62,6 +69,8 @@ pub struct Counters {
 impl Counters {
     const fn new() -> Self {
         Self {
+            arrived: AtomicU32::new(0),
+            stack_dropped: AtomicU32::new(0),
             received: AtomicU32::new(0),
             foreign: AtomicU32::new(0),
             requests_full: AtomicU32::new(0),
@@ -83,6 +92,30 @@ pub fn count(counter: &AtomicU32) {
 /// The current value of `counter`.
 pub fn read(counter: &AtomicU32) -> u32 {
     counter.load(Ordering::Relaxed)
+}
+
+/// The UDP server's count of the datagrams it took from its socket, and from it the stack's
+/// drops: of the datagrams that arrived for the port, those not taken once the socket is empty
+/// (the driver counts an arrival in the same executor, before the stack handles the frame, so
+/// with the socket empty every arrival so far was either taken or dropped).
+#[derive(Default)]
+pub struct StackDrops {
+    /// Datagrams taken from the socket since boot (wrapping, as the counters).
+    taken: u32,
+}
+
+impl StackDrops {
+    /// One datagram taken; with `socket_empty`, [`COUNTERS`]`.stack_dropped` is brought up to
+    /// date.
+    pub fn taken(&mut self, socket_empty: bool) {
+        self.taken = self.taken.wrapping_add(1);
+        if socket_empty {
+            let arrived = read(&COUNTERS.arrived);
+            COUNTERS
+                .stack_dropped
+                .store(arrived.wrapping_sub(self.taken), Ordering::Relaxed);
+        }
+    }
 }
 
 /// How many of the waiting requests each source holds.

@@ -18,7 +18,7 @@ use embassy_net::{Runner, Stack, StackResources};
 use static_cell::StaticCell;
 
 use crate::ingress::{FRAMES_PER_POLL, Paced};
-use crate::link::{COUNTERS, Datagram, count, offer};
+use crate::link::{COUNTERS, Datagram, StackDrops, count, offer};
 use crate::sender;
 use crate::settings::{ALLOW, ALLOW_LOCAL, Network, PORT};
 
@@ -109,12 +109,14 @@ pub async fn udp_server(stack: Stack<'static>) {
 }
 
 /// Takes the datagrams the stack received, for ever: those from allowed sources are offered to
-/// the control task, the others counted.
+/// the control task, the others counted, and what the stack dropped before them too.
 async fn receive(stack: Stack<'static>, socket: &mut UdpSocket<'_>) {
+    let mut drops = StackDrops::default();
     loop {
         let request = socket
             .recv_from_with(|payload, meta| Datagram::new(payload, meta.endpoint.into()))
             .await;
+        drops.taken(!socket.may_recv());
         if !allowed(stack, request.peer.ip()) {
             count(&COUNTERS.foreign);
         } else if offer(request) {

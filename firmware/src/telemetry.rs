@@ -78,7 +78,7 @@ pub async fn run(stack: Stack<'static>) {
             s.signing.dropped_replayed,
         );
         defmt::info!(
-            "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} unreachable, {} relay",
+            "status: link {}, {} {}, drives {=str} ({=str}), xyz {=f64} {=f64} {=f64} m | {} ticks, {} overruns, {} errors, compute mean {} us max {} us, wake latency max {} us | {} requests; rx {} dropped: {} in the stack, {} foreign, {} queue full, {} replies full, {} unaddressed, {} send errors, {} unreachable, {} relay",
             if stack.is_link_up() { "up" } else { "down" },
             s.mode.name(),
             if s.moving { "moving" } else { "holding" },
@@ -95,6 +95,7 @@ pub async fn run(stack: Stack<'static>) {
             s.wake_latency_max_us,
             s.requests,
             read(&COUNTERS.received),
+            read(&COUNTERS.stack_dropped),
             read(&COUNTERS.foreign),
             read(&COUNTERS.requests_full),
             read(&COUNTERS.outgoing_full),

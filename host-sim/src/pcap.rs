@@ -13,7 +13,12 @@
 //!
 //! The capture is process-wide (like a logger), so that the bus and the socket code only make
 //! one call each: [`udp`] and [`can`] do nothing until [`Capture::start`].
+//!
+//! The pcapng blocks are pcap-file's, the IP and UDP headers etherparse's. pcap-file 2 writes
+//! packet timestamps in nanoseconds whatever the interface's resolution says, so both interfaces
+//! declare nanoseconds (`if_tsresol` 9).
 
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::net::{IpAddr, SocketAddr};
@@ -25,6 +30,14 @@ use std::thread::JoinHandle;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use armgate_protocol::can::CanFrame;
+use etherparse::PacketBuilder;
+use pcap_file::pcapng::PcapNgWriter;
+use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketBlock;
+use pcap_file::pcapng::blocks::interface_description::{
+    InterfaceDescriptionBlock, InterfaceDescriptionOption,
+};
+use pcap_file::pcapng::blocks::section_header::{SectionHeaderBlock, SectionHeaderOption};
+use pcap_file::{DataLink, Endianness};
 
 /// Records queued for the writer at most (at most 192 bytes each, so about 1.5 MiB).
 const QUEUE: usize = 8192;
@@ -33,16 +46,17 @@ const IDLE_FLUSH: Duration = Duration::from_millis(200);
 /// The largest UDP payload captured whole (the protocol's datagrams are 31 bytes).
 const MAX_PAYLOAD: usize = 64;
 
-/// pcapng block types and link types.
-const SECTION_HEADER: u32 = 0x0A0D_0D0A;
-const INTERFACE_DESCRIPTION: u32 = 1;
-const ENHANCED_PACKET: u32 = 6;
-const BYTE_ORDER_MAGIC: u32 = 0x1A2B_3C4D;
-const LINKTYPE_RAW: u16 = 101;
-const LINKTYPE_CAN_SOCKETCAN: u16 = 227;
+/// The file's interfaces, in order: raw IP packets (`LINKTYPE_RAW`) and SocketCAN frames.
+const INTERFACES: [(DataLink, &str); 2] =
+    [(DataLink::RAW, "udp"), (DataLink::CAN_SOCKETCAN, "can")];
 /// Interface numbers in this file.
 const IP_INTERFACE: u32 = 0;
 const CAN_INTERFACE: u32 = 1;
+/// `if_tsresol` 9: timestamps in nanoseconds, as pcap-file writes them.
+const NANOSECONDS: u8 = 9;
+
+/// The capture file.
+type Writer = PcapNgWriter<BufWriter<File>>;
 
 /// One thing to write.
 enum Record {
@@ -79,9 +93,8 @@ impl Capture {
     /// Creates `path`, writes the file header and starts the writer thread. Only one capture
     /// per process.
     pub fn start(path: &Path) -> io::Result<Self> {
-        let mut out = BufWriter::new(File::create(path)?);
-        write_header(&mut out)?;
-        out.flush()?;
+        let mut out = header(BufWriter::new(File::create(path)?))?;
+        out.get_mut().flush()?;
         let (sender, receiver) = sync_channel(QUEUE);
         QUEUE_TO_WRITER
             .set(Queue {
@@ -161,13 +174,13 @@ pub fn can(frame: &CanFrame) {
 }
 
 /// The writer thread: writes records until [`Record::Finish`] or until every sender is gone.
-fn write_records(mut out: BufWriter<File>, receiver: &Receiver<Record>) -> io::Result<u64> {
+fn write_records(mut out: Writer, receiver: &Receiver<Record>) -> io::Result<u64> {
     let mut written = 0;
     loop {
         let record = match receiver.recv_timeout(IDLE_FLUSH) {
             Ok(record) => record,
             Err(RecvTimeoutError::Timeout) => {
-                out.flush()?;
+                out.get_mut().flush()?;
                 continue;
             }
             Err(RecvTimeoutError::Disconnected) => Record::Finish,
@@ -180,14 +193,14 @@ fn write_records(mut out: BufWriter<File>, receiver: &Receiver<Record>) -> io::R
                 len,
                 payload,
             } => {
-                let packet = ip_udp_packet(from, to, payload.get(..len).unwrap_or_default());
+                let packet = ip_udp_packet(from, to, payload.get(..len).unwrap_or_default())?;
                 write_packet(&mut out, IP_INTERFACE, at, &packet)?;
             }
             Record::Can { at, frame } => {
                 write_packet(&mut out, CAN_INTERFACE, at, &socketcan_frame(&frame))?;
             }
             Record::Finish => {
-                out.flush()?;
+                out.get_mut().flush()?;
                 return Ok(written);
             }
         }
@@ -195,74 +208,46 @@ fn write_records(mut out: BufWriter<File>, receiver: &Receiver<Record>) -> io::R
     }
 }
 
-/// Section header and the two interface descriptions.
-fn write_header(out: &mut impl Write) -> io::Result<()> {
-    let mut shb = Vec::new();
-    shb.extend_from_slice(&BYTE_ORDER_MAGIC.to_le_bytes());
-    shb.extend_from_slice(&1u16.to_le_bytes()); // major version
-    shb.extend_from_slice(&0u16.to_le_bytes()); // minor version
-    shb.extend_from_slice(&(-1i64).to_le_bytes()); // section length unknown
-    push_option(&mut shb, 4, b"armgate-sim"); // shb_userappl
-    push_option(&mut shb, 0, b""); // opt_endofopt
-    write_block(out, SECTION_HEADER, &shb)?;
-    for (link, name) in [
-        (LINKTYPE_RAW, &b"udp"[..]),
-        (LINKTYPE_CAN_SOCKETCAN, &b"can"[..]),
-    ] {
-        let mut idb = Vec::new();
-        idb.extend_from_slice(&link.to_le_bytes());
-        idb.extend_from_slice(&0u16.to_le_bytes()); // reserved
-        idb.extend_from_slice(&0u32.to_le_bytes()); // snap length: unlimited
-        push_option(&mut idb, 2, name); // if_name
-        push_option(&mut idb, 0, b"");
-        write_block(out, INTERFACE_DESCRIPTION, &idb)?;
+/// The section header and the two interface descriptions, written to `out`.
+fn header<W: Write>(out: W) -> io::Result<PcapNgWriter<W>> {
+    let section = SectionHeaderBlock {
+        endianness: Endianness::Little,
+        options: vec![SectionHeaderOption::UserApplication("armgate-sim".into())],
+        ..SectionHeaderBlock::default()
+    };
+    let mut writer = PcapNgWriter::with_section_header(out, section).map_err(io::Error::other)?;
+    for (linktype, name) in INTERFACES {
+        let interface = InterfaceDescriptionBlock {
+            linktype,
+            snaplen: 0,
+            options: vec![
+                InterfaceDescriptionOption::IfName(name.into()),
+                InterfaceDescriptionOption::IfTsResol(NANOSECONDS),
+            ],
+        };
+        writer
+            .write_pcapng_block(interface)
+            .map_err(io::Error::other)?;
     }
-    Ok(())
+    Ok(writer)
 }
 
-/// An enhanced packet block; timestamps in microseconds (the default `if_tsresol`).
-fn write_packet(
-    out: &mut impl Write,
+/// An enhanced packet block on `interface`, stamped `at`.
+fn write_packet<W: Write>(
+    out: &mut PcapNgWriter<W>,
     interface: u32,
     at: SystemTime,
     packet: &[u8],
 ) -> io::Result<()> {
-    let micros = at
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| u64::try_from(d.as_micros()).unwrap_or(u64::MAX));
-    let len = u32::try_from(packet.len()).map_err(io::Error::other)?;
-    let mut body = Vec::with_capacity(20 + packet.len() + 3);
-    body.extend_from_slice(&interface.to_le_bytes());
-    body.extend_from_slice(&((micros >> 32) as u32).to_le_bytes());
-    body.extend_from_slice(&(micros as u32).to_le_bytes());
-    body.extend_from_slice(&len.to_le_bytes()); // captured
-    body.extend_from_slice(&len.to_le_bytes()); // original
-    body.extend_from_slice(packet);
-    pad(&mut body);
-    write_block(out, ENHANCED_PACKET, &body)
-}
-
-/// A block: type, total length, body (already padded to 4 bytes), total length again.
-fn write_block(out: &mut impl Write, kind: u32, body: &[u8]) -> io::Result<()> {
-    let total = u32::try_from(body.len() + 12).map_err(io::Error::other)?;
-    out.write_all(&kind.to_le_bytes())?;
-    out.write_all(&total.to_le_bytes())?;
-    out.write_all(body)?;
-    out.write_all(&total.to_le_bytes())
-}
-
-/// An option: code, length, value padded to 4 bytes.
-fn push_option(block: &mut Vec<u8>, code: u16, value: &[u8]) {
-    block.extend_from_slice(&code.to_le_bytes());
-    block.extend_from_slice(&(value.len() as u16).to_le_bytes());
-    block.extend_from_slice(value);
-    pad(block);
-}
-
-fn pad(bytes: &mut Vec<u8>) {
-    while !bytes.len().is_multiple_of(4) {
-        bytes.push(0);
-    }
+    let block = EnhancedPacketBlock {
+        interface_id: interface,
+        timestamp: at.duration_since(UNIX_EPOCH).unwrap_or_default(),
+        original_len: u32::try_from(packet.len()).map_err(io::Error::other)?,
+        data: Cow::Borrowed(packet),
+        options: vec![],
+    };
+    out.write_pcapng_block(block).map_err(io::Error::other)?;
+    Ok(())
 }
 
 /// The 16-byte SocketCAN `struct can_frame` as pcap stores it: the identifier big-endian, the
@@ -278,99 +263,44 @@ fn socketcan_frame(frame: &CanFrame) -> [u8; 16] {
     out
 }
 
-/// An IPv4 or IPv6 packet with a UDP header around `payload`. Mixed address families (which
-/// a socket never produces) are written as IPv4 with unspecified addresses.
-fn ip_udp_packet(from: SocketAddr, to: SocketAddr, payload: &[u8]) -> Vec<u8> {
-    let udp_len = (8 + payload.len()) as u16;
-    let mut udp = Vec::with_capacity(usize::from(udp_len));
-    udp.extend_from_slice(&from.port().to_be_bytes());
-    udp.extend_from_slice(&to.port().to_be_bytes());
-    udp.extend_from_slice(&udp_len.to_be_bytes());
-    udp.extend_from_slice(&[0, 0]); // checksum, filled in below
-    udp.extend_from_slice(payload);
-    let mut packet = Vec::with_capacity(40 + udp.len());
-    let pseudo_header: Vec<u8> = match (from.ip(), to.ip()) {
-        (IpAddr::V6(src), IpAddr::V6(dst)) => {
-            packet.extend_from_slice(&[0x60, 0, 0, 0]); // version 6
-            packet.extend_from_slice(&udp_len.to_be_bytes()); // payload length
-            packet.extend_from_slice(&[17, 64]); // next header UDP, hop limit
-            packet.extend_from_slice(&src.octets());
-            packet.extend_from_slice(&dst.octets());
-            [
-                &src.octets()[..],
-                &dst.octets()[..],
-                &[0, 0],
-                &udp_len.to_be_bytes(),
-                &[0, 17],
-            ]
-            .concat()
-        }
+/// An IPv4 or IPv6 packet with a UDP header around `payload`, checksums included. Mixed
+/// address families (which a socket never produces) are written as IPv4 with unspecified
+/// addresses.
+fn ip_udp_packet(from: SocketAddr, to: SocketAddr, payload: &[u8]) -> io::Result<Vec<u8>> {
+    let ip = match (from.ip(), to.ip()) {
+        (IpAddr::V6(src), IpAddr::V6(dst)) => PacketBuilder::ipv6(src.octets(), dst.octets(), 64),
         (src, dst) => {
             let v4 = |ip: IpAddr| match ip {
                 IpAddr::V4(a) => a.octets(),
                 IpAddr::V6(_) => [0; 4],
             };
-            let (src, dst) = (v4(src), v4(dst));
-            let total = 20 + udp_len;
-            let mut header = [0u8; 20];
-            let fields = [
-                &[0x45, 0][..],           // version 4, 20-byte header; DSCP
-                &total.to_be_bytes(),     // total length
-                &[0, 0, 0x40, 0, 64, 17], // id 0, don't fragment, TTL 64, UDP
-                &[0, 0],                  // header checksum, filled in below
-                &src,
-                &dst,
-            ];
-            header
-                .iter_mut()
-                .zip(fields.concat())
-                .for_each(|(h, b)| *h = b);
-            let sum = checksum(&[&header]);
-            put(&mut header, 10, sum);
-            packet.extend_from_slice(&header);
-            [&src[..], &dst[..], &[0, 17], &udp_len.to_be_bytes()].concat()
+            PacketBuilder::ipv4(v4(src), v4(dst), 64)
         }
     };
-    let sum = match checksum(&[&pseudo_header, &udp]) {
-        0 => 0xFFFF, // 0 means "no checksum" in UDP
-        sum => sum,
-    };
-    put(&mut udp, 6, sum);
-    packet.extend_from_slice(&udp);
-    packet
-}
-
-/// Writes `value` big-endian at `at` (a checksum field inside a header built above).
-fn put(bytes: &mut [u8], at: usize, value: u16) {
-    if let Some(field) = bytes.get_mut(at..at + 2) {
-        field
-            .iter_mut()
-            .zip(value.to_be_bytes())
-            .for_each(|(f, v)| *f = v);
-    }
-}
-
-/// The Internet checksum (RFC 1071) over the concatenation of `parts` (each even-length but
-/// the last).
-fn checksum(parts: &[&[u8]]) -> u16 {
-    let mut sum: u32 = parts
-        .iter()
-        .flat_map(|p| p.chunks(2))
-        .map(|pair| match *pair {
-            [a, b] => u32::from(u16::from_be_bytes([a, b])),
-            [a] => u32::from(a) << 8,
-            _ => 0,
-        })
-        .sum();
-    while sum > 0xFFFF {
-        sum = (sum & 0xFFFF) + (sum >> 16);
-    }
-    !(sum as u16)
+    let udp = ip.udp(from.port(), to.port());
+    let mut packet = Vec::with_capacity(udp.size(payload.len()));
+    udp.write(&mut packet, payload).map_err(io::Error::other)?;
+    Ok(packet)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pcap_file::pcapng::{Block, PcapNgReader};
+
+    /// The Internet checksum (RFC 1071) over the concatenation of `parts`, each even-length:
+    /// 0 over a header (or pseudo header and datagram) whose checksum is right.
+    fn checksum(parts: &[&[u8]]) -> u16 {
+        let mut sum: u32 = parts
+            .iter()
+            .flat_map(|p| p.chunks(2))
+            .map(|pair| u32::from(u16::from_be_bytes([pair[0], *pair.get(1).unwrap_or(&0)])))
+            .sum();
+        while sum > 0xFFFF {
+            sum = (sum & 0xFFFF) + (sum >> 16);
+        }
+        !(sum as u16)
+    }
 
     #[test]
     fn the_queue_is_bounded_in_bytes() {
@@ -383,16 +313,17 @@ mod tests {
             "127.0.0.1:40000".parse().unwrap(),
             "127.0.0.1:7031".parse().unwrap(),
             b"PS",
-        );
+        )
+        .unwrap();
         assert_eq!(packet.len(), 20 + 8 + 2);
         assert_eq!(packet[0], 0x45);
         assert_eq!(packet[9], 17);
-        // A header with a correct checksum sums to zero.
         assert_eq!(checksum(&[&packet[..20]]), 0);
         assert_eq!(&packet[20..24], &[0x9C, 0x40, 0x1B, 0x77]);
         // The UDP checksum verifies over the pseudo header too.
         let pseudo = [&packet[12..20], &[0, 17, 0, 10]].concat();
         assert_eq!(checksum(&[&pseudo, &packet[20..]]), 0);
+        assert_eq!(&packet[28..], b"PS");
     }
 
     #[test]
@@ -400,13 +331,14 @@ mod tests {
         let packet = ip_udp_packet(
             "[::1]:7031".parse().unwrap(),
             "[::1]:5000".parse().unwrap(),
-            &[1, 2, 3],
-        );
-        assert_eq!(packet.len(), 40 + 8 + 3);
+            &[1, 2, 3, 4],
+        )
+        .unwrap();
+        assert_eq!(packet.len(), 40 + 8 + 4);
         assert_eq!(packet[0] >> 4, 6);
         assert_eq!(packet[6], 17);
         assert_eq!(packet[39], 1);
-        let pseudo = [&packet[8..40], &[0, 0, 0, 11, 0, 0, 0, 17]].concat();
+        let pseudo = [&packet[8..40], &[0, 0, 0, 12, 0, 0, 0, 17]].concat();
         assert_eq!(checksum(&[&pseudo, &packet[40..]]), 0);
     }
 
@@ -421,21 +353,44 @@ mod tests {
 
     #[test]
     fn blocks_are_padded_and_framed() {
-        let mut out = Vec::new();
-        write_header(&mut out).unwrap();
-        write_packet(&mut out, 1, UNIX_EPOCH + Duration::from_micros(5), &[9; 5]).unwrap();
+        let mut out = header(Vec::new()).unwrap();
+        let at = UNIX_EPOCH + Duration::from_micros(1_700_000_000_000_005);
+        write_packet(&mut out, CAN_INTERFACE, at, &[9; 5]).unwrap();
+        let out = out.into_inner();
         // Walk the blocks by their lengths: both length fields agree, every block is aligned.
-        let mut at = 0;
+        let mut offset = 0;
         let mut kinds = vec![];
-        while at < out.len() {
+        while offset < out.len() {
             let word = |i: usize| u32::from_le_bytes(out[i..i + 4].try_into().unwrap());
-            let len = word(at + 4) as usize;
+            let len = word(offset + 4) as usize;
             assert_eq!(len % 4, 0);
-            assert_eq!(word(at + len - 4) as usize, len);
-            kinds.push(word(at));
-            at += len;
+            assert_eq!(word(offset + len - 4) as usize, len);
+            kinds.push(word(offset));
+            offset += len;
         }
-        assert_eq!(kinds, [SECTION_HEADER, 1, 1, ENHANCED_PACKET]);
-        assert_eq!(at, out.len());
+        // Section header, two interface descriptions, an enhanced packet.
+        assert_eq!(kinds, [0x0A0D_0D0A, 1, 1, 6]);
+        assert_eq!(offset, out.len());
+        // Read back: the interfaces, the packet on the CAN one at its time (nanoseconds, as
+        // its interface declares).
+        let mut reader = PcapNgReader::new(&out[..]).unwrap();
+        let mut links = vec![];
+        while let Some(block) = reader.next_block() {
+            match block.unwrap() {
+                Block::InterfaceDescription(i) => {
+                    assert!(
+                        i.options
+                            .contains(&InterfaceDescriptionOption::IfTsResol(9))
+                    );
+                    links.push(i.linktype);
+                }
+                Block::EnhancedPacket(p) => {
+                    assert_eq!((p.interface_id, &p.data[..]), (1, &[9; 5][..]));
+                    assert_eq!(p.timestamp, at.duration_since(UNIX_EPOCH).unwrap());
+                }
+                _ => {}
+            }
+        }
+        assert_eq!(links, [DataLink::RAW, DataLink::CAN_SOCKETCAN]);
     }
 }

@@ -329,17 +329,23 @@ class Arm:
     def ik_solutions(self, pose: PoseLike) -> Optional[List[Tuple[int, List[float]]]]:
         """Every closed-form IK solution of ``pose`` within the joint limits (``KS``), as
         (branch bits, joints) pairs; branch bit 1 shoulder, 2 elbow, 4 wrist. None if the robot
-        has no closed form (docs/kinematics.md)."""
+        has no closed form (docs/kinematics.md). On an arm of more than six joints a second
+        ``KS`` with index bit 7 reads each solution's joints 7.. (bank 2); its solutions are
+        those for the present values of the redundancy parameters (θ3, and θ5 on eight)."""
         goal = as_pose(pose)
         values = goal.xyz + goal.rpy
         first = self.request("KS", values, 0)
         count = int(first.values[6])
         if count < 0:
             return None
+        joints = self.joint_count
         solutions = []
         for k in range(count):
             reply = first if k == 0 else self.request("KS", values, k)
-            solutions.append((reply.index, list(reply.values[:6])))
+            q = list(reply.values[:6])
+            if joints > 6:
+                q += list(self.request("KS", values, k | wire.BANK2).values[: joints - 6])
+            solutions.append((reply.index, q))
         return solutions
 
     def move_j_to_pose(

@@ -148,6 +148,17 @@ def test_ik_solutions_and_a_joint_move_on_a_chosen_branch(mk1) -> None:  # type:
         assert math.dist(arm.get_joints(), target) <= 0.001
 
 
+def test_ik_solutions_of_a_seven_joint_arm_are_whole(sim_factory) -> None:  # type: ignore[no-untyped-def]
+    iiwa = sim_factory("iiwa14")
+    with armgate.Arm("127.0.0.1", port=iiwa.port) as arm:
+        q = arm.get_joints()
+        solutions = arm.ik_solutions(arm.get_tcp_pose())
+        assert solutions is not None and len(solutions) >= 1
+        assert all(len(s) == 7 for _, s in solutions)
+        # The solutions for the present θ3 (the redundancy parameter): the present joints too.
+        assert any(math.dist(s, q) < 1e-3 for _, s in solutions)
+
+
 def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         arm.set_mode("joint")

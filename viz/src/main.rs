@@ -17,7 +17,9 @@ use clap::{Parser, Subcommand};
 
 /// See the arm: URDF export and MCAP recordings for 3-D viewers such as Foxglove.
 #[derive(Debug, Parser)]
-#[command(name = "armgate-viz", version)]
+// Run as `armgate urdf` and `armgate record` (the client passes the arguments on): their usage
+// says so.
+#[command(name = "armgate-viz", bin_name = "armgate", version)]
 struct Cli {
     #[command(subcommand)]
     command: Cmd,

@@ -1,6 +1,7 @@
 //! The closed-form IK requests: `KG` (a joint move to a Cartesian goal on a chosen branch),
 //! `KS` (read one of a pose's solutions) and `SQ` 5 (the present branch).
 
+use armgate_protocol::client::banks::{BANK_2, WRITE_JOINTS as BANK_LEN};
 use armgate_protocol::client::branch::{BRANCH_INDEX, NEAREST_BRANCH, NO_CLOSED_FORM, NO_SOLUTION};
 use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 
@@ -61,13 +62,19 @@ pub(super) fn goal(
 }
 
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the
-/// branch in the index), each joint on the turn nearest `reference`.
+/// branch in the index), each joint on the turn nearest `reference`. `index` is `k`, with
+/// [`BANK_2`] for joints 7.. in f0.. (refused on six joints or fewer, as for `jP`); on a
+/// redundant arm the solutions are those for the present values of its redundancy parameters.
 pub(super) fn solution(
     chain: &Chain,
     reference: &Joints,
     v: &[f64; VALUES],
-    k: u8,
+    index: u8,
 ) -> Result<Reply, IkRequestError> {
+    let (k, bank_2) = (index & !BANK_2, index & BANK_2 != 0);
+    if bank_2 && chain.dof() <= BANK_LEN {
+        return Err(IkRequestError::BadIndex);
+    }
     let target = pose(v)?;
     let mut values = [0.0f32; VALUES];
     let Ok(solutions) = chain.solve_all(&target, reference) else {
@@ -78,7 +85,8 @@ pub(super) fn solution(
     let Some(found) = solutions.get(usize::from(k)) else {
         return Ok(reply(Command::IkSolution, values, NO_SOLUTION));
     };
-    for (o, q) in values.iter_mut().zip(found.q.iter()).take(VALUES - 1) {
+    let joints = found.q.iter().skip(if bank_2 { BANK_LEN } else { 0 });
+    for (o, q) in values.iter_mut().zip(joints).take(VALUES - 1) {
         *o = *q as f32;
     }
     Ok(reply(Command::IkSolution, values, found.branch.bits()))

@@ -15,7 +15,7 @@ use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
 use super::subproblems::{Angle, sp4};
-use super::{spherical_wrist, three_parallel};
+use super::{spherical_shoulder, spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::math::Frame;
@@ -31,11 +31,17 @@ pub const CHECK: f64 = 1e-9;
 const POLISH_FROM: f64 = 1e-5;
 /// Newton steps that polish a solution of the ideal model on a calibrated chain.
 const POLISH_ITERATIONS: u16 = 20;
+/// Most re-solves of the ideal model that carry a root to a calibrated chain ([`Chain::refine`]).
+const REFINE_STEPS: usize = 4;
+/// A miss (m, rad) below which a carried root is left to Newton's polish.
+const REFINED: f64 = 1e-7;
 
 /// A configuration branch of a closed-form family: which root each of the three two-way
-/// choices took. Bit 0 is the shoulder (the second root of θ1), bit 1 the elbow (of θ3), bit
-/// 2 the wrist (of θ4, θ5 for a spherical wrist; of θ5 for three parallel axes). Flipping a bit
-/// gives the mirrored configuration: shoulder left/right, elbow up/down, wrist flipped.
+/// choices took. Bit 0 is the shoulder (the second root of θ1; of θ1, θ2 for a spherical
+/// shoulder), bit 1 the elbow (of θ3; of θ4 for a spherical shoulder), bit 2 the wrist (of θ4,
+/// θ5 for a spherical wrist; of θ5 for three parallel axes; of the wrist's first two solved
+/// joints for a spherical shoulder). Flipping a bit gives the mirrored configuration: shoulder
+/// left/right, elbow up/down, wrist flipped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Branch(u8);
 
@@ -80,19 +86,44 @@ pub struct BranchSolution {
 /// Every solution of a closed-form solve.
 pub type Solutions = Vec<BranchSolution, MAX_SOLUTIONS>;
 
-/// A candidate of a family solver: angles of the six joints and the branch.
+/// A candidate of a family solver: angles of the joints (zero past the last) and the branch.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Candidate {
-    pub angles: [Angle; 6],
+    pub angles: [Angle; MAX_JOINTS],
     /// The values of the angles a solver already took (`atan2` once for a root that several
     /// candidates share); NaN where not.
-    pub values: [f64; 6],
+    pub values: [f64; MAX_JOINTS],
     pub branch: Branch,
 }
 
 impl Candidate {
-    /// A candidate of `angles` on `branch`, with the `known` values (NaN: not taken yet).
+    /// A candidate of a six-joint arm's `angles` on `branch`, with the `known` values (NaN:
+    /// not taken yet).
     pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch) -> Self {
+        let zero = Angle { cos: 1.0, sin: 0.0 };
+        let mut all = Self::of_joints([zero; MAX_JOINTS], [0.0; MAX_JOINTS], branch);
+        let slots = all.angles.iter_mut().zip(all.values.iter_mut());
+        for ((a, v), (x, k)) in slots.zip(angles.into_iter().zip(known)) {
+            (*a, *v) = (x, k);
+        }
+        all
+    }
+
+    /// The sine and cosine of every angle, as FK by trigonometry takes them.
+    pub fn sin_cos(&self) -> [(f64, f64); MAX_JOINTS] {
+        let mut out = [(0.0, 1.0); MAX_JOINTS];
+        for (sc, a) in out.iter_mut().zip(&self.angles) {
+            *sc = (a.sin, a.cos);
+        }
+        out
+    }
+
+    /// A candidate of every joint's `angles` (and `known` values, NaN where not taken).
+    pub fn of_joints(
+        angles: [Angle; MAX_JOINTS],
+        known: [f64; MAX_JOINTS],
+        branch: Branch,
+    ) -> Self {
         Self {
             angles,
             values: known,
@@ -194,15 +225,50 @@ impl Chain {
             .map(|e| e.solution))
     }
 
-    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors.
+    /// [`solve_nearest`](Self::solve_nearest) with the solution's errors. A redundant chain
+    /// whose parameters have no solution at the reference's values takes the first values of a
+    /// sweep across their ranges that has one.
     pub(super) fn nearest_exact(
         &self,
         target: &Frame,
         reference: &[f64],
         branch: Option<Branch>,
     ) -> Result<Option<Exact>, IkError> {
-        let (form, reference, candidates) = self.candidates(target, reference, false)?;
-        let mut near = [Angle::of(0.0); 6];
+        let mut clamped = [0.0; MAX_JOINTS];
+        self.prepare(target, reference, &mut clamped)?;
+        let reference = clamped;
+        let found = self.nearest_for(target, &reference, branch)?;
+        let redundant = self
+            .closed_form()
+            .filter(|form| form.fit.family == Family::SphericalShoulder);
+        let Some(form) = redundant.filter(|_| found.is_none()) else {
+            return Ok(found);
+        };
+        if !spherical_shoulder::elbow_reaches(form, target) {
+            return Ok(None);
+        }
+        // The first reference of the sweep is the one just tried.
+        for k in 1..spherical_shoulder::SWEEP_TRIES {
+            let Some(values) = spherical_shoulder::swept(self, &reference, k) else {
+                break;
+            };
+            if let Some(found) = self.nearest_for(target, &values, branch)? {
+                return Ok(Some(found));
+            }
+        }
+        Ok(None)
+    }
+
+    /// The nearest solution for `reference`'s redundancy parameters.
+    fn nearest_for(
+        &self,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+        branch: Option<Branch>,
+    ) -> Result<Option<Exact>, IkError> {
+        let dof = reference.get(..self.dof()).unwrap_or(&[]);
+        let (form, reference, candidates) = self.candidates(target, dof, false)?;
+        let mut near = [Angle::of(0.0); MAX_JOINTS];
         for (a, r) in near.iter_mut().zip(&reference) {
             *a = Angle::of(*r);
         }
@@ -273,21 +339,89 @@ impl Chain {
         let mut clamped = [0.0; MAX_JOINTS];
         self.prepare(target, reference, &mut clamped)?;
         let mut candidates = Candidates::new();
+        self.candidates_of(form, target, &clamped, nearest, &mut candidates);
+        Ok((form, clamped, candidates))
+    }
+
+    /// The candidates of `form` for a checked `reference`, written to `out`.
+    fn candidates_of(
+        &self,
+        form: &ClosedForm,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+        nearest: bool,
+        out: &mut Candidates,
+    ) {
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, &clamped, nearest, &mut candidates);
+                spherical_wrist::solve(form, target, reference, nearest, out);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, &clamped, nearest, &mut candidates);
+                three_parallel::solve(form, target, reference, nearest, out);
+            }
+            Family::SphericalShoulder => {
+                spherical_shoulder::solve(form, self.dof(), target, reference, nearest, out);
             }
             Family::Numeric => {}
         }
-        Ok((form, clamped, candidates))
+    }
+
+    /// A chain only near its family: `candidate`, a root of the ideal model, carried towards
+    /// the true chain's root on the same branch. With `D(q)` the true chain's pose relative to
+    /// the ideal model's at `q` (slowly varying: the deviation is small), the true chain
+    /// reaches `target` where the ideal model reaches `target · D(q)⁻¹`; so the ideal model is
+    /// solved again for that corrected target, following the previous root at every choice
+    /// (away from singularities a miss of 1e-3 falls below 1e-7 within the four passes, where
+    /// Newton takes over). Unlike Newton steps on the true chain,
+    /// this cannot slide to another branch near a singularity, where the ideal model's wrist
+    /// angles can be ~0.1 rad off the true ones.
+    fn refine(&self, form: &ClosedForm, candidate: &Candidate, target: &Frame) -> Candidate {
+        let mut current = *candidate;
+        let mut ideal = *target;
+        for _ in 0..REFINE_STEPS {
+            let reached = self.pose_by_trig(&current.sin_cos());
+            let (position, rotation) = misses(&reached, target);
+            if position.max(rotation) <= REFINED {
+                break;
+            }
+            ideal = target * reached.inverse() * ideal;
+            let mut free = [0.0; MAX_JOINTS];
+            for (f, a) in free.iter_mut().zip(&current.angles) {
+                *f = a.value();
+            }
+            let mut next = Candidates::new();
+            self.candidates_of(form, &ideal, &free, true, &mut next);
+            let Some(found) = next.first() else {
+                break;
+            };
+            current = Candidate {
+                branch: candidate.branch,
+                ..*found
+            };
+        }
+        current
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
     /// approximate, if it is within the limits and reproduces `target`.
     fn finish(
+        &self,
+        form: &ClosedForm,
+        candidate: &Candidate,
+        target: &Frame,
+        reference: &[f64; MAX_JOINTS],
+    ) -> Option<Exact> {
+        if form.fit.is_exact() {
+            return self.verify(form, candidate, target, reference);
+        }
+        // The carried root; failing that, Newton steps from the ideal model's own.
+        let refined = self.refine(form, candidate, target);
+        self.verify(form, &refined, target, reference)
+            .or_else(|| self.verify(form, candidate, target, reference))
+    }
+
+    /// [`finish`](Self::finish) of a candidate as it is.
+    fn verify(
         &self,
         form: &ClosedForm,
         candidate: &Candidate,
@@ -317,12 +451,8 @@ impl Chain {
         if !form.fit.is_exact() {
             q = self.polish(target, &q)?;
         }
-        let mut sin_cos = [(0.0, 1.0); MAX_JOINTS];
-        for (sc, a) in sin_cos.iter_mut().zip(&candidate.angles) {
-            *sc = (a.sin, a.cos);
-        }
         let reached = if form.fit.is_exact() {
-            self.pose_by_trig(&sin_cos)
+            self.pose_by_trig(&candidate.sin_cos())
         } else {
             self.pose(&q)
         };

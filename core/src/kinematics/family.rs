@@ -22,7 +22,7 @@ const NEAR_SLACK: f64 = 0.05;
 /// Two axes at least this far from parallel (sine) count as distinct directions.
 const DISTINCT: f64 = 0.1;
 
-/// The closed-form families of six-revolute-joint arms.
+/// The closed-form families of revolute arms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Family {
     /// Axes 2 and 3 parallel, axes 4, 5 and 6 meeting in one point (the wrist centre); any
@@ -30,6 +30,11 @@ pub enum Family {
     SphericalWrist,
     /// Axes 2, 3 and 4 parallel, axes 5 and 6 meeting (ur5). Up to 8 solutions.
     ThreeParallel,
+    /// Seven or eight joints: axes 1–3 meeting in the shoulder, axes 5 to the last meeting in
+    /// the wrist centre, axis 4 (the elbow) through neither (iiwa14, ranger-mk2). Redundant:
+    /// θ3, and θ5 on eight joints, are parameters taken from the reference. Up to 8 solutions
+    /// for each value.
+    SphericalShoulder,
     /// No closed form here (prismatic joints, not six joints, or other geometry): the numeric
     /// solver only.
     Numeric,
@@ -76,11 +81,16 @@ impl ClosedForm {
 
     /// The family `chain` belongs to, if any.
     pub fn detect(chain: &Chain) -> Option<Self> {
-        if chain.dof() != 6 || (0..6).any(|i| chain.is_prismatic(i)) {
+        let dof = chain.dof();
+        if (0..dof).any(|i| chain.is_prismatic(i)) {
             return None;
         }
         let screws = Screws::of(chain);
-        spherical_wrist(&screws).or_else(|| three_parallel(&screws))
+        match dof {
+            6 => spherical_wrist(&screws).or_else(|| three_parallel(&screws)),
+            7 | 8 => spherical_shoulder(&screws, dof),
+            _ => None,
+        }
     }
 }
 
@@ -163,4 +173,34 @@ fn three_parallel(chain: &Screws) -> Option<ClosedForm> {
     let (centre, gap) = meeting(chain, 4, 5)?;
     through(&mut ideal, 4, 5, &centre);
     fit(Family::ThreeParallel, parallel.max(gap), ideal, centre)
+}
+
+/// Axes 1–3 through one point (the shoulder), axes 5 to `dof` through another (the wrist), the
+/// elbow's axis 4 through neither (else θ4 could not set the distance between them).
+fn spherical_shoulder(chain: &Screws, dof: usize) -> Option<ClosedForm> {
+    // The wrist's solved joints are its last three; the first of them meets the next.
+    let wrist_first = dof.checked_sub(3)?;
+    if !distinct(chain, 0, 1)
+        || !distinct(chain, wrist_first, wrist_first + 1)
+        || !distinct(chain, wrist_first + 1, wrist_first + 2)
+    {
+        return None;
+    }
+    let (shoulder, shoulder_gap) = meeting(chain, 0, 1)?;
+    let (wrist, wrist_gap) = meeting(chain, wrist_first, wrist_first + 1)?;
+    let off = |x: &Vector3<f64>, i: usize| match (chain.point.get(i), chain.axis.get(i)) {
+        (Some(p), Some(h)) => distance_to_line(x, p, h),
+        _ => f64::INFINITY,
+    };
+    if off(&shoulder, 3) <= NEAR || off(&wrist, 3) <= NEAR {
+        return None;
+    }
+    let mut deviation = shoulder_gap.max(wrist_gap).max(off(&shoulder, 2));
+    for i in 4..dof {
+        deviation = deviation.max(off(&wrist, i));
+    }
+    let mut ideal = *chain;
+    through(&mut ideal, 0, 2, &shoulder);
+    through(&mut ideal, 4, dof - 1, &wrist);
+    fit(Family::SphericalShoulder, deviation, ideal, wrist)
 }

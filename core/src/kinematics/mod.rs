@@ -18,6 +18,7 @@ mod family;
 mod ik;
 mod jacobian;
 mod screws;
+mod spherical_shoulder;
 mod spherical_wrist;
 mod subproblems;
 mod three_parallel;

@@ -4,11 +4,12 @@
 //! its two roots (the mirrored configuration); 0..=7. `KG` with [`NEAREST_BRANCH`] moves to the
 //! solution nearest the present joints, on whatever branch that is.
 
-/// Shoulder bit: the second root of θ1.
+/// Shoulder bit: the second root of θ1 (of θ1/θ2 on a 7–8 joint arm).
 pub const SHOULDER: u8 = 1;
-/// Elbow bit: the second root of θ3.
+/// Elbow bit: the second root of θ3 (of θ4 on a 7–8 joint arm).
 pub const ELBOW: u8 = 2;
-/// Wrist bit: the second root of the wrist (θ4/θ5, or θ5 for three parallel axes).
+/// Wrist bit: the second root of the wrist (θ4/θ5, θ5 for three parallel axes, θ5/θ6 or θ6/θ7
+/// on a 7–8 joint arm).
 pub const WRIST: u8 = 4;
 /// `KG` index: no branch chosen, the solution nearest the present joints.
 pub const NEAREST_BRANCH: u8 = 8;

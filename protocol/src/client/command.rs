@@ -18,7 +18,7 @@ pub enum Command {
     /// solution nearest the present joints.
     IkGoal,
     /// `KS`: read the `index`-th closed-form IK solution of the pose f0..f2, roll/pitch/yaw
-    /// f3..f5 (0 first).
+    /// f3..f5 (0 first; index bit 7, bank 2: its joints 7.. in f0..).
     IkSolution,
     /// `jB`: begin the joint motion to the stored joint goal.
     JointBegin,

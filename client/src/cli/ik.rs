@@ -1,0 +1,92 @@
+//! The inverse-kinematics subcommands: `ik` (every solution of a pose) and `ik-move`.
+
+use std::io::Write;
+
+use clap::Args;
+
+use super::CliError;
+use super::options::{PoseArgs, WaitArgs};
+use super::output::{fmt_values, follow, joint_progress, start};
+use crate::Client;
+
+/// `armgate ik` arguments.
+#[derive(Debug, Args)]
+pub struct IkArgs {
+    /// The pose.
+    #[command(flatten)]
+    pub pose: PoseArgs,
+}
+
+/// `armgate ik-move` arguments.
+#[derive(Debug, Args)]
+pub struct IkMoveArgs {
+    /// The pose.
+    #[command(flatten)]
+    pub pose: PoseArgs,
+    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist (as `armgate ik` prints them).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(0..8))]
+    pub branch: Option<u8>,
+    /// Minimum duration (s).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f64,
+    /// Waiting.
+    #[command(flatten)]
+    pub wait: WaitArgs,
+}
+
+/// `armgate ik`: KS, every solution with its branch (and its joints 7.. on an arm of more than
+/// six `joints`).
+pub(super) fn ik(
+    args: &IkArgs,
+    joints: usize,
+    client: &mut Client,
+    out: &mut impl Write,
+) -> Result<(), CliError> {
+    let IkArgs { pose } = args;
+    let (xyz, rpy) = pose.xyz_rpy();
+    let Some(solutions) = client.ik_solutions(xyz, rpy, joints)? else {
+        writeln!(out, "no closed-form IK for this robot (docs/kinematics.md)")?;
+        return Ok(());
+    };
+    writeln!(
+        out,
+        "{} solutions (branch: shoulder 1, elbow 2, wrist 4)",
+        solutions.len()
+    )?;
+    for s in &solutions {
+        writeln!(out, "  branch {} {}", s.branch, fmt_values(&s.q, 6))?;
+    }
+    Ok(())
+}
+
+/// `armgate ik-move`: KG, then wait until the joints are there.
+pub(super) fn ik_move(
+    args: &IkMoveArgs,
+    client: &mut Client,
+    out: &mut impl Write,
+) -> Result<(), CliError> {
+    let IkMoveArgs {
+        pose,
+        branch,
+        time,
+        wait,
+    } = args;
+    let (xyz, rpy) = pose.xyz_rpy();
+    let interrupt = wait.interrupt();
+    let goal = start(client, |c| c.ik_move(xyz, rpy, *branch, *time))?;
+    writeln!(
+        out,
+        "moving to {} (branch {})",
+        fmt_values(&goal.q, 4),
+        goal.branch
+    )?;
+    if wait.no_wait {
+        return Ok(());
+    }
+    let options = wait.options(*time, interrupt.as_ref());
+    let reached = follow(client, |c| {
+        c.wait_until_joints(&goal.q, &options, joint_progress)
+    })?;
+    writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
+    Ok(())
+}

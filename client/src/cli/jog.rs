@@ -1,0 +1,105 @@
+//! `armgate jog`: stream a twist (TW) or joint rates (jW) for a while, then ramp to rest.
+
+use std::io::Write;
+use std::time::Duration;
+
+use clap::Args;
+
+use super::output::settle;
+use super::{Cli, CliError, joint_count};
+use crate::banks::MAX_JOINTS;
+use crate::{Client, ClientError, TwistFrame, Velocity, interrupt};
+
+/// `armgate jog` arguments.
+#[derive(Debug, Args)]
+pub struct JogArgs {
+    /// The twist (3 or 6 values) or the joint rates (one per joint).
+    #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
+    pub values: Vec<f64>,
+    /// How long to stream (s).
+    #[arg(long = "for", default_value_t = 1.0)]
+    pub seconds: f64,
+    /// The twist is in the tool frame.
+    #[arg(long, conflicts_with = "rates")]
+    pub tool: bool,
+    /// The values are joint rates (jW), one per joint.
+    #[arg(long)]
+    pub rates: bool,
+}
+
+/// `armgate jog`: a TW or jW stream for `seconds`, then wait until the arm has ramped to rest.
+pub(super) fn jog(
+    args: &JogArgs,
+    cli: &Cli,
+    client: &mut Client,
+    out: &mut impl Write,
+) -> Result<(), CliError> {
+    let JogArgs {
+        values,
+        seconds,
+        tool,
+        rates,
+    } = args;
+    let (values, seconds, tool, rates) = (values.as_slice(), *seconds, *tool, *rates);
+    let duration = Some(seconds)
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .and_then(|s| Duration::try_from_secs_f64(s).ok())
+        .ok_or_else(|| CliError::Usage(format!("--for {seconds}: must be > 0 s")))?;
+    let velocity = if rates {
+        let n = joint_count(cli, client)?;
+        if values.len() != n {
+            return Err(CliError::Usage(format!(
+                "{} joint rates, but the arm has {n} joints",
+                values.len()
+            )));
+        }
+        Velocity::Joints(values.to_vec())
+    } else {
+        let (linear, angular) = match values {
+            [x, y, z] => ([*x, *y, *z], [0.0; 3]),
+            [x, y, z, a, b, c] => ([*x, *y, *z], [*a, *b, *c]),
+            _ => {
+                return Err(CliError::Usage(format!(
+                    "{} values: a twist is vx vy vz (m/s), optionally wx wy wz (rad/s)",
+                    values.len()
+                )));
+            }
+        };
+        let frame = if tool {
+            TwistFrame::Tool
+        } else {
+            TwistFrame::Base
+        };
+        Velocity::Twist {
+            linear,
+            angular,
+            frame,
+        }
+    };
+    // Ctrl-C ends the stream early: the arm ramps to rest as when it ends.
+    let interrupt = interrupt::ctrl_c().ok();
+    let interrupted = || interrupt.as_ref().is_some_and(interrupt::Interrupt::is_set);
+    let started = std::time::Instant::now();
+    match client.stream_for(&velocity, duration, interrupted) {
+        Ok(sent) => writeln!(
+            out,
+            "streamed {sent} commands over {:.2} s; the arm ramps to rest",
+            started.elapsed().as_secs_f64()
+        )?,
+        Err(ClientError::Interrupted) => {
+            return Err(CliError::Interrupted(
+                "stopped streaming: the arm ramps to rest".to_owned(),
+            ));
+        }
+        Err(e) => return Err(e.into()),
+    }
+    // Why the arm held where the stream would have driven it on (`WN12 jN at limit L`, `WN13`),
+    // said here rather than only on stderr: otherwise a jog at a limit looks like nothing.
+    let _ = client.poll_notices();
+    for notice in client.take_notices() {
+        writeln!(out, "notice: {notice}")?;
+    }
+    settle(client)?;
+    writeln!(out, "at rest")?;
+    Ok(())
+}

@@ -1,0 +1,168 @@
+//! The options several subcommands share: a pose, waiting for a motion, durations.
+
+use std::time::Duration;
+
+use clap::Args;
+
+use crate::banks::MAX_JOINTS;
+use crate::{WaitOptions, interrupt};
+
+/// A pose: position (m) and roll/pitch/yaw (rad).
+#[derive(Clone, Debug, Args)]
+pub struct PoseArgs {
+    /// x (m).
+    #[arg(allow_negative_numbers = true)]
+    pub x: f64,
+    /// y (m).
+    #[arg(allow_negative_numbers = true)]
+    pub y: f64,
+    /// z (m).
+    #[arg(allow_negative_numbers = true)]
+    pub z: f64,
+    /// Roll, about the base x axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub roll: f64,
+    /// Pitch, about the base y axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub pitch: f64,
+    /// Yaw, about the base z axis (rad).
+    #[arg(allow_negative_numbers = true)]
+    pub yaw: f64,
+}
+
+impl PoseArgs {
+    pub(super) fn xyz_rpy(&self) -> ([f64; 3], [f64; 3]) {
+        ([self.x, self.y, self.z], [self.roll, self.pitch, self.yaw])
+    }
+}
+
+/// Options of the commands that wait for a motion.
+#[derive(Clone, Debug, Args)]
+pub struct WaitArgs {
+    /// Return as soon as the motion has started.
+    #[arg(long)]
+    pub no_wait: bool,
+    /// Give up waiting after this long (default: 30 s plus the requested times); then ST.
+    #[arg(long, value_parser = parse_duration)]
+    pub wait_timeout: Option<Duration>,
+    /// Arrival tolerance, mm (joints: mrad).
+    #[arg(long, default_value_t = 1.0)]
+    pub tolerance: f64,
+    /// On Ctrl-C just exit and leave the arm moving (by default ST is sent first).
+    #[arg(long)]
+    pub no_stop_on_interrupt: bool,
+}
+
+impl WaitArgs {
+    /// The wait's options; with `interrupt`, Ctrl-C ends the wait.
+    pub(super) fn options(
+        &self,
+        requested: f64,
+        interrupt: Option<&interrupt::Interrupt>,
+    ) -> WaitOptions {
+        let extra = Duration::try_from_secs_f64(requested).unwrap_or_default();
+        WaitOptions {
+            tolerance: self.tolerance * 1e-3,
+            timeout: self
+                .wait_timeout
+                .unwrap_or(Duration::from_secs(30).saturating_add(extra)),
+            interrupt: interrupt.cloned(),
+            ..WaitOptions::default()
+        }
+    }
+
+    /// The options of a wait through via points blended within `blend`: an intermediate
+    /// point counts as passed within the blend plus the usual pass tolerance.
+    pub(super) fn passing(
+        &self,
+        requested: f64,
+        interrupt: Option<&interrupt::Interrupt>,
+        blend: f64,
+    ) -> WaitOptions {
+        let options = self.options(requested, interrupt);
+        WaitOptions {
+            pass_tolerance: options.pass_tolerance + blend,
+            ..options
+        }
+    }
+
+    /// Installs the Ctrl-C handler unless told not to (or there is no wait to interrupt).
+    /// Installed before the first request, so that Ctrl-C while the motion is being started
+    /// stops it as well.
+    pub(super) fn interrupt(&self) -> Option<interrupt::Interrupt> {
+        if self.no_wait || self.no_stop_on_interrupt {
+            return None;
+        }
+        interrupt::ctrl_c()
+            .map_err(|e| eprintln!("armgate: {e}; Ctrl-C will not stop the arm"))
+            .ok()
+    }
+}
+
+/// Parses `200ms`, `1s`, `1.5s` or a plain number of milliseconds.
+pub fn parse_duration(s: &str) -> Result<Duration, String> {
+    let s = s.trim();
+    let (number, scale) = if let Some(ms) = s.strip_suffix("ms") {
+        (ms, 1e-3)
+    } else if let Some(secs) = s.strip_suffix('s') {
+        (secs, 1.0)
+    } else {
+        (s, 1e-3)
+    };
+    number
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .and_then(|v| Duration::try_from_secs_f64(v * scale).ok())
+        .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s)"))
+}
+
+/// A duration that is not zero: a zero reply timeout would never wait for a reply.
+pub fn parse_timeout(s: &str) -> Result<Duration, String> {
+    match parse_duration(s)? {
+        Duration::ZERO => Err(format!("`{s}`: the timeout must be longer than 0")),
+        timeout => Ok(timeout),
+    }
+}
+
+pub(super) fn parse_joints(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if (1..=MAX_JOINTS).contains(&n) => Ok(n),
+        _ => Err(format!("`{s}`: the number of joints is 1 to {MAX_JOINTS}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::drives::{ModeArg, ModeArgs};
+    use super::super::{Cli, Cmd};
+    use super::*;
+    use clap::Parser;
+
+    #[test]
+    fn durations() {
+        assert_eq!(parse_duration("200ms"), Ok(Duration::from_millis(200)));
+        assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
+        assert_eq!(parse_duration("50"), Ok(Duration::from_millis(50)));
+        assert!(parse_duration("soon").is_err());
+        assert!(parse_duration("-1s").is_err());
+        assert!(parse_timeout("0").is_err());
+        assert!(parse_timeout("0ms").is_err());
+        assert_eq!(parse_timeout("1ms"), Ok(Duration::from_millis(1)));
+        assert!(Cli::try_parse_from(["armgate", "--timeout", "0s", "pose"]).is_err());
+        // The mode as the status shows it, and as the help numbers it, is accepted too.
+        for (typed, mode) in [
+            ("cartesian", ModeArg::Cart),
+            ("2", ModeArg::Cart),
+            ("1", ModeArg::Joint),
+            ("0", ModeArg::Off),
+        ] {
+            let cli = Cli::try_parse_from(["armgate", "mode", typed]).unwrap();
+            assert!(
+                matches!(cli.command, Cmd::Mode(ModeArgs { mode: m }) if m == mode),
+                "{typed}"
+            );
+        }
+        assert!(Cli::try_parse_from(["armgate", "mode", "3"]).is_err());
+    }
+}
