@@ -856,6 +856,29 @@ fn at(rotation: Rotation3<f64>, position: Vector3<f64>) -> Frame {
     Frame::from_parts(position.into(), rotation)
 }
 
+/// A line the tick follows slower where the joints need more than their rates (the move from
+/// home of the qemu-bench tick): accepted as shipped (up to 100 times), refused with the joint
+/// and where by a robot file that allows no slowing down.
+#[test]
+fn a_line_that_needs_slowing_down_is_refused_where_the_robot_file_says_so() {
+    let config = common::robot("ranger-mk1");
+    let home = config.home();
+    let start = Rig::new(&config, &home).pose();
+    let goal = at(
+        Rotation3::from_euler_angles(0.0, 0.0, 0.1) * start.rotation,
+        start.translation.vector + Vector3::new(0.05, -0.05, 0.05),
+    );
+    let mut rig = Rig::new(&config, &home);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    assert!(rig.ctrl.move_cartesian(goal, 4.0).is_ok());
+    let strict = config.clone().edit(|c| c.ik.line_slowdown = 1.0).unwrap();
+    let mut rig = Rig::new(&strict, &home);
+    rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+    let refusal = rig.ctrl.move_cartesian(goal, 4.0);
+    assert!(matches!(refusal, Err(Refusal::TooFast(..))), "{refusal:?}");
+    assert!(!rig.ctrl.is_moving());
+}
+
 #[test]
 fn the_half_turn_line_is_refused_up_front() {
     // The case: after the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0` the tool is

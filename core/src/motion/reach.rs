@@ -88,11 +88,6 @@ pub(super) struct Reach<'a> {
 /// that still does at 1/1024 of the line is refused as a jump.
 pub const MAX_JOINT_STEP: f64 = 0.25;
 
-/// How much faster than its rate limit a joint may need to move, averaged over a step of the
-/// check, at a line's cruise speed: up to this the tick slows the motion down where it must
-/// (within the acceleration limits); a line that needs more is refused.
-pub const MAX_SLOWDOWN: f64 = 100.0;
-
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
     /// `goal`, planned to last at least `min_duration` (s); returns the joints at the goal.
@@ -100,7 +95,7 @@ impl Reach<'_> {
     /// so far are returned.)
     ///
     /// Between two samples no joint may move more than [`MAX_JOINT_STEP`] (at the shortest
-    /// step) or need more than [`MAX_SLOWDOWN`] times its rate limit at the line's cruise
+    /// step) or need more than `ik.line_slowdown` times its rate limit at the line's cruise
     /// speed: a line on which the IK solution jumps to another branch, or swings a joint
     /// through a near-singularity, is refused with the joint and where, rather than started
     /// and aborted halfway.
@@ -156,7 +151,13 @@ impl Reach<'_> {
                     continue;
                 }
             };
-            match fault(&q, &solved, self.max_rate, (next - done) * duration) {
+            match fault(
+                &q,
+                &solved,
+                self.max_rate,
+                (next - done) * duration,
+                self.ik.line_slowdown,
+            ) {
                 // From afar the nearest solution may lie on another branch: retried shorter,
                 // as the tick would follow the line.
                 Some(Fault::Jump(_)) if step > MIN_JUMP_STEP => {
@@ -214,7 +215,7 @@ impl Reach<'_> {
 
 /// A joint (numbered from 1) that cannot make a step of the check as the tick would.
 enum Fault {
-    /// It would need more than [`MAX_SLOWDOWN`] times its rate limit at the line's cruise
+    /// It would need more than `ik.line_slowdown` times its rate limit at the line's cruise
     /// speed.
     Rate(u8),
     /// It would move more than [`MAX_JOINT_STEP`]: a jump to another branch, or a swing
@@ -222,9 +223,9 @@ enum Fault {
     Jump(u8),
 }
 
-/// The first joint that cannot move from `q` to `next` in `time` (s) at [`MAX_SLOWDOWN`] times
+/// The first joint that cannot move from `q` to `next` in `time` (s) at `slowdown` times
 /// `max_rate`, a jump first (a NaN is a jump).
-fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64) -> Option<Fault> {
+fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64) -> Option<Fault> {
     let number = |joint: usize| u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
     let moved = q.iter().zip(next.iter()).map(|(a, b)| libm::fabs(b - a));
     if let Some(joint) = moved.clone().position(|m| m.is_nan() || m > MAX_JOINT_STEP) {
@@ -232,7 +233,7 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64) -> Option<Faul
     }
     moved
         .zip(max_rate.iter())
-        .position(|(m, rate)| m > MAX_SLOWDOWN * rate * time)
+        .position(|(m, rate)| m > slowdown * rate * time)
         .map(|joint| Fault::Rate(number(joint)))
 }
 
@@ -276,19 +277,27 @@ mod tests {
     fn a_step_faults_on_a_jump_first_then_on_a_rate() {
         let step = |a: f64, b: f64| Joints::from_slice(&[a, b]).unwrap();
         let (rate, q) = (step(0.2, 0.2), step(0.0, 1.0));
-        // 0.2 rad/s for 1 s: up to 20 rad at MAX_SLOWDOWN, but never more than 0.25 a step.
-        assert!(fault(&q, &step(0.25, 1.0), &rate, 1.0).is_none());
+        // 0.2 rad/s for 1 s: up to 20 rad slowed down 100 times, but never more than 0.25 a
+        // step.
+        assert!(fault(&q, &step(0.25, 1.0), &rate, 1.0, 100.0).is_none());
         assert!(matches!(
-            fault(&q, &step(0.1, 1.26), &rate, 1.0),
+            fault(&q, &step(0.1, 1.26), &rate, 1.0, 100.0),
             Some(Fault::Jump(2))
         ));
         assert!(matches!(
-            fault(&q, &step(0.21, 1.0), &rate, 0.01),
+            fault(&q, &step(0.21, 1.0), &rate, 0.01, 100.0),
             Some(Fault::Rate(1))
         ));
         assert!(matches!(
-            fault(&q, &step(0.21, f64::NAN), &rate, 0.01),
+            fault(&q, &step(0.21, f64::NAN), &rate, 0.01, 100.0),
             Some(Fault::Jump(2))
+        ));
+        // A robot file that allows no slowing down (ik.line_slowdown = 1): 0.21 rad in 1 s at
+        // 0.2 rad/s is too fast.
+        assert!(fault(&q, &step(0.2, 1.0), &rate, 1.0, 1.0).is_none());
+        assert!(matches!(
+            fault(&q, &step(0.21, 1.0), &rate, 1.0, 1.0),
+            Some(Fault::Rate(1))
         ));
     }
 
