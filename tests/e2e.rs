@@ -1545,13 +1545,7 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
 #[test]
 fn a_jog_into_a_joint_limit_is_announced() {
     // Joint 6 at 3.09 rad, 52 mrad short of its 3.142 limit (inside the 2 % margin's reach).
-    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,3.09"]);
-    if !knows_status(&sim) {
-        return;
-    }
-    armgate(&sim, &["on"]).0.unwrap();
-    wait_drives(&sim, 2.0);
-    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    let sim = sessions::ready("1.5708,0.6,-0.4,0.2,1.8,3.09", 1.0);
     let (result, out) = armgate(
         &sim,
         &[
@@ -1560,4 +1554,18 @@ fn a_jog_into_a_joint_limit_is_announced() {
     );
     result.unwrap();
     assert!(out.contains("notice: WN12 j6 at limit 3.142"), "{out}");
+}
+
+#[test]
+fn the_half_turn_line_is_refused_before_the_arm_moves() {
+    // After the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0` the tool is 6 cm from joint
+    // 1's axis; armgate-sim's help example passes the wrist centre within 6 mm of it, where
+    // joint 1 would swing half a turn and joint 6 with it, into its limit 18 % of the way:
+    // refused with that, before the arm moves.
+    let sim = sessions::ready("1.5708,0.4,1.2,0,1.2,0", 2.0);
+    let before = sim.ok("jP", [0.0; 7], 0);
+    let (text, _) = refusal(armgate(&sim, &["move", "0.1", "0.6", "0.9", "0", "1.57", "0"]).0);
+    assert_eq!(text, "ER26 Cmd BG j6 > 3.142 at 18%");
+    assert_eq!(status(&sim)[4], 0.0, "nothing moves");
+    assert_eq!(sim.ok("jP", [0.0; 7], 0), before);
 }

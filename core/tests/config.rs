@@ -330,6 +330,40 @@ fn tracking_iterations_are_bounded() {
     }
 }
 
+/// How far the tick may slow a checked line down: 1 (never) to 1000 times, finite.
+#[test]
+fn line_slowdown_is_bounded() {
+    for (value, accepted) in [
+        ("0.5", false),
+        ("1.0", true),
+        ("100.0", true),
+        ("1000.0", true),
+        ("1000.5", false),
+        ("nan", false),
+        ("inf", false),
+    ] {
+        let text = mk1_text().replacen(
+            "[drives]",
+            &format!("[ik]\nline_slowdown = {value}\n\n[drives]"),
+            1,
+        );
+        match parse_toml(&text) {
+            Ok(robot) => {
+                assert!(accepted, "{value} accepted");
+                assert_eq!(robot.ik.line_slowdown, value.parse::<f64>().unwrap());
+            }
+            Err(e) => {
+                assert!(!accepted, "{value} refused: {e}");
+                assert!(
+                    e.to_string()
+                        .contains("ik.line_slowdown: must be 1 to 1000"),
+                    "{e}"
+                );
+            }
+        }
+    }
+}
+
 /// A joint whose limits, in encoder counts, do not fit the drive's 32 bits is refused: the
 /// drive manager would otherwise drop every set-point near them with only a counter.
 #[test]

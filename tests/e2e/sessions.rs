@@ -364,7 +364,7 @@ fn a_silent_client_with_a_watchdog_has_its_motion_stopped() {
 
 /// ranger-mk1 from `start` (joint angles) in mode `mode` (1 joint, 2 Cartesian), the drives
 /// running.
-fn ready(start: &str, mode: f32) -> Sim {
+pub(super) fn ready(start: &str, mode: f32) -> Sim {
     let sim = Sim::start_with("ranger-mk1", &["--start", start]);
     assert!(knows_status(&sim));
     assert_eq!(sim.ok("CM", [mode, 0., 0., 0., 0., 0., 0.], 0)[0], mode);

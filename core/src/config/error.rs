@@ -62,6 +62,8 @@ pub enum ConfigReason {
     CountsOverflow,
     /// One tracking solve may take 1 to 100 iterations (`config::MAX_TRACKING_ITERATIONS`).
     TrackingIterations,
+    /// A line may be slowed down 1 to 1000 times (`config::MAX_LINE_SLOWDOWN`).
+    LineSlowdown,
 }
 
 impl ConfigError {
@@ -113,6 +115,7 @@ impl fmt::Display for ConfigReason {
             Self::PdoLead => "must be 1 to 8 points",
             Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
             Self::TrackingIterations => "must be 1 to 100",
+            Self::LineSlowdown => "must be 1 to 1000",
             Self::CountsOverflow => {
                 "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
             }

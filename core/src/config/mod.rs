@@ -23,8 +23,8 @@ pub use error::{ConfigError, ConfigReason};
 pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{
     BaseConfig, BlendConfig, CartesianLimits, IkConfig, JointConfig, JointDrive, JointType,
-    MAX_BOXES, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MAX_TRACKING_ITERATIONS, MIN_PERIOD_SAMPLES,
-    RobotConfig, ToolConfig, WorkspaceConfig,
+    MAX_BOXES, MAX_LINE_SLOWDOWN, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MAX_TRACKING_ITERATIONS,
+    MIN_PERIOD_SAMPLES, RobotConfig, ToolConfig, WorkspaceConfig,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};

@@ -196,6 +196,9 @@ pub struct BlendConfig {
 /// few solves, and 65,535 each would not end within any control period.
 pub const MAX_TRACKING_ITERATIONS: u16 = 100;
 
+/// The most `ik.line_slowdown` may be: beyond it a line is hardly moving where it is slowed.
+pub const MAX_LINE_SLOWDOWN: f64 = 1000.0;
+
 /// Inverse-kinematics tuning.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -210,6 +213,11 @@ pub struct IkConfig {
     /// and refuse a move the arm cannot follow (`ER25`/`ER26` with where along the line).
     /// False: the seed's behaviour, the arm moves until the IK fails, then holds (`WN22`).
     pub check_lines: bool,
+    /// How many times its `max_rate` a joint may need at a line's cruise speed (averaged over
+    /// a step of the check) before the check refuses the line (`ER25 … jN too fast`); up to
+    /// it the tick follows the line slower, within the acceleration limits. 1 refuses every
+    /// line that would need slowing down. 1 to [`MAX_LINE_SLOWDOWN`].
+    pub line_slowdown: f64,
 }
 
 impl Default for IkConfig {
@@ -219,6 +227,7 @@ impl Default for IkConfig {
             tracking_iterations: 20,
             global_iterations: 2000,
             check_lines: true,
+            line_slowdown: 100.0,
         }
     }
 }
@@ -420,6 +429,9 @@ impl IkConfig {
         }
         if self.global_iterations == 0 {
             return Err(("ik.global_iterations", ConfigReason::NotPositive));
+        }
+        if !(1.0..=MAX_LINE_SLOWDOWN).contains(&self.line_slowdown) {
+            return Err(("ik.line_slowdown", ConfigReason::LineSlowdown));
         }
         Ok(())
     }

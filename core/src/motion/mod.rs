@@ -38,7 +38,9 @@ pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
 pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
-pub use reach::{CHECK_ITERATIONS, LINE_SAMPLES, MAX_SLOWDOWN, SOLVES_PER_LINE, check_iterations};
+pub use reach::{
+    CHECK_ITERATIONS, LINE_SAMPLES, MAX_JOINT_STEP, SOLVES_PER_LINE, check_iterations,
+};
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;

@@ -8,15 +8,21 @@
 //! boxes are checked exactly (segment against box). Reachability is checked at
 //! [`LINE_SAMPLES`] points by tracking IK from one point to the next, seeded with the
 //! commanded joints, as the ticks will; where a step fails the step is halved (down to 1/8),
-//! so that only a real limit refuses the move.
+//! so that only a real limit refuses the move. A step in which a joint moves more than
+//! [`MAX_JOINT_STEP`] is halved too, down to 1/1024 of the line: from afar the nearest
+//! solution may lie on another branch, where the tick, following the line past a
+//! near-singularity, swings a joint through up to half a turn (and maybe into a limit). The
+//! check follows that swing as the tick would; a joint that still moves that much in the
+//! shortest step jumps, and refuses the line.
 //!
 //! The check runs while a request is answered, inside a tick on the firmware, so its work is
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
 //! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
 //! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm): 0.29–0.55
-//! million instructions per check on average, at most 1.29 million (ranger-mk2, 19.44 ms
-//! period) and 1.47 million (iiwa14, 5.04 ms): within one period at 480 MHz.
+//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm; before the IK
+//! solves lost their copies, which made each cheaper): 0.33–0.66
+//! million instructions per check on average, at most 1.82 million (ranger-mk2, 19.44 ms
+//! period) and 1.68 million (iiwa14, 5.04 ms): within one period at 480 MHz.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -52,6 +58,9 @@ pub fn check_iterations(period: f64) -> u32 {
 }
 /// The smallest step tried, as a fraction of the way.
 const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
+/// The smallest step tried where a joint moves more than [`MAX_JOINT_STEP`]: a swing near a
+/// singularity is followed in steps this short, as the tick follows it.
+const MIN_JUMP_STEP: f64 = MIN_STEP / 8.0;
 /// Iterations of one tracking solve in the check at most.
 const CHECK_SOLVE_ITERATIONS: u16 = 10;
 /// A joint this close to a limit in a non-converged solution is taken as what stopped it.
@@ -71,11 +80,13 @@ pub(super) struct Reach<'a> {
     pub max_rate: &'a Joints,
 }
 
-/// How much faster than its rate limit a joint may need to move at a line's cruise speed: up
-/// to this the tick slows the motion down where it must (within the acceleration limits); a
-/// line that needs more — a jump to another IK branch, the base swinging half a turn for a
-/// few centimetres of the tool — is refused.
-pub const MAX_SLOWDOWN: f64 = 100.0;
+/// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
+/// of a pose a step ahead is not always the one the tick reaches by following the line: where
+/// the line passes close to a singularity (the wrist centre near joint 1's axis), the tick
+/// swings a joint through up to half a turn while the nearest solution lies on another branch,
+/// a small step away. A step in which a joint moves more than this is retried shorter, and one
+/// that still does at 1/1024 of the line is refused as a jump.
+pub const MAX_JOINT_STEP: f64 = 0.25;
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
@@ -83,10 +94,11 @@ impl Reach<'_> {
     /// (If the budget runs out the move gets the benefit of the doubt, and the joints reached
     /// so far are returned.)
     ///
-    /// Between two samples no joint may need more than [`MAX_SLOWDOWN`] times its rate limit
-    /// at the line's cruise speed: a line on which the IK solution jumps to another branch
-    /// needs far more, and is refused with the joint and where, rather than started and
-    /// aborted halfway.
+    /// Between two samples no joint may move more than [`MAX_JOINT_STEP`] (at the shortest
+    /// step) or need more than `ik.line_slowdown` times its rate limit at the line's cruise
+    /// speed: a line on which the IK solution jumps to another branch, or swings a joint
+    /// through a near-singularity, is refused with the joint and where, rather than started
+    /// and aborted halfway.
     pub fn line(
         &mut self,
         start: &Frame,
@@ -129,49 +141,41 @@ impl Reach<'_> {
                 break;
             }
             let next = (done + step).min(1.0);
+            let at = PathPoint::at(next);
             let there = point(next);
-            match self.solve(&there, (&q, &here), PathPoint::at(next)) {
-                Ok(solved) => {
-                    // A line that also fails for another reason (a joint limit, out of reach)
-                    // is refused for that: it says more.
-                    if let Err(refusal) =
-                        self.within_rates(&q, &solved, step * duration, PathPoint::at(next))
-                    {
-                        too_fast.get_or_insert(refusal);
-                    }
-                    (done, q, here) = (next, solved, there);
-                    step = (step * 2.0).min(full_step);
-                }
+            let solved = match self.solve(&there, (&q, &here), at) {
+                Ok(solved) => solved,
                 Err(refusal) if step <= MIN_STEP => return Err(refusal),
-                Err(_) => step *= 0.5,
+                Err(_) => {
+                    step *= 0.5;
+                    continue;
+                }
+            };
+            match fault(
+                &q,
+                &solved,
+                self.max_rate,
+                (next - done) * duration,
+                self.ik.line_slowdown,
+            ) {
+                // From afar the nearest solution may lie on another branch: retried shorter,
+                // as the tick would follow the line.
+                Some(Fault::Jump(_)) if step > MIN_JUMP_STEP => {
+                    step *= 0.5;
+                    continue;
+                }
+                Some(Fault::Jump(joint)) => return Err(Refusal::TooFast(joint, at)),
+                // A line that also fails for another reason further along (a joint limit,
+                // out of reach) is refused for that: it says more.
+                Some(Fault::Rate(joint)) => {
+                    too_fast.get_or_insert(Refusal::TooFast(joint, at));
+                }
+                None => {}
             }
+            (done, q, here) = (next, solved, there);
+            step = (step * 2.0).min(full_step);
         }
         too_fast.map_or(Ok(q), Err)
-    }
-
-    /// Refuses the step from `q` to `next`, which takes `time` (s) at cruise, if a joint would
-    /// need more than [`MAX_SLOWDOWN`] times its rate limit.
-    fn within_rates(
-        &self,
-        q: &Joints,
-        next: &Joints,
-        time: f64,
-        at: PathPoint,
-    ) -> Result<(), Refusal> {
-        for (joint, ((a, b), rate)) in q
-            .iter()
-            .zip(next.iter())
-            .zip(self.max_rate.iter())
-            .enumerate()
-        {
-            let ratio = libm::fabs(b - a) / (rate * time);
-            // A NaN ratio is refused too.
-            if ratio.is_nan() || ratio > MAX_SLOWDOWN {
-                let joint = u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
-                return Err(Refusal::TooFast(joint, at));
-            }
-        }
-        Ok(())
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
@@ -209,6 +213,30 @@ impl Reach<'_> {
     }
 }
 
+/// A joint (numbered from 1) that cannot make a step of the check as the tick would.
+enum Fault {
+    /// It would need more than `ik.line_slowdown` times its rate limit at the line's cruise
+    /// speed.
+    Rate(u8),
+    /// It would move more than [`MAX_JOINT_STEP`]: a jump to another branch, or a swing
+    /// near a singularity.
+    Jump(u8),
+}
+
+/// The first joint that cannot move from `q` to `next` in `time` (s) at `slowdown` times
+/// `max_rate`, a jump first (a NaN is a jump).
+fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64) -> Option<Fault> {
+    let number = |joint: usize| u8::try_from(joint.saturating_add(1)).unwrap_or(u8::MAX);
+    let moved = q.iter().zip(next.iter()).map(|(a, b)| libm::fabs(b - a));
+    if let Some(joint) = moved.clone().position(|m| m.is_nan() || m > MAX_JOINT_STEP) {
+        return Some(Fault::Jump(number(joint)));
+    }
+    moved
+        .zip(max_rate.iter())
+        .position(|(m, rate)| m > slowdown * rate * time)
+        .map(|joint| Fault::Rate(number(joint)))
+}
+
 /// The first joint of `q` at (within [`PINNED`]) or beyond one of its limits.
 fn pinned_joint(chain: &Chain, q: &[f64], at: PathPoint) -> Option<JointBound> {
     first_bound(chain, q, at, |past| past >= -PINNED)
@@ -244,6 +272,34 @@ fn first_bound(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_step_faults_on_a_jump_first_then_on_a_rate() {
+        let step = |a: f64, b: f64| Joints::from_slice(&[a, b]).unwrap();
+        let (rate, q) = (step(0.2, 0.2), step(0.0, 1.0));
+        // 0.2 rad/s for 1 s: up to 20 rad slowed down 100 times, but never more than 0.25 a
+        // step.
+        assert!(fault(&q, &step(0.25, 1.0), &rate, 1.0, 100.0).is_none());
+        assert!(matches!(
+            fault(&q, &step(0.1, 1.26), &rate, 1.0, 100.0),
+            Some(Fault::Jump(2))
+        ));
+        assert!(matches!(
+            fault(&q, &step(0.21, 1.0), &rate, 0.01, 100.0),
+            Some(Fault::Rate(1))
+        ));
+        assert!(matches!(
+            fault(&q, &step(0.21, f64::NAN), &rate, 0.01, 100.0),
+            Some(Fault::Jump(2))
+        ));
+        // A robot file that allows no slowing down (ik.line_slowdown = 1): 0.21 rad in 1 s at
+        // 0.2 rad/s is too fast.
+        assert!(fault(&q, &step(0.2, 1.0), &rate, 1.0, 1.0).is_none());
+        assert!(matches!(
+            fault(&q, &step(0.21, 1.0), &rate, 1.0, 1.0),
+            Some(Fault::Rate(1))
+        ));
+    }
 
     #[test]
     fn the_budget_follows_the_control_period_within_its_bounds() {
