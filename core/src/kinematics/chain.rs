@@ -237,7 +237,11 @@ impl Chain {
         };
         // NaN-safe by construction: only a positive determinant has a root (`det.max(0.0)`
         // relied on `max` dropping NaN).
-        Ok(if det > 0.0 { libm::sqrt(det) } else { 0.0 })
+        Ok(if det > 0.0 {
+            crate::math::sqrt(det)
+        } else {
+            0.0
+        })
     }
 
     /// Forward kinematics: walks the chain, showing each joint frame's rotation and origin to

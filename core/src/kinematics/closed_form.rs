@@ -536,7 +536,7 @@ impl Misses {
         let square = limit * limit;
         self.position < square
             && self.rotation < square
-            && libm::sqrt(self.position) + libm::sqrt(self.rotation) < limit
+            && crate::math::sqrt(self.position) + crate::math::sqrt(self.rotation) < limit
     }
 
     /// The larger of the two.
@@ -551,8 +551,8 @@ impl Misses {
         let within = self.position < limit && self.rotation < limit;
         if within {
             solution.iterations = 0;
-            solution.position_error = libm::sqrt(self.position);
-            solution.orientation_error = libm::sqrt(self.rotation);
+            solution.position_error = crate::math::sqrt(self.position);
+            solution.orientation_error = crate::math::sqrt(self.rotation);
         }
         within
     }

@@ -92,7 +92,7 @@ fn wrist_target(form: &ClosedForm, target: &Frame) -> (Matrix3<f64>, Vector3<f64
     (tool, d)
 }
 
-/// θ4 with `‖W(θ4) − S‖ = ‖d‖` (subproblem 3).
+/// θ4 with `‖W(θ4) − S‖ = ‖d‖` (subproblem 3, on the squares).
 fn elbow_roots(form: &ClosedForm, d: &Vector3<f64>) -> Roots {
     let s = &form.screws;
     let (shoulder, h4, o4) = (&s.point[0], &s.axis[3], &s.point[3]);
@@ -100,7 +100,7 @@ fn elbow_roots(form: &ClosedForm, d: &Vector3<f64>) -> Roots {
         h4,
         &(form.centre - o4),
         &(shoulder - o4),
-        d.norm(),
+        d.norm_squared(),
         form.slack(),
     )
 }

@@ -44,7 +44,8 @@ pub(super) fn solve(
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
+        let (elbows, n3) =
+            sp3(h3, &(w - o3), &(o2 - o3), u.norm_squared(), slack).list(free[2], nearest);
         for &(a3, b3) in elbows.iter().take(n3) {
             let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));

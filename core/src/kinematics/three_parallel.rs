@@ -63,7 +63,7 @@ pub(super) fn solve(
             let sum_value = sum.value();
             let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
             let (elbows, n3) =
-                sp3(h3, &(o4 - o3), &(o2 - o3), u.norm(), slack).list(free[2], nearest);
+                sp3(h3, &(o4 - o3), &(o2 - o3), u.norm_squared(), slack).list(free[2], nearest);
             for &(a3, b3) in elbows.iter().take(n3) {
                 let reach = (o3 - o2) + rotate(h3, &a3, &(o4 - o3));
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));

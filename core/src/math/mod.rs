@@ -16,9 +16,11 @@
 mod frame;
 mod joints;
 mod rotation;
+mod sqrt;
 
 pub use armgate_protocol::client::{Quaternion, rpy};
 pub use frame::{Frame, Twist, dh, diff, dist, is_finite};
 pub use joints::Joints;
 pub use nalgebra::{Rotation3, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
 pub use rotation::rotation_vector;
+pub use sqrt::sqrt;

@@ -21,7 +21,7 @@ pub fn rotation_vector(r: &Rotation3<f64>) -> Vector3<f64> {
         // rounding. Saves the square root and the atan2 on the IK's last iterations.
         return v * (1.0 + s2 / 6.0 + 0.075 * s2 * s2);
     }
-    let s = libm::sqrt(s2);
+    let s = crate::math::sqrt(s2);
     let theta = libm::atan2(s, c);
     if c > -0.5 {
         return v * (theta / s);
@@ -31,13 +31,13 @@ pub fn rotation_vector(r: &Rotation3<f64>) -> Vector3<f64> {
     let b = (m + m.transpose()) * 0.5;
     let (b00, b11, b22) = (b.m11 - c, b.m22 - c, b.m33 - c);
     let k = if b00 >= b11 && b00 >= b22 {
-        let kx = libm::sqrt(b00 / one_c);
+        let kx = crate::math::sqrt(b00 / one_c);
         Vector3::new(kx, b.m12 / (one_c * kx), b.m13 / (one_c * kx))
     } else if b11 >= b22 {
-        let ky = libm::sqrt(b11 / one_c);
+        let ky = crate::math::sqrt(b11 / one_c);
         Vector3::new(b.m21 / (one_c * ky), ky, b.m23 / (one_c * ky))
     } else {
-        let kz = libm::sqrt(b22 / one_c);
+        let kz = crate::math::sqrt(b22 / one_c);
         Vector3::new(b.m31 / (one_c * kz), b.m32 / (one_c * kz), kz)
     };
     let k = k * (1.0 / k.norm());

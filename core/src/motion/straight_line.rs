@@ -110,7 +110,7 @@ impl StraightLine {
     /// Normalises the direction and returns the length; a zero or non-finite length leaves a
     /// zero direction and gives 0.
     fn length_of_direction(&mut self) -> f64 {
-        let length = libm::sqrt(self.direction.iter().map(|d| d * d).sum::<f64>());
+        let length = crate::math::sqrt(self.direction.iter().map(|d| d * d).sum::<f64>());
         if length.is_nan() || length <= 0.0 || length.is_infinite() {
             self.direction = [0.0; MAX_JOINTS];
             return 0.0;

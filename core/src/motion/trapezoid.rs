@@ -44,7 +44,7 @@ impl Trapezoid {
             p.t2 = p.duration - t1;
             p.velocity = sign * v_max;
         } else {
-            let t1 = libm::sqrt(distance / a_max);
+            let t1 = crate::math::sqrt(distance / a_max);
             p.t1 = t1;
             p.t2 = t1;
             p.duration = 2.0 * t1;

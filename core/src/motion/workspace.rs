@@ -42,7 +42,7 @@ impl Workspace {
             .map(|&[x0, x1, y0, y1, z0, z1]| {
                 let gap = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
                 let (dx, dy, dz) = (gap(p.x, x0, x1), gap(p.y, y0, y1), gap(p.z, z0, z1));
-                libm::sqrt(dx * dx + dy * dy + dz * dz)
+                crate::math::sqrt(dx * dx + dy * dy + dz * dz)
             })
             .fold(inside, f64::min)
     }

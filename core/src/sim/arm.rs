@@ -73,8 +73,8 @@ impl RateLimitedArm {
             let dv = a_max * dt;
             // The fastest speed v that, after moving v·dt this step, still lets the joint stop on
             // the target in whole steps of deceleration a: v² + 3·dv·v ≤ 2·a·|error|.
-            let brake =
-                0.5 * (libm::sqrt(9.0 * dv * dv + 8.0 * a_max * libm::fabs(error)) - 3.0 * dv);
+            let brake = 0.5
+                * (crate::math::sqrt(9.0 * dv * dv + 8.0 * a_max * libm::fabs(error)) - 3.0 * dv);
             let wanted = libm::copysign(brake.min(*v_max), error);
             *v += limit_step(wanted - *v, dv);
             *q += *v * dt;

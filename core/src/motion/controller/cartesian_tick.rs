@@ -92,7 +92,7 @@ impl Controller {
             .time_to_abrupt_end()
             .map_or(1.0, |left| {
                 let n = left / self.period;
-                -0.5 * delta + libm::sqrt(0.25 * delta * delta + 2.0 * delta * n)
+                -0.5 * delta + crate::math::sqrt(0.25 * delta * delta + 2.0 * delta * n)
             });
         // The slowest step that only the acceleration clamp keeps from being reached.
         let mut abrupt = None;

@@ -48,5 +48,5 @@ fn limit_margin(chain: &Chain, q: &Joints) -> f64 {
 
 /// Euclidean distance between joint vectors (the joint sequence's reach metric).
 fn joint_distance(a: &Joints, b: &Joints) -> f64 {
-    libm::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
+    crate::math::sqrt(a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum())
 }

@@ -59,14 +59,14 @@ pub(super) fn minimum_time(d: f64, l: &JerkLimits) -> Ramp {
     let to_velocity = if v * j >= a * a {
         Ramp::at_limit(v, l)
     } else {
-        Ramp::below_limit(libm::sqrt(v / j))
+        Ramp::below_limit(crate::math::sqrt(v / j))
     };
     if d / v >= to_velocity.accel_time {
         return to_velocity;
     }
     let tj = a / j;
     if d >= 2.0 * a * tj * tj {
-        let accel_time = 0.5 * (tj + libm::sqrt(tj * tj + 4.0 * d / a));
+        let accel_time = 0.5 * (tj + crate::math::sqrt(tj * tj + 4.0 * d / a));
         Ramp {
             jerk_time: tj,
             accel_time,
@@ -95,7 +95,7 @@ pub(super) fn for_duration(d: f64, l: &JerkLimits, from: &Ramp, duration: f64) -
     let boundary = d / (a * tj) + 2.0 * tj;
     if from.at_acceleration_limit && duration <= boundary {
         let b = duration - tj;
-        let root = libm::sqrt((b * b - 4.0 * d / a).max(0.0));
+        let root = crate::math::sqrt((b * b - 4.0 * d / a).max(0.0));
         // 2d / (b + root) is the smaller root without cancellation.
         return Ramp::at_limit(2.0 * d / (b + root), l);
     }
@@ -106,7 +106,7 @@ pub(super) fn for_duration(d: f64, l: &JerkLimits, from: &Ramp, duration: f64) -
 /// Newton steps taken: the root of `g(Tj) = d/(j·Tj²) + 2·Tj − duration` (see
 /// [`for_duration`]).
 fn jerk_time_for(d: f64, j: f64, duration: f64) -> (f64, usize) {
-    let mut s = libm::sqrt(d / (j * duration));
+    let mut s = crate::math::sqrt(d / (j * duration));
     for step in 0..NEWTON_ITERATIONS {
         let g = d / (j * s * s) + 2.0 * s - duration;
         let slope = 2.0 - 2.0 * d / (j * s * s * s);

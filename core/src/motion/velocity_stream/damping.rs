@@ -50,7 +50,7 @@ pub fn singularity_damping(
         return 0.0;
     }
     let ratio = sigma / SINGULAR_THRESHOLD;
-    MAX_DAMPING * libm::sqrt(1.0 - ratio * ratio)
+    MAX_DAMPING * crate::math::sqrt(1.0 - ratio * ratio)
 }
 
 /// An estimate (from above) of the smallest singular value of `J` (six joints or more), by
@@ -79,7 +79,9 @@ pub fn smallest_singular_value(
         *d = *v;
     }
     let quotient = x.dot(&(outer * x));
-    quotient.is_finite().then(|| libm::sqrt(quotient.max(0.0)))
+    quotient
+        .is_finite()
+        .then(|| crate::math::sqrt(quotient.max(0.0)))
 }
 
 #[cfg(test)]
@@ -110,7 +112,7 @@ mod tests {
         assert!((damping(&diagonal(0.0)) - MAX_DAMPING).abs() < 1e-12);
         let half = damping(&diagonal(0.5 * SINGULAR_THRESHOLD));
         assert!(
-            (half - MAX_DAMPING * libm::sqrt(0.75)).abs() < 1e-9,
+            (half - MAX_DAMPING * crate::math::sqrt(0.75)).abs() < 1e-9,
             "{half}"
         );
         // Continuous: no jump as σ crosses the threshold.

@@ -24,7 +24,7 @@ pub fn braking_speed(
     // The step of this tick is taken before the braking starts.
     let distance = left - libm::fabs(rate) * period;
     if distance > 0.0 {
-        libm::sqrt(2.0 * acceleration * distance)
+        crate::math::sqrt(2.0 * acceleration * distance)
     } else {
         0.0
     }
@@ -40,9 +40,9 @@ mod tests {
         assert_eq!(braking_speed(0.0, 0.0, bounds, 2.0, 0.01), f64::INFINITY);
         // 0.5 left, minus 0.1 × 0.01 of this tick's step.
         let v = braking_speed(0.5, 0.1, bounds, 2.0, 0.01);
-        assert!((v - libm::sqrt(4.0 * 0.499)).abs() < 1e-12);
+        assert!((v - crate::math::sqrt(4.0 * 0.499)).abs() < 1e-12);
         let v = braking_speed(-0.5, -0.1, bounds, 2.0, 0.01);
-        assert!((v - libm::sqrt(4.0 * 0.499)).abs() < 1e-12);
+        assert!((v - crate::math::sqrt(4.0 * 0.499)).abs() < 1e-12);
         assert_eq!(braking_speed(1.0, 0.1, bounds, 2.0, 0.01), 0.0);
         assert_eq!(braking_speed(1.5, 0.1, bounds, 2.0, 0.01), 0.0);
         // Away from the bound it is near: no limit.
