@@ -347,16 +347,16 @@ impl Chain {
     /// Written to `solution` (whose joint count must be the chain's) if it reaches `target`
     /// within `tolerance`: returned by value, it was copied three times on the Cortex-M7.
     /// `seed` is one that [`prepare`](Self::prepare) checked for `target`; `seed_angles`, its
-    /// angles if known. The answer's angles are written to `answer` (emptied if unknown).
+    /// angles if known. The answer's angles are written to `answer`, if given (left as they
+    /// are if unknown).
     pub(super) fn follow(
         &self,
         target: &Frame,
         (seed, seed_angles): (&[f64; MAX_JOINTS], &SeedAngles),
         tolerance: f64,
         solution: &mut IkSolution,
-        answer: &mut SeedAngles,
+        answer: Option<&mut SeedAngles>,
     ) -> bool {
-        answer.0 = None;
         let mut candidates = Candidates::new();
         let Some(form) = self.closed_form() else {
             return false;
@@ -369,7 +369,11 @@ impl Chain {
                 .is_some_and(|errors| errors.report_within(tolerance, solution));
             // A refined root's angles are not the candidate's; the redundant family's solver
             // takes none (and copying them is not free).
-            if found && form.fit.is_exact() && form.fit.family != Family::SphericalShoulder {
+            if found
+                && form.fit.is_exact()
+                && form.fit.family != Family::SphericalShoulder
+                && let Some(answer) = answer
+            {
                 answer.0 = Some(candidate.angles);
             }
             found

@@ -107,6 +107,13 @@ impl core::fmt::Display for IkError {
     }
 }
 
+/// Empties `angles`, if kept: the answer they are left for is not a closed-form root's.
+fn forget(angles: Option<&mut SeedAngles>) {
+    if let Some(angles) = angles {
+        *angles = SeedAngles::default();
+    }
+}
+
 /// The seed's divergence guard (spec §3.5): true if the solved pose is farther from the target
 /// than the current pose by more than `margin` (metric: metres + radians). A diverging solution
 /// must not be commanded; the arm holds instead.
@@ -194,9 +201,13 @@ impl Chain {
         mut last: Option<&mut LastEvaluation>,
         angles: Option<(&SeedAngles, &mut SeedAngles)>,
     ) -> Result<IkResult, IkError> {
-        let (seed_angles, mut scratch) = (SeedAngles::default(), SeedAngles::default());
-        let (seed_angles, answer) = angles.unwrap_or((&seed_angles, &mut scratch));
-        *answer = SeedAngles::default();
+        // Without a caller that keeps them, the answer's angles are not copied out.
+        let unknown = SeedAngles::default();
+        let (seed_angles, mut answer) = match angles {
+            Some((seed_angles, answer)) => (seed_angles, Some(answer)),
+            None => (&unknown, None),
+        };
+        forget(answer.as_deref_mut());
         let mut start = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut start)?;
         // m + rad, the angle read without a logarithm (it only chooses the method).
@@ -224,12 +235,13 @@ impl Chain {
                 orientation_error: 0.0,
             };
             let tolerance = config.tolerance;
-            if self.follow(target, (&start, seed_angles), tolerance, &mut found, answer)
+            let seed = (&start, seed_angles);
+            if self.follow(target, seed, tolerance, &mut found, answer.as_deref_mut())
                 && within_jump(&found.q)
             {
                 return Ok(IkResult::Converged(found));
             }
-            *answer = SeedAngles::default();
+            forget(answer);
         }
         Ok(match last {
             Some(last) => self.newton_from(target, &start, config, last),

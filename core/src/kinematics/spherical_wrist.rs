@@ -101,12 +101,9 @@ fn wrist(
         PairRoots::Some(pairs, count) => {
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
-                    let angle = |i: usize| {
-                        known_angle(known, i)
-                            .copied()
-                            .unwrap_or_else(|| Angle::of(free[i]))
-                    };
-                    let (r4, r5) = (angle(3).negated(), angle(4));
+                    let r4 =
+                        known_angle(known, 3).map_or_else(|| Angle::of(-free[3]), Angle::negated);
+                    let r5 = known_angle(known, 4).map_or_else(|| Angle::of(free[4]), |a| *a);
                     let closeness =
                         |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
                     usize::from(closeness(&second) > closeness(&first))
