@@ -29,7 +29,7 @@ use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::Frame;
 use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
-use replies::{refusal_notice, values_reply};
+use replies::{operational, refusal_notice, values_reply};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -279,7 +279,7 @@ impl CommandHandler {
                 self.controller.clear_joint_via();
                 Ok(Reply::null(cmd))
             }
-            Command::JointExecute => self.joint_execute(req, drives),
+            Command::JointExecute => self.run_sequence(req, drives),
             Command::JointGoal => self.joint_goal(req),
             Command::JointPosition => self.joint_position(req),
             Command::JointVelocity => self.joint_velocity(req, drives),
@@ -308,7 +308,7 @@ impl CommandHandler {
                 self.controller.clear_cartesian_via();
                 Ok(Reply::null(cmd))
             }
-            Command::ViaExecute => self.via_execute(req, drives),
+            Command::ViaExecute => self.run_sequence(req, drives),
             Command::ViaTolerance | Command::JointViaTolerance => self.blend_tolerance(req),
             Command::ViaPoint => self.via_point(req),
         }
@@ -329,6 +329,12 @@ impl CommandHandler {
         } else {
             Err(refusal_notice(cmd, Refusal::WrongMode))
         }
+    }
+
+    /// A motion request needs its mode, then running drives.
+    fn ready_to_move(&self, cmd: Command, drives: &(impl Drives + ?Sized)) -> Result<(), Notice> {
+        self.in_mode(cmd)?;
+        operational(drives, cmd)
     }
 
     fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {

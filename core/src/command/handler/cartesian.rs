@@ -1,12 +1,13 @@
 //! The Cartesian motion requests: goals (`GL`, `GT`), the move (`BG`), via points (`VP`,
-//! `VE`), blend tolerances (`VT`, and `jT` alike) and the twist stream (`TW`).
+//! `VE`), blend tolerances (`VT`) and the twist stream (`TW`); `VT` and `VE` serve `jT` and
+//! `jE` alike.
 
 use armgate_protocol::client::{
     BlendTolerance, Command, Notice, Rejection, Reply, Request, Twist as TwistRequest,
 };
 
 use super::CommandHandler;
-use super::replies::{non_negative, operational, refusal_notice, values_reply};
+use super::replies::{non_negative, refusal_notice, values_reply};
 use crate::command::banks::BANK_2;
 use crate::command::drives::Drives;
 use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
@@ -20,8 +21,7 @@ impl CommandHandler {
     ) -> Result<Reply, Notice> {
         let cmd = req.command;
         let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
+        self.ready_to_move(cmd, drives)?;
         self.controller
             .move_cartesian(goal, duration)
             .map_err(|r| refusal_notice(cmd, r))?;
@@ -72,8 +72,7 @@ impl CommandHandler {
         if !xi.iter().all(|v| v.is_finite()) {
             return Err(Notice::BadNumber(cmd));
         }
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
+        self.ready_to_move(cmd, drives)?;
         self.controller
             .stream_twist(xi, twist.frame)
             .map_err(|r| refusal_notice(cmd, r))?;
@@ -85,18 +84,20 @@ impl CommandHandler {
         ))
     }
 
-    /// `VE`: runs the Cartesian via points.
-    pub(super) fn via_execute(
+    /// `VE` and `jE`: runs the via points of the request's kind.
+    pub(super) fn run_sequence(
         &mut self,
         req: &Request,
         drives: &(impl Drives + ?Sized),
     ) -> Result<Reply, Notice> {
         let cmd = req.command;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
-        self.controller
-            .start_cartesian_sequence()
-            .map_err(|r| refusal_notice(cmd, r))?;
+        self.ready_to_move(cmd, drives)?;
+        if cmd == Command::ViaExecute {
+            self.controller.start_cartesian_sequence()
+        } else {
+            self.controller.start_joint_sequence()
+        }
+        .map_err(|r| refusal_notice(cmd, r))?;
         Ok(Reply::null(cmd))
     }
 

@@ -4,9 +4,7 @@
 use armgate_protocol::client::{Notice, Reply, Request, VALUES};
 
 use super::CommandHandler;
-use super::replies::{
-    ik_notice, no_measurement, non_negative, operational, refusal_notice, values_reply,
-};
+use super::replies::{ik_notice, no_measurement, non_negative, refusal_notice, values_reply};
 use crate::command::drives::Drives;
 use crate::command::ik;
 
@@ -20,8 +18,7 @@ impl CommandHandler {
         let cmd = req.command;
         let v = req.values.map(f64::from);
         let duration = non_negative(v[6]).ok_or(Notice::BadNumber(cmd))?;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
+        self.ready_to_move(cmd, drives)?;
         let (present, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
         let chain = self.controller.chain();
         let ik = self.controller.ik_config();

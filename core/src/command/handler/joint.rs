@@ -1,10 +1,11 @@
-//! The joint motion requests: the goal (`jG`) and the move (`jB`), via points (`jV`, `jE`) and
-//! the joint-rate stream (`jW`), each staged in two banks on an arm with more than six joints.
+//! The joint motion requests: the goal (`jG`) and the move (`jB`), via points (`jV`; `jE` runs
+//! them with `VE`, in cartesian.rs) and the joint-rate stream (`jW`), each staged in two banks
+//! on an arm with more than six joints.
 
 use armgate_protocol::client::{JointRates, Notice, Rejection, Reply, Request};
 
 use super::CommandHandler;
-use super::replies::{bank_values, non_negative, operational, refusal_notice, values_reply};
+use super::replies::{bank_values, non_negative, refusal_notice, values_reply};
 use crate::command::banks::{BANK_2, BANK_LEN, BankKey};
 use crate::command::drives::Drives;
 
@@ -19,25 +20,9 @@ impl CommandHandler {
         let goal = self
             .joint_goal
             .ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
+        self.ready_to_move(cmd, drives)?;
         self.controller
             .move_joints(&goal, 0.0)
-            .map_err(|r| refusal_notice(cmd, r))?;
-        Ok(Reply::null(cmd))
-    }
-
-    /// `jE`: runs the joint via points.
-    pub(super) fn joint_execute(
-        &mut self,
-        req: &Request,
-        drives: &(impl Drives + ?Sized),
-    ) -> Result<Reply, Notice> {
-        let cmd = req.command;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
-        self.controller
-            .start_joint_sequence()
             .map_err(|r| refusal_notice(cmd, r))?;
         Ok(Reply::null(cmd))
     }
@@ -68,8 +53,7 @@ impl CommandHandler {
         let v = req.values.map(f64::from);
         let rates = JointRates::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
         let joints = bank_values(&v, cmd)?;
-        self.in_mode(cmd)?;
-        operational(drives, cmd)?;
+        self.ready_to_move(cmd, drives)?;
         if rates.bank_2 {
             self.stage(BankKey::Rates, joints, cmd)?;
         } else {
