@@ -156,7 +156,7 @@ fn refusals_follow_the_drives_through_start_fault_and_stop() {
     assert_eq!(rig.status()[4], 2.0, "a Cartesian move runs");
     assert_eq!(rig.text("BG", [0.0; 7]), "ER20 Cmd BG busy");
 
-    // OF while moving, a category-1 stop: the arm decelerates (SQ motion 6, index 2 cause 3),
+    // OF while moving: the arm decelerates (SQ motion 6, index 2 cause 3),
     // then the drives stop.
     assert_eq!(&rig.request("OF", [0.0; 7], 0)[..2], b"FO");
     assert_eq!(rig.status()[1], 2.0);
@@ -186,4 +186,54 @@ fn recalibration_waits_until_the_drives_settle_after_mode_off() {
     assert_eq!(rig.text("RC", here), "ER20 Cmd RC drives settling");
     rig.tick();
     assert_eq!(&rig.request("RC", here, 0)[..2], b"CR");
+}
+
+/// `SQ` index 2 names the cause of each stop that ends in a hold (docs/safety.md): a mode
+/// change while moving (2), a joint-rate stream whose requests stopped (6), and the client
+/// watchdog (8, with its notice); a new motion clears it.
+#[test]
+fn sq_index_2_names_mode_change_stream_timeout_and_silent_client_stops() {
+    let mut rig = Rig::new();
+    rig.ticks_until(|r| r.drives.status() == DriveStatus::Running);
+    let cause = |rig: &mut Rig| {
+        let reply = rig.request("SQ", [0.0; 7], 2);
+        assert_eq!((&reply[..2], reply[30]), (&b"QS"[..], 2));
+        f32::from_le_bytes(reply[2..6].try_into().unwrap())
+    };
+    let at_rest = |r: &Rig| r.handler.status(&r.drives).motion == Motion::Holding;
+
+    // CM while a Cartesian move runs: decelerates (f4 = 6), then the joint mode holds.
+    assert_eq!(&rig.request("CM", CARTESIAN, 0)[..2], b"MC");
+    assert_eq!(&rig.request("GT", UP, 0)[..2], b"TG");
+    assert_eq!(&rig.request("BG", [0.0; 7], 0)[..2], b"GB");
+    for _ in 0..10 {
+        rig.tick();
+    }
+    assert_eq!(rig.status()[4], 2.0, "a Cartesian move runs");
+    assert_eq!(cause(&mut rig), 0.0, "a running move has no cause in force");
+    let joint = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(&rig.request("CM", joint, 0)[..2], b"MC");
+    assert_eq!(rig.status()[4], 6.0);
+    rig.ticks_until(at_rest);
+    assert_eq!(cause(&mut rig), 2.0);
+
+    // One jW and then silence: the stream ramps to rest by itself.
+    let rates = [0.0, 0.0, 0.0, 0.0, 0.0, 0.05, 0.0];
+    assert_eq!(&rig.request("jW", rates, 0)[..2], b"Wj");
+    rig.tick();
+    assert_eq!(cause(&mut rig), 0.0, "a new motion clears the cause");
+    rig.ticks_until(at_rest);
+    assert_eq!(cause(&mut rig), 6.0);
+
+    // A move whose client asked for a 200 ms watchdog and then said nothing.
+    assert_eq!(&rig.request("CM", CARTESIAN, 0)[..2], b"MC");
+    assert_eq!(&rig.request("GT", UP, 0)[..2], b"TG");
+    assert_eq!(&rig.request("BG", [0.0; 7], 0)[..2], b"GB");
+    let watchdog = [200.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(&rig.request("WD", watchdog, 0)[..2], b"DW");
+    rig.notices.clear();
+    rig.ticks_until(|r| !r.notices.is_empty());
+    assert_eq!(rig.notices, ["ER41 client silent 200 ms"]);
+    rig.ticks_until(at_rest);
+    assert_eq!(cause(&mut rig), 8.0);
 }

@@ -328,3 +328,46 @@ fn a_third_frame_in_quick_succession_is_lost_at_1_mbit() {
     assert_eq!(lost(1_000_000), 1);
     assert_eq!(lost(500_000), 0);
 }
+
+/// A drive fault at speed: every drive is at rest on the last command taken within the hold
+/// cycles, a stop the drives make, not the supervisor's ramp (docs/safety.md).
+#[test]
+fn a_fault_at_speed_stops_every_drive_within_the_hold_cycles() {
+    let (mut rig, _) = moving();
+    let period = mk1_fast().control_period;
+    let mut last = rig.drive_positions();
+    rig.tick();
+    let mut now = rig.drive_positions();
+    let speed = |a: &[f64], b: &[f64]| {
+        let steps = a.iter().zip(b).map(|(a, b)| (b - a).abs());
+        steps.fold(0.0, f64::max) / period
+    };
+    let cruise = speed(&last, &now);
+    let emcy = Emcy {
+        code: 0x2310,
+        register: 0x03,
+        manufacturer: [0; 5],
+    };
+    let drive = rig.bus_mut().drive_mut(104).unwrap();
+    drive.inject(DriveEmergency::Other(emcy));
+    let mut ticks = 0;
+    let mut peak = 0.0_f64;
+    while ticks < 50 {
+        let before = speed(&last, &now);
+        last = now;
+        rig.tick();
+        now = rig.drive_positions();
+        ticks += 1;
+        let after = speed(&last, &now);
+        peak = peak.max((before - after).abs() / period);
+        if after == 0.0 {
+            break;
+        }
+    }
+    eprintln!(
+        "fault at {cruise:.3} rad/s: at rest after {ticks} ticks, peak deceleration {peak:.1} rad/s²"
+    );
+    assert!(cruise > 0.3, "at speed: {cruise}");
+    assert!(!rig.manager().is_operational());
+    assert!(ticks <= 6, "at rest after {ticks} ticks");
+}

@@ -40,6 +40,16 @@ fn mk1_fast() -> ValidRobot {
         .unwrap()
 }
 
+/// A rig on `mk1_fast`, its drives started, `ticks` into a joint move towards `MK1_READY`.
+fn moving(ticks: usize) -> Rig {
+    let mut rig = Rig::new(mk1_fast());
+    rig.start();
+    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
+    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
+    rig.ticks(ticks);
+    rig
+}
+
 /// Interpreter frames per node in `rig.sent()`.
 fn frames_per_drive(rig: &Rig) -> Vec<usize> {
     let mut counts = std::collections::BTreeMap::new();
@@ -193,11 +203,7 @@ fn mk2_streams_a_minute_to_eight_drives() {
 
 #[test]
 fn stop_holds_the_last_command_and_start_resumes_without_a_jump() {
-    let mut rig = Rig::new(mk1_fast());
-    rig.start();
-    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
-    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
-    rig.ticks(60); // moving
+    let mut rig = moving(60);
     let accepted = rig.tick_accepted().unwrap();
     rig.manager_mut().stop().unwrap();
     assert_eq!(rig.manager_mut().stop(), Err(LifecycleError::NotRunning));
@@ -443,11 +449,7 @@ fn drive_clocks_off_by_a_thousand_ppm_are_followed() {
 
 #[test]
 fn drives_stop_by_themselves_when_the_controller_dies() {
-    let mut rig = Rig::new(mk1_fast());
-    rig.start();
-    rig.ctrl_mut().set_mode(Mode::Joint).unwrap();
-    rig.ctrl_mut().move_joints(&MK1_READY, 0.0).unwrap();
-    rig.ticks(50);
+    let mut rig = moving(50);
     assert!(rig.bus().drives().all(|d| d.pt_running()));
     // The controller stops: no more points, no more heartbeats. The drives underflow first
     // (within two segments), then miss the heartbeat (300 ms after the last, which went out
@@ -486,4 +488,30 @@ fn drives_stop_by_themselves_when_the_controller_dies() {
     rig.bus_mut().reset_stats();
     rig.ticks(20);
     check_healthy(&rig);
+}
+
+/// `OF` (the manager's `stop()`) removes no power: the drives end their PT motion and hold
+/// the last command under servo, motors on (docs/safety.md: a category-2 stop).
+#[test]
+fn stopped_drives_keep_their_motors_on() {
+    use armgate_protocol::can::interpreter::{Index, Mnemonic, Reply, Value};
+    use drives_rig::frames::{exchange, query};
+    let mut rig = moving(60);
+    rig.manager_mut().stop().unwrap();
+    rig.until(20, |r| r.manager().state() == DriveState::Stopped);
+    rig.ticks(10);
+    let nodes: Vec<u8> = rig.bus().drives().map(|d| d.node().get()).collect();
+    for node in nodes {
+        let answers = exchange(rig.bus_mut(), &[query(node, Mnemonic::MO, 0)], 0.01);
+        let motor = answers.iter().map(|f| Reply::parse(f).unwrap().1);
+        let on = Reply::Value {
+            command: Mnemonic::MO,
+            index: Index::ZERO,
+            value: Value::Int(1),
+        };
+        assert!(
+            motor.into_iter().any(|r| r == on),
+            "node {node}: {answers:?}"
+        );
+    }
 }

@@ -458,6 +458,7 @@ fn boxes_block_cartesian_moves_and_allow_joint_moves_out() {
     rig.ctrl.move_cartesian(pb, 0.0).unwrap();
     let outs = rig.settle(20_000);
     assert!(outs.iter().any(|o| o.events.workspace_limit));
+    assert_eq!(rig.ctrl.stop_cause().0, Some(StopCause::Workspace));
     assert!(
         outs.iter()
             .all(|o| !in_box(o.setpoint.unwrap().translation.vector))
@@ -687,13 +688,25 @@ fn the_readme_move_is_refused_up_front_where_the_run_would_stop() {
     );
     let j3_max = JointBound::new(2, true, 1.6, PathPoint::Along(3));
     // Without the check the move starts, and stalls with joint 3 on that limit.
-    let (rig, _) = refused_where_the_unchecked_run_stops(
+    let (rig, outs) = refused_where_the_unchecked_run_stops(
         &config,
         &MK1_HOME,
         goal,
         5.0,
         Refusal::OutsideJointLimits(j3_max),
     );
+    assert_eq!(rig.ctrl.stop_cause().0, Some(StopCause::IkDivergence));
+    let commands: Vec<_> = outs.iter().filter_map(|o| o.command).collect();
+    let t = config.control_period;
+    let mut peak = 0.0_f64;
+    for w in commands.windows(3) {
+        for (j, joint) in config.joints.iter().enumerate() {
+            let a = (w[2][j] - 2.0 * w[1][j] + w[0][j]) / (t * t);
+            peak = peak.max(a.abs() / joint.max_acceleration);
+        }
+    }
+    // The stop that WN22 begins, like the run before it, stays within max_acceleration.
+    assert!(peak <= 1.0 + 1e-6, "peak acceleration {peak} × max");
     assert!((rig.arm.measured()[2] - 1.6).abs() < 1e-3);
     assert!((rig.pose().translation.vector - goal.translation.vector).norm() > 0.5);
 }

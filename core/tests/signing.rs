@@ -247,13 +247,19 @@ fn a_replayed_or_forged_motion_request_does_not_move_the_arm() {
 #[test]
 fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
     let mut cycle = cycle(Some(UnsignedAccess::Read));
-    let reads = [Command::Pose, Command::JointPosition, Command::Stop];
+    // Every request the session answers to everyone (KS included), and the stops.
+    let reads = [
+        Command::Pose,
+        Command::JointPosition,
+        Command::IkSolution,
+        Command::Stop,
+    ];
     let datagrams: Vec<_> = reads.iter().map(|c| message(*c, [0.0; 7])).collect();
     let mut waiting: Vec<&[u8]> = datagrams.iter().map(|d| &d[..]).collect();
     let mode = message(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
     waiting.push(&mode);
     let replies = exchange(&mut cycle, &waiting);
-    assert_eq!(replies.len(), 3, "CM is not a read");
+    assert_eq!(replies.len(), 4, "CM is not a read");
     assert!(replies.iter().all(|r| r.payload().len() == MESSAGE_LEN));
     assert_eq!(cycle.signing().dropped_unsigned, 1);
     assert_eq!(cycle.signing().policy, Some(SigningPolicy::UnsignedRead));

@@ -55,5 +55,5 @@ pub use counters::CycleCounters;
 pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
 pub use shares::Shares;
 pub use side::DriveSide;
-pub use signing::{Signing, UNSIGNED_READS, UnknownAccess, UnsignedAccess};
+pub use signing::{Signing, UnknownAccess, UnsignedAccess};
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

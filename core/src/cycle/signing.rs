@@ -15,6 +15,7 @@
 use core::fmt;
 use core::str::FromStr;
 
+use crate::command::Class;
 use armgate_protocol::client::signed::{
     CONTROLLER_LINK, SIGNED_LEN, Signature, SignatureError, Signed, SigningKey, SigningPolicy,
     SigningReport, TIMESTAMP_MAX,
@@ -27,23 +28,14 @@ pub enum UnsignedAccess {
     /// Nothing: it is dropped (the default).
     #[default]
     Refused,
-    /// Read ([`UNSIGNED_READS`]: pose, joints, temperatures, status) and stop (`ST`, `jR`:
-    /// the arm holds, the principle that any client can stop it); anything else is dropped.
+    /// Read (what the session answers to everyone, [`Class::Read`]: pose, joints,
+    /// temperatures, status, IK solutions) and stop ([`Class::Stop`], `ST`, `jR`: the arm
+    /// holds, the principle that any client can stop it); anything else is dropped.
     Read,
     /// Everything: the key then only signs the answers to signed clients (a lab moving its
     /// clients to signing one by one).
     All,
 }
-
-/// The requests an unsigned datagram may send with [`UnsignedAccess::Read`].
-pub const UNSIGNED_READS: [Command; 6] = [
-    Command::Pose,
-    Command::JointPosition,
-    Command::Temperature,
-    Command::Status,
-    Command::Stop,
-    Command::JointReset,
-];
 
 impl FromStr for UnsignedAccess {
     type Err = UnknownAccess;
@@ -280,7 +272,7 @@ fn unsigned<'a>(
         UnsignedAccess::Refused => false,
         UnsignedAccess::Read => {
             let chars = [0, 1].map(|i| datagram.get(i).copied().unwrap_or_default());
-            Command::from_chars(chars).is_some_and(|c| UNSIGNED_READS.contains(&c))
+            Command::from_chars(chars).is_some_and(|c| Class::of(c) != Class::Command)
         }
         UnsignedAccess::All => true,
     };

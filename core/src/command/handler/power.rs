@@ -36,7 +36,7 @@ impl CommandHandler {
         drives: &mut (impl Drives + ?Sized),
     ) -> Result<Reply, Notice> {
         self.banks.clear();
-        // A category-1 stop: decelerate, then remove power (in `tick`).
+        // Decelerate, then stop the drives (in `tick`); they hold under servo, motors on.
         if self.controller.is_moving() && drives.is_operational() {
             self.controller.stop(StopCause::PowerOff);
             self.power_off_at = Some(self.now + self.stop_within);
