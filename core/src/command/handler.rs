@@ -1,26 +1,35 @@
 //! The command handler: one client datagram in, one reply out.
+//!
+//! The requests' handling, one concern a file: `handler/cartesian.rs` (Cartesian goals, moves,
+//! via points, the twist stream), `handler/joint.rs` (the joint ones), `handler/ik_requests.rs`
+//! (`KG`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`, `OF`,
+//! `RC`); `handler/replies.rs` makes the replies and refusal texts.
 
-use armgate_protocol::client::banks::READ_JOINTS;
-use armgate_protocol::client::branch::BRANCH_INDEX;
-use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
+mod cartesian;
+mod ik_requests;
+mod joint;
+mod power;
+mod reads;
+mod replies;
+
+use armgate_protocol::client::signed::SigningReport;
 use core::net::{Ipv4Addr, SocketAddr};
 
 use armgate_protocol::client::{
-    BlendTolerance, CAUSE_INDEX, CauseReport, Command, DriveStatus, JointRates, MESSAGE_LEN,
-    Message, Motion, NAME_INDEX, NO_JOINT_TEMPERATURE, Notice, Rejection, Reply, Request,
-    RobotName, SESSION_INDEX, STATUS_INDEX, Text, Twist as TwistRequest, VALUES, WorkspaceReason,
+    Command, MESSAGE_LEN, Message, Motion, NAME_INDEX, Notice, Reply, Request, RobotName,
+    SESSION_INDEX, Text,
 };
 
-use super::banks::{BANK_2, BANK_LEN, BankKey, Banks};
+use super::banks::{BankKey, Banks};
 use super::drives::Drives;
-use super::ik::{self, IkRequestError};
 use super::relay::NoticeRelay;
 use super::session::Session;
 use super::status::Status;
 use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
-use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
+use crate::math::Frame;
 use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
+use replies::{operational, refusal_notice, values_reply};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
 /// staged joint banks and the warning relay.
@@ -242,142 +251,44 @@ impl CommandHandler {
         }
     }
 
+    /// Every request but the two `SQ` reports that are not seven floats: one method a request,
+    /// grouped by concern in `handler/` (cartesian, joint, ik_requests, reads, power).
     fn execute(
         &mut self,
         req: &Request,
         drives: &mut (impl Drives + ?Sized),
     ) -> Result<Reply, Notice> {
         let cmd = req.command;
-        let v = req.values.map(f64::from);
-        let slot = usize::from(req.index & !BANK_2);
-        let bank_2 = req.index & BANK_2 != 0;
-        let refused = |r: Refusal| refusal_notice(cmd, r);
-        let null = Reply::null(cmd);
-        let n = self.controller.chain().dof();
         match cmd {
-            Command::Begin => {
-                let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                self.controller
-                    .move_cartesian(goal, duration)
-                    .map_err(refused)?;
-                Ok(null)
-            }
+            Command::Begin => self.begin(req, drives),
             Command::ChangeMode => {
                 self.banks.clear();
                 // The seed accepted any value, e.g. 3, then forced mode 0 (spec §9 item 17).
                 let mode = Mode::from_value(req.values[0]).ok_or(Notice::BadNumber(cmd))?;
-                self.controller.set_mode(mode).map_err(refused)?;
+                self.controller
+                    .set_mode(mode)
+                    .map_err(|r| refusal_notice(cmd, r))?;
                 Ok(values_reply(cmd, &[f64::from(mode.value())], 0))
             }
-            Command::GoalQuaternion => {
-                let [x, y, z, qx, qy, qz, qw] = v;
-                let q = Quaternion::new(qx, qy, qz, qw)
-                    .normalized()
-                    .ok_or(Notice::BadNumber(cmd))?;
-                let goal = Frame::from_parts(Vector3::new(x, y, z).into(), q.to_rotation());
-                self.controller
-                    .check_cartesian_goal(&goal)
-                    .map_err(refused)?;
-                self.goal = Some((goal, 0.0));
-                let [a, b, c, d] = q.to_array();
-                Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
-            }
-            Command::GoalRpy => {
-                let [x, y, z, roll, pitch, yaw, t] = v;
-                let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
-                let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
-                let goal = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
-                self.controller
-                    .check_cartesian_goal(&goal)
-                    .map_err(refused)?;
-                self.goal = Some((goal, duration));
-                Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
-            }
-            Command::IkGoal => {
-                let duration = non_negative(v[6]).ok_or(Notice::BadNumber(cmd))?;
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                let (present, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
-                let chain = self.controller.chain();
-                let ik = self.controller.ik_config();
-                let (goal, branch) =
-                    ik::goal(chain, ik, &present, &v, req.index).map_err(|e| ik_notice(cmd, e))?;
-                self.controller
-                    .move_joints(&goal, duration)
-                    .map_err(refused)?;
-                let mut values = [0.0; VALUES];
-                for (o, q) in values.iter_mut().zip(goal.iter()) {
-                    *o = *q;
-                }
-                values[VALUES - 1] = duration;
-                Ok(values_reply(cmd, &values, branch))
-            }
-            Command::IkSolution => {
-                let reference = self
-                    .controller
-                    .measured()
-                    .map_or_else(|| self.controller.chain().mid_range(), |(q, _)| q);
-                ik::solution(self.controller.chain(), &reference, &v, req.index)
-                    .map_err(|e| ik_notice(cmd, e))
-            }
-            Command::JointBegin => {
-                let goal = self
-                    .joint_goal
-                    .ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                self.controller.move_joints(&goal, 0.0).map_err(refused)?;
-                Ok(null)
-            }
+            Command::GoalQuaternion => self.goal_quaternion(req),
+            Command::GoalRpy => self.goal_rpy(req),
+            Command::IkGoal => self.ik_goal(req, drives),
+            Command::IkSolution => self.ik_solution(req),
+            Command::JointBegin => self.joint_begin(req, drives),
             Command::JointClear => {
                 self.controller.clear_joint_via();
-                Ok(null)
+                Ok(Reply::null(cmd))
             }
-            Command::JointExecute => {
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                self.controller.start_joint_sequence().map_err(refused)?;
-                Ok(null)
-            }
-            Command::JointGoal => {
-                let joints = bank_values(&v, cmd)?;
-                if bank_2 {
-                    self.stage(BankKey::Goal, joints, cmd)?;
-                } else {
-                    let q = self.complete(BankKey::Goal, joints, cmd)?;
-                    self.joint_goal = Some(self.controller.check_joint_goal(&q).map_err(refused)?);
-                }
-                // The seed's f6 was stale (spec §9 item 9).
-                Ok(values_reply(cmd, joints, req.index & BANK_2))
-            }
-            Command::JointPosition => {
-                let (q, _) = self.controller.measured().ok_or(no_measurement(cmd))?;
-                joint_reply(cmd, &q, bank_2, n, 0.0)
-            }
-            Command::JointVelocity => {
-                let rates = JointRates::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
-                let joints = bank_values(&v, cmd)?;
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                if rates.bank_2 {
-                    self.stage(BankKey::Rates, joints, cmd)?;
-                } else {
-                    let q = self.complete(BankKey::Rates, joints, cmd)?;
-                    self.controller.stream_joint_rates(&q).map_err(refused)?;
-                }
-                // The echo: the rates as sent, and in f6 how long they hold.
-                let mut values = v;
-                values[BANK_LEN] = self.controller.stream_timeout();
-                Ok(values_reply(cmd, &values, req.index))
-            }
+            Command::JointExecute => self.run_sequence(req, drives),
+            Command::JointGoal => self.joint_goal(req),
+            Command::JointPosition => self.joint_position(req),
+            Command::JointVelocity => self.joint_velocity(req, drives),
             Command::JointReset | Command::Stop => {
                 self.stop(StopCause::Stop);
-                Ok(null)
+                Ok(Reply::null(cmd))
             }
             Command::Watchdog => {
-                let ms = v[0];
+                let ms = f64::from(req.values[0]);
                 if !(0.0..=f64::from(MAX_WATCHDOG_MS)).contains(&ms) {
                     return Err(Notice::BadNumber(cmd));
                 }
@@ -385,155 +296,21 @@ impl CommandHandler {
                 self.session.set_watchdog(ms);
                 Ok(values_reply(cmd, &[f64::from(ms)], 0))
             }
-            Command::JointVia => {
-                let joints = bank_values(&v, cmd)?;
-                let duration = non_negative(v[6]).ok_or(Notice::BadNumber(cmd))?;
-                if bank_2 {
-                    self.stage(BankKey::Via(slot), joints, cmd)?;
-                } else {
-                    let q = self.complete(BankKey::Via(slot), joints, cmd)?;
-                    self.controller
-                        .set_joint_via(slot, &q, duration)
-                        .map_err(refused)?;
-                }
-                // The echo: the joints as sent (`joints` is `v`'s first BANK_LEN values), then
-                // the clamped duration. No slice copy that could panic on a length mismatch.
-                let mut values = v;
-                values[BANK_LEN] = duration;
-                Ok(values_reply(cmd, &values, req.index))
-            }
-            Command::On => {
-                self.banks.clear();
-                // Already starting (e.g. at power-up): ON asks for what is under way.
-                if drives.status() == DriveStatus::Starting {
-                    return Ok(null);
-                }
-                if drives.start().is_err() {
-                    return Err(Notice::ArmDidNotStart(drives.status()));
-                }
-                self.power_off_at = None;
-                self.controller.release();
-                Ok(null)
-            }
-            Command::Off => {
-                self.banks.clear();
-                // Decelerate, then stop the drives (in `tick`); they hold under servo, motors on.
-                if self.controller.is_moving() && drives.is_operational() {
-                    self.controller.stop(StopCause::PowerOff);
-                    self.power_off_at = Some(self.now + self.stop_within);
-                    return Ok(null);
-                }
-                if drives.stop().is_err() {
-                    return Err(Notice::ArmDidNotStop(drives.status()));
-                }
-                self.controller.release();
-                Ok(null)
-            }
-            Command::Pose => {
-                let (_, pose) = self.controller.measured().ok_or(no_measurement(cmd))?;
-                let [x, y, z]: [f64; 3] = pose.translation.vector.into();
-                let [a, b, c, d] = Quaternion::from_rotation(&pose.rotation).to_array();
-                Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
-            }
-            Command::Recalibrate => {
-                let joints = bank_values(&v, cmd)?;
-                if bank_2 {
-                    self.stage(BankKey::Recalibrate, joints, cmd)?;
-                    return Ok(values_reply(cmd, joints, BANK_2));
-                }
-                // Only with the arm off: the measured angles jump (spec §6.8).
-                self.in_mode(cmd)?;
-                let q = self.complete(BankKey::Recalibrate, joints, cmd)?;
-                // Declaring the arm outside its range would make the measured pose illegal
-                // and the limiter ease commands back from there (the seed did not check).
-                let q = self.controller.check_joint_goal(&q).map_err(refused)?;
-                drives
-                    .recalibrate(&q)
-                    .map_err(|r| recalibration_refused(r, drives.status()))?;
-                Ok(null)
-            }
-            Command::Status => match req.index {
-                STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
-                CAUSE_INDEX => {
-                    let (cause, joint) = self.controller.stop_cause();
-                    Ok(CauseReport { cause, joint }.to_reply())
-                }
-                SIGNING_INDEX => Ok(self.signing.to_reply()),
-                BRANCH_INDEX => {
-                    let present = self.controller.measured().map(|(q, _)| q);
-                    Ok(ik::present_branch(
-                        self.controller.chain(),
-                        present.as_ref(),
-                    ))
-                }
-                _ => Err(Notice::BadIndex(cmd)),
-            },
-            Command::Temperature => {
-                let t = drives.temperatures();
-                joint_reply(cmd, &t, bank_2, n, NO_JOINT_TEMPERATURE)
-            }
-            Command::Twist => {
-                let twist = TwistRequest::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
-                let [vx, vy, vz] = twist.linear.map(f64::from);
-                let [wx, wy, wz] = twist.angular.map(f64::from);
-                let xi = Twist::new(vx, vy, vz, wx, wy, wz);
-                if !xi.iter().all(|v| v.is_finite()) {
-                    return Err(Notice::BadNumber(cmd));
-                }
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                self.controller
-                    .stream_twist(xi, twist.frame)
-                    .map_err(refused)?;
-                let timeout = self.controller.stream_timeout();
-                Ok(values_reply(
-                    cmd,
-                    &[vx, vy, vz, wx, wy, wz, timeout],
-                    req.index,
-                ))
-            }
+            Command::JointVia => self.joint_via(req),
+            Command::On => self.power_on(req, drives),
+            Command::Off => self.power_off(req, drives),
+            Command::Pose => self.pose(req),
+            Command::Recalibrate => self.recalibrate(req, drives),
+            Command::Status => self.status_report(req, drives),
+            Command::Temperature => self.temperature(req, drives),
+            Command::Twist => self.twist(req, drives),
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();
-                Ok(null)
+                Ok(Reply::null(cmd))
             }
-            Command::ViaExecute => {
-                self.in_mode(cmd)?;
-                operational(drives, cmd)?;
-                self.controller
-                    .start_cartesian_sequence()
-                    .map_err(refused)?;
-                Ok(null)
-            }
-            Command::ViaTolerance | Command::JointViaTolerance => {
-                // The slot is the whole index byte: 20 and above (bank bit included) are
-                // refused with ER24, as for VP.
-                let tolerance = BlendTolerance::parse(req)
-                    .ok()
-                    .and_then(|t| t.tolerance)
-                    .map(f64::from);
-                let slot = usize::from(req.index);
-                let in_effect = if cmd == Command::ViaTolerance {
-                    self.controller.set_cartesian_blend(slot, tolerance)
-                } else {
-                    self.controller.set_joint_blend(slot, tolerance)
-                }
-                .map_err(refused)?;
-                Ok(values_reply(cmd, &[in_effect], req.index))
-            }
-            Command::ViaPoint => {
-                if bank_2 {
-                    return Err(Notice::BadIndex(cmd));
-                }
-                let [x, y, z, roll, pitch, yaw, t] = v;
-                let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
-                let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
-                let pose = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
-                self.controller
-                    .set_cartesian_via(slot, pose, duration)
-                    .map_err(refused)?;
-                let [r, p, w] = math::rpy(&pose.rotation);
-                Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
-            }
+            Command::ViaExecute => self.run_sequence(req, drives),
+            Command::ViaTolerance | Command::JointViaTolerance => self.blend_tolerance(req),
+            Command::ViaPoint => self.via_point(req),
         }
     }
 
@@ -552,6 +329,12 @@ impl CommandHandler {
         } else {
             Err(refusal_notice(cmd, Refusal::WrongMode))
         }
+    }
+
+    /// A motion request needs its mode, then running drives.
+    fn ready_to_move(&self, cmd: Command, drives: &(impl Drives + ?Sized)) -> Result<(), Notice> {
+        self.in_mode(cmd)?;
+        operational(drives, cmd)
     }
 
     fn stage(&mut self, key: BankKey, values: &[f64], cmd: Command) -> Result<(), Notice> {
@@ -574,120 +357,6 @@ const MAX_WATCHDOG_MS: u16 = 60_000;
 
 /// The address of a client that gives none.
 const ANONYMOUS: SocketAddr = SocketAddr::new(core::net::IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0);
-
-/// The client text for a refused request, with its reason. (Out of line: eleven callers, all
-/// answering requests.)
-#[inline(never)]
-fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
-    let rejected = |why| Notice::Rejected(cmd, why);
-    let workspace = |why| Notice::OutsideWorkspace(cmd, why);
-    match refusal {
-        Refusal::InvalidNumber | Refusal::WrongJointCount => Notice::BadNumber(cmd),
-        Refusal::IndexOutOfRange => Notice::BadIndex(cmd),
-        Refusal::OutsideWorkspace => workspace(WorkspaceReason::Goal),
-        Refusal::CrossesBox(percent) => workspace(WorkspaceReason::CrossesBox(percent)),
-        Refusal::Unreachable(at) => workspace(WorkspaceReason::Unreachable(at)),
-        Refusal::ArmOutsideWorkspace => workspace(WorkspaceReason::ArmOutside),
-        Refusal::TooFast(joint, at) => workspace(WorkspaceReason::TooFast(joint, at)),
-        Refusal::OutsideJointLimits(bound) => Notice::BeyondJointLimit(cmd, bound),
-        Refusal::NoGoal => rejected(match cmd {
-            Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,
-            _ => Rejection::NoGoal,
-        }),
-        // Only the requests that need a mode are refused for the wrong one.
-        Refusal::WrongMode => rejected(Rejection::NeedsMode(
-            Mode::required_by(cmd).unwrap_or_default(),
-        )),
-        Refusal::Busy => rejected(Rejection::Busy),
-        Refusal::NotReady => rejected(Rejection::NoMeasurement),
-    }
-}
-
-/// The client text for a refused `KG`/`KS`.
-fn ik_notice(cmd: Command, error: IkRequestError) -> Notice {
-    match error {
-        IkRequestError::BadNumber => Notice::BadNumber(cmd),
-        IkRequestError::BadIndex => Notice::BadIndex(cmd),
-        IkRequestError::Refused(r) => refusal_notice(cmd, r),
-    }
-}
-
-fn no_measurement(cmd: Command) -> Notice {
-    Notice::Rejected(cmd, Rejection::NoMeasurement)
-}
-
-/// Motion needs running drives; otherwise the reason is their state, or their fault.
-fn operational(drives: &(impl Drives + ?Sized), cmd: Command) -> Result<(), Notice> {
-    let why = match (drives.status(), drives.fault_code()) {
-        (DriveStatus::Running, _) => return Ok(()),
-        (_, Some(code)) => Rejection::DriveFault(code),
-        (status, None) => Rejection::Drives(status),
-    };
-    Err(Notice::Rejected(cmd, why))
-}
-
-/// Why the drives refused `RC`: busy means starting, stopping, or still executing the last
-/// set-points after the mode was switched off (settling).
-fn recalibration_refused(refusal: Refusal, status: DriveStatus) -> Notice {
-    let cmd = Command::Recalibrate;
-    match (refusal, status) {
-        (Refusal::Busy, DriveStatus::Starting | DriveStatus::Stopping) => {
-            Notice::Rejected(cmd, Rejection::Drives(status))
-        }
-        (Refusal::Busy, _) => Notice::Rejected(cmd, Rejection::DrivesSettling),
-        (other, _) => refusal_notice(cmd, other),
-    }
-}
-
-/// The six joint values of a joint request, all finite.
-fn bank_values(v: &[f64; VALUES], cmd: Command) -> Result<&[f64], Notice> {
-    let joints = v.get(..BANK_LEN).unwrap_or(&[]);
-    if joints.iter().all(|x| x.is_finite()) {
-        Ok(joints)
-    } else {
-        Err(Notice::BadNumber(cmd))
-    }
-}
-
-/// A duration: finite, negative ones clamped to 0 (the seed left jV/VP unclamped, §9 item 12).
-fn non_negative(t: f64) -> Option<f64> {
-    t.is_finite().then_some(t.max(0.0))
-}
-
-/// A reply carrying `values` in f0.. (the rest zero).
-fn values_reply(cmd: Command, values: &[f64], index: u8) -> Reply {
-    let mut out = [0.0f32; VALUES];
-    for (o, v) in out.iter_mut().zip(values) {
-        *o = *v as f32;
-    }
-    Reply {
-        command: cmd,
-        values: out,
-        index,
-    }
-}
-
-/// jP/TM: joints 1–7 in f0..f6, or joints 7.. for bank 2 (refused on an arm without them,
-/// as docs/protocol.md says); unused slots hold `pad`.
-fn joint_reply(cmd: Command, q: &[f64], bank_2: bool, n: usize, pad: f32) -> Result<Reply, Notice> {
-    if bank_2 && n <= BANK_LEN {
-        return Err(Notice::BadIndex(cmd));
-    }
-    let skip = if bank_2 { BANK_LEN } else { 0 };
-    let mut values = [pad; VALUES];
-    for (o, v) in values
-        .iter_mut()
-        .zip(q.iter().take(n).skip(skip))
-        .take(READ_JOINTS)
-    {
-        *o = *v as f32;
-    }
-    Ok(Reply {
-        command: cmd,
-        values,
-        index: if bank_2 { BANK_2 } else { 0 },
-    })
-}
 
 /// The longest a stop from full speed may take (s): every joint from its top speed at its
 /// acceleration (plus the jerk ramp), and the Cartesian components likewise, doubled, plus

@@ -4,9 +4,12 @@
 //! The tick's parts, one concern a file: `controller/cartesian_tick.rs` (Cartesian mode: time
 //! scale, look-ahead, tracking IK), `controller/joint_tick.rs` (joint mode),
 //! `controller/streaming.rs` (the velocity stream's requests and tick) and
-//! `controller/stopping.rs` (a stop in progress).
+//! `controller/stopping.rs` (a stop in progress). The motion requests likewise:
+//! `controller/cartesian_requests.rs` and `controller/joint_requests.rs`.
 
+mod cartesian_requests;
 mod cartesian_tick;
+mod joint_requests;
 mod joint_tick;
 mod stopping;
 mod streaming;
@@ -15,17 +18,14 @@ use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
 use super::joint_limiter::JointLimiter;
-use super::joint_path::check_joint_path;
-use super::reach::{Reach, check_iterations, joint_beyond_limit};
-use super::sequence::{Sequence, SequenceStep, Tolerances, ViaPoint};
-use super::shape::Shape;
+use super::sequence::{Sequence, SequenceStep, Tolerances};
 use super::supervisor::{Along, StopCause, Supervisor};
 use super::velocity_stream::VelocityStream;
 use super::workspace::Workspace;
 use super::{Events, Refusal};
 use crate::config::{IkConfig, ValidRobot};
 use crate::kinematics::{Chain, Joints, KinematicsError, LastEvaluation};
-use crate::math::{self, Frame};
+use crate::math::Frame;
 use armgate_protocol::client::Motion;
 
 /// Below this pose error (m and rad, the seed's IK tolerance) a Cartesian set-point counts as
@@ -307,236 +307,6 @@ impl Controller {
         }
         self.joint_sequence.halt();
         self.cartesian_sequence.halt();
-    }
-
-    /// Moves the tool to `goal` (base frame) in at least `min_duration` seconds (negative: as
-    /// fast as the limits allow). Cartesian mode only.
-    /// The straight line to the goal is checked first (docs/protocol.md): a move the arm cannot
-    /// follow is refused with where and why.
-    pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
-        self.ready_for_cartesian_motion(&goal, min_duration)?;
-        let min_duration = min_duration.max(0.0);
-        if let Some(mut reach) = self.reach() {
-            let (start, seed) = self.cartesian_start();
-            reach.line(&start, &goal, &seed, min_duration)?;
-        }
-        self.supervisor.clear_cause();
-        self.cartesian_generator.move_to(goal, min_duration)
-    }
-
-    /// The pose a Cartesian motion starts from and the joints commanded there.
-    fn cartesian_start(&self) -> (Frame, Joints) {
-        let seed = self
-            .command
-            .or(self.measured.map(|(q, _)| q))
-            .unwrap_or_else(|| self.chain.mid_range());
-        (self.cartesian_generator.setpoint(), seed)
-    }
-
-    /// The up-front check of Cartesian lines (`None` if the robot file turned it off).
-    fn reach(&self) -> Option<Reach<'_>> {
-        self.ik.check_lines.then_some(Reach {
-            chain: &self.chain,
-            ik: &self.ik,
-            workspace: &self.workspace,
-            tolerance: REACH_TOLERANCE,
-            iterations_left: check_iterations(self.period),
-            speed: &self.cartesian_speed,
-            max_rate: &self.max_rate,
-        })
-    }
-
-    /// Moves the joints to `goal` in at least `min_duration` seconds. Joint mode only. The
-    /// tool's way is checked first: a move into an exclusion box or out of the workspace is
-    /// refused with where (driving out of a box the tool is in stays possible).
-    pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
-        let goal = self.ready_for_joint_motion(goal, min_duration)?;
-        let start = self.joint_generator.setpoint();
-        check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
-        self.supervisor.clear_cause();
-        self.joint_generator.move_to(goal, min_duration.max(0.0))
-    }
-
-    /// Runs a circle or sinusoid from the current set-point. Cartesian mode only.
-    pub fn start_shape(&mut self, shape: Shape) -> Result<(), Refusal> {
-        self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
-        self.supervisor.clear_cause();
-        self.cartesian_generator.start_shape(shape)
-    }
-
-    /// Asks a running shape to end where it started (end of revolution / centre crossing).
-    pub fn finish_shape(&mut self) -> Result<(), Refusal> {
-        if self.cartesian_generator.finish_shape() {
-            Ok(())
-        } else {
-            Err(Refusal::NoGoal)
-        }
-    }
-
-    /// Stores Cartesian via point `index` (0..20) with the minimum duration of its leg.
-    pub fn set_cartesian_via(
-        &mut self,
-        index: usize,
-        pose: Frame,
-        min_duration: f64,
-    ) -> Result<(), Refusal> {
-        if !min_duration.is_finite() {
-            return Err(Refusal::InvalidNumber);
-        }
-        self.check_cartesian_goal(&pose)?;
-        let via = ViaPoint {
-            point: pose,
-            min_duration: min_duration.max(0.0),
-        };
-        self.cartesian_sequence.set(index, via)
-    }
-
-    /// Stores joint via point `index` (0..20) with the minimum duration of its leg.
-    pub fn set_joint_via(
-        &mut self,
-        index: usize,
-        q: &[f64],
-        min_duration: f64,
-    ) -> Result<(), Refusal> {
-        let q = self.valid_joint_goal(q, min_duration)?;
-        let via = ViaPoint {
-            point: q,
-            min_duration: min_duration.max(0.0),
-        };
-        self.joint_sequence.set(index, via)
-    }
-
-    /// Sets the blend tolerance of Cartesian via point `index` (0..20; m + rad, ≥ 0; `None`:
-    /// the robot file's default) and returns the one now in effect there.
-    pub fn set_cartesian_blend(
-        &mut self,
-        index: usize,
-        tolerance: Option<f64>,
-    ) -> Result<f64, Refusal> {
-        self.cartesian_sequence.set_blend(index, tolerance)?;
-        self.cartesian_sequence.blend(index)
-    }
-
-    /// Sets the blend tolerance of joint via point `index` (0..20; rad, ≥ 0; `None`: the robot
-    /// file's default) and returns the one now in effect there.
-    pub fn set_joint_blend(
-        &mut self,
-        index: usize,
-        tolerance: Option<f64>,
-    ) -> Result<f64, Refusal> {
-        self.joint_sequence.set_blend(index, tolerance)?;
-        self.joint_sequence.blend(index)
-    }
-
-    /// Empties the Cartesian via-point slots.
-    pub fn clear_cartesian_via(&mut self) {
-        self.cartesian_sequence.clear();
-    }
-
-    /// Empties the joint via-point slots.
-    pub fn clear_joint_via(&mut self) {
-        self.joint_sequence.clear();
-    }
-
-    /// Runs the Cartesian via points 0, 1, … up to the first empty slot. Cartesian mode only.
-    /// Every leg's straight line is checked first, as for a move.
-    pub fn start_cartesian_sequence(&mut self) -> Result<(), Refusal> {
-        self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
-        if let Some(mut reach) = self.reach() {
-            let (mut from, mut q) = self.cartesian_start();
-            for via in self.cartesian_sequence.ready() {
-                q = reach.line(&from, &via.point, &q, via.min_duration)?;
-                from = via.point;
-            }
-        }
-        let first = self.cartesian_sequence.start()?;
-        self.supervisor.clear_cause();
-        let then = self.cartesian_sequence.towards();
-        self.cartesian_generator
-            .move_towards(first.point, first.min_duration, then)
-            .map(|_| ())
-    }
-
-    /// Runs the joint via points 0, 1, … up to the first empty slot. Joint mode only.
-    pub fn start_joint_sequence(&mut self) -> Result<(), Refusal> {
-        if self.mode != Mode::Joint {
-            return Err(Refusal::WrongMode);
-        }
-        if self.is_moving() {
-            return Err(Refusal::Busy);
-        }
-        let mut from = self.joint_generator.setpoint();
-        for via in self.joint_sequence.ready() {
-            check_joint_path(&self.chain, &self.workspace, &from, &via.point)?;
-            from = via.point;
-        }
-        let first = self.joint_sequence.start()?;
-        self.supervisor.clear_cause();
-        let then = self.joint_sequence.towards();
-        self.joint_generator
-            .move_towards(first.point, first.min_duration, then)
-            .map(|_| ())
-    }
-
-    fn ready_for_cartesian_motion(&self, goal: &Frame, min_duration: f64) -> Result<(), Refusal> {
-        if self.mode != Mode::Cartesian {
-            return Err(Refusal::WrongMode);
-        }
-        if !min_duration.is_finite() {
-            return Err(Refusal::InvalidNumber);
-        }
-        self.check_cartesian_goal(goal)?;
-        if self.is_moving() {
-            return Err(Refusal::Busy);
-        }
-        let arm_inside = self
-            .measured
-            .is_some_and(|(_, pose)| self.workspace.allows(&pose.translation.vector));
-        if !arm_inside {
-            return Err(Refusal::ArmOutsideWorkspace);
-        }
-        Ok(())
-    }
-
-    fn ready_for_joint_motion(&self, goal: &[f64], min_duration: f64) -> Result<Joints, Refusal> {
-        if self.mode != Mode::Joint {
-            return Err(Refusal::WrongMode);
-        }
-        let goal = self.valid_joint_goal(goal, min_duration)?;
-        if self.is_moving() {
-            return Err(Refusal::Busy);
-        }
-        Ok(goal)
-    }
-
-    fn valid_joint_goal(&self, goal: &[f64], min_duration: f64) -> Result<Joints, Refusal> {
-        if !min_duration.is_finite() {
-            return Err(Refusal::InvalidNumber);
-        }
-        self.check_joint_goal(goal)
-    }
-
-    /// Checks a joint goal without moving: one finite value per joint, within the limits.
-    pub fn check_joint_goal(&self, goal: &[f64]) -> Result<Joints, Refusal> {
-        let goal = self.chain.check(goal).map_err(|e| match e {
-            KinematicsError::WrongJointCount => Refusal::WrongJointCount,
-            KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
-        })?;
-        if let Some(bound) = joint_beyond_limit(&self.chain, &goal) {
-            return Err(Refusal::OutsideJointLimits(bound));
-        }
-        Ok(goal)
-    }
-
-    /// Checks a Cartesian goal without moving: finite, and its position inside the workspace.
-    pub fn check_cartesian_goal(&self, goal: &Frame) -> Result<(), Refusal> {
-        if !math::is_finite(goal) {
-            return Err(Refusal::InvalidNumber);
-        }
-        if !self.workspace.allows(&goal.translation.vector) {
-            return Err(Refusal::OutsideWorkspace);
-        }
-        Ok(())
     }
 
     /// The control mode.

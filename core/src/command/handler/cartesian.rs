@@ -1,0 +1,140 @@
+//! The Cartesian motion requests: goals (`GL`, `GT`), the move (`BG`), via points (`VP`,
+//! `VE`), blend tolerances (`VT`) and the twist stream (`TW`); `VT` and `VE` serve `jT` and
+//! `jE` alike.
+
+use armgate_protocol::client::{
+    BlendTolerance, Command, Notice, Rejection, Reply, Request, Twist as TwistRequest,
+};
+
+use super::CommandHandler;
+use super::replies::{non_negative, refusal_notice, values_reply};
+use crate::command::banks::BANK_2;
+use crate::command::drives::Drives;
+use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
+
+impl CommandHandler {
+    /// `BG`: the move to the stored goal.
+    pub(super) fn begin(
+        &mut self,
+        req: &Request,
+        drives: &(impl Drives + ?Sized),
+    ) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+        self.ready_to_move(cmd, drives)?;
+        self.controller
+            .move_cartesian(goal, duration)
+            .map_err(|r| refusal_notice(cmd, r))?;
+        Ok(Reply::null(cmd))
+    }
+
+    /// `GL`: a goal as position and quaternion.
+    pub(super) fn goal_quaternion(&mut self, req: &Request) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        let [x, y, z, qx, qy, qz, qw] = req.values.map(f64::from);
+        let q = Quaternion::new(qx, qy, qz, qw)
+            .normalized()
+            .ok_or(Notice::BadNumber(cmd))?;
+        let goal = Frame::from_parts(Vector3::new(x, y, z).into(), q.to_rotation());
+        self.controller
+            .check_cartesian_goal(&goal)
+            .map_err(|r| refusal_notice(cmd, r))?;
+        self.goal = Some((goal, 0.0));
+        let [a, b, c, d] = q.to_array();
+        Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
+    }
+
+    /// `GT`: a goal as position and roll–pitch–yaw, with a minimum duration.
+    pub(super) fn goal_rpy(&mut self, req: &Request) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        let [x, y, z, roll, pitch, yaw, t] = req.values.map(f64::from);
+        let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
+        let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
+        let goal = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
+        self.controller
+            .check_cartesian_goal(&goal)
+            .map_err(|r| refusal_notice(cmd, r))?;
+        self.goal = Some((goal, duration));
+        Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
+    }
+
+    /// `TW`: a streamed twist; the echo carries how long it holds.
+    pub(super) fn twist(
+        &mut self,
+        req: &Request,
+        drives: &(impl Drives + ?Sized),
+    ) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        let twist = TwistRequest::parse(req).map_err(|_| Notice::BadIndex(cmd))?;
+        let [vx, vy, vz] = twist.linear.map(f64::from);
+        let [wx, wy, wz] = twist.angular.map(f64::from);
+        let xi = Twist::new(vx, vy, vz, wx, wy, wz);
+        if !xi.iter().all(|v| v.is_finite()) {
+            return Err(Notice::BadNumber(cmd));
+        }
+        self.ready_to_move(cmd, drives)?;
+        self.controller
+            .stream_twist(xi, twist.frame)
+            .map_err(|r| refusal_notice(cmd, r))?;
+        let timeout = self.controller.stream_timeout();
+        Ok(values_reply(
+            cmd,
+            &[vx, vy, vz, wx, wy, wz, timeout],
+            req.index,
+        ))
+    }
+
+    /// `VE` and `jE`: runs the via points of the request's kind.
+    pub(super) fn run_sequence(
+        &mut self,
+        req: &Request,
+        drives: &(impl Drives + ?Sized),
+    ) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        self.ready_to_move(cmd, drives)?;
+        if cmd == Command::ViaExecute {
+            self.controller.start_cartesian_sequence()
+        } else {
+            self.controller.start_joint_sequence()
+        }
+        .map_err(|r| refusal_notice(cmd, r))?;
+        Ok(Reply::null(cmd))
+    }
+
+    /// `VT` and `jT`: a via point's blend tolerance; the echo is the one in effect.
+    pub(super) fn blend_tolerance(&mut self, req: &Request) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        // The slot is the whole index byte: 20 and above (bank bit included) are
+        // refused with ER24, as for VP.
+        let tolerance = BlendTolerance::parse(req)
+            .ok()
+            .and_then(|t| t.tolerance)
+            .map(f64::from);
+        let slot = usize::from(req.index);
+        let in_effect = if cmd == Command::ViaTolerance {
+            self.controller.set_cartesian_blend(slot, tolerance)
+        } else {
+            self.controller.set_joint_blend(slot, tolerance)
+        }
+        .map_err(|r| refusal_notice(cmd, r))?;
+        Ok(values_reply(cmd, &[in_effect], req.index))
+    }
+
+    /// `VP`: stores a Cartesian via point.
+    pub(super) fn via_point(&mut self, req: &Request) -> Result<Reply, Notice> {
+        let cmd = req.command;
+        if req.index & BANK_2 != 0 {
+            return Err(Notice::BadIndex(cmd));
+        }
+        let slot = usize::from(req.index & !BANK_2);
+        let [x, y, z, roll, pitch, yaw, t] = req.values.map(f64::from);
+        let duration = non_negative(t).ok_or(Notice::BadNumber(cmd))?;
+        let rotation = Rotation3::from_euler_angles(roll, pitch, yaw);
+        let pose = Frame::from_parts(Vector3::new(x, y, z).into(), rotation);
+        self.controller
+            .set_cartesian_via(slot, pose, duration)
+            .map_err(|r| refusal_notice(cmd, r))?;
+        let [r, p, w] = math::rpy(&pose.rotation);
+        Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
+    }
+}
