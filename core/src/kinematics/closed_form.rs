@@ -132,6 +132,22 @@ impl Candidate {
     }
 }
 
+/// The angles of a tracking seed's joints, where the caller has them: each spares a `sincos`
+/// at a two-way choice.
+pub(super) type Known<'a> = Option<&'a [Angle; MAX_JOINTS]>;
+
+/// Joint `i`'s angle in `known`, if any.
+pub(super) fn known_angle(known: Known<'_>, i: usize) -> Option<&Angle> {
+    known.and_then(|angles| angles.get(i))
+}
+
+/// The joint angles (sines and cosines) of a closed-form tracking solve's answer, kept to seed
+/// the next solve from that answer: it then compares its roots with them instead of taking the
+/// `sincos` of four seed joints (about 400 Cortex-M7 instructions). Empty when the answer came
+/// from Newton steps or from an approximate (calibrated) family's refined root.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SeedAngles(Option<[Angle; MAX_JOINTS]>);
+
 /// Where both families start: the target's rotation relative to the tool's at q = 0
 /// (`R1 ⋯ R6`), the target's place for the form's centre (which moves with the joints before
 /// the last two or three only) relative to axis 1's point, and the roots of θ1 that keep its
@@ -144,15 +160,21 @@ pub(super) struct Shoulder {
 }
 
 impl Shoulder {
-    /// The start of `form`'s solve for `target` (`nearest`: only the root nearest `free`).
-    pub fn of(form: &ClosedForm, target: &Frame, free: f64, nearest: bool) -> Self {
+    /// The start of `form`'s solve for `target` (`nearest`: only the root nearest `free`, whose
+    /// angle may be `known`).
+    pub fn of(
+        form: &ClosedForm,
+        target: &Frame,
+        (free, known): (f64, Option<&Angle>),
+        nearest: bool,
+    ) -> Self {
         let s = &form.screws;
         let [h1, h2, _, _, _, _, _, _] = &s.axis;
         let o1 = &s.point[0];
         let c = &form.centre;
         let tool = target.rotation.matrix() * s.tool_rotation.transpose();
         let v = target.translation.vector - tool * (s.tool_position - c) - o1;
-        let roots = sp4(&v, h1, h2, h2.dot(&(c - o1)), form.slack()).list(free, nearest);
+        let roots = sp4(&v, h1, h2, h2.dot(&(c - o1)), form.slack()).list(free, known, nearest);
         Self { tool, v, roots }
     }
 }
@@ -324,22 +346,37 @@ impl Chain {
     /// two-way choice the root nearest the seed, so one candidate is built and checked.
     /// Written to `solution` (whose joint count must be the chain's) if it reaches `target`
     /// within `tolerance`: returned by value, it was copied three times on the Cortex-M7.
-    /// `seed` is one that [`prepare`](Self::prepare) checked for `target`.
+    /// `seed` is one that [`prepare`](Self::prepare) checked for `target`; `seed_angles`, its
+    /// angles if known. The answer's angles are written to `answer`, if given (left as they
+    /// are if unknown).
     pub(super) fn follow(
         &self,
         target: &Frame,
-        seed: &[f64; MAX_JOINTS],
+        (seed, seed_angles): (&[f64; MAX_JOINTS], &SeedAngles),
         tolerance: f64,
         solution: &mut IkSolution,
+        answer: Option<&mut SeedAngles>,
     ) -> bool {
         let mut candidates = Candidates::new();
         let Some(form) = self.closed_form() else {
             return false;
         };
-        self.candidates_of(form, target, seed, true, &mut candidates);
+        let known = seed_angles.0.as_ref();
+        self.candidates_of(form, target, (seed, known), true, &mut candidates);
         candidates.first().is_some_and(|candidate| {
-            self.finish(form, candidate, target, (seed, &mut solution.q))
-                .is_some_and(|errors| errors.report_within(tolerance, solution))
+            let found = self
+                .finish(form, candidate, target, (seed, &mut solution.q))
+                .is_some_and(|errors| errors.report_within(tolerance, solution));
+            // A refined root's angles are not the candidate's; the redundant family's solver
+            // takes none (and copying them is not free).
+            if found
+                && form.fit.is_exact()
+                && form.fit.family != Family::SphericalShoulder
+                && let Some(answer) = answer
+            {
+                answer.0 = Some(candidate.angles);
+            }
+            found
         })
     }
 
@@ -366,25 +403,26 @@ impl Chain {
     ) -> Result<&ClosedForm, IkError> {
         let form = self.closed_form().ok_or(IkError::NoClosedForm)?;
         self.prepare(target, reference, checked)?;
-        self.candidates_of(form, target, checked, nearest, out);
+        self.candidates_of(form, target, (checked, None), nearest, out);
         Ok(form)
     }
 
-    /// The candidates of `form` for a checked `reference`, written to `out`.
+    /// The candidates of `form` for a checked `reference` (whose angles may be known), written
+    /// to `out`.
     fn candidates_of(
         &self,
         form: &ClosedForm,
         target: &Frame,
-        reference: &[f64; MAX_JOINTS],
+        (reference, known): (&[f64; MAX_JOINTS], Known<'_>),
         nearest: bool,
         out: &mut Candidates,
     ) {
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, reference, nearest, out);
+                spherical_wrist::solve(form, target, (reference, known), nearest, out);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, reference, nearest, out);
+                three_parallel::solve(form, target, (reference, known), nearest, out);
             }
             Family::SphericalShoulder => {
                 spherical_shoulder::solve(form, self.dof(), target, reference, nearest, out);
@@ -416,7 +454,7 @@ impl Chain {
                 *f = a.value();
             }
             let mut next = Candidates::new();
-            self.candidates_of(form, &ideal, &free, true, &mut next);
+            self.candidates_of(form, &ideal, (&free, None), true, &mut next);
             let Some(found) = next.first() else {
                 break;
             };

@@ -17,7 +17,7 @@
 use nalgebra::Vector6;
 
 use super::chain::Chain;
-use super::closed_form::Misses;
+use super::closed_form::{Misses, SeedAngles};
 use super::evaluation::LastEvaluation;
 use super::jacobian::{Jacobian, JointVector, damped_least_squares};
 use crate::MAX_JOINTS;
@@ -107,6 +107,13 @@ impl core::fmt::Display for IkError {
     }
 }
 
+/// Empties `angles`, if kept: the answer they are left for is not a closed-form root's.
+fn forget(angles: Option<&mut SeedAngles>) {
+    if let Some(angles) = angles {
+        *angles = SeedAngles::default();
+    }
+}
+
 /// The seed's divergence guard (spec §3.5): true if the solved pose is farther from the target
 /// than the current pose by more than `margin` (metric: metres + radians). A diverging solution
 /// must not be commanded; the arm holds instead.
@@ -163,33 +170,44 @@ impl Chain {
         config: &IkConfig,
         last: &mut LastEvaluation,
     ) -> Result<IkResult, IkError> {
-        self.track(target, (seed, None), config, Some(last))
+        self.track(target, (seed, None), config, Some(last), None)
     }
 
     /// [`solve_tracking`](Self::solve_tracking) for a caller that knows the pose at `seed`
     /// (`seed_pose`; a Cartesian line's previous point). It only chooses between Newton and
     /// the closed form, so an approximate pose does no harm; the seed's forward kinematics,
     /// a sixth of the closed form's cost on the Cortex-M7, is then spared unless Newton runs.
+    /// `angles`: the seed's [`SeedAngles`] (those of the solve that answered it) and where to
+    /// leave the answer's.
     pub fn solve_tracking_from(
         &self,
         target: &Frame,
-        seed: &[f64],
-        seed_pose: &Frame,
+        (seed, seed_pose): (&[f64], &Frame),
         config: &IkConfig,
+        angles: (&SeedAngles, &mut SeedAngles),
     ) -> Result<IkResult, IkError> {
-        self.track(target, (seed, Some(seed_pose)), config, None)
+        self.track(target, (seed, Some(seed_pose)), config, None, Some(angles))
     }
 
     /// Tracking IK from `seed`, whose pose may be known, with the last evaluation if the
     /// caller keeps one (else a buffer of Newton's own, built only if Newton runs: zeroing
-    /// its 560 bytes is a tenth of a closed-form solve on the Cortex-M7).
+    /// its 560 bytes is a tenth of a closed-form solve on the Cortex-M7), and the seed's
+    /// angles if the caller keeps them (then also the answer's).
     fn track(
         &self,
         target: &Frame,
         (seed, seed_pose): (&[f64], Option<&Frame>),
         config: &IkConfig,
         mut last: Option<&mut LastEvaluation>,
+        angles: Option<(&SeedAngles, &mut SeedAngles)>,
     ) -> Result<IkResult, IkError> {
+        // Without a caller that keeps them, the answer's angles are not copied out.
+        let unknown = SeedAngles::default();
+        let (seed_angles, mut answer) = match angles {
+            Some((seed_angles, answer)) => (seed_angles, Some(answer)),
+            None => (&unknown, None),
+        };
+        forget(answer.as_deref_mut());
         let mut start = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut start)?;
         // m + rad, the angle read without a logarithm (it only chooses the method).
@@ -216,9 +234,14 @@ impl Chain {
                 position_error: 0.0,
                 orientation_error: 0.0,
             };
-            if self.follow(target, &start, config.tolerance, &mut found) && within_jump(&found.q) {
+            let tolerance = config.tolerance;
+            let seed = (&start, seed_angles);
+            if self.follow(target, seed, tolerance, &mut found, answer.as_deref_mut())
+                && within_jump(&found.q)
+            {
                 return Ok(IkResult::Converged(found));
             }
+            forget(answer);
         }
         Ok(match last {
             Some(last) => self.newton_from(target, &start, config, last),

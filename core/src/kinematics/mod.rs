@@ -26,7 +26,7 @@ mod velocity;
 
 pub use crate::math::Joints;
 pub use chain::{Chain, KinematicsError};
-pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, Solutions};
+pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, SeedAngles, Solutions};
 pub use evaluation::LastEvaluation;
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};

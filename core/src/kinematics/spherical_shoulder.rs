@@ -48,7 +48,7 @@ pub(super) fn solve(
     let [h1, h2, h3, h4, h5, _, _, _] = &s.axis;
     let (shoulder, o4, w) = (&s.point[0], &s.point[3], &form.centre);
     let (tool, d) = wrist_target(form, target);
-    let (elbows, n4) = elbow_roots(form, &d).list(free[3], nearest);
+    let (elbows, n4) = elbow_roots(form, &d).list(free[3], None, nearest);
     let a3 = Angle::of(free[2]);
     // Eight joints: θ5 is a parameter too, and the wrist's last three joints are 6–8.
     let a5 = (dof == 8).then(|| Angle::of(free[4]));

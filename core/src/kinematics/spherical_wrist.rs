@@ -10,7 +10,7 @@
 
 use nalgebra::Vector3;
 
-use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
+use super::closed_form::{Branch, Candidate, Candidates, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
 use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
 use crate::MAX_JOINTS;
@@ -18,11 +18,12 @@ use crate::math::Frame;
 
 /// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
 /// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
-/// gives the value of a joint left free by a singularity.
+/// gives the value of a joint left free by a singularity; `known`, its angles if the caller has
+/// them.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
-    free: &[f64; MAX_JOINTS],
+    (free, known): (&[f64; MAX_JOINTS], Known),
     nearest: bool,
     out: &mut Candidates,
 ) {
@@ -31,7 +32,8 @@ pub(super) fn solve(
     let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
-    let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
+    let Shoulder { tool, v, roots } =
+        Shoulder::of(form, target, (free[0], known_angle(known, 0)), nearest);
     // Only the action of R1 ⋯ R6 on h5 and h6 is needed.
     let (tool_h5, tool_h6) = (tool * h5, tool * h6);
     // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
@@ -44,8 +46,11 @@ pub(super) fn solve(
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) =
-            sp3(h3, &(w - o3), &(o2 - o3), u.norm_squared(), slack).list(free[2], nearest);
+        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm_squared(), slack).list(
+            free[2],
+            known_angle(known, 2),
+            nearest,
+        );
         for &(a3, b3) in elbows.iter().take(n3) {
             let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
@@ -59,7 +64,7 @@ pub(super) fn solve(
                 [back(&shoulder_h5), back(&shoulder_h6)],
                 arm,
                 branch,
-                (free, nearest),
+                (free, known, nearest),
                 out,
             );
         }
@@ -73,7 +78,7 @@ fn wrist(
     [turned_h5, pointing]: [Vector3<f64>; 2],
     arm: ([Angle; 3], [f64; 3]),
     branch: Branch,
-    (free, nearest): (&[f64; MAX_JOINTS], bool),
+    (free, known, nearest): (&[f64; MAX_JOINTS], Known, bool),
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
@@ -96,7 +101,9 @@ fn wrist(
         PairRoots::Some(pairs, count) => {
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
-                    let (r4, r5) = (Angle::of(-free[3]), Angle::of(free[4]));
+                    let r4 =
+                        known_angle(known, 3).map_or_else(|| Angle::of(-free[3]), Angle::negated);
+                    let r5 = known_angle(known, 4).map_or_else(|| Angle::of(free[4]), |a| *a);
                     let closeness =
                         |(t4, t5): &(Angle, Angle)| t4.closeness(&r4) + t5.closeness(&r5);
                     usize::from(closeness(&second) > closeness(&first))

@@ -77,14 +77,20 @@ pub(super) enum Roots {
 impl Roots {
     /// The roots as an array of up to two, each with its branch index (0 = `+`, 1 = `−`);
     /// `Any` gives `reference` as branch 0. With `nearest`, only the root nearest
-    /// `reference` (the tracking case, which follows one branch).
-    pub fn list(self, reference: f64, nearest: bool) -> ([(Angle, u8); 2], usize) {
+    /// `reference` (the tracking case, which follows one branch), compared with its angle
+    /// `known` if the caller has it (a `sincos` spared).
+    pub fn list(
+        self,
+        reference: f64,
+        known: Option<&Angle>,
+        nearest: bool,
+    ) -> ([(Angle, u8); 2], usize) {
         let none = Angle { cos: 1.0, sin: 0.0 };
         match self {
             Self::None => ([(none, 0); 2], 0),
             Self::One(a) => ([(a, 0), (none, 0)], 1),
             Self::Two(a, b) if nearest => {
-                let r = Angle::of(reference);
+                let r = known.copied().unwrap_or_else(|| Angle::of(reference));
                 if a.closeness(&r) >= b.closeness(&r) {
                     ([(a, 0), (none, 0)], 1)
                 } else {

@@ -10,7 +10,7 @@
 //! once per wrist (subproblem 1), so θ4 is that sum less θ2 and θ3. Up to 2 · 2 · 2 = 8
 //! solutions.
 
-use super::closed_form::{Branch, Candidate, Candidates, Shoulder};
+use super::closed_form::{Branch, Candidate, Candidates, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
 use nalgebra::Vector3;
 
@@ -20,11 +20,12 @@ use crate::math::Frame;
 
 /// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
 /// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
-/// gives the value of a joint left free by a singularity.
+/// gives the value of a joint left free by a singularity; `known`, its angles if the caller has
+/// them.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
-    free: &[f64; MAX_JOINTS],
+    (free, known): (&[f64; MAX_JOINTS], Known),
     nearest: bool,
     out: &mut Candidates,
 ) {
@@ -36,7 +37,8 @@ pub(super) fn solve(
     // The senses of axes 3 and 4 along axis 2's (the ideal model's are exactly ±h).
     let (sense3, sense4) = (h3.dot(h), h4.dot(h));
     // R1 ⋯ R6, used on vectors only.
-    let Shoulder { tool, v, roots } = Shoulder::of(form, target, free[0], nearest);
+    let Shoulder { tool, v, roots } =
+        Shoulder::of(form, target, (free[0], known_angle(known, 0)), nearest);
     let tool_h6 = tool * h6;
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
@@ -46,7 +48,8 @@ pub(super) fn solve(
         let m = |x: &Vector3<f64>| rotate(h1, &back1, &(tool * x));
         let m_h6 = rotate(h1, &back1, &tool_h6);
         let mt_h = tool.transpose() * rotate(h1, &a1, h);
-        let (wrists, n5) = sp4(h, h5, h6, h.dot(&m_h6), slack).list(free[4], nearest);
+        let (wrists, n5) =
+            sp4(h, h5, h6, h.dot(&m_h6), slack).list(free[4], known_angle(known, 4), nearest);
         for &(a5, b5) in wrists.iter().take(n5) {
             let back5 = a5.negated();
             // R6 mᵀ h = R5ᵀ h
@@ -62,8 +65,11 @@ pub(super) fn solve(
             };
             let sum_value = sum.value();
             let u = rotate(h1, &back1, &v) + o1 - planar_c - o2;
-            let (elbows, n3) =
-                sp3(h3, &(o4 - o3), &(o2 - o3), u.norm_squared(), slack).list(free[2], nearest);
+            let (elbows, n3) = sp3(h3, &(o4 - o3), &(o2 - o3), u.norm_squared(), slack).list(
+                free[2],
+                known_angle(known, 2),
+                nearest,
+            );
             for &(a3, b3) in elbows.iter().take(n3) {
                 let reach = (o3 - o2) + rotate(h3, &a3, &(o4 - o3));
                 let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));

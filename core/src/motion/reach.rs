@@ -32,7 +32,7 @@ use armgate_protocol::client::{JointBound, PathPoint};
 use super::Refusal;
 use super::workspace::Workspace;
 use crate::config::IkConfig;
-use crate::kinematics::{Chain, Joints};
+use crate::kinematics::{Chain, Joints, SeedAngles};
 use crate::math::{self, Frame, Rotation3};
 
 /// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
@@ -132,9 +132,16 @@ impl Reach<'_> {
             .map(|(d, v)| libm::fabs(*d) / v)
             .fold(min_duration.max(0.0), f64::max);
         let full_step = 1.0 / LINE_SAMPLES as f64;
-        let (mut done, mut step, mut q) = (0.0, full_step, *seed);
-        // The pose at `q`: the line's last point reached (it spares the solver q's FK).
-        let mut here = *start;
+        let (mut done, mut step) = (0.0, full_step);
+        // The last point reached and the step being tried: the two swap roles, never copied
+        // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
+        let reached = Reached {
+            q: *seed,
+            pose: *start,
+            angles: SeedAngles::default(),
+        };
+        let mut points = [reached, reached];
+        let mut last = 0;
         let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
@@ -142,9 +149,15 @@ impl Reach<'_> {
             }
             let next = (done + step).min(1.0);
             let at = PathPoint::at(next);
-            let there = point(next);
-            let solved = match self.solve(&there, (&q, &here), at) {
-                Ok(solved) => solved,
+            let [first, second] = &mut points;
+            let (here, tried) = if last == 0 {
+                (&*first, second)
+            } else {
+                (&*second, first)
+            };
+            tried.pose = point(next);
+            match self.solve(here, tried, at) {
+                Ok(()) => {}
                 Err(refusal) if step <= MIN_STEP => return Err(refusal),
                 Err(_) => {
                     step *= 0.5;
@@ -152,8 +165,8 @@ impl Reach<'_> {
                 }
             };
             match fault(
-                &q,
-                &solved,
+                &here.q,
+                &tried.q,
                 self.max_rate,
                 (next - done) * duration,
                 self.ik.line_slowdown,
@@ -172,9 +185,10 @@ impl Reach<'_> {
                 }
                 None => {}
             }
-            (done, q, here) = (next, solved, there);
+            (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
         }
+        let q = points.get(last).map_or(*seed, |reached| reached.q);
         too_fast.map_or(Ok(q), Err)
     }
 
@@ -187,30 +201,37 @@ impl Reach<'_> {
         }
     }
 
-    /// Tracking IK to `target` from `seed` (at about `seed_pose`), within the limits and the
-    /// tolerance; else why not.
-    fn solve(
-        &mut self,
-        target: &Frame,
-        (seed, seed_pose): (&Joints, &Frame),
-        at: PathPoint,
-    ) -> Result<Joints, Refusal> {
+    /// Tracking IK from the point `from` to the pose of `to`, within the limits and the
+    /// tolerance, written to `to`'s joints and angles; else why not.
+    fn solve(&mut self, from: &Reached, to: &mut Reached, at: PathPoint) -> Result<(), Refusal> {
         let unreachable = Refusal::Unreachable(at);
         // Read in place: moving the answer out of its `Result` copied it.
+        let config = self.solve_config();
+        let angles = (&from.angles, &mut to.angles);
         let outcome =
-            (self.chain).solve_tracking_from(target, seed, seed_pose, &self.solve_config());
+            (self.chain).solve_tracking_from(&to.pose, (&from.q, &from.pose), &config, angles);
         let Ok(result) = &outcome else {
             return Err(unreachable);
         };
         let s = result.solution();
         self.iterations_left = self.iterations_left.saturating_sub(s.iterations);
+        to.q = s.q;
         if s.position_error <= self.tolerance && s.orientation_error <= self.tolerance {
-            return Ok(s.q);
+            return Ok(());
         }
         // The bounded descent stops joints exactly at their limits: one that sits there is
         // what kept the solution from the target.
         Err(pinned_joint(self.chain, &s.q, at).map_or(unreachable, Refusal::OutsideJointLimits))
     }
+}
+
+/// A point of the line: the joints there, their pose (which spares the next solve the FK), and
+/// their angles if a closed-form solve gave them (which spares it their `sincos`).
+#[derive(Clone, Copy)]
+struct Reached {
+    q: Joints,
+    pose: Frame,
+    angles: SeedAngles,
 }
 
 /// A joint (numbered from 1) that cannot make a step of the check as the tick would.
