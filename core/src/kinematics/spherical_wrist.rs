@@ -10,26 +10,27 @@
 
 use nalgebra::Vector3;
 
-use super::closed_form::{Branch, Candidate, Candidates, Known, Shoulder, known_angle};
+use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
+use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2, sp3};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
-/// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
-/// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
-/// gives the value of a joint left free by a singularity; `known`, its angles if the caller has
-/// them.
+/// Every candidate solution for `target` that passes `gate` (unchecked: the caller checks it
+/// by FK), or with `nearest` the one that takes the root nearest `free` at every choice.
+/// `free` also gives the value of a joint left free by a singularity; `known`, its angles if
+/// the caller has them.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
     (free, known): (&[f64; MAX_JOINTS], Known),
     nearest: bool,
+    gate: Gate,
     out: &mut Candidates,
 ) {
     let s = &form.screws;
     let slack = form.slack();
-    let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
+    let [h1, h2, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
     let Shoulder { tool, v, roots } =
@@ -39,9 +40,12 @@ pub(super) fn solve(
     // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
     // rotation about h2.
     let sense3 = h3.dot(h2);
+    let mirror = Mirror::of(h4, h5, h6);
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
-        let v1 = a1.value();
+        let Some(v1) = gate.admit(0, a1.value()) else {
+            continue;
+        };
         let back1 = a1.negated();
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
@@ -52,12 +56,18 @@ pub(super) fn solve(
             nearest,
         );
         for &(a3, b3) in elbows.iter().take(n3) {
+            let Some(v3) = gate.admit(2, a3.value()) else {
+                continue;
+            };
             let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+            let Some(v2) = gate.admit(1, a2.value()) else {
+                continue;
+            };
             // (R1 R2 R3)ᵀ applied to the tool's h5 and h6: what the wrist must produce.
             let back23 = a2.plus(&a3.signed(sense3)).negated();
             let back = |x: &Vector3<f64>| rotate(h2, &back23, x);
-            let arm = ([a1, a2, a3], [v1, a2.value(), a3.value()]);
+            let arm = ([a1, a2, a3], [v1, v2, v3]);
             let branch = Branch::from_roots(b1, b3, 0);
             wrist(
                 form,
@@ -65,6 +75,7 @@ pub(super) fn solve(
                 arm,
                 branch,
                 (free, known, nearest),
+                (gate, mirror),
                 out,
             );
         }
@@ -72,28 +83,35 @@ pub(super) fn solve(
 }
 
 /// Joints 4–6 producing the rotation `m = R4 R5 R6`, given as `[m h5, m h6]`, appended to the
-/// arm's `[θ1, θ2, θ3]` (angles and values).
+/// arm's `[θ1, θ2, θ3]` (angles and values) if `gate` passes them. The second root is the
+/// first's `mirror` where the wrist's axes allow it.
 fn wrist(
     form: &ClosedForm,
     [turned_h5, pointing]: [Vector3<f64>; 2],
     arm: ([Angle; 3], [f64; 3]),
     branch: Branch,
     (free, known, nearest): (&[f64; MAX_JOINTS], Known, bool),
+    (gate, mirror): (Gate, Option<Mirror>),
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
-    // R6 = R5ᵀ R4ᵀ m: where it takes h5.
-    let last = |a4: &Angle, a5: &Angle| {
+    // θ6 with R6 = R5ᵀ R4ᵀ m: where it takes h5; with the three values.
+    let solved = |a4: Angle, a5: Angle| {
         let back = rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5));
-        sp1(h6, h5, &back)
+        let a6 = sp1(h6, h5, &back)?;
+        Some(([a4, a5, a6], [a4.value(), a5.value(), a6.value()]))
     };
     let ([a1, a2, a3], [v1, v2, v3]) = arm;
-    let mut push = |a4: Angle, a5: Angle, wrist: u8| {
-        if let Some(a6) = last(&a4, &a5) {
-            let known = [v1, v2, v3, f64::NAN, f64::NAN, f64::NAN];
+    let mut push = |([a4, a5, a6], values): ([Angle; 3], [f64; 3]), wrist: u8| {
+        let [v4, v5, v6] = values;
+        if let (Some(v4), Some(v5), Some(v6)) =
+            (gate.admit(3, v4), gate.admit(4, v5), gate.admit(5, v6))
+        {
+            let values = [v1, v2, v3, v4, v5, v6];
             let angles = [a1, a2, a3, a4, a5, a6];
+            let branch = branch.with_wrist(wrist);
             // A full list only drops further roots, which cannot occur (8 at most).
-            let _ = out.push(Candidate::new(angles, known, branch.with_wrist(wrist)));
+            let _ = out.push(Candidate::new(angles, values, branch, gate.is_closed()));
         }
     };
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
@@ -111,17 +129,24 @@ fn wrist(
                 _ => 0,
             };
             let take = if nearest { 1 } else { count };
-            let roots = (0u8..).zip(pairs.iter()).skip(skip).take(take);
-            for (bw, (t4, t5)) in roots {
-                push(t4.negated(), *t5, bw);
+            let mut first: Option<([Angle; 3], [f64; 3])> = None;
+            for (bw, (t4, t5)) in (0u8..).zip(pairs.iter()).skip(skip).take(take) {
+                let root = match (first, mirror) {
+                    (Some(first), Some(mirror)) => Some(mirror.other(first.0, first.1)),
+                    _ => solved(t4.negated(), *t5),
+                };
+                if let Some(root) = root {
+                    first = Some(root);
+                    push(root, bw);
+                }
             }
         }
         PairRoots::FreeFirst => {
             // Axis 6 along axis 4 (θ5 = 0 on most arms): θ4 + θ6 is fixed, θ4 keeps `free`.
             let a4 = Angle::of(free[3]);
             let turned = rotate(h4, &a4.negated(), &pointing);
-            if let Some(a5) = sp1(h5, h6, &turned) {
-                push(a4, a5, 0);
+            if let Some(root) = sp1(h5, h6, &turned).and_then(|a5| solved(a4, a5)) {
+                push(root, 0);
             }
         }
         PairRoots::None => {}

@@ -55,9 +55,62 @@ impl Angle {
         }
     }
 
+    /// This angle plus half a turn.
+    pub fn half_turned(&self) -> Self {
+        Self {
+            cos: -self.cos,
+            sin: -self.sin,
+        }
+    }
+
     /// This angle about an axis of sense `sign` (+1 or −1) relative to the reference axis.
     pub fn signed(&self, sign: f64) -> Self {
         if sign < 0.0 { self.negated() } else { *self }
+    }
+}
+
+/// How far from perpendicular (cosine) two unit axes may be for [`Mirror`]: rounding only, so
+/// that the mirrored root is as exact as a solved one.
+const PERPENDICULAR: f64 = 1e-14;
+
+/// The second solution of three rotations about axes `a`, `b`, `c` with `b` perpendicular to
+/// both others, from the first: `R(a, α) R(b, β) R(c, γ) = R(a, α + π) R(b, −β − 2φ) R(c, γ +
+/// π)`, where `c = R(b, φ) a`. (With `R(c, γ) = R(b, φ) R(a, γ) R(b, −φ)`, this is the
+/// half-turn identity `R(a, α) R(b, β') R(a, γ) = R(a, α + π) R(b, −β') R(a, γ + π)` for `a ⊥
+/// b`.) It spares a wrist's second root its subproblems and its three `atan2`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Mirror {
+    /// 2φ.
+    twice: Angle,
+    /// Its value.
+    twice_value: f64,
+}
+
+impl Mirror {
+    /// The mirror of the unit axes `a`, `b`, `c` (in their zero configuration), if `b` is
+    /// perpendicular to both others.
+    pub fn of(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> Option<Self> {
+        if a.dot(b).abs() > PERPENDICULAR || b.dot(c).abs() > PERPENDICULAR {
+            return None;
+        }
+        let phi = Angle {
+            cos: a.dot(c),
+            sin: b.dot(&a.cross(c)),
+        };
+        let twice = phi.plus(&phi);
+        Some(Self {
+            twice,
+            twice_value: 2.0 * phi.value(),
+        })
+    }
+
+    /// The other solution of the angles `[α, β, γ]` with values `values`.
+    pub fn other(&self, [a, b, c]: [Angle; 3], [va, vb, vc]: [f64; 3]) -> ([Angle; 3], [f64; 3]) {
+        use core::f64::consts::PI;
+        (
+            [a.half_turned(), b.plus(&self.twice).negated(), c.half_turned()],
+            [va + PI, -vb - self.twice_value, vc + PI],
+        )
     }
 }
 
