@@ -113,15 +113,6 @@ impl Candidate {
         all
     }
 
-    /// The sine and cosine of every angle, as FK by trigonometry takes them.
-    pub fn sin_cos(&self) -> [(f64, f64); MAX_JOINTS] {
-        let mut out = [(0.0, 1.0); MAX_JOINTS];
-        for (sc, a) in out.iter_mut().zip(&self.angles) {
-            *sc = (a.sin, a.cos);
-        }
-        out
-    }
-
     /// A candidate of every joint's `angles` (and `known` values, NaN where not taken).
     pub fn of_joints(
         angles: [Angle; MAX_JOINTS],
@@ -499,7 +490,7 @@ impl Chain {
         let mut current = *candidate;
         let mut ideal = *target;
         for _ in 0..REFINE_STEPS {
-            let reached = self.pose_by_trig(&current.sin_cos());
+            let reached = self.pose_by_trig(&current.angles);
             if Misses::of(&reached, target).largest() <= REFINED * REFINED {
                 break;
             }
@@ -578,7 +569,7 @@ impl Chain {
             *q = self.polish(target, q)?;
         }
         let reached = if form.fit.is_exact() {
-            self.pose_by_trig(&candidate.sin_cos())
+            self.pose_by_trig(&candidate.angles)
         } else {
             self.pose(q)
         };

@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 
 use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2, sp3};
+use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2, sp3, sp3_twice_mid};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -40,7 +40,11 @@ pub(super) fn solve(
     // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
     // rotation about h2.
     let sense3 = h3.dot(h2);
-    let mirror = Mirror::of(h4, h5, h6);
+    // Only a solve for every root has a second wrist root to mirror.
+    let mirror = (!nearest).then(|| Mirror::of(h4, h5, h6)).flatten();
+    // Each shoulder's elbow roots: the second's value from the first's.
+    let (elbow, shoulder_to_elbow) = (w - o3, o2 - o3);
+    let twice_mid = (!nearest).then(|| sp3_twice_mid(h3, &elbow, &shoulder_to_elbow));
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let Some(v1) = gate.admit(0, a1.value()) else {
@@ -50,16 +54,22 @@ pub(super) fn solve(
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm_squared(), slack).list(
+        let (elbows, n3) = sp3(h3, &elbow, &shoulder_to_elbow, u.norm_squared(), slack).list(
             free[2],
             known_angle(known, 2),
             nearest,
         );
+        let mut first3 = None;
         for &(a3, b3) in elbows.iter().take(n3) {
-            let Some(v3) = gate.admit(2, a3.value()) else {
+            let value3 = match (first3, twice_mid) {
+                (Some(first), Some(twice)) => twice - first,
+                _ => a3.value(),
+            };
+            first3 = Some(value3);
+            let Some(v3) = gate.admit(2, value3) else {
                 continue;
             };
-            let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
+            let reach = rotate(h3, &a3, &elbow) - shoulder_to_elbow;
             let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
             let Some(v2) = gate.admit(1, a2.value()) else {
                 continue;

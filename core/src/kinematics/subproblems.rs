@@ -258,6 +258,15 @@ pub(super) fn sp3(
     sp4(p2, k, p1, dot, slack)
 }
 
+/// Subproblem 3's roots are `φ ± δ`, where only δ depends on the distance: 2φ for `k`, `p1`,
+/// `p2`, from which one root's value gives the other's (`2φ − θ`, no `atan2`).
+pub(super) fn sp3_twice_mid(k: &Vector3<f64>, p1: &Vector3<f64>, p2: &Vector3<f64>) -> f64 {
+    // As subproblem 4 on the dot product: a cos θ + b sin θ = c with φ = atan2(b, a).
+    let a = p2.dot(&(p1 - k * k.dot(p1)));
+    let b = p2.dot(&k.cross(p1));
+    2.0 * libm::atan2(b, a)
+}
+
 /// Both angles of subproblem 2's answer, `R(k1, θ1) p1 = R(k2, θ2) p2`.
 pub(super) type AnglePair = (Angle, Angle);
 
