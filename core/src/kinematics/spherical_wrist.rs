@@ -105,27 +105,49 @@ fn wrist(
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
-    // θ6 with R6 = R5ᵀ R4ᵀ m: where it takes h5; with the three values.
-    let solved = |a4: Angle, a5: Angle| {
-        let back = rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5));
-        let a6 = sp1(h6, h5, &back)?;
-        Some(([a4, a5, a6], [a4.value(), a5.value(), a6.value()]))
+    // θ6 with R6 = R5ᵀ R4ᵀ m: where it takes h5.
+    let last = |a4: &Angle, a5: &Angle| {
+        sp1(h6, h5, &rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5)))
     };
     let ([a1, a2, a3], [v1, v2, v3]) = arm;
-    let mut push = |([a4, a5, a6], values): ([Angle; 3], [f64; 3]), wrist: u8| {
-        let [v4, v5, v6] = values;
-        if let (Some(v4), Some(v5), Some(v6)) =
-            (gate.admit(3, v4), gate.admit(4, v5), gate.admit(5, v6))
-        {
-            let values = [v1, v2, v3, v4, v5, v6];
-            let angles = [a1, a2, a3, a4, a5, a6];
-            let branch = branch.with_wrist(wrist);
-            // A full list only drops further roots, which cannot occur (8 at most).
-            let _ = out.push(Candidate::new(angles, values, branch, gate.is_closed()));
-        }
+    // A root whose values `gate` passed.
+    let mut keep = |[a4, a5, a6]: [Angle; 3], [v4, v5, v6]: [f64; 3], wrist: u8| {
+        let values = [v1, v2, v3, v4, v5, v6];
+        let angles = [a1, a2, a3, a4, a5, a6];
+        let branch = branch.with_wrist(wrist);
+        // A full list only drops further roots, which cannot occur (8 at most).
+        let _ = out.push(Candidate::new(angles, values, branch, gate.is_closed()));
+    };
+    let admit = |[v4, v5, v6]: [f64; 3]| {
+        Some([gate.admit(3, v4)?, gate.admit(4, v5)?, gate.admit(5, v6)?])
+    };
+    // A root solved on its own, θ5 tested first (on most arms its limits are the narrowest:
+    // a root outside them needs no θ4 or θ6).
+    let mut solved = |a4: Angle, a5: Angle, wrist: u8| {
+        let v5 = gate.admit(4, a5.value())?;
+        let v4 = gate.admit(3, a4.value())?;
+        let a6 = last(&a4, &a5)?;
+        let v6 = gate.admit(5, a6.value())?;
+        keep([a4, a5, a6], [v4, v5, v6], wrist);
+        Some(())
     };
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
     match sp2(h4, &pointing, h5, h6, form.slack()) {
+        PairRoots::Some([(t4, a5), _], 2)
+            if let Some(mirror) = mirror
+                && let Some(a6) = last(&t4.negated(), &a5) =>
+        {
+            // Both roots, the second mirroring the first (its values whether or not the gate
+            // passes them).
+            let a4 = t4.negated();
+            let first = ([a4, a5, a6], [a4.value(), a5.value(), a6.value()]);
+            let second = mirror.other(first.0, first.1);
+            for (wrist, (angles, values)) in [(0, first), (1, second)] {
+                if let Some(values) = admit(values) {
+                    keep(angles, values, wrist);
+                }
+            }
+        }
         PairRoots::Some(pairs, count) => {
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
@@ -139,24 +161,16 @@ fn wrist(
                 _ => 0,
             };
             let take = if nearest { 1 } else { count };
-            let mut first: Option<([Angle; 3], [f64; 3])> = None;
             for (bw, (t4, t5)) in (0u8..).zip(pairs.iter()).skip(skip).take(take) {
-                let root = match (first, mirror) {
-                    (Some(first), Some(mirror)) => Some(mirror.other(first.0, first.1)),
-                    _ => solved(t4.negated(), *t5),
-                };
-                if let Some(root) = root {
-                    first = Some(root);
-                    push(root, bw);
-                }
+                let _ = solved(t4.negated(), *t5, bw);
             }
         }
         PairRoots::FreeFirst => {
             // Axis 6 along axis 4 (θ5 = 0 on most arms): θ4 + θ6 is fixed, θ4 keeps `free`.
             let a4 = Angle::of(free[3]);
             let turned = rotate(h4, &a4.negated(), &pointing);
-            if let Some(root) = sp1(h5, h6, &turned).and_then(|a5| solved(a4, a5)) {
-                push(root, 0);
+            if let Some(a5) = sp1(h5, h6, &turned) {
+                let _ = solved(a4, a5, 0);
             }
         }
         PairRoots::None => {}
