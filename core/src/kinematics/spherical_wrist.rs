@@ -133,14 +133,18 @@ fn wrist(
     };
     // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
     match sp2(h4, &pointing, h5, h6, form.slack()) {
-        PairRoots::Some([(t4, a5), _], 2)
-            if let Some(mirror) = mirror
-                && let Some(a6) = last(&t4.negated(), &a5) =>
-        {
+        PairRoots::Some([(t4, a5), _], 2) if let Some(mirror) = mirror => {
             // Both roots, the second mirroring the first (its values whether or not the gate
-            // passes them).
-            let a4 = t4.negated();
-            let first = ([a4, a5, a6], [a4.value(), a5.value(), a6.value()]);
+            // passes them); none if θ5 of neither is within its limits.
+            let (a4, v5) = (t4.negated(), a5.value());
+            let outside = |v: f64| gate.admit(4, v).is_none();
+            if outside(v5) && outside(mirror.other_middle(v5)) {
+                return;
+            }
+            let Some(a6) = last(&a4, &a5) else {
+                return;
+            };
+            let first = ([a4, a5, a6], [a4.value(), v5, a6.value()]);
             let second = mirror.other(first.0, first.1);
             for (wrist, (angles, values)) in [(0, first), (1, second)] {
                 if let Some(values) = admit(values) {

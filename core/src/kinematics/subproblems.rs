@@ -109,8 +109,13 @@ impl Mirror {
         use core::f64::consts::PI;
         (
             [a.half_turned(), b.plus(&self.twice).negated(), c.half_turned()],
-            [va + PI, -vb - self.twice_value, vc + PI],
+            [va + PI, self.other_middle(vb), vc + PI],
         )
+    }
+
+    /// The other solution's β from the value of the first's.
+    pub fn other_middle(&self, value: f64) -> f64 {
+        -value - self.twice_value
     }
 }
 
