@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 
 use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2, sp3, sp3_twice_mid};
+use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2_solving, sp3, sp3_twice_mid};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -131,8 +131,9 @@ fn wrist(
         keep([a4, a5, a6], [v4, v5, v6], wrist);
         Some(())
     };
-    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
-    match sp2(h4, &pointing, h5, h6, form.slack()) {
+    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6 (a mirrored second root is not solved).
+    let most = if mirror.is_some() { 1 } else { 2 };
+    match sp2_solving(h4, &pointing, h5, h6, (form.slack(), most)) {
         PairRoots::Some([(t4, a5), _], 2) if let Some(mirror) = mirror => {
             // Both roots, the second mirroring the first (its values whether or not the gate
             // passes them); none if θ5 of neither is within its limits.

@@ -295,6 +295,18 @@ pub(super) fn sp2(
     p2: &Vector3<f64>,
     slack: f64,
 ) -> PairRoots {
+    sp2_solving(k1, p1, k2, p2, (slack, 2))
+}
+
+/// [`sp2`] solving at most `most` roots (the count still says how many there are; any other is
+/// left at zero): for a caller that has the second root from the first.
+pub(super) fn sp2_solving(
+    k1: &Vector3<f64>,
+    p1: &Vector3<f64>,
+    k2: &Vector3<f64>,
+    p2: &Vector3<f64>,
+    (slack, most): (f64, usize),
+) -> PairRoots {
     let (a1, a2) = (k1.dot(p1), k2.dot(p2));
     if (p1 - k1 * a1).norm_squared() <= DEGENERATE * DEGENERATE {
         return PairRoots::FreeFirst;
@@ -321,7 +333,7 @@ pub(super) fn sp2(
     // Both points z keep the axial components and the norm, so their projections onto either
     // axis's plane are as long as each other: the first root's lengths serve the second.
     let mut lengths = None;
-    for (pair, sign) in pairs.iter_mut().zip([1.0, -1.0]).take(count) {
+    for (pair, sign) in pairs.iter_mut().zip([1.0, -1.0]).take(count.min(most)) {
         let z = base + n * (sign * gamma);
         let ((x1, y1), (x2, y2)) = (sp1_scaled(k1, p1, &z), sp1_scaled(k2, p2, &z));
         let (r1, r2) = *lengths.get_or_insert_with(|| {
