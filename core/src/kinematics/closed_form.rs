@@ -253,7 +253,8 @@ impl Chain {
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
         let mut all = Solutions::new();
-        self.solve_all_into(target, reference, &mut all).map(|()| all)
+        self.solve_all_into(target, reference, &mut all)
+            .map(|()| all)
     }
 
     /// [`solve_all`](Self::solve_all) into the caller's list (emptied first): a returned list

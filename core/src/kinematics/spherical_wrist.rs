@@ -107,7 +107,11 @@ fn wrist(
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
     // θ6 with R6 = R5ᵀ R4ᵀ m: where it takes h5.
     let last = |a4: &Angle, a5: &Angle| {
-        sp1(h6, h5, &rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5)))
+        sp1(
+            h6,
+            h5,
+            &rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5)),
+        )
     };
     let ([a1, a2, a3], [v1, v2, v3]) = arm;
     // A root whose values `gate` passed.
@@ -118,9 +122,8 @@ fn wrist(
         // A full list only drops further roots, which cannot occur (8 at most).
         let _ = out.push(Candidate::new(angles, values, branch, gate.is_closed()));
     };
-    let admit = |[v4, v5, v6]: [f64; 3]| {
-        Some([gate.admit(3, v4)?, gate.admit(4, v5)?, gate.admit(5, v6)?])
-    };
+    let admit =
+        |[v4, v5, v6]: [f64; 3]| Some([gate.admit(3, v4)?, gate.admit(4, v5)?, gate.admit(5, v6)?]);
     // A root solved on its own, θ5 tested first (on most arms its limits are the narrowest:
     // a root outside them needs no θ4 or θ6).
     let mut solved = |a4: Angle, a5: Angle, wrist: u8| {

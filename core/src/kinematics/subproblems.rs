@@ -108,7 +108,11 @@ impl Mirror {
     pub fn other(&self, [a, b, c]: [Angle; 3], [va, vb, vc]: [f64; 3]) -> ([Angle; 3], [f64; 3]) {
         use core::f64::consts::PI;
         (
-            [a.half_turned(), b.plus(&self.twice).negated(), c.half_turned()],
+            [
+                a.half_turned(),
+                b.plus(&self.twice).negated(),
+                c.half_turned(),
+            ],
             [va + PI, self.other_middle(vb), vc + PI],
         )
     }
@@ -410,6 +414,37 @@ mod tests {
                     .any(|(a, b)| close(a, t1) && close(b, t2))
             );
         }
+    }
+
+    #[test]
+    fn a_mirrored_root_turns_as_the_first_and_so_does_the_second_elbow_value() {
+        let mut rng = SplitMix64::new(44);
+        for _ in 0..1000 {
+            // Wrist axes a ⊥ b, c = R(b, φ) a.
+            let b = unit(&mut rng);
+            let a = b.cross(&unit(&mut rng)).normalize();
+            let c = rotate(&b, &Angle::of(rng.uniform(-3.0, 3.0)), &a);
+            let mirror = Mirror::of(&a, &b, &c).unwrap();
+            let values = [0; 3].map(|_| rng.uniform(-3.0, 3.0));
+            let angles = values.map(Angle::of);
+            let (other, other_values) = mirror.other(angles, values);
+            for (angle, value) in other.iter().zip(other_values) {
+                assert!(close(angle, value));
+            }
+            let turn = |[x, y, z]: [Angle; 3], p: &Vector3<f64>| {
+                rotate(&a, &x, &rotate(&b, &y, &rotate(&c, &z, p)))
+            };
+            let p = unit(&mut rng);
+            assert!((turn(angles, &p) - turn(other, &p)).norm() < 1e-12);
+            // Subproblem 3's second root is 2φ less the first.
+            let (k, p1, p2) = (unit(&mut rng), unit(&mut rng) * 0.7, unit(&mut rng) * 0.3);
+            let q = rotate(&k, &Angle::of(values[0]), &p1);
+            if let Roots::Two(plus, minus) = sp3(&k, &p1, &p2, (q - p2).norm_squared(), TANGENT) {
+                assert!(close(&minus, sp3_twice_mid(&k, &p1, &p2) - plus.value()));
+            }
+        }
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+        assert!(Mirror::of(&x, &(x + y).normalize(), &z).is_none());
     }
 
     #[test]

@@ -83,8 +83,11 @@ pub(super) fn solve(
                 continue;
             };
             let u = to_centre - rotate(h, &sum, &(c - o4));
-            let (elbows, n3) = sp3(h3, &elbow, &shoulder_to_elbow, u.norm_squared(), slack)
-                .list(free[2], known_angle(known, 2), nearest);
+            let (elbows, n3) = sp3(h3, &elbow, &shoulder_to_elbow, u.norm_squared(), slack).list(
+                free[2],
+                known_angle(known, 2),
+                nearest,
+            );
             let mut first3 = None;
             for &(a3, b3) in elbows.iter().take(n3) {
                 let value3 = match (first3, twice_mid) {
