@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 
 use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2_solving, sp3, sp3_twice_mid};
+use super::subproblems::{Angle, Elbow, Mirror, PairRoots, rotate, sp1, sp2_solving};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -42,9 +42,8 @@ pub(super) fn solve(
     let sense3 = h3.dot(h2);
     // Only a solve for every root has a second wrist root to mirror.
     let mirror = (!nearest).then(|| Mirror::of(h4, h5, h6)).flatten();
-    // Each shoulder's elbow roots: the second's value from the first's.
-    let (elbow, shoulder_to_elbow) = (w - o3, o2 - o3);
-    let twice_mid = (!nearest).then(|| sp3_twice_mid(h3, &elbow, &shoulder_to_elbow));
+    // θ3 from the distance between axis 2's point and the wrist centre.
+    let elbow = Elbow::new(h3, w - o3, o2 - o3, !nearest);
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let Some(v1) = gate.admit(0, a1.value()) else {
@@ -54,23 +53,13 @@ pub(super) fn solve(
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) = sp3(h3, &elbow, &shoulder_to_elbow, u.norm_squared(), slack).list(
-            free[2],
-            known_angle(known, 2),
-            nearest,
-        );
-        let mut first3 = None;
-        for &(a3, b3) in elbows.iter().take(n3) {
-            let value3 = match (first3, twice_mid) {
-                (Some(first), Some(twice)) => twice - first,
-                _ => a3.value(),
-            };
-            first3 = Some(value3);
+        let choice3 = (free[2], known_angle(known, 2), nearest);
+        let (elbows, n3) = elbow.roots(u.norm_squared(), slack, choice3);
+        for &(a3, value3, b3) in elbows.iter().take(n3) {
             let Some(v3) = gate.admit(2, value3) else {
                 continue;
             };
-            let reach = rotate(h3, &a3, &elbow) - shoulder_to_elbow;
-            let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+            let a2 = sp1(h2, &elbow.reach(&a3), &u).unwrap_or_else(|| Angle::of(free[1]));
             let Some(v2) = gate.admit(1, a2.value()) else {
                 continue;
             };

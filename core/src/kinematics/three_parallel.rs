@@ -14,7 +14,7 @@ use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, k
 use super::family::ClosedForm;
 use nalgebra::Vector3;
 
-use super::subproblems::{Angle, Mirror, rotate, sp1, sp3, sp3_twice_mid, sp4};
+use super::subproblems::{Angle, Elbow, Mirror, rotate, sp1, sp4};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -39,9 +39,8 @@ pub(super) fn solve(
     let (sense3, sense4) = (h3.dot(h), h4.dot(h));
     // R(h, Σ) R5 R6 with Σ = θ2 ± θ3 ± θ4: the second wrist root mirrors the first.
     let mirror = (!nearest).then(|| Mirror::of(h, h5, h6)).flatten();
-    // Each wrist root's elbow roots: the second's value from the first's.
-    let (elbow, shoulder_to_elbow) = (o4 - o3, o2 - o3);
-    let twice_mid = (!nearest).then(|| sp3_twice_mid(h3, &elbow, &shoulder_to_elbow));
+    // θ3 from the distance between the origins of axes 2 and 4.
+    let elbow = Elbow::new(h3, o4 - o3, o2 - o3, !nearest);
     // R1 ⋯ R6, used on vectors only.
     let Shoulder { tool, v, roots } =
         Shoulder::of(form, target, (free[0], known_angle(known, 0)), nearest);
@@ -83,23 +82,13 @@ pub(super) fn solve(
                 continue;
             };
             let u = to_centre - rotate(h, &sum, &(c - o4));
-            let (elbows, n3) = sp3(h3, &elbow, &shoulder_to_elbow, u.norm_squared(), slack).list(
-                free[2],
-                known_angle(known, 2),
-                nearest,
-            );
-            let mut first3 = None;
-            for &(a3, b3) in elbows.iter().take(n3) {
-                let value3 = match (first3, twice_mid) {
-                    (Some(first), Some(twice)) => twice - first,
-                    _ => a3.value(),
-                };
-                first3 = Some(value3);
+            let choice3 = (free[2], known_angle(known, 2), nearest);
+            let (elbows, n3) = elbow.roots(u.norm_squared(), slack, choice3);
+            for &(a3, value3, b3) in elbows.iter().take(n3) {
                 let Some(v3) = gate.admit(2, value3) else {
                     continue;
                 };
-                let reach = rotate(h3, &a3, &elbow) - shoulder_to_elbow;
-                let a2 = sp1(h, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+                let a2 = sp1(h, &elbow.reach(&a3), &u).unwrap_or_else(|| Angle::of(free[1]));
                 let Some(v2) = gate.admit(1, a2.value()) else {
                     continue;
                 };
