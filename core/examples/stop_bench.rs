@@ -287,7 +287,9 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
         return None;
     }
     if cause == Cause::Wn22 {
-        return (motion == Motion::Line).then(|| diverging_line(config, &q0)).flatten();
+        return (motion == Motion::Line)
+            .then(|| diverging_line(config, &q0))
+            .flatten();
     }
     let probe = Run::new(config, &q0);
     let p0 = probe.pose(&q0);

@@ -593,7 +593,11 @@ fn a_bus_off_at_speed_stops_the_drives_and_nothing_moves_until_on() {
         .client
         .notices
         .iter()
-        .map(|n| String::from_utf8_lossy(n.payload()).trim_end_matches('\0').to_string())
+        .map(|n| {
+            String::from_utf8_lossy(n.payload())
+                .trim_end_matches('\0')
+                .to_string()
+        })
         .collect();
     // SQ 0: drives faulted (f1 4) with code 35 (f2), the arm holding (f4 0); SQ 2: no stop
     // cause (0): the supervisor did not stop the arm, the drives did.
@@ -615,16 +619,26 @@ fn a_bus_off_at_speed_stops_the_drives_and_nothing_moves_until_on() {
         rig.manager().fault(),
         Some(DriveFault::Bus(armgate_core::drives::BusFault::BusOff))
     );
-    assert!(notices.iter().any(|n| n.starts_with("ER35 CAN bus off")), "{notices:?}");
+    assert!(
+        notices.iter().any(|n| n.starts_with("ER35 CAN bus off")),
+        "{notices:?}"
+    );
     assert_eq!((drives, code, motion, cause), (4.0, 35.0, 0.0, 0.0));
     assert!(pt_ended <= 0.1, "PT ran {pt_ended} s");
-    assert!(pre_operational <= 0.45, "pre-operational after {pre_operational} s");
+    assert!(
+        pre_operational <= 0.45,
+        "pre-operational after {pre_operational} s"
+    );
     for drive in rig.bus().drives() {
         assert_eq!(drive.stats().heartbeat_timeouts, 1);
     }
     // Motion is refused while the fault stands.
     let refusal = ask(&mut rig, Command::JointBegin, 0);
-    assert!(refusal.starts_with(b"ER20"), "{}", String::from_utf8_lossy(&refusal));
+    assert!(
+        refusal.starts_with(b"ER20"),
+        "{}",
+        String::from_utf8_lossy(&refusal)
+    );
     // The bus comes back: nothing moves on its own, the fault stays latched.
     rig.bus_mut().set_bus_off(false);
     let rest = rig.drive_positions();
@@ -639,5 +653,8 @@ fn a_bus_off_at_speed_stops_the_drives_and_nothing_moves_until_on() {
     for (now, then) in rig.drive_positions().iter().zip(&rest) {
         assert!((now - then).abs() < 1e-4, "moved from {then} to {now}");
     }
-    assert_eq!(rig.ctrl().motion(), armgate_protocol::client::Motion::Holding);
+    assert_eq!(
+        rig.ctrl().motion(),
+        armgate_protocol::client::Motion::Holding
+    );
 }
