@@ -137,11 +137,16 @@ pub async fn run(stack: Stack<'static>, known: &mut Buffers, probing: &mut Buffe
         loop {
             let outgoing = OUTGOING.receive().await;
             let (ip, now) = (outgoing.peer.ip(), Instant::now());
-            let n = neighbours.borrow();
-            if n.unreachable.holds(ip, now, UNREACHABLE_FOR) {
+            let (unreachable, resolved) = {
+                let n = neighbours.borrow();
+                (
+                    n.unreachable.holds(ip, now, UNREACHABLE_FOR),
+                    n.resolved.holds(ip, now, RESOLVED_FOR),
+                )
+            };
+            if unreachable {
                 count(&COUNTERS.unreachable);
-            } else if n.resolved.holds(ip, now, RESOLVED_FOR) {
-                drop(n);
+            } else if resolved {
                 known_queue.send(outgoing).await;
             } else if answers_a_stop(outgoing.payload()) {
                 if stop_probes.try_send(outgoing).is_err() {

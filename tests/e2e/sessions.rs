@@ -246,8 +246,8 @@ fn flood_from_many(
                 }
                 (SocketAddr::V6(_), None) => panic!("the firmware listens on IPv4"),
             }
-            progress.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            if progress.load(std::sync::atomic::Ordering::Relaxed) % 20 == 0 {
+            let n = progress.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n.is_multiple_of(20) {
                 std::thread::sleep(Duration::from_millis(10));
             }
         }
