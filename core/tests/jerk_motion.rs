@@ -11,7 +11,7 @@
 
 mod common;
 
-use armgate_core::config::ValidRobot;
+use armgate_core::config::{JointConfig, ValidRobot};
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
 use armgate_core::motion::{Controller, JointGenerator, Mode, StepOutput, StopCause};
@@ -70,6 +70,19 @@ fn within(value: f64, limit: f64, rounding: f64) -> bool {
     value <= limit * (1.0 + 1e-9) + rounding
 }
 
+/// Asserts that joint `i`'s commands `q` (one a tick of `dt`) keep `v_max` and the joint's
+/// acceleration and jerk limits.
+fn assert_within_limits(joint: &JointConfig, i: usize, q: &[f64], v_max: f64, dt: f64) {
+    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
+    let [v, a, j] = difference_peaks(q, dt);
+    assert!(within(v, v_max, 0.0), "joint {i}: v {v}");
+    assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
+    assert!(
+        within(j, joint.max_jerk.unwrap(), rounding),
+        "joint {i}: j {j}"
+    );
+}
+
 #[test]
 fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
     let config = common::robot("ranger-mk1-jerk");
@@ -80,16 +93,9 @@ fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
     let commands: Vec<Joints> = outs.iter().map(|o| o.command.unwrap()).collect();
     assert_eq!(commands.last().unwrap()[..], goal[..]);
     let dt = config.control_period;
-    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
     for (i, joint) in config.joints.iter().enumerate() {
         let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
-        let [v, a, j] = difference_peaks(&q, dt);
-        assert!(within(v, joint.max_velocity, 0.0), "joint {i}: v {v}");
-        assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
-        assert!(
-            within(j, joint.max_jerk.unwrap(), rounding),
-            "joint {i}: j {j}"
-        );
+        assert_within_limits(joint, i, &q, joint.max_velocity, dt);
         // Synchronised: every joint has covered the same fraction of its way at every tick.
         let fraction = |k: usize| (q[k] - MK1_READY[i]) / (goal[i] - MK1_READY[i]);
         let fraction0 = |k: usize| (commands[k][0] - MK1_READY[0]) / (goal[0] - MK1_READY[0]);
@@ -201,16 +207,9 @@ fn the_stop_that_wn22_begins_keeps_the_jerk_limits() {
     assert!(!ctrl.is_moving());
     let stop_ticks = commands.len() - diverged_at;
     assert!(stop_ticks <= 31, "at rest {stop_ticks} ticks after WN22");
-    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
     for (i, joint) in config.joints.iter().enumerate() {
         let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
-        let [v, a, j] = difference_peaks(&q, dt);
-        assert!(within(v, joint.max_rate, 0.0), "joint {i}: v {v}");
-        assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
-        assert!(
-            within(j, joint.max_jerk.unwrap(), rounding),
-            "joint {i}: j {j}"
-        );
+        assert_within_limits(joint, i, &q, joint.max_rate, dt);
     }
 }
 
