@@ -7,23 +7,31 @@ For each robot (default ranger-mk1, puma560, ur5):
 1. `armgate urdf ROBOT.toml` (the `armgate-viz` binary) writes the URDF; EAIK's `UrdfRobot`
    reads it (axes and points at q = 0; its end effector is link_6's origin with the base's
    orientation at q = 0, so poses are carried between the two by the fixed transforms
-   world->link_6 at q = 0 and link_6->tool, read from the same URDF with urchin).
-2. N joint vectors drawn uniformly in [-pi, pi)^n (numpy, seeded); armgate's FK gives the pose
-   and `Chain::solve_all` every solution (core/examples/ik_solutions.rs with `--wide-limits`:
-   every revolute joint limited to +-2pi and the reference at 0, so no limit drops a solution
-   and each branch comes back once, within +-pi).
-3. EAIK solves the same poses. Solutions are matched modulo 2pi (1e-6 rad per joint); every
-   solution of either side is checked by armgate's FK against the target (position m,
-   rotation angle rad). "Exact" means both errors <= 1e-9 (armgate's own check).
-4. Timing: EAIK's batched C++ call on one thread (Python's per-pose overhead is a list
-   conversion only), and its single-pose call from Python; ik-geo (PyPI `ik-geo`, IK-Geo's
-   Rust implementation) if installed, per call from Python.
+   world->link_6 at q = 0 and link_6->tool, read from the same URDF with urchin). The map is
+   checked first: EAIK's FK against armgate's at 200 configurations ("FK convention gap").
+2. Joint vectors (numpy, seeded): N uniform in [-pi, pi)^6, and N/4 each of round angles
+   (multiples of pi/2), a wrist 1e-9..1e-3 rad from q5 = 0 or pi, an elbow as near its
+   stretched or folded value. armgate's FK gives the pose and `Chain::solve_all` every solution
+   (core/examples/ik_solutions.rs with `--wide-limits`: every revolute joint limited to +-2pi,
+   reference 0, so no limit drops a solution and each branch comes back once, within +-pi).
+3. EAIK solves the same poses. Solutions are matched modulo 2pi (SAME = 1e-6 rad per joint);
+   every solution of either side is checked by armgate's FK against the target (position m,
+   rotation angle rad); "exact" means both errors <= 1e-9 (armgate's own check). A solution
+   or original vector that armgate lacks is looked for again with it as the reference (a
+   singular pose's free joint takes the reference's value); what is still missing is "near"
+   (within NEAR = 1e-2 of armgate's nearest: the same root, moved by a near-singular pose's
+   conditioning, where vectors that far apart all reproduce the pose within 1e-9) or
+   "absent".
+4. Timing (µs per all-solutions solve): armgate's solve_all (median of the uniform poses, one
+   call each), EAIK's batched C++ call on one thread, and EAIK's and ik-geo's (PyPI `ik-geo`,
+   IK-Geo's Rust implementation, family picked by hand) single calls from Python minus a
+   Python call of the same library's FK (the call's own cost).
 
 Needs numpy, eaik (and optionally ik-geo) from PyPI, cargo for the two binaries:
-    python3 -m venv .venv && .venv/bin/pip install eaik ik-geo
-    .venv/bin/python tools/ik_crosscheck.py [--samples 2000] [--seed 26] [--json out.json]
-Not run in CI (it needs PyPI packages); exits 1 if a solution either side returns that
-armgate's FK calls exact is missing on the other side, 0 otherwise.
+    python3 -m venv target/ik-crosscheck && target/ik-crosscheck/bin/pip install eaik ik-geo
+    target/ik-crosscheck/bin/python tools/ik_crosscheck.py [--samples 2000] [--json out.json]
+Not run in CI (it needs PyPI packages). Exits 1 if a solution EAIK finds exact, or an original
+vector, is absent from armgate's solutions; 0 otherwise.
 """
 
 from __future__ import annotations
@@ -156,13 +164,16 @@ def compare(example: Path, robot: Path, model: EaikModel, qs: np.ndarray) -> dic
           for (k, side, j, _), p in zip(listed, poses)}
 
     r = dict(poses=len(qs), ours=0, theirs=0, theirs_ls=0, theirs_exact=0, ours_error=0.0,
+             theirs_inexact_poses=0,
              theirs_exact_error=0.0, theirs_error=0.0, original_missing=[],
-             missing_in_ours=[], missing_in_theirs=[], representatives=0, fewer_theirs=0)
+             missing_in_ours=[], missing_in_theirs=[], representatives=0, fewer_theirs=0,
+             ours_us=float(np.median([o["micros"] for o in ours])))
     for k, (o, (sol, ls)) in enumerate(zip(ours, theirs)):
         mine = [s["q"] for s in o["solutions"]]
         r["ours"] += len(mine)
         r["theirs"] += len(sol)
         r["theirs_ls"] += int(ls.sum())
+        r["theirs_inexact_poses"] += any(max(fk[(k, "eaik", j)]) > EXACT for j in range(len(sol)))
         for j in range(len(mine)):
             r["ours_error"] = max(r["ours_error"], *fk[(k, "armgate", j)])
         if not any(wrapped(m, qs[k]) < SAME for m in mine):
@@ -221,9 +232,11 @@ def robot_results(name: str, count: int, seed: int, binaries: tuple[Path, Path],
     # The two FK conventions agree (the pose map is right) before anything is compared.
     fk_gap = max(max(errors(np.asarray(model.robot.fwdKin(q)), model.pose_of(t)))
                  for q, t in zip(uniform, targets))
+    results = {kind: compare(example, robot, model, qs) for kind, qs in sets.items()}
+    times = timing(model, [model.pose_of(t) for t in targets], name)
+    times["armgate"] = results["uniform"]["ours_us"]
     return dict(robot=name, eaik_family=model.robot.getKinematicFamily(), fk_gap=fk_gap,
-                sets={kind: compare(example, robot, model, qs) for kind, qs in sets.items()},
-                timing=timing(model, [model.pose_of(t) for t in targets], name))
+                sets=results, timing=times)
 
 
 def median_us(call, items: list, repeats: int = 5) -> float:
@@ -270,31 +283,38 @@ def ik_geo_robot(model: EaikModel, name: str):
 
 
 def report(results: list[dict]) -> None:
-    print("| robot | set | poses | solutions armgate / EAIK (mean) | EAIK least-squares / exact "
-          "(mean) | exact EAIK solutions armgate lacks: near / absent (another value of a free "
-          "joint) | armgate solutions EAIK lacks: near / absent (poses where EAIK has fewer "
-          "exact) | original q missing in armgate: near / absent | max FK error armgate / EAIK "
-          "exact / EAIK any |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(row(["robot", "set", "poses", "solutions armgate / EAIK (mean)",
+               "EAIK least-squares / exact (mean)", "poses with an inexact EAIK solution",
+               "exact EAIK solutions armgate lacks: near / absent (found with it as the "
+               "reference: a free joint's value)",
+               "armgate solutions EAIK lacks: near / absent (poses where EAIK has fewer exact)",
+               "original q missing in armgate: near / absent",
+               "max FK error armgate / EAIK exact / EAIK any"]))
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         for kind, s in r["sets"].items():
             n = s["poses"]
             print(f"| {r['robot']} | {kind} | {n} | {s['ours'] / n:.3f} / {s['theirs'] / n:.3f} | "
                   f"{s['theirs_ls'] / n:.3f} / {s['theirs_exact'] / n:.3f} | "
+                  f"{100 * s['theirs_inexact_poses'] / n:.1f} % | "
                   f"{bins(s['missing_in_ours'])} ({s['representatives']}) | "
                   f"{bins(s['missing_in_theirs'])} ({s['fewer_theirs']}) | "
                   f"{bins(s['original_missing'])} | {s['ours_error']:.1e} / "
                   f"{s['theirs_exact_error']:.1e} / {s['theirs_error']:.1e} |")
     print()
-    print("| robot | EAIK family | FK convention gap | EAIK batched, 1 thread | EAIK single "
-          "call | EAIK FK call | ik-geo single call | ik-geo FK call |")
-    print("|---|---|---|---|---|---|---|---|")
+    print(row(["robot", "EAIK family", "FK convention gap",
+               "armgate solve_all, ±2π limits (median)", "EAIK batched, 1 thread",
+               "EAIK single call − its FK call", "ik-geo single call − its FK call"]))
+    print("|---|---|---|---|---|---|---|")
     for r in results:
         t = r["timing"]
-        cell = lambda key: f"{t[key]:.2f}" if key in t else "-"  # noqa: E731
-        print(f"| {r['robot']} | {r['eaik_family']} | {r['fk_gap']:.1e} | "
-              f"{cell('eaik_batched')} | {cell('eaik_single')} | {cell('eaik_fk_call')} | "
-              f"{cell('ik_geo_single')} | {cell('ik_geo_fk_call')} |")
+
+        def net(call: str, fk: str) -> str:
+            return f"{t[call]:.2f} − {t[fk]:.2f} = {t[call] - t[fk]:.2f}" if call in t else "-"
+
+        print(f"| {r['robot']} | {r['eaik_family']} | {r['fk_gap']:.1e} | {t['armgate']:.2f} | "
+              f"{t['eaik_batched']:.2f} | {net('eaik_single', 'eaik_fk_call')} | "
+              f"{net('ik_geo_single', 'ik_geo_fk_call')} |")
     for r in results:
         for kind, s in r["sets"].items():
             absent = lambda cases: [c for c in cases if c["nearest"] >= NEAR]  # noqa: E731
@@ -304,6 +324,10 @@ def report(results: list[dict]) -> None:
                 print(f"{r['robot']} {kind}: armgate lacks the original vector {case}")
             for case in absent(s["missing_in_theirs"])[:3]:
                 print(f"{r['robot']} {kind}: armgate's solution not in EAIK's: {case}")
+
+
+def row(cells: list[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
 
 
 def bins(cases: list[dict]) -> str:
@@ -329,8 +353,8 @@ def main() -> int:
     report(results)
     if args.json:
         args.json.write_text(json.dumps(results, indent=1))
-    return int(any(s["missing_in_ours"] or s["original_missing"]
-                   for r in results for s in r["sets"].values()))
+    return int(any(c["nearest"] >= NEAR for r in results for s in r["sets"].values()
+                   for c in [*s["missing_in_ours"], *s["original_missing"]]))
 
 
 def version(package: str) -> str:

@@ -6,15 +6,17 @@
 //!
 //! Each input line is `fk q1 … qn` or `ik q1 … qn`. Both answer `{"pose": [16 numbers]}`, the
 //! tool frame FK(q) as a row-major 4×4 matrix; `ik` adds `"solutions": [{"q": […], "branch":
-//! b}, …]`, `Chain::solve_all` of that pose with the reference at the middle of the joint
-//! ranges, or at `r1 … rn` if the line goes on with them (`ik q1 … qn r1 … rn`: the reference
-//! also gives a joint that a singularity leaves free its value). `--wide-limits` first sets every revolute joint's limits to ±2π (and the reference
-//! to 0), so no solution is dropped by a limit and each branch comes back on the turn within
-//! ±π: what an all-solutions solver without limits returns.
+//! b}, …], "micros": t`: `Chain::solve_all` of that pose and its time (µs), with the reference
+//! at the middle of the joint ranges, or at `r1 … rn` if the line goes on with them (`ik q1 …
+//! qn r1 … rn`: the reference also gives a joint that a singularity leaves free its value).
+//! `--wide-limits` first sets every revolute joint's limits to ±2π (and so the reference to 0):
+//! no solution is dropped by a limit and each branch comes back on its turn within ±π, what an
+//! all-solutions solver without limits returns.
 #![allow(missing_docs, clippy::unwrap_used)]
 
 use std::f64::consts::TAU;
 use std::io::{BufRead, Write};
+use std::time::Instant;
 
 use armgate_core::config::{JointType, load_file};
 use armgate_core::kinematics::Chain;
@@ -52,7 +54,9 @@ fn main() {
         write!(out, "{{\"pose\": {}", numbers(matrix(&pose).iter())).unwrap();
         if mode == "ik" {
             let reference: &[f64] = if given.is_empty() { &mid } else { given };
+            let t0 = Instant::now();
             let solutions = chain.solve_all(&pose, reference).unwrap();
+            let micros = t0.elapsed().as_secs_f64() * 1e6;
             let listed: Vec<String> = solutions
                 .iter()
                 .map(|s| {
@@ -60,7 +64,8 @@ fn main() {
                     format!("{{\"q\": {q}, \"branch\": {}}}", s.branch.bits())
                 })
                 .collect();
-            write!(out, ", \"solutions\": [{}]", listed.join(", ")).unwrap();
+            let listed = listed.join(", ");
+            write!(out, ", \"solutions\": [{listed}], \"micros\": {micros:?}").unwrap();
         }
         writeln!(out, "}}").unwrap();
     }
