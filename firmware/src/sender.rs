@@ -130,9 +130,9 @@ type Queues<'a, const M: usize, const N: usize> = (
 /// resolved lately, one that waits for the others' neighbours.
 pub async fn run(stack: Stack<'static>, known: &mut Buffers, probing: &mut Buffers) {
     let neighbours = RefCell::new(Neighbours::default());
-    let known_queue = Channel::<NoopRawMutex, Datagram, 1>::new();
+    let known_queue = Channel::<NoopRawMutex, Datagram, PROBES>::new();
     let probes = Channel::<NoopRawMutex, Datagram, PROBES>::new();
-    let stop_probes = Channel::<NoopRawMutex, Datagram, 1>::new();
+    let stop_probes = Channel::<NoopRawMutex, Datagram, PROBES>::new();
     let sort = async {
         loop {
             let outgoing = OUTGOING.receive().await;
