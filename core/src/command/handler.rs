@@ -229,6 +229,11 @@ impl CommandHandler {
         self.session.notice_recipient()
     }
 
+    /// The client that holds the arm.
+    pub fn holder(&self) -> Option<SocketAddr> {
+        self.session.holder()
+    }
+
     /// The shell's count of replies and notices it could not send (`SQ` index 3 reports it).
     pub fn set_send_drops(&mut self, drops: u64) {
         self.session.set_send_drops(drops);
