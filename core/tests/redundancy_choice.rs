@@ -6,6 +6,8 @@
     clippy::panic,
     clippy::indexing_slicing
 )]
+// The seed deployed rounded angles such as 1.5708.
+#![allow(clippy::approx_constant)]
 
 mod common;
 
