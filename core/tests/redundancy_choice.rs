@@ -11,6 +11,8 @@
 
 mod common;
 
+use common::{datagram, floats};
+
 use std::net::SocketAddr;
 
 use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
@@ -75,13 +77,8 @@ impl Rig {
 
     /// The reply to `cmd` from the client on `port`.
     fn from(&mut self, port: u16, cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
-        let mut d = [0u8; 31];
-        d[..2].copy_from_slice(cmd.as_bytes());
-        for (k, v) in values.iter().enumerate() {
-            d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
-        }
-        d[30] = index;
-        self.cycle.answer(&d, client(port))
+        self.cycle
+            .answer(&datagram(cmd, values, index), client(port))
     }
 
     /// The same, from client 1.
@@ -117,10 +114,6 @@ impl Rig {
         let t = pose.translation.vector;
         [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32)
     }
-}
-
-fn floats(reply: &[u8; 31]) -> [f32; 7] {
-    core::array::from_fn(|k| f32::from_le_bytes(reply[2 + 4 * k..6 + 4 * k].try_into().unwrap()))
 }
 
 /// KR's values: θ3 in f0, θ5 in f1.
