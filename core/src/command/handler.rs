@@ -2,8 +2,8 @@
 //!
 //! The requests' handling, one concern a file: `handler/cartesian.rs` (Cartesian goals, moves,
 //! via points, the twist stream), `handler/joint.rs` (the joint ones), `handler/ik_requests.rs`
-//! (`KG`, `KR`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`, `OF`,
-//! `RC`); `handler/replies.rs` makes the replies and refusal texts.
+//! (`KG`, `KR`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`,
+//! `OF`, `RC`); `handler/replies.rs` makes the replies and refusal texts.
 
 mod cartesian;
 mod ik_requests;
