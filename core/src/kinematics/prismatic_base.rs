@@ -41,13 +41,8 @@ pub(super) fn solve(
     let tool = target.rotation.matrix() * s.tool_rotation.transpose();
     let sense5 = h5.dot(h4);
     let reference = (free[2], free[3] + sense5 * free[4]);
-    let (rotations, count) = rotation_roots(
-        form,
-        [2, 3, 5],
-        &|x: &Vector3<f64>| tool * x,
-        reference,
-        nearest,
-    );
+    let back = |x: &Vector3<f64>| tool * x;
+    let (rotations, count) = rotation_roots(form, [2, 3, 5], (&back, true), reference, nearest);
     // The slides' plane: its normal, and the Gram matrix of its two directions.
     let normal = h1.cross(h2).normalize();
     let c12 = h1.dot(h2);
