@@ -10,9 +10,7 @@
 
 mod common;
 
-use armgate_core::kinematics::{
-    Branch, CHECK, Chain, Family, IkError, IkResult, Joints, Solutions,
-};
+use armgate_core::kinematics::{Branch, CHECK, Chain, Family, IkError, Joints, Solutions};
 use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
 
@@ -302,14 +300,7 @@ fn global_ik_takes_an_exact_solution() {
         let chain = Chain::new(&config);
         for k in 0..500 {
             let target = chain.forward(&chain.random_joints(&mut rng)).unwrap();
-            let result = chain
-                .solve_global(&target, &chain.mid_range(), &config.ik, k)
-                .unwrap();
-            let IkResult::Converged(found) = result else {
-                panic!("{name} #{k}: {result:?}");
-            };
-            assert!(chain.within_limits(&found.q), "{name} #{k}");
-            assert_eq!(found.iterations, 0, "{name} #{k}: no Newton step");
+            common::assert_global_ik_exact(&chain, &config.ik, &target, k, &format!("{name} #{k}"));
         }
     }
 }
