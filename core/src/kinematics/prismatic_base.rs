@@ -49,10 +49,11 @@ pub(super) fn solve(
     let det = 1.0 - c12 * c12;
     let swing = o5 - o4;
     for &(a3, phi, a6, b3) in rotations.iter().take(count) {
-        // The tool's position with the slides and the θ4 swing of axis 5 left out.
-        let wrist = o6 + rotate(h6, &a6, &(s.tool_position - o6));
+        // The tool's position turned by θ6, then by φ about axis 5 and θ3; what is left is
+        // the slides and θ4's swing of axis 5 about axis 4.
+        let rolled = o6 + rotate(h6, &a6, &(s.tool_position - o6));
         let rest = target.translation.vector
-            - (o3 + rotate(h3, &a3, &(o4 - o3 + rotate(h4, &phi, &(wrist - o5)))));
+            - (o3 + rotate(h3, &a3, &(o4 - o3 + rotate(h4, &phi, &(rolled - o5)))));
         // rest = q1 h1 + q2 h2 + R3 R4 (o5 − o4): along the normal, θ4 alone.
         let up = rotate(h3, &a3.negated(), &normal);
         let (elbows, n4) = sp4(&up, h4, &swing, normal.dot(&rest), form.slack()).list(
