@@ -27,11 +27,6 @@ use crate::math::Frame;
 /// by less than that, which rounding hides); the candidate misses by about this much and is
 /// polished by Newton steps before the FK check.
 const NEARLY_ON_AXIS: f64 = 1e-6;
-/// Where three rotations' last axis must point this close (sine) to their first, the first
-/// joint keeps the reference's value: the candidate then misses by at most this, within
-/// [`CHECK`](super::CHECK). Farther out (up to [`NEARLY_ON_AXIS`]) [`near_axis`] solves it if
-/// the rotation is the target's own.
-const ON_AXIS: f64 = 1e-10;
 
 /// Up to two roots of a pair of joints, each with its branch index.
 type PairList = ([(Angle, Angle, u8); 2], usize);
@@ -177,8 +172,9 @@ fn shoulder_roots(
 /// then turns `hb` onto `(Ra Rb)ᵀ m hb` (subproblem 1). `(ra, rb)`: the reference values of
 /// θa and θb (θa keeps `ra` where it is free; with `nearest`, the pair nearest them).
 /// `m_exact`: `m` is the target's own (no root solved before it), so a tilt of `m hc` off `ha`
-/// above rounding is the target's and is solved ([`near_axis`]); otherwise it may be the
-/// error of an earlier tangent root (~1e-8) and, up to [`NEARLY_ON_AXIS`], leaves θa free.
+/// above rounding is the target's, and subproblem 2 solves it down to 1e-12; otherwise it may
+/// be the error of an earlier tangent root (~1e-8) and, up to [`NEARLY_ON_AXIS`], leaves θa
+/// free.
 pub(super) fn rotation_roots(
     form: &ClosedForm,
     [a, b, c]: [usize; 3],
@@ -200,11 +196,8 @@ pub(super) fn rotation_roots(
             out.1 += 1;
         }
     };
-    let tilt = misalignment(ha, &m_hc);
-    let roots = if tilt <= ON_AXIS || (!m_exact && tilt <= NEARLY_ON_AXIS) {
+    let roots = if !m_exact && misalignment(ha, &m_hc) <= NEARLY_ON_AXIS {
         PairRoots::FreeFirst
-    } else if tilt <= NEARLY_ON_AXIS {
-        near_axis(ha, &m_hc, hb, hc)
     } else {
         sp2(ha, &m_hc, hb, hc, form.slack())
     };
@@ -233,37 +226,6 @@ pub(super) fn rotation_roots(
         PairRoots::None => {}
     }
     out
-}
-
-/// Subproblem 2, `R(ha, t1) m = R(hb, t2) hc`, for `m` within [`NEARLY_ON_AXIS`] of `ha` but
-/// not on it (an `m` rounded off a singular configuration, such as a pose sent in `f32`),
-/// where subproblem 2's projections are too short to read. Near the value of t2 that puts `hc`
-/// on `ha`, a turn of t2 tilts it along `±ha × hb`: t1 turns `m`'s tilt onto that direction
-/// (subproblem 1, on the tilt's direction alone; the first root as subproblem 2 orders them),
-/// and t2 then turns `hc` onto `R(ha, t1) m` (subproblem 1). Both roots are exact.
-fn near_axis(
-    ha: &Vector3<f64>,
-    m: &Vector3<f64>,
-    hb: &Vector3<f64>,
-    hc: &Vector3<f64>,
-) -> PairRoots {
-    let side = ha.cross(hb);
-    let zero = Angle::of(0.0);
-    let mut pairs = [(zero, zero); 2];
-    let Some(t1) = sp1(ha, m, &side) else {
-        return PairRoots::None;
-    };
-    let half = Angle {
-        cos: -1.0,
-        sin: 0.0,
-    };
-    for (pair, t1) in pairs.iter_mut().zip([t1, t1.plus(&half)]) {
-        let Some(t2) = sp1(hb, hc, &rotate(ha, &t1, m)) else {
-            return PairRoots::None;
-        };
-        *pair = (t1, t2);
-    }
-    PairRoots::Some(pairs, 2)
 }
 
 /// Steps of a sweep across one redundancy parameter's range: 16 for θ3 alone, 8 · 8 for θ3
