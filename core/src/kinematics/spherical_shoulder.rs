@@ -217,7 +217,7 @@ pub(super) fn rotation_roots(
             }
         }
         PairRoots::FreeFirst => {
-            // Axis c along axis a (the wrist stretched): θa + θc is fixed, θa keeps `free`.
+            // Axis c along axis a (the wrist stretched): θa + θc is fixed, θa keeps `ra`.
             let aa = Angle::of(ra);
             if let Some(ab) = sp1(hb, hc, &rotate(ha, &aa.negated(), &m_hc)) {
                 push(aa, ab, 0);
