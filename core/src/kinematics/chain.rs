@@ -268,25 +268,18 @@ impl Chain {
         )
     }
 
-    /// The tool frame from the sine and cosine of each revolute joint's value and each
-    /// prismatic joint's value in `slides` (read only there): FK without recomputing the sines
-    /// and cosines a closed-form solver already has.
-    pub(super) fn pose_by_trig(
-        &self,
-        sin_cos: &[(f64, f64); MAX_JOINTS],
-        slides: &[f64; MAX_JOINTS],
-    ) -> Frame {
+    /// The tool frame of a revolute chain from the sine and cosine of each joint value
+    /// (prismatic joints keep their offset): FK without recomputing the sines and cosines a
+    /// closed-form solver already has.
+    pub(super) fn pose_by_trig(&self, sin_cos: &[(f64, f64); MAX_JOINTS]) -> Frame {
         self.walk_by(
-            |i, link, slide| {
-                if link.prismatic {
-                    return (link.sin_theta, link.cos_theta, link.d + slide);
-                }
+            |i, link, _| {
                 let (sq, cq) = sin_cos.get(i).copied().unwrap_or((0.0, 1.0));
                 let st = link.sin_theta * cq + link.cos_theta * sq;
                 let ct = link.cos_theta * cq - link.sin_theta * sq;
                 (st, ct, link.d)
             },
-            slides,
+            &[0.0; MAX_JOINTS],
             |_, _, _| {},
         )
     }

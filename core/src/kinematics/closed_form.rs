@@ -454,7 +454,7 @@ impl Chain {
         let mut current = *candidate;
         let mut ideal = *target;
         for _ in 0..REFINE_STEPS {
-            let reached = self.pose_by_trig(&current.sin_cos(), &current.values);
+            let reached = self.pose_of(form, &current);
             if Misses::of(&reached, target).largest() <= REFINED * REFINED {
                 break;
             }
@@ -513,26 +513,26 @@ impl Chain {
         } else {
             form.slack()
         };
-        let limits = min.iter().zip(max).enumerate();
-        for (((v, (angle, known)), r), (i, (lo, hi))) in joints.zip(limits) {
+        for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
             let value = if known.is_nan() {
                 angle.value()
             } else {
                 *known
             };
-            // A slide takes no turns.
-            let turned = if self.is_prismatic(i) {
-                (lo - widen <= value && value <= hi + widen).then_some(value)?
-            } else {
-                nearest_turn(value, *r, lo - widen, hi + widen)?
-            };
+            let turned = nearest_turn(value, *r, lo - widen, hi + widen)?;
             *v = saturate(turned, *lo, *hi);
+        }
+        // A slide takes no turns: its own value, if within its limits.
+        if form.fit.family == Family::PrismaticBase
+            && !prismatic_base::place_slides(&candidate.values, q, (min, max), widen)
+        {
+            return None;
         }
         if !form.fit.is_exact() {
             *q = self.polish(target, q)?;
         }
         let reached = if form.fit.is_exact() {
-            self.pose_by_trig(&candidate.sin_cos(), &candidate.values)
+            self.pose_of(form, candidate)
         } else {
             self.pose(q)
         };
@@ -550,6 +550,17 @@ impl Chain {
             }
         }
         Some(errors)
+    }
+
+    /// The pose `candidate` reaches, by trigonometry on its angles (then moved by its slides,
+    /// for a prismatic base).
+    fn pose_of(&self, form: &ClosedForm, candidate: &Candidate) -> Frame {
+        let pose = self.pose_by_trig(&candidate.sin_cos());
+        if form.fit.family == Family::PrismaticBase {
+            prismatic_base::slid(form, &candidate.values, pose)
+        } else {
+            pose
+        }
     }
 
     /// Newton steps on the true chain from a solution of its ideal model (or from a root known

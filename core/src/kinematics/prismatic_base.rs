@@ -19,7 +19,8 @@ use super::family::ClosedForm;
 use super::spherical_shoulder::rotation_roots;
 use super::subproblems::{Angle, rotate, sp4};
 use crate::MAX_JOINTS;
-use crate::math::Frame;
+use crate::math::{Frame, Joints};
+use crate::saturate::saturate;
 
 /// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
 /// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
@@ -86,4 +87,31 @@ pub(super) fn solve(
 pub(super) fn slide_distance(values: &[f64; MAX_JOINTS], reference: &[f64; MAX_JOINTS]) -> f64 {
     let (d1, d2) = (values[0] - reference[0], values[1] - reference[1]);
     0.5 * (d1 * d1 + d2 * d2)
+}
+
+/// `pose` (the chain's with its slides at 0) with the slides at `values[0]`, `values[1]`:
+/// moved along their axes, which nothing before them turns.
+pub(super) fn slid(form: &ClosedForm, values: &[f64; MAX_JOINTS], pose: Frame) -> Frame {
+    let [h1, h2, _, _, _, _, _, _] = &form.screws.axis;
+    let mut moved = pose;
+    moved.translation.vector += h1 * values[0] + h2 * values[1];
+    moved
+}
+
+/// The slides' `values` written to `q` (clamped into their limits) if each lies within its
+/// limits widened by `widen`; false if one does not.
+pub(super) fn place_slides(
+    values: &[f64; MAX_JOINTS],
+    q: &mut Joints,
+    (min, max): (&[f64; MAX_JOINTS], &[f64; MAX_JOINTS]),
+    widen: f64,
+) -> bool {
+    let slides = q.iter_mut().zip(values).zip(min.iter().zip(max)).take(2);
+    for ((v, value), (lo, hi)) in slides {
+        if !(lo - widen <= *value && *value <= hi + widen) {
+            return false;
+        }
+        *v = saturate(*value, *lo, *hi);
+    }
+    true
 }
