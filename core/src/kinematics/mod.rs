@@ -17,6 +17,7 @@ mod evaluation;
 mod family;
 mod ik;
 mod jacobian;
+mod prismatic_base;
 mod screws;
 mod spherical_shoulder;
 mod spherical_wrist;
