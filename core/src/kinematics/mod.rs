@@ -12,9 +12,11 @@
 //! * [`Chain::joint_rates`]: inverse velocity kinematics with a null-space term.
 
 mod chain;
+mod descent;
 mod closed_form;
 mod evaluation;
 mod family;
+mod global;
 mod ik;
 mod jacobian;
 mod screws;
