@@ -11,9 +11,10 @@
 //! * [`diverges`]: the seed's divergence guard.
 //! * [`Chain::joint_rates`]: inverse velocity kinematics with a null-space term.
 
+mod calibrated;
 mod chain;
-mod descent;
 mod closed_form;
+mod descent;
 mod evaluation;
 mod family;
 mod global;
