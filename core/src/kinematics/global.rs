@@ -50,7 +50,7 @@ impl Chain {
         if score(&best) > CLOSE {
             return result;
         }
-        let mut q = best.q.clone();
+        let mut q = best.q;
         self.sharpen(target, &mut q);
         let e = math::diff(&self.pose(&q), target);
         let (position_error, orientation_error) =
