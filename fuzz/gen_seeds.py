@@ -92,6 +92,12 @@ SEEDS = {
     + chunk(dgram("jP"))
     + chunk(dgram("TM"))
     + chunk(dgram("ST"), 1),
+    # KR (ranger-mk1 has no redundancy parameters: refused), KS and KG asking for its choice.
+    "ik_redundancy": chunk(dgram("CM", [1.0]), 1)
+    + chunk(dgram("KR", [0.5, 0.2], 3))
+    + chunk(dgram("KS", [*HOME_XYZ, *HOME_RPY], 0x40))
+    + chunk(dgram("KG", [*moved(HOME_XYZ, dz=0.002), *HOME_RPY, 1.0], 0x48), 64)
+    + chunk(dgram("ST"), 1),
     # Signed: a move with a replay of its BG (step 2 - 2 = 0: the same timestamp), a forged tag,
     # a cut-off block and the controller's own link 0 among the fresh datagrams.
     "signed_move": signed(dgram("CM", [2.0]), 0b011_001, 1)

@@ -22,6 +22,8 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+#[path = "e2e/redundancy.rs"]
+mod redundancy;
 #[path = "e2e/sessions.rs"]
 mod sessions;
 

@@ -127,12 +127,18 @@ pub enum Cmd {
     #[command(after_help = "Example: armgate move 0 0.2 0.8 0 0 -1.5708 --time 5")]
     Move(MoveArgs),
     /// Print every inverse-kinematics solution of a pose within the joint limits, each with
-    /// its configuration branch (KS; robots with a closed form, docs/kinematics.md).
-    #[command(after_help = "Example: armgate ik 0 0.2 0.8 0 0 -1.5708")]
+    /// its configuration branch (KS; robots with a closed form, docs/kinematics.md); on a 7–8
+    /// joint arm those for the present θ3 (θ5), or for --theta3 (--theta5).
+    #[command(
+        after_help = "Examples: armgate ik 0 0.2 0.8 0 0 -1.5708\n          armgate ik --theta3 0.5 0.4 0.1 0.6 3.1416 0 0   (iiwa14)"
+    )]
     Ik(IkArgs),
     /// Move the joints (joint mode) to the inverse kinematics of a pose on a chosen
-    /// configuration branch, or the solution nearest the present joints (KG), and wait.
-    #[command(after_help = "Example: armgate ik-move 0 0.2 0.8 0 0 -1.5708")]
+    /// configuration branch, or the solution nearest the present joints (KG), and wait; on a
+    /// 7–8 joint arm with the present θ3 (θ5), or --theta3 (--theta5).
+    #[command(
+        after_help = "Examples: armgate ik-move 0 0.2 0.8 0 0 -1.5708\n          armgate ik-move --theta3 0.5 0.4 0.1 0.6 3.1416 0 0   (iiwa14)"
+    )]
     IkMove(IkMoveArgs),
     /// Move the joints (joint mode) and wait until within the tolerance (1 mrad).
     ///

@@ -54,6 +54,7 @@ pub mod tools;
 pub mod velocity;
 pub mod wait;
 
+pub use armgate_protocol::client::redundancy::Redundancy;
 pub use armgate_protocol::client::{Command, Reply, Request, Text, TwistFrame};
 pub use client::{
     Client, ClientConfig, DEFAULT_ADDR, DEFAULT_NOTICE_CAPACITY, DEFAULT_RETRIES, DEFAULT_TIMEOUT,

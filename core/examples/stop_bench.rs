@@ -3,13 +3,19 @@
 //! `cargo run --release -p armgate-core --example stop_bench`
 //!
 //! For every robot file in `robots/` × {joint move, Cartesian line, blended sequence, twist
-//! stream, joint-velocity stream} × {ST, CM, OF, workspace boundary, stream timeout}, an ideal
-//! arm follows the commands; from the stop's cause on, per tick of commanded joints: the peak
+//! stream, joint-velocity stream} × {ST, CM, OF, workspace boundary, stream timeout, IK
+//! divergence}, an ideal arm follows the commands; from the stop's cause on, per tick of commanded joints: the peak
 //! acceleration over `max_acceleration` (the worst joint), the peak jerk over `max_jerk` (where
 //! the robot file sets one), the time and tool distance to rest, and the tool's largest
 //! distance from the path (Cartesian line and twist stream: the straight line). "refused":
 //! the motion was refused up front (boundary case); "entered box": the tool was strictly inside
 //! the box put across its way on some tick.
+//!
+//! IK divergence (`WN22`, Cartesian line only): the up-front line check is turned off
+//! (`ik.check_lines = false`) and the line runs from the start along the first of ±x, ±z, ±y,
+//! as long as the workspace bounds allow (up to 1 m), on which the tick loses its IK solution;
+//! figures from the tick that raised it, whose speed is in the note ("at N mm/s": the tick may
+//! have slowed the line down before it gave up).
 #![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
 
 use armgate_core::config::{ValidRobot, load_file};
@@ -35,6 +41,7 @@ enum Cause {
     Of,
     Boundary,
     Timeout,
+    Wn22,
 }
 
 const MOTIONS: [Motion; 5] = [
@@ -44,12 +51,13 @@ const MOTIONS: [Motion; 5] = [
     Motion::Twist,
     Motion::JointRates,
 ];
-const CAUSES: [Cause; 5] = [
+const CAUSES: [Cause; 6] = [
     Cause::St,
     Cause::Cm,
     Cause::Of,
     Cause::Boundary,
     Cause::Timeout,
+    Cause::Wn22,
 ];
 /// Ticks after the cause at most (rest is normally reached much earlier).
 const MAX_TICKS: usize = 20_000;
@@ -61,6 +69,8 @@ struct Run {
     now: f64,
     /// Commanded joints, one per tick.
     commands: Vec<Joints>,
+    /// The index in `commands` of the first tick that raised `WN22`.
+    ik_divergence: Option<usize>,
 }
 
 impl Run {
@@ -71,6 +81,7 @@ impl Run {
             arm: IdealArm::new(*q0),
             now: 0.0,
             commands: Vec::new(),
+            ik_divergence: None,
         };
         run.tick();
         run
@@ -82,6 +93,9 @@ impl Run {
         self.arm.step(out.command.as_ref());
         self.commands
             .push(out.command.unwrap_or(self.arm.measured()));
+        if out.events.ik_divergence && self.ik_divergence.is_none() {
+            self.ik_divergence = Some(self.commands.len() - 1);
+        }
     }
 
     fn pose(&self, q: &Joints) -> Vector3<f64> {
@@ -148,7 +162,7 @@ fn stop_now(run: &mut Run, cause: Cause) {
             run.ctrl.set_mode(other).unwrap();
         }
         Cause::Of => run.ctrl.stop(StopCause::PowerOff),
-        Cause::Boundary | Cause::Timeout => {}
+        Cause::Boundary | Cause::Timeout | Cause::Wn22 => {}
     }
 }
 
@@ -164,7 +178,7 @@ struct Figures {
     time: f64,
     distance: f64,
     deviation: Option<f64>,
-    note: &'static str,
+    note: String,
 }
 
 fn measure(
@@ -227,7 +241,7 @@ fn measure(
         time: (rest.saturating_sub(from)) as f64 * dt,
         distance,
         deviation: line.map(|_| deviation),
-        note: if inside { "entered box" } else { "" },
+        note: if inside { "entered box" } else { "" }.to_string(),
     }
 }
 
@@ -271,6 +285,11 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
     let dt = config.control_period;
     if cause == Cause::Timeout && !matches!(motion, Motion::Twist | Motion::JointRates) {
         return None;
+    }
+    if cause == Cause::Wn22 {
+        return (motion == Motion::Line)
+            .then(|| diverging_line(config, &q0))
+            .flatten();
     }
     let probe = Run::new(config, &q0);
     let p0 = probe.pose(&q0);
@@ -452,6 +471,41 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
     }
 }
 
+/// The stop that `WN22` begins on an unchecked Cartesian line the tick cannot follow to its end.
+fn diverging_line(config: &ValidRobot, q0: &Joints) -> Option<Figures> {
+    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
+    for (name, dir) in [
+        ("+x", Vector3::x()),
+        ("-x", -Vector3::x()),
+        ("+z", Vector3::z()),
+        ("-z", -Vector3::z()),
+        ("+y", Vector3::y()),
+        ("-y", -Vector3::y()),
+    ] {
+        for length in [1.0, 0.6, 0.4, 0.25] {
+            let mut run = Run::new(&unchecked, q0);
+            run.ctrl.set_mode(Mode::Cartesian).unwrap();
+            let mut goal = run.ctrl.cartesian_setpoint();
+            let origin = goal.translation.vector;
+            goal.translation.vector += dir * length;
+            if run.ctrl.move_cartesian(goal, 0.0).is_err() {
+                continue;
+            }
+            settle(&mut run);
+            let Some(from) = run.ik_divergence.filter(|k| *k >= 2) else {
+                continue;
+            };
+            let mut f = measure(&run, from, Some((origin, dir)), None);
+            let dt = unchecked.control_period;
+            let c = &run.commands;
+            let speed = (run.pose(&c[from - 1]) - run.pose(&c[from - 2])).norm() / dt;
+            f.note = format!("at {:.0} mm/s, {length} m along {name}", speed * 1e3);
+            return Some(f);
+        }
+    }
+    None
+}
+
 fn send(run: &mut Run, motion: Motion, speed: f64, dir: &Vector3<f64>, rates: &Joints) {
     if motion == Motion::Twist {
         let v = dir * speed;
@@ -469,7 +523,7 @@ fn refused() -> Figures {
         time: 0.0,
         distance: 0.0,
         deviation: None,
-        note: "refused",
+        note: "refused".to_string(),
     }
 }
 

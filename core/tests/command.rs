@@ -11,6 +11,8 @@
 mod common;
 mod drives_rig;
 
+use common::{datagram, floats};
+
 use armgate_core::command::Drives;
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::Cycle;
@@ -68,16 +70,6 @@ impl Rig {
     }
 }
 
-fn datagram(cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
-    let mut d = [0u8; 31];
-    d[..2].copy_from_slice(cmd.as_bytes());
-    for (k, v) in values.iter().enumerate() {
-        d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
-    }
-    d[30] = index;
-    d
-}
-
 fn text_of(reply: &[u8; 31]) -> String {
     let end = reply.iter().position(|b| *b == 0).unwrap();
     assert!(
@@ -85,10 +77,6 @@ fn text_of(reply: &[u8; 31]) -> String {
         "not zero-filled: {reply:?}"
     );
     String::from_utf8(reply[..end].to_vec()).unwrap()
-}
-
-fn floats(reply: &[u8; 31]) -> [f32; 7] {
-    core::array::from_fn(|k| f32::from_le_bytes(reply[2 + 4 * k..6 + 4 * k].try_into().unwrap()))
 }
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];

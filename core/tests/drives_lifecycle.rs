@@ -515,3 +515,146 @@ fn stopped_drives_keep_their_motors_on() {
         );
     }
 }
+
+/// The reply to a client request of `command` with index `index`, handled by the next tick.
+fn ask(rig: &mut Rig, command: armgate_protocol::client::Command, index: u8) -> Vec<u8> {
+    let bytes = armgate_protocol::client::Request {
+        command,
+        values: [0.0; 7],
+        index,
+    }
+    .to_bytes();
+    rig.client
+        .requests
+        .push_back(armgate_core::cycle::Datagram::new(&bytes, ()));
+    rig.client.replies.clear();
+    rig.tick();
+    rig.client.replies[0].payload().to_vec()
+}
+
+/// f0 of a 31-byte reply.
+fn f0(reply: &[u8]) -> f32 {
+    f32::from_le_bytes(reply[2..6].try_into().unwrap())
+}
+
+/// A CAN bus-off while the arm moves (docs/safety.md, "Faults, power loss and the network"):
+/// the client gets `ER35 CAN bus off`; nothing reaches the drives, which end their PT motion
+/// for lack of points and go pre-operational once the controller's heartbeat is missed (as
+/// when the controller dies); motion is refused; when the bus comes back nothing moves until
+/// the client's `ON`, and the interrupted move does not resume after it either.
+#[test]
+fn a_bus_off_at_speed_stops_the_drives_and_nothing_moves_until_on() {
+    use armgate_protocol::client::Command;
+    let mut rig = moving(50);
+    // The client that will get the notice (the last to send a valid request).
+    assert_eq!(&ask(&mut rig, Command::Status, 0)[..2], b"QS");
+    assert!(rig.bus().drives().all(|d| d.pt_running()));
+    let before = rig.drive_positions();
+    rig.tick();
+    let speed = rig
+        .drive_positions()
+        .iter()
+        .zip(&before)
+        .map(|(a, b)| (a - b).abs() / rig.period)
+        .fold(0.0, f64::max);
+    assert!(speed > 0.1, "moving at {speed} rad/s");
+    rig.bus_mut().set_bus_off(true);
+    let off = rig.now;
+    let (mut pt_ended, mut pre_operational) = (None, None);
+    let mut positions = vec![before, rig.drive_positions()];
+    for _ in 0..40 {
+        rig.tick();
+        positions.push(rig.drive_positions());
+        if pt_ended.is_none() && rig.bus().drives().all(|d| !d.pt_running()) {
+            pt_ended = Some(rig.now - off);
+        }
+        if rig
+            .bus()
+            .drives()
+            .all(|d| d.nmt_state() == NmtState::PreOperational)
+        {
+            pre_operational = Some(rig.now - off);
+            break;
+        }
+    }
+    let (pt_ended, pre_operational) = (pt_ended.unwrap(), pre_operational.unwrap());
+    // The largest change of a drive's speed from one period to the next, and the way run
+    // after the bus-off (the drives' own stop: not shaped by the controller).
+    let dt = rig.period;
+    let deceleration = positions
+        .windows(3)
+        .flat_map(|w| (0..w[0].len()).map(move |j| (w[2][j] - 2.0 * w[1][j] + w[0][j]).abs()))
+        .fold(0.0, f64::max)
+        / (dt * dt);
+    let run_on = (0..positions[1].len())
+        .map(|j| (positions[positions.len() - 1][j] - positions[1][j]).abs())
+        .fold(0.0, f64::max);
+    let notices: Vec<String> = rig
+        .client
+        .notices
+        .iter()
+        .map(|n| {
+            String::from_utf8_lossy(n.payload())
+                .trim_end_matches('\0')
+                .to_string()
+        })
+        .collect();
+    // SQ 0: drives faulted (f1 4) with code 35 (f2), the arm holding (f4 0); SQ 2: no stop
+    // cause (0): the supervisor did not stop the arm, the drives did.
+    let cause = f0(&ask(&mut rig, Command::Status, 2));
+    let status = ask(&mut rig, Command::Status, 0);
+    let field = |k: usize| f32::from_le_bytes(status[2 + 4 * k..6 + 4 * k].try_into().unwrap());
+    let (drives, code, motion) = (field(1), field(2), field(4));
+    eprintln!(
+        "bus-off at {:.2} rad/s (simulated): PT motion ended {:.0} ms later after {:.1} mrad, \
+         peak deceleration {deceleration:.1} rad/s², every drive \
+         pre-operational {:.0} ms later; notices {notices:?}; SQ 0 drives {drives} code {code} \
+         motion {motion}; SQ 2 cause {cause}",
+        speed,
+        pt_ended * 1e3,
+        run_on * 1e3,
+        pre_operational * 1e3
+    );
+    assert_eq!(
+        rig.manager().fault(),
+        Some(DriveFault::Bus(armgate_core::drives::BusFault::BusOff))
+    );
+    assert!(
+        notices.iter().any(|n| n.starts_with("ER35 CAN bus off")),
+        "{notices:?}"
+    );
+    assert_eq!((drives, code, motion, cause), (4.0, 35.0, 0.0, 0.0));
+    assert!(pt_ended <= 0.1, "PT ran {pt_ended} s");
+    assert!(
+        pre_operational <= 0.45,
+        "pre-operational after {pre_operational} s"
+    );
+    for drive in rig.bus().drives() {
+        assert_eq!(drive.stats().heartbeat_timeouts, 1);
+    }
+    // Motion is refused while the fault stands.
+    let refusal = ask(&mut rig, Command::JointBegin, 0);
+    assert!(
+        refusal.starts_with(b"ER20"),
+        "{}",
+        String::from_utf8_lossy(&refusal)
+    );
+    // The bus comes back: nothing moves on its own, the fault stays latched.
+    rig.bus_mut().set_bus_off(false);
+    let rest = rig.drive_positions();
+    rig.ticks(100);
+    assert_eq!(rig.drive_positions(), rest);
+    assert!(rig.bus().drives().all(|d| !d.pt_running()));
+    assert_eq!(rig.manager().state(), DriveState::Faulted);
+    // ON restarts the drives; the arm holds where it stopped (the move does not resume).
+    assert_eq!(&ask(&mut rig, Command::On, 0)[..2], b"NO");
+    rig.until(200, |r| r.manager().is_operational());
+    rig.ticks(50);
+    for (now, then) in rig.drive_positions().iter().zip(&rest) {
+        assert!((now - then).abs() < 1e-4, "moved from {then} to {now}");
+    }
+    assert_eq!(
+        rig.ctrl().motion(),
+        armgate_protocol::client::Motion::Holding
+    );
+}

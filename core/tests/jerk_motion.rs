@@ -11,10 +11,10 @@
 
 mod common;
 
-use armgate_core::config::ValidRobot;
+use armgate_core::config::{JointConfig, ValidRobot};
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, JointGenerator, Mode, StepOutput};
+use armgate_core::motion::{Controller, JointGenerator, Mode, StepOutput, StopCause};
 use armgate_core::rng::SplitMix64;
 use armgate_core::sim::IdealArm;
 
@@ -70,6 +70,19 @@ fn within(value: f64, limit: f64, rounding: f64) -> bool {
     value <= limit * (1.0 + 1e-9) + rounding
 }
 
+/// Asserts that joint `i`'s commands `q` (one a tick of `dt`) keep `v_max` and the joint's
+/// acceleration and jerk limits.
+fn assert_within_limits(joint: &JointConfig, i: usize, q: &[f64], v_max: f64, dt: f64) {
+    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
+    let [v, a, j] = difference_peaks(q, dt);
+    assert!(within(v, v_max, 0.0), "joint {i}: v {v}");
+    assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
+    assert!(
+        within(j, joint.max_jerk.unwrap(), rounding),
+        "joint {i}: j {j}"
+    );
+}
+
 #[test]
 fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
     let config = common::robot("ranger-mk1-jerk");
@@ -80,16 +93,9 @@ fn jerk_limited_joint_move_arrives_synchronised_within_every_limit() {
     let commands: Vec<Joints> = outs.iter().map(|o| o.command.unwrap()).collect();
     assert_eq!(commands.last().unwrap()[..], goal[..]);
     let dt = config.control_period;
-    let rounding = 8.0 * f64::EPSILON * 5.0 / (dt * dt * dt);
     for (i, joint) in config.joints.iter().enumerate() {
         let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
-        let [v, a, j] = difference_peaks(&q, dt);
-        assert!(within(v, joint.max_velocity, 0.0), "joint {i}: v {v}");
-        assert!(within(a, joint.max_acceleration, 0.0), "joint {i}: a {a}");
-        assert!(
-            within(j, joint.max_jerk.unwrap(), rounding),
-            "joint {i}: j {j}"
-        );
+        assert_within_limits(joint, i, &q, joint.max_velocity, dt);
         // Synchronised: every joint has covered the same fraction of its way at every tick.
         let fraction = |k: usize| (q[k] - MK1_READY[i]) / (goal[i] - MK1_READY[i]);
         let fraction0 = |k: usize| (commands[k][0] - MK1_READY[0]) / (goal[0] - MK1_READY[0]);
@@ -161,6 +167,49 @@ fn a_stop_that_begins_while_accelerating_keeps_the_jerk_limits() {
                 "after {after}: joint {i}: j {j}"
             );
         }
+    }
+}
+
+/// The stop that `WN22` begins (a Cartesian line the tick cannot follow to its end, the
+/// up-front check turned off so that the tick meets it) keeps the acceleration and jerk limits
+/// and ends as a rate-limited joint-space stop does: from at most 0.2 rad/s at 0.5 rad/s²
+/// (0.4 s) plus a 0.1 s jerk ramp at each end, 0.6 s (31 ticks).
+#[test]
+fn the_stop_that_wn22_begins_keeps_the_jerk_limits() {
+    let config = common::robot("ranger-mk1-jerk")
+        .edit(|c| c.ik.check_lines = false)
+        .unwrap();
+    let dt = config.control_period;
+    let mut ctrl = Controller::new(&config);
+    let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
+    let mut now = 0.0;
+    let mut commands = Vec::new();
+    let mut diverged_at = None;
+    ctrl.step(now, &arm.measured()).unwrap();
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    let mut goal = ctrl.cartesian_setpoint();
+    goal.translation.vector.x += 1.0;
+    ctrl.move_cartesian(goal, 0.0).unwrap();
+    for tick in 0..20_000 {
+        now += dt;
+        let out = ctrl.step(now, &arm.measured()).unwrap();
+        arm.step(out.command.as_ref());
+        commands.extend(out.command);
+        if out.events.ik_divergence && diverged_at.is_none() {
+            diverged_at = Some(tick);
+        }
+        if !ctrl.is_moving() {
+            break;
+        }
+    }
+    let diverged_at = diverged_at.expect("the line is lost on the way");
+    assert_eq!(ctrl.stop_cause().0, Some(StopCause::IkDivergence));
+    assert!(!ctrl.is_moving());
+    let stop_ticks = commands.len() - diverged_at;
+    assert!(stop_ticks <= 31, "at rest {stop_ticks} ticks after WN22");
+    for (i, joint) in config.joints.iter().enumerate() {
+        let q: Vec<f64> = commands.iter().map(|c| c[i]).collect();
+        assert_within_limits(joint, i, &q, joint.max_rate, dt);
     }
 }
 

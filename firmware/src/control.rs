@@ -17,7 +17,7 @@ use embassy_time::{Duration, Instant, Timer};
 
 use crate::board::Watchdog;
 use crate::drives::BoardDrives;
-use crate::link::{COUNTERS, OUTGOING, count, read, take};
+use crate::link::{COUNTERS, OUTGOING, count, read, set_holder, take};
 use crate::telemetry::{STATUS, Status};
 
 /// The cycle as the board runs it.
@@ -115,6 +115,7 @@ pub async fn run(
         Timer::at(scheduled).await;
         let begin = Instant::now();
         cycle.tick((begin - epoch).as_micros(), &mut QueueLink);
+        set_holder(cycle.holder().map(|holder| holder.ip()));
         watchdog.pet();
         let end = Instant::now();
         interval.add(begin.saturating_duration_since(scheduled), end - begin);

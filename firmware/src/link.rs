@@ -8,17 +8,19 @@
 //!
 //! One source address may hold at most half of the waiting requests ([`offer`],
 //! [`take`]): a client that floods the controller fills its own share, and the others' requests
-//! — a stop among them — still find room and are handled in the next tick.
+//! — a stop among them — still find room and are handled in the next tick. A flood from more
+//! addresses than the queue has places fills it all the same, so stops and the holder's
+//! requests ([`goes_ahead`]) wait in a queue of their own ([`AHEAD`]), served first.
 //!
 //! [`CommandHandler`]: armgate_core::command::CommandHandler
 
-use core::cell::RefCell;
-use core::net::SocketAddr;
+use core::cell::{Cell, RefCell};
+use core::net::{IpAddr, SocketAddr};
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use armgate_core::command::NOTICE_CAPACITY;
 use armgate_core::cycle::REQUESTS_PER_TICK;
-use armgate_core::cycle::Shares;
+use armgate_core::cycle::{Shares, goes_ahead};
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
@@ -28,6 +30,9 @@ use embassy_sync::channel::Channel;
 /// for a few clients and for bursts. The socket buffers another [`crate::net::SOCKET_PACKETS`]
 /// datagrams before the queue.
 pub const REQUEST_QUEUE: usize = REQUESTS_PER_TICK;
+/// Stops and the holder's requests that can wait for the next tick: a few, one source at most
+/// half of them (a client waits for each reply).
+pub const AHEAD_QUEUE: usize = 4;
 /// Replies and notices waiting to be sent: one tick produces at most one reply per queued
 /// request and at most the notices the core's relay holds; the UDP server empties the queue
 /// between two ticks, except while a destination fails to resolve
@@ -39,6 +44,8 @@ pub type Datagram = armgate_core::cycle::Datagram<SocketAddr>;
 
 /// Requests from allowed sources, in arrival order ([`offer`], [`take`]).
 static REQUESTS: Channel<CriticalSectionRawMutex, Datagram, REQUEST_QUEUE> = Channel::new();
+/// Stops and the holder's requests, in arrival order, served before [`REQUESTS`].
+static AHEAD: Channel<CriticalSectionRawMutex, Datagram, AHEAD_QUEUE> = Channel::new();
 /// Replies and notices, in the order the control task produced them.
 pub static OUTGOING: Channel<CriticalSectionRawMutex, Datagram, OUTGOING_QUEUE> = Channel::new();
 
@@ -118,25 +125,56 @@ impl StackDrops {
     }
 }
 
-/// How many of the waiting requests each source holds.
-static SHARES: Mutex<CriticalSectionRawMutex, RefCell<Shares<REQUEST_QUEUE>>> =
-    Mutex::new(RefCell::new(Shares::new()));
+/// How many of the waiting requests each source holds, in each queue.
+struct Lanes {
+    requests: Shares<REQUEST_QUEUE>,
+    ahead: Shares<AHEAD_QUEUE>,
+}
+
+static LANES: Mutex<CriticalSectionRawMutex, RefCell<Lanes>> = Mutex::new(RefCell::new(Lanes {
+    requests: Shares::new(),
+    ahead: Shares::new(),
+}));
+
+/// The address of the client that holds the arm, as of the last tick (control task side).
+static HOLDER: Mutex<CriticalSectionRawMutex, Cell<Option<IpAddr>>> = Mutex::new(Cell::new(None));
+
+/// Sets the address of the client that holds the arm (control task side, after each tick).
+pub fn set_holder(holder: Option<IpAddr>) {
+    HOLDER.lock(|h| h.set(holder));
+}
 
 /// Queues `request` for the control task (UDP server side); false if the queue is full or its
-/// source already holds its share (the datagram is dropped).
+/// source already holds its share (the datagram is dropped). A request that goes ahead does,
+/// unless its source still has requests in the other queue (a source's requests keep their
+/// order) or the ahead queue has no room for it.
 pub fn offer(request: Datagram) -> bool {
-    SHARES.lock(|shares| {
-        shares
-            .borrow_mut()
-            .admit(request.peer.ip(), || REQUESTS.try_send(request).is_ok())
+    let source = request.peer.ip();
+    let holder = HOLDER.lock(Cell::get);
+    LANES.lock(|lanes| {
+        let lanes = &mut *lanes.borrow_mut();
+        let ahead = goes_ahead(request.payload(), source, holder)
+            && lanes.requests.held(source) == 0
+            && lanes
+                .ahead
+                .admit(source, || AHEAD.try_send(request).is_ok());
+        ahead
+            || lanes
+                .requests
+                .admit(source, || REQUESTS.try_send(request).is_ok())
     })
 }
 
-/// The oldest waiting request (control task side).
+/// The oldest waiting request that goes ahead, else the oldest other (control task side).
 pub fn take() -> Option<Datagram> {
-    SHARES.lock(|shares| {
+    LANES.lock(|lanes| {
+        let lanes = &mut *lanes.borrow_mut();
+        if let Ok(request) = AHEAD.try_receive() {
+            lanes.ahead.release(request.peer.ip());
+            return Some(request);
+        }
         let request = REQUESTS.try_receive().ok()?;
-        shares.borrow_mut().release(request.peer.ip());
+        lanes.requests.release(request.peer.ip());
         Some(request)
     })
 }

@@ -32,9 +32,9 @@ pub const SOCKET_PACKETS: usize = 2 * FRAMES_PER_POLL;
 /// Payload bytes per buffered datagram (the protocol's datagrams are 31 bytes, 44 signed; a
 /// larger datagram that does not fit is dropped by the stack).
 pub const PACKET_BYTES: usize = 64;
-/// Sockets of the stack: the UDP server's two (receiving, sending), and the DHCP client with
-/// `dhcp`.
-const SOCKETS: usize = 3;
+/// Sockets of the stack: the UDP server's three (receiving; sending to known destinations and
+/// to the others, [`sender`]), and the DHCP client with `dhcp`.
+const SOCKETS: usize = 4;
 
 /// The network stack's socket storage.
 static RESOURCES: StaticCell<StackResources<SOCKETS>> = StaticCell::new();
@@ -100,10 +100,10 @@ pub async fn udp_server(stack: Stack<'static>) {
         defmt::error!("net: cannot bind UDP port {}: {}", PORT, e);
         return;
     }
-    let mut sending = sender::Buffers::new();
+    let (mut known, mut probing) = (sender::Buffers::new(), sender::Buffers::new());
     join(
         receive(stack, &mut receiving),
-        sender::run(stack, &mut sending),
+        sender::run(stack, &mut known, &mut probing),
     )
     .await;
 }

@@ -279,6 +279,8 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
             local,
             allow: &allow,
             inbox: &mut inbox,
+            holder: cycle.holder().map(|holder| holder.ip()),
+            ahead_taken: 0,
             logger: &logger,
             stats: &mut stats,
             time: elapsed.as_secs_f64(),

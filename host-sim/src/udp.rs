@@ -6,14 +6,16 @@
 //! turn: a client flooding the simulator waits behind its own requests only, and the others'
 //! requests, a stop among them, are handled in the next tick. (The firmware, with a queue of
 //! 8, gives each source half of it; a burst from one client is answered whole here, as the
-//! kernel's 4 MiB buffer held it before.)
+//! kernel's 4 MiB buffer held it before.) A full inbox makes room by dropping the newest
+//! request of the source that holds the most, so a flood from many addresses cannot shut the
+//! others out, and stops and the holder's requests ([`goes_ahead`]) are taken first.
 
 use std::collections::VecDeque;
 use std::io::ErrorKind;
 use std::net::{IpAddr, SocketAddr, UdpSocket};
 
 use armgate_core::command::Network;
-use armgate_core::cycle::{Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{Datagram, Dropped, Link, Outgoing, goes_ahead};
 
 use crate::log::{Logger, Record};
 
@@ -22,6 +24,11 @@ const MAX_READS: usize = 256;
 
 /// Requests waiting in the [`Inbox`] at most (about what the 4 MiB socket buffer holds).
 const INBOX_CAPACITY: usize = 4096;
+
+/// Requests that go ahead taken per tick at most (as the firmware's queue for them holds): the
+/// rest of the tick's are taken in turn, so that a holder that floods does not shut out the
+/// others.
+pub const AHEAD_PER_TICK: usize = 4;
 
 /// Requests read and waiting for a tick: a queue per source address, taken in turn.
 #[derive(Debug, Default)]
@@ -32,30 +39,66 @@ pub struct Inbox {
     len: usize,
 }
 
+/// What became of a request offered to the [`Inbox`].
+#[derive(Debug, PartialEq)]
+enum Admission {
+    /// Queued.
+    Queued,
+    /// Queued, and the newest request of the source that held the most was dropped for it.
+    QueuedInstead,
+    /// Dropped: the inbox is full, and its source holds as many as any.
+    Dropped,
+}
+
 impl Inbox {
-    /// Queues `datagram` behind its source's; false if the inbox is full.
-    fn push(&mut self, datagram: Datagram<SocketAddr>) -> bool {
-        if self.len >= INBOX_CAPACITY {
-            return false;
-        }
+    /// Queues `datagram` behind its source's; with the inbox full, in place of the newest
+    /// request of the source that holds the most, if that one holds more than this one's.
+    fn push(&mut self, datagram: Datagram<SocketAddr>) -> Admission {
         let source = datagram.peer.ip();
+        let mut admission = Admission::Queued;
+        if self.len >= INBOX_CAPACITY {
+            let held = self
+                .sources
+                .iter()
+                .find(|(ip, _)| *ip == source)
+                .map_or(0, |(_, queue)| queue.len());
+            match self.sources.iter_mut().max_by_key(|(_, queue)| queue.len()) {
+                Some((_, longest)) if longest.len() > held + 1 => {
+                    longest.pop_back();
+                    self.len -= 1;
+                    admission = Admission::QueuedInstead;
+                }
+                _ => return Admission::Dropped,
+            }
+        }
         match self.sources.iter_mut().find(|(ip, _)| *ip == source) {
             Some((_, queue)) => queue.push_back(datagram),
             None => self.sources.push_back((source, VecDeque::from([datagram]))),
         }
         self.len += 1;
-        true
+        admission
     }
 
-    /// The oldest request of the next source in turn.
-    fn pop(&mut self) -> Option<Datagram<SocketAddr>> {
-        let (source, mut queue) = self.sources.pop_front()?;
+    /// With `ahead`, the oldest request of the first source in turn whose next request goes
+    /// ahead (a stop, or from `holder`), if any; else that of the next source in turn. True
+    /// with the request if it went ahead.
+    fn pop(&mut self, holder: Option<IpAddr>, ahead: bool) -> Option<(Datagram<SocketAddr>, bool)> {
+        let first = ahead
+            .then(|| {
+                self.sources.iter().position(|(ip, queue)| {
+                    queue
+                        .front()
+                        .is_some_and(|d| goes_ahead(d.payload(), *ip, holder))
+                })
+            })
+            .flatten();
+        let (source, mut queue) = self.sources.remove(first.unwrap_or(0))?;
         let datagram = queue.pop_front();
         if !queue.is_empty() {
             self.sources.push_back((source, queue));
         }
         self.len -= usize::from(datagram.is_some());
-        datagram
+        datagram.map(|d| (d, first.is_some()))
     }
 }
 
@@ -80,6 +123,10 @@ pub struct UdpLink<'a> {
     pub allow: &'a [Network],
     /// Requests read and not yet handled.
     pub inbox: &'a mut Inbox,
+    /// The address of the client that holds the arm (its requests are taken first).
+    pub holder: Option<IpAddr>,
+    /// Requests that went ahead this tick ([`AHEAD_PER_TICK`] at most).
+    pub ahead_taken: usize,
     /// The CSV logs.
     pub logger: &'a Logger,
     /// What was counted.
@@ -112,9 +159,13 @@ impl UdpLink<'_> {
                 self.stats.refused_sources += 1;
                 continue;
             }
-            if !self.inbox.push(Datagram::new(datagram, from)) {
-                self.stats.crowded += 1;
-                continue;
+            match self.inbox.push(Datagram::new(datagram, from)) {
+                Admission::Queued => {}
+                Admission::QueuedInstead => self.stats.crowded += 1,
+                Admission::Dropped => {
+                    self.stats.crowded += 1;
+                    continue;
+                }
             }
             self.stats.received += 1;
             self.logger.log(Record::Command {
@@ -128,7 +179,10 @@ impl UdpLink<'_> {
 impl Link<SocketAddr> for UdpLink<'_> {
     fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
         self.read_socket();
-        self.inbox.pop()
+        let ahead = self.ahead_taken < AHEAD_PER_TICK;
+        let (datagram, went_ahead) = self.inbox.pop(self.holder, ahead)?;
+        self.ahead_taken += usize::from(went_ahead);
+        Some(datagram)
     }
 
     fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
@@ -160,5 +214,58 @@ impl Link<SocketAddr> for UdpLink<'_> {
             crate::record::answer(self.local, datagram.peer, bytes);
         }
         sent.map(drop).map_err(|_| Dropped)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ps(ip: [u8; 4]) -> Datagram<SocketAddr> {
+        Datagram::new(b"PS", SocketAddr::from((ip, 4000)))
+    }
+
+    #[test]
+    fn a_full_inbox_drops_from_the_source_that_holds_the_most() {
+        let mut inbox = Inbox::default();
+        for k in 0..INBOX_CAPACITY {
+            let ip = [10, 0, (k % 64) as u8, if k < 64 { 1 } else { 2 }];
+            assert_eq!(inbox.push(ps(ip)), Admission::Queued);
+        }
+        // 10.0.x.1 hold one each, 10.0.x.2 (4096 - 64) / 64 = 63: a new source, or one that
+        // holds one, gets in in place of one of the latter's; one of those does not.
+        assert_eq!(inbox.push(ps([10, 1, 0, 1])), Admission::QueuedInstead);
+        assert_eq!(inbox.len, INBOX_CAPACITY);
+        assert_eq!(inbox.push(ps([10, 0, 0, 1])), Admission::QueuedInstead);
+        assert_eq!(inbox.push(ps([10, 0, 5, 2])), Admission::Dropped);
+        assert_eq!(inbox.len, INBOX_CAPACITY);
+    }
+
+    #[test]
+    fn stops_and_the_holders_requests_are_taken_first() {
+        let mut inbox = Inbox::default();
+        let holder = [192, 168, 1, 2];
+        for k in 1..=20 {
+            inbox.push(ps([192, 168, 1, 100 + k]));
+        }
+        inbox.push(Datagram::new(
+            b"ST",
+            SocketAddr::from(([192, 168, 1, 9], 1)),
+        ));
+        inbox.push(ps(holder));
+        inbox.push(ps(holder));
+        let mut pop = |ahead| inbox.pop(Some(holder.into()), ahead).unwrap();
+        let (first, ahead) = pop(true);
+        assert_eq!((first.payload(), ahead), (&b"ST"[..], true));
+        let (second, ahead) = pop(true);
+        assert_eq!((second.peer.ip(), ahead), (IpAddr::from(holder), true));
+        // Not ahead (its tick's share is taken): the next source in turn.
+        let (third, ahead) = pop(false);
+        assert_eq!(
+            (third.peer.ip(), ahead),
+            (IpAddr::from([192, 168, 1, 101]), false)
+        );
+        let (fourth, _) = pop(true);
+        assert_eq!(fourth.peer.ip(), IpAddr::from(holder));
     }
 }

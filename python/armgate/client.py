@@ -326,25 +326,54 @@ class Arm:
             return None
         return self.wait_for_joints([q], self._options(time or 0.0))
 
-    def ik_solutions(self, pose: PoseLike) -> Optional[List[Tuple[int, List[float]]]]:
+    def choose_redundancy(
+        self, theta3: Optional[float] = None, theta5: Optional[float] = None
+    ) -> None:
+        """``KR``: the values of the redundancy parameters of a 7–8 joint arm (θ3, and θ5 on
+        eight; None: the present value) for this client's next ``KG`` and its ``KS`` reads
+        that ask for them (:meth:`move_j_to_pose`, :meth:`ik_solutions` send it themselves).
+        Refused (``ER24``, :class:`~armgate.BadIndex`) on an arm without them, ``ER26`` beyond
+        a joint's limits."""
+        index = (wire.THETA3 if theta3 is not None else 0) | (
+            wire.THETA5 if theta5 is not None else 0
+        )
+        values = [float(theta3 or 0.0), float(theta5 or 0.0)]
+        self.request("KR", values, index)
+
+    def _chosen(self, theta3: Optional[float], theta5: Optional[float]) -> int:
+        """``KR`` if a value is given, and the index bit of the ``KG``/``KS`` that uses it."""
+        if theta3 is None and theta5 is None:
+            return 0
+        self.choose_redundancy(theta3, theta5)
+        return wire.CHOSEN
+
+    def ik_solutions(
+        self,
+        pose: PoseLike,
+        theta3: Optional[float] = None,
+        theta5: Optional[float] = None,
+    ) -> Optional[List[Tuple[int, List[float]]]]:
         """Every closed-form IK solution of ``pose`` within the joint limits (``KS``), as
         (branch bits, joints) pairs; branch bit 1 shoulder, 2 elbow, 4 wrist. None if the robot
         has no closed form (docs/kinematics.md). On an arm of more than six joints a second
         ``KS`` with index bit 7 reads each solution's joints 7.. (bank 2); its solutions are
-        those for the present values of the redundancy parameters (θ3, and θ5 on eight)."""
+        those for the present values of the redundancy parameters (θ3, and θ5 on eight), or
+        for ``theta3`` (``theta5``) where given (sent first with ``KR``)."""
         goal = as_pose(pose)
         values = goal.xyz + goal.rpy
-        first = self.request("KS", values, 0)
+        chosen = self._chosen(theta3, theta5)
+        first = self.request("KS", values, chosen)
         count = int(first.values[6])
         if count < 0:
             return None
         joints = self.joint_count
         solutions = []
         for k in range(count):
-            reply = first if k == 0 else self.request("KS", values, k)
+            reply = first if k == 0 else self.request("KS", values, k | chosen)
             q = list(reply.values[:6])
             if joints > 6:
-                q += list(self.request("KS", values, k | wire.BANK2).values[: joints - 6])
+                upper = self.request("KS", values, k | wire.BANK2 | chosen)
+                q += list(upper.values[: joints - 6])
             solutions.append((reply.index, q))
         return solutions
 
@@ -354,13 +383,18 @@ class Arm:
         branch: Optional[int] = None,
         time: Optional[float] = None,
         wait: bool = True,
+        theta3: Optional[float] = None,
+        theta5: Optional[float] = None,
     ) -> Tuple[List[float], int]:
         """A joint move (joint mode) to the IK solution of ``pose`` on configuration ``branch``
         (bits 1 shoulder, 2 elbow, 4 wrist), or without one the solution nearest the present
-        joints (``KG``). Returns the goal joints and the branch taken (8: none, a robot
-        without a closed form); with ``wait`` the joints are polled until reached."""
+        joints (``KG``); on a 7–8 joint arm with the present θ3 (θ5), or ``theta3``
+        (``theta5``) where given (sent first with ``KR``; no solution for them: refused, no
+        other values are tried). Returns the goal's joints 1–6 and the branch taken (8: none,
+        a robot without a closed form); with ``wait`` the joints are polled until reached."""
         goal = as_pose(pose)
-        index = 8 if branch is None else int(branch)
+        chosen = self._chosen(theta3, theta5)
+        index = (8 if branch is None else int(branch)) | chosen
         reply = self.request("KG", goal.xyz + goal.rpy + (float(time or 0.0),), index)
         q = list(reply.values[:6])
         if wait:
@@ -438,13 +472,14 @@ class Arm:
         self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
     ) -> List[float]:
         """Polls ``jP`` until the joints have passed ``goals`` in order and reached the last
-        (Euclidean norm within the tolerances)."""
+        (Euclidean norm within the tolerances). A goal may give the first joints only (``KG``'s
+        reply carries joints 1–6): the others are not compared."""
         opts = options or self.wait_options
 
         def measure(
             q: List[float], goal: List[float], last: bool
         ) -> Tuple[float, Optional[float], bool]:
-            d = math.dist(q, goal)
+            d = math.dist(q[: len(goal)], goal)
             return d, None, d <= (opts.tolerance if last else opts.pass_tolerance)
 
         def moved(a: List[float], b: List[float]) -> bool:

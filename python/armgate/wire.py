@@ -38,6 +38,13 @@ TOOL_FRAME = 0x01
 """Index bit of ``TW``: the twist is in the tool frame."""
 """Bit 7 of the index: bank 2 (joints 7..) for joint requests."""
 
+THETA3 = 0x01
+"""Index bit of ``KR``: f0 is θ3 (rad)."""
+THETA5 = 0x02
+"""Index bit of ``KR``: f1 is θ5 (rad; eight joints)."""
+CHOSEN = 0x40
+"""Index bit of ``KG`` and ``KS``: solve with this client's ``KR`` choice."""
+
 _FLOATS = struct.Struct("<7f")
 
 
@@ -91,7 +98,7 @@ def _index_matches(chars: str, request: int, reply: int) -> bool:
         return request & ~BANK2 == reply & ~BANK2
     if chars in ("jP", "TM"):
         return request & BANK2 == reply & BANK2
-    if chars in ("SQ", "TW", "jW", "jT", "VT"):
+    if chars in ("SQ", "TW", "jW", "jT", "VT", "KR"):
         return request == reply
     return True
 

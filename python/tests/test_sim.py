@@ -159,6 +159,25 @@ def test_ik_solutions_of_a_seven_joint_arm_are_whole(sim_factory) -> None:  # ty
         assert any(math.dist(s, q) < 1e-3 for _, s in solutions)
 
 
+def test_a_chosen_theta3_lists_and_moves_on_a_seven_joint_arm(sim_factory) -> None:  # type: ignore[no-untyped-def]
+    iiwa = sim_factory("iiwa14", "--start", "0.1,0.5,0.3,-1.0,0.2,0.8,0.1")
+    with armgate.Arm("127.0.0.1", port=iiwa.port) as arm:
+        pose = arm.get_tcp_pose()
+        # The same pose with θ3 = -0.2 instead of the present 0.3 (KR, then KS with its bit).
+        solutions = arm.ik_solutions(pose, theta3=-0.2)
+        assert solutions is not None and len(solutions) >= 1
+        assert all(abs(q[2] + 0.2) < 1e-5 for _, q in solutions)
+        with pytest.raises(armgate.BadIndex):
+            arm.choose_redundancy(theta5=0.1)  # seven joints: no θ5
+        with pytest.raises(armgate.BeyondJointLimit):
+            arm.choose_redundancy(theta3=3.0)
+        assert arm.set_mode(armgate.Mode.JOINT) == armgate.Mode.JOINT
+        target, _ = arm.move_j_to_pose(pose, theta3=-0.2)
+        assert abs(target[2] + 0.2) < 1e-5
+        assert abs(arm.get_joints()[2] + 0.2) < 1e-3
+        assert math.dist(arm.get_tcp_pose().xyz, pose.xyz) < 1e-3
+
+
 def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         arm.set_mode("joint")

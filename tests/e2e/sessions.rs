@@ -199,28 +199,201 @@ fn a_stop_gets_through_while_another_client_floods() {
     );
 }
 
+/// How many source addresses flood at once in
+/// [`a_flood_from_many_addresses_silences_neither_the_holder_nor_a_stop`].
+const FLOOD_SOURCES: u8 = 32;
+
+/// A flood from [`FLOOD_SOURCES`] addresses, one datagram from each in turn, `rounds` times:
+/// `PS`, and every fourth round `CM 2` (a command from a client that does not hold the arm),
+/// about 2,000 a second. From 127.0.1.k on loopback (a socket bound to each), or for the
+/// firmware from 192.168.1.(100 + k), forged through a raw socket in its namespace (nobody owns
+/// them: their replies do not resolve). Returns the datagrams sent and, on loopback, the
+/// flood's sockets (their replies are still in them).
+fn flood_from_many(
+    to: SocketAddr,
+    rounds: usize,
+    progress: &std::sync::atomic::AtomicUsize,
+) -> (usize, Vec<UdpSocket>) {
+    let sockets: Vec<UdpSocket> = if firmware().is_some() {
+        Vec::new()
+    } else {
+        (1..=FLOOD_SOURCES)
+            .map(|k| {
+                let socket = UdpSocket::bind(SocketAddr::from(([127, 0, 1, k], 0))).unwrap();
+                socket.connect(to).unwrap();
+                socket
+            })
+            .collect()
+    };
+    let mut sent = 0;
+    for round in 0..rounds {
+        let request = if round % 4 == 3 {
+            datagram("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0)
+        } else {
+            datagram("PS", [0.0; 7], 0)
+        };
+        for k in 1..=FLOOD_SOURCES {
+            match (&to, sockets.get(usize::from(k) - 1)) {
+                (_, Some(socket)) => {
+                    if socket.send(&request).is_ok() {
+                        sent += 1;
+                    }
+                }
+                (SocketAddr::V4(to), None) => {
+                    let forged = std::net::SocketAddrV4::new([192, 168, 1, 100 + k].into(), 40_000);
+                    send_spoofed(forged, *to, &request);
+                    sent += 1;
+                }
+                (SocketAddr::V6(_), None) => panic!("the firmware listens on IPv4"),
+            }
+            let n = progress.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n.is_multiple_of(20) {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        }
+    }
+    (sent, sockets)
+}
+
+#[test]
+fn a_flood_from_many_addresses_silences_neither_the_holder_nor_a_stop() {
+    // A holds the arm in a long joint move (a radian on the first joint, about 15 s).
+    let (sim, goal) = moving(1.0, |_| {});
+    let to = sim.socket.peer_addr().unwrap();
+    // 9,600 datagrams, about 5 s: past the point where armgate-sim's inbox is full (4,096
+    // waiting, 8 served a tick) before A asks anything.
+    let rounds = 300;
+    let progress = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let flood = std::thread::spawn({
+        let progress = progress.clone();
+        move || flood_from_many(to, rounds, &progress)
+    });
+    let total = rounds * usize::from(FLOOD_SOURCES);
+    let under_way = |share: usize| {
+        while progress.load(std::sync::atomic::Ordering::Relaxed) < total * share / 8 {
+            std::thread::yield_now();
+        }
+    };
+    under_way(5);
+    // While it lasts, A's reads and commands are answered (resent every 200 ms as the armgate
+    // client does) and A still holds the arm.
+    let mut holder_sends = Vec::new();
+    for _ in 0..4 {
+        let (session, sends) = ask_resending(&sim.socket, "SQ", [0.0; 7], 3);
+        assert_eq!(session[0], 1.0, "A no longer holds the arm: {session:?}");
+        holder_sends.push(sends);
+        let (watchdog, sends) = ask_resending(&sim.socket, "WD", [0.0; 7], 0);
+        assert_eq!(watchdog[0], 0.0);
+        holder_sends.push(sends);
+    }
+    let (status_now, sends) = ask_resending(&sim.socket, "SQ", [0.0; 7], 0);
+    holder_sends.push(sends);
+    assert_eq!(status_now[0], 1.0, "a flooding non-holder changed the mode");
+    assert_eq!(status_now[4], 1.0, "the joint move runs on");
+    // A third client's ST stops the arm, still during the flood.
+    under_way(6);
+    let c = second_client(&sim);
+    let (_, stop_sends) = ask_resending(&c, "ST", [0.0; 7], 0);
+    let flood_running = !flood.is_finished();
+    let (cause, _) = ask_resending(&sim.socket, "SQ", [0.0; 7], 2);
+    let (status_then, _) = ask_resending(&sim.socket, "SQ", [0.0; 7], 0);
+    let (sent, flood_sockets) = flood.join().unwrap();
+    // (By now the arm may be at rest, and a CM of the flood's may have taken control.)
+    let (session, _) = ask_resending(&sim.socket, "SQ", [0.0; 7], 3);
+    // What the flood got back (loopback): its CM refused while the arm moved; once the arm is
+    // at rest, a CM still waiting takes control, as any client's may.
+    let mut answers = std::collections::BTreeMap::<String, usize>::new();
+    for socket in &flood_sockets {
+        socket.set_nonblocking(true).unwrap();
+        let mut buf = [0u8; 64];
+        while socket.recv(&mut buf).is_ok() {
+            let key = match decode(&buf) {
+                Answer::Reply(c, ..) => String::from_utf8_lossy(&c).into_owned(),
+                Answer::Text(t) => t.split(' ').take(2).collect::<Vec<_>>().join(" "),
+            };
+            *answers.entry(key).or_default() += 1;
+        }
+    }
+    eprintln!(
+        "flood from {FLOOD_SOURCES} addresses: {sent} datagrams sent (PS, every fourth round CM 2); \
+         the flood got back {answers:?}; A's {} requests answered after {holder_sends:?} sends; \
+         C's ST answered after {stop_sends} send(s), flood still sending: {flood_running}; \
+         SQ 2 cause {}, SQ f4 {}; SQ 3: holder {}, send drops {}, clients {}",
+        holder_sends.len(),
+        cause[0],
+        status_then[4],
+        session[0],
+        session[5],
+        session[6],
+    );
+    assert_eq!(sent, total);
+    if firmware().is_none() {
+        assert!(
+            answers.get("ER40 Cmd").is_some_and(|n| *n > 0),
+            "{answers:?}"
+        );
+    }
+    assert_eq!(cause[0], 1.0, "stopped by ST");
+    assert_ne!(status_then[4], 1.0, "the joint move was not stopped");
+    // The arm comes to rest short of the goal (resent requests may leave late replies behind:
+    // each is matched by its characters and index).
+    let started = Instant::now();
+    while ask_resending(&sim.socket, "SQ", [0.0; 7], 0).0[4] != 0.0 {
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "the arm came to rest"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let (rest, _) = ask_resending(&sim.socket, "jP", [0.0; 7], 0);
+    assert!(
+        (rest[0] - goal[0]).abs() > 0.1,
+        "the move ran to its end: {rest:?}"
+    );
+    let mut sim = sim;
+    if firmware().is_none() {
+        let kill = Command::new("kill")
+            .args(["-TERM", &sim.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        sim.child.wait().unwrap();
+        eprintln!("armgate-sim: {}", sim.stderr_rest().trim());
+    }
+}
+
 /// Sends ST every 200 ms until its reply comes (at most 10 times); how many were sent.
 fn stop_resending(sim: &Sim) -> usize {
-    let timeout = sim.socket.read_timeout().unwrap();
-    sim.socket
+    ask_resending(&sim.socket, "ST", [0.0; 7], 0).1
+}
+
+/// Sends a request on `socket` every 200 ms, as the armgate client does, until its reply
+/// (the command reversed) comes, at most 10 times: the reply's values and how many were sent.
+fn ask_resending(socket: &UdpSocket, cmd: &str, values: [f32; 7], index: u8) -> ([f32; 7], usize) {
+    let reversed = [cmd.as_bytes()[1], cmd.as_bytes()[0]];
+    let timeout = socket.read_timeout().unwrap();
+    socket
         .set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
+    let mut reply = None;
     let sends = (1..=10)
         .find(|_| {
-            sim.socket.send(&datagram("ST", [0.0; 7], 0)).unwrap();
+            socket.send(&datagram(cmd, values, index)).unwrap();
             let mut buf = [0u8; 64];
-            while sim.socket.recv(&mut buf).is_ok() {
-                if let Answer::Reply(c, ..) = decode(&buf)
-                    && &c == b"TS"
+            while socket.recv(&mut buf).is_ok() {
+                if let Answer::Reply(c, v, i) = decode(&buf)
+                    && c == reversed
+                    && i == index
                 {
+                    reply = Some(v);
                     return true;
                 }
             }
             false
         })
-        .expect("ST never answered");
-    sim.socket.set_read_timeout(timeout).unwrap();
-    sends
+        .unwrap_or_else(|| panic!("{cmd} {index} never answered in 10 sends"));
+    socket.set_read_timeout(timeout).unwrap();
+    (reply.unwrap(), sends)
 }
 
 /// A second client, from [`second_client_address`], talking to the same controller.

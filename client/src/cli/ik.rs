@@ -7,7 +7,7 @@ use clap::Args;
 use super::CliError;
 use super::options::{PoseArgs, WaitArgs};
 use super::output::{fmt_values, follow, joint_progress, start};
-use crate::Client;
+use crate::{Client, Redundancy};
 
 /// `armgate ik` arguments.
 #[derive(Debug, Args)]
@@ -15,6 +15,33 @@ pub struct IkArgs {
     /// The pose.
     #[command(flatten)]
     pub pose: PoseArgs,
+    /// The redundancy values.
+    #[command(flatten)]
+    pub redundancy: RedundancyArgs,
+}
+
+/// The redundancy parameters of a 7–8 joint arm (docs/kinematics.md, "Redundant arms"); a
+/// value not given keeps the present one.
+#[derive(Debug, Args)]
+pub struct RedundancyArgs {
+    /// θ3 (rad) on a 7–8 joint arm (iiwa14, ranger-mk2): the solutions that put joint 3 at this
+    /// value instead of its present one (sent first with KR).
+    #[arg(long, value_name = "RAD", allow_negative_numbers = true)]
+    pub theta3: Option<f64>,
+    /// θ5 (rad) on an 8-joint arm (ranger-mk2): likewise for joint 5.
+    #[arg(long, value_name = "RAD", allow_negative_numbers = true)]
+    pub theta5: Option<f64>,
+}
+
+impl RedundancyArgs {
+    /// The `KR` choice, if a value was given.
+    fn choice(&self) -> Option<Redundancy> {
+        let Self { theta3, theta5 } = *self;
+        (theta3.is_some() || theta5.is_some()).then(|| Redundancy {
+            theta3: theta3.map(|v| v as f32),
+            theta5: theta5.map(|v| v as f32),
+        })
+    }
 }
 
 /// `armgate ik-move` arguments.
@@ -26,6 +53,9 @@ pub struct IkMoveArgs {
     /// Branch bits: 1 shoulder, 2 elbow, 4 wrist (as `armgate ik` prints them).
     #[arg(long, value_parser = clap::value_parser!(u8).range(0..8))]
     pub branch: Option<u8>,
+    /// The redundancy values (no solution for them: refused, no others are tried).
+    #[command(flatten)]
+    pub redundancy: RedundancyArgs,
     /// Minimum duration (s).
     #[arg(long, default_value_t = 0.0)]
     pub time: f64,
@@ -35,16 +65,16 @@ pub struct IkMoveArgs {
 }
 
 /// `armgate ik`: KS, every solution with its branch (and its joints 7.. on an arm of more than
-/// six `joints`).
+/// six `joints`), for the present or the chosen redundancy values.
 pub(super) fn ik(
     args: &IkArgs,
     joints: usize,
     client: &mut Client,
     out: &mut impl Write,
 ) -> Result<(), CliError> {
-    let IkArgs { pose } = args;
+    let IkArgs { pose, redundancy } = args;
     let (xyz, rpy) = pose.xyz_rpy();
-    let Some(solutions) = client.ik_solutions(xyz, rpy, joints)? else {
+    let Some(solutions) = client.ik_solutions(xyz, rpy, joints, redundancy.choice())? else {
         writeln!(out, "no closed-form IK for this robot (docs/kinematics.md)")?;
         return Ok(());
     };
@@ -68,12 +98,14 @@ pub(super) fn ik_move(
     let IkMoveArgs {
         pose,
         branch,
+        redundancy,
         time,
         wait,
     } = args;
     let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
-    let goal = start(client, |c| c.ik_move(xyz, rpy, *branch, *time))?;
+    let choice = redundancy.choice();
+    let goal = start(client, |c| c.ik_move(xyz, rpy, (*branch, choice), *time))?;
     writeln!(
         out,
         "moving to {} (branch {})",

@@ -34,7 +34,8 @@
 //!
 //! Leaving stops what teleop started: `q`, Esc, Ctrl-C, SIGTERM, a closed terminal (SIGHUP)
 //! or an error of the terminal all send `ST` (on a socket of its own, [`StopOnExit`]) before
-//! the process ends, as `armgate move` does on Ctrl-C.
+//! the process ends, as `armgate move` does on Ctrl-C. On SIGTERM and SIGHUP a thread of its
+//! own sends it at once ([`stop_on_signal`]): a closed terminal leaves the keyboard loop stuck.
 //!
 //! The header shows the robot, mode, drives and motion from the status request (SQ); with a
 //! controller too old for it the mode is unknown until the first `m`, and `m` from an unknown
@@ -102,24 +103,87 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
     })
 }
 
-/// Sends `ST` when dropped — on every way out of [`run`], an error return included — so that
-/// leaving teleop never leaves the arm moving.
-struct StopOnExit {
+/// Where and how to send `ST`.
+struct Stopper {
     peer: std::net::SocketAddr,
     config: crate::ClientConfig,
     /// Signs the stop for a controller that wants signed requests.
     signer: Option<crate::Signer>,
 }
 
-impl Drop for StopOnExit {
-    fn drop(&mut self) {
-        // ST is obeyed from any client: a socket of its own, so that it never waits behind the
-        // I/O thread's request.
-        if let Ok(mut client) = Client::connect_with(self.peer, self.config.clone()) {
-            client.set_signer(self.signer.take());
+impl Stopper {
+    /// Sends `ST`. It is obeyed from any client: a socket of its own, so that it never waits
+    /// behind the I/O thread's request.
+    fn stop(self) {
+        if let Ok(mut client) = Client::connect_with(self.peer, self.config) {
+            client.set_signer(self.signer);
             let _ = client.stop();
         }
     }
+
+    /// The same destination, signing on the next link id (two stoppers' timestamps must not
+    /// race).
+    fn next(&self) -> Self {
+        Self {
+            peer: self.peer,
+            config: self.config.clone(),
+            signer: self.signer.as_ref().map(crate::Signer::next_link),
+        }
+    }
+}
+
+/// Sends `ST` when dropped — on every way out of [`run`], an error return included — so that
+/// leaving teleop never leaves the arm moving.
+struct StopOnExit(Option<Stopper>);
+
+impl Drop for StopOnExit {
+    fn drop(&mut self) {
+        if let Some(stopper) = self.0.take() {
+            stopper.stop();
+        }
+    }
+}
+
+/// How long the keyboard loop has after SIGTERM or SIGHUP to end by itself before the process
+/// is ended.
+const SIGNAL_GRACE: Duration = Duration::from_secs(1);
+
+/// On SIGTERM or SIGHUP (`signalled`), stops the arm from a thread of its own, and ends the
+/// process if the keyboard loop has not ended (`done`) within [`SIGNAL_GRACE`]: once the
+/// terminal is gone (a closed window, a dropped SSH session), crossterm's event poll (0.29)
+/// spins on the dead terminal and never returns, so the loop would never reach its own `ST`.
+fn stop_on_signal(
+    signalled: crate::interrupt::Interrupt,
+    done: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    stopper: Stopper,
+) -> std::io::Result<()> {
+    use std::sync::atomic::Ordering;
+    let tick = Duration::from_millis(20);
+    std::thread::Builder::new()
+        .name("armgate-teleop-signals".into())
+        .spawn(move || {
+            while !signalled.is_set() {
+                if done.load(Ordering::SeqCst) {
+                    return;
+                }
+                std::thread::sleep(tick);
+            }
+            stopper.stop();
+            let deadline = std::time::Instant::now() + SIGNAL_GRACE;
+            while std::time::Instant::now() < deadline {
+                if done.load(Ordering::SeqCst) {
+                    return;
+                }
+                std::thread::sleep(tick);
+            }
+            // stderr may be the terminal that is gone: a failed write is no reason to panic.
+            let _ = std::io::Write::write_all(
+                &mut std::io::stderr(),
+                b"armgate: teleop: ended by a signal, its terminal unresponsive; sent ST\n",
+            );
+            std::process::exit(1);
+        })
+        .map(drop)
 }
 
 /// Restores the terminal when dropped, also on an error return.
@@ -161,7 +225,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // Signed on the next link id: its timestamps would race the polls' on one link.
     let signer = client.signer().map(crate::Signer::next_link);
-    let _stop = StopOnExit {
+    let stopper = Stopper {
         peer: client.peer(),
         config: client.config().clone(),
         // A link of its own again: the stop must not race the jog stream's timestamps.
@@ -169,6 +233,9 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
     let signalled = crate::interrupt::ctrl_c().map_err(std::io::Error::other)?;
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    stop_on_signal(signalled.clone(), done.clone(), stopper.next())?;
+    let _stop = StopOnExit(Some(stopper));
     let streamer = Client::connect_with(client.peer(), config)
         .map(|mut streamer| {
             streamer.set_signer(signer);
@@ -228,6 +295,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
         }
     }
     streamer.stop();
+    done.store(true, std::sync::atomic::Ordering::SeqCst);
     // Dropping the sender ends the I/O thread after its current request; it is not joined, so
     // that quitting never waits for a timeout.
     Ok(())

@@ -2,8 +2,8 @@
 //!
 //! The requests' handling, one concern a file: `handler/cartesian.rs` (Cartesian goals, moves,
 //! via points, the twist stream), `handler/joint.rs` (the joint ones), `handler/ik_requests.rs`
-//! (`KG`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`, `OF`,
-//! `RC`); `handler/replies.rs` makes the replies and refusal texts.
+//! (`KG`, `KR`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`,
+//! `OF`, `RC`); `handler/replies.rs` makes the replies and refusal texts.
 
 mod cartesian;
 mod ik_requests;
@@ -22,6 +22,7 @@ use armgate_protocol::client::{
 
 use super::banks::{BankKey, Banks};
 use super::drives::Drives;
+use super::redundancy::RedundancyChoice;
 use super::relay::NoticeRelay;
 use super::session::Session;
 use super::status::Status;
@@ -50,6 +51,8 @@ pub struct CommandHandler {
     /// The jB goal (jG).
     joint_goal: Option<Joints>,
     banks: Banks,
+    /// The redundancy values a client chose with `KR`.
+    redundancy: RedundancyChoice,
     relay: NoticeRelay,
     session: Session,
     /// The robot's name, for the status request.
@@ -78,6 +81,7 @@ impl CommandHandler {
             goal: None,
             joint_goal: None,
             banks: Banks::default(),
+            redundancy: RedundancyChoice::default(),
             relay: NoticeRelay::default(),
             session: Session::default(),
             name: RobotName::new(&config.name),
@@ -202,9 +206,12 @@ impl CommandHandler {
         }
         let busy = self.controller.motion() != Motion::Holding;
         self.client = client;
-        let reply = self
-            .session
-            .admit(request.command, client, self.now, busy)
+        let holder = self.session.holder();
+        let admitted = self.session.admit(request.command, client, self.now, busy);
+        if self.session.holder() != holder {
+            self.redundancy.clear();
+        }
+        let reply = admitted
             .and_then(|()| self.answer(&request, client, drives))
             .unwrap_or_else(|notice| self.refuse(notice));
         self.session
@@ -227,6 +234,11 @@ impl CommandHandler {
     /// request.
     pub fn notice_recipient(&self) -> Option<SocketAddr> {
         self.session.notice_recipient()
+    }
+
+    /// The client that holds the arm.
+    pub fn holder(&self) -> Option<SocketAddr> {
+        self.session.holder()
     }
 
     /// The shell's count of replies and notices it could not send (`SQ` index 3 reports it).
@@ -273,6 +285,7 @@ impl CommandHandler {
             Command::GoalQuaternion => self.goal_quaternion(req),
             Command::GoalRpy => self.goal_rpy(req),
             Command::IkGoal => self.ik_goal(req, drives),
+            Command::IkRedundancy => self.choose_redundancy(req),
             Command::IkSolution => self.ik_solution(req),
             Command::JointBegin => self.joint_begin(req, drives),
             Command::JointClear => {
@@ -315,10 +328,11 @@ impl CommandHandler {
     }
 
     /// Stops the arm: `ST`, `jR`, and the client watchdog (one path for all of them).
-    /// Every stop from the command layer: the staged banks go, the supervisor brings the arm
-    /// to rest.
+    /// Every stop from the command layer: the staged banks and the `KR` choice go, the
+    /// supervisor brings the arm to rest.
     fn stop(&mut self, cause: StopCause) {
         self.banks.clear();
+        self.redundancy.clear();
         self.controller.stop(cause);
     }
 

@@ -1,21 +1,25 @@
 //! The closed-form IK requests: `KG` (a joint move to a Cartesian goal on a chosen branch),
-//! `KS` (read one of a pose's solutions) and `SQ` 5 (the present branch).
+//! `KR` (the redundancy values of the next `KG`), `KS` (read one of a pose's solutions) and
+//! `SQ` 5 (the present branch).
 
 use armgate_protocol::client::banks::{BANK_2, WRITE_JOINTS as BANK_LEN};
 use armgate_protocol::client::branch::{BRANCH_INDEX, NEAREST_BRANCH, NO_CLOSED_FORM, NO_SOLUTION};
+use armgate_protocol::client::redundancy::{CHOSEN, Redundancy};
 use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 
+use super::redundancy::{self, Values};
 use crate::config::IkConfig;
 use crate::kinematics::{Branch, Chain, Family, IkResult, Joints};
 use crate::math::{Frame, Rotation3, Vector3};
 use crate::motion::Refusal;
 
-/// Why a `KG` or `KS` is refused.
+/// Why a `KG`, `KR` or `KS` is refused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum IkRequestError {
     /// A value is NaN or infinite.
     BadNumber,
-    /// The index names no branch (or a branch on a robot without a closed form).
+    /// The index names no branch (or a branch on a robot without a closed form), a redundancy
+    /// parameter the arm does not have, or a `KR` choice the client has not made.
     BadIndex,
     /// The controller refuses it (no solution: the goal is out of reach).
     Refused(Refusal),
@@ -31,18 +35,57 @@ fn pose(v: &[f64; VALUES]) -> Result<Frame, IkRequestError> {
     Ok(Frame::from_parts(Vector3::new(x, y, z).into(), rotation))
 }
 
+/// `KR`'s choice: the values its index names (f0 θ3, f1 θ5), each finite. Refused on a
+/// chain without a redundant closed form, and θ5 on one of seven joints. (The joint limits are
+/// the controller's to check.)
+pub(super) fn choice(
+    chain: &Chain,
+    v: &[f32; VALUES],
+    index: u8,
+) -> Result<Values, IkRequestError> {
+    let chosen = Redundancy::parse(v, index).ok_or(IkRequestError::BadIndex)?;
+    let parameters = chain.redundancy_parameters().len();
+    if parameters == 0 || (chosen.theta5.is_some() && parameters < 2) {
+        return Err(IkRequestError::BadIndex);
+    }
+    let values = [chosen.theta3, chosen.theta5];
+    if values.iter().flatten().any(|x| !x.is_finite()) {
+        return Err(IkRequestError::BadNumber);
+    }
+    Ok(values.map(|x| x.map(f64::from)))
+}
+
+/// The reference of a `KG` or `KS` whose index has [`CHOSEN`]: `present` with the client's
+/// `KR` choice put in (refused if it made none); `present` as it is without that bit. Also
+/// whether the choice was put in.
+pub(super) fn reference(
+    chain: &Chain,
+    mut present: Joints,
+    index: u8,
+    choice: Option<Values>,
+) -> Result<(Joints, bool), IkRequestError> {
+    if index & CHOSEN == 0 {
+        return Ok((present, false));
+    }
+    let values = choice.ok_or(IkRequestError::BadIndex)?;
+    redundancy::apply(values, chain.redundancy_parameters(), &mut present);
+    Ok((present, true))
+}
+
 /// The joints of `KG`'s goal and the branch bits they lie on ([`NEAREST_BRANCH`] on a robot
-/// without a closed form, solved by global IK from the present joints).
+/// without a closed form, solved by global IK from the present joints). `reference` is the
+/// present joints, with the client's choice of the redundancy parameters if `chosen`: then
+/// the goal keeps them (no other values are tried).
 pub(super) fn goal(
     chain: &Chain,
     ik: &IkConfig,
-    present: &Joints,
+    (reference, chosen): (&Joints, bool),
     v: &[f64; VALUES],
     index: u8,
 ) -> Result<(Joints, u8), IkRequestError> {
     let target = pose(v)?;
     let out_of_reach = IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
-    let branch = match index {
+    let branch = match index & !CHOSEN {
         NEAREST_BRANCH => None,
         bits => Some(Branch::from_bits(bits).ok_or(IkRequestError::BadIndex)?),
     };
@@ -50,12 +93,17 @@ pub(super) fn goal(
         if branch.is_some() {
             return Err(IkRequestError::BadIndex);
         }
-        return match chain.solve_global(&target, present, ik, 0) {
+        return match chain.solve_global(&target, reference, ik, 0) {
             Ok(IkResult::Converged(s)) => Ok((s.q, NEAREST_BRANCH)),
             _ => Err(out_of_reach),
         };
     }
-    match chain.solve_nearest(&target, present, branch) {
+    let found = if chosen {
+        chain.solve_nearest_keeping(&target, reference, branch)
+    } else {
+        chain.solve_nearest(&target, reference, branch)
+    };
+    match found {
         Ok(Some(found)) => Ok((found.q, found.branch.bits())),
         _ => Err(out_of_reach),
     }
@@ -64,14 +112,15 @@ pub(super) fn goal(
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the
 /// branch in the index), each joint on the turn nearest `reference`. `index` is `k`, with
 /// [`BANK_2`] for joints 7.. in f0.. (refused on six joints or fewer, as for `jP`); on a
-/// redundant arm the solutions are those for the present values of its redundancy parameters.
+/// redundant arm the solutions are those for `reference`'s values of its redundancy
+/// parameters (the present ones, or the client's choice with [`CHOSEN`]).
 pub(super) fn solution(
     chain: &Chain,
     reference: &Joints,
     v: &[f64; VALUES],
     index: u8,
 ) -> Result<Reply, IkRequestError> {
-    let (k, bank_2) = (index & !BANK_2, index & BANK_2 != 0);
+    let (k, bank_2) = (index & !(BANK_2 | CHOSEN), index & BANK_2 != 0);
     if bank_2 && chain.dof() <= BANK_LEN {
         return Err(IkRequestError::BadIndex);
     }

@@ -10,6 +10,7 @@ mod banks;
 mod drives;
 mod handler;
 mod ik;
+mod redundancy;
 mod relay;
 mod session;
 mod status;

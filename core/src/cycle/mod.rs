@@ -53,7 +53,7 @@ pub use budget::PLANNING_PER_TICK;
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
 pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
-pub use shares::Shares;
+pub use shares::{Shares, answers_a_stop, goes_ahead};
 pub use side::DriveSide;
 pub use signing::{Signing, UnknownAccess, UnsignedAccess};
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

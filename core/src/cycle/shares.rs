@@ -5,9 +5,35 @@
 //! a stop among them. With a share per source, the others always find room, and their requests
 //! are handled within a tick or two of arriving.
 //!
+//! Shares alone cannot keep room when more sources flood than the queue has places: it is
+//! full whenever a request arrives. Some requests therefore go ahead ([`goes_ahead`]): a
+//! stop, obeyed from everyone, and the requests of the client that holds the arm. A shell
+//! queues them apart and serves them first.
+//!
 //! [`REQUESTS_PER_TICK`]: super::REQUESTS_PER_TICK
 
 use core::net::IpAddr;
+
+use armgate_protocol::client::Command;
+
+use crate::command::Class;
+
+/// True if the request `payload` from `source` goes ahead of the others: a stop (`ST`, `jR`),
+/// or any request from `holder`, the address of the client that holds the arm.
+pub fn goes_ahead(payload: &[u8], source: IpAddr, holder: Option<IpAddr>) -> bool {
+    matches!(payload, [a, b, ..] if is_stop([*a, *b])) || holder == Some(source)
+}
+
+/// True if `payload` is the reply to a stop (`TS`, `Rj`: the command reversed), which a shell
+/// sends ahead of other replies to new destinations.
+pub fn answers_a_stop(payload: &[u8]) -> bool {
+    matches!(payload, [a, b, ..] if is_stop([*b, *a]))
+}
+
+/// True if `chars` are a stop's command characters.
+fn is_stop(chars: [u8; 2]) -> bool {
+    Command::from_chars(chars).is_some_and(|c| Class::of(c) == Class::Stop)
+}
 
 /// How many requests of a queue of `N` each source address holds, for at most `N` sources.
 #[derive(Clone, Debug)]
@@ -51,6 +77,15 @@ impl<const N: usize> Shares<N> {
             *entry = Some((source, n.saturating_add(1)));
         }
         true
+    }
+
+    /// How many requests `source` holds.
+    pub fn held(&self, source: IpAddr) -> usize {
+        self.held
+            .iter()
+            .flatten()
+            .find(|(a, _)| *a == source)
+            .map_or(0, |(_, n)| *n)
     }
 
     /// A request from `source` left the queue.
@@ -97,5 +132,37 @@ mod tests {
             shares.release(flood);
         }
         assert!(shares.held.iter().all(Option::is_none));
+    }
+
+    #[test]
+    fn stops_and_the_holders_requests_go_ahead() {
+        let holder = IpAddr::V4(Ipv4Addr::new(192, 168, 1, 2));
+        let other = IpAddr::V4(Ipv4Addr::new(192, 168, 1, 9));
+        assert!(goes_ahead(b"ST", other, Some(holder)));
+        assert!(goes_ahead(b"jR\0\0", other, None));
+        assert!(goes_ahead(b"PS", holder, Some(holder)));
+        assert!(goes_ahead(b"", holder, Some(holder)));
+        assert!(!goes_ahead(b"PS", other, Some(holder)));
+        assert!(!goes_ahead(b"CM", other, None));
+        assert!(!goes_ahead(b"S", other, None));
+        assert!(!goes_ahead(b"TS", other, None));
+        assert!(answers_a_stop(b"TS"));
+        assert!(answers_a_stop(b"Rj\0"));
+        assert!(!answers_a_stop(b"ST"));
+        assert!(!answers_a_stop(b"SP"));
+        assert!(!answers_a_stop(b"ER40 Cmd ST"));
+        assert!(!answers_a_stop(b"T"));
+    }
+
+    #[test]
+    fn held_counts_a_sources_requests() {
+        let a = IpAddr::V4(Ipv4Addr::new(10, 0, 0, 1));
+        let mut shares = Shares::<8>::new();
+        assert_eq!(shares.held(a), 0);
+        assert!(shares.admit(a, || true));
+        assert!(shares.admit(a, || true));
+        assert_eq!(shares.held(a), 2);
+        shares.release(a);
+        assert_eq!(shares.held(a), 1);
     }
 }

@@ -162,6 +162,12 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
         self.handler.notice_recipient().map(P::from_address)
     }
 
+    /// The client that holds the arm ([`goes_ahead`](super::goes_ahead) serves its requests
+    /// first).
+    pub fn holder(&self) -> Option<P> {
+        self.handler.holder().map(P::from_address)
+    }
+
     /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
     pub fn signing(&self) -> SigningReport {
         self.gate.report()

@@ -287,7 +287,7 @@ impl Chain {
     }
 
     /// The nearest solution for `reference`'s redundancy parameters.
-    fn nearest_for(
+    pub(super) fn nearest_for(
         &self,
         target: &Frame,
         reference: &[f64; MAX_JOINTS],

@@ -14,8 +14,9 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::chain::Chain;
-use super::closed_form::{Branch, Candidate, Candidates};
-use super::family::ClosedForm;
+use super::closed_form::{Branch, BranchSolution, Candidate, Candidates};
+use super::family::{ClosedForm, Family};
+use super::ik::IkError;
 use super::screws::misalignment;
 use super::subproblems::{Angle, PairRoots, Roots, rotate, sp1, sp2, sp3};
 use crate::MAX_JOINTS;
@@ -227,6 +228,40 @@ const SWEEP: [usize; 2] = [16, 8];
 /// How many references [`swept`] gives at most.
 pub(super) const SWEEP_TRIES: usize = 64;
 
+/// The joints (0-based) that are the redundancy parameters on a chain of `dof` joints: θ3,
+/// and θ5 on eight.
+fn parameters(dof: usize) -> &'static [usize] {
+    if dof == 8 { &[2, 4] } else { &[2] }
+}
+
+impl Chain {
+    /// The joints (0-based) whose values are the redundancy parameters of the closed form: θ3
+    /// (index 2) on a seven-joint arm, θ3 and θ5 (2, 4) on eight; none on a chain without a
+    /// redundant closed form.
+    pub fn redundancy_parameters(&self) -> &'static [usize] {
+        match self.closed_form() {
+            Some(form) if form.fit.family == Family::SphericalShoulder => parameters(self.dof()),
+            _ => &[],
+        }
+    }
+
+    /// The solution nearest `reference` (on `branch` if given) that keeps the reference's
+    /// values of the redundancy parameters: [`solve_nearest`](Self::solve_nearest) without
+    /// its sweep, for a caller that chose them. `None` if those values have none.
+    pub fn solve_nearest_keeping(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        branch: Option<Branch>,
+    ) -> Result<Option<BranchSolution>, IkError> {
+        let mut checked = [0.0; MAX_JOINTS];
+        self.prepare(target, reference, &mut checked)?;
+        Ok(self
+            .nearest_for(target, &checked, branch)?
+            .map(|e| e.solution))
+    }
+}
+
 /// The `k`-th reference of a sweep of the redundancy parameters across their ranges, from the
 /// reference's own values outwards: each parameter moved by 0, +1, −1, +2, … steps of
 /// 1/[`SWEEP`] of its range (wrapped within it). `None` past the sweep's end.
@@ -235,11 +270,8 @@ pub(super) fn swept(
     reference: &[f64; MAX_JOINTS],
     k: usize,
 ) -> Option<[f64; MAX_JOINTS]> {
-    let (parameters, steps): (&[usize], _) = if chain.dof() == 8 {
-        (&[2, 4], SWEEP[1])
-    } else {
-        (&[2], SWEEP[0])
-    };
+    let parameters = parameters(chain.dof());
+    let steps = if chain.dof() == 8 { SWEEP[1] } else { SWEEP[0] };
     let (min, max) = (chain.min(), chain.max());
     let mut out = *reference;
     let mut rest = k;

@@ -116,7 +116,7 @@ pub(super) fn rotate(k: &Vector3<f64>, a: &Angle, v: &Vector3<f64>) -> Vector3<f
 /// or `q` lies on the axis (every angle, or none, does).
 pub(super) fn sp1(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> Option<Angle> {
     let (x, y) = sp1_scaled(k, p, q);
-    unit(x, y, crate::math::sqrt(x * x + y * y))
+    unit(x, y, crate::math::sqrt(x * x + y * y), DEGENERATE)
 }
 
 /// Subproblem 1's cosine and sine times `‖p⊥‖·‖q⊥‖` (the lengths of the projections onto the
@@ -127,9 +127,10 @@ fn sp1_scaled(k: &Vector3<f64>, p: &Vector3<f64>, q: &Vector3<f64>) -> (f64, f64
     (pp.dot(&qp), k.dot(&p.cross(q)))
 }
 
-/// The angle of cosine and sine `(x, y) / r`; `None` if `r` is too small to tell.
-fn unit(x: f64, y: f64, r: f64) -> Option<Angle> {
-    (r > DEGENERATE).then(|| Angle {
+/// The angle of cosine and sine `(x, y) / r`; `None` if `r` is too small to tell, i.e. not
+/// above `floor`.
+fn unit(x: f64, y: f64, r: f64, floor: f64) -> Option<Angle> {
+    (r > floor).then(|| Angle {
         cos: x / r,
         sin: y / r,
     })
@@ -229,7 +230,10 @@ pub(super) fn sp2(
     slack: f64,
 ) -> PairRoots {
     let (a1, a2) = (k1.dot(p1), k2.dot(p2));
-    if (p1 - k1 * a1).norm_squared() <= DEGENERATE * DEGENERATE {
+    // ‖p1⊥‖², the square of p1's distance from k1, taken directly: near the free case it is
+    // far below the rounding of ‖p1‖² − a1².
+    let off1 = (p1 - k1 * a1).norm_squared();
+    if off1 <= DEGENERATE * DEGENERATE {
         return PairRoots::FreeFirst;
     }
     let c = k1.dot(k2);
@@ -238,10 +242,13 @@ pub(super) fn sp2(
     if s2 <= DEGENERATE || (n1 - n2).abs() > slack * (n1 + n2) {
         return PairRoots::None;
     }
-    // The common point z = αk1 + βk2 + γ(k1 × k2) keeps both axial components and the norm.
+    // The common point z = αk1 + βk2 + γ(k1 × k2) keeps both axial components and the norm:
+    // its distance from k1 is p1's, ‖z⊥‖² = β²s² + γ²s² = ‖p1⊥‖². (Written as ‖p1‖² − ‖αk1 +
+    // βk2‖², γ² lost everything below 1e-16 to rounding: a wrist within 1e-8 rad of its
+    // singularity got no roots.)
     let alpha = (a1 - c * a2) / s2;
     let beta = (a2 - c * a1) / s2;
-    let gamma2 = (n1 - alpha * alpha - beta * beta - 2.0 * alpha * beta * c) / s2;
+    let gamma2 = off1 / s2 - beta * beta;
     if gamma2 < -slack {
         return PairRoots::None;
     }
@@ -263,7 +270,11 @@ pub(super) fn sp2(
                 crate::math::sqrt(x2 * x2 + y2 * y2),
             )
         });
-        match (unit(x1, y1, r1), unit(x2, y2, r2)) {
+        // Each length is a squared distance from an axis (‖p⊥‖·‖z⊥‖ with ‖z⊥‖ = ‖p⊥‖), so
+        // the floor is the square of the free case's: compared with DEGENERATE itself, every
+        // wrist 1e-12 to 1e-6 rad from its singularity lost its roots.
+        let floor = DEGENERATE * DEGENERATE;
+        match (unit(x1, y1, r1, floor), unit(x2, y2, r2, floor)) {
             (Some(t1), Some(t2)) => *pair = (t1, t2),
             _ => return PairRoots::None,
         }

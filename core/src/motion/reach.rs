@@ -19,10 +19,8 @@
 //! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
 //! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
 //! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. Measured on the Cortex-M7 (qemu-bench, random moves up to 60 cm; before the IK
-//! solves lost their copies, which made each cheaper): 0.33–0.66
-//! million instructions per check on average, at most 1.82 million (ranger-mk2, 19.44 ms
-//! period) and 1.68 million (iiwa14, 5.04 ms): within one period at 480 MHz.
+//! the doubt. What a check costs on the Cortex-M7 (`qemu-bench/run.sh`, row "Cartesian line
+//! check") is in docs/kinematics.md; the worst measured stays within one period at 480 MHz.
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.

@@ -1,5 +1,10 @@
 //! Shared helpers of the core's integration tests.
-#![allow(dead_code, clippy::unwrap_used, clippy::panic)]
+#![allow(
+    dead_code,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
 
 pub mod experiments;
 
@@ -30,4 +35,20 @@ pub fn all_robots() -> Vec<(String, ValidRobot)> {
         .collect();
     names.sort();
     names.into_iter().map(|n| (n.clone(), robot(&n))).collect()
+}
+
+/// A request datagram: two characters, seven floats, the index.
+pub fn datagram(cmd: &str, values: [f32; 7], index: u8) -> [u8; 31] {
+    let mut d = [0u8; 31];
+    d[..2].copy_from_slice(cmd.as_bytes());
+    for (k, v) in values.iter().enumerate() {
+        d[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+    }
+    d[30] = index;
+    d
+}
+
+/// A reply's seven floats.
+pub fn floats(reply: &[u8; 31]) -> [f32; 7] {
+    core::array::from_fn(|k| f32::from_le_bytes(reply[2 + 4 * k..6 + 4 * k].try_into().unwrap()))
 }

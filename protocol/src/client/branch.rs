@@ -11,7 +11,7 @@ pub const ELBOW: u8 = 2;
 /// Wrist bit: the second root of the wrist (θ4/θ5, θ5 for three parallel axes, θ5/θ6 or θ6/θ7
 /// on a 7–8 joint arm).
 pub const WRIST: u8 = 4;
-/// `KG` index: no branch chosen, the solution nearest the present joints.
+/// `KG` index: no branch chosen (with [`CHOSEN`](super::redundancy::CHOSEN): 8 | `CHOSEN`), the solution nearest the present joints.
 pub const NEAREST_BRANCH: u8 = 8;
 /// `SQ` index of the present branch (reply f0: the bits, or −1 for none).
 pub const BRANCH_INDEX: u8 = 5;

@@ -17,6 +17,10 @@ pub enum Command {
     /// [`branch`](super::branch)); [`NEAREST_BRANCH`](super::branch::NEAREST_BRANCH): the
     /// solution nearest the present joints.
     IkGoal,
+    /// `KR`: choose the redundancy parameters (f0 θ3, f1 θ5; index bits:
+    /// [`redundancy`](super::redundancy)) of this client's next `KG` and its `KS` reads, on an
+    /// arm of seven or eight joints with a closed form.
+    IkRedundancy,
     /// `KS`: read the `index`-th closed-form IK solution of the pose f0..f2, roll/pitch/yaw
     /// f3..f5 (0 first; index bit 7, bank 2: its joints 7.. in f0..).
     IkSolution,
@@ -76,12 +80,13 @@ pub enum Command {
 
 impl Command {
     /// Every command, in the order of the spec's table.
-    pub const ALL: [Self; 28] = [
+    pub const ALL: [Self; 29] = [
         Self::Begin,
         Self::ChangeMode,
         Self::GoalQuaternion,
         Self::GoalRpy,
         Self::IkGoal,
+        Self::IkRedundancy,
         Self::IkSolution,
         Self::JointBegin,
         Self::JointClear,
@@ -115,6 +120,7 @@ impl Command {
             Self::GoalQuaternion => b"GL",
             Self::GoalRpy => b"GT",
             Self::IkGoal => b"KG",
+            Self::IkRedundancy => b"KR",
             Self::IkSolution => b"KS",
             Self::JointBegin => b"jB",
             Self::JointClear => b"jC",

@@ -29,6 +29,8 @@
 //! * [`StatusReport`], [`RobotName`], [`CauseReport`] and [`SessionReport`]: the replies to the
 //!   status request `SQ` (indices 0, 1, 2, 3).
 //! * [`Error`]: why a datagram is not a request (or reply).
+//! * [`branch`] and [`redundancy`]: the configuration of a closed-form IK solution (`KG`,
+//!   `KS`, `KR`).
 //! * [`banks`]: how seven floats carry up to eight joints; [`Mode`]: the control modes of `CM`;
 //!   [`UNKNOWN_TEMPERATURE`], [`NO_JOINT_TEMPERATURE`]: the sentinels of `TM`.
 //! * [`BlendTolerance`]: the via points' blend tolerances, `VT` and `jT`.
@@ -46,6 +48,7 @@ mod mode;
 mod notice;
 mod orientation;
 mod reason;
+pub mod redundancy;
 mod reply;
 mod request;
 mod session;

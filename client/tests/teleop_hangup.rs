@@ -1,0 +1,165 @@
+//! `armgate teleop` on SIGHUP, and on a terminal that closes: it sends `ST` before it exits
+//! (docs/safety.md). teleop needs a terminal: it runs under `script`, which gives it a pty,
+//! against a fake controller on 127.0.0.1:0 that answers every request and notes each one.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::net::UdpSocket;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A fake controller: every request is answered with its characters reversed and its values
+/// and index echoed, and its characters noted, until `stop` is set.
+fn fake(stop: Arc<AtomicBool>) -> (String, Arc<Mutex<Vec<String>>>) {
+    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket
+        .set_read_timeout(Some(Duration::from_millis(50)))
+        .unwrap();
+    let addr = socket.local_addr().unwrap().to_string();
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    std::thread::spawn({
+        let seen = seen.clone();
+        move || {
+            let mut buf = [0; 64];
+            while !stop.load(Ordering::Relaxed) {
+                let Ok((len, from)) = socket.recv_from(&mut buf) else {
+                    continue;
+                };
+                if len < 31 {
+                    continue;
+                }
+                seen.lock()
+                    .unwrap()
+                    .push(String::from_utf8_lossy(&buf[..2]).into_owned());
+                let mut reply = buf[..31].to_vec();
+                reply.swap(0, 1);
+                let _ = socket.send_to(&reply, from);
+            }
+        }
+    });
+    (addr, seen)
+}
+
+/// The process ids below `pid`, depth first.
+fn descendants(pid: u32) -> Vec<u32> {
+    let children =
+        std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).unwrap_or_default();
+    children
+        .split_whitespace()
+        .filter_map(|c| c.parse().ok())
+        .flat_map(|c| std::iter::once(c).chain(descendants(c)))
+        .collect()
+}
+
+/// Waits up to `within` for `done`, polling every 20 ms.
+fn wait_for(within: Duration, mut done: impl FnMut() -> bool) -> bool {
+    let started = Instant::now();
+    while started.elapsed() < within {
+        if done() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    done()
+}
+
+/// Ends `script` and what runs under it if the test fails on the way.
+struct Reap(Child);
+
+impl Drop for Reap {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Runs `armgate teleop` under `script` against a fake controller, ends it with `end` (given
+/// `script` and teleop's process id) once it polls, and returns the requests the controller got
+/// after that; None without `script`.
+fn requests_after(end: impl FnOnce(&mut Child, u32)) -> Option<Vec<String>> {
+    if Command::new("script").arg("--version").output().is_err() {
+        eprintln!("skipped: no `script` (util-linux) to give teleop a terminal");
+        return None;
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    let (addr, seen) = fake(stop.clone());
+    let teleop = format!(
+        "{} --addr {addr} --joints 6 teleop",
+        env!("CARGO_BIN_EXE_armgate")
+    );
+    // stdin stays open (a pipe): `script` would end at its end.
+    let script = Command::new("script")
+        .args(["-qec", &teleop, "/dev/null"])
+        .env("TERM", "xterm")
+        .env_remove("ARMGATE_ADDR")
+        .env_remove("ARMGATE_KEY_FILE")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut script = Reap(script);
+    // Running: it polls the controller.
+    assert!(
+        wait_for(Duration::from_secs(20), || seen.lock().unwrap().len() >= 5),
+        "teleop never polled: {:?}",
+        seen.lock().unwrap()
+    );
+    let armgate = descendants(script.0.id())
+        .into_iter()
+        .find(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/comm"))
+                .is_ok_and(|comm| comm.trim() == "armgate")
+        })
+        .expect("armgate under script");
+    let before = seen.lock().unwrap().len();
+    assert!(!seen.lock().unwrap().iter().any(|c| c == "ST"));
+    end(&mut script.0, armgate);
+    // It exits (or is left a zombie of `script`'s, killed).
+    let gone = || {
+        std::fs::read_to_string(format!("/proc/{armgate}/stat"))
+            .map_or(true, |stat| stat.contains(") Z "))
+    };
+    assert!(wait_for(Duration::from_secs(10), gone), "teleop still runs");
+    stop.store(true, Ordering::Relaxed);
+    let after = seen.lock().unwrap()[before..].to_vec();
+    Some(after)
+}
+
+#[test]
+fn teleop_sends_st_on_sighup() {
+    let Some(after) = requests_after(|_, armgate| {
+        let hangup = Command::new("kill")
+            .args(["-HUP", &armgate.to_string()])
+            .status()
+            .unwrap();
+        assert!(hangup.success());
+    }) else {
+        return;
+    };
+    eprintln!("after SIGHUP the controller got {after:?}");
+    assert!(
+        after.iter().any(|c| c == "ST"),
+        "no ST after SIGHUP: {after:?}"
+    );
+}
+
+/// The terminal itself goes (`script`, which holds the pty's other end, is killed): the kernel
+/// hangs up teleop's terminal and sends it SIGHUP, and reading the terminal no longer blocks.
+#[test]
+fn teleop_sends_st_when_its_terminal_closes() {
+    let Some(after) = requests_after(|script, _| {
+        script.kill().unwrap();
+        let _ = script.wait();
+    }) else {
+        return;
+    };
+    eprintln!("after its terminal closed the controller got {after:?}");
+    assert!(after.iter().any(|c| c == "ST"), "no ST: {after:?}");
+}

@@ -1,0 +1,78 @@
+//! A chosen redundancy value over UDP (`KR`, docs/protocol.md): `armgate ik --theta3` lists
+//! the solutions that keep it, `armgate ik-move --theta3` moves the arm to the pose with it.
+
+use super::*;
+
+use armgate_core::kinematics::Chain;
+use armgate_core::math;
+
+#[test]
+fn ik_and_ik_move_take_a_chosen_theta3_on_a_seven_joint_arm() {
+    let sim = Sim::start_with("iiwa14", &["--start", "0.1,0.5,0.3,-1.0,0.2,0.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/iiwa14.toml");
+    let chain = Chain::new(&armgate_core::config::load_file(&root).unwrap());
+    // A pose whose configuration has another θ3 than the present joints.
+    let target = [0.3, 0.7, -0.6, -1.2, 0.4, 0.6, -0.2];
+    let pose = chain.forward(&target).unwrap();
+    let t = pose.translation.vector;
+    let [r, p, y] = math::rpy(&pose.rotation);
+    let words: Vec<String> = [t.x, t.y, t.z, r, p, y]
+        .iter()
+        .map(|v| format!("{v:.9}"))
+        .collect();
+    let with = |head: &[&str]| -> Vec<String> {
+        head.iter()
+            .map(|s| (*s).to_owned())
+            .chain(words.iter().cloned())
+            .collect()
+    };
+    let run = |args: Vec<String>| {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        armgate(&sim, &args)
+    };
+    // Every solution listed keeps θ3 = −0.6.
+    let (result, out) = run(with(&["ik", "--theta3", "-0.6"]));
+    result.unwrap();
+    let listed: Vec<&str> = out.lines().filter(|l| l.contains("branch ")).collect();
+    assert!(listed.len() >= 2, "{out}");
+    for line in &listed {
+        let third = line.split_whitespace().nth(4).unwrap();
+        assert_eq!(third, "-0.600000", "{out}");
+    }
+    // The controller refuses what the arm does not have, and values beyond the limits.
+    assert_eq!(
+        sim.text("KR", [3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 1),
+        "ER26 Cmd KR j3 > 2.967"
+    );
+    assert!(
+        sim.text("KR", [0.1, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0], 3)
+            .starts_with("ER24 Cmd KR")
+    );
+    armgate(&sim, &["on"]).0.unwrap();
+    armgate(&sim, &["mode", "joint"]).0.unwrap();
+    let (result, out) = run(with(&[
+        "ik-move",
+        "--theta3",
+        "-0.6",
+        "--wait-timeout",
+        "30s",
+    ]));
+    result.unwrap();
+    assert!(out.contains("arrived"), "{out}");
+    let low = sim.ok("jP", [0.0; 7], 0);
+    let high = sim.ok("jP", [0.0; 7], 0x80);
+    let q: Vec<f64> = low[..6]
+        .iter()
+        .chain(&high[..1])
+        .map(|v| f64::from(*v))
+        .collect();
+    assert!((q[2] + 0.6).abs() < 1e-3, "{q:?}");
+    let reached = chain.forward(&q).unwrap();
+    assert!((reached.translation.vector - t).norm() < 1e-3, "{q:?}");
+    // The choice was the command line's client's: another client's KG cannot ask for it.
+    let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
+    assert!(sim.text("KG", values, 8 | 0x40).starts_with("ER24 Cmd KG"));
+}
