@@ -133,7 +133,12 @@ fn successes(config: &ValidRobot, poses: &[Joints]) -> (usize, usize) {
 
 #[test]
 fn calibrated_files_are_solved_as_often_as_the_nominal_ones() {
-    for (name, seed) in [("ranger-mk1", 11), ("puma560", 3), ("ur5", 3)] {
+    for (name, seed) in [
+        ("ranger-mk1", 11),
+        ("puma560", 3),
+        ("ur5", 3),
+        ("hybrid", 3),
+    ] {
         let nominal = load_file(robot(name)).unwrap();
         let calibrated = calibrated(name, seed);
         let (fit, nominal_fit) = (

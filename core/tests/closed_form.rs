@@ -14,7 +14,7 @@ use armgate_core::kinematics::{Branch, CHECK, Chain, Family, IkError, Joints, So
 use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
 
-const CLOSED: [(&str, Family); 7] = [
+const CLOSED: [(&str, Family); 8] = [
     ("ranger-mk1", Family::SphericalWrist),
     ("ranger-mk1-table21", Family::SphericalWrist),
     ("ranger-mk1-jerk", Family::SphericalWrist),
@@ -22,6 +22,7 @@ const CLOSED: [(&str, Family); 7] = [
     ("ur5", Family::ThreeParallel),
     ("iiwa14", Family::SphericalShoulder),
     ("ranger-mk2", Family::SphericalShoulder),
+    ("hybrid", Family::PrismaticBase),
 ];
 
 fn chain(name: &str) -> Chain {
@@ -93,12 +94,15 @@ fn the_family_of_every_shipped_robot_is_detected() {
         assert_eq!(fit.family, family, "{name}");
         assert!(fit.is_exact(), "{name}: {fit:?}");
     }
-    // Two prismatic joints: no closed form here (docs/kinematics.md).
-    let hybrid = chain("hybrid");
-    assert_eq!(hybrid.family().family, Family::Numeric);
-    let target = hybrid.forward(&hybrid.mid_range()).unwrap();
+    // Prismatic joints anywhere but the first two: no closed form here (docs/kinematics.md).
+    let moved = common::robot("hybrid")
+        .edit(|c| c.joints.swap(1, 2))
+        .unwrap();
+    let moved = Chain::new(&moved);
+    assert_eq!(moved.family().family, Family::Numeric);
+    let target = moved.forward(&moved.mid_range()).unwrap();
     assert_eq!(
-        hybrid.solve_all(&target, &hybrid.mid_range()),
+        moved.solve_all(&target, &moved.mid_range()),
         Err(IkError::NoClosedForm)
     );
 }
@@ -133,7 +137,7 @@ fn random_configurations_are_among_the_solutions_of_their_pose() {
 fn round_angles_and_singular_configurations_are_solved() {
     let quarter = core::f64::consts::FRAC_PI_2;
     let mut rng = SplitMix64::new(5);
-    for (name, _) in CLOSED {
+    for (name, family) in CLOSED {
         let chain = chain(name);
         // Multiples of π/2 within the limits (where a joint has none, its middle).
         for k in 0..200 {
@@ -154,6 +158,10 @@ fn round_angles_and_singular_configurations_are_solved() {
                 1e-6
             };
             assert_recovered(&chain, &q, &q, tol, &format!("{name} round #{k}"));
+        }
+        if family == Family::PrismaticBase {
+            // Its singular configurations: `a_prismatic_base_at_its_singular_configurations`.
+            continue;
         }
         // The wrist singularity, θ5 = 0 or π: axes 4 and 6 in line (spherical wrist), axis 6
         // parallel to the three parallel axes (ur5).
@@ -225,6 +233,78 @@ fn stretched_elbow(chain: &Chain) -> f64 {
         .unwrap_or(x)
 }
 
+/// `pose` with its position and roll, pitch, yaw rounded to `f32`, as a request carries it.
+fn in_f32(pose: &Frame) -> Frame {
+    let [r, p, y] = math::rpy(&pose.rotation).map(|v| f64::from(v as f32));
+    let t = pose.translation.vector.map(|v| f64::from(v as f32));
+    Frame::from_parts(t.into(), math::Rotation3::from_euler_angles(r, p, y))
+}
+
+/// hybrid's singular configurations: axis 6 along axis 3 (θ4 + θ5 = 0 or π, the zero pose
+/// among them), where only θ3 ± θ6 is fixed and θ3 keeps the reference's value; the arm
+/// vertical (θ4 = ±π/2), where θ4's two roots meet; and both at once.
+#[test]
+fn a_prismatic_base_at_its_singular_configurations() {
+    let chain = chain("hybrid");
+    let zero = Joints::zeros(6);
+    assert_recovered(&chain, &zero, &zero, 1e-7, "zero");
+    let half = core::f64::consts::FRAC_PI_2;
+    let mut rng = SplitMix64::new(0x4b);
+    for k in 0..300 {
+        let mut q = chain.random_joints(&mut rng);
+        let pick = rng.next_f64();
+        if pick > 0.4 {
+            q[3] = if rng.next_f64() < 0.5 { half } else { -half };
+        }
+        if pick < 0.6 {
+            // θ5 = −θ4 (φ = 0) or π − θ4 (φ = π), wrapped into ±π.
+            let phi = if pick < 0.3 {
+                0.0
+            } else {
+                core::f64::consts::PI
+            };
+            q[4] = libm::remainder(phi - q[3], core::f64::consts::TAU);
+        }
+        assert!(chain.within_limits(&q));
+        // The tangent root of θ4 is known to √ε ≈ 1.5e-8 before Newton's polish.
+        let what = format!("hybrid singular #{k}");
+        assert_recovered(&chain, &q, &q, 1e-6, &what);
+        // The pose as the wire carries it (f32): ~1e-7 off the singular one, so θ3 is no longer
+        // free but set by the rounding's direction, and the slides follow the turned arm (up
+        // to 1 m: admissible from within ±1 m); still solved, exactly. (Rounded off the
+        // vertical arm, the height may lie beyond the reach: no exact solution.)
+        if pick < 0.4 && q[0].abs() < 1.0 && q[1].abs() < 1.0 {
+            let rounded = in_f32(&chain.forward(&q).unwrap());
+            let solutions = chain.solve_all(&rounded, &q).unwrap();
+            assert!(!solutions.is_empty(), "{what}: rounded");
+            assert_exact(&chain, &rounded, &solutions, &what);
+        }
+        // Away from θ3's freedom the nearest solution is found from mid-range too.
+        if pick >= 0.6 {
+            assert_recovered(&chain, &q, &chain.mid_range(), 1e-6, "hybrid vertical");
+        }
+    }
+}
+
+/// Global IK from the middle of the ranges takes an exact solution, without a Newton step,
+/// on every six-joint closed-form robot (the redundant arms' sweep of their parameters:
+/// closed_form_redundant.rs).
+#[test]
+fn global_ik_takes_an_exact_solution() {
+    let mut rng = SplitMix64::new(0x6b);
+    for (name, family) in CLOSED {
+        if family == Family::SphericalShoulder {
+            continue;
+        }
+        let config = common::robot(name);
+        let chain = Chain::new(&config);
+        for k in 0..500 {
+            let target = chain.forward(&chain.random_joints(&mut rng)).unwrap();
+            common::assert_global_ik_exact(&chain, &config.ik, &target, k, &format!("{name} #{k}"));
+        }
+    }
+}
+
 #[test]
 fn the_nearest_solution_and_a_chosen_branch() {
     let mut rng = SplitMix64::new(9);
@@ -269,16 +349,28 @@ fn unreachable_and_hostile_targets_have_no_solution() {
     }
 }
 
+/// Away from the singularities near which the ideal model's angles differ from the true
+/// chain's by ~deviation / sin: the wrist's (θ5 = 0 or π) on six revolute joints; on hybrid
+/// axis 6 along axis 3 (θ4 + θ5 = 0 or π) and the arm vertical (θ4 = ±π/2). There Newton
+/// from the ideal model's root may find another branch.
+fn regular(family: Family, q: &Joints) -> bool {
+    match family {
+        Family::PrismaticBase => (q[3] + q[4]).sin().abs() > 0.1 && q[3].cos().abs() > 0.1,
+        _ => q[4].sin().abs() > 0.1,
+    }
+}
+
 /// A calibrated arm: twists, lengths and offsets fitted a little off their nominal values, a
-/// Hayati β between the parallel axes, the base placed. It is only near its family, so the
-/// ideal model's solutions are polished on the true chain: every configuration is still
-/// recovered, and global IK succeeds as on the nominal file.
+/// Hayati β between the parallel axes (on joint `tilted`), the base placed. It is only near
+/// its family, so the ideal model's solutions are polished on the true chain: every
+/// configuration is still recovered, and global IK succeeds as on the nominal file.
 #[test]
 fn a_calibrated_arm_is_solved_through_its_ideal_model() {
-    for (name, family) in [
-        ("ranger-mk1", Family::SphericalWrist),
-        ("puma560", Family::SphericalWrist),
-        ("ur5", Family::ThreeParallel),
+    for (name, family, tilted) in [
+        ("ranger-mk1", Family::SphericalWrist, 2),
+        ("puma560", Family::SphericalWrist, 2),
+        ("ur5", Family::ThreeParallel, 2),
+        ("hybrid", Family::PrismaticBase, 4),
     ] {
         let config = common::robot(name)
             .edit(|c| {
@@ -291,7 +383,7 @@ fn a_calibrated_arm_is_solved_through_its_ideal_model() {
                     j.d -= 4e-4 * s;
                     j.theta += 2e-3 * s;
                 }
-                c.joints[2].beta = 1.5e-3;
+                c.joints[tilted].beta = 1.5e-3;
             })
             .unwrap();
         let chain = Chain::new(&config);
@@ -302,9 +394,7 @@ fn a_calibrated_arm_is_solved_through_its_ideal_model() {
         let mut global = 0;
         for k in 0..500 {
             let q = chain.random_joints(&mut rng);
-            // Near the wrist singularity the ideal model's wrist angles differ from the true
-            // ones by ~deviation / sin θ5: Newton from there may find the other wrist branch.
-            if q[4].sin().abs() > 0.1 {
+            if regular(family, &q) {
                 // Newton stops at 1e-10 m + rad: near a stretched elbow that leaves ~1e-6 rad.
                 let what = format!("{name} #{k}");
                 assert_recovered(&chain, &q, &chain.mid_range(), 1e-5, &what);

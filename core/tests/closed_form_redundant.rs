@@ -12,7 +12,7 @@
 
 mod common;
 
-use armgate_core::kinematics::{CHECK, Chain, IkResult, Joints, Solutions};
+use armgate_core::kinematics::{CHECK, Chain, Joints, Solutions};
 use armgate_core::math::{self, Frame};
 use armgate_core::rng::SplitMix64;
 
@@ -112,17 +112,7 @@ fn global_ik_and_the_nearest_solution_use_the_closed_form() {
             assert!(same_modulo_turns(&nearest.q, &q, 1e-7), "{name} #{k}");
             assert_eq!(chain.branch_of(&q), Some(nearest.branch), "{name} #{k}");
             // From the middle of the ranges: some exact solution, whatever θ3 it needs.
-            let result = chain
-                .solve_global(&target, &chain.mid_range(), &config.ik, k)
-                .unwrap();
-            let IkResult::Converged(found) = result else {
-                panic!("{name} #{k}: {result:?}");
-            };
-            assert!(chain.within_limits(&found.q), "{name} #{k}");
-            assert_eq!(
-                found.iterations, 0,
-                "{name} #{k}: closed form, no Newton step"
-            );
+            common::assert_global_ik_exact(&chain, &config.ik, &target, k, &format!("{name} #{k}"));
         }
     }
 }

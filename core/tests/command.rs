@@ -16,7 +16,8 @@ use common::{datagram, floats};
 use armgate_core::command::Drives;
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::Cycle;
-use armgate_core::kinematics::Joints;
+use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::math;
 use armgate_core::rng::SplitMix64;
 use armgate_core::sim::IdealArm;
 use armgate_core::sim::{ArmModel, SimulatedDrives};
@@ -405,23 +406,21 @@ fn bank_2_reads_are_refused_on_a_six_joint_arm() {
     assert_eq!((&pj[..2], pj[30]), (&b"Pj"[..], 0));
 }
 
-/// `SQ` 5 reports the present branch; `KS` lists every closed-form solution of a pose; `KG`
-/// moves the joints to the solution on a chosen branch (joint mode).
-#[test]
-fn closed_form_requests_list_choose_and_report_branches() {
-    use armgate_core::kinematics::Chain;
-    use armgate_core::math;
-    let config = common::robot("ranger-mk1");
-    let chain = Chain::new(&config);
-    let mut rig = mk1();
-    let ready = Joints::from_slice(&MK1_READY).unwrap();
+/// `SQ` 5 reports the present branch of the arm at `present`; `KS` lists every closed-form
+/// solution of `target_q`'s pose; `KG` moves the joints to the solution on its branch (joint
+/// mode), and `SQ` 5 then reports that branch. The branches listed.
+fn list_choose_and_report(
+    rig: &mut Rig,
+    chain: &Chain,
+    present: &[f64],
+    target_q: &[f64],
+) -> Vec<u8> {
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!((&sq[..2], sq[30]), (&b"QS"[..], 5));
-    let present = chain.branch_of(&ready).unwrap();
-    assert_eq!(floats(&sq)[0], f32::from(present.bits()));
+    let branch = chain.branch_of(present).unwrap();
+    assert_eq!(floats(&sq)[0], f32::from(branch.bits()));
 
-    let target_q: Vec<f64> = MK1_READY.iter().map(|q| q + 0.1).collect();
-    let pose = chain.forward(&target_q).unwrap();
+    let pose = chain.forward(target_q).unwrap();
     let [r, p, y] = math::rpy(&pose.rotation);
     let t = pose.translation.vector;
     let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
@@ -437,13 +436,14 @@ fn closed_form_requests_list_choose_and_report_branches() {
         assert!(!branches.contains(&sk[30]));
         branches.push(sk[30]);
         if q.iter()
-            .zip(&target_q)
+            .zip(target_q)
             .all(|(a, b)| (f64::from(*a) - b).abs() < 1e-4)
         {
             target_branch = Some(sk[30]);
         }
     }
-    let target_branch = target_branch.expect("the configuration is among the solutions");
+    let target_branch =
+        target_branch.unwrap_or_else(|| panic!("the configuration is among the solutions"));
     assert_eq!(rig.request("KS", values, count)[30], 0xFF);
     // KG needs joint mode and a branch 0..=7 or 8 (nearest).
     assert!(
@@ -455,21 +455,33 @@ fn closed_form_requests_list_choose_and_report_branches() {
     assert!(rig.text("KG", values, 9).starts_with("ER24"));
     let gk = rig.request("KG", values, target_branch);
     assert_eq!((&gk[..2], gk[30]), (&b"GK"[..], target_branch));
-    for (a, b) in floats(&gk).iter().zip(&target_q) {
+    for (a, b) in floats(&gk).iter().zip(target_q) {
         assert!((f64::from(*a) - b).abs() < 1e-4);
     }
     for _ in 0..1000 {
         rig.tick();
     }
     let jp = floats(&rig.request("jP", [0.0; 7], 0));
-    for (a, b) in jp.iter().zip(&target_q) {
+    for (a, b) in jp.iter().zip(target_q) {
         assert!((f64::from(*a) - b).abs() < 1e-4, "{jp:?}");
     }
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!(floats(&sq)[0], f32::from(target_branch));
+    branches
+}
+
+#[test]
+fn closed_form_requests_list_choose_and_report_branches() {
+    let chain = Chain::new(&common::robot("ranger-mk1"));
+    let mut rig = mk1();
+    let target_q: Vec<f64> = MK1_READY.iter().map(|q| q + 0.1).collect();
+    list_choose_and_report(&mut rig, &chain, &MK1_READY, &target_q);
     // A robot without a closed form: KS answers f6 = −1.
-    let mut hybrid = Rig::new(&common::robot("hybrid"), &[0.0; 6]);
-    let sk = hybrid.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
+    let numeric = common::robot("hybrid")
+        .edit(|c| c.joints.swap(1, 2))
+        .unwrap();
+    let mut numeric = Rig::new(&numeric, &[0.0; 6]);
+    let sk = numeric.request("KS", [0.5, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0], 0);
     assert_eq!((floats(&sk)[6], sk[30]), (-1.0, 0xFF));
     // A redundant arm: the solutions for the present θ3.
     let present = [0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1];
@@ -494,5 +506,27 @@ fn closed_form_requests_list_choose_and_report_branches() {
     assert_eq!(
         floats(&iiwa.request("SQ", [0.0; 7], 5))[0],
         f32::from(branch.bits())
+    );
+}
+
+/// hybrid (two slides, then four revolute joints): the same requests, on its closed form; no
+/// branch sets the wrist bit (docs/kinematics.md), so `KG` on it has no solution.
+#[test]
+fn closed_form_requests_on_a_prismatic_base() {
+    let config = common::robot("hybrid");
+    let chain = Chain::new(&config);
+    let present = [0.1, -0.2, 0.3, 0.4, -0.9, 0.2];
+    let mut rig = Rig::new(&config, &present);
+    let target_q: Vec<f64> = present.iter().map(|q| q + 0.1).collect();
+    let branches = list_choose_and_report(&mut rig, &chain, &present, &target_q);
+    assert!(branches.len() >= 2, "{branches:?}");
+    assert!(branches.iter().all(|b| b & 4 == 0), "{branches:?}");
+    let pose = chain.forward(&present).unwrap();
+    let [r, p, y] = math::rpy(&pose.rotation);
+    let t = pose.translation.vector;
+    let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
+    assert!(
+        rig.text("KG", values, 4)
+            .starts_with("ER25 Cmd KG unreachable")
     );
 }

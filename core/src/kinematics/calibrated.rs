@@ -64,7 +64,7 @@ impl Chain {
         let mut current = *candidate;
         let mut ideal = *target;
         for _ in 0..REFINE_STEPS {
-            let reached = self.pose_by_trig(&current.sin_cos());
+            let reached = self.pose_of(form, &current);
             if Misses::of(&reached, target).largest() <= REFINED * REFINED {
                 break;
             }

@@ -15,7 +15,7 @@ use super::chain::Chain;
 use super::family::{ClosedForm, Family, FamilyFit};
 use super::ik::{IkError, IkSolution};
 use super::subproblems::{Angle, sp4};
-use super::{spherical_shoulder, spherical_wrist, three_parallel};
+use super::{prismatic_base, spherical_shoulder, spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 use crate::math::Joints;
@@ -33,8 +33,10 @@ const POLISH_FROM: f64 = 1e-5;
 /// choices took. Bit 0 is the shoulder (the second root of θ1; of θ1, θ2 for a spherical
 /// shoulder), bit 1 the elbow (of θ3; of θ4 for a spherical shoulder), bit 2 the wrist (of θ4,
 /// θ5 for a spherical wrist; of θ5 for three parallel axes; of the wrist's first two solved
-/// joints for a spherical shoulder). Flipping a bit gives the mirrored configuration: shoulder
-/// left/right, elbow up/down, wrist flipped.
+/// joints for a spherical shoulder). A prismatic base sets bit 0 for the second root of θ3
+/// and θ4 + θ5 (the base turned about half a turn) and bit 1 for that of θ4, never bit 2.
+/// Flipping a bit gives the mirrored configuration: shoulder left/right, elbow up/down, wrist
+/// flipped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Branch(u8);
 
@@ -300,7 +302,9 @@ impl Chain {
         for (a, r) in near.iter_mut().zip(&checked) {
             *a = Angle::of(*r);
         }
-        // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate.
+        // 1 − cos of each joint's distance to the reference, summed: no atan2 per candidate
+        // (a slide's angle is zero for every candidate: its distance is added apart).
+        let slides = form.fit.family == Family::PrismaticBase;
         let mut distance = [f64::INFINITY; MAX_SOLUTIONS];
         for (d, c) in distance.iter_mut().zip(&candidates) {
             if branch.is_none_or(|b| b == c.branch) {
@@ -310,6 +314,9 @@ impl Chain {
                     .zip(&near)
                     .map(|(a, r)| 1.0 - a.closeness(r))
                     .sum();
+                if slides {
+                    *d += prismatic_base::slide_distance(&c.values, &checked);
+                }
             }
         }
         // Nearest first (a selection, not a sort: a sort's code would cost the firmware
@@ -423,6 +430,9 @@ impl Chain {
             Family::SphericalShoulder => {
                 spherical_shoulder::solve(form, self.dof(), target, reference, nearest, out);
             }
+            Family::PrismaticBase => {
+                prismatic_base::solve(form, target, (reference, known), nearest, out);
+            }
             Family::Numeric => {}
         }
     }
@@ -473,11 +483,17 @@ impl Chain {
             let turned = nearest_turn(value, *r, lo - widen, hi + widen)?;
             *v = saturate(turned, *lo, *hi);
         }
+        // A slide takes no turns: its own value, if within its limits.
+        if form.fit.family == Family::PrismaticBase
+            && !prismatic_base::place_slides(&candidate.values, q, (min, max), widen)
+        {
+            return None;
+        }
         if !form.fit.is_exact() {
             *q = self.polish(target, q)?;
         }
         let reached = if form.fit.is_exact() {
-            self.pose_by_trig(&candidate.sin_cos())
+            self.pose_of(form, candidate)
         } else {
             self.pose(q)
         };
@@ -495,6 +511,17 @@ impl Chain {
             }
         }
         Some(errors)
+    }
+
+    /// The pose `candidate` reaches, by trigonometry on its angles (then moved by its slides,
+    /// for a prismatic base).
+    pub(super) fn pose_of(&self, form: &ClosedForm, candidate: &Candidate) -> Frame {
+        let pose = self.pose_by_trig(&candidate.sin_cos());
+        if form.fit.family == Family::PrismaticBase {
+            prismatic_base::slid(form, &candidate.values, pose)
+        } else {
+            pose
+        }
     }
 }
 

@@ -35,8 +35,12 @@ pub enum Family {
     /// θ3, and θ5 on eight joints, are parameters taken from the reference. Up to 8 solutions
     /// for each value.
     SphericalShoulder,
-    /// No closed form here (prismatic joints, not six joints, or other geometry): the numeric
-    /// solver only.
+    /// Six joints: two prismatic joints along distinct directions (a base sliding in a plane),
+    /// then four revolute joints whose middle two axes, 4 and 5, are parallel (hybrid: base
+    /// yaw, two pitches, roll). Up to 4 solutions.
+    PrismaticBase,
+    /// No closed form here (other prismatic joints, not six joints, or other geometry): the
+    /// numeric solver only.
     Numeric,
 }
 
@@ -63,7 +67,8 @@ pub(super) struct ClosedForm {
     pub fit: FamilyFit,
     /// The ideal model: the chain's screws with the family's conditions made exact.
     pub screws: Screws,
-    /// Where the last axes meet: the wrist centre, or the point on axes 5 and 6.
+    /// Where the last axes meet: the wrist centre, or the point on axes 5 and 6; for a
+    /// prismatic base, axis 4's point, about which θ4 swings axis 5.
     pub centre: Vector3<f64>,
 }
 
@@ -82,10 +87,14 @@ impl ClosedForm {
     /// The family `chain` belongs to, if any.
     pub fn detect(chain: &Chain) -> Option<Self> {
         let dof = chain.dof();
-        if (0..dof).any(|i| chain.is_prismatic(i)) {
-            return None;
-        }
         let screws = Screws::of(chain);
+        if (0..dof).any(|i| chain.is_prismatic(i)) {
+            let base = dof == 6
+                && chain.is_prismatic(0)
+                && chain.is_prismatic(1)
+                && !(2..dof).any(|i| chain.is_prismatic(i));
+            return if base { prismatic_base(&screws) } else { None };
+        }
         match dof {
             6 => spherical_wrist(&screws).or_else(|| three_parallel(&screws)),
             7 | 8 => spherical_shoulder(&screws, dof),
@@ -203,4 +212,20 @@ fn spherical_shoulder(chain: &Screws, dof: usize) -> Option<ClosedForm> {
     through(&mut ideal, 0, 2, &shoulder);
     through(&mut ideal, 4, dof - 1, &wrist);
     fit(Family::SphericalShoulder, deviation, ideal, wrist)
+}
+
+/// Slides 1 and 2 along distinct directions, axes 4 ∥ 5 and apart (else θ4 could not set the
+/// height), axis 3 ∦ 4 and axis 6 ∦ 5 (else θ3, θ4 + θ5 and θ6 could not make every rotation).
+/// Only the parallel pair is made exact in the ideal model: nothing else needs to be.
+fn prismatic_base(chain: &Screws) -> Option<ClosedForm> {
+    if !distinct(chain, 0, 1) || !distinct(chain, 2, 3) || !distinct(chain, 4, 5) {
+        return None;
+    }
+    let pivot = chain.point[3];
+    if distance_to_line(&chain.point[4], &pivot, &chain.axis[3]) <= NEAR {
+        return None;
+    }
+    let mut ideal = *chain;
+    let parallel = make_parallel(&mut ideal, 3, 4)?;
+    fit(Family::PrismaticBase, parallel, ideal, pivot)
 }

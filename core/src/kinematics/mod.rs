@@ -20,6 +20,7 @@ mod family;
 mod global;
 mod ik;
 mod jacobian;
+mod prismatic_base;
 mod screws;
 mod spherical_shoulder;
 mod spherical_wrist;

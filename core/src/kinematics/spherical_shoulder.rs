@@ -66,8 +66,13 @@ pub(super) fn solve(
                 let x = rotate(h4, &a4.negated(), &rotate(h3, &a3.negated(), &x));
                 a5.map_or(x, |a5| rotate(h5, &a5.negated(), &x))
             };
-            let first = if a5.is_some() { 5 } else { 4 };
-            let (wrists, n6) = wrist_roots(form, first, &back, free, nearest);
+            let (first, reference) = if a5.is_some() {
+                (5, (free[5], free[6]))
+            } else {
+                (4, (free[4], free[5]))
+            };
+            let wrist = [first, first + 1, first + 2];
+            let (wrists, n6) = rotation_roots(form, wrist, (&back, false), reference, nearest);
             for &(wa, wb, wc, bw) in wrists.iter().take(n6) {
                 let mut angles = [a1, a2, a3, a4, wa, wb, wc, unit];
                 let mut known = [f64::NAN; MAX_JOINTS];
@@ -161,26 +166,29 @@ fn shoulder_roots(
     }
 }
 
-/// The wrist's last three joints (`first`, `first + 1`, `first + 2`, axes through the wrist
-/// centre) producing the rotation `m` (given by its action `back` on vectors):
-/// `R(ha, θa) R(hb, θb) R(hc, θc) = m`. Axis c must point along `m hc`: `R(ha, −θa) m hc =
-/// R(hb, θb) hc` (subproblem 2); θc then turns `hb` onto `(Ra Rb)ᵀ m hb` (subproblem 1).
-fn wrist_roots(
+/// The rotations about three axes `[a, b, c]` (axis indices; b ∦ a, c) producing the rotation
+/// `m` (given by its action `back` on vectors): `R(ha, θa) R(hb, θb) R(hc, θc) = m` — the
+/// wrist's last three joints of a spherical shoulder, or θ3, θ4 + θ5 and θ6 of a prismatic
+/// base. Axis c must point along `m hc`: `R(ha, −θa) m hc = R(hb, θb) hc` (subproblem 2); θc
+/// then turns `hb` onto `(Ra Rb)ᵀ m hb` (subproblem 1). `(ra, rb)`: the reference values of
+/// θa and θb (θa keeps `ra` where it is free; with `nearest`, the pair nearest them).
+/// `m_exact`: `m` is the target's own (no root solved before it), so a tilt of `m hc` off `ha`
+/// above rounding is the target's, and subproblem 2 solves it down to 1e-12; otherwise it may
+/// be the error of an earlier tangent root (~1e-8) and, up to [`NEARLY_ON_AXIS`], leaves θa
+/// free.
+pub(super) fn rotation_roots(
     form: &ClosedForm,
-    first: usize,
-    back: &impl Fn(&Vector3<f64>) -> Vector3<f64>,
-    free: &[f64; MAX_JOINTS],
+    [a, b, c]: [usize; 3],
+    (back, m_exact): (&impl Fn(&Vector3<f64>) -> Vector3<f64>, bool),
+    (ra, rb): (f64, f64),
     nearest: bool,
 ) -> ([(Angle, Angle, Angle, u8); 2], usize) {
     let axes = &form.screws.axis;
     let unit = Angle::of(0.0);
     let mut out = ([(unit, unit, unit, 0); 2], 0);
-    let (Some(ha), Some(hb), Some(hc)) =
-        (axes.get(first), axes.get(first + 1), axes.get(first + 2))
-    else {
+    let (Some(ha), Some(hb), Some(hc)) = (axes.get(a), axes.get(b), axes.get(c)) else {
         return out;
     };
-    let value = |i: usize| free.get(i).copied().unwrap_or(0.0);
     let (m_hb, m_hc) = (back(hb), back(hc));
     let mut push = |aa: Angle, ab: Angle, bit: u8| {
         let rest = rotate(hb, &ab.negated(), &rotate(ha, &aa.negated(), &m_hb));
@@ -189,14 +197,14 @@ fn wrist_roots(
             out.1 += 1;
         }
     };
-    let roots = if misalignment(ha, &m_hc) <= NEARLY_ON_AXIS {
+    let roots = if !m_exact && misalignment(ha, &m_hc) <= NEARLY_ON_AXIS {
         PairRoots::FreeFirst
     } else {
         sp2(ha, &m_hc, hb, hc, form.slack())
     };
     match roots {
         PairRoots::Some(pairs, count) => {
-            let (ra, rb) = (Angle::of(-value(first)), Angle::of(value(first + 1)));
+            let (ra, rb) = (Angle::of(-ra), Angle::of(rb));
             let closeness = |(ta, tb): &(Angle, Angle)| ta.closeness(&ra) + tb.closeness(&rb);
             let skip = match pairs {
                 [one, two] if nearest && count == 2 => {
@@ -210,8 +218,8 @@ fn wrist_roots(
             }
         }
         PairRoots::FreeFirst => {
-            // Axis c along axis a (the wrist stretched): θa + θc is fixed, θa keeps `free`.
-            let aa = Angle::of(value(first));
+            // Axis c along axis a (the wrist stretched): θa + θc is fixed, θa keeps `ra`.
+            let aa = Angle::of(ra);
             if let Some(ab) = sp1(hb, hc, &rotate(ha, &aa.negated(), &m_hc)) {
                 push(aa, ab, 0);
             }

@@ -10,7 +10,9 @@ pub mod experiments;
 
 use std::path::PathBuf;
 
-use armgate_core::config::{ValidRobot, load_file};
+use armgate_core::config::{IkConfig, ValidRobot, load_file};
+use armgate_core::kinematics::{Chain, IkResult};
+use armgate_core::math::Frame;
 
 /// The workspace's `robots/` folder.
 pub fn robots_dir() -> PathBuf {
@@ -35,6 +37,19 @@ pub fn all_robots() -> Vec<(String, ValidRobot)> {
         .collect();
     names.sort();
     names.into_iter().map(|n| (n.clone(), robot(&n))).collect()
+}
+
+/// Global IK from the middle of the ranges reaches `target` within the limits without a
+/// Newton step: the closed form's answer.
+pub fn assert_global_ik_exact(chain: &Chain, ik: &IkConfig, target: &Frame, k: u64, what: &str) {
+    let result = chain
+        .solve_global(target, &chain.mid_range(), ik, k)
+        .unwrap();
+    let IkResult::Converged(found) = result else {
+        panic!("{what}: {result:?}");
+    };
+    assert!(chain.within_limits(&found.q), "{what}");
+    assert_eq!(found.iterations, 0, "{what}: closed form, no Newton step");
 }
 
 /// A request datagram: two characters, seven floats, the index.
