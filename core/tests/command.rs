@@ -530,3 +530,33 @@ fn closed_form_requests_on_a_prismatic_base() {
             .starts_with("ER25 Cmd KG unreachable")
     );
 }
+
+/// A `KG` to the pose the arm is at, as `armgate pose` prints it (six decimals), keeps the
+/// present joints. hybrid's home is singular (axis 6 in line with axis 3): the exact solutions
+/// of the printed pose, 3.5e-7 rad off, turn θ3 a quarter turn and run the slides 0.5 m out.
+#[test]
+fn kg_to_the_pose_the_arm_is_at_does_not_move_it() {
+    let config = common::robot("hybrid");
+    let chain = Chain::new(&config);
+    let home = [0.0; 6];
+    let mut rig = Rig::new(&config, &home);
+    let printed = [0.0, -0.5, -0.5, 3.141593, 0.0, -1.570796, 0.0].map(|v: f64| v as f32);
+    let [x, y, z, roll, pitch, yaw, _] = printed.map(f64::from);
+    let target = math::Frame::from_parts(
+        math::Vector3::new(x, y, z).into(),
+        math::Rotation3::from_euler_angles(roll, pitch, yaw),
+    );
+    let far = chain.solve_all(&target, &home).unwrap();
+    assert!(
+        far.iter().all(|s| s.q.iter().any(|q| q.abs() > 0.4)),
+        "{far:?}"
+    );
+    rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    for index in [8, chain.branch_of(&home).unwrap().bits()] {
+        let reply = floats(&rig.request("KG", printed, index));
+        assert!(reply[..6].iter().all(|q| q.abs() < 1e-9), "{reply:?}");
+        for _ in 0..50 {
+            rig.tick();
+        }
+    }
+}

@@ -10,7 +10,7 @@ use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 use super::redundancy::{self, Values};
 use crate::config::IkConfig;
 use crate::kinematics::{Branch, Chain, Family, IkResult, Joints};
-use crate::math::{Frame, Rotation3, Vector3};
+use crate::math::{Frame, Rotation3, Vector3, dist};
 use crate::motion::Refusal;
 
 /// Why a `KG`, `KR` or `KS` is refused.
@@ -98,6 +98,12 @@ pub(super) fn goal(
             _ => Err(out_of_reach),
         };
     }
+    if let Some(kept) = (!chosen)
+        .then(|| already_there(chain, &target, reference, branch))
+        .flatten()
+    {
+        return Ok(kept);
+    }
     let found = if chosen {
         chain.solve_nearest_keeping(&target, reference, branch)
     } else {
@@ -107,6 +113,31 @@ pub(super) fn goal(
         Ok(Some(found)) => Ok((found.q, found.branch.bits())),
         _ => Err(out_of_reach),
     }
+}
+
+/// How near a `KG` goal the arm may already be for the goal to be the present joints: a pose
+/// on the wire is an f32 (a few 1e-7), as `armgate pose` prints it six decimals. Near a
+/// singularity the exact solution of a goal that close can lie far away (hybrid at home: θ3 a
+/// quarter turn, the slides 0.5 m out), which is not what a client asking for the arm's own
+/// pose means.
+const ALREADY_THERE: f64 = 1e-6;
+
+/// The present joints and their branch, if they reach `target` within [`ALREADY_THERE`]
+/// (m + rad) on the branch asked for.
+fn already_there(
+    chain: &Chain,
+    target: &Frame,
+    present: &Joints,
+    branch: Option<Branch>,
+) -> Option<(Joints, u8)> {
+    let pose = chain.forward(present).ok()?;
+    if dist(&pose, target) > ALREADY_THERE {
+        return None;
+    }
+    let on = chain.branch_of(present)?;
+    branch
+        .is_none_or(|b| b == on)
+        .then(|| (present.clone(), on.bits()))
 }
 
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the
