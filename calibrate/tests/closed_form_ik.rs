@@ -14,8 +14,22 @@ use armgate_core::kinematics::{CHECK, Chain, Joints};
 use armgate_core::math;
 use armgate_core::rng::SplitMix64;
 
-/// Random joint vectors per robot.
+/// Random joint vectors per robot; `ARMGATE_IK_SAMPLES` sets another count (the figures in
+/// docs/kinematics.md are of 5,000).
 const SAMPLES: usize = 2000;
+
+fn samples() -> usize {
+    std::env::var("ARMGATE_IK_SAMPLES")
+        .ok()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(SAMPLES)
+}
+
+/// The random joint vectors of `chain` the figures are of (the first `n` of a fixed stream).
+fn random_poses(chain: &Chain, n: usize) -> Vec<Joints> {
+    let mut rng = SplitMix64::new(0x26ca1);
+    (0..n).map(|_| chain.random_joints(&mut rng)).collect()
+}
 
 fn robot(name: &str) -> PathBuf {
     PathBuf::from(format!(
@@ -136,30 +150,64 @@ fn calibrated_files_are_solved_as_often_as_the_nominal_ones() {
             !fit.is_exact(),
             "{name}: a calibrated file only nearly fits: {fit:?}"
         );
-        let chain = Chain::new(&nominal);
-        let mut rng = SplitMix64::new(0x26ca1);
-        let poses: Vec<Joints> = (0..SAMPLES)
-            .map(|_| chain.random_joints(&mut rng))
-            .collect();
+        let n = samples();
+        let poses = random_poses(&Chain::new(&nominal), n);
         let before = successes(&nominal, &poses);
         let after = successes(&calibrated, &poses);
         println!(
-            "{name}: deviation {:.2e}; global IK {} → {}, configuration among all solutions {} → {} of {SAMPLES}",
+            "{name}: deviation {:.2e}; global IK {} → {}, configuration among all solutions {} → {} of {n}",
             fit.deviation, before.0, after.0, before.1, after.1
         );
-        assert_eq!(before, (SAMPLES, SAMPLES), "{name} nominal");
-        // Global IK: at most one miss (puma560's, one pose also with 5000 samples: near both
-        // the shoulder and the wrist singularity no root of the ideal model verifies, and the
-        // numeric fallback stalls 1e-7 from the target).
+        assert_eq!(before, (n, n), "{name} nominal");
+        assert_eq!(after.0, before.0, "{name} calibrated: global {after:?}");
+        // Every solution: within ~0.02 rad of a singularity the true arm can have more
+        // solutions than the ideal model has roots (up to 10 within the limits where the list
+        // holds 8), and a few configurations there are not found (0–0.08 % of 5,000).
         assert!(
-            after.0 + 1 >= before.0,
-            "{name} calibrated: global {after:?}"
-        );
-        // Every solution: within 0.02 rad of a singularity the ideal model's roots lie 0.1–1
-        // rad from the true arm's, and a few carry to another exact solution of the pose.
-        assert!(
-            after.1 * 1000 >= before.1 * 995,
+            after.1 * 1000 >= before.1 * 998,
             "{name} calibrated: all {after:?}"
+        );
+    }
+}
+
+/// Configurations within ~0.05 rad of a singularity on calibrated files, where the ideal
+/// model's roots carry badly: each is found by global IK and among every solution, and where
+/// the true arm has a second solution 1e-4–0.05 rad away, both are listed.
+#[test]
+fn near_singular_configurations_of_calibrated_files_are_found() {
+    // (robot, seed of the perturbation, index in the stream of random vectors, what is near)
+    let cases = [
+        // Near the shoulder and the wrist singularity at once (θ5 = −0.0495); the damped
+        // Newton steps crawled and stopped 1e-7 from the target.
+        ("puma560", 3, 1918, false),
+        // Elbow stretched (θ3 = −0.0021): a second solution 8e-5 rad away in θ3.
+        ("ur5", 3, 3166, true),
+        // Wrist nearly aligned (θ5 = π + 0.032): a second solution 0.05 rad away in θ4, θ6.
+        ("ranger-mk1", 11, 4773, true),
+    ];
+    for (name, seed, index, twin) in cases {
+        let config = calibrated(name, seed);
+        let chain = Chain::new(&config);
+        let poses = random_poses(&Chain::new(&load_file(robot(name)).unwrap()), index + 1);
+        let q = &poses[index];
+        let target = chain.forward(q).unwrap();
+        let global = chain
+            .solve_global(&target, &chain.mid_range(), &config.ik, index as u64)
+            .unwrap();
+        assert!(global.is_converged(), "{name} #{index}: {global:?}");
+        let solutions = chain.solve_all(&target, &chain.mid_range()).unwrap();
+        assert!(
+            solutions.iter().any(|s| same_modulo_turns(&s.q, q, 1e-7)),
+            "{name} #{index}: {q:?} not among {solutions:?}"
+        );
+        let nearby = solutions
+            .iter()
+            .filter(|s| same_modulo_turns(&s.q, q, 0.1))
+            .count();
+        assert_eq!(
+            nearby,
+            1 + usize::from(twin),
+            "{name} #{index}: {solutions:?}"
         );
     }
 }

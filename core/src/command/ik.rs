@@ -137,7 +137,7 @@ fn already_there(
     let on = chain.branch_of(present)?;
     branch
         .is_none_or(|b| b == on)
-        .then(|| (present.clone(), on.bits()))
+        .then(|| (*present, on.bits()))
 }
 
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the

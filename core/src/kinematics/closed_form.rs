@@ -17,7 +17,6 @@ use super::ik::{IkError, IkSolution};
 use super::subproblems::{Angle, sp4};
 use super::{prismatic_base, spherical_shoulder, spherical_wrist, three_parallel};
 use crate::MAX_JOINTS;
-use crate::config::IkConfig;
 use crate::math::Frame;
 use crate::math::Joints;
 use crate::saturate::saturate;
@@ -29,12 +28,6 @@ pub const MAX_SOLUTIONS: usize = 8;
 pub const CHECK: f64 = 1e-9;
 /// A candidate this close to the target (m, rad) but not within [`CHECK`] is polished.
 const POLISH_FROM: f64 = 1e-5;
-/// Newton steps that polish a solution of the ideal model on a calibrated chain.
-const POLISH_ITERATIONS: u16 = 20;
-/// Most re-solves of the ideal model that carry a root to a calibrated chain ([`Chain::refine`]).
-const REFINE_STEPS: usize = 4;
-/// A miss (m, rad) below which a carried root is left to Newton's polish.
-const REFINED: f64 = 1e-7;
 
 /// A configuration branch of a closed-form family: which root each of the three two-way
 /// choices took. Bit 0 is the shoulder (the second root of θ1; of θ1, θ2 for a spherical
@@ -286,6 +279,9 @@ impl Chain {
             if !kept {
                 solutions.truncate(solutions.len().saturating_sub(1));
             }
+            if !form.fit.is_exact() {
+                self.complete(&candidates, target, &checked, solutions);
+            }
         }
         Ok(())
     }
@@ -461,7 +457,7 @@ impl Chain {
 
     /// The candidates of `form` for a checked `reference` (whose angles may be known), written
     /// to `out`.
-    fn candidates_of(
+    pub(super) fn candidates_of(
         &self,
         form: &ClosedForm,
         target: &Frame,
@@ -486,41 +482,6 @@ impl Chain {
             }
             Family::Numeric => {}
         }
-    }
-
-    /// A chain only near its family: `candidate`, a root of the ideal model, carried towards
-    /// the true chain's root on the same branch. With `D(q)` the true chain's pose relative to
-    /// the ideal model's at `q` (slowly varying: the deviation is small), the true chain
-    /// reaches `target` where the ideal model reaches `target · D(q)⁻¹`; so the ideal model is
-    /// solved again for that corrected target, following the previous root at every choice
-    /// (away from singularities a miss of 1e-3 falls below 1e-7 within the four passes, where
-    /// Newton takes over). Unlike Newton steps on the true chain,
-    /// this cannot slide to another branch near a singularity, where the ideal model's wrist
-    /// angles can be ~0.1 rad off the true ones.
-    fn refine(&self, form: &ClosedForm, candidate: &Candidate, target: &Frame) -> Candidate {
-        let mut current = *candidate;
-        let mut ideal = *target;
-        for _ in 0..REFINE_STEPS {
-            let reached = self.pose_of(form, &current);
-            if Misses::of(&reached, target).largest() <= REFINED * REFINED {
-                break;
-            }
-            ideal = target * reached.inverse() * ideal;
-            let mut free = [0.0; MAX_JOINTS];
-            for (f, a) in free.iter_mut().zip(&current.angles) {
-                *f = a.value();
-            }
-            let mut next = Candidates::new();
-            self.candidates_of(form, &ideal, (&free, None), true, &mut next);
-            let Some(found) = next.first() else {
-                break;
-            };
-            current = Candidate {
-                branch: candidate.branch,
-                ..*found
-            };
-        }
-        current
     }
 
     /// A candidate on the turns nearest `reference`, polished if the family fit is
@@ -608,26 +569,13 @@ impl Chain {
 
     /// The pose `candidate` reaches, by trigonometry on its angles (then moved by its slides,
     /// for a prismatic base).
-    fn pose_of(&self, form: &ClosedForm, candidate: &Candidate) -> Frame {
+    pub(super) fn pose_of(&self, form: &ClosedForm, candidate: &Candidate) -> Frame {
         let pose = self.pose_by_trig(&candidate.angles);
         if form.fit.family == Family::PrismaticBase {
             prismatic_base::slid(form, &candidate.values, pose)
         } else {
             pose
         }
-    }
-
-    /// Newton steps on the true chain from a solution of its ideal model (or from a root known
-    /// only to √ε); the best pose reached.
-    fn polish(&self, target: &Frame, q: &Joints) -> Option<Joints> {
-        let config = IkConfig {
-            tolerance: 0.1 * CHECK,
-            tracking_iterations: POLISH_ITERATIONS,
-            ..IkConfig::default()
-        };
-        // Aiming below CHECK, Newton may stall on rounding just above its tolerance: its best
-        // pose goes to the caller's check either way.
-        Some(self.newton_tracking(target, q, &config).ok()?.solution().q)
     }
 }
 
@@ -659,7 +607,7 @@ impl Misses {
     }
 
     /// The larger of the two.
-    fn largest(&self) -> f64 {
+    pub(super) fn largest(&self) -> f64 {
         self.position.max(self.rotation)
     }
 
@@ -679,7 +627,7 @@ impl Misses {
 
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
 /// `reference`; `None` if no turn fits.
-fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
+pub(super) fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
     const TAU: f64 = core::f64::consts::TAU;
     // Within π of the reference: if it fits, no other turn is nearer. The turns rounded by a
     // saturating conversion (one instruction on the Cortex-M7; `libm::round` is about 35):

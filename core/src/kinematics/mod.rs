@@ -11,10 +11,13 @@
 //! * [`diverges`]: the seed's divergence guard.
 //! * [`Chain::joint_rates`]: inverse velocity kinematics with a null-space term.
 
+mod calibrated;
 mod chain;
 mod closed_form;
+mod descent;
 mod evaluation;
 mod family;
+mod global;
 mod ik;
 mod jacobian;
 mod prismatic_base;
