@@ -279,9 +279,9 @@ impl Chain {
             if !kept {
                 solutions.truncate(solutions.len().saturating_sub(1));
             }
-            if !form.fit.is_exact() {
-                self.complete(&candidates, target, &checked, solutions);
-            }
+        }
+        if !form.fit.is_exact() {
+            self.complete(&candidates, target, &checked, solutions);
         }
         Ok(())
     }
