@@ -1,8 +1,9 @@
 //! The per-tick work budget: at most [`PLANNING_PER_TICK`] planning request a tick.
 //!
-//! A planning request (`BG`, `VE`, `jB`, `jE`, `RC`, and the Cartesian goals and via points
-//! `GL`, `GT`, `VP`) may run the IK along a whole line: about 1.5 M instructions to an
-//! unreachable goal on the board. Eight in one tick would take several periods and let the
+//! A planning request (`BG`, `VE`, `jB`, `jE`, `RC`, the Cartesian goals and via points
+//! `GL`, `GT`, `VP`, and the closed-form IK's `KG` and `KS`) may run the IK along a whole line:
+//! about 1.5 M instructions to an unreachable goal on the board (`KS` on a calibrated arm near
+//! a singularity searches for missed solutions, up to 8 Newton descents). Eight in one tick would take several periods and let the
 //! drives' buffers run dry, so the second and later planning requests of a tick wait for the
 //! next ticks ([`Waiting`]), and so does everything after them from the same client (its
 //! requests keep their order). Other clients' requests go on meanwhile; a stop (`ST`, `jR`),
@@ -44,6 +45,7 @@ impl Work {
             | Command::GoalQuaternion
             | Command::GoalRpy
             | Command::IkGoal
+            | Command::IkSolution
             | Command::ViaPoint) => Self::Plans(c),
             Command::Stop | Command::JointReset => Self::Stops,
             _ => Self::Other,
