@@ -17,7 +17,7 @@
 use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
-use armgate_core::kinematics::{Chain, Family, Joints};
+use armgate_core::kinematics::{Chain, Family, Joints, Solutions};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
@@ -134,9 +134,14 @@ fn measure_robot(config: &ValidRobot) -> Results {
         }
         if chain.family().family != Family::Numeric {
             let reference = chain.mid_range();
-            let (ticks, all) = measure(|| chain.solve_all(&target, black_box(&reference)));
+            // Into a list of the caller's, as the firmware would keep one (a returned list is
+            // copied: 650 bytes).
+            let mut all = Solutions::new();
+            let (ticks, solved) = measure(|| {
+                chain.solve_all_into(&target, black_box(&reference), black_box(&mut all))
+            });
             results.all_solutions.add(ticks);
-            results.solutions += all.map_or(0, |a| a.len() as u64);
+            results.solutions += solved.map_or(0, |()| all.len() as u64);
             let (ticks, _) =
                 measure(|| chain.newton_tracking(&target, black_box(&seed), &config.ik));
             results.newton_tracking.add(ticks);

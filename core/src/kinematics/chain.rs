@@ -4,6 +4,7 @@ use nalgebra::{Matrix3, Matrix6, Rotation3, SMatrix, SVector, Vector3};
 
 use super::family::ClosedForm;
 use super::jacobian::Jacobian;
+use super::subproblems::Angle;
 use crate::MAX_JOINTS;
 use crate::config::{JointType, RobotConfig, ValidRobot};
 use crate::math::Joints;
@@ -268,13 +269,13 @@ impl Chain {
         )
     }
 
-    /// The tool frame of a revolute chain from the sine and cosine of each joint value
+    /// The tool frame of a revolute chain from each joint value's angle (cosine and sine)
     /// (prismatic joints keep their offset): FK without recomputing the sines and cosines a
     /// closed-form solver already has.
-    pub(super) fn pose_by_trig(&self, sin_cos: &[(f64, f64); MAX_JOINTS]) -> Frame {
+    pub(super) fn pose_by_trig(&self, angles: &[Angle; MAX_JOINTS]) -> Frame {
         self.walk_by(
             |i, link, _| {
-                let (sq, cq) = sin_cos.get(i).copied().unwrap_or((0.0, 1.0));
+                let (sq, cq) = angles.get(i).map_or((0.0, 1.0), |a| (a.sin, a.cos));
                 let st = link.sin_theta * cq + link.cos_theta * sq;
                 let ct = link.cos_theta * cq - link.sin_theta * sq;
                 (st, ct, link.d)

@@ -89,28 +89,23 @@ pub(super) struct Candidate {
     /// candidates share); NaN where not.
     pub values: [f64; MAX_JOINTS],
     pub branch: Branch,
+    /// Every value taken and passed by a [`Gate`] (on the turn nearest the reference, within
+    /// the limits): the values are the solution's joints as they are.
+    pub admitted: bool,
 }
 
 impl Candidate {
     /// A candidate of a six-joint arm's `angles` on `branch`, with the `known` values (NaN:
-    /// not taken yet).
-    pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch) -> Self {
+    /// not taken yet), `admitted` if a [`Gate`] passed all of them.
+    pub fn new(angles: [Angle; 6], known: [f64; 6], branch: Branch, admitted: bool) -> Self {
         let zero = Angle { cos: 1.0, sin: 0.0 };
         let mut all = Self::of_joints([zero; MAX_JOINTS], [0.0; MAX_JOINTS], branch);
         let slots = all.angles.iter_mut().zip(all.values.iter_mut());
         for ((a, v), (x, k)) in slots.zip(angles.into_iter().zip(known)) {
             (*a, *v) = (x, k);
         }
+        all.admitted = admitted;
         all
-    }
-
-    /// The sine and cosine of every angle, as FK by trigonometry takes them.
-    pub fn sin_cos(&self) -> [(f64, f64); MAX_JOINTS] {
-        let mut out = [(0.0, 1.0); MAX_JOINTS];
-        for (sc, a) in out.iter_mut().zip(&self.angles) {
-            *sc = (a.sin, a.cos);
-        }
-        out
     }
 
     /// A candidate of every joint's `angles` (and `known` values, NaN where not taken).
@@ -123,7 +118,42 @@ impl Candidate {
             angles,
             values: known,
             branch,
+            admitted: false,
         }
+    }
+}
+
+/// The joint limits as a family solver applies them: to each joint value as soon as it has
+/// it, on the turn nearest the reference, so that a branch outside them is dropped before its
+/// remaining joints are solved and its candidates need no limit test afterwards. Open (every
+/// value passes, as it is) for the ideal model of a calibrated arm, whose roots lie near the
+/// true ones only: they are tested after their refinement.
+#[derive(Clone, Copy)]
+pub(super) struct Gate<'a>(Option<GateLimits<'a>>);
+
+/// A closed [`Gate`]'s reference and limits.
+type GateLimits<'a> = (
+    &'a [f64; MAX_JOINTS],
+    &'a [f64; MAX_JOINTS],
+    &'a [f64; MAX_JOINTS],
+);
+
+impl Gate<'_> {
+    /// Joint `i`'s `value` on the turn nearest the reference within the limits; `None` if no
+    /// turn is within them. An open gate passes every value as it is.
+    pub fn admit(&self, i: usize, value: f64) -> Option<f64> {
+        let Some((reference, min, max)) = self.0 else {
+            return Some(value);
+        };
+        match (reference.get(i), min.get(i), max.get(i)) {
+            (Some(r), Some(lo), Some(hi)) => nearest_turn(value, *r, *lo, *hi),
+            _ => None,
+        }
+    }
+
+    /// True if it tests the limits (the values it passes are then the solution's).
+    pub fn is_closed(&self) -> bool {
+        self.0.is_some()
     }
 }
 
@@ -217,28 +247,43 @@ impl Chain {
     /// value kept by a joint a singularity leaves free). Refused with
     /// [`IkError::NoClosedForm`] for a [`Family::Numeric`] chain.
     pub fn solve_all(&self, target: &Frame, reference: &[f64]) -> Result<Solutions, IkError> {
+        let mut all = Solutions::new();
+        self.solve_all_into(target, reference, &mut all)
+            .map(|()| all)
+    }
+
+    /// [`solve_all`](Self::solve_all) into the caller's list (emptied first): a returned list
+    /// is copied on the Cortex-M7 (650 bytes, about 330 instructions), and so is each solution
+    /// pushed by value; here every solution is written in its slot.
+    pub fn solve_all_into(
+        &self,
+        target: &Frame,
+        reference: &[f64],
+        solutions: &mut Solutions,
+    ) -> Result<(), IkError> {
+        solutions.clear();
         let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
         let form = self.candidates(target, reference, false, (&mut checked, &mut candidates))?;
-        // Filled in place: `Ok(list)` of a finished list copied its 650 bytes (byte by byte
-        // on the Cortex-M7, about 2,400 instructions).
-        let mut all = Ok(Solutions::new());
-        if let Ok(solutions) = &mut all {
-            let mut q = Joints::zeros(self.dof());
-            for candidate in &candidates {
-                if self
-                    .finish(form, candidate, target, (&checked, &mut q))
-                    .is_some()
-                {
-                    let branch = candidate.branch;
-                    // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                    let _ = solutions.push(BranchSolution { q, branch });
-                }
-            }
-            if !form.fit.is_exact() {
-                self.complete(&candidates, target, &checked, solutions);
+        for candidate in &candidates {
+            let slot = BranchSolution {
+                q: Joints::from_array(candidate.values, self.dof()),
+                branch: candidate.branch,
+            };
+            // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+            let (Ok(()), Some(solution)) = (solutions.push(slot), solutions.last_mut()) else {
+                break;
+            };
+            let kept = self
+                .finish(form, candidate, target, (&checked, &mut solution.q))
+                .is_some();
+            if !kept {
+                solutions.truncate(solutions.len().saturating_sub(1));
             }
         }
-        all
+        if !form.fit.is_exact() {
+            self.complete(&candidates, target, &checked, solutions);
+        }
+        Ok(())
     }
 
     /// The solution nearest to `reference` (on `branch` if given): the candidates are tried
@@ -420,12 +465,14 @@ impl Chain {
         nearest: bool,
         out: &mut Candidates,
     ) {
+        let (min, max) = self.limits();
+        let gate = || Gate(form.fit.is_exact().then_some((reference, min, max)));
         match form.fit.family {
             Family::SphericalWrist => {
-                spherical_wrist::solve(form, target, (reference, known), nearest, out);
+                spherical_wrist::solve(form, target, (reference, known), nearest, gate(), out);
             }
             Family::ThreeParallel => {
-                three_parallel::solve(form, target, (reference, known), nearest, out);
+                three_parallel::solve(form, target, (reference, known), nearest, gate(), out);
             }
             Family::SphericalShoulder => {
                 spherical_shoulder::solve(form, self.dof(), target, reference, nearest, out);
@@ -465,6 +512,13 @@ impl Chain {
         (reference, q): (&[f64; MAX_JOINTS], &mut Joints),
     ) -> Option<Misses> {
         let (min, max) = self.limits();
+        // A gate's values are the joints already; any others are turned and tested here.
+        let untested = if candidate.admitted {
+            *q = Joints::from_array(candidate.values, q.len());
+            0
+        } else {
+            MAX_JOINTS
+        };
         let angles = candidate.angles.iter().zip(&candidate.values);
         let joints = q.iter_mut().zip(angles).zip(reference);
         // An ideal model's root may lie a little beyond a limit the true chain's is within:
@@ -474,7 +528,7 @@ impl Chain {
         } else {
             form.slack()
         };
-        for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)) {
+        for (((v, (angle, known)), r), (lo, hi)) in joints.zip(min.iter().zip(max)).take(untested) {
             let value = if known.is_nan() {
                 angle.value()
             } else {
@@ -516,7 +570,7 @@ impl Chain {
     /// The pose `candidate` reaches, by trigonometry on its angles (then moved by its slides,
     /// for a prismatic base).
     pub(super) fn pose_of(&self, form: &ClosedForm, candidate: &Candidate) -> Frame {
-        let pose = self.pose_by_trig(&candidate.sin_cos());
+        let pose = self.pose_by_trig(&candidate.angles);
         if form.fit.family == Family::PrismaticBase {
             prismatic_base::slid(form, &candidate.values, pose)
         } else {

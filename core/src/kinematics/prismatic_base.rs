@@ -76,6 +76,7 @@ pub(super) fn solve(
                 angles,
                 values,
                 Branch::from_roots(b3, b4, 0),
+                false,
             ));
         }
     }

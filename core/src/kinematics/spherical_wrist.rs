@@ -10,26 +10,27 @@
 
 use nalgebra::Vector3;
 
-use super::closed_form::{Branch, Candidate, Candidates, Known, Shoulder, known_angle};
+use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
 use super::family::ClosedForm;
-use super::subproblems::{Angle, PairRoots, rotate, sp1, sp2, sp3};
+use super::subproblems::{Angle, Elbow, Mirror, PairRoots, rotate, sp1, sp2_solving};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
-/// Every candidate solution for `target` (unchecked: the caller applies limits and FK), or
-/// with `nearest` the one that takes the root nearest `free` at every choice. `free` also
-/// gives the value of a joint left free by a singularity; `known`, its angles if the caller has
-/// them.
+/// Every candidate solution for `target` that passes `gate` (unchecked: the caller checks it
+/// by FK), or with `nearest` the one that takes the root nearest `free` at every choice.
+/// `free` also gives the value of a joint left free by a singularity; `known`, its angles if
+/// the caller has them.
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
     (free, known): (&[f64; MAX_JOINTS], Known),
     nearest: bool,
+    gate: Gate,
     out: &mut Candidates,
 ) {
     let s = &form.screws;
     let slack = form.slack();
-    let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
+    let [h1, h2, h3, h4, h5, h6, _, _] = &s.axis;
     let [o1, o2, o3, _, _, _, _, _] = &s.point;
     let w = &form.centre;
     let Shoulder { tool, v, roots } =
@@ -39,25 +40,33 @@ pub(super) fn solve(
     // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
     // rotation about h2.
     let sense3 = h3.dot(h2);
+    // Only a solve for every root has a second wrist root to mirror.
+    let mirror = (!nearest).then(|| Mirror::of(h4, h5, h6)).flatten();
+    // θ3 from the distance between axis 2's point and the wrist centre.
+    let elbow = Elbow::new(h3, w - o3, o2 - o3, !nearest);
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
-        let v1 = a1.value();
+        let Some(v1) = gate.admit(0, a1.value()) else {
+            continue;
+        };
         let back1 = a1.negated();
         let (shoulder_h5, shoulder_h6) =
             (rotate(h1, &back1, &tool_h5), rotate(h1, &back1, &tool_h6));
         let u = rotate(h1, &back1, &v) - (o2 - o1);
-        let (elbows, n3) = sp3(h3, &(w - o3), &(o2 - o3), u.norm_squared(), slack).list(
-            free[2],
-            known_angle(known, 2),
-            nearest,
-        );
-        for &(a3, b3) in elbows.iter().take(n3) {
-            let reach = (o3 - o2) + rotate(h3, &a3, &(w - o3));
-            let a2 = sp1(h2, &reach, &u).unwrap_or_else(|| Angle::of(free[1]));
+        let choice3 = (free[2], known_angle(known, 2), nearest);
+        let (elbows, n3) = elbow.roots(u.norm_squared(), slack, choice3);
+        for &(a3, value3, b3) in elbows.iter().take(n3) {
+            let Some(v3) = gate.admit(2, value3) else {
+                continue;
+            };
+            let a2 = sp1(h2, &elbow.reach(&a3), &u).unwrap_or_else(|| Angle::of(free[1]));
+            let Some(v2) = gate.admit(1, a2.value()) else {
+                continue;
+            };
             // (R1 R2 R3)ᵀ applied to the tool's h5 and h6: what the wrist must produce.
             let back23 = a2.plus(&a3.signed(sense3)).negated();
             let back = |x: &Vector3<f64>| rotate(h2, &back23, x);
-            let arm = ([a1, a2, a3], [v1, a2.value(), a3.value()]);
+            let arm = ([a1, a2, a3], [v1, v2, v3]);
             let branch = Branch::from_roots(b1, b3, 0);
             wrist(
                 form,
@@ -65,6 +74,7 @@ pub(super) fn solve(
                 arm,
                 branch,
                 (free, known, nearest),
+                (gate, mirror),
                 out,
             );
         }
@@ -72,32 +82,69 @@ pub(super) fn solve(
 }
 
 /// Joints 4–6 producing the rotation `m = R4 R5 R6`, given as `[m h5, m h6]`, appended to the
-/// arm's `[θ1, θ2, θ3]` (angles and values).
+/// arm's `[θ1, θ2, θ3]` (angles and values) if `gate` passes them. The second root is the
+/// first's `mirror` where the wrist's axes allow it.
 fn wrist(
     form: &ClosedForm,
     [turned_h5, pointing]: [Vector3<f64>; 2],
     arm: ([Angle; 3], [f64; 3]),
     branch: Branch,
     (free, known, nearest): (&[f64; MAX_JOINTS], Known, bool),
+    (gate, mirror): (Gate, Option<Mirror>),
     out: &mut Candidates,
 ) {
     let [_, _, _, h4, h5, h6, _, _] = &form.screws.axis;
-    // R6 = R5ᵀ R4ᵀ m: where it takes h5.
+    // θ6 with R6 = R5ᵀ R4ᵀ m: where it takes h5.
     let last = |a4: &Angle, a5: &Angle| {
-        let back = rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5));
-        sp1(h6, h5, &back)
+        sp1(
+            h6,
+            h5,
+            &rotate(h5, &a5.negated(), &rotate(h4, &a4.negated(), &turned_h5)),
+        )
     };
     let ([a1, a2, a3], [v1, v2, v3]) = arm;
-    let mut push = |a4: Angle, a5: Angle, wrist: u8| {
-        if let Some(a6) = last(&a4, &a5) {
-            let known = [v1, v2, v3, f64::NAN, f64::NAN, f64::NAN];
-            let angles = [a1, a2, a3, a4, a5, a6];
-            // A full list only drops further roots, which cannot occur (8 at most).
-            let _ = out.push(Candidate::new(angles, known, branch.with_wrist(wrist)));
-        }
+    // A root whose values `gate` passed.
+    let mut keep = |[a4, a5, a6]: [Angle; 3], [v4, v5, v6]: [f64; 3], wrist: u8| {
+        let values = [v1, v2, v3, v4, v5, v6];
+        let angles = [a1, a2, a3, a4, a5, a6];
+        let branch = branch.with_wrist(wrist);
+        // A full list only drops further roots, which cannot occur (8 at most).
+        let _ = out.push(Candidate::new(angles, values, branch, gate.is_closed()));
     };
-    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6
-    match sp2(h4, &pointing, h5, h6, form.slack()) {
+    let admit =
+        |[v4, v5, v6]: [f64; 3]| Some([gate.admit(3, v4)?, gate.admit(4, v5)?, gate.admit(5, v6)?]);
+    // A root solved on its own, θ5 tested first (on most arms its limits are the narrowest:
+    // a root outside them needs no θ4 or θ6).
+    let mut solved = |a4: Angle, a5: Angle, wrist: u8| {
+        let v5 = gate.admit(4, a5.value())?;
+        let v4 = gate.admit(3, a4.value())?;
+        let a6 = last(&a4, &a5)?;
+        let v6 = gate.admit(5, a6.value())?;
+        keep([a4, a5, a6], [v4, v5, v6], wrist);
+        Some(())
+    };
+    // R(h4, −θ4) · m h6 = R(h5, θ5) · h6 (a mirrored second root is not solved).
+    let most = if mirror.is_some() { 1 } else { 2 };
+    match sp2_solving(h4, &pointing, h5, h6, (form.slack(), most)) {
+        PairRoots::Some([(t4, a5), _], 2) if let Some(mirror) = mirror => {
+            // Both roots, the second mirroring the first (its values whether or not the gate
+            // passes them); none if θ5 of neither is within its limits.
+            let (a4, v5) = (t4.negated(), a5.value());
+            let outside = |v: f64| gate.admit(4, v).is_none();
+            if outside(v5) && outside(mirror.other_middle(v5)) {
+                return;
+            }
+            let Some(a6) = last(&a4, &a5) else {
+                return;
+            };
+            let first = ([a4, a5, a6], [a4.value(), v5, a6.value()]);
+            let second = mirror.other(first.0, first.1);
+            for (wrist, (angles, values)) in [(0, first), (1, second)] {
+                if let Some(values) = admit(values) {
+                    keep(angles, values, wrist);
+                }
+            }
+        }
         PairRoots::Some(pairs, count) => {
             let skip = match pairs {
                 [first, second] if nearest && count == 2 => {
@@ -111,9 +158,8 @@ fn wrist(
                 _ => 0,
             };
             let take = if nearest { 1 } else { count };
-            let roots = (0u8..).zip(pairs.iter()).skip(skip).take(take);
-            for (bw, (t4, t5)) in roots {
-                push(t4.negated(), *t5, bw);
+            for (bw, (t4, t5)) in (0u8..).zip(pairs.iter()).skip(skip).take(take) {
+                let _ = solved(t4.negated(), *t5, bw);
             }
         }
         PairRoots::FreeFirst => {
@@ -121,7 +167,7 @@ fn wrist(
             let a4 = Angle::of(free[3]);
             let turned = rotate(h4, &a4.negated(), &pointing);
             if let Some(a5) = sp1(h5, h6, &turned) {
-                push(a4, a5, 0);
+                let _ = solved(a4, a5, 0);
             }
         }
         PairRoots::None => {}

@@ -22,6 +22,17 @@ impl Joints {
         }
     }
 
+    /// The first `n` entries of `values` (`n` capped at [`MAX_JOINTS`]), the rest zeroed: a
+    /// fixed-size move, where a slice's copy is a `memcpy` call.
+    pub fn from_array(mut values: [f64; MAX_JOINTS], n: usize) -> Self {
+        let len = n.min(MAX_JOINTS);
+        // A select per entry, not a fill (which becomes a `memset` call).
+        for (i, v) in values.iter_mut().enumerate() {
+            *v = if i < len { *v } else { 0.0 };
+        }
+        Self { values, len }
+    }
+
     /// A copy of `values`, or `None` if it holds more than [`MAX_JOINTS`] entries.
     pub fn from_slice(values: &[f64]) -> Option<Self> {
         let mut joints = Self::zeros(values.len());
