@@ -98,10 +98,7 @@ pub(super) fn goal(
             _ => Err(out_of_reach),
         };
     }
-    if let Some(kept) = (!chosen)
-        .then(|| already_there(chain, &target, reference, branch))
-        .flatten()
-    {
+    if !chosen && let Some(kept) = already_there(chain, &target, reference, branch) {
         return Ok(kept);
     }
     let found = if chosen {

@@ -15,6 +15,7 @@ use heapless::Deque;
 
 use super::link::{Datagram, Peer};
 use super::tick::REQUESTS_PER_TICK;
+use crate::command::Class;
 
 /// Planning requests handled per tick at most.
 pub const PLANNING_PER_TICK: usize = 1;
@@ -47,7 +48,7 @@ impl Work {
             | Command::IkGoal
             | Command::IkSolution
             | Command::ViaPoint) => Self::Plans(c),
-            Command::Stop | Command::JointReset => Self::Stops,
+            c if Class::of(c) == Class::Stop => Self::Stops,
             _ => Self::Other,
         }
     }

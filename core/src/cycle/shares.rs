@@ -21,18 +21,19 @@ use crate::command::Class;
 /// True if the request `payload` from `source` goes ahead of the others: a stop (`ST`, `jR`),
 /// or any request from `holder`, the address of the client that holds the arm.
 pub fn goes_ahead(payload: &[u8], source: IpAddr, holder: Option<IpAddr>) -> bool {
-    matches!(payload, [a, b, ..] if is_stop([*a, *b])) || holder == Some(source)
+    matches!(payload, [a, b, ..] if is_stop(Command::from_chars([*a, *b])))
+        || holder == Some(source)
 }
 
-/// True if `payload` is the reply to a stop (`TS`, `Rj`: the command reversed), which a shell
-/// sends ahead of other replies to new destinations.
+/// True if `payload` is the reply to a stop (`TS`, `Rj`), which a shell sends ahead of other
+/// replies to new destinations.
 pub fn answers_a_stop(payload: &[u8]) -> bool {
-    matches!(payload, [a, b, ..] if is_stop([*b, *a]))
+    matches!(payload, [a, b, ..] if is_stop(Command::from_reply_chars([*a, *b])))
 }
 
-/// True if `chars` are a stop's command characters.
-fn is_stop(chars: [u8; 2]) -> bool {
-    Command::from_chars(chars).is_some_and(|c| Class::of(c) == Class::Stop)
+/// True if `command` is a stop.
+fn is_stop(command: Option<Command>) -> bool {
+    command.is_some_and(|c| Class::of(c) == Class::Stop)
 }
 
 /// How many requests of a queue of `N` each source address holds, for at most `N` sources.

@@ -174,12 +174,8 @@ impl Chain {
         if self.dof() != 6 {
             return None;
         }
-        let mut x = [0.0; MAX_JOINTS];
-        for (x, v) in x.iter_mut().zip(q.iter()) {
-            *x = *v;
-        }
         let (mut axes, mut jacobian) = (Axes::default(), Jacobian::zeros());
-        let tool = self.tool_and_axes(&x, &mut axes);
+        let tool = self.tool_and_axes(q.as_array(), &mut axes);
         self.jacobian_into(&axes, &tool.translation.vector, &mut jacobian);
         Some(jacobian)
     }

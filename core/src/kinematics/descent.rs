@@ -144,10 +144,7 @@ impl Chain {
     /// squared singular value, crawl: a solution that passes a 1e-9 check can lie 1e-5 rad
     /// from the exact one, and a descent within 1e-7 of the target can run out of steps.
     pub(super) fn sharpen(&self, target: &Frame, q: &mut Joints) {
-        let mut x = [0.0; MAX_JOINTS];
-        for (x, v) in x.iter_mut().zip(q.iter()) {
-            *x = *v;
-        }
+        let mut x = *q.as_array();
         let (mut axes, mut jacobian) = (Axes::default(), Jacobian::zeros());
         let mut tool = self.tool_and_axes(&x, &mut axes);
         let mut e = math::diff(&tool, target);
