@@ -264,7 +264,26 @@ impl Chain {
         solutions.clear();
         let (mut checked, mut candidates) = ([0.0; MAX_JOINTS], Candidates::new());
         let form = self.candidates(target, reference, false, (&mut checked, &mut candidates))?;
+        let exact = form.fit.is_exact();
+        let flange = target.rotation.matrix() * self.tool_rotation().transpose();
         for candidate in &candidates {
+            // The common case apart: an exact family's candidate that its gate admitted needs
+            // only its FK check (through `finish`, about 110 more instructions on the M7).
+            if exact
+                && candidate.admitted
+                && form.fit.family != Family::PrismaticBase
+                && Misses::of_flange(
+                    self.misses_by_trig(&candidate.angles, (&flange, &target.translation.vector)),
+                )
+                .largest()
+                    <= CHECK * CHECK
+            {
+                let q = Joints::from_array(candidate.values, self.dof());
+                let branch = candidate.branch;
+                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
+                let _ = solutions.push(BranchSolution { q, branch });
+                continue;
+            }
             let slot = BranchSolution {
                 q: Joints::from_array(candidate.values, self.dof()),
                 branch: candidate.branch,
@@ -280,7 +299,7 @@ impl Chain {
                 solutions.truncate(solutions.len().saturating_sub(1));
             }
         }
-        if !form.fit.is_exact() {
+        if !exact {
             self.complete(&candidates, target, &checked, solutions);
         }
         Ok(())
@@ -597,6 +616,14 @@ impl Misses {
         }
     }
 
+    /// From [`Chain::misses_by_trig`]'s squared errors.
+    fn of_flange((position, frobenius): (f64, f64)) -> Self {
+        Self {
+            position,
+            rotation: 0.5 * frobenius,
+        }
+    }
+
     /// True if their square roots sum (m + rad) to less than `limit`; the roots are taken
     /// only if neither alone reaches it.
     pub fn closer_than(&self, limit: f64) -> bool {
@@ -628,12 +655,20 @@ impl Misses {
 /// `angle` plus the whole number of turns that puts it within `[lo, hi]` nearest to
 /// `reference`; `None` if no turn fits.
 pub(super) fn nearest_turn(angle: f64, reference: f64, lo: f64, hi: f64) -> Option<f64> {
-    const TAU: f64 = core::f64::consts::TAU;
-    // Within π of the reference: if it fits, no other turn is nearer. The turns rounded by a
-    // saturating conversion (one instruction on the Cortex-M7; `libm::round` is about 35):
-    // whole turns beyond ±2³¹ only saturate, and no such angle fits any limit anyway.
-    let turns = (reference - angle) / TAU;
-    let near = angle + TAU * f64::from((turns + 0.5f64.copysign(turns)) as i32);
+    use core::f64::consts::{PI, TAU};
+    // Within π of the reference: if it fits, no other turn is nearer. A solver's angle lies
+    // within a turn and a half of the reference (one turn or none); others take the whole turns
+    // rounded by a saturating conversion (one instruction on the Cortex-M7; `libm::round` is
+    // about 35): whole turns beyond ±2³¹ only saturate, and no such angle fits any limit anyway.
+    let away = reference - angle;
+    let near = if away.abs() < PI {
+        angle
+    } else if away.abs() < 3.0 * PI {
+        angle + TAU.copysign(away)
+    } else {
+        let turns = away / TAU;
+        angle + TAU * f64::from((turns + 0.5f64.copysign(turns)) as i32)
+    };
     if lo <= near && near <= hi {
         return Some(near);
     }

@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 
 use super::chain::Chain;
 use super::screws::{Screws, closest_meeting, distance_to_line, misalignment};
-use super::subproblems::TANGENT;
+use super::subproblems::{Circle, Elbow, Mirror, Sinusoid, TANGENT};
 
 /// Deviation (m, or the sine of an angle) up to which the chain is the family's ideal model.
 const EXACT: f64 = 1e-9;
@@ -70,6 +70,47 @@ pub(super) struct ClosedForm {
     /// Where the last axes meet: the wrist centre, or the point on axes 5 and 6; for a
     /// prismatic base, axis 4's point, about which θ4 swings axis 5.
     pub centre: Vector3<f64>,
+    /// What every solve of a six-joint revolute family shares.
+    pub fixed: Option<Fixed>,
+}
+
+/// The parts of a six-joint revolute family's solve that depend on the ideal model only,
+/// taken once when the family is detected (each solve took them again, with two `atan2`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Fixed {
+    /// θ3 from the distance between axis 2's point and the wrist centre (for three parallel
+    /// axes, axis 4's point).
+    pub elbow: Elbow,
+    /// The wrist's second root from its first, if its middle axis is perpendicular to the
+    /// others (axes 4, 5, 6; for three parallel axes, 2, 5, 6).
+    pub mirror: Option<Mirror>,
+    /// Three parallel axes: θ5 from `h2ᵀ R5 h6`, and the circle of the planar part
+    /// `R(h2, Σ) (c − o4)`.
+    pub parallel: Option<(Sinusoid, Circle)>,
+}
+
+impl Fixed {
+    /// The parts of `form`'s family; `None` for the other families. Out of line: inlined into
+    /// the chain's construction, it cost the firmware 3 KB of flash.
+    #[inline(never)]
+    fn of(form: &ClosedForm) -> Option<Self> {
+        let [_, h2, h3, h4, h5, h6, _, _] = &form.screws.axis;
+        let [_, o2, o3, o4, _, _, _, _] = &form.screws.point;
+        let c = &form.centre;
+        match form.fit.family {
+            Family::SphericalWrist => Some(Self {
+                elbow: Elbow::new(h3, c - o3, o2 - o3),
+                mirror: Mirror::of(h4, h5, h6),
+                parallel: None,
+            }),
+            Family::ThreeParallel => Some(Self {
+                elbow: Elbow::new(h3, o4 - o3, o2 - o3),
+                mirror: Mirror::of(h2, h5, h6),
+                parallel: Some((Sinusoid::new(h2, h5, h6), Circle::new(h2, &(c - o4)))),
+            }),
+            _ => None,
+        }
+    }
 }
 
 impl ClosedForm {
@@ -95,11 +136,15 @@ impl ClosedForm {
                 && !(2..dof).any(|i| chain.is_prismatic(i));
             return if base { prismatic_base(&screws) } else { None };
         }
-        match dof {
+        let form = match dof {
             6 => spherical_wrist(&screws).or_else(|| three_parallel(&screws)),
             7 | 8 => spherical_shoulder(&screws, dof),
             _ => None,
-        }
+        }?;
+        Some(Self {
+            fixed: Fixed::of(&form),
+            ..form
+        })
     }
 }
 
@@ -148,6 +193,7 @@ fn fit(family: Family, deviation: f64, screws: Screws, centre: Vector3<f64>) -> 
         fit: FamilyFit { family, deviation },
         screws,
         centre,
+        fixed: None,
     })
 }
 

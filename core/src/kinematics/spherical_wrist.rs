@@ -11,8 +11,8 @@
 use nalgebra::Vector3;
 
 use super::closed_form::{Branch, Candidate, Candidates, Gate, Known, Shoulder, known_angle};
-use super::family::ClosedForm;
-use super::subproblems::{Angle, Elbow, Mirror, PairRoots, rotate, sp1, sp2_solving};
+use super::family::{ClosedForm, Fixed};
+use super::subproblems::{Angle, Mirror, PairRoots, rotate, sp1, sp2_solving};
 use crate::MAX_JOINTS;
 use crate::math::Frame;
 
@@ -20,6 +20,9 @@ use crate::math::Frame;
 /// by FK), or with `nearest` the one that takes the root nearest `free` at every choice.
 /// `free` also gives the value of a joint left free by a singularity; `known`, its angles if
 /// the caller has them.
+// Out of line: inlined with the other families' solvers, each cost about 70 instructions more
+// on the Cortex-M7 (qemu-bench), and the firmware 0.9 KB more flash.
+#[inline(never)]
 pub(super) fn solve(
     form: &ClosedForm,
     target: &Frame,
@@ -30,9 +33,8 @@ pub(super) fn solve(
 ) {
     let s = &form.screws;
     let slack = form.slack();
-    let [h1, h2, h3, h4, h5, h6, _, _] = &s.axis;
-    let [o1, o2, o3, _, _, _, _, _] = &s.point;
-    let w = &form.centre;
+    let [h1, h2, h3, _, h5, h6, _, _] = &s.axis;
+    let [o1, o2, _, _, _, _, _, _] = &s.point;
     let Shoulder { tool, v, roots } =
         Shoulder::of(form, target, (free[0], known_angle(known, 0)), nearest);
     // Only the action of R1 ⋯ R6 on h5 and h6 is needed.
@@ -40,10 +42,12 @@ pub(super) fn solve(
     // The sense of axis 3 along axis 2's (the ideal model's is exactly ±h2): R2 R3 is one
     // rotation about h2.
     let sense3 = h3.dot(h2);
-    // Only a solve for every root has a second wrist root to mirror.
-    let mirror = (!nearest).then(|| Mirror::of(h4, h5, h6)).flatten();
     // θ3 from the distance between axis 2's point and the wrist centre.
-    let elbow = Elbow::new(h3, w - o3, o2 - o3, !nearest);
+    let Some(Fixed { elbow, mirror, .. }) = &form.fixed else {
+        return;
+    };
+    // Only a solve for every root has a second wrist root to mirror.
+    let mirror = mirror.filter(|_| !nearest);
     let (shoulders, n1) = roots;
     for &(a1, b1) in shoulders.iter().take(n1) {
         let Some(v1) = gate.admit(0, a1.value()) else {
