@@ -3,12 +3,13 @@
 //! A planning request (`BG`, `VE`, `jB`, `jE`, `RC`, the Cartesian goals and via points
 //! `GL`, `GT`, `VP`, and the closed-form IK's `KG` and `KS`) may run the IK along a whole line:
 //! about 1.5 M instructions to an unreachable goal on the board (`KS` on a calibrated arm near
-//! a singularity searches for missed solutions, up to 8 Newton descents). Eight in one tick would take several periods and let the
-//! drives' buffers run dry, so the second and later planning requests of a tick wait for the
-//! next ticks ([`Waiting`]), and so does everything after them from the same client (its
-//! requests keep their order). Other clients' requests go on meanwhile; a stop (`ST`, `jR`),
-//! from anyone, cancels the planning requests still waiting, which arrived before it: each is
-//! answered `ER42 Cmd XX cancelled by ST` rather than started after the stop.
+//! a singularity searches for missed solutions, up to 8 Newton descents). Eight in one tick
+//! would take several periods and let the drives' buffers run dry, so the second and later
+//! planning requests of a tick wait for the next ticks ([`Waiting`]), and so does everything
+//! after them from the same client (its requests keep their order). Other clients' requests go
+//! on meanwhile; a stop (`ST`, `jR`), from anyone, cancels the planning requests still
+//! waiting, which arrived before it: each is answered `ER42 Cmd XX cancelled by ST` rather
+//! than started after the stop.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;

@@ -90,7 +90,9 @@ pub(super) struct Candidate {
     pub values: [f64; MAX_JOINTS],
     pub branch: Branch,
     /// Every value taken and passed by a [`Gate`] (on the turn nearest the reference, within
-    /// the limits): the values are the solution's joints as they are.
+    /// the limits): the values are the solution's joints as they are, and the angles alone
+    /// give its pose. Only an exact family's gate is closed, and a prismatic base's solver
+    /// takes none (its pose needs the slides), so this is never set for either.
     pub admitted: bool,
 }
 
@@ -267,23 +269,6 @@ impl Chain {
         let exact = form.fit.is_exact();
         let flange = target.rotation.matrix() * self.tool_rotation().transpose();
         for candidate in &candidates {
-            // The common case apart: an exact family's candidate that its gate admitted needs
-            // only its FK check (through `finish`, about 110 more instructions on the M7).
-            if exact
-                && candidate.admitted
-                && form.fit.family != Family::PrismaticBase
-                && Misses::of_flange(
-                    self.misses_by_trig(&candidate.angles, (&flange, &target.translation.vector)),
-                )
-                .largest()
-                    <= CHECK * CHECK
-            {
-                let q = Joints::from_array(candidate.values, self.dof());
-                let branch = candidate.branch;
-                // Never full: one solution per candidate, at most MAX_SOLUTIONS candidates.
-                let _ = solutions.push(BranchSolution { q, branch });
-                continue;
-            }
             let slot = BranchSolution {
                 q: Joints::from_array(candidate.values, self.dof()),
                 branch: candidate.branch,
@@ -292,9 +277,17 @@ impl Chain {
             let (Ok(()), Some(solution)) = (solutions.push(slot), solutions.last_mut()) else {
                 break;
             };
-            let kept = self
-                .finish(form, candidate, target, (&checked, &mut solution.q))
-                .is_some();
+            // The common case apart: a candidate that a gate admitted (an exact revolute
+            // family's) needs only its FK check (through `finish`, about 110 more instructions
+            // on the M7).
+            let aim = (&flange, &target.translation.vector);
+            let reached = candidate.admitted
+                && Misses::of_flange(self.misses_by_trig(&candidate.angles, aim)).largest()
+                    <= CHECK * CHECK;
+            let kept = reached
+                || self
+                    .finish(form, candidate, target, (&checked, &mut solution.q))
+                    .is_some();
             if !kept {
                 solutions.truncate(solutions.len().saturating_sub(1));
             }
