@@ -118,6 +118,13 @@ fn reason_hint(why: Rejection) -> Option<String> {
                 .into()
         }
         Rejection::NoViaPoint => "store via point 0 first (VP / jV), or use `armgate run`".into(),
+        Rejection::HolderChanged => {
+            "another client took control since your goal or via points: send them again".into()
+        }
+        Rejection::Stopped(_) => {
+            "the arm was stopped: send a zero velocity to resume streaming (`armgate jog` does)"
+                .into()
+        }
         Rejection::Drives(DriveStatus::Running) | Rejection::NoMeasurement => return None,
     })
 }

@@ -50,6 +50,22 @@ pub enum Velocity {
     Joints(Vec<f64>),
 }
 
+impl Velocity {
+    /// The same kind of command at rest: a zero twist in the same frame, or zero rates for
+    /// the same joints. Sent first, it re-arms a stream after a stop (which latches: the
+    /// controller refuses a moving stream until its holder asks for rest on purpose).
+    pub fn at_rest(&self) -> Self {
+        match self {
+            Self::Twist { frame, .. } => Self::Twist {
+                linear: [0.0; 3],
+                angular: [0.0; 3],
+                frame: *frame,
+            },
+            Self::Joints(rates) => Self::Joints(vec![0.0; rates.len()]),
+        }
+    }
+}
+
 /// How long the command of an echo holds (its f6), if it says.
 fn hold_time(reply: &Reply) -> Option<Duration> {
     let seconds = f64::from(*reply.values.last()?);
@@ -93,7 +109,9 @@ impl Client {
 
     /// Streams `velocity` from this thread for `duration`, once per control period (a third
     /// of the hold time the controller echoes), or until `interrupted()` says so; then the arm
-    /// ramps to rest. Returns the number of commands sent.
+    /// ramps to rest. A stream started here is started on purpose: it first sends the command
+    /// at rest ([`Velocity::at_rest`]), which re-arms streaming after a stop. Returns the
+    /// number of commands sent after it.
     pub fn stream_for(
         &mut self,
         velocity: &Velocity,
@@ -102,6 +120,7 @@ impl Client {
     ) -> Result<u32, ClientError> {
         // None: a duration beyond the clock's range, streamed until interrupted.
         let end = Instant::now().checked_add(duration);
+        self.velocity(&velocity.at_rest())?;
         let mut sent = 0u32;
         while end.is_none_or(|end| Instant::now() < end) {
             if interrupted() {
@@ -145,7 +164,7 @@ pub enum StreamEvent {
 /// more and the controller ramps the arm to rest. Dropping it ends the thread.
 #[derive(Debug)]
 pub struct VelocityStreamer {
-    commands: Sender<Option<(Velocity, Instant)>>,
+    commands: Sender<Option<Order>>,
     /// Failures and notices.
     pub events: Receiver<StreamEvent>,
     /// The thread.
@@ -168,10 +187,26 @@ impl VelocityStreamer {
         })
     }
 
-    /// Streams `velocity` until `until` (it replaces what was streamed before).
+    /// Streams `velocity` until `until` (it replaces what was streamed before). After a stop
+    /// the controller refuses it until a stream is started on purpose ([`start`](Self::start)).
     pub fn stream(&self, velocity: Velocity, until: Instant) {
         // A send fails only if the thread has ended, which `events` has told.
-        let _ = self.commands.send(Some((velocity, until)));
+        let _ = self.commands.send(Some(Order {
+            velocity,
+            until,
+            rearm: false,
+        }));
+    }
+
+    /// Starts a stream on purpose (an operator's fresh key press, not its auto-repeat): sends
+    /// the command at rest first, which re-arms streaming after a stop, then streams as
+    /// [`stream`](Self::stream).
+    pub fn start(&self, velocity: Velocity, until: Instant) {
+        let _ = self.commands.send(Some(Order {
+            velocity,
+            until,
+            rearm: true,
+        }));
     }
 
     /// Stops sending at once; the controller ramps the arm to rest after its hold time.
@@ -180,11 +215,15 @@ impl VelocityStreamer {
     }
 }
 
-fn run(
-    mut client: Client,
-    commands: &Receiver<Option<(Velocity, Instant)>>,
-    events: &Sender<StreamEvent>,
-) {
+/// What the streaming thread is told: a velocity until a deadline, re-armed first or not.
+#[derive(Debug)]
+struct Order {
+    velocity: Velocity,
+    until: Instant,
+    rearm: bool,
+}
+
+fn run(mut client: Client, commands: &Receiver<Option<Order>>, events: &Sender<StreamEvent>) {
     let mut current: Option<(Velocity, Instant)> = None;
     let mut interval = DEFAULT_INTERVAL;
     let mut next_send = Instant::now();
@@ -194,10 +233,20 @@ fn run(
             Some(_) => commands.recv_timeout(next_send.saturating_duration_since(Instant::now())),
         };
         match received {
-            Ok(command) => {
-                // A new command goes out at once.
-                current = command;
+            Ok(order) => {
+                // A new command goes out at once, after the re-arming one if asked for.
+                let rearm = order
+                    .as_ref()
+                    .filter(|o| o.rearm)
+                    .map(|o| client.velocity(&o.velocity.at_rest()));
+                current = order.map(|o| (o.velocity, o.until));
                 next_send = Instant::now();
+                if let Some(Err(error)) = rearm {
+                    current = None;
+                    if events.send(StreamEvent::Failed(error)).is_err() {
+                        return;
+                    }
+                }
             }
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => return,
@@ -278,9 +327,11 @@ mod tests {
         let sent = c
             .stream_for(&rates, Duration::from_millis(200), || false)
             .unwrap();
-        // Every 10 ms (a third of the 30 ms hold) for 200 ms.
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms, after the zero that re-arms.
         assert!((10..=21).contains(&sent), "{sent}");
-        assert_eq!(fake.received().len(), sent as usize);
+        let received = fake.received();
+        assert_eq!(received.len(), sent as usize + 1);
+        assert_eq!(&received[0][2..30], &[0; 28], "rates at rest first");
         let stopped = c.stream_for(&rates, Duration::from_secs(5), || true);
         assert!(matches!(stopped, Err(ClientError::Interrupted)));
         // A duration beyond the clock's range streams (until interrupted) instead of panicking.
@@ -304,5 +355,27 @@ mod tests {
         assert!((10..=25).contains(&sent), "{sent} sends");
         std::thread::sleep(Duration::from_millis(100));
         assert_eq!(fake.received().len(), sent);
+    }
+
+    #[test]
+    fn a_stream_started_on_purpose_sends_the_twist_at_rest_first() {
+        let fake = controller();
+        let streamer = VelocityStreamer::spawn(fake.client()).unwrap();
+        let up = Velocity::Twist {
+            linear: [0.0, 0.0, 0.01],
+            angular: [0.0; 3],
+            frame: TwistFrame::Tool,
+        };
+        streamer.start(up, Instant::now() + Duration::from_millis(50));
+        std::thread::sleep(Duration::from_millis(150));
+        let sent = fake.received();
+        assert!(sent.len() >= 2, "{} sends", sent.len());
+        assert_eq!((&sent[0][..2], sent[0][30]), (&b"TW"[..], 0x01));
+        assert_eq!(
+            &sent[0][2..30],
+            &[0; 28],
+            "the twist at rest, in the tool frame"
+        );
+        assert_eq!(&sent[1][10..14], &0.01f32.to_le_bytes());
     }
 }

@@ -62,7 +62,7 @@ use ratatui::crossterm::event::{self, KeyCode, KeyEvent, KeyEventKind, KeyModifi
 
 use crate::velocity::{StreamEvent, VelocityStreamer};
 use crate::{Client, ClientError};
-use jog::HeldKey;
+use jog::{FIRST_HOLD, HeldKey};
 use state::{Action, Event, Key, TeleopState};
 
 /// How the keyboard client runs.
@@ -282,7 +282,13 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
             let sent = match state.handle_key(key) {
                 Some(Action::Jog(velocity)) => {
                     let until = held.press(velocity.clone(), now);
-                    streamer.stream(velocity, until);
+                    // A fresh press moves on purpose and re-arms the stream after a stop;
+                    // the terminal's auto-repeat of a key held through a stop does not.
+                    if until == now + FIRST_HOLD {
+                        streamer.start(velocity, until);
+                    } else {
+                        streamer.stream(velocity, until);
+                    }
                     jog_key = Some(k.code);
                     true
                 }

@@ -6,6 +6,7 @@
 //! `OF`, `RC`); `handler/replies.rs` makes the replies and refusal texts.
 
 mod cartesian;
+mod handover;
 mod ik_requests;
 mod joint;
 mod power;
@@ -30,6 +31,7 @@ use crate::config::ValidRobot;
 use crate::kinematics::{Joints, KinematicsError};
 use crate::math::Frame;
 use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
+use handover::Cleared;
 use replies::{operational, refusal_notice, values_reply};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
@@ -53,6 +55,8 @@ pub struct CommandHandler {
     banks: Banks,
     /// The redundancy values a client chose with `KR`.
     redundancy: RedundancyChoice,
+    /// What a change of holder cleared (the holder's own state: `handler/handover.rs`).
+    cleared: Cleared,
     relay: NoticeRelay,
     session: Session,
     /// The robot's name, for the status request.
@@ -82,6 +86,7 @@ impl CommandHandler {
             joint_goal: None,
             banks: Banks::default(),
             redundancy: RedundancyChoice::default(),
+            cleared: Cleared::default(),
             relay: NoticeRelay::default(),
             session: Session::default(),
             name: RobotName::new(&config.name),
@@ -209,7 +214,7 @@ impl CommandHandler {
         let holder = self.session.holder();
         let admitted = self.session.admit(request.command, client, self.now, busy);
         if self.session.holder() != holder {
-            self.redundancy.clear();
+            self.hand_over();
         }
         let reply = admitted
             .and_then(|()| self.answer(&request, client, drives))
@@ -290,6 +295,7 @@ impl CommandHandler {
             Command::JointBegin => self.joint_begin(req, drives),
             Command::JointClear => {
                 self.controller.clear_joint_via();
+                self.cleared.joint_via = false;
                 Ok(Reply::null(cmd))
             }
             Command::JointExecute => self.run_sequence(req, drives),
@@ -319,6 +325,7 @@ impl CommandHandler {
             Command::Twist => self.twist(req, drives),
             Command::ViaClear => {
                 self.controller.clear_cartesian_via();
+                self.cleared.cartesian_via = false;
                 Ok(Reply::null(cmd))
             }
             Command::ViaExecute => self.run_sequence(req, drives),

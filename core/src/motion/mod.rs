@@ -45,7 +45,7 @@ pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};
 pub use shape::Shape;
 pub use straight_line::StraightLine;
-pub use supervisor::StopCause;
+pub use supervisor::{StopCause, latches};
 pub use trapezoid::Trapezoid;
 pub use velocity_stream::{
     MARGIN_SHARE, MAX_DAMPING, SINGULAR_THRESHOLD, StreamCommand, StreamStep, TIMEOUT_PERIODS,

@@ -1,6 +1,6 @@
 //! Why a motion request was refused.
 
-use armgate_protocol::client::{JointBound, PathPoint};
+use armgate_protocol::client::{JointBound, PathPoint, StopCause};
 
 /// Why the controller refused a request; the command handler maps each to an `ER` reply.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,6 +35,9 @@ pub enum Refusal {
     IndexOutOfRange,
     /// The controller has not yet received a measurement.
     NotReady,
+    /// A stream after this stop, which latched: only a zero twist or zero joint rates (or a
+    /// move) starts motion again.
+    Stopped(StopCause),
 }
 
 impl core::fmt::Display for Refusal {
@@ -63,6 +66,9 @@ impl core::fmt::Display for Refusal {
             Self::ArmOutsideWorkspace => f.write_str("the arm is outside the workspace"),
             Self::IndexOutOfRange => f.write_str("via-point index out of range"),
             Self::NotReady => f.write_str("no measurement yet"),
+            Self::Stopped(cause) => {
+                write!(f, "stopped ({cause:?}): a zero velocity re-arms the stream")
+            }
         }
     }
 }

@@ -117,10 +117,13 @@ impl<P: Copy> Sequence<P> {
         Ok(())
     }
 
-    /// Empties every slot and forgets the slots' own blend tolerances.
-    pub fn clear(&mut self) {
+    /// Empties every slot and forgets the slots' own blend tolerances; true if there was
+    /// anything to forget.
+    pub fn clear(&mut self) -> bool {
+        let had = self.slots.iter().any(Option::is_some) || self.blends.iter().any(Option::is_some);
         self.slots = [None; VIA_SLOTS];
         self.blends = [None; VIA_SLOTS];
+        had
     }
 
     /// Starts the sequence; returns the first leg to command.

@@ -20,6 +20,24 @@ use crate::kinematics::Joints;
 use armgate_protocol::client::Hold;
 pub use armgate_protocol::client::StopCause;
 
+/// True if a stop of `cause` latches: afterwards the arm stays at rest until its holder starts
+/// a motion on purpose (a move, or a zero twist or zero joint rates that re-arm a stream), so
+/// that a stream still being sent cannot undo it a period later (docs/safety.md). The stops
+/// that latch are the ones that come from outside the holder's own stream: `ST`/`jR` from
+/// anyone, `OF`, the workspace, IK divergence, the client watchdog. A stream's own timeout is
+/// the protocol's way to end a stream (its client stopped sending), a mode change is the
+/// holder's own request, and a joint-limit hold is no stop: they do not latch.
+pub fn latches(cause: StopCause) -> bool {
+    match cause {
+        StopCause::Stop
+        | StopCause::PowerOff
+        | StopCause::Workspace
+        | StopCause::IkDivergence
+        | StopCause::ClientSilent => true,
+        StopCause::ModeChange | StopCause::StreamTimeout | StopCause::JointLimit => false,
+    }
+}
+
 /// How a stop in progress brings the arm to rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Along {
@@ -58,6 +76,8 @@ pub struct Supervisor {
     held_joint: Option<u8>,
     /// The cause in force is a stream's hold: it ends with the hold.
     holding: bool,
+    /// The stop that latched: streams stay refused until a motion starts on purpose.
+    latch: Option<StopCause>,
 }
 
 impl Supervisor {
@@ -73,6 +93,7 @@ impl Supervisor {
             cause: None,
             held_joint: None,
             holding: false,
+            latch: None,
         }
     }
 
@@ -89,6 +110,30 @@ impl Supervisor {
         self.cause = Some(self.stopping.as_ref().map_or(cause, |s| s.cause));
         self.held_joint = None;
         self.holding = false;
+        self.latch_for(cause);
+    }
+
+    /// A stop that found the arm at rest: nothing to brake, but its cause is in force and it
+    /// latches as a stop in motion would (an `ST` between two streams stops the second).
+    pub fn at_rest(&mut self, cause: StopCause) {
+        if self.stopping.is_none() {
+            self.cause = Some(cause);
+            self.held_joint = None;
+            self.holding = false;
+        }
+        self.latch_for(cause);
+    }
+
+    /// Latches `cause` if it is one that latches and none has yet.
+    fn latch_for(&mut self, cause: StopCause) {
+        if latches(cause) && self.latch.is_none() {
+            self.latch = Some(cause);
+        }
+    }
+
+    /// The stop that latched, if no motion has started on purpose since.
+    pub fn latch(&self) -> Option<StopCause> {
+        self.latch
     }
 
     /// A stop along the path that cannot follow it any more goes on in joint space, from the
@@ -143,11 +188,12 @@ impl Supervisor {
         self.stopping = None;
     }
 
-    /// Clears the cause in force: a new motion starts.
+    /// Clears the cause in force and the latch: a new motion starts on purpose.
     pub fn clear_cause(&mut self) {
         if self.stopping.is_none() {
             self.cause = None;
             self.held_joint = None;
+            self.latch = None;
         }
     }
 

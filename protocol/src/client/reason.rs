@@ -5,8 +5,8 @@
 
 use core::fmt;
 
-use super::Mode;
 use super::words::{Milli, decimal, phrase, value_of};
+use super::{Mode, StopCause};
 
 /// The drives' state, as a status reply (`QS` f1) and refusals report it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -63,11 +63,19 @@ pub enum Rejection {
     NoViaPoint,
     /// `no measurement`: the controller has not measured the joints yet.
     NoMeasurement,
+    /// `holder changed`: `BG`/`jB` without a goal, `VE`/`jE` without via points, because
+    /// another client took control since this one set them: goals, via points and blends
+    /// belong to the client that set them, and a new holder starts with none.
+    HolderChanged,
+    /// `after ST: send 0`: a stream (`TW`, `jW`) after a stop, which latches: the arm stays
+    /// at rest until the holder starts a motion on purpose, a zero twist or zero joint rates
+    /// (which re-arm the stream) or a move. Names the stop (`ST`, `OF`, `ER21`, `WN22`, `ER41`).
+    Stopped(StopCause),
 }
 
 impl Rejection {
     /// The reasons that are one fixed phrase.
-    const PHRASES: [(Self, &'static str); 10] = [
+    const PHRASES: [(Self, &'static str); 11] = [
         (Self::Busy, "busy"),
         (Self::Drives(DriveStatus::Off), "drives off"),
         (Self::Drives(DriveStatus::Starting), "drives starting"),
@@ -78,9 +86,12 @@ impl Rejection {
         (Self::NoGoal, "no goal"),
         (Self::NoViaPoint, "no via point 0"),
         (Self::NoMeasurement, "no measurement"),
+        (Self::HolderChanged, "holder changed"),
     ];
     const DRIVE_FAULT: &'static str = "drive fault ";
     const NEEDS_MODE: &'static str = "needs mode ";
+    /// `after <stop>: send 0`.
+    const STOPPED: (&'static str, &'static str) = ("after ", ": send 0");
 
     /// Reads the reason back from the text after `ER20 Cmd XX `.
     pub(super) fn parse(s: &str) -> Option<Self> {
@@ -89,6 +100,13 @@ impl Rejection {
         }
         if let Some(code) = s.strip_prefix(Self::DRIVE_FAULT) {
             return decimal(code).map(Self::DriveFault);
+        }
+        if let Some(name) = s
+            .strip_prefix(Self::STOPPED.0)
+            .and_then(|r| r.strip_suffix(Self::STOPPED.1))
+        {
+            let cause = StopCause::ALL.into_iter().find(|c| stop_name(*c) == name);
+            return cause.map(Self::Stopped);
         }
         let mode: u8 = decimal(s.strip_prefix(Self::NEEDS_MODE)?)?;
         let mode = Mode::ALL.into_iter().find(|m| m.value() == mode)?;
@@ -101,8 +119,27 @@ impl fmt::Display for Rejection {
         match *self {
             Self::DriveFault(code) => write!(f, "{}{code:02}", Self::DRIVE_FAULT),
             Self::NeedsMode(mode) => write!(f, "{}{}", Self::NEEDS_MODE, mode.value()),
+            Self::Stopped(cause) => {
+                let (before, after) = Self::STOPPED;
+                write!(f, "{before}{}{after}", stop_name(cause))
+            }
             fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
+    }
+}
+
+/// A stop's short name in a refusal (`after ST: send 0`): the request or notice that caused
+/// it, at most four characters so that every text fits.
+fn stop_name(cause: StopCause) -> &'static str {
+    match cause {
+        StopCause::Stop => "ST",
+        StopCause::ModeChange => "CM",
+        StopCause::PowerOff => "OF",
+        StopCause::Workspace => "ER21",
+        StopCause::IkDivergence => "WN22",
+        StopCause::StreamTimeout => "idle",
+        StopCause::JointLimit => "WN12",
+        StopCause::ClientSilent => "ER41",
     }
 }
 

@@ -11,6 +11,7 @@ use super::replies::{non_negative, refusal_notice, values_reply};
 use crate::command::banks::BANK_2;
 use crate::command::drives::Drives;
 use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
+use crate::motion::Refusal;
 
 impl CommandHandler {
     /// `BG`: the move to the stored goal.
@@ -20,7 +21,9 @@ impl CommandHandler {
         drives: &(impl Drives + ?Sized),
     ) -> Result<Reply, Notice> {
         let cmd = req.command;
-        let (goal, duration) = self.goal.ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+        let (goal, duration) = self
+            .goal
+            .ok_or_else(|| self.missing(cmd, Rejection::NoGoal))?;
         self.ready_to_move(cmd, drives)?;
         self.controller
             .move_cartesian(goal, duration)
@@ -40,6 +43,7 @@ impl CommandHandler {
             .check_cartesian_goal(&goal)
             .map_err(|r| refusal_notice(cmd, r))?;
         self.goal = Some((goal, 0.0));
+        self.cleared.goal = false;
         let [a, b, c, d] = q.to_array();
         Ok(values_reply(cmd, &[x, y, z, a, b, c, d], 0))
     }
@@ -55,6 +59,7 @@ impl CommandHandler {
             .check_cartesian_goal(&goal)
             .map_err(|r| refusal_notice(cmd, r))?;
         self.goal = Some((goal, duration));
+        self.cleared.goal = false;
         Ok(values_reply(cmd, &[x, y, z, roll, pitch, yaw, duration], 0))
     }
 
@@ -97,7 +102,10 @@ impl CommandHandler {
         } else {
             self.controller.start_joint_sequence()
         }
-        .map_err(|r| refusal_notice(cmd, r))?;
+        .map_err(|r| match r {
+            Refusal::NoGoal => self.missing(cmd, Rejection::NoViaPoint),
+            other => refusal_notice(cmd, other),
+        })?;
         Ok(Reply::null(cmd))
     }
 
@@ -112,8 +120,10 @@ impl CommandHandler {
             .map(f64::from);
         let slot = usize::from(req.index);
         let in_effect = if cmd == Command::ViaTolerance {
+            self.cleared.cartesian_via = false;
             self.controller.set_cartesian_blend(slot, tolerance)
         } else {
+            self.cleared.joint_via = false;
             self.controller.set_joint_blend(slot, tolerance)
         }
         .map_err(|r| refusal_notice(cmd, r))?;
@@ -134,6 +144,7 @@ impl CommandHandler {
         self.controller
             .set_cartesian_via(slot, pose, duration)
             .map_err(|r| refusal_notice(cmd, r))?;
+        self.cleared.cartesian_via = false;
         let [r, p, w] = math::rpy(&pose.rotation);
         Ok(values_reply(cmd, &[x, y, z, r, p, w, duration], req.index))
     }

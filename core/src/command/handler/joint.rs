@@ -19,7 +19,7 @@ impl CommandHandler {
         let cmd = req.command;
         let goal = self
             .joint_goal
-            .ok_or(Notice::Rejected(cmd, Rejection::NoGoal))?;
+            .ok_or_else(|| self.missing(cmd, Rejection::NoGoal))?;
         self.ready_to_move(cmd, drives)?;
         self.controller
             .move_joints(&goal, 0.0)
@@ -38,6 +38,7 @@ impl CommandHandler {
             let q = self.complete(BankKey::Goal, joints, cmd)?;
             let goal = self.controller.check_joint_goal(&q);
             self.joint_goal = Some(goal.map_err(|r| refusal_notice(cmd, r))?);
+            self.cleared.joint_goal = false;
         }
         // The seed's f6 was stale (spec §9 item 9).
         Ok(values_reply(cmd, joints, req.index & BANK_2))
@@ -82,6 +83,7 @@ impl CommandHandler {
             self.controller
                 .set_joint_via(slot, &q, duration)
                 .map_err(|r| refusal_notice(cmd, r))?;
+            self.cleared.joint_via = false;
         }
         // The echo: the joints as sent (`joints` is `v`'s first BANK_LEN values), then
         // the clamped duration. No slice copy that could panic on a length mismatch.

@@ -36,6 +36,7 @@ pub(super) fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
         )),
         Refusal::Busy => rejected(Rejection::Busy),
         Refusal::NotReady => rejected(Rejection::NoMeasurement),
+        Refusal::Stopped(cause) => rejected(Rejection::Stopped(cause)),
     }
 }
 

@@ -92,9 +92,9 @@ impl Controller {
         self.cartesian_sequence.blend(index)
     }
 
-    /// Empties the Cartesian via-point slots.
-    pub fn clear_cartesian_via(&mut self) {
-        self.cartesian_sequence.clear();
+    /// Empties the Cartesian via-point slots and their blend tolerances; true if any was set.
+    pub fn clear_cartesian_via(&mut self) -> bool {
+        self.cartesian_sequence.clear()
     }
 
     /// Runs the Cartesian via points 0, 1, … up to the first empty slot. Cartesian mode only.

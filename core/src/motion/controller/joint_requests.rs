@@ -46,9 +46,9 @@ impl Controller {
         self.joint_sequence.blend(index)
     }
 
-    /// Empties the joint via-point slots.
-    pub fn clear_joint_via(&mut self) {
-        self.joint_sequence.clear();
+    /// Empties the joint via-point slots and their blend tolerances; true if any was set.
+    pub fn clear_joint_via(&mut self) -> bool {
+        self.joint_sequence.clear()
     }
 
     /// Runs the joint via points 0, 1, … up to the first empty slot. Joint mode only.

@@ -41,7 +41,8 @@ impl Controller {
         if !twist.iter().all(|v| v.is_finite()) {
             return Err(Refusal::InvalidNumber);
         }
-        self.ready_for_stream(Mode::Cartesian)?;
+        let zero = twist.iter().all(|v| *v == 0.0);
+        self.ready_for_stream(Mode::Cartesian, zero)?;
         self.supervisor.clear_cause();
         self.stream.command(StreamCommand::Twist(twist, frame));
         Ok(())
@@ -55,20 +56,26 @@ impl Controller {
             KinematicsError::WrongJointCount => Refusal::WrongJointCount,
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
-        self.ready_for_stream(Mode::Joint)?;
+        let zero = rates.iter().all(|v| *v == 0.0);
+        self.ready_for_stream(Mode::Joint, zero)?;
         self.supervisor.clear_cause();
         self.stream.command(StreamCommand::JointRates(rates));
         Ok(())
     }
 
     /// A stream may start, or resume while its own stop (`ST`, its timeout) is under way: it
-    /// then takes over from the velocity commanded last, within the same limits.
-    fn ready_for_stream(&mut self, mode: Mode) -> Result<(), Refusal> {
+    /// then takes over from the velocity commanded last, within the same limits. After a stop
+    /// that latched, only a `zero` command may (it re-arms the stream: the holder asks for
+    /// rest on purpose), so that a stream still being sent cannot undo the stop.
+    fn ready_for_stream(&mut self, mode: Mode, zero: bool) -> Result<(), Refusal> {
         if self.mode != mode {
             return Err(Refusal::WrongMode);
         }
         if self.measured.is_none() {
             return Err(Refusal::NotReady);
+        }
+        if let Some(cause) = self.supervisor.latch().filter(|_| !zero) {
+            return Err(Refusal::Stopped(cause));
         }
         let stream_stopping = self.supervisor.stopping().is_some_and(|stop| {
             matches!(stop.along, Along::Joints(_))

@@ -2,7 +2,8 @@
 //! table for other clients (`table.rs`).
 
 use crate::client::{
-    Command, DriveStatus, Hold, JointBound, Mode, Notice, PathPoint, Rejection, WorkspaceReason,
+    Command, DriveStatus, Hold, JointBound, Mode, Notice, PathPoint, Rejection, StopCause,
+    WorkspaceReason,
 };
 
 /// At least one of every variant and every reason, each distinct in its text.
@@ -20,7 +21,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
             Rejection::NoGoal,
             Rejection::NoViaPoint,
             Rejection::NoMeasurement,
+            Rejection::HolderChanged,
         ])
+        .chain(StopCause::ALL.map(Rejection::Stopped))
         .chain(Mode::ALL.map(Rejection::NeedsMode))
         .map(|why| Notice::Rejected(Begin, why));
     let reasons = [

@@ -1,0 +1,301 @@
+//! Stops and who owns motion state, through the whole cycle with two clients
+//! (docs/safety.md): a stop latches until the holder starts a motion on purpose, goals and via
+//! points belong to the client that set them, and a client's own `ST` overtakes its own
+//! queued requests.
+#![allow(
+    missing_docs,
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+// The seed deployed rounded angles such as 1.5708.
+#![allow(clippy::approx_constant)]
+
+mod common;
+
+use std::collections::VecDeque;
+use std::net::SocketAddr;
+
+use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::kinematics::Joints;
+use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
+use armgate_protocol::client::Motion;
+use common::datagram;
+
+const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
+const JOINT: [f32; 7] = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+const CARTESIAN: [f32; 7] = [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+/// 1 cm/s along y: the jog.
+const ALONG_Y: [f32; 7] = [0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
+
+fn a() -> SocketAddr {
+    SocketAddr::from(([192, 168, 1, 2], 5000))
+}
+
+fn b() -> SocketAddr {
+    SocketAddr::from(([192, 168, 1, 3], 6000))
+}
+
+/// Requests queued for the next tick, and what came back.
+#[derive(Default)]
+struct Clients {
+    requests: VecDeque<Datagram<SocketAddr>>,
+    replies: Vec<(SocketAddr, String)>,
+}
+
+impl Link<SocketAddr> for Clients {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        self.requests.pop_front()
+    }
+
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
+        if kind == Outgoing::Reply {
+            self.replies
+                .push((datagram.peer, reply_text(datagram.payload())));
+        }
+        Ok(())
+    }
+}
+
+/// A reply as text: an `ER`/`WN` text, or the reply's two characters.
+fn reply_text(reply: &[u8]) -> String {
+    let text = String::from_utf8_lossy(reply)
+        .trim_end_matches('\0')
+        .to_owned();
+    if text.starts_with("ER") || text.starts_with("WN") {
+        text
+    } else {
+        String::from_utf8_lossy(&reply[..2]).into_owned()
+    }
+}
+
+/// ranger-mk1 on an ideal simulated arm, every tick's set-point kept.
+struct Rig {
+    cycle: Cycle<SimulatedDrives, SocketAddr>,
+    clients: Clients,
+    setpoints: Vec<Joints>,
+}
+
+impl Rig {
+    fn new(q0: &[f64]) -> Self {
+        let config = common::robot("ranger-mk1");
+        let arm = IdealArm::new(Joints::from_slice(q0).unwrap());
+        let mut rig = Self {
+            cycle: Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm))),
+            clients: Clients::default(),
+            setpoints: Vec::new(),
+        };
+        rig.tick();
+        rig
+    }
+
+    fn tick(&mut self) {
+        let due = self.cycle.next_due_us();
+        let out = self.cycle.tick(due, &mut self.clients).step.unwrap();
+        if let Some(q) = out.command {
+            self.setpoints.push(q);
+        }
+    }
+
+    /// A request from `client`, answered between ticks: the reply's text.
+    fn send(&mut self, client: SocketAddr, cmd: &str, values: [f32; 7], index: u8) -> String {
+        reply_text(&self.cycle.answer(&datagram(cmd, values, index), client))
+    }
+
+    /// A request that must be answered with its reversed characters.
+    fn ok(&mut self, client: SocketAddr, cmd: &str, values: [f32; 7], index: u8) {
+        let reply = self.send(client, cmd, values, index);
+        let reversed: String = cmd.chars().rev().collect();
+        assert_eq!(reply, reversed, "{cmd} from {client}");
+    }
+
+    /// `SQ` index 2's cause.
+    fn cause(&mut self) -> f32 {
+        let reply = self.cycle.answer(&datagram("SQ", [0.0; 7], 2), b());
+        common::floats(&reply)[0]
+    }
+
+    fn motion(&self) -> Motion {
+        self.cycle.handler().controller().motion()
+    }
+
+    fn last(&self) -> Joints {
+        *self.setpoints.last().unwrap()
+    }
+}
+
+/// The reproduction: A streams `TW` along y every tick, B sends `ST`. Before, A's next
+/// twist resumed the stream (9.6 mm in the next second). Now every twist of A's after the
+/// stop is refused, naming the stop and how to resume; the arm comes to rest and stays there;
+/// `SQ` 2 keeps cause 1. A zero twist re-arms the stream, and only then does A's jog move
+/// the arm again.
+#[test]
+fn a_stop_latches_a_stream_until_its_holder_sends_a_zero_twist() {
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", CARTESIAN, 0);
+    for _ in 0..50 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Streaming);
+    rig.ok(b(), "ST", [0.0; 7], 0);
+    // A's jog goes on sending for 2 s: every twist refused, the arm at rest.
+    for _ in 0..100 {
+        assert_eq!(
+            rig.send(a(), "TW", ALONG_Y, 0),
+            "ER20 Cmd TW after ST: send 0"
+        );
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Holding);
+    let rest = rig.last();
+    let tail = &rig.setpoints[rig.setpoints.len() - 60..];
+    assert!(
+        tail.iter().all(|q| *q == rest),
+        "the arm moved after the stop"
+    );
+    assert_eq!(rig.cause(), 1.0, "SQ 2 keeps the stop's cause");
+    // The holder re-arms on purpose: a zero twist, then its jog moves the arm again.
+    rig.ok(a(), "TW", [0.0; 7], 0);
+    assert_eq!(rig.cause(), 0.0, "a new motion clears the cause");
+    for _ in 0..10 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_ne!(rig.last(), rest);
+    assert_eq!(rig.motion(), Motion::Streaming);
+}
+
+/// The same for joint rates, after an `ST` that found the arm at rest and after the client
+/// watchdog's stop (`ER41`); a stream's own timeout, its normal end, does not latch.
+#[test]
+fn joint_rates_latch_after_st_and_the_watchdog_but_not_after_their_own_timeout() {
+    let rates = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0];
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", JOINT, 0);
+    // An ST while nothing moves latches all the same.
+    rig.ok(b(), "ST", [0.0; 7], 0);
+    assert_eq!(
+        rig.send(a(), "jW", rates, 0),
+        "ER20 Cmd jW after ST: send 0"
+    );
+    assert_eq!(rig.cause(), 1.0);
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    // A stream that its client lets run out: cause 6, and the next jW simply starts again.
+    rig.ok(a(), "jW", rates, 0);
+    for _ in 0..40 {
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Holding);
+    assert_eq!(rig.cause(), 6.0);
+    rig.ok(a(), "jW", rates, 0);
+    rig.tick();
+    assert_eq!(rig.motion(), Motion::Streaming);
+    // A move whose client asked for a 100 ms watchdog and then went silent: stopped (ER41).
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    for _ in 0..10 {
+        rig.tick();
+    }
+    let goal = [1.5708, 0.6, 0.4, 0.2, 1.8, 0.1, 0.0];
+    rig.ok(a(), "jG", goal, 0);
+    rig.ok(a(), "WD", [100.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    rig.ok(a(), "jB", [0.0; 7], 0);
+    for _ in 0..60 {
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Holding);
+    assert_eq!(rig.cause(), 8.0);
+    assert_eq!(
+        rig.send(a(), "jW", rates, 0),
+        "ER20 Cmd jW after ER41: send 0"
+    );
+    // A move is a motion started on purpose: it clears the latch too.
+    rig.ok(a(), "jG", [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1, 0.0], 0);
+    rig.ok(a(), "jB", [0.0; 7], 0);
+    assert_eq!(rig.cause(), 0.0);
+}
+
+/// The reproduction: A sends `jG qA`; B (the arm at rest) sends `jG qB`; A's `jB`
+/// drove the arm to qB. Now a change of holder starts the new holder with nothing: A's `jB`
+/// is refused, saying why, and the arm never moves towards qB; A's own goal sent again runs.
+#[test]
+fn a_goal_belongs_to_its_client_and_a_new_holder_starts_with_none() {
+    let mut rig = Rig::new(&MK1_READY);
+    let q_a = [1.5708, 0.6, -0.3, 0.2, 1.8, 0.1, 0.0];
+    let q_b = [1.0708, 0.6, -0.4, 0.2, 1.8, 0.1, 0.0];
+    rig.ok(a(), "CM", JOINT, 0);
+    rig.ok(a(), "jG", q_a, 0);
+    rig.tick();
+    rig.ok(b(), "jG", q_b, 0);
+    assert_eq!(
+        rig.send(a(), "jB", [0.0; 7], 0),
+        "ER20 Cmd jB holder changed"
+    );
+    for _ in 0..20 {
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Holding);
+    assert_eq!(rig.last()[0], MK1_READY[0], "never towards qB");
+    // B's goal went when A took control, and B taking it back does not bring it back.
+    assert_eq!(
+        rig.send(b(), "jB", [0.0; 7], 0),
+        "ER20 Cmd jB holder changed"
+    );
+    // A client that never had a goal, with nothing cleared: the plain reason.
+    rig.ok(b(), "jC", [0.0; 7], 0);
+    assert_eq!(
+        rig.send(b(), "jE", [0.0; 7], 0),
+        "ER20 Cmd jE no via point 0"
+    );
+    // A sends its goal again: its own move runs.
+    rig.ok(a(), "jG", q_a, 0);
+    rig.ok(a(), "jB", [0.0; 7], 0);
+    assert_eq!(rig.motion(), Motion::JointMove);
+}
+
+/// The same for a Cartesian goal (`GT` + `BG`), via points with their blends (`VP`/`VT` +
+/// `VE`, `jV`/`jT` + `jE`) and the `KR` choice: cleared at a change of holder.
+#[test]
+fn cartesian_goals_via_points_and_blends_go_with_their_holder() {
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", CARTESIAN, 0);
+    let pose = common::floats(&rig.cycle.answer(&datagram("PS", [0.0; 7], 0), a()));
+    let [x, y, z, ..] = pose;
+    let here = rig.cycle.handler().controller().cartesian_setpoint();
+    let [roll, pitch, yaw] = armgate_core::math::rpy(&here.rotation).map(|v| v as f32);
+    let goal = [x, y, z + 0.01, roll, pitch, yaw, 0.0];
+    rig.ok(a(), "GT", goal, 0);
+    rig.ok(a(), "VP", goal, 0);
+    rig.ok(a(), "VT", [0.005, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    // B takes control (a read does not) and finds none of A's.
+    assert_eq!(rig.send(b(), "PS", [0.0; 7], 0), "SP");
+    assert_eq!(
+        rig.send(b(), "BG", [0.0; 7], 0),
+        "ER20 Cmd BG holder changed"
+    );
+    assert_eq!(
+        rig.send(b(), "VE", [0.0; 7], 0),
+        "ER20 Cmd VE holder changed"
+    );
+    // Its blend tolerance at slot 0 is the robot file's again, not A's 5 mm.
+    let blend = rig.send(b(), "VT", [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    assert_eq!(blend, "TV");
+    for _ in 0..10 {
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Holding);
+    // Joint via points and their blends likewise, in joint mode.
+    rig.ok(a(), "CM", JOINT, 0);
+    let via = [1.5708, 0.6, -0.35, 0.2, 1.8, 0.1, 0.0];
+    rig.ok(a(), "jV", via, 0);
+    rig.ok(a(), "jT", [0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    rig.ok(b(), "CM", JOINT, 0);
+    assert_eq!(
+        rig.send(b(), "jE", [0.0; 7], 0),
+        "ER20 Cmd jE holder changed"
+    );
+    // B's own via point runs.
+    rig.ok(b(), "jV", via, 0);
+    rig.ok(b(), "jE", [0.0; 7], 0);
+    assert_eq!(rig.motion(), Motion::JointSequence);
+}
