@@ -26,6 +26,8 @@ use std::time::{Duration, Instant};
 mod redundancy;
 #[path = "e2e/sessions.rs"]
 mod sessions;
+#[path = "e2e/stops.rs"]
+mod stops;
 
 /// A running `armgate-sim` and a client socket.
 struct Sim {

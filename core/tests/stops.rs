@@ -299,3 +299,57 @@ fn cartesian_goals_via_points_and_blends_go_with_their_holder() {
     rig.ok(b(), "jE", [0.0; 7], 0);
     assert_eq!(rig.motion(), Motion::JointSequence);
 }
+
+/// A client's own `ST` does not wait behind its own queued requests. Before, a client's
+/// requests kept their order behind its planning request that waited for the next tick, the
+/// stop among them: its queued move started first and the stop came ticks later. Now the stop
+/// is handled in the tick it arrives and cancels the waiting requests that would start motion
+/// (a move, a stream), which are answered `ER42`; the arm never moves.
+#[test]
+fn a_clients_own_st_overtakes_its_queued_requests_and_cancels_them() {
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", JOINT, 0);
+    rig.ok(a(), "jG", [1.5708, 0.6, -0.3, 0.2, 1.8, 0.1, 0.0], 0);
+    let pose = common::floats(&rig.cycle.answer(&datagram("PS", [0.0; 7], 0), a()));
+    let [x, y, z, ..] = pose;
+    let goal = [x, y, z, 0.0, 0.0, 0.0, 0.0];
+    for (cmd, values) in [
+        ("GT", goal),
+        ("GT", goal),
+        ("jB", [0.0; 7]),
+        ("jW", [0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0]),
+        ("ST", [0.0; 7]),
+    ] {
+        rig.clients
+            .requests
+            .push_back(Datagram::new(&datagram(cmd, values, 0), a()));
+    }
+    rig.clients.replies.clear();
+    rig.tick();
+    let replies: Vec<&str> = rig
+        .clients
+        .replies
+        .iter()
+        .map(|(_, r)| r.as_str())
+        .collect();
+    assert_eq!(
+        replies,
+        [
+            "TG",
+            "ER42 Cmd GT cancelled by ST",
+            "ER42 Cmd jB cancelled by ST",
+            "ER42 Cmd jW cancelled by ST",
+            "TS"
+        ]
+    );
+    rig.clients.replies.clear();
+    for _ in 0..10 {
+        rig.tick();
+    }
+    assert!(rig.clients.replies.is_empty(), "nothing left waiting");
+    assert_eq!(rig.motion(), Motion::Holding);
+    assert!(
+        rig.setpoints.iter().all(|q| q[2] == MK1_READY[2]),
+        "never moved"
+    );
+}

@@ -118,7 +118,7 @@ fn replies_to_a_source_nobody_owns_do_not_silence_the_controller() {
 }
 
 /// A start where ranger-mk1 can move its first joint a long way (as in the full session).
-const START: &str = "1.5708,0.6,-0.4,0.2,1.8,0.1";
+pub(super) const START: &str = "1.5708,0.6,-0.4,0.2,1.8,0.1";
 
 /// ranger-mk1 from [`START`] in joint mode, `before_move` done, then moving its first joint by
 /// `by` rad (the move accepted); the goal's joints.
@@ -397,7 +397,7 @@ fn ask_resending(socket: &UdpSocket, cmd: &str, values: [f32; 7], index: u8) -> 
 }
 
 /// A second client, from [`second_client_address`], talking to the same controller.
-fn second_client(sim: &Sim) -> UdpSocket {
+pub(super) fn second_client(sim: &Sim) -> UdpSocket {
     let socket = UdpSocket::bind(second_client_address()).unwrap();
     socket.connect(sim.socket.peer_addr().unwrap()).unwrap();
     socket
@@ -407,7 +407,7 @@ fn second_client(sim: &Sim) -> UdpSocket {
 }
 
 /// Sends a request on `socket` and returns the next answer that is not an unsolicited notice.
-fn ask(socket: &UdpSocket, cmd: &str, values: [f32; 7], index: u8) -> Answer {
+pub(super) fn ask(socket: &UdpSocket, cmd: &str, values: [f32; 7], index: u8) -> Answer {
     socket.send(&datagram(cmd, values, index)).unwrap();
     loop {
         let mut buf = [0u8; 64];

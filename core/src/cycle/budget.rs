@@ -7,9 +7,10 @@
 //! would take several periods and let the drives' buffers run dry, so the second and later
 //! planning requests of a tick wait for the next ticks ([`Waiting`]), and so does everything
 //! after them from the same client (its requests keep their order). Other clients' requests go
-//! on meanwhile; a stop (`ST`, `jR`), from anyone, cancels the planning requests still
-//! waiting, which arrived before it: each is answered `ER42 Cmd XX cancelled by ST` rather
-//! than started after the stop.
+//! on meanwhile. A stop (`ST`, `jR`), from anyone, never waits, not even behind its own
+//! client's requests: it is handled at once and cancels the requests still waiting that would
+//! start motion (the planning ones and the streams `TW`, `jW`), which arrived before it: each
+//! is answered `ER42 Cmd XX cancelled by ST` rather than started after the stop.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;
@@ -26,7 +27,9 @@ pub const PLANNING_PER_TICK: usize = 1;
 pub(super) enum Work {
     /// May plan a motion (counted against the budget).
     Plans(Command),
-    /// Stops the arm (cancels the planning requests waiting).
+    /// Streams a velocity: not counted, but cancelled by a stop as a planning request is.
+    Streams(Command),
+    /// Stops the arm (cancels the planning requests and streams waiting).
     Stops,
     /// Anything else (or not a request at all: answered with its refusal).
     Other,
@@ -49,6 +52,7 @@ impl Work {
             | Command::IkGoal
             | Command::IkSolution
             | Command::ViaPoint) => Self::Plans(c),
+            c @ (Command::Twist | Command::JointVelocity) => Self::Streams(c),
             c if Class::of(c) == Class::Stop => Self::Stops,
             _ => Self::Other,
         }
@@ -73,17 +77,27 @@ pub(super) fn waits<P: Peer>(waiting: &Waiting<P>, peer: P) -> bool {
         .any(|p| p.datagram.peer.address() == peer.address())
 }
 
-/// Takes the planning requests out of `waiting` (the others stay, in order), calling
+impl Work {
+    /// The command of a request a stop cancels while it waits: one that would start motion.
+    pub(super) fn cancelled_by_stop(self) -> Option<Command> {
+        match self {
+            Self::Plans(c) | Self::Streams(c) => Some(c),
+            Self::Stops | Self::Other => None,
+        }
+    }
+}
+
+/// Takes the requests a stop cancels out of `waiting` (the others stay, in order), calling
 /// `cancel` for each.
-pub(super) fn cancel_planning<P: Copy>(
-    waiting: &mut Waiting<P>,
-    mut cancel: impl FnMut(Pending<P>),
-) {
+pub(super) fn cancel_motion<P: Copy>(waiting: &mut Waiting<P>, mut cancel: impl FnMut(Pending<P>)) {
     for _ in 0..waiting.len() {
         let Some(request) = waiting.pop_front() else {
             break;
         };
-        if matches!(Work::of(request.datagram.payload()), Work::Plans(_)) {
+        if Work::of(request.datagram.payload())
+            .cancelled_by_stop()
+            .is_some()
+        {
             cancel(request);
         } else {
             // Room: it was just taken out.

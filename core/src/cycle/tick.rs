@@ -1,6 +1,6 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
-use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, waits};
+use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_motion, waits};
 use super::counters::bump;
 use super::signing::Gate;
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
@@ -210,7 +210,9 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             };
             let work = Work::of(request.datagram.payload());
             let plans = matches!(work, Work::Plans(_));
-            if waits(&later, request.datagram.peer) || (plans && planned >= PLANNING_PER_TICK) {
+            // A stop waits for nothing, not even its own client's requests: it cancels them.
+            let queued = work != Work::Stops && waits(&later, request.datagram.peer);
+            if queued || (plans && planned >= PLANNING_PER_TICK) {
                 // Room: at most one a pass.
                 let _ = later.push_back(request);
                 continue;
@@ -230,18 +232,18 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
         self.waiting = later;
     }
 
-    /// Answers the planning requests waiting (in `later` and in `waiting`) as cancelled by a
-    /// stop that arrived after them.
+    /// Answers the requests waiting (in `later` and in `waiting`) that would start motion as
+    /// cancelled by a stop that arrived after them.
     fn cancel_waiting(&mut self, later: &mut Waiting<P>, link: &mut impl Link<P>) {
         let mut cancelled = Waiting::new();
         for queue in [&mut *later, &mut self.waiting] {
-            cancel_planning(queue, |request| {
+            cancel_motion(queue, |request| {
                 let _ = cancelled.push_back(request);
             });
         }
         while let Some(request) = cancelled.pop_front() {
             self.handler.count_refusal();
-            if let Work::Plans(command) = Work::of(request.datagram.payload()) {
+            if let Some(command) = Work::of(request.datagram.payload()).cancelled_by_stop() {
                 let reply = Notice::Cancelled(command).text().to_bytes();
                 self.reply(link, &reply, &request);
             }

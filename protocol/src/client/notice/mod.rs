@@ -56,8 +56,9 @@ pub enum Notice {
     /// `ER41 client silent 500 ms`: the controlling client said nothing for longer than its
     /// watchdog (`WD`, this many ms, at most 60,000) while the arm moved: the arm was stopped.
     ClientSilent(u16),
-    /// `ER42 Cmd XX cancelled by ST`: a planning request that waited for a later tick (the
-    /// per-tick work budget) was cancelled by a stop that arrived after it.
+    /// `ER42 Cmd XX cancelled by ST`: a request that would start motion (a planning one, or
+    /// a stream) waited for a later tick (the per-tick work budget, or behind its client's
+    /// planning request) and was cancelled by a stop that arrived after it.
     Cancelled(Command),
     /// `WN12 jN at limit L` / `WN13 Held at workspace edge.`: a stream holds the arm there.
     Held(Hold),
