@@ -353,3 +353,86 @@ fn a_clients_own_st_overtakes_its_queued_requests_and_cancels_them() {
         "never moved"
     );
 }
+
+/// Every tick's Cartesian set-point of a line on ranger-mk1 from the joints, stopped by
+/// `ST` at `fraction` of its planned duration, until rest: the peak change of each axis's
+/// velocity over a period, over that axis's `max_acceleration`, before and after the stop, and
+/// the set-points' largest distance from the line.
+fn line_stopped_at(by: [f64; 3], fraction: f64) -> ([f64; 3], [f64; 3], f64) {
+    use armgate_core::math::Vector3;
+    use armgate_core::motion::{Controller, Mode, StopCause};
+    let config = common::robot("ranger-mk1");
+    let dt = config.control_period;
+    let mut ctrl = Controller::new(&config);
+    let mut arm = IdealArm::new(Joints::from_slice(&MK1_READY).unwrap());
+    let mut now = 0.0;
+    let mut points: Vec<Vector3<f64>> = Vec::new();
+    let mut tick = |ctrl: &mut Controller, points: &mut Vec<Vector3<f64>>| {
+        now += dt;
+        let out = ctrl.step(now, &arm.measured()).unwrap();
+        arm.step(out.command.as_ref());
+        if let Some(sp) = out.setpoint {
+            points.push(sp.translation.vector);
+        }
+    };
+    tick(&mut ctrl, &mut points);
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    tick(&mut ctrl, &mut points);
+    let mut goal = ctrl.cartesian_setpoint();
+    let origin = goal.translation.vector;
+    let way = Vector3::new(by[0], by[1], by[2]);
+    goal.translation.vector += way;
+    let duration = ctrl.move_cartesian(goal, 0.0).unwrap();
+    for _ in 0..(fraction * duration / dt) as usize {
+        tick(&mut ctrl, &mut points);
+    }
+    let from = points.len();
+    ctrl.stop(StopCause::Stop);
+    for _ in 0..2000 {
+        tick(&mut ctrl, &mut points);
+        if !ctrl.is_moving() {
+            break;
+        }
+    }
+    assert!(!ctrl.is_moving(), "never came to rest");
+    let a_max = config.cartesian.max_acceleration;
+    let (mut before, mut after) = ([0.0f64; 3], [0.0f64; 3]);
+    for k in 2..points.len() {
+        let a = (points[k] - 2.0 * points[k - 1] + points[k - 2]) / (dt * dt);
+        let peak = if k < from { &mut before } else { &mut after };
+        for i in 0..3 {
+            peak[i] = peak[i].max(a[i].abs() / a_max[i]);
+        }
+    }
+    let dir = way.normalize();
+    let off = points
+        .iter()
+        .map(|p| {
+            let d = p - origin;
+            (d - dir * d.dot(&dir)).norm()
+        })
+        .fold(0.0, f64::max);
+    (before, after, off)
+}
+
+/// The case: a line by (0.10, −0.10, 0.05) m, `ST` at cruise. Before, the set-point
+/// decelerated at up to 1.97 × the per-axis Cartesian `max_acceleration` on x and y (the brake
+/// and the line's own deceleration phase, which the stop reached, added up). Now every axis
+/// stays within 1.00 × whatever the direction and wherever the stop begins, and the set-points
+/// stay on the line.
+#[test]
+fn a_cartesian_stop_stays_within_each_axis_acceleration_limit() {
+    for by in [[0.10, -0.10, 0.05], [-0.05, 0.08, -0.03], [0.0, 0.0, 0.06]] {
+        for fraction in [0.2, 0.5, 0.7, 0.9] {
+            let (before, after, off) = line_stopped_at(by, fraction);
+            for i in 0..3 {
+                assert!(before[i] <= 1.0 + 1e-6, "{by:?} {fraction}: {before:?}");
+                assert!(
+                    after[i] <= 1.0 + 1e-6,
+                    "{by:?} stopped at {fraction}: {after:?}"
+                );
+            }
+            assert!(off < 1e-9, "{by:?} {fraction}: {off} m off the line");
+        }
+    }
+}

@@ -105,3 +105,97 @@ fn a_goal_set_by_one_client_never_moves_the_arm_for_another() {
     sim.start_motion("jB");
     sim.wait_joints(&q_a[..6], 10.0);
 }
+
+/// The robot file's own Cartesian limits (0.03 m/s, 0.01 m/s² on each axis), not the faster
+/// ones the other tests use: the line then has a cruise of 0.3 s, and a stop at its
+/// middle runs into the line's own deceleration phase.
+fn as_shipped(text: String) -> String {
+    text.replace(
+        "max_velocity = [0.1, 0.1, 0.1, 0.3, 0.3, 0.3]",
+        "max_velocity = [0.03, 0.03, 0.03, 0.05, 0.05, 0.05]",
+    )
+    .replace(
+        "max_acceleration = [0.2, 0.2, 0.2, 0.5, 0.5, 0.5]",
+        "max_acceleration = [0.01, 0.01, 0.01, 0.05, 0.05, 0.05]",
+    )
+}
+
+/// The Cartesian set-points (x, y, z) of `state.csv`, once the last three are equal.
+fn logged_setpoints(sim: &Sim) -> Vec<[f64; 3]> {
+    let logs = sim._dir.0.join("logs").join("state.csv");
+    let started = Instant::now();
+    loop {
+        let rows = csv_rows(&logs);
+        let points: Vec<[f64; 3]> = rows[1..]
+            .iter()
+            .filter(|r| !r[21].is_empty())
+            .map(|r| [21, 22, 23].map(|k| r[k].parse().unwrap()))
+            .collect();
+        if points.len() > 3 && points[points.len() - 3..].windows(2).all(|w| w[0] == w[1]) {
+            return points;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "the log never shows the set-point at rest"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// The case: ranger-mk1 from its joints, a line by (0.10, −0.10, 0.05) m, `ST` at
+/// cruise. Before, the set-point decelerated at 1.97 × the per-axis `max_acceleration` on x
+/// and y. Now each axis stays within 1.00 × (the state log's set-points, armgate-sim), and the
+/// tool comes to rest on the line (both targets).
+#[test]
+fn st_in_a_diagonal_cartesian_line_at_cruise_brakes_within_each_axis_limit() {
+    let sim = Sim::start_edited("ranger-mk1", as_shipped, &["--start", START]);
+    if !knows_status(&sim) {
+        return;
+    }
+    wait_drives(&sim, 2.0);
+    sim.ok("CM", [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let start = sim.ok("PS", [0.0; 7], 0);
+    let by = [0.10f32, -0.10, 0.05];
+    let mut goal = start;
+    for k in 0..3 {
+        goal[k] += by[k];
+    }
+    sim.ok("GL", goal, 0);
+    sim.start_motion("BG");
+    // 6.33 s planned: 3 s up to 0.03 m/s on x, 0.33 s of cruise, 3 s down.
+    std::thread::sleep(Duration::from_millis(3170));
+    sim.null("ST");
+    assert!(
+        poll_status(&sim, Duration::from_secs(6), |s| s[4] == 0.0),
+        "never came to rest"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    let end = sim.ok("PS", [0.0; 7], 0);
+    let length = by.iter().map(|v| v * v).sum::<f32>().sqrt();
+    let along = (0..3).map(|k| (end[k] - start[k]) * by[k]).sum::<f32>() / length;
+    let off = (moved(&start, &end).powi(2) - along.powi(2))
+        .max(0.0)
+        .sqrt();
+    eprintln!(
+        "diagonal line stopped at cruise: {:.1} mm along, {:.3} mm off the line",
+        1e3 * along,
+        1e3 * off
+    );
+    assert!(along > 0.03, "{along} m along");
+    assert!(off < 1e-4, "{off} m off the line");
+    if firmware().is_some() {
+        return; // the state log is armgate-sim's
+    }
+    let points = logged_setpoints(&sim);
+    let period = 0.01944;
+    let mut peak = [0.0f64; 3];
+    for w in points.windows(3) {
+        for k in 0..3 {
+            let a = (w[2][k] - 2.0 * w[1][k] + w[0][k]) / (period * period);
+            peak[k] = peak[k].max(a.abs() / 0.01);
+        }
+    }
+    eprintln!("peak set-point acceleration / max_acceleration per axis: {peak:.4?}");
+    // The log's nine decimals carry 2e-9 m of rounding into each second difference.
+    assert!(peak.iter().all(|p| *p <= 1.0 + 2e-3), "{peak:?}");
+}

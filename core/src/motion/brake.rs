@@ -59,6 +59,14 @@ impl Brake {
     pub fn scale(&self) -> f64 {
         self.scale
     }
+
+    /// Takes `scale` (between the one [`next`](Self::next) gave and `from`, the one before)
+    /// instead: the caller found that the path slows down by itself and the scale need not fall
+    /// as far. The fall is then the smaller one.
+    pub fn ease_to(&mut self, scale: f64, from: f64) {
+        self.scale = scale.clamp(0.0, 1.0);
+        self.rate = (from - self.scale).max(0.0);
+    }
 }
 
 /// `min_k limit_k · t / |v_k|`: how far a scale of `v` may change in a tick (∞ at rest).

@@ -101,6 +101,9 @@ pub struct Controller {
     time_scale: f64,
     /// The Cartesian set-point's velocity at full time scale, from the last tick's step.
     cartesian_nominal: [f64; 6],
+    /// The Cartesian set-point's velocity over the last tick's step, as commanded: what a stop
+    /// along the path keeps each axis's change of within its acceleration limit.
+    cartesian_step: [f64; 6],
     /// Cartesian limits (x, y, z, rx, ry, rz): acceleration, and jerk if set.
     cartesian_acceleration: [f64; 6],
     cartesian_jerk: Option<[f64; 6]>,
@@ -145,6 +148,7 @@ impl Controller {
             supervisor: Supervisor::new(config),
             time_scale: 1.0,
             cartesian_nominal: [0.0; 6],
+            cartesian_step: [0.0; 6],
             cartesian_acceleration: cartesian.max_acceleration,
             cartesian_jerk: cartesian_j_max,
             cartesian_speed: cartesian.max_velocity,

@@ -125,6 +125,7 @@ impl Controller {
                     self.time_scale = scale;
                     self.cartesian_nominal =
                         cartesian_velocity(&before, &setpoint, self.period * scale);
+                    self.cartesian_step = cartesian_velocity(&before, &setpoint, self.period);
                     self.cartesian_generator.commit(t, sample);
                     events.motion_finished |= finished && !self.cartesian_sequence.is_running();
                     let unchecked = !self.ik.check_lines || self.cartesian_generator.runs_shape();
@@ -141,6 +142,7 @@ impl Controller {
         if let Some((q, scale, t, sample)) = abrupt {
             self.time_scale = scale;
             self.cartesian_nominal = cartesian_velocity(&before, &sample.0, self.period * scale);
+            self.cartesian_step = cartesian_velocity(&before, &sample.0, self.period);
             self.cartesian_generator.commit(t, sample);
             events.motion_finished |= sample.1 && !self.cartesian_sequence.is_running();
             return Some((q, sample.0));

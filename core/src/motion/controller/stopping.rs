@@ -79,7 +79,12 @@ impl Controller {
             (rate, change) = (rate.min(r), change.min(c));
         }
         let mut brake = self.supervisor.stopping()?.brake;
-        let scale = brake.next(rate, change);
+        let from = brake.scale();
+        let braked = brake.next(rate, change);
+        let scale = self.within_cartesian_limits(t0, &before, braked, from);
+        if scale > braked {
+            brake.ease_to(scale, from);
+        }
         let t_next = t0 + scale * self.period;
         let sample = self.cartesian_generator.sample(t_next);
         let (setpoint, finished) = sample;
@@ -89,6 +94,7 @@ impl Controller {
         if let Some(stop) = self.supervisor.stopping_mut() {
             stop.brake = brake;
         }
+        self.cartesian_step = cartesian_velocity(&before, &setpoint, self.period);
         self.cartesian_generator.commit(t_next, sample);
         if finished || scale <= 0.0 {
             self.supervisor.finish();
@@ -97,6 +103,38 @@ impl Controller {
             self.cartesian_sequence.halt();
         }
         Some((Some(q), Some(setpoint)))
+    }
+
+    /// The smallest scale in `scale..=from` at which the step from `before` (motion time `t0`)
+    /// changes no Cartesian axis's velocity by more than its acceleration limit over a period.
+    /// The brake's budget bounds the change the scale makes at the path's present speed; the
+    /// path may slow down by itself at the same time (a line's own deceleration phase, reached
+    /// while the stop still brakes), and the two together reached 1.97 × a per-axis limit
+    /// before (issue 33). Where the path slows down, the scale falls less; along a straight
+    /// path the step's velocity grows with the scale, so a bisection finds it.
+    fn within_cartesian_limits(&self, t0: f64, before: &Frame, scale: f64, from: f64) -> f64 {
+        let t = self.period;
+        let within = |s: f64| {
+            let (ahead, _) = self.cartesian_generator.sample(t0 + s * t);
+            let v = cartesian_velocity(before, &ahead, t);
+            let change = v.iter().zip(self.cartesian_step.iter());
+            change
+                .zip(self.cartesian_acceleration.iter())
+                .all(|((v, w), a)| libm::fabs(v - w) <= a * t * (1.0 + 1e-9))
+        };
+        if from <= scale || within(scale) {
+            return scale;
+        }
+        let (mut lo, mut hi) = (scale, from);
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if within(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
     }
 
     /// The next scale of the stop in progress (0 if none).
@@ -112,6 +150,10 @@ impl Controller {
         self.hold_at(*q);
     }
 }
+
+/// Halvings of the interval in which a stop along a Cartesian path looks for its scale: 2⁻³⁰
+/// of the scale, far below what a set-point can show.
+const BISECTIONS: u32 = 30;
 
 /// Joint velocity of the step from `a` to `b` over `dt`.
 fn joint_velocity(a: &Joints, b: &Joints, dt: f64) -> Joints {

@@ -2,12 +2,18 @@
 //!
 //! `cargo run --release -p armgate-core --example stop_bench`
 //!
-//! For every robot file in `robots/` × {joint move, Cartesian line, blended sequence, twist
-//! stream, joint-velocity stream} × {ST, CM, OF, workspace boundary, stream timeout, IK
-//! divergence}, an ideal arm follows the commands; from the stop's cause on, per tick of commanded joints: the peak
-//! acceleration over `max_acceleration` (the worst joint), the peak jerk over `max_jerk` (where
-//! the robot file sets one), the time and tool distance to rest, and the tool's largest
-//! distance from the path (Cartesian line and twist stream: the straight line). "refused":
+//! For every robot file in `robots/` × {joint move, Cartesian line, diagonal Cartesian line,
+//! blended sequence, twist stream, joint-velocity stream} × {ST, CM, OF, workspace boundary,
+//! stream timeout, IK divergence}, an ideal arm follows the commands; from the stop's cause on,
+//! per tick of commanded joints: the peak acceleration over `max_acceleration` (the worst
+//! joint), the peak jerk over `max_jerk` (where the robot file sets one), per tick of Cartesian
+//! set-points (Cartesian motions that stop along their path): the peak change of an axis's
+//! velocity over that axis's Cartesian `max_acceleration` (the worst of x, y, z, rx, ry, rz;
+//! "-" without set-points), the time and tool distance to rest, and the tool's largest
+//! distance from the path (Cartesian lines and twist stream: the straight line). The diagonal
+//! line goes along (1, −1, ½) (issue 33's (0.10, −0.10, 0.05) m on ranger-mk1), just long
+//! enough to reach cruise, so that a stop at its middle runs into the line's own deceleration
+//! phase. "refused":
 //! the motion was refused up front (boundary case); "entered box": the tool was strictly inside
 //! the box put across its way on some tick.
 //!
@@ -18,17 +24,21 @@
 //! have slowed the line down before it gave up).
 #![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
 
+mod figures;
+
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{Frame, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode, StopCause};
 use armgate_core::sim::IdealArm;
 use armgate_protocol::client::TwistFrame;
+use figures::{Figures, measure, refused};
 
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Motion {
     JointMove,
     Line,
+    Diagonal,
     Blended,
     Twist,
     JointRates,
@@ -44,9 +54,10 @@ enum Cause {
     Wn22,
 }
 
-const MOTIONS: [Motion; 5] = [
+const MOTIONS: [Motion; 6] = [
     Motion::JointMove,
     Motion::Line,
+    Motion::Diagonal,
     Motion::Blended,
     Motion::Twist,
     Motion::JointRates,
@@ -69,6 +80,8 @@ struct Run {
     now: f64,
     /// Commanded joints, one per tick.
     commands: Vec<Joints>,
+    /// The Cartesian set-point of each tick (none while the motion is not Cartesian).
+    setpoints: Vec<Option<Frame>>,
     /// The index in `commands` of the first tick that raised `WN22`.
     ik_divergence: Option<usize>,
 }
@@ -81,6 +94,7 @@ impl Run {
             arm: IdealArm::new(*q0),
             now: 0.0,
             commands: Vec::new(),
+            setpoints: Vec::new(),
             ik_divergence: None,
         };
         run.tick();
@@ -93,6 +107,7 @@ impl Run {
         self.arm.step(out.command.as_ref());
         self.commands
             .push(out.command.unwrap_or(self.arm.measured()));
+        self.setpoints.push(out.setpoint);
         if out.events.ik_divergence && self.ik_divergence.is_none() {
             self.ik_divergence = Some(self.commands.len() - 1);
         }
@@ -134,7 +149,30 @@ fn line_goal(run: &mut Run, length: f64) -> Option<(Frame, Vector3<f64>)> {
                 stop_now(run, Cause::St);
                 settle(run);
                 run.commands.clear();
+                run.setpoints.clear();
                 return Some((goal, dir));
+            }
+        }
+    }
+    None
+}
+
+/// A line along (1, −1, ½) or its reverse, just long enough to reach cruise on x: a stop at its
+/// middle runs into the line's own deceleration phase.
+fn diagonal_goal(run: &mut Run) -> Option<(Frame, Vector3<f64>)> {
+    let c = &run.config.config().cartesian;
+    let x = (1.11 * c.max_velocity[0] * c.max_velocity[0] / c.max_acceleration[0]).clamp(0.02, 0.2);
+    let start = run.ctrl.cartesian_setpoint();
+    for way in [Vector3::new(1.0, -1.0, 0.5), Vector3::new(-1.0, 1.0, -0.5)] {
+        for scale in [1.0, 0.5] {
+            let mut goal = start;
+            goal.translation.vector += way * x * scale;
+            if run.ctrl.move_cartesian(goal, 0.0).is_ok() {
+                stop_now(run, Cause::St);
+                settle(run);
+                run.commands.clear();
+                run.setpoints.clear();
+                return Some((goal, way.normalize()));
             }
         }
     }
@@ -170,79 +208,6 @@ fn stop_now(run: &mut Run, cause: Cause) {
 fn cruise_length(config: &ValidRobot) -> f64 {
     let c = &config.config().cartesian;
     (3.0 * c.max_velocity[0] * c.max_velocity[0] / c.max_acceleration[0]).clamp(0.06, 0.3)
-}
-
-struct Figures {
-    accel: f64,
-    jerk: Option<f64>,
-    time: f64,
-    distance: f64,
-    deviation: Option<f64>,
-    note: String,
-}
-
-fn measure(
-    run: &Run,
-    from: usize,
-    line: Option<(Vector3<f64>, Vector3<f64>)>,
-    boxed: Option<[f64; 6]>,
-) -> Figures {
-    let dt = run.config.control_period;
-    let joints = &run.config.config().joints;
-    let c = &run.commands;
-    let vel = |k: usize| -> Vec<f64> {
-        (0..c[k].len())
-            .map(|j| (c[k][j] - c[k - 1][j]) / dt)
-            .collect()
-    };
-    let acc = |k: usize| -> Vec<f64> {
-        let (v1, v0) = (vel(k), vel(k - 1));
-        v1.iter().zip(&v0).map(|(a, b)| (a - b) / dt).collect()
-    };
-    let (mut accel, mut jerk) = (0.0f64, 0.0f64);
-    let mut rest = c.len() - 1;
-    for k in from.max(3)..c.len() {
-        let a = acc(k);
-        let a0 = acc(k - 1);
-        for j in 0..a.len() {
-            accel = accel.max(a[j].abs() / joints[j].max_acceleration);
-            if let Some(jm) = joints[j].max_jerk {
-                jerk = jerk.max((a[j] - a0[j]).abs() / dt / jm);
-            }
-        }
-    }
-    for k in (from.max(2)..c.len()).rev() {
-        if vel(k).iter().any(|v| v.abs() > 1e-9) {
-            rest = k;
-            break;
-        }
-        rest = k;
-    }
-    let mut distance = 0.0;
-    let mut deviation = 0.0f64;
-    for k in from.max(1)..=rest.min(c.len() - 1) {
-        let (p0, p1) = (run.pose(&c[k - 1]), run.pose(&c[k]));
-        distance += (p1 - p0).norm();
-        if let Some((origin, dir)) = line {
-            let d = p1 - origin;
-            deviation = deviation.max((d - dir * d.dot(&dir)).norm());
-        }
-    }
-    // Any tick's tool position strictly inside the box put across the way.
-    let inside = boxed.is_some_and(|[x0, x1, y0, y1, z0, z1]| {
-        c.iter().any(|q| {
-            let p = run.pose(q);
-            x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
-        })
-    });
-    Figures {
-        accel,
-        jerk: joints.iter().any(|j| j.max_jerk.is_some()).then_some(jerk),
-        time: (rest.saturating_sub(from)) as f64 * dt,
-        distance,
-        deviation: line.map(|_| deviation),
-        note: if inside { "entered box" } else { "" }.to_string(),
-    }
 }
 
 /// A planned motion run to its end: whether the tool entered the box across its way.
@@ -330,11 +295,15 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
             settle(&mut run);
             Some(measure(&run, from, None, None))
         }
-        Motion::Line | Motion::Blended => {
+        Motion::Line | Motion::Diagonal | Motion::Blended => {
             let length = cruise_length(config);
             let mut run = Run::new(config, &q0);
             run.ctrl.set_mode(Mode::Cartesian).unwrap();
-            let (goal, dir) = line_goal(&mut run, length)?;
+            let (goal, dir) = if motion == Motion::Diagonal {
+                diagonal_goal(&mut run)?
+            } else {
+                line_goal(&mut run, length)?
+            };
             let origin = run.ctrl.cartesian_setpoint().translation.vector;
             let config = if cause == Cause::Boundary {
                 with_box(
@@ -359,7 +328,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 .min(c.max_acceleration[1])
                 .min(c.max_acceleration[2]);
             let leg = (goal.translation.vector - origin).norm();
-            let duration = if motion == Motion::Line {
+            let duration = if motion != Motion::Blended {
                 match run.ctrl.move_cartesian(goal, 0.0) {
                     Ok(d) => d,
                     Err(_) => return Some(refused()),
@@ -393,7 +362,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
             let from = run.commands.len();
             stop_now(&mut run, cause);
             settle(&mut run);
-            let line = (motion == Motion::Line).then_some((origin, dir));
+            let line = (motion != Motion::Blended).then_some((origin, dir));
             Some(measure(&run, from, line, None))
         }
         Motion::Twist | Motion::JointRates => {
@@ -516,17 +485,6 @@ fn send(run: &mut Run, motion: Motion, speed: f64, dir: &Vector3<f64>, rates: &J
     }
 }
 
-fn refused() -> Figures {
-    Figures {
-        accel: 0.0,
-        jerk: None,
-        time: 0.0,
-        distance: 0.0,
-        deviation: None,
-        note: "refused".to_string(),
-    }
-}
-
 fn main() {
     let dir = format!("{}/../robots", env!("CARGO_MANIFEST_DIR"));
     let mut files: Vec<_> = std::fs::read_dir(&dir)
@@ -536,10 +494,10 @@ fn main() {
         .collect();
     files.sort();
     println!(
-        "| robot | motion | cause | accel/max | jerk/max | stop s | dist mm | dev mm | note |"
+        "| robot | motion | cause | accel/max | jerk/max | cart acc/max | stop s | dist mm | dev mm | note |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
-    let mut worst = 0.0f64;
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let (mut worst, mut worst_cartesian) = (0.0f64, 0.0f64);
     for path in files {
         let config = load_file(&path).unwrap();
         let name = config.config().name.clone();
@@ -549,13 +507,18 @@ fn main() {
                     continue;
                 };
                 worst = worst.max(f.accel);
+                let path = matches!(motion, Motion::Line | Motion::Diagonal | Motion::Blended);
+                if path && cause != Cause::Cm {
+                    worst_cartesian = worst_cartesian.max(f.cartesian.unwrap_or(0.0));
+                }
                 let opt = |v: Option<f64>, scale: f64| {
                     v.map_or("-".to_string(), |v| format!("{:.3}", v * scale))
                 };
                 println!(
-                    "| {name} | {motion:?} | {cause:?} | {:.2} | {} | {:.2} | {:.1} | {} | {} |",
+                    "| {name} | {motion:?} | {cause:?} | {:.2} | {} | {} | {:.2} | {:.1} | {} | {} |",
                     f.accel,
                     opt(f.jerk, 1.0),
+                    opt(f.cartesian, 1.0),
                     f.time,
                     f.distance * 1e3,
                     opt(f.deviation, 1e3),
@@ -565,4 +528,7 @@ fn main() {
         }
     }
     println!("\nworst accel/max over every case: {worst:.2}");
+    println!(
+        "worst Cartesian axis acc/max of a stop along a Cartesian path (ST, OF, boundary): {worst_cartesian:.2}"
+    );
 }
