@@ -265,7 +265,11 @@ class Arm:
     ) -> float:
         """``TW``: streams a tool twist (Cartesian mode): ``linear`` (m/s) and ``angular``
         (rad/s), in the base frame or the tool frame. It holds for three control periods, the
-        time returned (s): send the next one before then, or the arm ramps to rest."""
+        time returned (s): send the next one before then, or the arm ramps to rest.
+
+        After a stop (``ST`` from any client, ``OF``, ``ER21``, ``WN22``, ``ER41``) the stream
+        is latched: a twist other than zero is refused (``ER20 Cmd TW after ST: send 0``) until
+        a zero twist re-arms it, sent on purpose when a stream starts."""
         values = [float(v) for v in linear] + [float(v) for v in angular]
         if len(values) != 6:
             raise ValueError("a twist has three linear and three angular components")
