@@ -1,6 +1,9 @@
 //! The supervisor's oracle: on every tick of seeded random request sequences, the commanded
-//! joint acceleration is within `max_acceleration` (+1e-9 relative), and the tool never gets
-//! strictly inside an exclusion box it was not already in.
+//! joint acceleration is within `max_acceleration` (+1e-9 relative), every tick of a stop along
+//! a Cartesian path changes each axis's set-point velocity within its Cartesian
+//! `max_acceleration` (+1e-6 relative), the tool never gets strictly inside an exclusion box it
+//! was not already in, and after a stop (`ST`, `OF`) no stream starts until a move or a zero
+//! stream re-arms it (issue 33).
 #![allow(
     clippy::approx_constant,
     missing_docs,
@@ -12,16 +15,19 @@ mod common;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Joints;
-use armgate_core::math::{Frame, Twist, Vector3};
-use armgate_core::motion::{Controller, Mode, StopCause};
+use armgate_core::math::{self, Frame, Twist, Vector3};
+use armgate_core::motion::{Controller, Mode, Refusal, StopCause};
 use armgate_core::rng::SplitMix64;
 use armgate_core::sim::IdealArm;
+use armgate_protocol::client::Motion;
 use armgate_protocol::client::TwistFrame;
 
 /// Checks every tick's command against the previous two.
 struct Oracle {
     config: ValidRobot,
     last: Vec<Joints>,
+    /// The last two Cartesian set-points.
+    setpoints: Vec<Frame>,
     inside: Vec<bool>,
     ticks: usize,
 }
@@ -36,6 +42,31 @@ impl Oracle {
                 x0 < p.x && p.x < x1 && y0 < p.y && p.y < y1 && z0 < p.z && p.z < z1
             })
             .collect()
+    }
+
+    /// A tick's Cartesian set-point; `stopping`: a stop was under way when the tick began.
+    fn check_setpoint(&mut self, stopping: bool, setpoint: Option<Frame>) {
+        let Some(sp) = setpoint else {
+            self.setpoints.clear();
+            return;
+        };
+        if let ([a, b], true) = (&self.setpoints[..], stopping) {
+            let dt = self.config.control_period;
+            let (v0, v1) = (math::diff(a, b), math::diff(b, &sp));
+            for k in 0..6 {
+                let acc = (v1[k] - v0[k]) / (dt * dt);
+                let limit = self.config.cartesian.max_acceleration[k];
+                assert!(
+                    acc.abs() <= limit * (1.0 + 1e-6),
+                    "tick {}: Cartesian axis {k} at {acc} (limit {limit}) in a stop",
+                    self.ticks
+                );
+            }
+        }
+        self.setpoints.push(sp);
+        if self.setpoints.len() > 2 {
+            self.setpoints.remove(0);
+        }
     }
 
     fn check(&mut self, ctrl: &Controller, command: Option<Joints>) {
@@ -82,6 +113,7 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
     let mut oracle = Oracle {
         inside: Vec::new(),
         last: Vec::new(),
+        setpoints: Vec::new(),
         ticks: 0,
         config: config.clone(),
     };
@@ -90,12 +122,28 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
     let mut now = 0.0;
     let mut step = |ctrl: &mut Controller, arm: &mut IdealArm, oracle: &mut Oracle| {
         now += dt;
+        let stopping = ctrl.motion() == Motion::Stopping;
         let out = ctrl.step(now, &arm.measured()).unwrap();
         oracle.check(ctrl, out.command);
+        oracle.check_setpoint(stopping, out.setpoint);
         arm.step(out.command.as_ref());
     };
     step(&mut ctrl, &mut arm, &mut oracle);
     let c = &config.cartesian;
+    // An ST or OF since the last move or zero stream that was accepted: no stream may start.
+    let mut latched = false;
+    // A stream request: refused while latched (unless zero, which re-arms), checked.
+    let stream = |latched: &mut bool, zero: bool, result: Result<(), Refusal>| {
+        if *latched && !zero {
+            assert!(
+                !matches!(result, Ok(())),
+                "a stream started after a stop without re-arming"
+            );
+        }
+        if zero && result.is_ok() {
+            *latched = false;
+        }
+    };
     for _ in 0..requests {
         match rng.next_u64() % 9 {
             0 => {
@@ -109,7 +157,9 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
                     let (lo, hi) = (chain.min()[j], chain.max()[j]);
                     *g = (*g + rng.uniform(-0.5, 0.5)).clamp(lo, hi);
                 }
-                let _ = ctrl.move_joints(&goal, 0.0);
+                if ctrl.move_joints(&goal, 0.0).is_ok() {
+                    latched = false;
+                }
             }
             3 | 4 => {
                 let pose = chain.forward(&arm.measured()).unwrap();
@@ -120,13 +170,21 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
                 );
                 let goal =
                     Frame::from_parts((pose.translation.vector + offset).into(), pose.rotation);
-                let _ = ctrl.move_cartesian(goal, 0.0);
+                if ctrl.move_cartesian(goal, 0.0).is_ok() {
+                    latched = false;
+                }
             }
             5 => {
                 let mut v = |k: usize| rng.uniform(-1.0, 1.0) * c.max_velocity[k];
                 let twist = Twist::new(v(0), v(1), v(2), 0.0, 0.0, 0.0);
+                // Half the streams start on purpose: a zero twist first.
+                if rng.next_u64().is_multiple_of(2) {
+                    let zero = ctrl.stream_twist(Twist::zeros(), TwistFrame::Base);
+                    stream(&mut latched, true, zero);
+                }
                 for _ in 0..(rng.next_u64() % 60) {
-                    let _ = ctrl.stream_twist(twist, TwistFrame::Base);
+                    let result = ctrl.stream_twist(twist, TwistFrame::Base);
+                    stream(&mut latched, false, result);
                     step(&mut ctrl, &mut arm, &mut oracle);
                 }
             }
@@ -136,13 +194,24 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
                     .iter()
                     .map(|j| rng.uniform(-1.0, 1.0) * j.max_velocity.min(j.max_rate))
                     .collect();
+                if rng.next_u64().is_multiple_of(2) {
+                    let zero = ctrl.stream_joint_rates(&vec![0.0; rates.len()]);
+                    stream(&mut latched, true, zero);
+                }
                 for _ in 0..(rng.next_u64() % 60) {
-                    let _ = ctrl.stream_joint_rates(&rates);
+                    let result = ctrl.stream_joint_rates(&rates);
+                    stream(&mut latched, false, result);
                     step(&mut ctrl, &mut arm, &mut oracle);
                 }
             }
-            7 => ctrl.stop(StopCause::Stop),
-            _ => ctrl.stop(StopCause::PowerOff),
+            7 => {
+                ctrl.stop(StopCause::Stop);
+                latched = true;
+            }
+            _ => {
+                ctrl.stop(StopCause::PowerOff);
+                latched = true;
+            }
         }
         for _ in 0..(rng.next_u64() % 120) {
             step(&mut ctrl, &mut arm, &mut oracle);

@@ -105,36 +105,61 @@ impl Controller {
         Some((Some(q), Some(setpoint)))
     }
 
-    /// The smallest scale in `scale..=from` at which the step from `before` (motion time `t0`)
-    /// changes no Cartesian axis's velocity by more than its acceleration limit over a period.
-    /// The brake's budget bounds the change the scale makes at the path's present speed; the
-    /// path may slow down by itself at the same time (a line's own deceleration phase, reached
-    /// while the stop still brakes), and the two together reached 1.97 × a per-axis limit
-    /// before (issue 33). Where the path slows down, the scale falls less; along a straight
-    /// path the step's velocity grows with the scale, so a bisection finds it.
+    /// The scale nearest the brake's `scale` (`from`: the last one) at which the step from
+    /// `before` (motion time `t0`) changes no Cartesian axis's velocity by more than its
+    /// acceleration limit over a period. The brake's budget bounds the change the scale makes
+    /// at the path's present full speed; it can miss two ways. The path may slow down by itself
+    /// while the stop brakes (a line's own deceleration phase): the two together reached
+    /// 1.97 × a per-axis limit before (issue 33); the scale then falls less, at most back to
+    /// `from`. A stop that begins while the motion runs below full speed (its time scale below
+    /// 1, near a singularity) would speed it up at its first scale; the scale then falls
+    /// further, down to 0 at most. Along a path the step's velocity grows with the scale: a
+    /// bisection finds the edge.
     fn within_cartesian_limits(&self, t0: f64, before: &Frame, scale: f64, from: f64) -> f64 {
-        let t = self.period;
-        let within = |s: f64| {
-            let (ahead, _) = self.cartesian_generator.sample(t0 + s * t);
-            let v = cartesian_velocity(before, &ahead, t);
-            let change = v.iter().zip(self.cartesian_step.iter());
-            change
-                .zip(self.cartesian_acceleration.iter())
-                .all(|((v, w), a)| libm::fabs(v - w) <= a * t * (1.0 + 1e-9))
-        };
-        if from <= scale || within(scale) {
+        let Some(too_fast) = self.cartesian_excess(t0, before, scale) else {
             return scale;
-        }
-        let (mut lo, mut hi) = (scale, from);
+        };
+        let (mut lo, mut hi) = if too_fast {
+            (0.0, scale)
+        } else {
+            (scale, from.max(scale))
+        };
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
-            if within(mid) {
+            // Too fast: the scale must fall further; within: as near the brake's as may be.
+            let excess = self.cartesian_excess(t0, before, mid);
+            let lower = if too_fast {
+                excess == Some(true)
+            } else {
+                excess != Some(false)
+            };
+            if lower {
                 hi = mid;
             } else {
                 lo = mid;
             }
         }
-        hi
+        if too_fast { lo } else { hi }
+    }
+
+    /// Whether the step from `before` to the set-point at motion time `t0 + s` periods changes
+    /// some Cartesian axis's velocity by more than its acceleration limit over a period:
+    /// `Some(true)` speeding up (the step faster than the last), `Some(false)` slowing down,
+    /// `None` within every limit.
+    fn cartesian_excess(&self, t0: f64, before: &Frame, s: f64) -> Option<bool> {
+        let t = self.period;
+        let (ahead, _) = self.cartesian_generator.sample(t0 + s * t);
+        let v = cartesian_velocity(before, &ahead, t);
+        let last = &self.cartesian_step;
+        let limits = v
+            .iter()
+            .zip(last.iter())
+            .zip(self.cartesian_acceleration.iter());
+        let beyond = limits
+            .into_iter()
+            .any(|((v, w), a)| libm::fabs(v - w) > a * t * (1.0 + 1e-9));
+        let square = |x: &[f64; 6]| x.iter().map(|c| c * c).sum::<f64>();
+        beyond.then(|| square(&v) > square(last))
     }
 
     /// The next scale of the stop in progress (0 if none).
