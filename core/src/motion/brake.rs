@@ -22,6 +22,16 @@ impl Default for Brake {
 }
 
 impl Brake {
+    /// A brake that starts from `scale` (0..=1) rather than full speed: a stop along a path
+    /// that ran slower than planned (a Cartesian motion's time scale) brakes from the speed it
+    /// had, instead of speeding it up to full scale at its first tick.
+    pub fn at(scale: f64) -> Self {
+        Self {
+            scale: scale.clamp(0.0, 1.0),
+            rate: 0.0,
+        }
+    }
+
     /// The next tick's scale. `max_rate`: the largest fall of the scale in one tick (from the
     /// acceleration limits at the speed being scaled); `max_change`: the largest change of that
     /// fall from one tick to the next (from the jerk limits; infinite without them). With a

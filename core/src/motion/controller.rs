@@ -14,6 +14,7 @@ mod joint_tick;
 mod stopping;
 mod streaming;
 
+use super::brake::Brake;
 use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
@@ -294,7 +295,23 @@ impl Controller {
         }
         self.joint_sequence.halt();
         self.cartesian_sequence.halt();
+        self.begin_path_stop(cause);
+    }
+
+    /// Starts a stop along the running motion's path. A Cartesian one brakes from the speed
+    /// the path runs at, its time scale (below 1 where the tick slowed it down, near a
+    /// singularity): from full scale its first tick would speed the path up, beyond the joints'
+    /// acceleration, and the stop would leave the path for joint space (iiwa14's line in
+    /// stop_bench, before).
+    fn begin_path_stop(&mut self, cause: StopCause) {
+        let fresh = !self.supervisor.is_stopping();
         self.supervisor.begin(cause, Along::Path);
+        if fresh
+            && self.mode == Mode::Cartesian
+            && let Some(stop) = self.supervisor.stopping_mut()
+        {
+            stop.brake = Brake::at(self.time_scale);
+        }
     }
 
     /// The stop or hold cause in force (`SQ` index 2), and the joint of a joint-limit hold.

@@ -7,7 +7,7 @@ use crate::math::{self, Frame};
 use crate::motion::Events;
 use crate::motion::brake::budget;
 use crate::motion::sequence::SequenceStep;
-use crate::motion::supervisor::{Along, StopCause};
+use crate::motion::supervisor::StopCause;
 
 /// How a Cartesian set-point can be tracked this tick.
 pub(super) enum Tracking {
@@ -131,7 +131,7 @@ impl Controller {
                     let unchecked = !self.ik.check_lines || self.cartesian_generator.runs_shape();
                     if moving && !finished && unchecked && self.boundary_ahead(&setpoint, t) {
                         events.workspace_limit = true;
-                        self.supervisor.begin(StopCause::Workspace, Along::Path);
+                        self.begin_path_stop(StopCause::Workspace);
                         self.cartesian_sequence.halt();
                     }
                     return Some((q, setpoint));

@@ -81,16 +81,26 @@ impl Controller {
         let mut brake = self.supervisor.stopping()?.brake;
         let from = brake.scale();
         let braked = brake.next(rate, change);
-        let scale = self.within_cartesian_limits(t0, &before, braked, from);
+        let eased = self.within_cartesian_limits(t0, &before, braked, from);
+        // The joints first: where they cannot follow the eased step (near a singularity the
+        // joints' speed along the path is not the tool's), the brake's own.
+        let mut tracked = None;
+        for scale in [eased, braked] {
+            let t_next = t0 + scale * self.period;
+            let sample = self.cartesian_generator.sample(t_next);
+            if let Tracking::Reached(q) = self.track(&sample.0, q_cmd) {
+                tracked = Some((scale, t_next, sample, q));
+                break;
+            }
+            if eased <= braked {
+                break;
+            }
+        }
+        let (scale, t_next, sample, q) = tracked?;
+        let (setpoint, finished) = sample;
         if scale > braked {
             brake.ease_to(scale, from);
         }
-        let t_next = t0 + scale * self.period;
-        let sample = self.cartesian_generator.sample(t_next);
-        let (setpoint, finished) = sample;
-        let Tracking::Reached(q) = self.track(&setpoint, q_cmd) else {
-            return None;
-        };
         if let Some(stop) = self.supervisor.stopping_mut() {
             stop.brake = brake;
         }
@@ -105,61 +115,37 @@ impl Controller {
         Some((Some(q), Some(setpoint)))
     }
 
-    /// The scale nearest the brake's `scale` (`from`: the last one) at which the step from
+    /// The smallest scale in `scale..=from` (`from`: the last one) at which the step from
     /// `before` (motion time `t0`) changes no Cartesian axis's velocity by more than its
     /// acceleration limit over a period. The brake's budget bounds the change the scale makes
-    /// at the path's present full speed; it can miss two ways. The path may slow down by itself
-    /// while the stop brakes (a line's own deceleration phase): the two together reached
-    /// 1.97 × a per-axis limit before (issue 33); the scale then falls less, at most back to
-    /// `from`. A stop that begins while the motion runs below full speed (its time scale below
-    /// 1, near a singularity) would speed it up at its first scale; the scale then falls
-    /// further, down to 0 at most. Along a path the step's velocity grows with the scale: a
-    /// bisection finds the edge.
+    /// at the path's present speed; the path may slow down by itself at the same time (a
+    /// line's own deceleration phase, reached while the stop still brakes), and the two
+    /// together reached 1.97 × a per-axis limit before (issue 33). Where the path slows down,
+    /// the scale falls less; along a path the step's velocity grows with the scale, so a
+    /// bisection finds it.
     fn within_cartesian_limits(&self, t0: f64, before: &Frame, scale: f64, from: f64) -> f64 {
-        let Some(too_fast) = self.cartesian_excess(t0, before, scale) else {
+        let t = self.period;
+        let within = |s: f64| {
+            let (ahead, _) = self.cartesian_generator.sample(t0 + s * t);
+            let v = cartesian_velocity(before, &ahead, t);
+            let change = v.iter().zip(self.cartesian_step.iter());
+            change
+                .zip(self.cartesian_acceleration.iter())
+                .all(|((v, w), a)| libm::fabs(v - w) <= a * t * (1.0 + 1e-9))
+        };
+        if from <= scale || within(scale) {
             return scale;
-        };
-        let (mut lo, mut hi) = if too_fast {
-            (0.0, scale)
-        } else {
-            (scale, from.max(scale))
-        };
+        }
+        let (mut lo, mut hi) = (scale, from);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (lo + hi);
-            // Too fast: the scale must fall further; within: as near the brake's as may be.
-            let excess = self.cartesian_excess(t0, before, mid);
-            let lower = if too_fast {
-                excess == Some(true)
-            } else {
-                excess != Some(false)
-            };
-            if lower {
+            if within(mid) {
                 hi = mid;
             } else {
                 lo = mid;
             }
         }
-        if too_fast { lo } else { hi }
-    }
-
-    /// Whether the step from `before` to the set-point at motion time `t0 + s` periods changes
-    /// some Cartesian axis's velocity by more than its acceleration limit over a period:
-    /// `Some(true)` speeding up (the step faster than the last), `Some(false)` slowing down,
-    /// `None` within every limit.
-    fn cartesian_excess(&self, t0: f64, before: &Frame, s: f64) -> Option<bool> {
-        let t = self.period;
-        let (ahead, _) = self.cartesian_generator.sample(t0 + s * t);
-        let v = cartesian_velocity(before, &ahead, t);
-        let last = &self.cartesian_step;
-        let limits = v
-            .iter()
-            .zip(last.iter())
-            .zip(self.cartesian_acceleration.iter());
-        let beyond = limits
-            .into_iter()
-            .any(|((v, w), a)| libm::fabs(v - w) > a * t * (1.0 + 1e-9));
-        let square = |x: &[f64; 6]| x.iter().map(|c| c * c).sum::<f64>();
-        beyond.then(|| square(&v) > square(last))
+        hi
     }
 
     /// The next scale of the stop in progress (0 if none).
