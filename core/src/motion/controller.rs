@@ -274,8 +274,8 @@ impl Controller {
     /// one way to rest. A moving arm decelerates within every joint's acceleration (and jerk)
     /// limits — a move or sequence along its path, a stream in joint space — and then holds;
     /// [`is_moving`](Self::is_moving) stays true until it is at rest. A held arm just stays.
-    /// Every stop latches ([`latches`](super::latches)): a stream stays refused
-    /// until the holder starts a motion on purpose.
+    /// A stop whose cause latches ([`latches`](super::latches)), in motion or at rest, leaves
+    /// streams refused until the holder starts a motion on purpose.
     pub fn stop(&mut self, cause: StopCause) {
         if !self.is_moving() || self.command.is_none() {
             if let Some((q_m, _)) = self.measured {
