@@ -1,0 +1,236 @@
+//! `armgate-sim --whistles --can socketcan:IFACE`: the robot file's simulated Whistles as a
+//! process on a CAN interface, for a controller on the other side of a real bus (a second
+//! adapter, or `vcan0` shared with `armgate-sim --can socketcan:vcan0`).
+//!
+//! The drives are the in-process simulation's own: a [`VirtualBus`] of [`SimWhistle`]s built
+//! from the robot file as `--can sim` builds it (interpreter and PDO schedules, faults). The
+//! interface stands where that bus has the controller: a frame read from the socket is queued
+//! on the virtual bus as the controller's, at the wall-clock time it was read, and every frame
+//! the drives put on the virtual bus is written to the socket. The virtual bus's bit timing
+//! therefore comes on top of the real bus's: the drives answer a little later than they would
+//! on their own, never earlier.
+//!
+//! Faults are injected on standard input, one line each (for tests and for trying what the
+//! controller does): `emcy NODE` (the drive sends an emergency, "message lost": `ER32`),
+//! `heartbeat-lost NODE` (the drive reports the controller's heartbeat lost: `ER36`),
+//! `silent NODE` (the drive sends nothing from now on).
+//!
+//! [`SimWhistle`]: armgate_core::sim::SimWhistle
+
+use std::io::BufRead;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver};
+use std::time::{Duration, Instant};
+
+use armgate_core::config::ValidRobot;
+use armgate_core::drives::{BusState, CanBus, DriveEmergency};
+use armgate_core::kinematics::Joints;
+use armgate_core::sim::VirtualBus;
+
+use crate::socketcan::{self, SocketCan};
+
+/// How long the loop sleeps when there is nothing to do: far below a drive's 360 µs sample and
+/// its 250 µs interpreter time, so the wall clock is followed closely.
+const IDLE: Duration = Duration::from_micros(100);
+
+/// A fault to inject, from a line of standard input.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// The drive sends an emergency ("message lost").
+    Emergency(u8),
+    /// The drive reports the controller's heartbeat lost.
+    HeartbeatLost(u8),
+    /// The drive sends nothing from now on.
+    Silent(u8),
+}
+
+impl Fault {
+    /// Parses `emcy NODE`, `heartbeat-lost NODE` or `silent NODE`.
+    pub fn parse(line: &str) -> Result<Self, String> {
+        let mut words = line.split_whitespace();
+        let (Some(kind), Some(node), None) = (words.next(), words.next(), words.next()) else {
+            return Err(format!("`{line}`: expected KIND NODE"));
+        };
+        let node: u8 = node
+            .parse()
+            .map_err(|_| format!("`{line}`: {node} is not a node id"))?;
+        match kind {
+            "emcy" => Ok(Self::Emergency(node)),
+            "heartbeat-lost" => Ok(Self::HeartbeatLost(node)),
+            "silent" => Ok(Self::Silent(node)),
+            _ => Err(format!(
+                "`{line}`: {kind} is not one of emcy, heartbeat-lost, silent"
+            )),
+        }
+    }
+
+    fn node(self) -> u8 {
+        match self {
+            Self::Emergency(node) | Self::HeartbeatLost(node) | Self::Silent(node) => node,
+        }
+    }
+
+    /// Applies the fault to its drive on `bus`; false if no drive has that node id.
+    fn apply(self, bus: &mut VirtualBus) -> bool {
+        let Some(drive) = bus.drive_mut(self.node()) else {
+            return false;
+        };
+        match self {
+            Self::Emergency(_) => drive.inject(DriveEmergency::MessageLost),
+            Self::HeartbeatLost(_) => drive.inject(DriveEmergency::HeartbeatLost),
+            Self::Silent(_) => drive.faults.silent = true,
+        }
+        true
+    }
+}
+
+/// What crossed between the interface and the simulated bus.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counters {
+    /// Frames read from the interface.
+    received: u64,
+    /// Frames the drives sent, written to the interface.
+    sent: u64,
+    /// Frames read that the virtual bus's controller queue could not take.
+    dropped_in: u64,
+    /// Frames of the drives the interface refused (queue full, bus-off).
+    dropped_out: u64,
+}
+
+/// Serves the simulated Whistles of `config`, with their encoders at `start`, on interface
+/// `iface` until `running` turns false or `duration` (s) has passed.
+pub fn serve(
+    config: &ValidRobot,
+    start: &Joints,
+    iface: &str,
+    duration: Option<f64>,
+    running: &Arc<AtomicBool>,
+) -> Result<(), String> {
+    let mut socket = SocketCan::open(iface).map_err(|e| socketcan::explain(iface, &e))?;
+    let mut bus = VirtualBus::for_robot_at(config, start);
+    let nodes: Vec<String> = bus.drives().map(|d| d.node().get().to_string()).collect();
+    let faults = read_faults();
+    eprintln!(
+        "armgate-sim: simulated Whistles of {} (nodes {}, {} bit/s) on socketcan:{iface}; faults on stdin: emcy|heartbeat-lost|silent NODE",
+        config.name,
+        nodes.join(", "),
+        config.drives.can_bitrate,
+    );
+    let epoch = Instant::now();
+    let mut counters = Counters::default();
+    while running.load(Ordering::SeqCst) {
+        let now = epoch.elapsed().as_secs_f64();
+        if duration.is_some_and(|d| now >= d) {
+            break;
+        }
+        for fault in faults.try_iter() {
+            if !fault.apply(&mut bus) {
+                eprintln!("armgate-sim: no drive with node id {}", fault.node());
+            }
+        }
+        bus.advance(now)
+            .map_err(|_| "the simulated drives stalled".to_owned())?;
+        let mut busy = false;
+        while let Some(frame) = socket.try_receive() {
+            busy = true;
+            counters.received += 1;
+            if bus.try_transmit(&frame).is_err() {
+                counters.dropped_in += 1;
+            }
+        }
+        while let Some(frame) = bus.try_receive() {
+            busy = true;
+            match socket.try_transmit(&frame) {
+                Ok(()) => counters.sent += 1,
+                Err(_) => counters.dropped_out += 1,
+            }
+        }
+        // A bus-off is the kernel's to restart (`restart-ms`); the drives have no client to
+        // wait for, so they try again at once.
+        if socket.state() == BusState::BusOff {
+            socket.recover();
+        }
+        if !busy {
+            std::thread::sleep(IDLE);
+        }
+    }
+    let c = socket.counters();
+    eprintln!(
+        "armgate-sim: Whistles stopped; {} frames received, {} sent, {} dropped inbound (queue full), {} refused by the interface; SocketCAN: {} bus-offs, {} frames refused by a full transmit queue",
+        counters.received,
+        counters.sent,
+        counters.dropped_in,
+        counters.dropped_out,
+        c.bus_offs,
+        c.queue_full
+    );
+    Ok(())
+}
+
+/// Faults typed on standard input, read on a thread of their own (a line that is not a fault
+/// is reported and ignored; the end of input ends nothing).
+fn read_faults() -> Receiver<Fault> {
+    let (sender, receiver) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { return };
+            if line.trim().is_empty() {
+                continue;
+            }
+            match Fault::parse(&line) {
+                Ok(fault) => {
+                    eprintln!("armgate-sim: injecting {fault:?}");
+                    if sender.send(fault).is_err() {
+                        return;
+                    }
+                }
+                Err(e) => eprintln!("armgate-sim: {e}"),
+            }
+        }
+    });
+    receiver
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use armgate_protocol::can::CanFrame;
+
+    use super::*;
+
+    #[test]
+    fn fault_lines_parse_and_bad_ones_say_why() {
+        assert_eq!(Fault::parse("emcy 3"), Ok(Fault::Emergency(3)));
+        assert_eq!(
+            Fault::parse(" heartbeat-lost 1 "),
+            Ok(Fault::HeartbeatLost(1))
+        );
+        assert_eq!(Fault::parse("silent 6"), Ok(Fault::Silent(6)));
+        assert!(Fault::parse("silent").unwrap_err().contains("KIND NODE"));
+        assert!(Fault::parse("emcy x").unwrap_err().contains("not a node id"));
+        assert!(Fault::parse("melt 2").unwrap_err().contains("not one of"));
+        assert!(Fault::parse("emcy 1 2").is_err());
+    }
+
+    #[test]
+    fn an_injected_emergency_reaches_the_interface_side_and_silent_drives_send_nothing() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/ranger-mk1.toml");
+        let config = armgate_core::config::load_file(std::path::Path::new(path)).unwrap();
+        let mut bus = VirtualBus::for_robot(&config);
+        bus.advance(0.5).unwrap();
+        while bus.try_receive().is_some() {}
+        // ranger-mk1's drives are nodes 101 to 106.
+        assert!(Fault::Emergency(102).apply(&mut bus));
+        assert!(!Fault::Emergency(2).apply(&mut bus));
+        bus.advance(0.51).unwrap();
+        let frames: Vec<CanFrame> = std::iter::from_fn(|| bus.try_receive()).collect();
+        // EMCY of node 102: 0x80 + 102.
+        assert!(frames.iter().any(|f| f.id() == 0x80 + 102), "{frames:?}");
+        assert!(Fault::Silent(102).apply(&mut bus));
+        assert!(Fault::Emergency(102).apply(&mut bus));
+        bus.advance(0.6).unwrap();
+        let frames: Vec<CanFrame> = std::iter::from_fn(|| bus.try_receive()).collect();
+        assert!(frames.iter().all(|f| f.id() & 0x7f != 102), "{frames:?}");
+    }
+}
