@@ -68,6 +68,13 @@ fn can_pair() -> Option<(String, String)> {
     Some((controller.to_owned(), whistles.to_owned()))
 }
 
+/// The `armgate-sim` to start: `ARMGATE_E2E_SIM` if set (tools/socketcan-vm.sh: an optimised
+/// build for the emulated machine), else the one cargo built with these tests.
+fn sim_exe() -> PathBuf {
+    std::env::var_os("ARMGATE_E2E_SIM")
+        .map_or_else(|| env!("CARGO_BIN_EXE_armgate-sim").into(), PathBuf::from)
+}
+
 /// Starts `armgate-sim --whistles` on `iface` for robot `file` (with `--start` from `extra`)
 /// and waits for its first line: the controller must find its drives answering.
 fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child {
@@ -76,7 +83,7 @@ fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child 
         .position(|a| *a == "--start")
         .map(|i| &extra[i..=i + 1])
         .unwrap_or_default();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+    let mut child = Command::new(sim_exe())
         .args(["--whistles", "--can", &format!("socketcan:{iface}"), "--robot"])
         .arg(file)
         .args(start)
@@ -180,7 +187,7 @@ impl Sim {
                 } else {
                     &["--listen", "127.0.0.1:0"]
                 };
-                let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
+                let mut command = Command::new(sim_exe());
                 if let Some((iface, _)) = &can {
                     command.arg("--can").arg(format!("socketcan:{iface}"));
                 }
@@ -224,8 +231,13 @@ impl Sim {
             .unwrap();
         socket.connect(addr).unwrap();
         // The firmware's host build is unoptimised and runs its control and network tasks on one
-        // thread: on a loaded machine a reply can take longer than armgate-sim's.
-        let timeout = if firmware().is_some() { 2000 } else { 500 };
+        // thread, and the SocketCAN tests run in an emulated machine: on a loaded machine a
+        // reply can take longer than armgate-sim's.
+        let timeout = if firmware().is_some() || can.is_some() {
+            2000
+        } else {
+            500
+        };
         socket
             .set_read_timeout(Some(Duration::from_millis(timeout)))
             .unwrap();
