@@ -4,9 +4,9 @@
 //! build of the firmware (tools/firmware-e2e.sh does it) — the firmware's own tasks on Linux,
 //! reached over a TAP device inside a network namespace. The same session runs against both.
 //! Every reply is checked to the byte where it is fixed (characters, payload, index) against
-//! docs/protocol.md. With `ARMGATE_E2E_CAN=can0,can1` (tools/socketcan-vm.sh, in a VM whose
-//! kernel has SocketCAN) each test's `armgate-sim` drives its Whistles over a real CAN stack:
-//! `--can socketcan:can0`, with `armgate-sim --whistles` on can1 of the same bus.
+//! docs/protocol.md. With `ARMGATE_E2E_CAN=can0,can1` each test's `armgate-sim` drives its
+//! Whistles over a real CAN stack: `--can socketcan:can0`, with `armgate-sim --whistles` on
+//! can1 of the same bus (or both on one vcan: `vcan0,vcan0`; docs/drives.md, "SocketCAN").
 #![allow(
     missing_docs,
     clippy::unwrap_used,
@@ -68,13 +68,6 @@ fn can_pair() -> Option<(String, String)> {
     Some((controller.to_owned(), whistles.to_owned()))
 }
 
-/// The `armgate-sim` to start: `ARMGATE_E2E_SIM` if set (tools/socketcan-vm.sh: an optimised
-/// build for the emulated machine), else the one cargo built with these tests.
-fn sim_exe() -> PathBuf {
-    std::env::var_os("ARMGATE_E2E_SIM")
-        .map_or_else(|| env!("CARGO_BIN_EXE_armgate-sim").into(), PathBuf::from)
-}
-
 /// Starts `armgate-sim --whistles` on `iface` for robot `file` (with `--start` from `extra`)
 /// and waits for its first line: the controller must find its drives answering.
 fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child {
@@ -83,8 +76,13 @@ fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child 
         .position(|a| *a == "--start")
         .map(|i| &extra[i..=i + 1])
         .unwrap_or_default();
-    let mut child = Command::new(sim_exe())
-        .args(["--whistles", "--can", &format!("socketcan:{iface}"), "--robot"])
+    let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+        .args([
+            "--whistles",
+            "--can",
+            &format!("socketcan:{iface}"),
+            "--robot",
+        ])
         .arg(file)
         .args(start)
         .stdin(Stdio::piped())
@@ -187,7 +185,7 @@ impl Sim {
                 } else {
                     &["--listen", "127.0.0.1:0"]
                 };
-                let mut command = Command::new(sim_exe());
+                let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
                 if let Some((iface, _)) = &can {
                     command.arg("--can").arg(format!("socketcan:{iface}"));
                 }

@@ -288,10 +288,25 @@ mod tests {
 
     #[test]
     fn the_drive_manager_starts_and_holds_the_whistles_across_an_untimed_bus() {
-        let config = ranger();
+        holds(&ranger());
+        // The PDO schedule at its fastest period for ranger-mk1 (12 samples, 4.32 ms).
+        let pdo = ranger()
+            .edit(|config| {
+                config.drives.streaming = armgate_core::config::Streaming::Pdo;
+                config.control_period = 12.0 * armgate_core::config::SAMPLE_TIME;
+            })
+            .unwrap();
+        holds(&pdo);
+    }
+
+    /// The drive manager of `config` and its Whistles across [`wire`]: started, running, no
+    /// fault after 3 s.
+    fn holds(config: &ValidRobot) {
+        let config = config.clone();
         let start = config.home();
         let (controller, mut iface) = wire();
-        let mut drives = CanDrives::started(&config, &DriveSettings::default(), controller).unwrap();
+        let mut drives =
+            CanDrives::started(&config, &DriveSettings::default(), controller).unwrap();
         let mut whistles = Whistles::new(&config, &start);
         let period = config.control_period;
         // The Whistles' loop every 0.5 ms, the controller's tick every period, for 3 s.
@@ -318,7 +333,11 @@ mod tests {
         );
         assert_eq!(Fault::parse("silent 6"), Ok(Fault::Silent(6)));
         assert!(Fault::parse("silent").unwrap_err().contains("KIND NODE"));
-        assert!(Fault::parse("emcy x").unwrap_err().contains("not a node id"));
+        assert!(
+            Fault::parse("emcy x")
+                .unwrap_err()
+                .contains("not a node id")
+        );
         assert!(Fault::parse("melt 2").unwrap_err().contains("not one of"));
         assert!(Fault::parse("emcy 1 2").is_err());
     }
