@@ -4,7 +4,9 @@
 //! build of the firmware (tools/firmware-e2e.sh does it) — the firmware's own tasks on Linux,
 //! reached over a TAP device inside a network namespace. The same session runs against both.
 //! Every reply is checked to the byte where it is fixed (characters, payload, index) against
-//! docs/protocol.md.
+//! docs/protocol.md. With `ARMGATE_E2E_CAN=can0,can1` each test's `armgate-sim` drives its
+//! Whistles over a real CAN stack: `--can socketcan:can0`, with `armgate-sim --whistles` on
+//! can1 of the same bus (or both on one vcan: `vcan0,vcan0`; docs/drives.md, "SocketCAN").
 #![allow(
     missing_docs,
     clippy::unwrap_used,
@@ -26,12 +28,16 @@ use std::time::{Duration, Instant};
 mod redundancy;
 #[path = "e2e/sessions.rs"]
 mod sessions;
+#[path = "e2e/socketcan.rs"]
+mod socketcan;
 #[path = "e2e/stops.rs"]
 mod stops;
 
 /// A running `armgate-sim` and a client socket.
 struct Sim {
     child: Child,
+    /// With `ARMGATE_E2E_CAN`: the simulated Whistles' process, its stdin open for faults.
+    whistles: Option<Child>,
     socket: UdpSocket,
     stderr: BufReader<std::process::ChildStderr>,
     _dir: TempDir,
@@ -49,7 +55,53 @@ impl Drop for Sim {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+        if let Some(whistles) = &mut self.whistles {
+            let _ = whistles.kill();
+            let _ = whistles.wait();
+        }
     }
+}
+
+/// The controller's and the Whistles' CAN interfaces, if `ARMGATE_E2E_CAN` names them
+/// (`can0,can1`): two controllers on one bus, so the tests run one at a time.
+fn can_pair() -> Option<(String, String)> {
+    let pair = std::env::var("ARMGATE_E2E_CAN").ok()?;
+    let (controller, whistles) = pair.split_once(',').expect("ARMGATE_E2E_CAN=IFACE,IFACE");
+    Some((controller.to_owned(), whistles.to_owned()))
+}
+
+/// Starts `armgate-sim --whistles` on `iface` for robot `file` (with `--start` from `extra`)
+/// and waits for its first line: the controller must find its drives answering.
+fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child {
+    let start = extra
+        .iter()
+        .position(|a| *a == "--start")
+        .map(|i| &extra[i..=i + 1])
+        .unwrap_or_default();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+        .args([
+            "--whistles",
+            "--can",
+            &format!("socketcan:{iface}"),
+            "--robot",
+        ])
+        .arg(file)
+        .args(start)
+        .stdin(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    assert!(line.contains("simulated Whistles"), "{line}");
+    // The rest of its output goes to the test's own stderr.
+    std::thread::spawn(move || {
+        for line in stderr.lines().map_while(Result::ok) {
+            eprintln!("{line}");
+        }
+    });
+    child
 }
 
 /// The firmware's host build to test instead of `armgate-sim`, if `ARMGATE_E2E_FIRMWARE` names
@@ -106,6 +158,10 @@ impl Sim {
             );
         let file = dir.join("robot.toml");
         std::fs::write(&file, edit(fast)).unwrap();
+        let can = can_pair();
+        let whistles = can
+            .as_ref()
+            .map(|(_, iface)| start_whistles(iface, &file, extra));
         let mut child = match firmware() {
             Some(firmware) => {
                 // The firmware takes its robot and start pose from the environment (host
@@ -132,6 +188,9 @@ impl Sim {
                     &["--listen", "127.0.0.1:0"]
                 };
                 let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
+                if let Some((iface, _)) = &can {
+                    command.arg("--can").arg(format!("socketcan:{iface}"));
+                }
                 command
                     .args(listen)
                     .args(["--quiet", "--robot"])
@@ -172,13 +231,19 @@ impl Sim {
             .unwrap();
         socket.connect(addr).unwrap();
         // The firmware's host build is unoptimised and runs its control and network tasks on one
-        // thread: on a loaded machine a reply can take longer than armgate-sim's.
-        let timeout = if firmware().is_some() { 2000 } else { 500 };
+        // thread, and the SocketCAN tests run in an emulated machine: on a loaded machine a
+        // reply can take longer than armgate-sim's.
+        let timeout = if firmware().is_some() || can.is_some() {
+            2000
+        } else {
+            500
+        };
         socket
             .set_read_timeout(Some(Duration::from_millis(timeout)))
             .unwrap();
         Self {
             child,
+            whistles,
             socket,
             stderr,
             _dir: TempDir(dir),

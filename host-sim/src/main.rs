@@ -11,6 +11,7 @@ mod record;
 mod socketcan;
 mod status;
 mod udp;
+mod whistles;
 
 use std::io::IsTerminal;
 use std::net::{SocketAddr, UdpSocket};
@@ -117,6 +118,12 @@ struct Args {
     /// No status line on the terminal.
     #[arg(long)]
     quiet: bool,
+    /// Be the other side of the bus instead of the controller: the robot file's simulated
+    /// Whistles on the interface of `--can socketcan:IFACE` (with `--start`, `--streaming`,
+    /// `--duration`), for a controller on a second adapter or the same vcan. Faults are
+    /// injected on standard input: `emcy NODE`, `heartbeat-lost NODE`, `silent NODE`.
+    #[arg(long)]
+    whistles: bool,
     /// Print the arm's pose at its home position and exit.
     #[arg(long)]
     print_home: bool,
@@ -200,6 +207,9 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         };
         format!("{what}: {e}")
     })?;
+    if args.whistles {
+        return serve_whistles(args, config, &start);
+    }
     let drives = Backend::open(&args.can, config, &start, || {
         arm_model(args.arm, config, start)
     })?;
@@ -350,6 +360,19 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         eprintln!("armgate-sim: {summary}");
     }
     Ok(())
+}
+
+/// `--whistles`: the simulated Whistles on the `--can` interface until Ctrl-C, SIGTERM or
+/// `--duration`.
+fn serve_whistles(args: &Args, config: &ValidRobot, start: &Joints) -> Result<(), String> {
+    let CanChoice::SocketCan(iface) = &args.can else {
+        return Err("--whistles needs --can socketcan:IFACE".into());
+    };
+    let running = Arc::new(AtomicBool::new(true));
+    let stop = running.clone();
+    ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
+        .map_err(|e| format!("Ctrl-C handler: {e}"))?;
+    whistles::serve(config, start, iface, args.duration, &running)
 }
 
 /// `--key` and `--allow-unsigned`.

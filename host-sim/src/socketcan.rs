@@ -17,6 +17,7 @@
 //! error is counted and reported as a full queue.
 
 use std::io::{self, ErrorKind};
+use std::time::Duration;
 
 use armgate_core::drives::{BusState, CanBus, TxError};
 use armgate_protocol::can::CanFrame;
@@ -113,6 +114,15 @@ impl SocketCan {
             socket,
             tally: Tally::default(),
         })
+    }
+
+    /// Makes reads wait up to `timeout` for a frame instead of returning at once (the Whistle
+    /// simulator: woken by the frame itself, not by a sleep that ends later). Writes still
+    /// return at once: a full transmit queue is `ENOBUFS` either way.
+    pub fn wait_for_frames(&self, timeout: Duration) -> io::Result<()> {
+        self.socket.set_nonblocking(false)?;
+        self.socket.set_read_timeout(timeout)?;
+        self.socket.set_write_timeout(Duration::from_micros(1))
     }
 
     /// What was ignored or failed so far.
