@@ -37,7 +37,9 @@ pub mod cli;
 mod client;
 mod commands;
 mod drives;
+pub mod ended;
 mod error;
+pub mod exit;
 #[cfg(test)]
 mod fake;
 mod hints;
@@ -62,6 +64,7 @@ pub use client::{
 };
 pub use commands::NO_READING;
 pub use drives::DrivesOn;
+pub use ended::{EndStop, StopPolicy, Stopper};
 pub use error::ClientError;
 pub use ik::IkSolution;
 pub use pose::{Mode, Pose, Quaternion, next_mode};

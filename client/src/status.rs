@@ -127,10 +127,12 @@ impl Status {
             Some(CauseReport {
                 cause: Some(cause),
                 joint,
-            }) => match joint {
-                Some(j) => format!("{} (j{})", cause.name(), u16::from(j) + 1),
-                None => cause.name().to_owned(),
-            },
+                by,
+            }) => {
+                let joint = joint.map_or(String::new(), |j| format!(" (j{})", u16::from(j) + 1));
+                let by = by.map_or(String::new(), |a| format!(" from {a}"));
+                format!("{}{joint}{by}", cause.name())
+            }
             _ => "none".to_owned(),
         }
     }
@@ -259,11 +261,12 @@ pub(crate) mod tests {
                 cause: Some(CauseReport {
                     cause: Some(StopCause::ModeChange),
                     joint: Some(3),
+                    by: Some("0.31.0.8:3".parse().unwrap()),
                 }),
             }
         );
         assert_eq!(s.drives_text(), "faulted (ER31)");
-        assert_eq!(s.cause_text(), "mode change (j4)");
+        assert_eq!(s.cause_text(), "mode change (j4) from 0.31.0.8:3");
         let sent = fake.received();
         assert_eq!(sent.len(), 3);
         assert_eq!((&sent[0][..2], sent[0][30]), (&b"SQ"[..], 0));

@@ -559,7 +559,11 @@ fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_contro
     assert_eq!(out, "moving\n");
     let err = result.unwrap_err();
     let message = err.to_string();
-    assert_eq!(err.exit_code(), 2, "{message}");
+    assert_eq!(
+        err.exit_code(),
+        armgate_client::exit::NOT_ARRIVED,
+        "{message}"
+    );
     assert!(
         message.starts_with("target 1 not reached within 500ms")
             && message.ends_with("; sent ST: the arm stops and holds"),
@@ -708,4 +712,52 @@ fn armgate_move_whose_begin_reply_is_lost_gets_it_again_and_arrives() {
     assert!(!passed.iter().any(|c| c == "ST"), "{passed:?}");
     let now = sim.ok("PS", [0.0; 7], 0);
     assert!((now[2] - ps[2] - 0.03).abs() < 0.002, "{now:?}");
+}
+
+#[test]
+fn a_cli_move_another_client_stops_says_who_stopped_it_and_exits_3() {
+    // `armgate jmove` of 0.3 rad on the first joint (about 5 s); client B sends ST after 1 s.
+    let sim = ready(START, 1.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.3;
+    let q: Vec<String> = goal[..6].iter().map(f32::to_string).collect();
+    let addr = sim.socket.peer_addr().unwrap();
+    let mover = std::thread::spawn(move || {
+        let mut args = vec!["jmove"];
+        args.extend(q.iter().map(String::as_str));
+        let (result, _) = armgate_at(addr, &args);
+        result.unwrap_err()
+    });
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 1.0));
+    std::thread::sleep(Duration::from_secs(1));
+    let b = second_client(&sim);
+    assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
+    let err = mover.join().unwrap();
+    let message = err.to_string();
+    assert_eq!(err.exit_code(), armgate_client::exit::STOPPED, "{message}");
+    let by = b.local_addr().unwrap();
+    assert_eq!(
+        message,
+        format!("the motion was stopped by client {by}: ST (target 1 not reached)")
+    );
+    // Short of the goal, at rest: the CLI did not send an ST of its own (the cause is B's).
+    let rest = sim.ok("jP", [0.0; 7], 0);
+    assert!(goal[0] - rest[0] > 0.1, "{rest:?} (goal {goal:?})");
+    let SocketAddr::V4(v4) = by else {
+        panic!("{by}")
+    };
+    let ip = u32::from(*v4.ip());
+    let halves = [(ip >> 16) as f32, (ip & 0xffff) as f32];
+    assert_eq!(
+        stop_cause_of(&b)[..5],
+        [1.0, 0.0, halves[0], halves[1], f32::from(by.port())]
+    );
+}
+
+/// `SQ` index 2 from `socket`: the stop cause, the joint, who set it.
+fn stop_cause_of(socket: &UdpSocket) -> [f32; 7] {
+    match ask(socket, "SQ", [0.0; 7], 2) {
+        Answer::Reply(chars, v, 2) if &chars == b"QS" => v,
+        other => panic!("SQ 2: {other:?}"),
+    }
 }

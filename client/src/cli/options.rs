@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 
 use crate::banks::MAX_JOINTS;
-use crate::{WaitOptions, interrupt};
+use crate::{StopPolicy, WaitOptions, interrupt};
 
 /// A pose: position (m) and roll/pitch/yaw (rad).
 #[derive(Clone, Debug, Args)]
@@ -48,7 +48,7 @@ pub struct WaitArgs {
     /// Arrival tolerance, mm (joints: mrad).
     #[arg(long, default_value_t = 1.0)]
     pub tolerance: f64,
-    /// On Ctrl-C just exit and leave the arm moving (by default ST is sent first).
+    /// On Ctrl-C exit and leave the arm moving, saying so (by default ST is sent first).
     #[arg(long)]
     pub no_stop_on_interrupt: bool,
 }
@@ -67,6 +67,11 @@ impl WaitArgs {
                 .wait_timeout
                 .unwrap_or(Duration::from_secs(30).saturating_add(extra)),
             interrupt: interrupt.cloned(),
+            stop: if self.no_stop_on_interrupt {
+                StopPolicy::ExceptInterrupt
+            } else {
+                StopPolicy::Always
+            },
             ..WaitOptions::default()
         }
     }
@@ -86,11 +91,11 @@ impl WaitArgs {
         }
     }
 
-    /// Installs the Ctrl-C handler unless told not to (or there is no wait to interrupt).
-    /// Installed before the first request, so that Ctrl-C while the motion is being started
-    /// stops it as well.
+    /// Installs the Ctrl-C handler (unless there is no wait to interrupt): the wait ends and
+    /// says what the arm does ([`WaitOptions::stop`]). Installed before the first request, so
+    /// that Ctrl-C while the motion is being started stops it as well.
     pub(super) fn interrupt(&self) -> Option<interrupt::Interrupt> {
-        if self.no_wait || self.no_stop_on_interrupt {
+        if self.no_wait {
             return None;
         }
         interrupt::ctrl_c()
