@@ -43,6 +43,7 @@ from .errors import (
     ReplyTimeout,
     SignatureMismatch,
     Stalled,
+    Stopped,
     Undersized,
     ViaPointMissed,
     WaitFailed,
@@ -51,7 +52,7 @@ from .errors import (
 )
 from .pose import Pose
 from .signing import Signer
-from .status import DriveState, Mode, Motion, Status, StopCause
+from .status import DriveState, Holder, Mode, Motion, Status, StopCause
 
 __all__ = [
     "DEFAULT_PORT",
@@ -77,6 +78,7 @@ __all__ = [
     "DriveState",
     "HeldAtWorkspaceEdge",
     "HeldByOther",
+    "Holder",
     "IkDivergence",
     "JointLimitWarning",
     "Mode",
@@ -90,6 +92,7 @@ __all__ = [
     "Stalled",
     "Status",
     "StopCause",
+    "Stopped",
     "Undersized",
     "ViaPointMissed",
     "WaitFailed",

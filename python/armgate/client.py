@@ -24,6 +24,7 @@ from typing import (
 from . import wire
 from .signing import KeyLike, Signer
 from .errors import (
+    ArmError,
     BadIndex,
     ControllerMessage,
     ControllerTooOld,
@@ -32,10 +33,12 @@ from .errors import (
     ReplyTimeout,
     SignatureMismatch,
     Stalled,
+    Stopped,
+    WaitFailed,
     WaitTimeout,
 )
 from .pose import Pose, PoseLike, as_pose
-from .status import Mode, Motion, Status, StopCause
+from .status import Holder, Mode, Motion, Status, StopCause, address_of
 
 DEFAULT_PORT = 7031
 """The controller's UDP port (``armgate-sim`` listens on 127.0.0.1:7031)."""
@@ -78,6 +81,10 @@ class WaitOptions:
     """The polling period (s)."""
     stall: Optional[float] = 3.0
     """Give up if the arm has not moved for this long (s); None: never."""
+    stop: bool = True
+    """When a wait ends without arriving (Ctrl-C, a timeout, a stall, no reply), send ``ST``
+    so that the arm does not go on alone, and say so (the error's ``stop``). A motion the
+    controller stopped is raised as :class:`~armgate.Stopped` and not stopped again."""
 
 
 _STILL = 1e-6
@@ -184,8 +191,11 @@ class Arm:
         """``TM``: the drive temperatures (deg C), None for a drive not heard from yet."""
         return [None if t == NO_READING else t for t in self._read_banks("TM", self.joint_count)]
 
-    def get_status(self) -> Status:
-        """``SQ``: mode, drive state and fault, joint count, motion, refusals, uptime, name.
+    def get_status(self, details: bool = True) -> Status:
+        """``SQ``: mode, drive state and fault, joint count, motion, refusals, uptime, name;
+        with ``details`` also the stop cause in force and who set it (``SQ`` 2), who holds the
+        arm (address and port), the watchdog and the clients known (``SQ`` 3), where the
+        controller reports them.
 
         Raises :class:`~armgate.ControllerTooOld` if the controller does not know ``SQ``."""
         try:
@@ -195,20 +205,43 @@ class Arm:
             raise ControllerTooOld(
                 f"the controller does not know the status request SQ ({e.text}); update it"
             ) from e
-        return Status.from_replies(numbers.values, named[2:30])
+        status = Status.from_replies(numbers.values, named[2:30])
+        if not details:
+            return status
+        cause, _, by = self._stop_report()
+        status = replace(status, stop_cause=cause, stopped_by=by)
+        try:
+            session = self.request("SQ", index=3).values
+        except (BadIndex, NotUnderstood):
+            return status
+        holder = int(round(session[0]))
+        return replace(
+            status,
+            holder=Holder(holder) if holder in Holder._value2member_map_ else None,
+            holder_address=address_of(session[1], session[2], session[3]),
+            watchdog_ms=int(round(session[4])),
+            clients=int(round(session[6])),
+        )
 
     def get_stop_cause(self) -> Tuple[Optional[StopCause], Optional[int]]:
         """``SQ`` index 2: why the arm last stopped or is held, and the joint (1-based) of a
         joint-limit hold; ``(None, None)`` for none (or from a controller without index 2)."""
+        cause, joint, _ = self._stop_report()
+        return cause, joint
+
+    def _stop_report(self) -> Tuple[Optional[StopCause], Optional[int], Optional[str]]:
+        """``SQ`` index 2: the cause, the joint (1-based) and the address of the client that
+        set a client's cause; all None from a controller without index 2."""
         try:
             values = self.request("SQ", index=2).values
         except (BadIndex, NotUnderstood):
-            return (None, None)
+            return (None, None, None)
         cause = int(round(values[0]))
         joint = int(round(values[1]))
         return (
             StopCause(cause) if cause in StopCause._value2member_map_ else None,
             joint or None,
+            address_of(values[2], values[3], values[4]),
         )
 
     @property
@@ -216,7 +249,7 @@ class Arm:
         """The arm's joint count (asked once, see the class description)."""
         if self._joints is None:
             try:
-                self._joints = self.get_status().joint_count
+                self._joints = self.get_status(details=False).joint_count
             except ControllerTooOld:
                 self._has_status = False
                 self._joints = self._count_from_temperatures()
@@ -465,8 +498,7 @@ class Arm:
         def moved(a: Pose, b: Pose) -> bool:
             return a.distance(b) > _STILL or a.angle_to(b) > _STILL
 
-        with self._watchdog_while(opts):
-            return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
+        return self._owned(opts, lambda: self._wait(goals, opts, self.get_tcp_pose, measure, moved))
 
     def wait_for_joints(
         self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
@@ -485,8 +517,70 @@ class Arm:
         def moved(a: List[float], b: List[float]) -> bool:
             return any(abs(x - y) > _STILL for x, y in zip(a, b))
 
-        with self._watchdog_while(opts):
-            return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
+        targets = [list(g) for g in goals]
+        return self._owned(opts, lambda: self._wait(targets, opts, self.get_joints, measure, moved))
+
+    def _owned(self, options: WaitOptions, wait: Callable[[], T]) -> T:
+        """Runs a wait this client owns, with the watchdog on. If it ends without arriving, a
+        stall or timeout while the controller reports a stop cause is raised as
+        :class:`~armgate.Stopped` (why, and who); any other ending but a motion the controller
+        ended sends ``ST`` (``options.stop``) and says so: the error's ``stop`` and message, a
+        warning on the ``armgate`` logger."""
+        try:
+            with self._watchdog_while(options):
+                return wait()
+        except (Stalled, WaitTimeout) as e:
+            stopped = self._explain(e)
+            if stopped is not None:
+                raise stopped from None
+            if options.stop:
+                raise e.stopped(self._stop_motion())
+            raise
+        except ControllerMessage as e:
+            if not e.ends_motion and options.stop:
+                self._say_stopped(e)
+            raise
+        except (ArmError, KeyboardInterrupt) as e:
+            if options.stop and not isinstance(e, Stopped):
+                self._say_stopped(e)
+            raise
+
+    def _explain(self, error: WaitFailed) -> Optional[Stopped]:
+        """A stall or timeout that the controller caused: :class:`~armgate.Stopped` with the
+        stop cause in force (a motion's start clears the last one) and who set it; asked before
+        this client's own ``ST``, which would replace it. None without a cause (or an answer)."""
+        try:
+            cause, joint, address = self._stop_report()
+        except ArmError:
+            return None
+        if cause is None:
+            return None
+        if not cause.set_by_client:
+            by = "the controller"
+        elif address is None:
+            by = "another client"
+        elif address == "{}:{}".format(*self._socket.getsockname()[:2]):
+            by = "this client"
+        else:
+            by = f"client {address}"
+        return Stopped(cause, by, joint, error.target, error.distance, error.angle)
+
+    def _stop_motion(self) -> str:
+        """Sends ``ST`` for a wait that gave up; what happened, in words."""
+        try:
+            self.stop()
+        except ArmError as e:
+            return f"ST failed ({e}): the arm may still be moving"
+        return "sent ST: the arm stops and holds"
+
+    def _say_stopped(self, error: BaseException) -> None:
+        """``ST`` after ``error`` ended a wait, said on the logger and kept as ``error.stop``."""
+        stop = self._stop_motion()
+        log.warning("%s: %s", type(error).__name__, stop)
+        try:
+            error.stop = stop  # type: ignore[attr-defined]
+        except AttributeError:
+            pass
 
     @contextlib.contextmanager
     def _watchdog_while(self, options: WaitOptions) -> Iterator[None]:
@@ -577,7 +671,7 @@ class Arm:
         while _time.monotonic() - started <= options.timeout:
             if self._has_status is not False:
                 try:
-                    if self.get_status().motion == Motion.IDLE:
+                    if self.get_status(details=False).motion == Motion.IDLE:
                         return read()
                 except ControllerTooOld:
                     self._has_status = False
