@@ -9,10 +9,11 @@
 
 use std::fmt;
 
+pub use armgate_protocol::client::Holder;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
-    STATUS_INDEX, StatusReport, VALUES,
+    SESSION_INDEX, STATUS_INDEX, SessionReport, StatusReport, VALUES,
 };
 pub use armgate_protocol::client::{DriveStatus, Motion, StopCause};
 
@@ -177,6 +178,21 @@ impl Client {
                 command: Command::Status,
                 values: reply.values,
                 index: CAUSE_INDEX,
+            })
+            .ok()),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// `SQ` index 3: who holds the arm (this client, another at an address and port, nobody),
+    /// the client watchdog, the clients known; `None` from a controller without it.
+    pub fn session(&mut self) -> Result<Option<SessionReport>, ClientError> {
+        match self.status_part(SESSION_INDEX) {
+            Ok(reply) => Ok(SessionReport::from_reply(&Reply {
+                command: Command::Status,
+                values: reply.values,
+                index: SESSION_INDEX,
             })
             .ok()),
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
