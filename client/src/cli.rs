@@ -233,7 +233,13 @@ fn with_hint(client: &mut Client, error: CliError) -> CliError {
     let CliError::Client(ClientError::Rejected(text)) = error else {
         return error;
     };
-    let status = client.status().ok();
+    let mut status = client.status().ok();
+    if let Some(status) = status.as_mut()
+        && crate::matching::code(&text) == Some(40)
+    {
+        // ER40 has no room for the holder's port: the session report names it.
+        status.session = client.session().ok().flatten();
+    }
     CliError::Refused {
         hint: hints::hint(&text, status.as_ref()),
         text,

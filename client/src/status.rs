@@ -88,6 +88,9 @@ pub struct Status {
     /// Why the arm last stopped, or is held (`SQ` index 2, asked by [`Client::stop_cause`];
     /// none if not asked, or from older controllers).
     pub cause: Option<CauseReport>,
+    /// Who holds the arm, the watchdog, the clients known (`SQ` index 3, asked by
+    /// [`Client::session`]; none if not asked, or from older controllers).
+    pub session: Option<SessionReport>,
 }
 
 impl Status {
@@ -119,6 +122,7 @@ impl Status {
             uptime: f64::from(report.uptime),
             name: name.as_str().to_owned(),
             cause: None,
+            session: None,
         })
     }
 
@@ -136,6 +140,19 @@ impl Status {
             }
             _ => "none".to_owned(),
         }
+    }
+
+    /// Who holds the arm: `nobody`, `this client (127.0.0.1:40001)`, `127.0.0.1:40001`.
+    pub fn holder_text(&self) -> Option<String> {
+        let session = self.session?;
+        let address = session.address.map(|a| a.to_string());
+        Some(match (session.holder, address) {
+            (Holder::Nobody, _) => "nobody".to_owned(),
+            (Holder::You, Some(a)) => format!("this client ({a})"),
+            (Holder::You, None) => "this client".to_owned(),
+            (Holder::Other, Some(a)) => a,
+            (Holder::Other, None) => "another client (IPv6)".to_owned(),
+        })
     }
 
     /// The drive state with its fault: `running`, `faulted (ER31)`.
@@ -156,6 +173,14 @@ impl fmt::Display for Status {
         writeln!(f, "motion     {}", self.motion.name())?;
         if self.cause.is_some() {
             writeln!(f, "stopped by {}", self.cause_text())?;
+        }
+        if let (Some(holder), Some(session)) = (self.holder_text(), self.session) {
+            writeln!(f, "holder     {holder}")?;
+            writeln!(f, "clients    {} known", session.clients)?;
+            match session.watchdog_ms {
+                0 => writeln!(f, "watchdog   off")?,
+                ms => writeln!(f, "watchdog   {ms} ms")?,
+            }
         }
         writeln!(f, "refused    {} requests", self.refused)?;
         write!(f, "uptime     {:.1} s", self.uptime)
@@ -279,6 +304,7 @@ pub(crate) mod tests {
                     joint: Some(3),
                     by: Some("0.31.0.8:3".parse().unwrap()),
                 }),
+                session: None,
             }
         );
         assert_eq!(s.drives_text(), "faulted (ER31)");
@@ -289,6 +315,18 @@ pub(crate) mod tests {
         assert_eq!((&sent[1][..2], sent[1][30]), (&b"SQ"[..], 1));
         assert_eq!((&sent[2][..2], sent[2][30]), (&b"SQ"[..], 2));
         assert!(s.to_string().contains("drives     faulted (ER31)"));
+        s.session = Some(SessionReport {
+            holder: Holder::Other,
+            address: Some("192.168.1.2:40001".parse().unwrap()),
+            watchdog_ms: 500,
+            send_drops: 0,
+            clients: 3,
+        });
+        let shown = s.to_string();
+        assert!(
+            shown.contains("holder     192.168.1.2:40001\nclients    3 known\nwatchdog   500 ms\n"),
+            "{shown}"
+        );
     }
 
     #[test]

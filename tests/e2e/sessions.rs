@@ -752,6 +752,20 @@ fn a_cli_move_another_client_stops_says_who_stopped_it_and_exits_3() {
         stop_cause_of(&b)[..5],
         [1.0, 0.0, halves[0], halves[1], f32::from(by.port())]
     );
+    // `armgate status` shows the cause with who set it, the holder (the mover) with its port,
+    // the clients and the watchdog.
+    let (result, shown) = armgate(&sim, &["status"]);
+    result.unwrap();
+    assert!(
+        shown.contains(&format!("stopped by ST from {by}\n")),
+        "{shown}"
+    );
+    let holder = shown
+        .lines()
+        .find_map(|l| l.strip_prefix("holder     "))
+        .unwrap_or_else(|| panic!("{shown}"));
+    assert!(holder.parse::<SocketAddr>().is_ok(), "{shown}");
+    assert!(shown.contains("watchdog   off\n"), "{shown}");
 }
 
 /// `SQ` index 2 from `socket`: the stop cause, the joint, who set it.

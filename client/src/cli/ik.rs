@@ -86,6 +86,11 @@ pub(super) fn ik(
     for s in &solutions {
         writeln!(out, "  branch {} {}", s.branch, fmt_values(&s.q, 6))?;
     }
+    if solutions.is_empty() {
+        return Err(CliError::NoSolution(
+            "no IK solution of this pose within the joint limits".to_owned(),
+        ));
+    }
     Ok(())
 }
 
@@ -121,4 +126,33 @@ pub(super) fn ik_move(
     })?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{cartesian_controller, run_with};
+    use armgate_protocol::client::Command;
+
+    #[test]
+    fn a_pose_without_a_solution_exits_5() {
+        // KS answered with no solution (f6 = 0) on a robot with a closed form.
+        let fake = cartesian_controller(|_, _| {});
+        let (result, out) = run_with(&fake, &["ik", "0", "0.2", "9", "0", "0", "0"]);
+        let err = result.unwrap_err();
+        assert_eq!(err.exit_code(), crate::exit::NO_SOLUTION, "{err}");
+        assert!(out.starts_with("0 solutions"), "{out}");
+        assert_eq!(
+            err.to_string(),
+            "no IK solution of this pose within the joint limits"
+        );
+        // Two solutions: success.
+        let fake = cartesian_controller(|r, reply| {
+            if r.command == Command::IkSolution {
+                reply.values[6] = 2.0;
+            }
+        });
+        let (result, out) = run_with(&fake, &["ik", "0", "0.2", "0.8", "0", "0", "0"]);
+        result.unwrap();
+        assert!(out.starts_with("2 solutions"), "{out}");
+    }
 }

@@ -849,6 +849,7 @@ mod tests {
             uptime: 1.0,
             name: "ranger-mk1".into(),
             cause: None,
+            session: None,
         }
     }
 
