@@ -29,7 +29,7 @@ pub use error::CliError;
 pub use ik::{IkArgs, IkMoveArgs};
 pub use jog::JogArgs;
 pub use motion::{JmoveArgs, MoveArgs};
-pub use options::{PoseArgs, WaitArgs, parse_duration, parse_timeout};
+pub use options::{PoseArgs, WaitArgs, parse_duration, parse_seconds, parse_timeout};
 pub use read::print_pose;
 pub use run_file::RunArgs;
 pub use send::SendArgs;

@@ -59,14 +59,15 @@ pub struct WaitOptions {
 }
 
 impl Default for WaitOptions {
-    /// 1 mm (or 1 mrad for joints), 0.01 rad, 10 mm to pass a via point, 60 s, 20 Hz, stall
-    /// after 3 s, `ST` on every ending but arrival.
+    /// 1 mm (or 1 mrad for joints), 0.01 rad, 10 mm to pass a via point, 10 min (the stall
+    /// check ends a wait whose arm does not move; long moves must not be cut short), 20 Hz,
+    /// stall after 3 s, `ST` on every ending but arrival.
     fn default() -> Self {
         Self {
             tolerance: 0.001,
             angle_tolerance: 0.01,
             pass_tolerance: 0.01,
-            timeout: Duration::from_secs(60),
+            timeout: Duration::from_secs(600),
             poll: Duration::from_millis(50),
             stall: Some(Duration::from_secs(3)),
             interrupt: None,

@@ -75,8 +75,9 @@ class WaitOptions:
     pass_tolerance: float = 0.01
     """An intermediate via point counts as passed within this distance (the arm does not dwell
     there, so a 20 Hz poll may never see it within ``tolerance``)."""
-    timeout: float = 60.0
-    """Give up after this many seconds."""
+    timeout: float = 600.0
+    """Give up after this many seconds (a move's wait adds its requested duration). The stall
+    check ends a wait whose arm does not move; long moves must not be cut short."""
     poll: float = 0.05
     """The polling period (s)."""
     stall: Optional[float] = 3.0
@@ -692,10 +693,10 @@ class Arm:
         return replace(options, pass_tolerance=options.pass_tolerance + (blend or 0.0))
 
     def _options(self, requested: float) -> WaitOptions:
-        # As the Rust tool: 30 s plus the requested duration, unless set otherwise.
+        # As the Rust tool: the default plus the requested duration, unless set otherwise.
         if self.wait_options.timeout != WaitOptions.timeout:
             return self.wait_options
-        return replace(self.wait_options, timeout=30.0 + requested)
+        return replace(self.wait_options, timeout=WaitOptions.timeout + requested)
 
     # -- notices ---------------------------------------------------------------------------
 

@@ -33,8 +33,9 @@ pub struct RecordArgs {
     /// How often to read jP and PS (Hz).
     #[arg(long, default_value_t = 20.0)]
     rate: f64,
-    /// Stop after this many seconds (default: until Ctrl-C or SIGTERM).
-    #[arg(long, value_name = "SECONDS")]
+    /// Stop after this long (`60`, `60s`, `2min`; bare: seconds; default: until Ctrl-C or
+    /// SIGTERM).
+    #[arg(long, value_name = "DURATION", value_parser = armgate_client::cli::parse_seconds)]
     duration: Option<f64>,
     /// Sign the requests with the key in this file, for a controller with a key
     /// (docs/safety.md, "Signing").

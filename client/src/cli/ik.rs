@@ -5,7 +5,7 @@ use std::io::Write;
 use clap::Args;
 
 use super::CliError;
-use super::options::{PoseArgs, WaitArgs};
+use super::options::{PoseArgs, WaitArgs, parse_seconds};
 use super::output::{fmt_values, follow, joint_progress, start};
 use crate::{Client, Redundancy};
 
@@ -56,8 +56,8 @@ pub struct IkMoveArgs {
     /// The redundancy values (no solution for them: refused, no others are tried).
     #[command(flatten)]
     pub redundancy: RedundancyArgs,
-    /// Minimum duration (s).
-    #[arg(long, default_value_t = 0.0)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds).
+    #[arg(long, default_value_t = 0.0, value_parser = parse_seconds)]
     pub time: f64,
     /// Waiting.
     #[command(flatten)]

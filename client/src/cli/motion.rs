@@ -5,7 +5,7 @@ use std::io::Write;
 
 use clap::Args;
 
-use super::options::{PoseArgs, WaitArgs};
+use super::options::{PoseArgs, WaitArgs, parse_seconds};
 use super::output::{fmt_values, follow, joint_progress, pose_progress, start};
 use super::{Cli, CliError, joint_count};
 use crate::banks::MAX_JOINTS;
@@ -17,8 +17,9 @@ pub struct MoveArgs {
     /// The goal.
     #[command(flatten)]
     pub pose: PoseArgs,
-    /// Minimum duration (s); 0 = as fast as the controller's limits allow.
-    #[arg(long, default_value_t = 0.0)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds); 0 = as fast as the controller's
+    /// limits allow.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_seconds)]
     pub time: f64,
     /// Waiting.
     #[command(flatten)]
@@ -31,8 +32,8 @@ pub struct JmoveArgs {
     /// One value per joint (rad, or m for prismatic joints), as many as the arm has.
     #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
     pub q: Vec<f64>,
-    /// Minimum duration (s).
-    #[arg(long)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds).
+    #[arg(long, value_parser = parse_seconds)]
     pub time: Option<f64>,
     /// Waiting.
     #[command(flatten)]

@@ -42,7 +42,9 @@ pub struct WaitArgs {
     /// Return as soon as the motion has started.
     #[arg(long)]
     pub no_wait: bool,
-    /// Give up waiting after this long (default: 30 s plus the requested times); then ST.
+    /// Give up waiting after this long, e.g. 90s, 500ms, 2min (a bare number is seconds);
+    /// then ST. Default: 10 min plus the requested times (a stalled arm ends the wait after
+    /// 3 s without motion anyway).
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
     /// Arrival tolerance, mm (joints: mrad).
@@ -65,7 +67,7 @@ impl WaitArgs {
             tolerance: self.tolerance * 1e-3,
             timeout: self
                 .wait_timeout
-                .unwrap_or(Duration::from_secs(30).saturating_add(extra)),
+                .unwrap_or(WaitOptions::default().timeout.saturating_add(extra)),
             interrupt: interrupt.cloned(),
             stop: if self.no_stop_on_interrupt {
                 StopPolicy::ExceptInterrupt
@@ -104,22 +106,30 @@ impl WaitArgs {
     }
 }
 
-/// Parses `200ms`, `1s`, `1.5s` or a plain number of milliseconds.
+/// Parses a duration with its unit, `200ms`, `1.5s`, `2min`, or a bare number of seconds (as
+/// every duration of the `armgate` tool: `--timeout`, `--wait-timeout`, `--time`, `--for`).
 pub fn parse_duration(s: &str) -> Result<Duration, String> {
     let s = s.trim();
     let (number, scale) = if let Some(ms) = s.strip_suffix("ms") {
         (ms, 1e-3)
+    } else if let Some(min) = s.strip_suffix("min") {
+        (min, 60.0)
     } else if let Some(secs) = s.strip_suffix('s') {
         (secs, 1.0)
     } else {
-        (s, 1e-3)
+        (s, 1.0)
     };
     number
         .trim()
         .parse::<f64>()
         .ok()
         .and_then(|v| Duration::try_from_secs_f64(v * scale).ok())
-        .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s)"))
+        .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s, 2min; bare: seconds)"))
+}
+
+/// A duration in seconds, for the options that are numbers of seconds (`--time`, `--for`).
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    parse_duration(s).map(|d| d.as_secs_f64())
 }
 
 /// A duration that is not zero: a zero reply timeout would never wait for a reply.
@@ -148,7 +158,20 @@ mod tests {
     fn durations() {
         assert_eq!(parse_duration("200ms"), Ok(Duration::from_millis(200)));
         assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
-        assert_eq!(parse_duration("50"), Ok(Duration::from_millis(50)));
+        // A bare number is seconds, as --time and --for are (issue 37: 90 was 90 ms).
+        assert_eq!(parse_duration("90"), Ok(Duration::from_secs(90)));
+        assert_eq!(parse_duration("2min"), Ok(Duration::from_secs(120)));
+        assert_eq!(parse_seconds("500ms"), Ok(0.5));
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0", "--wait-timeout", "90"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        assert_eq!(args.wait.wait_timeout, Some(Duration::from_secs(90)));
+        let cli = Cli::try_parse_from([
+            "armgate", "move", "0", "0", "0", "0", "0", "0", "--time", "1.5s",
+        ])
+        .unwrap();
+        assert!(matches!(cli.command, Cmd::Move(m) if m.time == 1.5));
         assert!(parse_duration("soon").is_err());
         assert!(parse_duration("-1s").is_err());
         assert!(parse_timeout("0").is_err());
