@@ -54,28 +54,28 @@ fn fake(stop: Arc<AtomicBool>, holding: Holding) -> (String, Arc<Mutex<Vec<Strin
                     .push(String::from_utf8_lossy(&buf[..2]).into_owned());
                 let mut reply = buf[..31].to_vec();
                 reply.swap(0, 1);
-                let holder = match (holding, first) {
+                let holder: Option<std::net::SocketAddrV4> = match (holding, first) {
                     (Holding::Nobody, _) => None,
                     (Holding::Stranger, _) => Some("10.0.0.9:4000".parse().unwrap()),
                     (Holding::Teleop, std::net::SocketAddr::V4(a)) => Some(a),
                     (Holding::Teleop, _) => None,
                 };
-                if &buf[..2] == b"SQ" && buf[30] == 3 {
-                    if let Some(holder) = holder {
-                        let holder: std::net::SocketAddrV4 = holder;
-                        let ip = u32::from(*holder.ip());
-                        let values = [
-                            2.0f32,
-                            (ip >> 16) as f32,
-                            (ip & 0xffff) as f32,
-                            f32::from(holder.port()),
-                            0.0,
-                            0.0,
-                            2.0,
-                        ];
-                        for (k, v) in values.iter().enumerate() {
-                            reply[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
-                        }
+                if &buf[..2] == b"SQ"
+                    && buf[30] == 3
+                    && let Some(holder) = holder
+                {
+                    let ip = u32::from(*holder.ip());
+                    let values = [
+                        2.0f32,
+                        (ip >> 16) as f32,
+                        (ip & 0xffff) as f32,
+                        f32::from(holder.port()),
+                        0.0,
+                        0.0,
+                        2.0,
+                    ];
+                    for (k, v) in values.iter().enumerate() {
+                        reply[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
                     }
                 }
                 let _ = socket.send_to(&reply, from);

@@ -33,7 +33,8 @@ press sends).
                  joint keys: jG + jB.
                  If BG (jB) is refused, e.g. a motion still runs: ST, then BG (jB) once more.
   j              switch between Cartesian and joint keys
-  m              next mode via CM, from the present one: off -> joint -> cart -> off
+  m              CM to the mode the keys need (cartesian, or joint for the joint keys);
+                 in it already: on along off -> joint -> cart -> off
   v              jog keys <-> step keys
   space          stop (ST); a jog key still held does not move again until pressed anew
   o              drives on (ON)

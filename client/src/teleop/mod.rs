@@ -16,7 +16,7 @@
 //! | c | desired pose ← current pose | desired joints ← current joints |
 //! | Enter | GT (desired position, current RPY, T = 0) + BG | jG + jB |
 //! | j | switch to joint keys | switch to Cartesian keys |
-//! | m | next mode via CM: off → joint → cart → off | same |
+//! | m | CM to the mode the keys need (cartesian / joint); there, on along off → joint → cart | same |
 //! | v | jog keys ↔ step keys | same |
 //! | q, Esc, Ctrl-C | stop (ST) and quit (the terminal is restored) | same |
 //!

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use super::jog::{BASE_JOG_RATE, BASE_JOG_SPEED, FIRST_HOLD};
 use crate::status::{Motion, Status};
 use crate::{Mode, Pose, Text, TwistFrame, Velocity, next_mode};
+use armgate_protocol::client::{Notice, Rejection};
 
 /// The base Cartesian step per key press (m), multiplied by the scale.
 pub const BASE_STEP: f64 = 0.001;
@@ -332,6 +333,14 @@ impl TeleopState {
         self.controller = Some(status);
     }
 
+    /// The mode the keys need: Cartesian for the Cartesian keys, joint for the joint keys.
+    pub fn keys_mode(&self) -> Mode {
+        match self.variant {
+            Variant::Cartesian => Mode::Cartesian,
+            Variant::Joint => Mode::Joint,
+        }
+    }
+
     /// The Cartesian step (m).
     pub fn step(&self) -> f64 {
         BASE_STEP * self.scale
@@ -380,6 +389,9 @@ impl TeleopState {
                 }
                 self.refused = Some(text);
                 self.show_text(text);
+                if let Ok(Notice::Rejected(_, Rejection::NeedsMode(mode))) = Notice::parse(&text) {
+                    self.status = format!("needs mode {}: press m", mode.name());
+                }
             }
             Event::NoReply(status) => {
                 self.no_reply = true;
@@ -455,7 +467,14 @@ impl TeleopState {
                 None
             }
             Key::Char('m') => {
-                let next = next_mode(self.mode_pending.or(self.mode).unwrap_or(Mode::Off));
+                // The mode the keys need first (never through off); from there on the cycle.
+                let present = self.mode_pending.or(self.mode);
+                let needed = self.keys_mode();
+                let next = if present == Some(needed) {
+                    next_mode(needed)
+                } else {
+                    needed
+                };
                 self.mode_pending = Some(next);
                 Some(Action::SetMode(next))
             }
@@ -811,31 +830,43 @@ mod tests {
     }
 
     #[test]
-    fn m_cycles_the_mode_from_the_reported_one() {
+    fn m_selects_the_mode_the_keys_need_then_cycles() {
         let mut s = ready(false);
-        assert_eq!(
-            s.handle_key(Key::Char('m')),
-            Some(Action::SetMode(Mode::Joint))
-        );
-        s.apply(Event::Mode(Mode::Joint));
+        // Cartesian keys: m goes to Cartesian mode at once, not through off or joint.
         assert_eq!(
             s.handle_key(Key::Char('m')),
             Some(Action::SetMode(Mode::Cartesian))
         );
         s.apply(Event::Mode(Mode::Cartesian));
+        // There: on along the cycle.
         assert_eq!(
             s.handle_key(Key::Char('m')),
             Some(Action::SetMode(Mode::Off))
         );
-        // Pressed again before the answer: cycles on from the requested mode.
+        // Pressed again before the answer: from the requested mode, back to the keys' one.
         assert_eq!(s.mode_pending, Some(Mode::Off));
         assert_eq!(
             s.handle_key(Key::Char('m')),
-            Some(Action::SetMode(Mode::Joint))
+            Some(Action::SetMode(Mode::Cartesian))
         );
         s.apply(Event::ModeFailed);
         assert_eq!(s.mode_pending, None);
         assert_eq!(s.mode, Some(Mode::Cartesian));
+        // Joint keys in Cartesian mode: m goes to joint mode directly.
+        s.handle_key(Key::Char('j'));
+        assert_eq!(
+            s.handle_key(Key::Char('m')),
+            Some(Action::SetMode(Mode::Joint))
+        );
+    }
+
+    #[test]
+    fn a_refusal_for_the_mode_says_press_m() {
+        let mut s = ready(false);
+        s.apply(Event::Refused(crate::fake::parsed_text(
+            "ER20 Cmd TW needs mode 2",
+        )));
+        assert_eq!(s.status, "needs mode cartesian: press m");
     }
 
     fn status(mode: Mode, motion: Motion) -> Status {
