@@ -33,8 +33,22 @@ fn shipped(path: &Path) -> Option<(&'static str, &'static str)> {
 }
 
 /// Loads the robot file at `path`, or the built-in copy of a shipped robot it names (said on
-/// stderr); a missing file that names none lists the built-in ones.
+/// stderr); a missing file that names none lists the built-in ones. Suspicious values are
+/// warned about on stderr.
 pub fn load(path: &Path) -> Result<ValidRobot, String> {
+    let robot = find(path)?;
+    for (joint, min, max) in robot.wide_limits() {
+        eprintln!(
+            "armgate-sim: warning: joint {}: limits {min} .. {max} rad reach beyond a turn each \
+             way (±2π): written in degrees?",
+            joint + 1
+        );
+    }
+    Ok(robot)
+}
+
+/// The file at `path`, else the built-in copy it names.
+fn find(path: &Path) -> Result<ValidRobot, String> {
     if path.exists() {
         return load_file(path).map_err(|e| e.to_string());
     }
