@@ -29,6 +29,7 @@ from .errors import (
     ControllerMessage,
     ControllerTooOld,
     ControllerUnreachable,
+    HeldByOther,
     NotUnderstood,
     ReplyTimeout,
     SignatureMismatch,
@@ -742,11 +743,32 @@ class Arm:
 
     def request(self, chars: str, values: Sequence[float] = (), index: int = 0) -> wire.Message:
         """Sends any request and returns its reply; raises the typed exception of an ``ER``
-        text that answers it, :class:`~armgate.ReplyTimeout` if every attempt timed out."""
-        datagram = self._exchange(chars, wire.encode(chars, values, index), index)
+        text that answers it, :class:`~armgate.ReplyTimeout` if every attempt timed out. A
+        :class:`~armgate.HeldByOther` (``ER40``, whose text has no room for a port) names the
+        holder with its port (``SQ`` 3) and says what to do."""
+        try:
+            datagram = self._exchange(chars, wire.encode(chars, values, index), index)
+        except HeldByOther as e:
+            raise self._with_holder(e) from None
         message = wire.decode(datagram)
         assert message is not None  # _exchange returns only 31-byte replies
         return message
+
+    def _with_holder(self, error: HeldByOther) -> HeldByOther:
+        """``error`` with the holder's address and port from ``SQ`` 3, where it answers."""
+        try:
+            session = self.request("SQ", index=3).values
+        except ArmError:
+            return error
+        holder = address_of(session[1], session[2], session[3])
+        error.holder = holder
+        if holder is not None:
+            error.args = (
+                f"{error.text} ({holder} holds the arm while it moves: wait until its motion "
+                "ends, or stop() it, which any client may; then the next request takes "
+                "control)",
+            )
+        return error
 
     def _exchange(self, chars: str, datagram: bytes, index: int) -> bytes:
         # Whatever arrived before this request cannot be its reply.

@@ -261,7 +261,14 @@ class DriveFault(ControllerError):
 
 class HeldByOther(ControllerError):
     """``ER40 Cmd XX by 192.168.1.2``: another client controls the arm while it moves
-    (``by another client`` for an IPv6 one)."""
+    (``by another client`` for an IPv6 one). Raised by :meth:`~armgate.Arm.request` with
+    ``holder``, its address and port (``"192.168.1.2:40001"``, from ``SQ`` 3), in the message
+    with what to do."""
+
+    holder: Optional[str] = None
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else self.text
 
 
 class ClientSilent(ControllerError):

@@ -348,3 +348,18 @@ def test_a_move_another_client_stops_raises_stopped_with_the_cause_and_who(mk1) 
         assert status.holder == armgate.Holder.YOU
         assert status.holder_address == "127.0.0.1:{}".format(arm._socket.getsockname()[1])
         assert status.clients is not None and status.clients >= 2  # the fixture's probe too
+
+
+def test_a_refusal_by_another_holder_names_it_with_its_port(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm, armgate.Arm(
+        "127.0.0.1", port=mk1.port
+    ) as other:
+        goal = _far_joint_goal(arm)
+        arm.move_j(goal, wait=False)
+        with pytest.raises(armgate.HeldByOther) as held:
+            other.set_mode("cartesian")
+        holder = "127.0.0.1:{}".format(arm._socket.getsockname()[1])
+        assert held.value.holder == holder
+        assert held.value.text.startswith("ER40 Cmd CM by 127.0.0.1")
+        assert f"({holder} holds the arm while it moves" in str(held.value)
+        arm.stop()
