@@ -16,7 +16,6 @@ from .client import (
     DEFAULT_TIMEOUT,
     NO_READING,
     Arm,
-    WaitOptions,
 )
 from .errors import (
     ArmDidNotStart,
@@ -53,6 +52,7 @@ from .errors import (
 from .pose import Pose
 from .signing import Signer
 from .status import DriveState, Holder, Mode, Motion, Status, StopCause
+from .waiting import WaitOptions
 
 __all__ = [
     "DEFAULT_PORT",
