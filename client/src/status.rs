@@ -10,6 +10,7 @@
 use std::fmt;
 
 pub use armgate_protocol::client::Holder;
+use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
@@ -220,6 +221,16 @@ impl Client {
                 index: SESSION_INDEX,
             })
             .ok()),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// `SQ` index 5: the configuration branch of the measured joints (bits 1 shoulder, 2
+    /// elbow, 4 wrist); `None` without a closed form, a measurement, or the report.
+    pub fn present_branch(&mut self) -> Result<Option<u8>, ClientError> {
+        match self.status_part(BRANCH_INDEX) {
+            Ok(reply) => Ok(u8::try_from(reply.values[0] as i32).ok()),
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
             Err(e) => Err(e),
         }

@@ -50,8 +50,9 @@ pub struct IkMoveArgs {
     /// The pose.
     #[command(flatten)]
     pub pose: PoseArgs,
-    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist (as `armgate ik` prints them).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(0..8))]
+    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist, 0..=7 (as `armgate ik` prints them);
+    /// without it, the solution nearest the present joints.
+    #[arg(long, value_parser = parse_branch)]
     pub branch: Option<u8>,
     /// The redundancy values (no solution for them: refused, no others are tried).
     #[command(flatten)]
@@ -83,8 +84,31 @@ pub(super) fn ik(
         "{} solutions (branch: shoulder 1, elbow 2, wrist 4)",
         solutions.len()
     )?;
+    // The arm's own branch, and the solution nearest its joints: what ik-move without
+    // --branch moves to (best effort: a controller without the reports marks none).
+    let present = client.present_branch().ok().flatten();
+    let here = client.joints(joints).ok();
+    let nearest = here.as_ref().and_then(|q| {
+        solutions
+            .iter()
+            .map(|s| (s.branch, distance(&s.q, q)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(branch, _)| branch)
+    });
     for s in &solutions {
-        writeln!(out, "  branch {} {}", s.branch, fmt_values(&s.q, 6))?;
+        let mut marks = Vec::new();
+        if present == Some(s.branch) {
+            marks.push("the arm's present branch");
+        }
+        if nearest == Some(s.branch) {
+            marks.push("nearest the joints: ik-move's choice without --branch");
+        }
+        let marks = if marks.is_empty() {
+            String::new()
+        } else {
+            format!("   <- {}", marks.join("; "))
+        };
+        writeln!(out, "  branch {} {}{marks}", s.branch, fmt_values(&s.q, 6))?;
     }
     if solutions.is_empty() {
         return Err(CliError::NoSolution(
@@ -92,6 +116,27 @@ pub(super) fn ik(
         ));
     }
     Ok(())
+}
+
+/// `--branch`: the bits 0..=7.
+fn parse_branch(s: &str) -> Result<u8, String> {
+    match s.parse::<u8>() {
+        Ok(bits) if bits <= 7 => Ok(bits),
+        _ => Err(format!(
+            "`{s}`: a branch is 0 to 7, the sum of 1 shoulder, 2 elbow, 4 wrist (`armgate ik` \
+             lists those with a solution); leave --branch out for the solution nearest the \
+             present joints"
+        )),
+    }
+}
+
+/// The Euclidean distance between two joint vectors (their common joints).
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// `armgate ik-move`: KG, then wait until the joints are there.
@@ -144,6 +189,15 @@ mod tests {
         assert_eq!(
             err.to_string(),
             "no IK solution of this pose within the joint limits"
+        );
+        // --branch 8 says what a branch is.
+        let cli = <crate::cli::Cli as clap::Parser>::try_parse_from([
+            "armgate", "ik-move", "0", "0", "0", "0", "0", "0", "--branch", "8",
+        ]);
+        let message = cli.unwrap_err().to_string();
+        assert!(
+            message.contains("a branch is 0 to 7, the sum of 1 shoulder"),
+            "{message}"
         );
         // Two solutions: success.
         let fake = cartesian_controller(|r, reply| {
