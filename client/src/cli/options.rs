@@ -47,8 +47,9 @@ pub struct WaitArgs {
     /// 3 s without motion anyway).
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
-    /// Arrival tolerance, mm (joints: mrad).
-    #[arg(long, default_value_t = 1.0)]
+    /// Arrival tolerance, mm (joints: mrad); more than 0 (the measured values are floats: an
+    /// exact arrival is never seen).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_tolerance)]
     pub tolerance: f64,
     /// On Ctrl-C exit and leave the arm moving, saying so (by default ST is sent first).
     #[arg(long)]
@@ -132,6 +133,17 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
     parse_duration(s).map(|d| d.as_secs_f64())
 }
 
+/// An arrival tolerance: finite and more than 0 (`--tolerance 0` could never be met and would
+/// end every wait as a stall).
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}`: the tolerance is a number of mm (joints: mrad) above 0, e.g. 0.1"
+        )),
+    }
+}
+
 /// A duration that is not zero: a zero reply timeout would never wait for a reply.
 pub fn parse_timeout(s: &str) -> Result<Duration, String> {
     match parse_duration(s)? {
@@ -158,6 +170,8 @@ mod tests {
     fn durations() {
         assert_eq!(parse_duration("200ms"), Ok(Duration::from_millis(200)));
         assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
+        assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0"]).is_err());
+        assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0.05"]).is_ok());
         // A bare number is seconds, as --time and --for are (issue 37: 90 was 90 ms).
         assert_eq!(parse_duration("90"), Ok(Duration::from_secs(90)));
         assert_eq!(parse_duration("2min"), Ok(Duration::from_secs(120)));
