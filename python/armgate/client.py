@@ -307,10 +307,10 @@ class Arm(Waiting):
             self.request("GL", goal.xyz + goal.quaternion)
         else:
             self.request("GT", goal.xyz + goal.rpy + (float(time),))
-        self.request("BG")
+        planned = self.request("BG").values[6]
         if not wait:
             return None
-        return self.wait_for_poses([goal], self._options(time or 0.0))
+        return self.wait_for_poses([goal], self._options(time or 0.0, planned))
 
     def move_j(
         self, q: Sequence[float], time: Optional[float] = None, wait: bool = True
@@ -321,14 +321,15 @@ class Arm(Waiting):
         q = self._check_joints(q)
         if time is None:
             self._write_banks("jG", q, 0, 0.0)
-            self.request("jB")
+            planned = self.request("jB").values[6]
         else:
+            planned = 0.0
             self.request("jC")
             self._write_banks("jV", q, 0, float(time))
             self.request("jE")
         if not wait:
             return None
-        return self.wait_for_joints([q], self._options(time or 0.0))
+        return self.wait_for_joints([q], self._options(time or 0.0, planned))
 
     def choose_redundancy(
         self, theta3: Optional[float] = None, theta5: Optional[float] = None

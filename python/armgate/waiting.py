@@ -279,8 +279,12 @@ class Waiting:
         options = self._options(requested)
         return replace(options, pass_tolerance=options.pass_tolerance + (blend or 0.0))
 
-    def _options(self, requested: float) -> WaitOptions:
-        # As the Rust tool: the default plus the requested duration, unless set otherwise.
+    def _options(self, requested: float, planned: float = 0.0) -> WaitOptions:
+        """As the Rust tool, unless set otherwise: twice the planned duration the controller
+        reported (``BG``/``jB`` reply f6, 0 for none) plus 30 s, else the default plus the
+        requested duration."""
         if self.wait_options.timeout != WaitOptions.timeout:
             return self.wait_options
+        if planned > 0.0:
+            return replace(self.wait_options, timeout=2.0 * planned + 30.0)
         return replace(self.wait_options, timeout=WaitOptions.timeout + requested)

@@ -363,3 +363,14 @@ def test_a_refusal_by_another_holder_names_it_with_its_port(mk1) -> None:  # typ
         assert held.value.text.startswith("ER40 Cmd CM by 127.0.0.1")
         assert f"({holder} holds the arm while it moves" in str(held.value)
         arm.stop()
+
+
+def test_a_move_start_reports_its_planned_duration(mk1) -> None:  # type: ignore[no-untyped-def]
+    """``jB``'s reply carries the planned duration (f6), which sizes the wait's timeout."""
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        goal = _far_joint_goal(arm)  # 0.3 rad on joint 1, at most 0.07 rad/s
+        arm._write_banks("jG", goal, 0, 0.0)
+        planned = arm.request("jB").values[6]
+        assert 0.3 / 0.07 <= planned < 60.0
+        assert arm._options(0.0, planned).timeout == pytest.approx(2 * planned + 30.0)
+        arm.stop()

@@ -491,7 +491,11 @@ fn a_begin_whose_reply_was_lost_is_answered_again_not_refused_busy() {
     let (sim, goal) = moving(0.3, |_| {});
     std::thread::sleep(Duration::from_millis(200));
     match sim.request("jB", [0.0; 7], 0) {
-        Answer::Reply(c, v, 0) if &c == b"Bj" => assert_eq!(v, [0.0; 7]),
+        // The first reply again: f6 the move's planned duration (0.3 rad at 0.07 rad/s and more).
+        Answer::Reply(c, v, 0) if &c == b"Bj" => {
+            assert_eq!(v[..6], [0.0; 6]);
+            assert!((0.3 / 0.07..60.0).contains(&v[6]), "{v:?}");
+        }
         other => panic!("the resent jB: {other:?}"),
     }
     // Carried out once: the move runs on to its goal (not restarted, not refused).

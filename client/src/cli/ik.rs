@@ -165,7 +165,7 @@ pub(super) fn ik_move(
     if wait.no_wait {
         return Ok(());
     }
-    let options = wait.options(*time, interrupt.as_ref());
+    let options = wait.options(*time, None, interrupt.as_ref());
     let reached = follow(client, |c| {
         c.wait_until_joints(&goal.q, &options, joint_progress)
     })?;

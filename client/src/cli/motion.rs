@@ -50,13 +50,13 @@ pub(super) fn move_to(
     let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
     client.goal_rpy(xyz, rpy, *time)?;
-    start(client, Client::begin)?;
+    let planned = start(client, Client::begin)?;
     writeln!(out, "moving")?;
     if wait.no_wait {
         return Ok(());
     }
     let goal = Pose::from_xyz_rpy(xyz, rpy);
-    let options = wait.options(*time, interrupt.as_ref());
+    let options = wait.options(*time, planned, interrupt.as_ref());
     let pose = follow(client, |c| {
         c.wait_until_pose(&goal, &options, pose_progress)
     })?;
@@ -79,22 +79,23 @@ pub(super) fn jmove(
     let JmoveArgs { q, time, wait } = args;
     check_joint_count(q.len(), joint_count(cli, client)?)?;
     let interrupt = wait.interrupt();
-    match time {
+    let planned = match time {
         None => {
             client.joint_goal(q)?;
-            start(client, Client::joint_begin)?;
+            start(client, Client::joint_begin)?
         }
         Some(t) => {
             client.joint_via_clear()?;
             client.via_joint(0, q, *t)?;
             start(client, Client::run_joint_sequence)?;
+            None
         }
-    }
+    };
     writeln!(out, "moving")?;
     if wait.no_wait {
         return Ok(());
     }
-    let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
+    let options = wait.options(time.unwrap_or(0.0), planned, interrupt.as_ref());
     let reached = follow(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())

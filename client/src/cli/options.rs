@@ -43,8 +43,8 @@ pub struct WaitArgs {
     #[arg(long)]
     pub no_wait: bool,
     /// Give up waiting after this long, e.g. 90s, 500ms, 2min (a bare number is seconds);
-    /// then ST. Default: 10 min plus the requested times (a stalled arm ends the wait after
-    /// 3 s without motion anyway).
+    /// then ST. Default: twice the planned duration the controller reports plus 30 s, else
+    /// 10 min plus the requested times (a stalled arm ends the wait after 3 s anyway).
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
     /// Arrival tolerance, mm (joints: mrad); more than 0 (the measured values are floats: an
@@ -57,18 +57,23 @@ pub struct WaitArgs {
 }
 
 impl WaitArgs {
-    /// The wait's options; with `interrupt`, Ctrl-C ends the wait.
+    /// The wait's options for a motion that takes at least `requested` s, or `planned` as the
+    /// controller reports it; with `interrupt`, Ctrl-C ends the wait.
     pub(super) fn options(
         &self,
         requested: f64,
+        planned: Option<Duration>,
         interrupt: Option<&interrupt::Interrupt>,
     ) -> WaitOptions {
         let extra = Duration::try_from_secs_f64(requested).unwrap_or_default();
+        let default = match planned {
+            // Room for slow-downs near singularities and joint limits.
+            Some(planned) => planned.saturating_mul(2).saturating_add(PLANNED_MARGIN),
+            None => WaitOptions::default().timeout.saturating_add(extra),
+        };
         WaitOptions {
             tolerance: self.tolerance * 1e-3,
-            timeout: self
-                .wait_timeout
-                .unwrap_or(WaitOptions::default().timeout.saturating_add(extra)),
+            timeout: self.wait_timeout.unwrap_or(default),
             interrupt: interrupt.cloned(),
             stop: if self.no_stop_on_interrupt {
                 StopPolicy::ExceptInterrupt
@@ -87,7 +92,7 @@ impl WaitArgs {
         interrupt: Option<&interrupt::Interrupt>,
         blend: f64,
     ) -> WaitOptions {
-        let options = self.options(requested, interrupt);
+        let options = self.options(requested, None, interrupt);
         WaitOptions {
             pass_tolerance: options.pass_tolerance + blend,
             ..options
@@ -106,6 +111,9 @@ impl WaitArgs {
             .ok()
     }
 }
+
+/// The margin of a wait on a motion whose planned duration the controller reported.
+const PLANNED_MARGIN: Duration = Duration::from_secs(30);
 
 /// Parses a duration with its unit, `200ms`, `1.5s`, `2min`, or a bare number of seconds (as
 /// every duration of the `armgate` tool: `--timeout`, `--wait-timeout`, `--time`, `--for`).
@@ -170,6 +178,29 @@ mod tests {
     fn durations() {
         assert_eq!(parse_duration("200ms"), Ok(Duration::from_millis(200)));
         assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
+        // The wait: twice the planned duration plus 30 s, else 10 min plus the requested time;
+        // --wait-timeout wins.
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        let planned = Some(Duration::from_secs(45));
+        assert_eq!(
+            args.wait.options(0.0, planned, None).timeout,
+            Duration::from_secs(120)
+        );
+        assert_eq!(
+            args.wait.options(5.0, None, None).timeout,
+            Duration::from_secs(605)
+        );
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0", "--wait-timeout", "2s"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        assert_eq!(
+            args.wait.options(0.0, planned, None).timeout,
+            Duration::from_secs(2)
+        );
         assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0"]).is_err());
         assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0.05"]).is_ok());
         // A bare number is seconds, as --time and --for are (issue 37: 90 was 90 ms).
