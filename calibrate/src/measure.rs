@@ -152,14 +152,22 @@ pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
 /// did not arrive is the pose's reason to be skipped, no reply ends the run.
 fn visit(client: &mut Client, goal: &[f64], settle: Duration) -> Result<Visit, String> {
     let started = client.joint_goal(goal).and_then(|_| client.joint_begin());
-    match started {
-        Ok(()) => {}
+    let planned = match started {
+        Ok(planned) => planned,
         Err(ClientError::Rejected(text)) => {
             return Ok(Err(Refusal::Refused(format!("refused: {text}"))));
         }
         Err(e) => return Err(e.to_string()),
-    }
-    if let Err(e) = client.wait_until_joints(goal, &WaitOptions::default(), |_| {}) {
+    };
+    // Twice the planned duration and a margin, as `armgate jmove` waits.
+    let defaults = WaitOptions::default();
+    let options = WaitOptions {
+        timeout: planned.map_or(defaults.timeout, |p| {
+            p.saturating_mul(2).saturating_add(Duration::from_secs(30))
+        }),
+        ..defaults
+    };
+    if let Err(e) = client.wait_until_joints(goal, &options, |_| {}) {
         return Ok(Err(Refusal::NotReached(e.to_string())));
     }
     client

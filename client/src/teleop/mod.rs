@@ -36,7 +36,7 @@
 //! terminal (SIGHUP) or an error of the terminal all send `ST` (on a socket of its own,
 //! [`StopOnExit`]) before the process ends, as `armgate move` does on Ctrl-C — unless the
 //! controller's session report (`SQ` 3) names another client as the holder of the arm: a
-//! teleop opened to watch leaves another operator's motion alone ([`Stopper::stop`]). On
+//! teleop opened to watch leaves another operator's motion alone ([`StopSender::stop`]). On
 //! SIGTERM and SIGHUP a thread of its own does so at once ([`stop_on_signal`]): a closed
 //! terminal leaves the keyboard loop stuck.
 //!
@@ -111,7 +111,7 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
 }
 
 /// Where and how to send `ST`, and for whom.
-struct Stopper {
+struct StopSender {
     peer: std::net::SocketAddr,
     config: crate::ClientConfig,
     /// Signs the stop for a controller that wants signed requests.
@@ -120,7 +120,7 @@ struct Stopper {
     own: Vec<std::net::SocketAddr>,
 }
 
-/// What [`Stopper::stop`] did.
+/// What [`StopSender::stop`] did.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ExitStop {
     /// Sent `ST` (this teleop holds the arm, nobody does, or the controller cannot say).
@@ -131,7 +131,7 @@ pub enum ExitStop {
     Failed,
 }
 
-impl Stopper {
+impl StopSender {
     /// Sends `ST` unless the controller names another client as the holder (`SQ` 3). It is
     /// obeyed from any client: a socket of its own, so that it never waits behind the I/O
     /// thread's request. A controller that cannot say (too old, no answer) is stopped.
@@ -167,7 +167,7 @@ impl Stopper {
 
 /// Sends `ST` when dropped — on every way out of [`run`], an error return included — so that
 /// leaving teleop never leaves the arm moving.
-struct StopOnExit(Option<Stopper>);
+struct StopOnExit(Option<StopSender>);
 
 impl Drop for StopOnExit {
     fn drop(&mut self) {
@@ -191,7 +191,7 @@ const SIGNAL_GRACE: Duration = Duration::from_secs(1);
 fn stop_on_signal(
     signalled: crate::interrupt::Interrupt,
     done: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    stopper: Stopper,
+    stopper: StopSender,
 ) -> std::io::Result<()> {
     use std::sync::atomic::Ordering;
     let tick = Duration::from_millis(20);
@@ -277,7 +277,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
         .into_iter()
         .filter_map(Result::ok)
         .collect();
-    let stopper = Stopper {
+    let stopper = StopSender {
         peer: client.peer(),
         config: client.config().clone(),
         // A link of its own again: the stop must not race the jog stream's timestamps.
