@@ -311,15 +311,21 @@ impl Sim {
         );
     }
 
-    /// Sends `cmd` (a null request) until it gets its null reply, as long as the answer is
-    /// one of `refusals`.
+    /// Sends `cmd` (a null request) until it gets its null reply (a motion start's carries its
+    /// planned duration in f6), as long as the answer is one of `refusals`.
     fn retry_while(&self, cmd: &str, refusals: &[&str]) {
         let started = Instant::now();
         loop {
             match self.request(cmd, [0.0; 7], 0) {
                 Answer::Reply(chars, v, _) => {
                     let b = cmd.as_bytes();
-                    assert_eq!((chars, v), ([b[1], b[0]], [0.0; 7]), "{cmd} null reply");
+                    assert_eq!(chars, [b[1], b[0]], "{cmd} reply");
+                    assert_eq!(v[..6], [0.0; 6], "{cmd} null reply");
+                    if matches!(cmd, "BG" | "jB") {
+                        assert!(v[6] > 0.0 && v[6] < 600.0, "{cmd} planned duration {v:?}");
+                    } else {
+                        assert_eq!(v[6], 0.0, "{cmd} null reply");
+                    }
                     return;
                 }
                 Answer::Text(t) if refusals.contains(&t.as_str()) => {

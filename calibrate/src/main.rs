@@ -1,6 +1,8 @@
 //! `armgate-calibrate`: fit a robot file to measured tool positions, or plan the poses to
 //! measure. `armgate calibrate …` runs this binary. See `docs/calibration.md`.
 
+mod measure;
+
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -133,6 +135,11 @@ enum Cmd {
         #[arg(long)]
         out: PathBuf,
     },
+    /// The measuring run: move the arm (armgate-sim or a controller, `--addr`) through a
+    /// plan's poses, let it settle, record the joints it reports and the instrument's reading
+    /// (a prompt, a hook command, or none), and write the fit's measurement file; a pose that
+    /// is refused or not reached is skipped with its reason.
+    Measure(measure::MeasureArgs),
 }
 
 fn main() -> ExitCode {
@@ -171,6 +178,8 @@ fn main() -> ExitCode {
             instrument.as_deref(),
             &out,
         ),
+        Some(Cmd::Measure(args)) => robot(&args.robot)
+            .and_then(|config| measure::run(&args, config.dof()).map_err(Into::into)),
         None => run_fit(&cli.fit),
     };
     match result {

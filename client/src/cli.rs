@@ -29,7 +29,7 @@ pub use error::CliError;
 pub use ik::{IkArgs, IkMoveArgs};
 pub use jog::JogArgs;
 pub use motion::{JmoveArgs, MoveArgs};
-pub use options::{PoseArgs, WaitArgs, parse_duration, parse_timeout};
+pub use options::{PoseArgs, WaitArgs, parse_duration, parse_seconds, parse_timeout};
 pub use read::print_pose;
 pub use run_file::RunArgs;
 pub use send::SendArgs;
@@ -70,11 +70,16 @@ Examples:
   armgate record run.mcap --robot robots/ranger-mk1.toml --duration 60
                                              the controller in MCAP for Foxglove
 
-Exit status: 0 success, 1 the controller refused (ER text) or aborted a motion (ER21, WN22,
-WN27, ER3x), 2 no reply, I/O error, bad arguments or a bad run file, 130 interrupted.
 A move, ik-move, jmove or run that fails after starting its motion (Ctrl-C, --wait-timeout,
-a stall, an abort, no reply) sends ST first and says so: the arm stops and holds.
-Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.";
+a stall, no reply) sends ST first and says so: the arm stops and holds. A motion stopped by
+the controller or another client says why and by whom.
+Unsolicited ER/WN notices that arrive meanwhile are printed to stderr.
+";
+
+/// The examples, then the exit statuses (one table, [`crate::exit`]).
+fn after_help() -> String {
+    format!("{AFTER_HELP}\n{}", crate::exit::help())
+}
 
 /// The `armgate` command line: how to reach the controller, and what to do.
 #[derive(Debug)]
@@ -88,7 +93,7 @@ pub struct Cli {
 /// The command line as clap derives it: [`Cli`] adds the controller options to the
 /// subcommands that use them.
 #[derive(Debug, Parser)]
-#[command(name = "armgate", version, about = ABOUT, long_about = LONG_ABOUT, after_help = AFTER_HELP)]
+#[command(name = "armgate", version, about = ABOUT, long_about = LONG_ABOUT, after_help = after_help())]
 struct Parsed {
     /// How to reach the controller.
     #[command(flatten)]
@@ -228,7 +233,13 @@ fn with_hint(client: &mut Client, error: CliError) -> CliError {
     let CliError::Client(ClientError::Rejected(text)) = error else {
         return error;
     };
-    let status = client.status().ok();
+    let mut status = client.status().ok();
+    if let Some(status) = status.as_mut()
+        && crate::matching::code(&text) == Some(40)
+    {
+        // ER40 has no room for the holder's port: the session report names it.
+        status.session = client.session().ok().flatten();
+    }
     CliError::Refused {
         hint: hints::hint(&text, status.as_ref()),
         text,

@@ -4,8 +4,19 @@ use armgate_protocol::client::{
     BlendTolerance, Command, Reply, Request, UNKNOWN_TEMPERATURE, VALUES, ViaKind,
 };
 
+use std::time::Duration;
+
 use crate::banks;
 use crate::{Client, ClientError, Mode, Pose, Quaternion};
+
+/// The planned duration a motion start's reply reports in f6 (0, as the seed's null reply:
+/// none).
+fn planned(reply: &Reply) -> Option<Duration> {
+    let [.., f6] = reply.values;
+    Some(f64::from(f6))
+        .filter(|t| *t > 0.0)
+        .and_then(|t| Duration::try_from_secs_f64(t).ok())
+}
 use armgate_protocol::client::banks::BANK_2;
 
 /// The temperature a drive that never answered reports (°C).
@@ -135,9 +146,10 @@ impl Client {
     }
 
     /// `BG`: starts the Cartesian motion to the stored goal (Cartesian mode; refused while a
-    /// motion runs).
-    pub fn begin(&mut self) -> Result<(), ClientError> {
-        self.simple(Command::Begin).map(drop)
+    /// motion runs). Returns the planned duration the controller reports (`None` from one that
+    /// reports none, as the seed's).
+    pub fn begin(&mut self) -> Result<Option<Duration>, ClientError> {
+        self.simple(Command::Begin).map(|reply| planned(&reply))
     }
 
     /// `jG`: stores the joint goal; for more than six joints bank 2 is sent first.
@@ -145,9 +157,11 @@ impl Client {
         self.write_banks(Command::JointGoal, q, 0, 0.0)
     }
 
-    /// `jB`: starts the joint motion to the stored joint goal (joint mode).
-    pub fn joint_begin(&mut self) -> Result<(), ClientError> {
-        self.simple(Command::JointBegin).map(drop)
+    /// `jB`: starts the joint motion to the stored joint goal (joint mode). Returns the planned
+    /// duration, as [`begin`](Self::begin).
+    pub fn joint_begin(&mut self) -> Result<Option<Duration>, ClientError> {
+        self.simple(Command::JointBegin)
+            .map(|reply| planned(&reply))
     }
 
     /// `VP`: stores Cartesian via point `slot` (0..19) with a minimum duration `time` (s).

@@ -6,11 +6,14 @@ use std::time::Duration;
 
 use armgate_protocol::client::Text;
 
+use crate::ended::{EndStop, Stopper};
+use crate::exit;
+use crate::status::{Name, StopCause};
+
 /// Everything that can go wrong talking to the controller.
 ///
-/// [`exit_code`](Self::exit_code) maps each case to the exit status of the `armgate` tool: 1 when
-/// the controller said no (a rejection, or a notice that ended a motion), 2 for everything else
-/// (no answer, I/O, bad arguments).
+/// [`exit_code`](Self::exit_code) maps each case to the exit status of the `armgate` tool, one
+/// table for every subcommand ([`exit::TABLE`]).
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     /// A socket operation failed.
@@ -51,6 +54,31 @@ pub enum ClientError {
     /// (`ER21`, `WN22`, `WN27` or a drive fault `ER3x`).
     #[error("motion aborted: {0}")]
     Aborted(Text),
+    /// A wait ended because the controller stopped the motion before the target was reached,
+    /// for `cause` (`SQ` index 2; `joint` names a joint limit's joint, 0-based), set by `by`.
+    #[error(
+        "the motion was stopped by {by}: {}{} (target {} not reached)",
+        cause.name(), joint.map_or(String::new(), |j| format!(" (j{})", u16::from(j) + 1)),
+        target + 1
+    )]
+    Stopped {
+        /// Why the controller stopped it.
+        cause: StopCause,
+        /// The joint of a joint-limit hold (0-based).
+        joint: Option<u8>,
+        /// Who stopped it.
+        by: Stopper,
+        /// The 0-based number of the target not reached.
+        target: usize,
+    },
+    /// A wait this client owned ended without arriving; `stop` says whether it sent `ST`.
+    #[error("{error}; {stop}")]
+    Ended {
+        /// Why the wait ended.
+        error: Box<ClientError>,
+        /// What this client did about the motion.
+        stop: EndStop,
+    },
     /// A wait ended because the arm stopped moving before it reached the target.
     #[error(
         "the arm stopped {} from target {} (no motion for {after:?})",
@@ -93,7 +121,7 @@ pub enum ClientError {
     /// ON was answered but the drives do not run (faulted, off, or still starting).
     #[error("the drives did not start: {0}")]
     NotStarted(String),
-    /// A wait ended because it was interrupted (Ctrl-C); the motion was not stopped.
+    /// A wait ended because it was interrupted (Ctrl-C).
     #[error("interrupted")]
     Interrupted,
     /// An argument cannot be sent (e.g. too many joints, a via slot with bit 7 set).
@@ -110,13 +138,20 @@ fn remaining(distance: f64, angle: Option<f64>) -> String {
 }
 
 impl ClientError {
-    /// The exit status for the `armgate` tool: 1 if the controller refused or aborted, else 2.
+    /// The exit status for the `armgate` tool: its row of [`exit::TABLE`].
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Rejected(_) | Self::Aborted(_) | Self::TooOld { .. } | Self::NotStarted(_) => 1,
-            // 128 + SIGINT, as a shell reports a process ended by Ctrl-C.
-            Self::Interrupted => 130,
-            _ => 2,
+            Self::Rejected(_) | Self::TooOld { .. } | Self::NotStarted(_) => exit::REFUSED,
+            Self::Aborted(_) | Self::Stopped { .. } => exit::STOPPED,
+            Self::Stalled { .. } | Self::WaitTimeout { .. } => exit::NOT_ARRIVED,
+            Self::Interrupted => exit::INTERRUPTED,
+            Self::Ended { error, .. } => error.exit_code(),
+            Self::Io(_)
+            | Self::Address(_)
+            | Self::Timeout { .. }
+            | Self::Unverified { .. }
+            | Self::Refused(_)
+            | Self::InvalidArgument(_) => exit::NO_CONTACT,
         }
     }
 }

@@ -13,6 +13,19 @@ use crate::{Mode, Text};
 /// The code of `ER20`, the refusals with a reason.
 const REJECTED: u8 = 20;
 
+/// The code of `ER40`: another client holds the moving arm.
+const HELD_BY_OTHER: u8 = 40;
+
+/// The hint for `ER40`: the holder with its port (the text has no room for it), and what to do.
+fn holder_hint(status: &Status) -> Option<String> {
+    let holder = status.holder_text()?;
+    Some(format!(
+        "{holder} holds the arm while it moves: wait until its motion ends (`armgate status` \
+         shows it), or stop it with `armgate stop` (obeyed from any client); then the next \
+         request takes control"
+    ))
+}
+
 /// A hint for a refusal, if there is one to give.
 pub fn hint(text: &Text, status: Option<&Status>) -> Option<String> {
     let header = Header::parse(text).ok()?;
@@ -23,6 +36,9 @@ pub fn hint(text: &Text, status: Option<&Status>) -> Option<String> {
         return Some(h);
     }
     if let Some(status) = status {
+        if header.code == HELD_BY_OTHER {
+            return holder_hint(status);
+        }
         if let Some(h) = drive_hint(status, header.code) {
             return Some(h);
         }
@@ -160,6 +176,7 @@ mod tests {
             uptime: 3.0,
             name: "ranger-mk1".into(),
             cause: None,
+            session: None,
         }
     }
 
@@ -251,5 +268,23 @@ mod tests {
         );
         assert_eq!(hint(&parsed_text("ER11 Arm did not start"), None), None);
         assert_eq!(hint(&parsed_text("ER26 Cmd jG j5 < 0.785"), None), None);
+    }
+
+    #[test]
+    fn another_holder_is_named_with_its_port_and_what_to_do() {
+        let mut s = status(Mode::Joint, DriveStatus::Running, 0, Motion::JointMove);
+        s.session = Some(armgate_protocol::client::SessionReport {
+            holder: crate::status::Holder::Other,
+            address: Some("127.0.0.1:40001".parse().unwrap()),
+            watchdog_ms: 0,
+            send_drops: 0,
+            clients: 2,
+        });
+        let h = hint_for("ER40 Cmd jB by 127.0.0.1", Some(s));
+        assert!(
+            h.starts_with("127.0.0.1:40001 holds the arm while it moves: wait")
+                && h.contains("`armgate stop`"),
+            "{h}"
+        );
     }
 }

@@ -24,7 +24,10 @@
 //! * [`Client`]: requests with timeout and retries, reply matching ([`matching`]), the queue of
 //!   unsolicited notices, and one typed method per command (`pose`, `joints`, `goal_rpy`,
 //!   `begin`, `joint_goal`, `via_joint`, ...; joint requests follow the bank rule, [`banks`]).
-//! * [`wait`]: polling until a pose or joint target is reached.
+//! * [`wait`]: polling until a pose or joint target is reached; a wait that does not arrive
+//!   sends `ST` and says so, and one the controller stopped says why and who
+//!   ([`ended`], [`ClientError::Stopped`]).
+//! * [`exit`]: the `armgate` tool's exit statuses, one table for every subcommand.
 //! * [`velocity`]: twist and joint-rate streaming (`TW`, `jW`), [`VelocityStreamer`].
 //! * [`runfile`]: TOML via-point sequences.
 //! * [`status`]: the status request `SQ` (mode, drives, joint count, robot name);
@@ -37,7 +40,9 @@ pub mod cli;
 mod client;
 mod commands;
 mod drives;
+pub mod ended;
 mod error;
+pub mod exit;
 #[cfg(test)]
 mod fake;
 mod hints;
@@ -62,6 +67,7 @@ pub use client::{
 };
 pub use commands::NO_READING;
 pub use drives::DrivesOn;
+pub use ended::{EndStop, StopPolicy, Stopper};
 pub use error::ClientError;
 pub use ik::IkSolution;
 pub use pose::{Mode, Pose, Quaternion, next_mode};

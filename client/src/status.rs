@@ -9,10 +9,12 @@
 
 use std::fmt;
 
+pub use armgate_protocol::client::Holder;
+use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
-    STATUS_INDEX, StatusReport, VALUES,
+    SESSION_INDEX, STATUS_INDEX, SessionReport, StatusReport, VALUES,
 };
 pub use armgate_protocol::client::{DriveStatus, Motion, StopCause};
 
@@ -87,6 +89,9 @@ pub struct Status {
     /// Why the arm last stopped, or is held (`SQ` index 2, asked by [`Client::stop_cause`];
     /// none if not asked, or from older controllers).
     pub cause: Option<CauseReport>,
+    /// Who holds the arm, the watchdog, the clients known (`SQ` index 3, asked by
+    /// [`Client::session`]; none if not asked, or from older controllers).
+    pub session: Option<SessionReport>,
 }
 
 impl Status {
@@ -118,6 +123,7 @@ impl Status {
             uptime: f64::from(report.uptime),
             name: name.as_str().to_owned(),
             cause: None,
+            session: None,
         })
     }
 
@@ -127,12 +133,27 @@ impl Status {
             Some(CauseReport {
                 cause: Some(cause),
                 joint,
-            }) => match joint {
-                Some(j) => format!("{} (j{})", cause.name(), u16::from(j) + 1),
-                None => cause.name().to_owned(),
-            },
+                by,
+            }) => {
+                let joint = joint.map_or(String::new(), |j| format!(" (j{})", u16::from(j) + 1));
+                let by = by.map_or(String::new(), |a| format!(" from {a}"));
+                format!("{}{joint}{by}", cause.name())
+            }
             _ => "none".to_owned(),
         }
+    }
+
+    /// Who holds the arm: `nobody`, `this client (127.0.0.1:40001)`, `127.0.0.1:40001`.
+    pub fn holder_text(&self) -> Option<String> {
+        let session = self.session?;
+        let address = session.address.map(|a| a.to_string());
+        Some(match (session.holder, address) {
+            (Holder::Nobody, _) => "nobody".to_owned(),
+            (Holder::You, Some(a)) => format!("this client ({a})"),
+            (Holder::You, None) => "this client".to_owned(),
+            (Holder::Other, Some(a)) => a,
+            (Holder::Other, None) => "another client (IPv6)".to_owned(),
+        })
     }
 
     /// The drive state with its fault: `running`, `faulted (ER31)`.
@@ -153,6 +174,14 @@ impl fmt::Display for Status {
         writeln!(f, "motion     {}", self.motion.name())?;
         if self.cause.is_some() {
             writeln!(f, "stopped by {}", self.cause_text())?;
+        }
+        if let (Some(holder), Some(session)) = (self.holder_text(), self.session) {
+            writeln!(f, "holder     {holder}")?;
+            writeln!(f, "clients    {} known", session.clients)?;
+            match session.watchdog_ms {
+                0 => writeln!(f, "watchdog   off")?,
+                ms => writeln!(f, "watchdog   {ms} ms")?,
+            }
         }
         writeln!(f, "refused    {} requests", self.refused)?;
         write!(f, "uptime     {:.1} s", self.uptime)
@@ -177,6 +206,31 @@ impl Client {
                 index: CAUSE_INDEX,
             })
             .ok()),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// `SQ` index 3: who holds the arm (this client, another at an address and port, nobody),
+    /// the client watchdog, the clients known; `None` from a controller without it.
+    pub fn session(&mut self) -> Result<Option<SessionReport>, ClientError> {
+        match self.status_part(SESSION_INDEX) {
+            Ok(reply) => Ok(SessionReport::from_reply(&Reply {
+                command: Command::Status,
+                values: reply.values,
+                index: SESSION_INDEX,
+            })
+            .ok()),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// `SQ` index 5: the configuration branch of the measured joints (bits 1 shoulder, 2
+    /// elbow, 4 wrist); `None` without a closed form, a measurement, or the report.
+    pub fn present_branch(&mut self) -> Result<Option<u8>, ClientError> {
+        match self.status_part(BRANCH_INDEX) {
+            Ok(reply) => Ok(u8::try_from(reply.values[0] as i32).ok()),
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
             Err(e) => Err(e),
         }
@@ -259,17 +313,31 @@ pub(crate) mod tests {
                 cause: Some(CauseReport {
                     cause: Some(StopCause::ModeChange),
                     joint: Some(3),
+                    by: Some("0.31.0.8:3".parse().unwrap()),
                 }),
+                session: None,
             }
         );
         assert_eq!(s.drives_text(), "faulted (ER31)");
-        assert_eq!(s.cause_text(), "mode change (j4)");
+        assert_eq!(s.cause_text(), "mode change (j4) from 0.31.0.8:3");
         let sent = fake.received();
         assert_eq!(sent.len(), 3);
         assert_eq!((&sent[0][..2], sent[0][30]), (&b"SQ"[..], 0));
         assert_eq!((&sent[1][..2], sent[1][30]), (&b"SQ"[..], 1));
         assert_eq!((&sent[2][..2], sent[2][30]), (&b"SQ"[..], 2));
         assert!(s.to_string().contains("drives     faulted (ER31)"));
+        s.session = Some(SessionReport {
+            holder: Holder::Other,
+            address: Some("192.168.1.2:40001".parse().unwrap()),
+            watchdog_ms: 500,
+            send_drops: 0,
+            clients: 3,
+        });
+        let shown = s.to_string();
+        assert!(
+            shown.contains("holder     192.168.1.2:40001\nclients    3 known\nwatchdog   500 ms\n"),
+            "{shown}"
+        );
     }
 
     #[test]

@@ -11,8 +11,13 @@
 //! * with [`ClientError::Stalled`] when the arm has not moved for [`WaitOptions::stall`]
 //!   (held short of the target without a motion-ending notice, e.g. clamped at a joint limit);
 //! * with [`ClientError::WaitTimeout`] after [`WaitOptions::timeout`];
-//! * with [`ClientError::Interrupted`] when [`WaitOptions::interrupt`] is set (Ctrl-C); the
-//!   motion goes on unless the caller stops it.
+//! * with [`ClientError::Interrupted`] when [`WaitOptions::interrupt`] is set (Ctrl-C).
+//!
+//! A stall or timeout while the controller reports a stop cause (`SQ` 2) becomes
+//! [`ClientError::Stopped`]: the motion was stopped, and the error says why and by whom. Any
+//! other ending but arrival sends `ST` as [`WaitOptions::stop`] says (by default always) and
+//! is returned as [`ClientError::Ended`], which says so: the wait's owner gave up on the motion,
+//! so the arm must not go on alone ([`crate::ended`]).
 //!
 //! Notices that arrive during a wait are handed to the progress callback (and not left in
 //! the client's queue).
@@ -26,6 +31,7 @@ use std::time::{Duration, Instant};
 
 use armgate_protocol::client::Text;
 
+use crate::ended::StopPolicy;
 use crate::interrupt::Interrupt;
 use crate::matching;
 use crate::{Client, ClientError, Pose};
@@ -48,20 +54,24 @@ pub struct WaitOptions {
     pub stall: Option<Duration>,
     /// End the wait when this flag is set (checked at every poll).
     pub interrupt: Option<Interrupt>,
+    /// When a wait that does not arrive sends `ST`.
+    pub stop: StopPolicy,
 }
 
 impl Default for WaitOptions {
-    /// 1 mm (or 1 mrad for joints), 0.01 rad, 10 mm to pass a via point, 60 s, 20 Hz, stall
-    /// after 3 s.
+    /// 1 mm (or 1 mrad for joints), 0.01 rad, 10 mm to pass a via point, 10 min (the stall
+    /// check ends a wait whose arm does not move; long moves must not be cut short), 20 Hz,
+    /// stall after 3 s, `ST` on every ending but arrival.
     fn default() -> Self {
         Self {
             tolerance: 0.001,
             angle_tolerance: 0.01,
             pass_tolerance: 0.01,
-            timeout: Duration::from_secs(60),
+            timeout: Duration::from_secs(600),
             poll: Duration::from_millis(50),
             stall: Some(Duration::from_secs(3)),
             interrupt: None,
+            stop: StopPolicy::Always,
         }
     }
 }
@@ -221,7 +231,8 @@ impl Client {
         Ok(previous)
     }
 
-    /// The shared polling loop, with the controller's watchdog on while it runs.
+    /// The shared polling loop, with the controller's watchdog on while it runs; a wait that
+    /// does not arrive is explained and ended ([`Client::end_wait`]).
     fn wait_through<T, F, M, P>(
         &mut self,
         goals: &[T],
@@ -237,13 +248,15 @@ impl Client {
         P: FnMut(&Progress<'_, T>),
     {
         let watched = self.watchdog(watchdog_ms(options.poll)).is_ok();
-        let result = self.poll_through(goals, options, read, measure, moved, progress);
+        let result = self
+            .poll_through(goals, options, read, measure, moved, progress)
+            .map_err(|e| self.explain(e));
         if watched {
             // Best effort: a lost reply leaves it on, which only matters once the client is
             // silent while the arm moves.
             let _ = self.watchdog(0);
         }
-        result
+        result.map_err(|e| self.end_wait(e, options.stop))
     }
 
     fn poll_through<T, F, M, P>(
@@ -340,6 +353,16 @@ mod tests {
     /// A fake arm that moves 10 mm along x per PS poll towards `target` once BG is received,
     /// optionally sending a notice when it is at `notice_at` steps.
     fn arm(start: f64, target: f64, notice: Option<(usize, &'static str)>) -> FakeController {
+        stopped_arm(start, target, notice, None)
+    }
+
+    /// [`arm`], stopped after `stop.0` steps with the `SQ` 2 report `stop.1` (f0..f4).
+    fn stopped_arm(
+        start: f64,
+        target: f64,
+        notice: Option<(usize, &'static str)>,
+        stop: Option<(usize, [f32; 5])>,
+    ) -> FakeController {
         let state = Arc::new(Mutex::new((start, false, 0usize)));
         FakeController::spawn(move |datagram| {
             let message = Message::new_checked(datagram).unwrap();
@@ -349,6 +372,9 @@ mod tests {
             match request.command {
                 Command::Begin => s.1 = true,
                 Command::Pose => {
+                    if stop.is_some_and(|(at, _)| s.2 >= at) {
+                        s.1 = false;
+                    }
                     if s.1 {
                         s.0 = if (target - s.0).abs() < 0.01 {
                             target
@@ -367,11 +393,30 @@ mod tests {
                     out.push(reply.to_bytes().to_vec());
                     return out;
                 }
+                Command::Status => {
+                    let mut reply = Reply::null(Command::Status);
+                    reply.index = request.index;
+                    if let Some((at, report)) = stop
+                        && s.2 >= at
+                    {
+                        reply.values[..5].copy_from_slice(&report);
+                    }
+                    out.push(reply.to_bytes().to_vec());
+                    return out;
+                }
                 _ => {}
             }
             out.push(Reply::null(request.command).to_bytes().to_vec());
             out
         })
+    }
+
+    /// The requests' characters the fake received.
+    fn sent(fake: &FakeController) -> Vec<String> {
+        fake.received()
+            .iter()
+            .map(|d| String::from_utf8_lossy(&d[..2]).into_owned())
+            .collect()
     }
 
     fn options() -> WaitOptions {
@@ -380,6 +425,14 @@ mod tests {
             timeout: Duration::from_secs(5),
             stall: Some(Duration::from_millis(200)),
             ..WaitOptions::default()
+        }
+    }
+
+    /// Why a wait ended, and whether it sent ST ([`ClientError::Ended`]).
+    fn ended(err: ClientError) -> (ClientError, Option<crate::ended::EndStop>) {
+        match err {
+            ClientError::Ended { error, stop } => (*error, Some(stop)),
+            other => (other, None),
         }
     }
 
@@ -455,16 +508,71 @@ mod tests {
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0; 3]);
         let err = c.wait_until_pose(&goal, &options(), |_| {}).unwrap_err();
         assert!(
+            err.to_string()
+                .ends_with("; sent ST: the arm stops and holds")
+        );
+        let (err, stop) = ended(err);
+        assert!(
             matches!(err, ClientError::Stalled { target: 0, distance, .. } if (distance - 0.1).abs() < 1e-6),
             "{err:?}"
         );
+        assert_eq!(stop, Some(crate::ended::EndStop::Sent));
+        // No stop cause in force (SQ 2 asked first), then this client's ST.
+        let sent = sent(&fake);
+        assert_eq!(sent[sent.len() - 3..], ["SQ", "WD", "ST"]);
         let mut opts = options();
         opts.stall = None;
         opts.timeout = Duration::from_millis(100);
-        assert!(matches!(
-            c.wait_until_pose(&goal, &opts, |_| {}),
-            Err(ClientError::WaitTimeout { .. })
-        ));
+        let (err, _) = ended(c.wait_until_pose(&goal, &opts, |_| {}).unwrap_err());
+        assert!(matches!(err, ClientError::WaitTimeout { .. }));
+        assert_eq!(
+            ClientError::Ended {
+                error: Box::new(err),
+                stop: crate::ended::EndStop::Sent
+            }
+            .exit_code(),
+            crate::exit::NOT_ARRIVED
+        );
+    }
+
+    #[test]
+    fn a_motion_another_client_stopped_says_why_and_who_and_is_not_stopped_again() {
+        // Cause 1 (ST) set by 127.0.0.1:40001 after three steps.
+        let report = [1.0, 0.0, 32512.0, 1.0, 40001.0];
+        let fake = stopped_arm(0.0, 0.1, None, Some((3, report)));
+        let mut c = client(&fake);
+        c.begin().unwrap();
+        let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0; 3]);
+        let err = c.wait_until_pose(&goal, &options(), |_| {}).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the motion was stopped by client 127.0.0.1:40001: ST (target 1 not reached)"
+        );
+        let ClientError::Stopped { cause, by, .. } = err else {
+            panic!("{err:?}")
+        };
+        assert_eq!(cause, crate::status::StopCause::Stop);
+        assert_eq!(
+            by,
+            crate::ended::Stopper::Client("127.0.0.1:40001".parse().unwrap())
+        );
+        assert!(!sent(&fake).contains(&"ST".to_owned()));
+        // The workspace: the controller's own cause.
+        let fake = stopped_arm(0.0, 0.1, None, Some((2, [4.0, 0.0, 0.0, 0.0, 0.0])));
+        let mut c = client(&fake);
+        c.begin().unwrap();
+        let err = c.wait_until_pose(&goal, &options(), |_| {}).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ClientError::Stopped {
+                    by: crate::ended::Stopper::Controller,
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        assert_eq!(err.exit_code(), crate::exit::STOPPED);
     }
 
     #[test]
@@ -472,21 +580,20 @@ mod tests {
         let fake = arm(0.1, 0.1, None);
         let mut c = client(&fake);
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0, 0.0, 0.5]);
-        assert!(matches!(
-            c.wait_until_pose(&goal, &options(), |_| {}),
-            Err(ClientError::Stalled { .. })
-        ));
+        let (err, _) = ended(c.wait_until_pose(&goal, &options(), |_| {}).unwrap_err());
+        assert!(matches!(err, ClientError::Stalled { .. }));
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0, 0.0, 0.005]);
         c.wait_until_pose(&goal, &options(), |_| {}).unwrap();
     }
 
-    #[test]
-    fn an_interrupt_ends_the_wait_and_leaves_the_arm_alone() {
+    /// A wait through a fake arm, interrupted at the third poll under `policy`.
+    fn interrupted(policy: StopPolicy) -> (ClientError, Vec<Vec<u8>>) {
         let fake = arm(0.0, 0.1, None);
         let mut c = client(&fake);
         c.begin().unwrap();
         let goal = Pose::from_xyz_rpy([0.1, 0.0, 0.0], [0.0; 3]);
         let mut opts = options();
+        opts.stop = policy;
         let flag = Interrupt::new();
         opts.interrupt = Some(flag.clone());
         let mut polls = 0;
@@ -498,14 +605,32 @@ mod tests {
                 }
             })
             .unwrap_err();
-        assert!(matches!(err, ClientError::Interrupted), "{err:?}");
         assert_eq!(polls, 3);
-        // Nothing but the watchdog, PS polls and the watchdog off was sent: stopping is the
-        // caller's decision.
-        let sent = fake.received();
+        (err, fake.received())
+    }
+
+    #[test]
+    fn an_interrupt_ends_the_wait_and_stops_the_arm_unless_told_not_to() {
+        let (err, sent) = interrupted(StopPolicy::Always);
+        assert_eq!(
+            err.to_string(),
+            "interrupted; sent ST: the arm stops and holds"
+        );
+        assert_eq!(err.exit_code(), crate::exit::INTERRUPTED);
+        // The watchdog, PS polls, the watchdog off, then ST.
         assert_eq!(&sent[1][..2], b"WD");
-        assert_eq!(&sent[sent.len() - 1][..6], b"WD\0\0\0\0");
-        assert!(sent[2..sent.len() - 1].iter().all(|d| &d[..2] == b"PS"));
+        assert_eq!(&sent[sent.len() - 2][..6], b"WD\0\0\0\0");
+        assert_eq!(&sent[sent.len() - 1][..2], b"ST");
+        assert!(sent[2..sent.len() - 2].iter().all(|d| &d[..2] == b"PS"));
+        let (err, sent) = interrupted(StopPolicy::ExceptInterrupt);
+        assert_eq!(
+            err.to_string(),
+            "interrupted; no ST sent, as asked: the arm goes on moving"
+        );
+        assert!(sent.iter().all(|d| &d[..2] != b"ST"));
+        let (err, sent) = interrupted(StopPolicy::Never);
+        assert!(matches!(err, ClientError::Interrupted));
+        assert!(sent.iter().all(|d| &d[..2] != b"ST"));
     }
 
     #[test]
@@ -521,8 +646,11 @@ mod tests {
     fn joints_wait() {
         let fake = FakeController::spawn(|datagram| {
             let m = Message::new_checked(datagram).unwrap();
-            let mut reply = Reply::null(Command::JointPosition);
-            reply.values = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.0];
+            let command = Request::parse(&m).unwrap().command;
+            let mut reply = Reply::null(command);
+            if command == Command::JointPosition {
+                reply.values = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.0];
+            }
             reply.index = m.index();
             vec![reply.to_bytes().to_vec()]
         });
@@ -531,9 +659,9 @@ mod tests {
             .wait_until_joints(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], &options(), |_| {})
             .unwrap();
         assert_eq!(q.len(), 6);
-        assert!(matches!(
-            c.wait_until_joints(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.7], &options(), |_| {}),
-            Err(ClientError::Stalled { .. })
-        ));
+        let err = c
+            .wait_until_joints(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.7], &options(), |_| {})
+            .unwrap_err();
+        assert!(matches!(ended(err), (ClientError::Stalled { .. }, Some(_))));
     }
 }

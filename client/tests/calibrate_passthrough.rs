@@ -15,9 +15,11 @@ fn armgate_in(dir_name: &str) -> (PathBuf, PathBuf) {
 }
 
 fn run(exe: &Path, args: &[&str]) -> std::process::Output {
+    // Not as if run by `cargo run -p armgate-client`, which would build the tool instead.
     Command::new(exe)
         .args(args)
         .env("PATH", "")
+        .env_remove("CARGO")
         .output()
         .unwrap()
 }

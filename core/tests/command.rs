@@ -110,7 +110,8 @@ fn worked_examples_cm_bg_and_vp() {
     rig.tick();
     // BG before any goal is rejected, zero-filled.
     assert_eq!(rig.text("BG", [0.0; 7], 0), "ER20 Cmd BG no goal");
-    // A reachable goal 5 cm from the current pose, then BG → `47 42` + 29 zeros.
+    // A reachable goal 5 cm from the current pose, then BG → `47 42`, f6 the planned duration
+    // (5 cm at ranger-mk1's Cartesian limits: 4.47 s), zeros elsewhere.
     let ps = floats(&rig.request("PS", [0.0; 7], 0));
     let reply = rig.request(
         "GL",
@@ -119,8 +120,11 @@ fn worked_examples_cm_bg_and_vp() {
     );
     assert_eq!(&reply[..2], b"LG");
     let bg = rig.request("BG", [0.0; 7], 0);
+    let planned = floats(&bg)[6];
+    assert!((4.4..4.6).contains(&planned), "{planned}");
     let mut gb = [0u8; 31];
     gb[..2].copy_from_slice(&[0x47, 0x42]);
+    gb[26..30].copy_from_slice(&planned.to_le_bytes());
     assert_eq!(bg, gb);
     // The same datagram again within a second is a resend: its reply again, not carried out
     // twice. Later, while still moving, BG is rejected.

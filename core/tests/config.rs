@@ -59,7 +59,7 @@ fn min_above_max_names_the_joint_and_field() {
     let text = mk1_text().replacen("min = -0.785", "min = 4.0", 1);
     assert_eq!(
         refusal(&text),
-        "robot file: joints[1].min: minimum is greater than maximum"
+        "robot file: joint 2, min: minimum is greater than maximum"
     );
 }
 
@@ -68,7 +68,7 @@ fn nan_names_the_field() {
     let text = mk1_text().replacen("d = 0.538", "d = nan", 1);
     assert_eq!(
         refusal(&text),
-        "robot file: joints[3].d: must be a finite number (not NaN or infinite)"
+        "robot file: joint 4, d: must be a finite number (not NaN or infinite)"
     );
     let text = mk1_text().replacen("control_period = 0.01944", "control_period = inf", 1);
     assert!(refusal(&text).contains("control_period: must be a whole number"));
@@ -114,7 +114,7 @@ fn home_outside_the_limits_is_refused() {
     let text = mk1_text().replacen("home = 0.0", "home = -1.0", 1);
     assert_eq!(
         refusal(&text),
-        "robot file: joints[1].drive.home: home must lie within the joint's min and max"
+        "robot file: joint 2, drive.home: home must lie within the joint's min and max"
     );
 }
 
@@ -243,7 +243,7 @@ fn jerk_limited_profile_needs_every_jerk_limit() {
     ));
     assert_eq!(
         e,
-        "robot file: joints[0].max_jerk: is required by [motion] profile = \"jerk-limited\""
+        "robot file: joint 1, max_jerk: is required by [motion] profile = \"jerk-limited\""
     );
     let e = refusal(&jerk_text().replacen("max_jerk = [0.02,", "max_jerk = [0.0,", 1));
     assert_eq!(
@@ -259,7 +259,7 @@ fn jerk_limited_profile_needs_every_jerk_limit() {
     let e = refusal(&mk1_text().replacen("max_rate = 0.2", "max_rate = 0.2\nmax_jerk = -1.0", 1));
     assert_eq!(
         e,
-        "robot file: joints[0].max_jerk: must be greater than zero"
+        "robot file: joint 1, max_jerk: must be greater than zero"
     );
     let e = refusal(&jerk_text().replacen("\"jerk-limited\"", "\"s-curve\"", 1));
     assert!(e.contains("s-curve"), "{e}");
@@ -270,17 +270,17 @@ fn drive_errors_name_the_field() {
     let e = refusal(&mk1_text().replacen("node_id = 102", "node_id = 101", 1));
     assert_eq!(
         e,
-        "robot file: joints[1].drive.node_id: node id is used by an earlier joint"
+        "robot file: joint 2, drive.node_id: node id is used by an earlier joint"
     );
     let e = refusal(&mk1_text().replacen("counts_per_rev = 817741", "counts_per_rev = 0", 1));
     assert!(
-        e.starts_with("robot file: joints[0].drive.counts_per_rev"),
+        e.starts_with("robot file: joint 1, drive.counts_per_rev"),
         "{e}"
     );
     let e = refusal(&mk1_text().replacen("can_bitrate = 500000", "can_bitrate = 400000", 1));
     assert!(e.starts_with("robot file: drives.can_bitrate"), "{e}");
     let e = refusal(&mk1_text().replacen("node_id = 101", "node_id = 200", 1));
-    assert!(e.starts_with("robot file: joints[0].drive.node_id"), "{e}");
+    assert!(e.starts_with("robot file: joint 1, drive.node_id"), "{e}");
 }
 
 #[test]
@@ -380,4 +380,31 @@ fn limits_beyond_the_drives_counts_are_refused() {
     );
     // The shipped counts fit.
     assert!(robot.edit(|_| ()).is_ok());
+}
+
+#[test]
+fn revolute_limits_beyond_a_turn_are_flagged_and_no_shipped_file_has_them() {
+    // Limits written in degrees (±270) load, but are flagged for the shells to warn about.
+    let robot = common::robot("ranger-mk1")
+        .edit(|c| {
+            c.joints[3].min = -270.0;
+            c.joints[3].max = 270.0;
+        })
+        .unwrap();
+    assert_eq!(
+        robot.wide_limits().collect::<Vec<_>>(),
+        [(3, -270.0, 270.0)]
+    );
+    for name in [
+        "ranger-mk1",
+        "ranger-mk1-jerk",
+        "ranger-mk1-table21",
+        "ranger-mk2",
+        "hybrid",
+        "puma560",
+        "ur5",
+        "iiwa14",
+    ] {
+        assert_eq!(common::robot(name).wide_limits().count(), 0, "{name}");
+    }
 }

@@ -8,6 +8,7 @@ mod backend;
 mod log;
 mod pcap;
 mod record;
+mod robots;
 mod socketcan;
 mod status;
 mod udp;
@@ -23,7 +24,7 @@ use std::time::{Duration, Instant};
 
 use armgate_core::command::Network;
 use armgate_core::config::SAMPLE_TIME;
-use armgate_core::config::{Streaming, ValidRobot, load_file};
+use armgate_core::config::{Streaming, ValidRobot};
 use armgate_core::cycle::{Cycle, DriveSide, Signing, UnsignedAccess};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
@@ -45,7 +46,8 @@ use udp::{Inbox, Stats, UdpLink};
 #[derive(Parser, Debug)]
 #[command(version, about, long_about)]
 struct Args {
-    /// Robot description file (TOML); see docs/robot-file.md.
+    /// Robot description file (TOML); see docs/robot-file.md. A shipped robot's name
+    /// (`ur5`, `robots/ur5.toml`) that is not a file here loads its built-in copy.
     #[arg(long, default_value = "robots/ranger-mk1.toml")]
     robot: PathBuf,
     /// UDP address to listen on for client commands.
@@ -174,10 +176,7 @@ enum ArmKind {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    let config = match load_file(&args.robot)
-        .map_err(|e| e.to_string())
-        .and_then(|config| with_overrides(config, &args))
-    {
+    let config = match robots::load(&args.robot).and_then(|config| with_overrides(config, &args)) {
         Ok(config) => config,
         Err(e) => {
             eprintln!("armgate-sim: {}: {e}", args.robot.display());

@@ -16,7 +16,6 @@ from .client import (
     DEFAULT_TIMEOUT,
     NO_READING,
     Arm,
-    WaitOptions,
 )
 from .errors import (
     ArmDidNotStart,
@@ -43,6 +42,7 @@ from .errors import (
     ReplyTimeout,
     SignatureMismatch,
     Stalled,
+    Stopped,
     Undersized,
     ViaPointMissed,
     WaitFailed,
@@ -51,7 +51,8 @@ from .errors import (
 )
 from .pose import Pose
 from .signing import Signer
-from .status import DriveState, Mode, Motion, Status, StopCause
+from .status import DriveState, Holder, Mode, Motion, Status, StopCause
+from .waiting import WaitOptions
 
 __all__ = [
     "DEFAULT_PORT",
@@ -77,6 +78,7 @@ __all__ = [
     "DriveState",
     "HeldAtWorkspaceEdge",
     "HeldByOther",
+    "Holder",
     "IkDivergence",
     "JointLimitWarning",
     "Mode",
@@ -90,6 +92,7 @@ __all__ = [
     "Stalled",
     "Status",
     "StopCause",
+    "Stopped",
     "Undersized",
     "ViaPointMissed",
     "WaitFailed",

@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import collections
-import contextlib
 import logging
 import math
 import socket
 import time as _time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import (
     Callable,
     Deque,
-    Iterator,
     List,
     Optional,
     Sequence,
@@ -24,18 +22,19 @@ from typing import (
 from . import wire
 from .signing import KeyLike, Signer
 from .errors import (
+    ArmError,
     BadIndex,
     ControllerMessage,
     ControllerTooOld,
     ControllerUnreachable,
+    HeldByOther,
     NotUnderstood,
     ReplyTimeout,
     SignatureMismatch,
-    Stalled,
-    WaitTimeout,
 )
 from .pose import Pose, PoseLike, as_pose
-from .status import Mode, Motion, Status, StopCause
+from .status import Holder, Mode, Status, StopCause, address_of
+from .waiting import Waiting, WaitOptions
 
 DEFAULT_PORT = 7031
 """The controller's UDP port (``armgate-sim`` listens on 127.0.0.1:7031)."""
@@ -60,27 +59,6 @@ T = TypeVar("T")
 NoticeCallback = Callable[[ControllerMessage], None]
 
 
-@dataclass(frozen=True)
-class WaitOptions:
-    """How a wait decides that a target is reached, and when it gives up (the Rust client's
-    defaults)."""
-
-    tolerance: float = 0.001
-    """The last target is reached within this distance (m for poses, rad or m for joints)."""
-    angle_tolerance: float = 0.01
-    """... and, for poses, within this angle (rad)."""
-    pass_tolerance: float = 0.01
-    """An intermediate via point counts as passed within this distance (the arm does not dwell
-    there, so a 20 Hz poll may never see it within ``tolerance``)."""
-    timeout: float = 60.0
-    """Give up after this many seconds."""
-    poll: float = 0.05
-    """The polling period (s)."""
-    stall: Optional[float] = 3.0
-    """Give up if the arm has not moved for this long (s); None: never."""
-
-
-_STILL = 1e-6
 
 
 def _split_host_port(host: str, port: int) -> Tuple[str, int]:
@@ -95,7 +73,7 @@ def _split_host_port(host: str, port: int) -> Tuple[str, int]:
     return name, int(number)
 
 
-class Arm:
+class Arm(Waiting):
     """A client of one armgate controller.
 
     ``Arm("127.0.0.1", port=7031)`` opens a UDP socket; nothing is sent until a request. Every
@@ -184,8 +162,11 @@ class Arm:
         """``TM``: the drive temperatures (deg C), None for a drive not heard from yet."""
         return [None if t == NO_READING else t for t in self._read_banks("TM", self.joint_count)]
 
-    def get_status(self) -> Status:
-        """``SQ``: mode, drive state and fault, joint count, motion, refusals, uptime, name.
+    def get_status(self, details: bool = True) -> Status:
+        """``SQ``: mode, drive state and fault, joint count, motion, refusals, uptime, name;
+        with ``details`` also the stop cause in force and who set it (``SQ`` 2), who holds the
+        arm (address and port), the watchdog and the clients known (``SQ`` 3), where the
+        controller reports them.
 
         Raises :class:`~armgate.ControllerTooOld` if the controller does not know ``SQ``."""
         try:
@@ -195,20 +176,43 @@ class Arm:
             raise ControllerTooOld(
                 f"the controller does not know the status request SQ ({e.text}); update it"
             ) from e
-        return Status.from_replies(numbers.values, named[2:30])
+        status = Status.from_replies(numbers.values, named[2:30])
+        if not details:
+            return status
+        cause, _, by = self._stop_report()
+        status = replace(status, stop_cause=cause, stopped_by=by)
+        try:
+            session = self.request("SQ", index=3).values
+        except (BadIndex, NotUnderstood):
+            return status
+        holder = int(round(session[0]))
+        return replace(
+            status,
+            holder=Holder(holder) if holder in Holder._value2member_map_ else None,
+            holder_address=address_of(session[1], session[2], session[3]),
+            watchdog_ms=int(round(session[4])),
+            clients=int(round(session[6])),
+        )
 
     def get_stop_cause(self) -> Tuple[Optional[StopCause], Optional[int]]:
         """``SQ`` index 2: why the arm last stopped or is held, and the joint (1-based) of a
         joint-limit hold; ``(None, None)`` for none (or from a controller without index 2)."""
+        cause, joint, _ = self._stop_report()
+        return cause, joint
+
+    def _stop_report(self) -> Tuple[Optional[StopCause], Optional[int], Optional[str]]:
+        """``SQ`` index 2: the cause, the joint (1-based) and the address of the client that
+        set a client's cause; all None from a controller without index 2."""
         try:
             values = self.request("SQ", index=2).values
         except (BadIndex, NotUnderstood):
-            return (None, None)
+            return (None, None, None)
         cause = int(round(values[0]))
         joint = int(round(values[1]))
         return (
             StopCause(cause) if cause in StopCause._value2member_map_ else None,
             joint or None,
+            address_of(values[2], values[3], values[4]),
         )
 
     @property
@@ -216,7 +220,7 @@ class Arm:
         """The arm's joint count (asked once, see the class description)."""
         if self._joints is None:
             try:
-                self._joints = self.get_status().joint_count
+                self._joints = self.get_status(details=False).joint_count
             except ControllerTooOld:
                 self._has_status = False
                 self._joints = self._count_from_temperatures()
@@ -307,10 +311,10 @@ class Arm:
             self.request("GL", goal.xyz + goal.quaternion)
         else:
             self.request("GT", goal.xyz + goal.rpy + (float(time),))
-        self.request("BG")
+        planned = self.request("BG").values[6]
         if not wait:
             return None
-        return self.wait_for_poses([goal], self._options(time or 0.0))
+        return self.wait_for_poses([goal], self._options(time or 0.0, planned))
 
     def move_j(
         self, q: Sequence[float], time: Optional[float] = None, wait: bool = True
@@ -321,14 +325,15 @@ class Arm:
         q = self._check_joints(q)
         if time is None:
             self._write_banks("jG", q, 0, 0.0)
-            self.request("jB")
+            planned = self.request("jB").values[6]
         else:
+            planned = 0.0
             self.request("jC")
             self._write_banks("jV", q, 0, float(time))
             self.request("jE")
         if not wait:
             return None
-        return self.wait_for_joints([q], self._options(time or 0.0))
+        return self.wait_for_joints([q], self._options(time or 0.0, planned))
 
     def choose_redundancy(
         self, theta3: Optional[float] = None, theta5: Optional[float] = None
@@ -453,160 +458,6 @@ class Arm:
         self.request("jE")
         return self.wait_for_joints(qs, self._passing(total, blend)) if wait else None
 
-    # -- waiting ---------------------------------------------------------------------------
-
-    def wait_for_poses(self, goals: Sequence[Pose], options: Optional[WaitOptions] = None) -> Pose:
-        """Polls ``PS`` until the tool has passed ``goals`` in order (each but the last within
-        ``pass_tolerance``) and reached the last one."""
-        opts = options or self.wait_options
-
-        def measure(pose: Pose, goal: Pose, last: bool) -> Tuple[float, Optional[float], bool]:
-            d, a = pose.distance(goal), pose.angle_to(goal)
-            if last:
-                return d, a, d <= opts.tolerance and a <= opts.angle_tolerance
-            return d, a, d <= opts.pass_tolerance
-
-        def moved(a: Pose, b: Pose) -> bool:
-            return a.distance(b) > _STILL or a.angle_to(b) > _STILL
-
-        with self._watchdog_while(opts):
-            return self._wait(goals, opts, self.get_tcp_pose, measure, moved)
-
-    def wait_for_joints(
-        self, goals: Sequence[Sequence[float]], options: Optional[WaitOptions] = None
-    ) -> List[float]:
-        """Polls ``jP`` until the joints have passed ``goals`` in order and reached the last
-        (Euclidean norm within the tolerances). A goal may give the first joints only (``KG``'s
-        reply carries joints 1–6): the others are not compared."""
-        opts = options or self.wait_options
-
-        def measure(
-            q: List[float], goal: List[float], last: bool
-        ) -> Tuple[float, Optional[float], bool]:
-            d = math.dist(q[: len(goal)], goal)
-            return d, None, d <= (opts.tolerance if last else opts.pass_tolerance)
-
-        def moved(a: List[float], b: List[float]) -> bool:
-            return any(abs(x - y) > _STILL for x, y in zip(a, b))
-
-        with self._watchdog_while(opts):
-            return self._wait([list(g) for g in goals], opts, self.get_joints, measure, moved)
-
-    @contextlib.contextmanager
-    def _watchdog_while(self, options: WaitOptions) -> Iterator[None]:
-        """The controller's client watchdog on (twenty polls, at least a second) for the
-        block: if this program dies or loses the network while the arm moves, the controller
-        stops it. A controller without one, or another client holding the arm, refuses it;
-        the block runs without."""
-        refused = (ControllerMessage, ControllerTooOld, ReplyTimeout)
-        try:
-            self.watchdog(max(1000, min(60000, round(options.poll * 20 * 1000))))
-        except refused:
-            yield
-            return
-        try:
-            yield
-        finally:
-            try:
-                self.watchdog(0)
-            except refused:
-                pass
-
-    def _wait(
-        self,
-        goals: Sequence[T],
-        options: WaitOptions,
-        read: Callable[[], T],
-        measure: Callable[[T, T, bool], Tuple[float, Optional[float], bool]],
-        moved: Callable[[T, T], bool],
-    ) -> T:
-        started = _time.monotonic()
-        last_move = started
-        previous: Optional[T] = None
-        target = 0
-        while True:
-            current = read()
-            notices = self.take_notices()
-            now = _time.monotonic()
-            if previous is None or moved(previous, current):
-                last_move = now
-            distance: float = math.inf
-            angle: Optional[float] = None
-            arrived = False
-            while target < len(goals):
-                last = target + 1 == len(goals)
-                distance, angle, reached = measure(current, goals[target], last)
-                if not reached:
-                    break
-                if last:
-                    arrived = True
-                    break
-                target += 1
-            if arrived:
-                return self._settle(current, started, options, read, moved)
-            for notice in notices:
-                if notice.ends_motion:
-                    raise notice
-            remaining = f"{distance * 1e3:.1f} mm" if angle is not None else f"{distance:.4f}"
-            if options.stall is not None and now - last_move > options.stall:
-                raise Stalled(
-                    f"the arm stopped {remaining} from target {target + 1} "
-                    f"(no motion for {options.stall} s)",
-                    target,
-                    distance,
-                    angle,
-                )
-            if now - started > options.timeout:
-                raise WaitTimeout(
-                    f"target {target + 1} not reached within {options.timeout} s "
-                    f"(still {remaining} from it)",
-                    target,
-                    distance,
-                    angle,
-                )
-            previous = current
-            _time.sleep(options.poll)
-
-    def _settle(
-        self,
-        current: T,
-        started: float,
-        options: WaitOptions,
-        read: Callable[[], T],
-        moved: Callable[[T, T], bool],
-    ) -> T:
-        """After arrival within the tolerance the generator may still be finishing its profile
-        (and refuses the next motion until it has): waits until the status reports no motion,
-        or, from a controller without the status request, until two polls read the same."""
-        while _time.monotonic() - started <= options.timeout:
-            if self._has_status is not False:
-                try:
-                    if self.get_status().motion == Motion.IDLE:
-                        return read()
-                except ControllerTooOld:
-                    self._has_status = False
-                    continue
-            else:
-                _time.sleep(options.poll)
-                latest = read()
-                if not moved(current, latest):
-                    return latest
-                current = latest
-                continue
-            _time.sleep(options.poll)
-        return current
-
-    def _passing(self, requested: float, blend: Optional[float]) -> WaitOptions:
-        # Blended via points are passed within the blend, plus the usual pass tolerance.
-        options = self._options(requested)
-        return replace(options, pass_tolerance=options.pass_tolerance + (blend or 0.0))
-
-    def _options(self, requested: float) -> WaitOptions:
-        # As the Rust tool: 30 s plus the requested duration, unless set otherwise.
-        if self.wait_options.timeout != WaitOptions.timeout:
-            return self.wait_options
-        return replace(self.wait_options, timeout=30.0 + requested)
-
     # -- notices ---------------------------------------------------------------------------
 
     def take_notices(self) -> List[ControllerMessage]:
@@ -651,11 +502,32 @@ class Arm:
 
     def request(self, chars: str, values: Sequence[float] = (), index: int = 0) -> wire.Message:
         """Sends any request and returns its reply; raises the typed exception of an ``ER``
-        text that answers it, :class:`~armgate.ReplyTimeout` if every attempt timed out."""
-        datagram = self._exchange(chars, wire.encode(chars, values, index), index)
+        text that answers it, :class:`~armgate.ReplyTimeout` if every attempt timed out. A
+        :class:`~armgate.HeldByOther` (``ER40``, whose text has no room for a port) names the
+        holder with its port (``SQ`` 3) and says what to do."""
+        try:
+            datagram = self._exchange(chars, wire.encode(chars, values, index), index)
+        except HeldByOther as e:
+            raise self._with_holder(e) from None
         message = wire.decode(datagram)
         assert message is not None  # _exchange returns only 31-byte replies
         return message
+
+    def _with_holder(self, error: HeldByOther) -> HeldByOther:
+        """``error`` with the holder's address and port from ``SQ`` 3, where it answers."""
+        try:
+            session = self.request("SQ", index=3).values
+        except ArmError:
+            return error
+        holder = address_of(session[1], session[2], session[3])
+        error.holder = holder
+        if holder is not None:
+            error.args = (
+                f"{error.text} ({holder} holds the arm while it moves: wait until its motion "
+                "ends, or stop() it, which any client may; then the next request takes "
+                "control)",
+            )
+        return error
 
     def _exchange(self, chars: str, datagram: bytes, index: int) -> bytes:
         # Whatever arrived before this request cannot be its reply.

@@ -19,7 +19,7 @@ text and the reason after the prefix::
 from __future__ import annotations
 
 import re
-from typing import Dict, Optional, Type
+from typing import Any, Dict, Optional, Type
 
 
 class ArmError(Exception):
@@ -60,24 +60,62 @@ class ControllerTooOld(ArmError):
 
 
 class WaitFailed(ArmError):
-    """A wait for the arm ended without reaching the target."""
+    """A wait for the arm ended without reaching the target.
+
+    ``stop`` says what the client did about the motion (``"sent ST: the arm stops and holds"``,
+    or why it could not), and is part of the message; None where it did nothing (the
+    controller had stopped the motion already, or ``WaitOptions.stop`` is False)."""
 
     def __init__(self, message: str, target: int, distance: float, angle: Optional[float]):
         super().__init__(message)
+        self.message = message
         self.target = target
         """The 0-based number of the target not reached."""
         self.distance = distance
         """The remaining distance (m for poses, rad or m for joints)."""
         self.angle = angle
         """For poses: the remaining angle (rad)."""
+        self.stop: Optional[str] = None
+
+    def stopped(self, stop: str) -> "WaitFailed":
+        """This error, saying what was done about the motion (``stop``)."""
+        self.stop = stop
+        self.args = (f"{self.message}; {stop}",)
+        return self
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else self.message
 
 
 class Stalled(WaitFailed):
-    """The arm stopped moving before it reached the target (no motion-ending notice came)."""
+    """The arm stopped moving before it reached the target and nothing had stopped it (no
+    motion-ending notice, no stop cause in ``SQ`` index 2), e.g. held at a joint limit."""
 
 
 class WaitTimeout(WaitFailed, TimeoutError):
-    """A wait ran out of time."""
+    """A wait ran out of time (and nothing had stopped the motion)."""
+
+
+class Stopped(WaitFailed):
+    """The controller stopped the motion being waited for: ``cause`` is its reason
+    (:class:`~armgate.StopCause`, from ``SQ`` index 2), ``by`` who set it: ``"the controller"``
+    (workspace, IK divergence, watchdog, ...), ``"this client"``, ``"client 127.0.0.1:40001"``
+    or ``"another client"`` (one the controller does not name). ``joint`` is the 1-based joint
+    of a joint-limit hold."""
+
+    def __init__(
+        self, cause: Any, by: str, joint: Optional[int], target: int, distance: float,
+        angle: Optional[float],
+    ) -> None:
+        name = getattr(cause, "label", str(cause))
+        at = f" (j{joint})" if joint else ""
+        super().__init__(
+            f"the motion was stopped by {by}: {name}{at} (target {target + 1} not reached)",
+            target, distance, angle,
+        )
+        self.cause = cause
+        self.by = by
+        self.joint = joint
 
 
 _NAMED = re.compile(r"(?:Cmd|Msg) (..)(?: |$)")
@@ -223,7 +261,14 @@ class DriveFault(ControllerError):
 
 class HeldByOther(ControllerError):
     """``ER40 Cmd XX by 192.168.1.2``: another client controls the arm while it moves
-    (``by another client`` for an IPv6 one)."""
+    (``by another client`` for an IPv6 one). Raised by :meth:`~armgate.Arm.request` with
+    ``holder``, its address and port (``"192.168.1.2:40001"``, from ``SQ`` 3), in the message
+    with what to do."""
+
+    holder: Optional[str] = None
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else self.text
 
 
 class ClientSilent(ControllerError):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
-from typing import Sequence, Union
+from typing import Optional, Sequence, Union
 
 
 class Mode(enum.IntEnum):
@@ -68,6 +68,46 @@ class StopCause(enum.IntEnum):
     CLIENT_SILENT = 8
     """The controlling client was silent for longer than its watchdog (``WD``)."""
 
+    @property
+    def label(self) -> str:
+        """As the Rust client names it: ``ST``, ``workspace limit``, ``client silent``."""
+        return _CAUSE_LABELS[self]
+
+    @property
+    def set_by_client(self) -> bool:
+        """Whether a client's request sets this cause (``ST``/``jR``, ``CM``, ``OF``); the
+        others are the controller's own."""
+        return self in (StopCause.STOP, StopCause.MODE_CHANGE, StopCause.POWER_OFF)
+
+
+_CAUSE_LABELS = {
+    StopCause.STOP: "ST",
+    StopCause.MODE_CHANGE: "mode change",
+    StopCause.POWER_OFF: "OF",
+    StopCause.WORKSPACE: "workspace limit",
+    StopCause.IK_DIVERGENCE: "IK divergence",
+    StopCause.STREAM_TIMEOUT: "stream timeout",
+    StopCause.JOINT_LIMIT: "joint limit",
+    StopCause.CLIENT_SILENT: "client silent",
+}
+
+
+class Holder(enum.IntEnum):
+    """Who holds the arm, as ``SQ`` index 3 tells the asking client."""
+
+    NOBODY = 0
+    YOU = 1
+    OTHER = 2
+
+
+def address_of(high: float, low: float, port: float) -> Optional[str]:
+    """``"a.b.c.d:port"`` from an IPv4 address in two 16-bit halves and a port (``SQ`` 2 and
+    3), None for 0 (none, or an IPv6 client)."""
+    ip = (int(round(high)) << 16) | int(round(low))
+    if ip == 0:
+        return None
+    return f"{ip >> 24}.{(ip >> 16) & 255}.{(ip >> 8) & 255}.{ip & 255}:{int(round(port))}"
+
 
 def _enum(kind, value: float):  # type: ignore[no-untyped-def]
     """The member of ``kind`` for ``value``, or the rounded number if it is not one."""
@@ -94,6 +134,18 @@ class Status:
     """Seconds since the controller started."""
     name: str
     """The robot's name from its robot file."""
+    stop_cause: Optional[StopCause] = None
+    """Why the arm last stopped or is held (``SQ`` 2); None for none, or an older controller."""
+    stopped_by: Optional[str] = None
+    """The address of the client whose request set :attr:`stop_cause` (``ST``, ``CM``, ``OF``)."""
+    holder: Optional[Holder] = None
+    """Who holds the arm (``SQ`` 3); None from an older controller."""
+    holder_address: Optional[str] = None
+    """The holder's address and port, ``"127.0.0.1:40001"`` (None: nobody, or IPv6)."""
+    watchdog_ms: Optional[int] = None
+    """The client watchdog (ms, 0 off)."""
+    clients: Optional[int] = None
+    """The clients the controller knows."""
 
     @classmethod
     def from_replies(cls, values: Sequence[float], name: bytes) -> "Status":

@@ -167,12 +167,17 @@ def test_status_layout(fake_factory) -> None:  # type: ignore[no-untyped-def]
     def answer(d: bytes) -> List[bytes]:
         if d[30] == 0:
             return [reply("QS", [2, 2, 0, 6, 3, 4, 12.5], 0)]
+        if d[30] == 2:  # ST from 192.168.1.2:40001
+            return [reply("QS", [1, 0, 49320, 258, 40001, 0, 0], 2)]
+        if d[30] == 3:  # held by 192.168.1.3:40002, watchdog 500 ms, 2 clients
+            return [reply("QS", [2, 49320, 259, 40002, 500, 0, 2], 3)]
         return [b"QS" + b"ranger-mk1".ljust(28, b"\0") + bytes([1])]
 
     fake = fake_factory(answer)
     with armgate.Arm("127.0.0.1", fake.port) as arm:
         status = arm.get_status()
         assert arm.joint_count == 6
+        plain = arm.get_status(details=False)
     assert status == armgate.Status(
         mode=armgate.Mode.CARTESIAN,
         drive_state=armgate.DriveState.RUNNING,
@@ -182,7 +187,14 @@ def test_status_layout(fake_factory) -> None:  # type: ignore[no-untyped-def]
         refusals=4,
         uptime=12.5,
         name="ranger-mk1",
+        stop_cause=armgate.StopCause.STOP,
+        stopped_by="192.168.1.2:40001",
+        holder=armgate.Holder.OTHER,
+        holder_address="192.168.1.3:40002",
+        watchdog_ms=500,
+        clients=2,
     )
+    assert plain.holder is None and plain.stop_cause is None
 
 
 def test_an_older_controller_is_named_as_such(fake_factory) -> None:  # type: ignore[no-untyped-def]

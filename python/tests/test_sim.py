@@ -271,3 +271,106 @@ def test_nothing_listening_is_reported(sim_factory) -> None:  # type: ignore[no-
     with armgate.Arm("127.0.0.1", port=free_port(), timeout=0.05) as arm:
         with pytest.raises((armgate.ControllerUnreachable, armgate.ReplyTimeout)):
             arm.get_tcp_pose()
+
+
+def _far_joint_goal(arm: armgate.Arm) -> list:  # type: ignore[type-arg]
+    """A joint goal 0.3 rad along joint 1: about 5 s on ranger-mk1."""
+    arm.recalibrate(COMFORTABLE)
+    assert arm.set_mode("joint") == armgate.Mode.JOINT
+    goal = arm.get_joints()
+    goal[0] += 0.3
+    return goal
+
+
+def _at_rest(arm: armgate.Arm, within: float = 3.0) -> bool:
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        if arm.get_status(details=False).motion == armgate.Motion.IDLE:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def test_a_move_interrupted_by_ctrl_c_is_stopped(mk1) -> None:  # type: ignore[no-untyped-def]
+    """Issue 33: Ctrl-C (KeyboardInterrupt) in ``move_j`` sends ST; the arm comes to rest
+    short of the goal instead of running on."""
+    import _thread
+    import threading
+
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        goal = _far_joint_goal(arm)
+        timer = threading.Timer(1.0, _thread.interrupt_main)
+        timer.start()
+        with pytest.raises(KeyboardInterrupt) as interrupted:
+            arm.move_j(goal)
+        timer.join()
+        assert interrupted.value.stop == "sent ST: the arm stops and holds"  # type: ignore[attr-defined]
+        assert _at_rest(arm)
+        status = arm.get_status()
+        assert status.stop_cause == armgate.StopCause.STOP
+        assert status.stopped_by == "127.0.0.1:{}".format(arm._socket.getsockname()[1])
+        rest = arm.get_joints()
+        time.sleep(0.5)
+        assert close(arm.get_joints(), rest, 1e-6), "the arm moves on"
+        assert goal[0] - rest[0] > 0.1
+
+
+def test_a_wait_that_times_out_stops_the_arm_and_says_so(mk1) -> None:  # type: ignore[no-untyped-def]
+    options = armgate.WaitOptions(timeout=0.5)
+    with armgate.Arm("127.0.0.1", port=mk1.port, wait_options=options) as arm:
+        goal = _far_joint_goal(arm)
+        with pytest.raises(armgate.WaitTimeout) as timeout:
+            arm.move_j(goal)
+        assert timeout.value.stop == "sent ST: the arm stops and holds"
+        assert str(timeout.value).endswith("; sent ST: the arm stops and holds")
+        assert _at_rest(arm)
+        assert goal[0] - arm.get_joints()[0] > 0.1
+
+
+def test_a_move_another_client_stops_raises_stopped_with_the_cause_and_who(mk1) -> None:  # type: ignore[no-untyped-def]
+    import threading
+
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm, armgate.Arm(
+        "127.0.0.1", port=mk1.port
+    ) as other:
+        goal = _far_joint_goal(arm)
+        timer = threading.Timer(1.0, other.stop)
+        timer.start()
+        with pytest.raises(armgate.Stopped) as stopped:
+            arm.move_j(goal)
+        timer.join()
+        by = "client 127.0.0.1:{}".format(other._socket.getsockname()[1])
+        assert stopped.value.cause == armgate.StopCause.STOP
+        assert stopped.value.by == by
+        assert str(stopped.value) == f"the motion was stopped by {by}: ST (target 1 not reached)"
+        assert stopped.value.stop is None  # the controller had stopped it: no ST of its own
+        status = arm.get_status()
+        assert status.holder == armgate.Holder.YOU
+        assert status.holder_address == "127.0.0.1:{}".format(arm._socket.getsockname()[1])
+        assert status.clients is not None and status.clients >= 2  # the fixture's probe too
+
+
+def test_a_refusal_by_another_holder_names_it_with_its_port(mk1) -> None:  # type: ignore[no-untyped-def]
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm, armgate.Arm(
+        "127.0.0.1", port=mk1.port
+    ) as other:
+        goal = _far_joint_goal(arm)
+        arm.move_j(goal, wait=False)
+        with pytest.raises(armgate.HeldByOther) as held:
+            other.set_mode("cartesian")
+        holder = "127.0.0.1:{}".format(arm._socket.getsockname()[1])
+        assert held.value.holder == holder
+        assert held.value.text.startswith("ER40 Cmd CM by 127.0.0.1")
+        assert f"({holder} holds the arm while it moves" in str(held.value)
+        arm.stop()
+
+
+def test_a_move_start_reports_its_planned_duration(mk1) -> None:  # type: ignore[no-untyped-def]
+    """``jB``'s reply carries the planned duration (f6), which sizes the wait's timeout."""
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        goal = _far_joint_goal(arm)  # 0.3 rad on joint 1, at most 0.07 rad/s
+        arm._write_banks("jG", goal, 0, 0.0)
+        planned = arm.request("jB").values[6]
+        assert 0.3 / 0.07 <= planned < 60.0
+        assert arm._options(0.0, planned).timeout == pytest.approx(2 * planned + 30.0)
+        arm.stop()

@@ -76,3 +76,40 @@ fn ik_and_ik_move_take_a_chosen_theta3_on_a_seven_joint_arm() {
     let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
     assert!(sim.text("KG", values, 8 | 0x40).starts_with("ER24 Cmd KG"));
 }
+
+#[test]
+fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
+    // ranger-mk1 from the README's start; the README's ik pose has two solutions.
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    let pose = ["0", "0.2", "0.8", "0", "0", "-1.5708"];
+    let (result, out) = armgate(&sim, &[&["ik"][..], &pose].concat());
+    result.unwrap();
+    let marked: Vec<&str> = out
+        .lines()
+        .filter(|l| l.contains("ik-move's choice"))
+        .collect();
+    assert_eq!(marked.len(), 1, "{out}");
+    let chosen: u8 = marked[0]
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        out.lines().filter(|l| l.contains("present branch")).count() <= 1,
+        "{out}"
+    );
+    eprintln!("{out}");
+    let _ = sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+    wait_drives(&sim, 2.0);
+    let (result, moved) = armgate(&sim, &[&["ik-move", "--no-wait"][..], &pose].concat());
+    result.unwrap();
+    assert!(
+        moved.contains(&format!("(branch {chosen})")),
+        "ik marked {chosen}: {out}\nik-move: {moved}"
+    );
+    let _ = sim.ok("ST", [0.0; 7], 0);
+}

@@ -491,7 +491,11 @@ fn a_begin_whose_reply_was_lost_is_answered_again_not_refused_busy() {
     let (sim, goal) = moving(0.3, |_| {});
     std::thread::sleep(Duration::from_millis(200));
     match sim.request("jB", [0.0; 7], 0) {
-        Answer::Reply(c, v, 0) if &c == b"Bj" => assert_eq!(v, [0.0; 7]),
+        // The first reply again: f6 the move's planned duration (0.3 rad at 0.07 rad/s and more).
+        Answer::Reply(c, v, 0) if &c == b"Bj" => {
+            assert_eq!(v[..6], [0.0; 6]);
+            assert!((0.3 / 0.07..60.0).contains(&v[6]), "{v:?}");
+        }
         other => panic!("the resent jB: {other:?}"),
     }
     // Carried out once: the move runs on to its goal (not restarted, not refused).
@@ -559,7 +563,11 @@ fn a_cli_move_that_outlasts_its_wait_is_stopped_and_the_next_client_takes_contro
     assert_eq!(out, "moving\n");
     let err = result.unwrap_err();
     let message = err.to_string();
-    assert_eq!(err.exit_code(), 2, "{message}");
+    assert_eq!(
+        err.exit_code(),
+        armgate_client::exit::NOT_ARRIVED,
+        "{message}"
+    );
     assert!(
         message.starts_with("target 1 not reached within 500ms")
             && message.ends_with("; sent ST: the arm stops and holds"),
@@ -708,4 +716,66 @@ fn armgate_move_whose_begin_reply_is_lost_gets_it_again_and_arrives() {
     assert!(!passed.iter().any(|c| c == "ST"), "{passed:?}");
     let now = sim.ok("PS", [0.0; 7], 0);
     assert!((now[2] - ps[2] - 0.03).abs() < 0.002, "{now:?}");
+}
+
+#[test]
+fn a_cli_move_another_client_stops_says_who_stopped_it_and_exits_3() {
+    // `armgate jmove` of 0.3 rad on the first joint (about 5 s); client B sends ST after 1 s.
+    let sim = ready(START, 1.0);
+    let mut goal = sim.ok("jP", [0.0; 7], 0);
+    goal[0] += 0.3;
+    let q: Vec<String> = goal[..6].iter().map(f32::to_string).collect();
+    let addr = sim.socket.peer_addr().unwrap();
+    let mover = std::thread::spawn(move || {
+        let mut args = vec!["jmove"];
+        args.extend(q.iter().map(String::as_str));
+        let (result, _) = armgate_at(addr, &args);
+        result.unwrap_err()
+    });
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 1.0));
+    std::thread::sleep(Duration::from_secs(1));
+    let b = second_client(&sim);
+    assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
+    let err = mover.join().unwrap();
+    let message = err.to_string();
+    assert_eq!(err.exit_code(), armgate_client::exit::STOPPED, "{message}");
+    let by = b.local_addr().unwrap();
+    assert_eq!(
+        message,
+        format!("the motion was stopped by client {by}: ST (target 1 not reached)")
+    );
+    // Short of the goal, at rest: the CLI did not send an ST of its own (the cause is B's).
+    let rest = sim.ok("jP", [0.0; 7], 0);
+    assert!(goal[0] - rest[0] > 0.1, "{rest:?} (goal {goal:?})");
+    let SocketAddr::V4(v4) = by else {
+        panic!("{by}")
+    };
+    let ip = u32::from(*v4.ip());
+    let halves = [(ip >> 16) as f32, (ip & 0xffff) as f32];
+    assert_eq!(
+        stop_cause_of(&b)[..5],
+        [1.0, 0.0, halves[0], halves[1], f32::from(by.port())]
+    );
+    // `armgate status` shows the cause with who set it, the holder (the mover) with its port,
+    // the clients and the watchdog.
+    let (result, shown) = armgate(&sim, &["status"]);
+    result.unwrap();
+    assert!(
+        shown.contains(&format!("stopped by ST from {by}\n")),
+        "{shown}"
+    );
+    let holder = shown
+        .lines()
+        .find_map(|l| l.strip_prefix("holder     "))
+        .unwrap_or_else(|| panic!("{shown}"));
+    assert!(holder.parse::<SocketAddr>().is_ok(), "{shown}");
+    assert!(shown.contains("watchdog   off\n"), "{shown}");
+}
+
+/// `SQ` index 2 from `socket`: the stop cause, the joint, who set it.
+fn stop_cause_of(socket: &UdpSocket) -> [f32; 7] {
+    match ask(socket, "SQ", [0.0; 7], 2) {
+        Answer::Reply(chars, v, 2) if &chars == b"QS" => v,
+        other => panic!("SQ 2: {other:?}"),
+    }
 }

@@ -3,6 +3,11 @@
 //! once a second, and every notice that arrives. Times are this program's clock from the start.
 //! A controller has no command and set-point to read, and this client sees only its own
 //! datagrams: `/joint_command`, `/setpoint`, `/goal`, `/planned_path` and `/can` stay empty.
+//!
+//! It fails (an error, exit status non-zero) when nothing was recorded — no reading answered:
+//! nothing listening, a controller with a key and none given — and when the robot file does
+//! not describe the controller's robot (its name or joint count differ from the status's):
+//! a recording drawn with the wrong arm is worse than none (issue 37).
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -33,8 +38,9 @@ pub struct RecordArgs {
     /// How often to read jP and PS (Hz).
     #[arg(long, default_value_t = 20.0)]
     rate: f64,
-    /// Stop after this many seconds (default: until Ctrl-C or SIGTERM).
-    #[arg(long, value_name = "SECONDS")]
+    /// Stop after this long (`60`, `60s`, `2min`; bare: seconds; default: until Ctrl-C or
+    /// SIGTERM).
+    #[arg(long, value_name = "DURATION", value_parser = armgate_client::cli::parse_seconds)]
     duration: Option<f64>,
     /// Sign the requests with the key in this file, for a controller with a key
     /// (docs/safety.md, "Signing").
@@ -90,6 +96,8 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
     let mut next_status = start;
     let mut polls = 0u64;
     let mut failed = 0u64;
+    let mut mismatch = None;
+    let mut checked = false;
     while !stop.is_set() {
         let now = Instant::now();
         let t = (now - start).as_secs_f64();
@@ -105,16 +113,14 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
             next_status = now + STATUS_INTERVAL;
             match client.status() {
                 Ok(status) => {
-                    if status.name != robot.name.as_str() && next_status == start + STATUS_INTERVAL
-                    {
-                        eprintln!(
-                            "armgate record: warning: the controller runs `{}`, the robot file \
-                             describes `{}`",
-                            status.name,
-                            robot.name.as_str()
-                        );
-                    }
                     log(&tap, t, Level::Info, peer, one_line(&status.to_string()));
+                    if !checked {
+                        checked = true;
+                        mismatch = robot_mismatch(&status, robot).err();
+                        if mismatch.is_some() {
+                            break;
+                        }
+                    }
                 }
                 Err(e) => log(&tap, t, Level::Warning, peer, format!("status: {e}")),
             }
@@ -145,7 +151,33 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
          {dropped} events dropped (queue full)",
         args.file.display()
     );
+    if let Some(why) = mismatch {
+        return Err(format!(
+            "{why}: give the robot file the controller runs (`armgate status` names it)"
+        ));
+    }
+    if polls == failed {
+        return Err(format!(
+            "nothing recorded: {polls} readings, none answered by {} (is the controller \
+             running there? one with a signing key needs --key)",
+            args.addr
+        ));
+    }
     Ok(())
+}
+
+/// Whether the robot file describes the controller's robot: the same name and joint count.
+fn robot_mismatch(status: &armgate_client::Status, robot: &ValidRobot) -> Result<(), String> {
+    if status.name == robot.name.as_str() && status.joints == robot.dof() {
+        return Ok(());
+    }
+    Err(format!(
+        "the controller runs `{}` ({} joints), the robot file describes `{}` ({} joints)",
+        status.name,
+        status.joints,
+        robot.name.as_str(),
+        robot.dof()
+    ))
 }
 
 /// One reading: `jP` (both banks if needed) and `PS`.
@@ -182,4 +214,93 @@ fn log(tap: &Tap, t: f64, level: Level, peer: SocketAddr, text: String) {
         name: peer.to_string(),
         text,
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::UdpSocket;
+
+    fn robot(name: &str) -> ValidRobot {
+        let path = format!("{}/../robots/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        armgate_core::config::load_file(&path).unwrap()
+    }
+
+    fn args(addr: String, robot: &str, file: PathBuf) -> RecordArgs {
+        RecordArgs {
+            file,
+            robot: PathBuf::from(robot),
+            addr,
+            rate: 20.0,
+            duration: Some(0.5),
+            key: None,
+            link_id: 1,
+        }
+    }
+
+    /// A controller of a six-joint `ranger-mk1` that answers `SQ` (status and name) and echoes
+    /// everything else, until the test ends.
+    fn six_joint_controller() -> String {
+        let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let addr = socket.local_addr().unwrap().to_string();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 64];
+            while let Ok((n, from)) = socket.recv_from(&mut buf) {
+                if n < MESSAGE_LEN {
+                    continue;
+                }
+                let mut reply = buf[..MESSAGE_LEN].to_vec();
+                reply.swap(0, 1);
+                if &buf[..2] == b"SQ" {
+                    reply[2..30].fill(0);
+                    if buf[30] == 1 {
+                        reply[2..12].copy_from_slice(b"ranger-mk1");
+                    } else {
+                        let values = [2.0f32, 2.0, 0.0, 6.0, 0.0, 0.0, 1.0];
+                        for (k, v) in values.iter().enumerate() {
+                            reply[2 + 4 * k..6 + 4 * k].copy_from_slice(&v.to_le_bytes());
+                        }
+                    }
+                }
+                let _ = socket.send_to(&reply, from);
+            }
+        });
+        addr
+    }
+
+    #[test]
+    fn a_robot_file_of_another_arm_fails_the_recording() {
+        let addr = six_joint_controller();
+        let dir = std::env::temp_dir().join(format!("armgate-record-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let err = run(
+            &args(addr.clone(), "iiwa14.toml", dir.join("a.mcap")),
+            &robot("iiwa14"),
+        )
+        .unwrap_err();
+        assert!(
+            err.starts_with(
+                "the controller runs `ranger-mk1` (6 joints), the robot file describes `iiwa14` \
+                 (7 joints)"
+            ),
+            "{err}"
+        );
+        // The right file records.
+        run(
+            &args(addr, "ranger-mk1.toml", dir.join("b.mcap")),
+            &robot("ranger-mk1"),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn a_recording_without_a_single_answer_fails() {
+        // A socket that never answers.
+        let silent = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let addr = silent.local_addr().unwrap().to_string();
+        let file = std::env::temp_dir().join(format!("armgate-silent-{}.mcap", std::process::id()));
+        let err = run(&args(addr, "ranger-mk1.toml", file), &robot("ranger-mk1")).unwrap_err();
+        assert!(err.starts_with("nothing recorded: "), "{err}");
+        assert!(err.contains("none answered"), "{err}");
+    }
 }

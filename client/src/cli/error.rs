@@ -1,6 +1,6 @@
 //! Why an `armgate` command failed, and its exit status.
 
-use crate::{ClientError, RunFileError, Text};
+use crate::{ClientError, RunFileError, Text, exit};
 
 /// Why a command failed.
 #[derive(Debug, thiserror::Error)]
@@ -28,28 +28,23 @@ pub enum CliError {
         /// What to do about it.
         hint: Option<String>,
     },
-    /// Ctrl-C during a wait; says whether ST was sent.
+    /// Ctrl-C during a stream (`jog`): says what the arm does.
     #[error("interrupted: {0}")]
     Interrupted(String),
-    /// A command that started a motion failed before it saw it end; ST was sent first.
-    #[error("{error}; {stop}")]
-    Stopped {
-        /// Why the command failed.
-        error: ClientError,
-        /// Whether ST was sent.
-        stop: String,
-    },
+    /// `armgate ik`: the pose has no solution within the joint limits.
+    #[error("{0}")]
+    NoSolution(String),
 }
 
 impl CliError {
-    /// 1 if the controller refused or aborted, 130 if interrupted, else 2.
+    /// The command's row of [`exit::TABLE`], the same for every subcommand.
     pub fn exit_code(&self) -> u8 {
         match self {
             Self::Client(e) => e.exit_code(),
-            Self::Refused { .. } => 1,
-            Self::Interrupted(_) => ClientError::Interrupted.exit_code(),
-            Self::Stopped { error, .. } => error.exit_code(),
-            _ => 2,
+            Self::Refused { .. } => exit::REFUSED,
+            Self::Interrupted(_) => exit::INTERRUPTED,
+            Self::NoSolution(_) => exit::NO_SOLUTION,
+            Self::RunFile(_) | Self::Usage(_) | Self::Output(_) | Self::Plot(_) => exit::NO_CONTACT,
         }
     }
 

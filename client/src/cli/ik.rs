@@ -5,7 +5,7 @@ use std::io::Write;
 use clap::Args;
 
 use super::CliError;
-use super::options::{PoseArgs, WaitArgs};
+use super::options::{PoseArgs, WaitArgs, parse_seconds};
 use super::output::{fmt_values, follow, joint_progress, start};
 use crate::{Client, Redundancy};
 
@@ -50,14 +50,15 @@ pub struct IkMoveArgs {
     /// The pose.
     #[command(flatten)]
     pub pose: PoseArgs,
-    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist (as `armgate ik` prints them).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(0..8))]
+    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist, 0..=7 (as `armgate ik` prints them);
+    /// without it, the solution nearest the present joints.
+    #[arg(long, value_parser = parse_branch)]
     pub branch: Option<u8>,
     /// The redundancy values (no solution for them: refused, no others are tried).
     #[command(flatten)]
     pub redundancy: RedundancyArgs,
-    /// Minimum duration (s).
-    #[arg(long, default_value_t = 0.0)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds).
+    #[arg(long, default_value_t = 0.0, value_parser = parse_seconds)]
     pub time: f64,
     /// Waiting.
     #[command(flatten)]
@@ -83,10 +84,59 @@ pub(super) fn ik(
         "{} solutions (branch: shoulder 1, elbow 2, wrist 4)",
         solutions.len()
     )?;
+    // The arm's own branch, and the solution nearest its joints: what ik-move without
+    // --branch moves to (best effort: a controller without the reports marks none).
+    let present = client.present_branch().ok().flatten();
+    let here = client.joints(joints).ok();
+    let nearest = here.as_ref().and_then(|q| {
+        solutions
+            .iter()
+            .map(|s| (s.branch, distance(&s.q, q)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(branch, _)| branch)
+    });
     for s in &solutions {
-        writeln!(out, "  branch {} {}", s.branch, fmt_values(&s.q, 6))?;
+        let mut marks = Vec::new();
+        if present == Some(s.branch) {
+            marks.push("the arm's present branch");
+        }
+        if nearest == Some(s.branch) {
+            marks.push("nearest the joints: ik-move's choice without --branch");
+        }
+        let marks = if marks.is_empty() {
+            String::new()
+        } else {
+            format!("   <- {}", marks.join("; "))
+        };
+        writeln!(out, "  branch {} {}{marks}", s.branch, fmt_values(&s.q, 6))?;
+    }
+    if solutions.is_empty() {
+        return Err(CliError::NoSolution(
+            "no IK solution of this pose within the joint limits".to_owned(),
+        ));
     }
     Ok(())
+}
+
+/// `--branch`: the bits 0..=7.
+fn parse_branch(s: &str) -> Result<u8, String> {
+    match s.parse::<u8>() {
+        Ok(bits) if bits <= 7 => Ok(bits),
+        _ => Err(format!(
+            "`{s}`: a branch is 0 to 7, the sum of 1 shoulder, 2 elbow, 4 wrist (`armgate ik` \
+             lists those with a solution); leave --branch out for the solution nearest the \
+             present joints"
+        )),
+    }
+}
+
+/// The Euclidean distance between two joint vectors (their common joints).
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// `armgate ik-move`: KG, then wait until the joints are there.
@@ -115,10 +165,48 @@ pub(super) fn ik_move(
     if wait.no_wait {
         return Ok(());
     }
-    let options = wait.options(*time, interrupt.as_ref());
+    let options = wait.options(*time, None, interrupt.as_ref());
     let reached = follow(client, |c| {
         c.wait_until_joints(&goal.q, &options, joint_progress)
     })?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{cartesian_controller, run_with};
+    use armgate_protocol::client::Command;
+
+    #[test]
+    fn a_pose_without_a_solution_exits_5() {
+        // KS answered with no solution (f6 = 0) on a robot with a closed form.
+        let fake = cartesian_controller(|_, _| {});
+        let (result, out) = run_with(&fake, &["ik", "0", "0.2", "9", "0", "0", "0"]);
+        let err = result.unwrap_err();
+        assert_eq!(err.exit_code(), crate::exit::NO_SOLUTION, "{err}");
+        assert!(out.starts_with("0 solutions"), "{out}");
+        assert_eq!(
+            err.to_string(),
+            "no IK solution of this pose within the joint limits"
+        );
+        // --branch 8 says what a branch is.
+        let cli = <crate::cli::Cli as clap::Parser>::try_parse_from([
+            "armgate", "ik-move", "0", "0", "0", "0", "0", "0", "--branch", "8",
+        ]);
+        let message = cli.unwrap_err().to_string();
+        assert!(
+            message.contains("a branch is 0 to 7, the sum of 1 shoulder"),
+            "{message}"
+        );
+        // Two solutions: success.
+        let fake = cartesian_controller(|r, reply| {
+            if r.command == Command::IkSolution {
+                reply.values[6] = 2.0;
+            }
+        });
+        let (result, out) = run_with(&fake, &["ik", "0", "0.2", "0.8", "0", "0", "0"]);
+        result.unwrap();
+        assert!(out.starts_with("2 solutions"), "{out}");
+    }
 }

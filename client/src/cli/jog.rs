@@ -16,8 +16,8 @@ pub struct JogArgs {
     /// The twist (3 or 6 values) or the joint rates (one per joint).
     #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
     pub values: Vec<f64>,
-    /// How long to stream (s).
-    #[arg(long = "for", default_value_t = 1.0)]
+    /// How long to stream (`1`, `1s`, `500ms`; bare: seconds).
+    #[arg(long = "for", default_value_t = 1.0, value_parser = super::options::parse_seconds)]
     pub seconds: f64,
     /// The twist is in the tool frame.
     #[arg(long, conflicts_with = "rates")]

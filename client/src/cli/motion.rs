@@ -5,7 +5,7 @@ use std::io::Write;
 
 use clap::Args;
 
-use super::options::{PoseArgs, WaitArgs};
+use super::options::{PoseArgs, WaitArgs, parse_seconds};
 use super::output::{fmt_values, follow, joint_progress, pose_progress, start};
 use super::{Cli, CliError, joint_count};
 use crate::banks::MAX_JOINTS;
@@ -17,8 +17,9 @@ pub struct MoveArgs {
     /// The goal.
     #[command(flatten)]
     pub pose: PoseArgs,
-    /// Minimum duration (s); 0 = as fast as the controller's limits allow.
-    #[arg(long, default_value_t = 0.0)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds); 0 = as fast as the controller's
+    /// limits allow.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_seconds)]
     pub time: f64,
     /// Waiting.
     #[command(flatten)]
@@ -31,8 +32,8 @@ pub struct JmoveArgs {
     /// One value per joint (rad, or m for prismatic joints), as many as the arm has.
     #[arg(required = true, num_args = 1..=MAX_JOINTS, allow_negative_numbers = true)]
     pub q: Vec<f64>,
-    /// Minimum duration (s).
-    #[arg(long)]
+    /// Minimum duration (`5`, `5s`, `1500ms`; bare: seconds).
+    #[arg(long, value_parser = parse_seconds)]
     pub time: Option<f64>,
     /// Waiting.
     #[command(flatten)]
@@ -49,13 +50,13 @@ pub(super) fn move_to(
     let (xyz, rpy) = pose.xyz_rpy();
     let interrupt = wait.interrupt();
     client.goal_rpy(xyz, rpy, *time)?;
-    start(client, Client::begin)?;
+    let planned = start(client, Client::begin)?;
     writeln!(out, "moving")?;
     if wait.no_wait {
         return Ok(());
     }
     let goal = Pose::from_xyz_rpy(xyz, rpy);
-    let options = wait.options(*time, interrupt.as_ref());
+    let options = wait.options(*time, planned, interrupt.as_ref());
     let pose = follow(client, |c| {
         c.wait_until_pose(&goal, &options, pose_progress)
     })?;
@@ -78,22 +79,23 @@ pub(super) fn jmove(
     let JmoveArgs { q, time, wait } = args;
     check_joint_count(q.len(), joint_count(cli, client)?)?;
     let interrupt = wait.interrupt();
-    match time {
+    let planned = match time {
         None => {
             client.joint_goal(q)?;
-            start(client, Client::joint_begin)?;
+            start(client, Client::joint_begin)?
         }
         Some(t) => {
             client.joint_via_clear()?;
             client.via_joint(0, q, *t)?;
             start(client, Client::run_joint_sequence)?;
+            None
         }
-    }
+    };
     writeln!(out, "moving")?;
     if wait.no_wait {
         return Ok(());
     }
-    let options = wait.options(time.unwrap_or(0.0), interrupt.as_ref());
+    let options = wait.options(time.unwrap_or(0.0), planned, interrupt.as_ref());
     let reached = follow(client, |c| c.wait_until_joints(q, &options, joint_progress))?;
     writeln!(out, "arrived: {}", fmt_values(&reached, 4))?;
     Ok(())

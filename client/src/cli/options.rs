@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 
 use crate::banks::MAX_JOINTS;
-use crate::{WaitOptions, interrupt};
+use crate::{StopPolicy, WaitOptions, interrupt};
 
 /// A pose: position (m) and roll/pitch/yaw (rad).
 #[derive(Clone, Debug, Args)]
@@ -42,31 +42,44 @@ pub struct WaitArgs {
     /// Return as soon as the motion has started.
     #[arg(long)]
     pub no_wait: bool,
-    /// Give up waiting after this long (default: 30 s plus the requested times); then ST.
+    /// Give up waiting after this long, e.g. 90s, 500ms, 2min (a bare number is seconds);
+    /// then ST. Default: twice the planned duration the controller reports plus 30 s, else
+    /// 10 min plus the requested times (a stalled arm ends the wait after 3 s anyway).
     #[arg(long, value_parser = parse_duration)]
     pub wait_timeout: Option<Duration>,
-    /// Arrival tolerance, mm (joints: mrad).
-    #[arg(long, default_value_t = 1.0)]
+    /// Arrival tolerance, mm (joints: mrad); more than 0 (the measured values are floats: an
+    /// exact arrival is never seen).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_tolerance)]
     pub tolerance: f64,
-    /// On Ctrl-C just exit and leave the arm moving (by default ST is sent first).
+    /// On Ctrl-C exit and leave the arm moving, saying so (by default ST is sent first).
     #[arg(long)]
     pub no_stop_on_interrupt: bool,
 }
 
 impl WaitArgs {
-    /// The wait's options; with `interrupt`, Ctrl-C ends the wait.
+    /// The wait's options for a motion that takes at least `requested` s, or `planned` as the
+    /// controller reports it; with `interrupt`, Ctrl-C ends the wait.
     pub(super) fn options(
         &self,
         requested: f64,
+        planned: Option<Duration>,
         interrupt: Option<&interrupt::Interrupt>,
     ) -> WaitOptions {
         let extra = Duration::try_from_secs_f64(requested).unwrap_or_default();
+        let default = match planned {
+            // Room for slow-downs near singularities and joint limits.
+            Some(planned) => planned.saturating_mul(2).saturating_add(PLANNED_MARGIN),
+            None => WaitOptions::default().timeout.saturating_add(extra),
+        };
         WaitOptions {
             tolerance: self.tolerance * 1e-3,
-            timeout: self
-                .wait_timeout
-                .unwrap_or(Duration::from_secs(30).saturating_add(extra)),
+            timeout: self.wait_timeout.unwrap_or(default),
             interrupt: interrupt.cloned(),
+            stop: if self.no_stop_on_interrupt {
+                StopPolicy::ExceptInterrupt
+            } else {
+                StopPolicy::Always
+            },
             ..WaitOptions::default()
         }
     }
@@ -79,18 +92,18 @@ impl WaitArgs {
         interrupt: Option<&interrupt::Interrupt>,
         blend: f64,
     ) -> WaitOptions {
-        let options = self.options(requested, interrupt);
+        let options = self.options(requested, None, interrupt);
         WaitOptions {
             pass_tolerance: options.pass_tolerance + blend,
             ..options
         }
     }
 
-    /// Installs the Ctrl-C handler unless told not to (or there is no wait to interrupt).
-    /// Installed before the first request, so that Ctrl-C while the motion is being started
-    /// stops it as well.
+    /// Installs the Ctrl-C handler (unless there is no wait to interrupt): the wait ends and
+    /// says what the arm does ([`WaitOptions::stop`]). Installed before the first request, so
+    /// that Ctrl-C while the motion is being started stops it as well.
     pub(super) fn interrupt(&self) -> Option<interrupt::Interrupt> {
-        if self.no_wait || self.no_stop_on_interrupt {
+        if self.no_wait {
             return None;
         }
         interrupt::ctrl_c()
@@ -99,22 +112,44 @@ impl WaitArgs {
     }
 }
 
-/// Parses `200ms`, `1s`, `1.5s` or a plain number of milliseconds.
+/// The margin of a wait on a motion whose planned duration the controller reported.
+const PLANNED_MARGIN: Duration = Duration::from_secs(30);
+
+/// Parses a duration with its unit, `200ms`, `1.5s`, `2min`, or a bare number of seconds (as
+/// every duration of the `armgate` tool: `--timeout`, `--wait-timeout`, `--time`, `--for`).
 pub fn parse_duration(s: &str) -> Result<Duration, String> {
     let s = s.trim();
     let (number, scale) = if let Some(ms) = s.strip_suffix("ms") {
         (ms, 1e-3)
+    } else if let Some(min) = s.strip_suffix("min") {
+        (min, 60.0)
     } else if let Some(secs) = s.strip_suffix('s') {
         (secs, 1.0)
     } else {
-        (s, 1e-3)
+        (s, 1.0)
     };
     number
         .trim()
         .parse::<f64>()
         .ok()
         .and_then(|v| Duration::try_from_secs_f64(v * scale).ok())
-        .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s)"))
+        .ok_or_else(|| format!("`{s}` is not a duration (e.g. 200ms, 1.5s, 2min; bare: seconds)"))
+}
+
+/// A duration in seconds, for the options that are numbers of seconds (`--time`, `--for`).
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    parse_duration(s).map(|d| d.as_secs_f64())
+}
+
+/// An arrival tolerance: finite and more than 0 (`--tolerance 0` could never be met and would
+/// end every wait as a stall).
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "`{s}`: the tolerance is a number of mm (joints: mrad) above 0, e.g. 0.1"
+        )),
+    }
 }
 
 /// A duration that is not zero: a zero reply timeout would never wait for a reply.
@@ -143,7 +178,45 @@ mod tests {
     fn durations() {
         assert_eq!(parse_duration("200ms"), Ok(Duration::from_millis(200)));
         assert_eq!(parse_duration("1.5s"), Ok(Duration::from_millis(1500)));
-        assert_eq!(parse_duration("50"), Ok(Duration::from_millis(50)));
+        // The wait: twice the planned duration plus 30 s, else 10 min plus the requested time;
+        // --wait-timeout wins.
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        let planned = Some(Duration::from_secs(45));
+        assert_eq!(
+            args.wait.options(0.0, planned, None).timeout,
+            Duration::from_secs(120)
+        );
+        assert_eq!(
+            args.wait.options(5.0, None, None).timeout,
+            Duration::from_secs(605)
+        );
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0", "--wait-timeout", "2s"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        assert_eq!(
+            args.wait.options(0.0, planned, None).timeout,
+            Duration::from_secs(2)
+        );
+        assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0"]).is_err());
+        assert!(Cli::try_parse_from(["armgate", "jmove", "0", "--tolerance", "0.05"]).is_ok());
+        // A bare number is seconds, as --time and --for are (issue 37: 90 was 90 ms).
+        assert_eq!(parse_duration("90"), Ok(Duration::from_secs(90)));
+        assert_eq!(parse_duration("2min"), Ok(Duration::from_secs(120)));
+        assert_eq!(parse_seconds("500ms"), Ok(0.5));
+        let cli = Cli::try_parse_from(["armgate", "jmove", "0", "--wait-timeout", "90"]).unwrap();
+        let Cmd::Jmove(args) = cli.command else {
+            panic!()
+        };
+        assert_eq!(args.wait.wait_timeout, Some(Duration::from_secs(90)));
+        let cli = Cli::try_parse_from([
+            "armgate", "move", "0", "0", "0", "0", "0", "0", "--time", "1.5s",
+        ])
+        .unwrap();
+        assert!(matches!(cli.command, Cmd::Move(m) if m.time == 1.5));
         assert!(parse_duration("soon").is_err());
         assert!(parse_duration("-1s").is_err());
         assert!(parse_timeout("0").is_err());

@@ -6,21 +6,15 @@ use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
 use super::CliError;
-use crate::{Client, ClientError, Pose, Progress, Text};
+use crate::{Client, ClientError, Pose, Progress, StopPolicy, Text};
 
 /// A command that leaves before it saw the motion it started end (a wait that timed out,
-/// stalled, was aborted or interrupted; a controller that stopped answering) sends ST first:
-/// otherwise the arm goes on alone, and the next client is refused (`ER40`) until it ends.
+/// stalled or was interrupted; a controller that stopped answering) sends ST first, and says so
+/// ([`Client::end_wait`]): otherwise the arm goes on alone, and the next client is refused
+/// (`ER40`) until it ends. A wait of the library has done so already.
 pub(super) fn stop_started(client: &mut Client, error: ClientError) -> CliError {
     finish_progress();
-    let stop = match client.stop() {
-        Ok(()) => "sent ST: the arm stops and holds".to_owned(),
-        Err(e) => format!("ST failed ({e}): the arm may still be moving"),
-    };
-    match error {
-        ClientError::Interrupted => CliError::Interrupted(stop),
-        error => CliError::Stopped { error, stop },
-    }
+    CliError::Client(client.end_wait(error, StopPolicy::Always))
 }
 
 /// Sends the request(s) that start a motion. When the starting request's replies are all lost,
@@ -152,7 +146,7 @@ mod tests {
         let err = stop_started(&mut client, ClientError::Interrupted);
         assert_eq!(
             err.to_string(),
-            "interrupted: sent ST: the arm stops and holds"
+            "interrupted; sent ST: the arm stops and holds"
         );
         assert_eq!(err.exit_code(), 130);
         assert_eq!(&fake.received()[0][..2], b"ST");
@@ -168,13 +162,14 @@ mod tests {
             "target 1 not reached within 1s (still 0.2500 (joint norm) from it); sent ST: the arm \
              stops and holds"
         );
-        assert_eq!(err.exit_code(), 2);
+        assert_eq!(err.exit_code(), crate::exit::NOT_ARRIVED);
+        // The controller ended it: not stopped again.
         let err = stop_started(
             &mut client,
             ClientError::Aborted(crate::fake::parsed_text("WN22 Inv Kin Divergence.")),
         );
-        assert_eq!(err.exit_code(), 1);
-        assert_eq!(fake.received().len(), 3);
+        assert_eq!(err.exit_code(), crate::exit::STOPPED);
+        assert_eq!(fake.received().len(), 2);
         assert!(fake.received().iter().all(|d| &d[..2] == b"ST"));
     }
 }

@@ -5,10 +5,12 @@ use std::io::Write;
 use super::{Cli, CliError, joint_count};
 use crate::{Client, NO_READING, Pose};
 
-/// `armgate status`: the state (SQ 0, the stop cause SQ 2) and, with --key, the signing counters.
+/// `armgate status`: the state (SQ 0), the stop cause and who set it (SQ 2), the holder, the
+/// clients and the watchdog (SQ 3) and, with --key, the signing counters.
 pub(super) fn status(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), CliError> {
     let mut status = client.status()?;
     status.cause = client.stop_cause()?;
+    status.session = client.session()?;
     writeln!(out, "{status}")?;
     if cli.controller.key.is_some() {
         let s = client.signing_report()?;

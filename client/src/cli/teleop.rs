@@ -28,14 +28,18 @@ press sends).
   Down / Up      y - / +      Up / Down      select previous / next joint
   PgDn / PgUp    z - / +      1 .. 8         select joint 1 .. 8
   + / -          double / halve the scale
-  space          desired <- current
+  c              desired <- current
   Enter          GT (desired position, current roll/pitch/yaw, T = 0) + BG;
                  joint keys: jG + jB.
                  If BG (jB) is refused, e.g. a motion still runs: ST, then BG (jB) once more.
   j              switch between Cartesian and joint keys
-  m              next mode via CM, from the present one: off -> joint -> cart -> off
+  m              CM to the mode the keys need (cartesian, or joint for the joint keys);
+                 in it already: on along off -> joint -> cart -> off
   v              jog keys <-> step keys
-  q, Esc         quit (the terminal is restored)
+  space          stop (ST); a jog key still held does not move again until pressed anew
+  o              drives on (ON)
+  q, Esc         quit: ST unless another client holds the arm (the terminal is restored);
+                 Ctrl-C the same, exit status 130
 
 A Cartesian step is 1 mm x scale, a joint step 0.01 rad x scale.";
 
@@ -67,5 +71,10 @@ pub(super) fn run(args: &TeleopArgs, cli: &Cli, mut client: Client) -> Result<()
         poll,
         addr: cli.controller.addr.clone(),
     };
-    teleop::run(client, options).map_err(CliError::Output)
+    match teleop::run(client, options).map_err(CliError::Output)? {
+        teleop::Ended::Quit => Ok(()),
+        teleop::Ended::Interrupted => Err(CliError::Interrupted(
+            "teleop ended (ST sent unless another client holds the arm)".to_owned(),
+        )),
+    }
 }

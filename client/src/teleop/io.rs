@@ -127,10 +127,10 @@ fn read_state(client: &mut Client, joints: usize, with_status: &mut bool) -> Vec
 /// them — is reported, never stopped through.
 fn begin_or_restart(
     client: &mut Client,
-    begin: fn(&mut Client) -> Result<(), ClientError>,
+    begin: fn(&mut Client) -> Result<Option<Duration>, ClientError>,
 ) -> Result<bool, ClientError> {
     match begin(client) {
-        Ok(()) => Ok(false),
+        Ok(_) => Ok(false),
         Err(ClientError::Rejected(text))
             if matches!(
                 Notice::parse(&text),
@@ -138,7 +138,7 @@ fn begin_or_restart(
             ) =>
         {
             client.stop()?;
-            begin(client).map(|()| true)
+            begin(client).map(|_| true)
         }
         Err(e) => Err(e),
     }

@@ -16,7 +16,7 @@
 //! | c | desired pose ← current pose | desired joints ← current joints |
 //! | Enter | GT (desired position, current RPY, T = 0) + BG | jG + jB |
 //! | j | switch to joint keys | switch to Cartesian keys |
-//! | m | next mode via CM: off → joint → cart → off | same |
+//! | m | CM to the mode the keys need (cartesian / joint); there, on along off → joint → cart | same |
 //! | v | jog keys ↔ step keys | same |
 //! | q, Esc, Ctrl-C | stop (ST) and quit (the terminal is restored) | same |
 //!
@@ -32,10 +32,17 @@
 //! BG (jB) is refused `busy` (this client's motion is still running), the client sends ST and
 //! then BG (jB) once more; any other refusal (another client holding the arm, `ER40`) is shown.
 //!
-//! Leaving stops what teleop started: `q`, Esc, Ctrl-C, SIGTERM, a closed terminal (SIGHUP)
-//! or an error of the terminal all send `ST` (on a socket of its own, [`StopOnExit`]) before
-//! the process ends, as `armgate move` does on Ctrl-C. On SIGTERM and SIGHUP a thread of its
-//! own sends it at once ([`stop_on_signal`]): a closed terminal leaves the keyboard loop stuck.
+//! Leaving stops what teleop started, and only that: `q`, Esc, Ctrl-C, SIGTERM, a closed
+//! terminal (SIGHUP) or an error of the terminal all send `ST` (on a socket of its own,
+//! [`StopOnExit`]) before the process ends, as `armgate move` does on Ctrl-C — unless the
+//! controller's session report (`SQ` 3) names another client as the holder of the arm: a
+//! teleop opened to watch leaves another operator's motion alone ([`StopSender::stop`]). On
+//! SIGTERM and SIGHUP a thread of its own does so at once ([`stop_on_signal`]): a closed
+//! terminal leaves the keyboard loop stuck.
+//!
+//! The stop key (space) stops the jog stream at once as well as the arm, and a jog key still
+//! held (its auto-repeats) does not restart it: the operator releases it and presses again
+//! ([`state`]).
 //!
 //! The header shows the robot, mode, drives and motion from the status request (SQ); with a
 //! controller too old for it the mode is unknown until the first `m`, and `m` from an unknown
@@ -103,21 +110,46 @@ pub fn key(event: &KeyEvent) -> Option<Key> {
     })
 }
 
-/// Where and how to send `ST`.
-struct Stopper {
+/// Where and how to send `ST`, and for whom.
+struct StopSender {
     peer: std::net::SocketAddr,
     config: crate::ClientConfig,
     /// Signs the stop for a controller that wants signed requests.
     signer: Option<crate::Signer>,
+    /// This teleop's sockets (polls and moves, the jog stream): the holders it may stop.
+    own: Vec<std::net::SocketAddr>,
 }
 
-impl Stopper {
-    /// Sends `ST`. It is obeyed from any client: a socket of its own, so that it never waits
-    /// behind the I/O thread's request.
-    fn stop(self) {
-        if let Ok(mut client) = Client::connect_with(self.peer, self.config) {
-            client.set_signer(self.signer);
-            let _ = client.stop();
+/// What [`StopSender::stop`] did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ExitStop {
+    /// Sent `ST` (this teleop holds the arm, nobody does, or the controller cannot say).
+    Sent,
+    /// Another client holds the arm: its motion is not this teleop's to stop.
+    Left(std::net::SocketAddrV4),
+    /// `ST` was due but got no answer.
+    Failed,
+}
+
+impl StopSender {
+    /// Sends `ST` unless the controller names another client as the holder (`SQ` 3). It is
+    /// obeyed from any client: a socket of its own, so that it never waits behind the I/O
+    /// thread's request. A controller that cannot say (too old, no answer) is stopped.
+    fn stop(self) -> ExitStop {
+        let Ok(mut client) = Client::connect_with(self.peer, self.config) else {
+            return ExitStop::Failed;
+        };
+        client.set_signer(self.signer);
+        if let Ok(Some(session)) = client.session()
+            && session.holder == crate::status::Holder::Other
+            && let Some(holder) = session.address
+            && !self.own.contains(&std::net::SocketAddr::V4(holder))
+        {
+            return ExitStop::Left(holder);
+        }
+        match client.stop() {
+            Ok(()) => ExitStop::Sent,
+            Err(_) => ExitStop::Failed,
         }
     }
 
@@ -128,18 +160,22 @@ impl Stopper {
             peer: self.peer,
             config: self.config.clone(),
             signer: self.signer.as_ref().map(crate::Signer::next_link),
+            own: self.own.clone(),
         }
     }
 }
 
 /// Sends `ST` when dropped — on every way out of [`run`], an error return included — so that
 /// leaving teleop never leaves the arm moving.
-struct StopOnExit(Option<Stopper>);
+struct StopOnExit(Option<StopSender>);
 
 impl Drop for StopOnExit {
     fn drop(&mut self) {
-        if let Some(stopper) = self.0.take() {
-            stopper.stop();
+        if let Some(stopper) = self.0.take()
+            && let ExitStop::Left(holder) = stopper.stop()
+        {
+            // After the terminal is restored (dropped later than `Restore`).
+            eprintln!("armgate: teleop: {holder} holds the arm; its motion was left alone");
         }
     }
 }
@@ -155,7 +191,7 @@ const SIGNAL_GRACE: Duration = Duration::from_secs(1);
 fn stop_on_signal(
     signalled: crate::interrupt::Interrupt,
     done: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    stopper: Stopper,
+    stopper: StopSender,
 ) -> std::io::Result<()> {
     use std::sync::atomic::Ordering;
     let tick = Duration::from_millis(20);
@@ -168,7 +204,7 @@ fn stop_on_signal(
                 }
                 std::thread::sleep(tick);
             }
-            stopper.stop();
+            let _ = stopper.stop();
             let deadline = std::time::Instant::now() + SIGNAL_GRACE;
             while std::time::Instant::now() < deadline {
                 if done.load(Ordering::SeqCst) {
@@ -216,8 +252,18 @@ fn report_releases() -> bool {
         .is_ok()
 }
 
-/// Runs the keyboard client until q / Esc / Ctrl-C or a signal; sends ST on the way out.
-pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
+/// How the keyboard client ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ended {
+    /// `q` or Esc.
+    Quit,
+    /// Ctrl-C, SIGTERM or SIGHUP (the `armgate` tool exits 130).
+    Interrupted,
+}
+
+/// Runs the keyboard client until q / Esc / Ctrl-C or a signal; sends ST on the way out
+/// (unless another client holds the arm).
+pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
     // The jog stream has a socket of its own: it must not wait behind the polls.
     let config = crate::ClientConfig {
         retries: 0,
@@ -225,24 +271,27 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // Signed on the next link id: its timestamps would race the polls' on one link.
     let signer = client.signer().map(crate::Signer::next_link);
-    let stopper = Stopper {
+    let stream_client = Client::connect_with(client.peer(), config)
+        .map_err(|e| std::io::Error::other(e.to_string()))?;
+    let own = [client.local_addr(), stream_client.local_addr()]
+        .into_iter()
+        .filter_map(Result::ok)
+        .collect();
+    let stopper = StopSender {
         peer: client.peer(),
         config: client.config().clone(),
         // A link of its own again: the stop must not race the jog stream's timestamps.
         signer: signer.as_ref().map(crate::Signer::next_link),
+        own,
     };
     // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
     let signalled = crate::interrupt::ctrl_c().map_err(std::io::Error::other)?;
     let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     stop_on_signal(signalled.clone(), done.clone(), stopper.next())?;
     let _stop = StopOnExit(Some(stopper));
-    let streamer = Client::connect_with(client.peer(), config)
-        .map(|mut streamer| {
-            streamer.set_signer(signer);
-            streamer
-        })
-        .map_err(|e| std::io::Error::other(e.to_string()))
-        .and_then(VelocityStreamer::spawn)?;
+    let mut stream_client = stream_client;
+    stream_client.set_signer(signer);
+    let streamer = VelocityStreamer::spawn(stream_client)?;
     let io = io::spawn(client, options.joints, options.poll)?;
     let mut state = TeleopState::new(options.addr, options.joints, options.live);
     state.jog = options.jog;
@@ -253,6 +302,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     };
     // The terminal key that streams, to stop on its release.
     let mut jog_key = None;
+    let mut ctrl_c = false;
     while !state.quit && !signalled.is_set() {
         let now = std::time::Instant::now();
         state.at(now);
@@ -278,6 +328,7 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
             held = HeldKey::default();
             streamer.stop();
         }
+        ctrl_c |= k.modifiers.contains(KeyModifiers::CONTROL) && k.code == KeyCode::Char('c');
         if let Some(key) = key(&k) {
             let sent = match state.handle_key(key) {
                 Some(Action::Jog(velocity)) => {
@@ -292,6 +343,13 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
                     jog_key = Some(k.code);
                     true
                 }
+                Some(Action::Stop) => {
+                    // The jog stream stops with the arm: a held key must not drive it on.
+                    jog_key = None;
+                    held = HeldKey::default();
+                    streamer.stop();
+                    io.actions.send(Action::Stop).is_ok()
+                }
                 Some(action) => io.actions.send(action).is_ok(),
                 None => true,
             };
@@ -304,7 +362,11 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     done.store(true, std::sync::atomic::Ordering::SeqCst);
     // Dropping the sender ends the I/O thread after its current request; it is not joined, so
     // that quitting never waits for a timeout.
-    Ok(())
+    Ok(if ctrl_c || signalled.is_set() {
+        Ended::Interrupted
+    } else {
+        Ended::Quit
+    })
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 //!  ER/WN: WN12 Joint limit.
 //!  sent GT + BG
 //!  ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  c desired←current  Enter send
-//!  space STOP  o drives on  j joint keys  v jog/step  m next mode  q/Esc stop+quit
+//!  space STOP  o drives on  j joint keys  v jog/step  m mode cartesian  q/Esc quit
 //! ```
 
 use ratatui::Frame;
@@ -144,11 +144,11 @@ pub fn render(state: &TeleopState, frame: &mut Frame<'_>) {
     let help_lines = match state.variant {
         Variant::Cartesian => [
             " ←/→ x −/+  ↓/↑ y −/+  PgDn/PgUp z −/+  +/- scale  c desired←current  Enter send",
-            " space STOP  o drives on  j joint keys  v jog/step  m next mode  q/Esc stop+quit",
+            " space STOP  o drives on  j joint keys  v jog/step  m mode cartesian  q/Esc quit",
         ],
         Variant::Joint => [
             " 1-8 or ↑/↓ select joint  ←/→ joint −/+  +/- scale  c desired←current  Enter send",
-            " space STOP  o drives on  j Cartesian keys  v jog/step  m next mode  q/Esc stop+quit",
+            " space STOP  o drives on  j Cartesian keys  v jog/step  m mode joint  q/Esc quit",
         ],
     };
     frame.render_widget(
@@ -285,6 +285,7 @@ mod tests {
             uptime: 1.0,
             name: "ranger-mk1".into(),
             cause: None,
+            session: None,
         }));
         let text = screen(&s);
         assert!(

@@ -7,9 +7,10 @@
 
 use std::time::{Duration, Instant};
 
-use super::jog::{BASE_JOG_RATE, BASE_JOG_SPEED};
+use super::jog::{BASE_JOG_RATE, BASE_JOG_SPEED, FIRST_HOLD};
 use crate::status::{Motion, Status};
 use crate::{Mode, Pose, Text, TwistFrame, Velocity, next_mode};
+use armgate_protocol::client::{Notice, Rejection};
 
 /// The base Cartesian step per key press (m), multiplied by the scale.
 pub const BASE_STEP: f64 = 0.001;
@@ -187,6 +188,11 @@ pub struct TeleopState {
     pub now: Instant,
     /// Polls without motion, while the own motion runs (without SQ).
     still_polls: u32,
+    /// The last jog key and when it came (a press or an auto-repeat).
+    last_jog: Option<(Key, Instant)>,
+    /// The jog key held when the stop key was pressed, and when it last repeated: its repeats
+    /// do not jog again, only a new press does (after a pause longer than [`FIRST_HOLD`]).
+    held_at_stop: Option<(Key, Instant)>,
 }
 
 impl TeleopState {
@@ -220,6 +226,8 @@ impl TeleopState {
             no_reply: false,
             now: Instant::now(),
             still_polls: 0,
+            last_jog: None,
+            held_at_stop: None,
         }
     }
 
@@ -325,6 +333,14 @@ impl TeleopState {
         self.controller = Some(status);
     }
 
+    /// The mode the keys need: Cartesian for the Cartesian keys, joint for the joint keys.
+    pub fn keys_mode(&self) -> Mode {
+        match self.variant {
+            Variant::Cartesian => Mode::Cartesian,
+            Variant::Joint => Mode::Joint,
+        }
+    }
+
     /// The Cartesian step (m).
     pub fn step(&self) -> f64 {
         BASE_STEP * self.scale
@@ -373,6 +389,9 @@ impl TeleopState {
                 }
                 self.refused = Some(text);
                 self.show_text(text);
+                if let Ok(Notice::Rejected(_, Rejection::NeedsMode(mode))) = Notice::parse(&text) {
+                    self.status = format!("needs mode {}: press m", mode.name());
+                }
             }
             Event::NoReply(status) => {
                 self.no_reply = true;
@@ -402,7 +421,15 @@ impl TeleopState {
                 None
             }
             Key::Char(' ') => {
-                self.status = String::from("stop (ST)");
+                let now = self.now;
+                self.held_at_stop = self
+                    .last_jog
+                    .filter(|(_, at)| now.saturating_duration_since(*at) <= FIRST_HOLD);
+                self.status = String::from(if self.held_at_stop.is_some() {
+                    "stop (ST): release the key, then press it again to move"
+                } else {
+                    "stop (ST)"
+                });
                 Some(Action::Stop)
             }
             Key::Char('o') => {
@@ -440,7 +467,14 @@ impl TeleopState {
                 None
             }
             Key::Char('m') => {
-                let next = next_mode(self.mode_pending.or(self.mode).unwrap_or(Mode::Off));
+                // The mode the keys need first (never through off); from there on the cycle.
+                let present = self.mode_pending.or(self.mode);
+                let needed = self.keys_mode();
+                let next = if present == Some(needed) {
+                    next_mode(needed)
+                } else {
+                    needed
+                };
                 self.mode_pending = Some(next);
                 Some(Action::SetMode(next))
             }
@@ -467,11 +501,14 @@ impl TeleopState {
             if let Some(v) = linear.get_mut(axis) {
                 *v = sign * BASE_JOG_SPEED * self.scale;
             }
-            return self.jogging(Velocity::Twist {
-                linear,
-                angular: [0.0; 3],
-                frame: TwistFrame::Base,
-            });
+            return self.jogging(
+                key,
+                Velocity::Twist {
+                    linear,
+                    angular: [0.0; 3],
+                    frame: TwistFrame::Base,
+                },
+            );
         }
         let step = self.step();
         let Some(desired) = self.desired.as_mut() else {
@@ -511,7 +548,7 @@ impl TeleopState {
             if let Some(r) = rates.get_mut(self.selected) {
                 *r = sign * BASE_JOG_RATE * self.scale;
             }
-            return self.jogging(Velocity::Joints(rates));
+            return self.jogging(key, Velocity::Joints(rates));
         }
         let step = self.joint_step();
         let Some(q) = self.desired_joints.get_mut(self.selected) else {
@@ -523,8 +560,19 @@ impl TeleopState {
         self.edited()
     }
 
-    /// A jog: this client's motion, which the desired values follow.
-    fn jogging(&mut self, velocity: Velocity) -> Option<Action> {
+    /// A jog by `key`: this client's motion, which the desired values follow — unless `key`
+    /// is still held from before a stop (its auto-repeats keep coming).
+    fn jogging(&mut self, key: Key, velocity: Velocity) -> Option<Action> {
+        let now = self.now;
+        if let Some((held, at)) = self.held_at_stop {
+            if held == key && now.saturating_duration_since(at) <= FIRST_HOLD {
+                self.held_at_stop = Some((held, now));
+                self.status = String::from("stopped: release the key, then press it again to move");
+                return None;
+            }
+            self.held_at_stop = None;
+        }
+        self.last_jog = Some((key, now));
         self.own_motion = true;
         self.still_polls = 0;
         self.pose_edit = Edit::Following;
@@ -601,6 +649,36 @@ mod tests {
         s.apply(Event::Joints(vec![1.0; 6]));
         s.apply(Event::Joints(vec![2.0; 6]));
         assert_eq!(s.desired_joints, [2.0; 6]);
+    }
+
+    #[test]
+    fn the_stop_key_holds_off_a_held_jog_key_until_it_is_pressed_again() {
+        let mut s = ready(false);
+        s.jog = true;
+        let t0 = Instant::now();
+        s.at(t0);
+        assert!(matches!(s.handle_key(Key::Right), Some(Action::Jog(_))));
+        s.at(t0 + Duration::from_millis(40));
+        assert_eq!(s.handle_key(Key::Char(' ')), Some(Action::Stop));
+        assert_eq!(
+            s.status,
+            "stop (ST): release the key, then press it again to move"
+        );
+        // The held key's repeats, 40 ms apart for a second: no jog.
+        for k in 2..27 {
+            s.at(t0 + Duration::from_millis(40 * k));
+            assert_eq!(s.handle_key(Key::Right), None, "repeat {k}");
+        }
+        // Another key moves at once; so does the same key pressed after a pause.
+        assert!(matches!(s.handle_key(Key::Up), Some(Action::Jog(_))));
+        s.handle_key(Key::Char(' '));
+        s.at(t0 + Duration::from_millis(40 * 27) + FIRST_HOLD * 2);
+        assert!(matches!(s.handle_key(Key::Up), Some(Action::Jog(_))));
+        // A stop with no key held lets the next press jog.
+        s.at(t0 + Duration::from_secs(10));
+        s.handle_key(Key::Char(' '));
+        assert_eq!(s.status, "stop (ST)");
+        assert!(matches!(s.handle_key(Key::Left), Some(Action::Jog(_))));
     }
 
     #[test]
@@ -752,31 +830,43 @@ mod tests {
     }
 
     #[test]
-    fn m_cycles_the_mode_from_the_reported_one() {
+    fn m_selects_the_mode_the_keys_need_then_cycles() {
         let mut s = ready(false);
-        assert_eq!(
-            s.handle_key(Key::Char('m')),
-            Some(Action::SetMode(Mode::Joint))
-        );
-        s.apply(Event::Mode(Mode::Joint));
+        // Cartesian keys: m goes to Cartesian mode at once, not through off or joint.
         assert_eq!(
             s.handle_key(Key::Char('m')),
             Some(Action::SetMode(Mode::Cartesian))
         );
         s.apply(Event::Mode(Mode::Cartesian));
+        // There: on along the cycle.
         assert_eq!(
             s.handle_key(Key::Char('m')),
             Some(Action::SetMode(Mode::Off))
         );
-        // Pressed again before the answer: cycles on from the requested mode.
+        // Pressed again before the answer: from the requested mode, back to the keys' one.
         assert_eq!(s.mode_pending, Some(Mode::Off));
         assert_eq!(
             s.handle_key(Key::Char('m')),
-            Some(Action::SetMode(Mode::Joint))
+            Some(Action::SetMode(Mode::Cartesian))
         );
         s.apply(Event::ModeFailed);
         assert_eq!(s.mode_pending, None);
         assert_eq!(s.mode, Some(Mode::Cartesian));
+        // Joint keys in Cartesian mode: m goes to joint mode directly.
+        s.handle_key(Key::Char('j'));
+        assert_eq!(
+            s.handle_key(Key::Char('m')),
+            Some(Action::SetMode(Mode::Joint))
+        );
+    }
+
+    #[test]
+    fn a_refusal_for_the_mode_says_press_m() {
+        let mut s = ready(false);
+        s.apply(Event::Refused(crate::fake::parsed_text(
+            "ER20 Cmd TW needs mode 2",
+        )));
+        assert_eq!(s.status, "needs mode cartesian: press m");
     }
 
     fn status(mode: Mode, motion: Motion) -> Status {
@@ -790,6 +880,7 @@ mod tests {
             uptime: 1.0,
             name: "ranger-mk1".into(),
             cause: None,
+            session: None,
         }
     }
 

@@ -69,6 +69,8 @@ pub struct CommandHandler {
     now: f64,
     /// The client whose request is being handled.
     client: SocketAddr,
+    /// The client whose request set the stop cause in force (`SQ` 2 names it).
+    stopped_by: Option<SocketAddr>,
     /// `OF` while moving: the drives stop when the arm is at rest, or at this time (s).
     power_off_at: Option<f64>,
     /// The longest a stop from full speed may take (s), with a margin: the bound on `OF`'s wait.
@@ -94,6 +96,7 @@ impl CommandHandler {
             signing: SigningReport::default(),
             now: 0.0,
             client: ANONYMOUS,
+            stopped_by: None,
             power_off_at: None,
             stop_within: stop_time_bound(config),
         }
@@ -216,9 +219,13 @@ impl CommandHandler {
         if self.session.holder() != holder {
             self.hand_over();
         }
+        let cause = self.controller.stop_cause().0;
         let reply = admitted
             .and_then(|()| self.answer(&request, client, drives))
             .unwrap_or_else(|notice| self.refuse(notice));
+        if self.controller.stop_cause().0 != cause {
+            self.stopped_by = Some(client);
+        }
         self.session
             .answered(client, request.command, datagram, &reply, self.now);
         reply

@@ -126,7 +126,14 @@ impl fmt::Display for ConfigReason {
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.joint {
-            Some(j) => write!(f, "joints[{j}].{}: {}", self.field, self.reason),
+            // Joints counted from 1, as everywhere else (the file's n-th [[joints]] table).
+            Some(j) => write!(
+                f,
+                "joint {}, {}: {}",
+                usize::from(j).saturating_add(1),
+                self.field,
+                self.reason
+            ),
             None => write!(f, "{}: {}", self.field, self.reason),
         }
     }

@@ -2,7 +2,7 @@
 
 use core::ops::Deref;
 
-use super::{ConfigError, RobotConfig};
+use super::{ConfigError, JointType, RobotConfig};
 
 /// A robot description that passed [`RobotConfig::validate`]: the only input of the
 /// controller, the kinematic chain and the drive manager, so none of them can be handed a
@@ -37,6 +37,19 @@ impl ValidRobot {
     /// The description, to change and validate again.
     pub fn into_config(self) -> RobotConfig {
         self.config
+    }
+
+    /// Suspicious values that validation lets pass: a revolute joint whose limits reach beyond
+    /// ±2π (more than a turn each way: written in degrees?), as (joint from 0, min, max). The
+    /// shells print them at load.
+    pub fn wide_limits(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        let turn = core::f64::consts::TAU;
+        self.config
+            .joints
+            .iter()
+            .enumerate()
+            .filter(move |(_, j)| j.kind == JointType::Revolute && (j.min < -turn || j.max > turn))
+            .map(|(k, j)| (k, j.min, j.max))
     }
 
     /// This description with `change` applied, validated again.

@@ -1,5 +1,7 @@
 //! Why the arm stopped or holds: what `SQ` index 2 reports (docs/protocol.md).
 
+use core::net::{Ipv4Addr, SocketAddrV4};
+
 use super::{Command, DecodeError, Reply};
 
 /// `SQ` index of the stop or hold cause in force.
@@ -48,13 +50,18 @@ impl StopCause {
 }
 
 /// The `QS` reply to `SQ` index 2: the cause in force (f0, 0 for none) and, for a joint limit,
-/// the joint (f1, 1-based; 0 otherwise).
+/// the joint (f1, 1-based; 0 otherwise); for a cause a client's request set (`ST`, `jR`, `CM`,
+/// `OF`), that client's IPv4 address as f2/f3 (upper and lower 16 bits, as `SQ` 3 gives the
+/// holder's) and its port as f4 (all 0 for the controller's own causes or an IPv6 client), so
+/// that a client whose motion was stopped can say by whom.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CauseReport {
     /// The cause in force: the last stop's until the next motion starts, or a stream's hold.
     pub cause: Option<StopCause>,
     /// The joint a [`StopCause::JointLimit`] holds (0-based).
     pub joint: Option<u8>,
+    /// The client whose request set the cause, if a client did and its address is IPv4.
+    pub by: Option<SocketAddrV4>,
 }
 
 impl CauseReport {
@@ -62,9 +69,18 @@ impl CauseReport {
     pub fn to_reply(&self) -> Reply {
         let code = self.cause.map_or(0, |c| c as u8);
         let joint = self.joint.map_or(0, |j| j.saturating_add(1));
+        let ip = self.by.map_or(0, |a| u32::from(*a.ip()));
         Reply {
             command: Command::Status,
-            values: [f32::from(code), f32::from(joint), 0.0, 0.0, 0.0, 0.0, 0.0],
+            values: [
+                f32::from(code),
+                f32::from(joint),
+                f32::from((ip >> 16) as u16),
+                f32::from(ip as u16),
+                f32::from(self.by.map_or(0, |a| a.port())),
+                0.0,
+                0.0,
+            ],
             index: CAUSE_INDEX,
         }
     }
@@ -75,11 +91,13 @@ impl CauseReport {
         if reply.command != Command::Status || reply.index != CAUSE_INDEX {
             return Err(DecodeError::WrongCommand);
         }
-        let [code, joint, ..] = reply.values;
+        let [code, joint, high, low, port, ..] = reply.values;
         let (code, joint) = (code as u8, joint as u8);
+        let ip = (u32::from(high as u16) << 16) | u32::from(low as u16);
         Ok(Self {
             cause: StopCause::from_code(code),
             joint: joint.checked_sub(1),
+            by: (ip != 0).then(|| SocketAddrV4::new(Ipv4Addr::from(ip), port as u16)),
         })
     }
 }
@@ -93,13 +111,23 @@ mod tests {
         let report = CauseReport {
             cause: Some(StopCause::JointLimit),
             joint: Some(5),
+            by: None,
         };
         let reply = report.to_reply();
-        assert_eq!(reply.values[..2], [7.0, 6.0]);
+        assert_eq!(reply.values[..5], [7.0, 6.0, 0.0, 0.0, 0.0]);
         assert_eq!(CauseReport::from_reply(&reply), Ok(report));
+        let stopped = CauseReport {
+            cause: Some(StopCause::Stop),
+            joint: None,
+            by: Some("192.168.1.2:40001".parse().unwrap()),
+        };
+        let reply = stopped.to_reply();
+        assert_eq!(reply.values[..5], [1.0, 0.0, 49320.0, 258.0, 40001.0]);
+        assert_eq!(CauseReport::from_reply(&reply), Ok(stopped));
         let none = CauseReport {
             cause: None,
             joint: None,
+            by: None,
         };
         assert_eq!(CauseReport::from_reply(&none.to_reply()), Ok(none));
     }

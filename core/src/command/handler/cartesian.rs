@@ -7,14 +7,15 @@ use armgate_protocol::client::{
 };
 
 use super::CommandHandler;
-use super::replies::{non_negative, refusal_notice, values_reply};
+use super::replies::{non_negative, planned_reply, refusal_notice, values_reply};
 use crate::command::banks::BANK_2;
 use crate::command::drives::Drives;
 use crate::math::{self, Frame, Quaternion, Rotation3, Twist, Vector3};
 use crate::motion::Refusal;
 
 impl CommandHandler {
-    /// `BG`: the move to the stored goal.
+    /// `BG`: the move to the stored goal; the reply's f6 is its planned duration (s), so that a
+    /// client can size its wait.
     pub(super) fn begin(
         &mut self,
         req: &Request,
@@ -25,10 +26,11 @@ impl CommandHandler {
             .goal
             .ok_or_else(|| self.missing(cmd, Rejection::NoGoal))?;
         self.ready_to_move(cmd, drives)?;
-        self.controller
+        let planned = self
+            .controller
             .move_cartesian(goal, duration)
             .map_err(|r| refusal_notice(cmd, r))?;
-        Ok(Reply::null(cmd))
+        Ok(planned_reply(cmd, planned))
     }
 
     /// `GL`: a goal as position and quaternion.

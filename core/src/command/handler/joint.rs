@@ -5,7 +5,7 @@
 use armgate_protocol::client::{JointRates, Notice, Rejection, Reply, Request};
 
 use super::CommandHandler;
-use super::replies::{bank_values, non_negative, refusal_notice, values_reply};
+use super::replies::{bank_values, non_negative, planned_reply, refusal_notice, values_reply};
 use crate::command::banks::{BANK_2, BANK_LEN, BankKey};
 use crate::command::drives::Drives;
 
@@ -21,10 +21,11 @@ impl CommandHandler {
             .joint_goal
             .ok_or_else(|| self.missing(cmd, Rejection::NoGoal))?;
         self.ready_to_move(cmd, drives)?;
-        self.controller
+        let planned = self
+            .controller
             .move_joints(&goal, 0.0)
             .map_err(|r| refusal_notice(cmd, r))?;
-        Ok(Reply::null(cmd))
+        Ok(planned_reply(cmd, planned))
     }
 
     /// `jG`: stores the joint goal (bank 2 staged until bank 1 completes it).

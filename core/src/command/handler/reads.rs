@@ -7,12 +7,15 @@ use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, NO_JOINT_TEMPERATURE, Notice, Reply, Request, STATUS_INDEX,
 };
 
+use core::net::SocketAddr;
+
 use super::CommandHandler;
 use super::replies::{joint_reply, no_measurement, values_reply};
 use crate::command::banks::BANK_2;
 use crate::command::drives::Drives;
 use crate::command::ik;
 use crate::math::Quaternion;
+use crate::motion::StopCause;
 
 impl CommandHandler {
     /// `PS`: the measured tool pose, position and quaternion.
@@ -54,7 +57,15 @@ impl CommandHandler {
             STATUS_INDEX => Ok(self.status(drives).report().to_reply()),
             CAUSE_INDEX => {
                 let (cause, joint) = self.controller.stop_cause();
-                Ok(CauseReport { cause, joint }.to_reply())
+                // Only the causes a request sets are a client's; the rest are the controller's.
+                let by = match (cause, self.stopped_by) {
+                    (
+                        Some(StopCause::Stop | StopCause::ModeChange | StopCause::PowerOff),
+                        Some(SocketAddr::V4(a)),
+                    ) => Some(a),
+                    _ => None,
+                };
+                Ok(CauseReport { cause, joint, by }.to_reply())
             }
             SIGNING_INDEX => Ok(self.signing.to_reply()),
             BRANCH_INDEX => {

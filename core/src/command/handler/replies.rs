@@ -91,6 +91,11 @@ pub(super) fn non_negative(t: f64) -> Option<f64> {
     t.is_finite().then_some(t.max(0.0))
 }
 
+/// The reply to a motion start (`BG`, `jB`): f6 the planned duration (s), the rest 0.
+pub(super) fn planned_reply(cmd: Command, planned: f64) -> Reply {
+    values_reply(cmd, &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, planned], 0)
+}
+
 /// A reply carrying `values` in f0.. (the rest zero).
 pub(super) fn values_reply(cmd: Command, values: &[f64], index: u8) -> Reply {
     let mut out = [0.0f32; VALUES];

@@ -1,0 +1,253 @@
+//! `armgate calibrate measure`: the measuring run. It moves the arm through a plan's joint
+//! configurations (`plan --out plan.csv`) with `jG` + `jB`, waits for each motion to end and
+//! the arm to settle, reads the joints the controller reports (`jP`), takes the instrument's
+//! reading, and writes the file the fit reads (`q1..qn,x,y,z,weight`, each line after a comment
+//! naming its plan pose). A pose the controller refuses from where the arm is (the joint
+//! path to it would leave the workspace, say) is tried again once after the others, from
+//! another pose; a pose refused again, or a motion the controller stops, is skipped with its
+//! reason (said on stderr and as a comment in the file), and the run goes on from where the
+//! arm is.
+//!
+//! The instrument's side is one of: a prompt (type `x,y,z` in metres, an empty line skips the
+//! pose), a hook (`--hook CMD`, run by `sh -c` at each pose with `ARMGATE_POSE` (1-based) and
+//! `ARMGATE_JOINTS` (the reported joints, comma-separated) in its environment; the last line of
+//! its output is `x,y,z`; a failure skips the pose), so that a tracker's own software takes the
+//! reading, or none (`--joints-only`: the reported joints, in the plan's format, to pair with
+//! the instrument's file later).
+
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use armgate_calibrate::fit::Measurement;
+use armgate_calibrate::measurements;
+use armgate_client::cli::parse_duration;
+use armgate_client::{Client, ClientConfig, ClientError, Mode, Signer, WaitOptions};
+use clap::Args;
+use nalgebra::Vector3;
+
+/// `measure`'s options.
+#[derive(Debug, Args)]
+pub struct MeasureArgs {
+    /// The robot file (its joint count reads the plan).
+    #[arg(long)]
+    pub robot: PathBuf,
+    /// The joint configurations to visit (CSV, as `plan` writes them), in order.
+    #[arg(long)]
+    pub plan: PathBuf,
+    /// Where to write the measurements (the fit's `--measurements`).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The controller's address, host:port.
+    #[arg(long, env = "ARMGATE_ADDR", default_value = armgate_client::DEFAULT_ADDR)]
+    pub addr: String,
+    /// Sign the requests with the key in this file (a controller with a key).
+    #[arg(long, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
+    pub key: Option<PathBuf>,
+    /// With --key: the link id to sign with, 1..=255.
+    #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = armgate_client::DEFAULT_LINK)]
+    pub link_id: u8,
+    /// The instrument's reading by a command run at each pose (see above); without it and
+    /// without --joints-only, a prompt.
+    #[arg(long, value_name = "CMD", conflicts_with = "joints_only")]
+    pub hook: Option<String>,
+    /// No instrument: write the reported joints only (the plan's format).
+    #[arg(long)]
+    pub joints_only: bool,
+    /// How long to let the arm settle after each motion before reading (`500ms`, `1s`).
+    #[arg(long, default_value = "500ms", value_parser = parse_duration)]
+    pub settle: Duration,
+}
+
+/// Why a pose was not measured.
+enum Refusal {
+    /// The controller refused the motion from where the arm is.
+    Refused(String),
+    /// The motion did not arrive.
+    NotReached(String),
+}
+
+/// The joints reported at a visited pose, or why it was not measured.
+type Visit = Result<Vec<f64>, Refusal>;
+
+/// Runs the measuring run; returns an error only when the controller cannot be talked to or
+/// a file cannot be read or written (a pose that fails is skipped).
+pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
+    let text =
+        std::fs::read_to_string(&args.plan).map_err(|e| format!("{}: {e}", args.plan.display()))?;
+    let plan = measurements::parse_poses(&text, dof)
+        .map_err(|e| format!("{}: {e}", args.plan.display()))?;
+    let mut client = Client::connect_with(args.addr.as_str(), ClientConfig::default())
+        .map_err(|e| e.to_string())?;
+    if let Some(key) = &args.key {
+        let signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        client.set_signer(Some(signer));
+    }
+    client
+        .set_mode(Mode::Joint)
+        .map_err(|e| format!("CM 1: {e}"))?;
+    let mut out = String::new();
+    let (mut measured, mut skipped) = (0usize, 0usize);
+    // Each plan pose with whether it was deferred already.
+    let mut queue: std::collections::VecDeque<(usize, bool)> =
+        (0..plan.len()).map(|k| (k, false)).collect();
+    while let Some((k, deferred)) = queue.pop_front() {
+        let Some(goal) = plan.get(k) else { continue };
+        let visit = match visit(&mut client, goal, args.settle)? {
+            Err(Refusal::Refused(why)) if !deferred => {
+                eprintln!("pose {}/{}: {why}; tried again later", k + 1, plan.len());
+                queue.push_back((k, true));
+                continue;
+            }
+            Err(Refusal::Refused(why) | Refusal::NotReached(why)) => Err(why),
+            Ok(q) => Ok(q),
+        };
+        let reading = visit.and_then(|q| read_instrument(args, k, &q).map(|p| (q, p)));
+        match reading {
+            Ok((q, position)) => {
+                eprintln!("pose {}/{}: measured", k + 1, plan.len());
+                out += &format!("# plan pose {}\n", k + 1);
+                let row = match position {
+                    Some(position) => measurements::format(
+                        &[Measurement {
+                            q,
+                            position,
+                            weight: 1.0,
+                            line: 0,
+                        }],
+                        dof,
+                    ),
+                    None => measurements::format_poses(&[q], dof),
+                };
+                // The row without the header.
+                out += row.lines().nth(1).unwrap_or_default();
+                out.push('\n');
+                measured += 1;
+            }
+            Err(why) => {
+                skipped += 1;
+                eprintln!("pose {}/{}: skipped: {why}", k + 1, plan.len());
+                out += &format!("# plan pose {} skipped: {why}\n", k + 1);
+            }
+        }
+    }
+    let header = if args.joints_only {
+        measurements::format_poses(&[], dof)
+    } else {
+        measurements::format(&[], dof)
+    };
+    std::fs::write(&args.out, header + &out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    eprintln!(
+        "wrote {measured} of {} plan poses to {} ({skipped} skipped)",
+        plan.len(),
+        args.out.display()
+    );
+    if measured == 0 {
+        return Err("no pose was measured".into());
+    }
+    Ok(())
+}
+
+/// Moves to `goal` and reads the joints once the arm has settled; a refusal or a motion that
+/// did not arrive is the pose's reason to be skipped, no reply ends the run.
+fn visit(client: &mut Client, goal: &[f64], settle: Duration) -> Result<Visit, String> {
+    let started = client.joint_goal(goal).and_then(|_| client.joint_begin());
+    let planned = match started {
+        Ok(planned) => planned,
+        Err(ClientError::Rejected(text)) => {
+            return Ok(Err(Refusal::Refused(format!("refused: {text}"))));
+        }
+        Err(e) => return Err(e.to_string()),
+    };
+    // Twice the planned duration and a margin, as `armgate jmove` waits.
+    let defaults = WaitOptions::default();
+    let options = WaitOptions {
+        timeout: planned.map_or(defaults.timeout, |p| {
+            p.saturating_mul(2).saturating_add(Duration::from_secs(30))
+        }),
+        ..defaults
+    };
+    if let Err(e) = client.wait_until_joints(goal, &options, |_| {}) {
+        return Ok(Err(Refusal::NotReached(e.to_string())));
+    }
+    client
+        .wait_motion_ended(Duration::from_secs(5))
+        .map_err(|e| e.to_string())?;
+    std::thread::sleep(settle);
+    client.joints(goal.len()).map(Ok).map_err(|e| e.to_string())
+}
+
+/// The instrument's reading at plan pose `k` (0-based) with the reported joints `q`: none for
+/// `--joints-only`, else the hook's or the prompt's `x,y,z`.
+fn read_instrument(
+    args: &MeasureArgs,
+    k: usize,
+    q: &[f64],
+) -> Result<Option<Vector3<f64>>, String> {
+    if args.joints_only {
+        return Ok(None);
+    }
+    let joints: Vec<String> = q.iter().map(|v| format!("{v:.9}")).collect();
+    let line = match &args.hook {
+        Some(cmd) => {
+            let output = std::process::Command::new("sh")
+                .args(["-c", cmd])
+                .env("ARMGATE_POSE", (k + 1).to_string())
+                .env("ARMGATE_JOINTS", joints.join(","))
+                .output()
+                .map_err(|e| format!("hook: {e}"))?;
+            if !output.status.success() {
+                return Err(format!("hook exited with {}", output.status));
+            }
+            String::from_utf8_lossy(&output.stdout)
+                .lines()
+                .rfind(|l| !l.trim().is_empty())
+                .unwrap_or_default()
+                .to_owned()
+        }
+        None => {
+            eprint!(
+                "pose {}: the arm is at {}; measure the tool and type x,y,z (m), or Enter to \
+                 skip: ",
+                k + 1,
+                joints.join(" ")
+            );
+            let _ = std::io::stderr().flush();
+            let mut line = String::new();
+            std::io::stdin()
+                .lock()
+                .read_line(&mut line)
+                .map_err(|e| format!("prompt: {e}"))?;
+            if line.trim().is_empty() {
+                return Err("no reading given".into());
+            }
+            line
+        }
+    };
+    position(&line).map(Some)
+}
+
+/// `x,y,z` (m).
+fn position(line: &str) -> Result<Vector3<f64>, String> {
+    let values: Result<Vec<f64>, _> = line.split(',').map(|v| v.trim().parse()).collect();
+    match values.as_deref() {
+        Ok([x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
+        _ => Err(format!("`{}` is not x,y,z in metres", line.trim())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_instrument_reading_is_three_finite_numbers() {
+        assert_eq!(
+            position(" 0.5, -0.25 ,1\n"),
+            Ok(Vector3::new(0.5, -0.25, 1.0))
+        );
+        assert!(position("0.5,0.2").is_err());
+        assert!(position("a,b,c").is_err());
+        assert!(position("0.5,NaN,1").is_err());
+    }
+}

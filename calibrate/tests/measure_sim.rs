@@ -1,0 +1,149 @@
+//! A scripted calibration run (issue 37): `armgate calibrate measure` moves ur5 in armgate-sim
+//! through a plan's poses, its hook takes each reading from a perturbed "true" ur5
+//! (`simulate --perturb 7` on the reported joints), and the fit of what it wrote is accepted
+//! (exit 0: better than nominal, residual within 3 × the noise, else it refuses).
+//!
+//! armgate-sim is `$ARMGATE_SIM`, else `armgate-sim` next to this package's binary (built with
+//! cargo if missing), as python/tests/conftest.py finds it.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+const CALIBRATE: &str = env!("CARGO_BIN_EXE_armgate-calibrate");
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn sim_binary() -> PathBuf {
+    if let Some(given) = std::env::var_os("ARMGATE_SIM") {
+        return given.into();
+    }
+    let sim = Path::new(CALIBRATE).with_file_name("armgate-sim");
+    if !sim.is_file() {
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let built = Command::new(cargo)
+            .args(["build", "-q", "-p", "armgate-sim"])
+            .current_dir(repo())
+            .status()
+            .unwrap();
+        assert!(built.success());
+    }
+    sim
+}
+
+/// armgate-sim on a free port; ended when dropped.
+struct Sim(Child, String);
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn start_sim(robot: &str) -> Sim {
+    let mut child = Command::new(sim_binary())
+        .args(["--robot", robot, "--listen", "127.0.0.1:0", "--can", "off"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut addr = None;
+    for line in stderr.lines() {
+        let line = line.unwrap();
+        if let Some(at) = line.find("udp://") {
+            let rest = &line[at + 6..];
+            addr = Some(rest.split([',', ' ']).next().unwrap().to_owned());
+            break;
+        }
+    }
+    Sim(child, addr.expect("armgate-sim's address"))
+}
+
+fn calibrate(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(CALIBRATE)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_measuring_run_on_ur5_in_the_simulator_is_fitted() {
+    let dir = std::env::temp_dir().join(format!("armgate-measure-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = repo().join("robots/ur5.toml");
+    let robot = robot.to_str().unwrap();
+    let plan = calibrate(
+        &[
+            "plan", "--robot", robot, "--poses", "14", "--out", "plan.csv",
+        ],
+        &dir,
+    );
+    assert!(plan.status.success(), "{plan:?}");
+    let sim = start_sim(robot);
+    // The instrument: the perturbed truth's tool position at the reported joints.
+    let hook = format!(
+        "echo \"$ARMGATE_JOINTS\" > p$ARMGATE_POSE.csv && {CALIBRATE} simulate --truth {robot} \
+         --perturb 7 --seed $ARMGATE_POSE --poses p$ARMGATE_POSE.csv --out m$ARMGATE_POSE.csv \
+         2>/dev/null && tail -1 m$ARMGATE_POSE.csv | cut -d, -f7-9"
+    );
+    let run = calibrate(
+        &[
+            "measure",
+            "--robot",
+            robot,
+            "--plan",
+            "plan.csv",
+            "--out",
+            "measured.csv",
+            "--addr",
+            &sim.1,
+            "--hook",
+            &hook,
+        ],
+        &dir,
+    );
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{said}");
+    drop(sim);
+    // Every pose not skipped was reached and read: one line per "measured".
+    let measured = std::fs::read_to_string(dir.join("measured.csv")).unwrap();
+    let rows = measured
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('q'))
+        .count();
+    assert_eq!(rows, said.matches(": measured").count(), "{said}");
+    let skipped = said.matches(": skipped").count();
+    assert_eq!(rows + skipped, 14, "{said}");
+    assert!(rows >= 10, "{said}");
+    assert_eq!(
+        measured.matches("# plan pose").count(),
+        14,
+        "every plan pose is named: {measured}"
+    );
+    // The fit accepts it.
+    let fit = calibrate(
+        &[
+            "--robot",
+            robot,
+            "--measurements",
+            "measured.csv",
+            "--noise-mm",
+            "0.05",
+            "--out",
+            "calibrated.toml",
+            "--instrument-out",
+            "tracker.toml",
+        ],
+        &dir,
+    );
+    let report =
+        String::from_utf8_lossy(&fit.stdout).into_owned() + &String::from_utf8_lossy(&fit.stderr);
+    assert!(fit.status.success(), "{report}");
+    assert!(dir.join("calibrated.toml").is_file());
+}
