@@ -8,7 +8,10 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use armgate_client::Signer;
-use armgate_protocol::client::signed::{SIGNED_LEN, Signature, Signed as Block, SigningKey};
+use armgate_protocol::client::signed::{
+    ControllerId, IDENTITY_INDEX, SIGNED_LEN, Signature, Signed as Block, SigningKey,
+    timestamp_from_unix_us,
+};
 
 use super::{Answer, Sim, datagram, decode, is_unsolicited, with_joints};
 
@@ -31,13 +34,30 @@ struct Signed<'a> {
 }
 
 impl<'a> Signed<'a> {
+    /// A client on `link` that learns the controller's id from its identity report, as the
+    /// clients do.
     fn new(sim: &'a Sim, key: &PathBuf, link: u8) -> Self {
+        let mut client = Self::unidentified(sim, key, link);
+        let report = client.ok("SQ", [0.0; 7], IDENTITY_INDEX);
+        let controller = ControllerId((report[0] as u32) << 16 | report[1] as u32);
+        client.signer.set_controller(controller);
+        client.key = client.key.for_controller(controller);
+        client
+    }
+
+    /// A client that signs for any controller (it knows no id).
+    fn unidentified(sim: &'a Sim, key: &PathBuf, link: u8) -> Self {
         Self {
             sim,
             signer: Signer::from_file(key, link).unwrap(),
             key: SigningKey::parse(&std::fs::read_to_string(key).unwrap()).unwrap(),
             at: 0,
         }
+    }
+
+    /// `SQ` index 4: the signing counters.
+    fn counts(&mut self) -> [f32; 7] {
+        self.ok("SQ", [0.0; 7], 4)
     }
 
     /// The signed datagram of a request (not sent).
@@ -56,7 +76,10 @@ impl<'a> Signed<'a> {
             let Some(message) = self.signer.open(&buf[..n], self.at) else {
                 // A notice signed before the request (older than it) may still be waiting.
                 let block = Block::new_checked(&buf[..n]).unwrap();
-                assert!(Signature::parse(&block, &self.key).is_ok(), "forged answer");
+                assert!(
+                    Signature::parse(&block, &self.key).is_ok(),
+                    "forged answer, or for another controller"
+                );
                 assert!(
                     matches!(decode(&buf[..31]), Answer::Text(t) if is_unsolicited(&t)),
                     "an answer older than its request: {:?}",
@@ -147,16 +170,16 @@ fn only_fresh_datagrams_signed_with_the_key_move_the_arm() {
         link: 1,
         timestamp: served - 1,
     }
-    .emit(
-        &away_goal,
-        &SigningKey::parse(&std::fs::read_to_string(&key).unwrap()).unwrap(),
-    );
+    .emit(&away_goal, &arm.key);
     let truncated = arm.sign("jG", with_joints(&away, 0.0), 0);
     let wrong_key = Signature {
         link: 1,
         timestamp: arm.at + 1,
     }
-    .emit(&away_goal, &SigningKey::new(&[0xa5; 32]));
+    .emit(
+        &away_goal,
+        &SigningKey::new(&[0xa5; 32]).for_controller(arm.key.controller()),
+    );
     let attacks: [(&str, &[u8]); 7] = [
         ("forged MAC", &forged),
         ("replayed jG", &captured_goal),
@@ -176,7 +199,7 @@ fn only_fresh_datagrams_signed_with_the_key_move_the_arm() {
     let counts = arm.ok("SQ", [0.0; 7], 4);
     assert_eq!(
         counts,
-        // Policy 1 (required); 11 signed served (this SQ included); 1 unsigned, 1 truncated,
+        // Policy 1 (required); 12 signed served (this SQ included); 1 unsigned, 1 truncated,
         // 2 forged (MAC, key), 3 replayed (jG, jB, old) dropped.
         [1.0, arm_served(&counts), 0.0, 1.0, 1.0, 2.0, 3.0],
         "{attacks:?}"
@@ -219,5 +242,196 @@ fn unsigned_clients_may_read_and_stop_beside_signed_ones_when_allowed() {
         (2.0, 2.0, 1.0),
         "{counts:?}"
     );
+    let _ = std::fs::remove_file(&key);
+}
+
+/// The wall clock as a signature's timestamp.
+fn now() -> u64 {
+    let unix = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap();
+    timestamp_from_unix_us(unix.as_micros() as u64)
+}
+
+/// `CM 1`, `jG` 0.05 rad away from `home` on joint 1, `jB`: signed on `link` from `timestamp`.
+fn move_sequence(arm: &Signed, link: u8, timestamp: u64, home: &[f32]) -> Vec<[u8; SIGNED_LEN]> {
+    let mut away = home.to_vec();
+    away[0] += 0.05;
+    [
+        datagram("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0),
+        datagram("jG", with_joints(&away, 0.0), 0),
+        datagram("jB", [0.0; 7], 0),
+    ]
+    .iter()
+    .zip(0..)
+    .map(|(m, k)| {
+        Signature {
+            link,
+            timestamp: timestamp + k,
+        }
+        .emit(m, &arm.key)
+    })
+    .collect()
+}
+
+/// Sends `datagrams` a tick apart; then asserts that none was answered and the arm still is at
+/// `home` a second later.
+fn sent_in_vain(arm: &mut Signed, datagrams: &[[u8; SIGNED_LEN]], home: &[f32]) {
+    for d in datagrams {
+        arm.sim.socket.send(d).unwrap();
+        std::thread::sleep(Duration::from_millis(30));
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    // Handled in arrival order: an answer to any of them would come before jP's.
+    let jp = arm.ok("jP", [0.0; 7], 0);
+    assert!(
+        jp.iter().zip(home).all(|(a, b)| (a - b).abs() < 1e-4),
+        "the arm moved: {jp:?}"
+    );
+    assert_eq!(arm.ok("SQ", [0.0; 7], 0)[4], 0.0, "holding");
+}
+
+#[test]
+fn a_day_old_sequence_on_an_unused_link_is_dropped_and_counted() {
+    let key = key_file("day-old", [0x4b; 32]);
+    let sim = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let mut arm = Signed::new(&sim, &key, 1);
+    arm.wait_running();
+    let home: Vec<f32> = arm.ok("jP", [0.0; 7], 0)[..6].to_vec();
+    let day = 86_400 * 100_000;
+    let sequence = move_sequence(&arm, 2, now() - day, &home);
+    let before = arm.counts()[6];
+    sent_in_vain(&mut arm, &sequence, &home);
+    assert_eq!(arm.counts()[6] - before, 3.0, "three dropped as replayed");
+    let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn after_a_restart_with_the_state_kept_a_served_sequence_is_dropped() {
+    let key = key_file("restart", [0x2d; 32]);
+    let state = key.with_extension("state");
+    let _ = std::fs::remove_file(&state);
+    let args = [
+        "--key",
+        key.to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+        "--controller-id",
+        "5eed0001",
+    ];
+    let sim = Sim::start_with("ranger-mk1", &args);
+    let mut arm = Signed::new(&sim, &key, 1);
+    assert_eq!(arm.key.controller(), ControllerId(0x5eed_0001));
+    arm.wait_running();
+    let home: Vec<f32> = arm.ok("jP", [0.0; 7], 0)[..6].to_vec();
+    let sequence = move_sequence(&arm, 2, now(), &home);
+    for d in &sequence {
+        sim.socket.send(d).unwrap();
+        assert!(matches!(arm.receive(), Answer::Reply(..)));
+    }
+    // The arm moved; it is back home before the restart.
+    let mut away = home.clone();
+    away[0] += 0.05;
+    arm.wait_joints(&away);
+    arm.ok("jG", with_joints(&home, 0.0), 0);
+    arm.ok("jB", [0.0; 7], 0);
+    arm.wait_joints(&home);
+    drop(sim);
+    assert!(
+        std::fs::read_to_string(&state)
+            .unwrap()
+            .trim()
+            .parse::<u64>()
+            .is_ok()
+    );
+
+    let sim = Sim::start_with("ranger-mk1", &args);
+    // A client whose clock is past the kept reservation (at most 2 s ahead of its last use).
+    std::thread::sleep(Duration::from_millis(2100));
+    let mut arm = Signed::new(&sim, &key, 3);
+    arm.wait_running();
+    sent_in_vain(&mut arm, &sequence, &home);
+    assert_eq!(arm.counts()[6], 3.0, "three dropped as replayed");
+    let _ = std::fs::remove_file(&key);
+    let _ = std::fs::remove_file(&state);
+}
+
+#[test]
+fn a_key_shared_by_two_arms_moves_only_the_one_addressed() {
+    if super::firmware().is_some() {
+        return; // One firmware at a time: two controllers are two armgate-sims.
+    }
+    let key = key_file("two-arms", [0x71; 32]);
+    let a = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let b = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let mut arm_a = Signed::new(&a, &key, 1);
+    let mut arm_b = Signed::new(&b, &key, 1);
+    assert_ne!(arm_a.key.controller(), arm_b.key.controller());
+    arm_b.wait_running();
+    let home: Vec<f32> = arm_b.ok("jP", [0.0; 7], 0)[..6].to_vec();
+    // Arm A's sequence, sent to arm B: forged there.
+    let for_a = move_sequence(&arm_a, 2, now(), &home);
+    sent_in_vain(&mut arm_b, &for_a, &home);
+    assert_eq!(arm_b.counts()[5], 3.0, "three dropped as forged");
+    // And A obeys it.
+    arm_a.wait_running();
+    for d in &for_a[..1] {
+        a.socket.send(d).unwrap();
+        assert!(matches!(arm_a.receive(), Answer::Reply(c, _, _) if &c == b"MC"));
+    }
+    let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn a_signed_stop_on_a_shared_link_from_a_slower_clock_is_obeyed_and_answered() {
+    let key = key_file("slow-stop", [0x66; 32]);
+    let sim = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let mut arm = Signed::new(&sim, &key, 1);
+    arm.wait_running();
+    let home: Vec<f32> = arm.ok("jP", [0.0; 7], 0)[..6].to_vec();
+    let mut far = home.clone();
+    far[0] += 0.4;
+    arm.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    arm.ok("jG", with_joints(&far, 0.0), 0);
+    arm.ok("jB", [0.0; 7], 0);
+    assert_ne!(arm.ok("SQ", [0.0; 7], 0)[4], 0.0, "moving");
+    // Another operator on link 1 too, its clock 3 s behind.
+    let stop = Signature {
+        link: 1,
+        timestamp: arm.at - 300_000,
+    }
+    .emit(&datagram("ST", [0.0; 7], 0), &arm.key);
+    sim.socket.send(&stop).unwrap();
+    let mut buf = [0u8; 64];
+    let n = sim.socket.recv(&mut buf).expect("the stop is answered");
+    let message = arm
+        .signer
+        .open(&buf[..n], arm.at - 300_000)
+        .expect("signed answer");
+    assert!(matches!(decode(&message), Answer::Reply(c, _, _) if &c == b"TS"));
+    let started = Instant::now();
+    while arm.ok("SQ", [0.0; 7], 0)[4] != 0.0 {
+        assert!(started.elapsed() < Duration::from_secs(5), "never stopped");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let jp = arm.ok("jP", [0.0; 7], 0);
+    assert!(
+        (jp[0] - far[0]).abs() > 0.05,
+        "stopped short of the goal: {jp:?}"
+    );
+    assert_eq!(arm.counts()[6], 0.0, "nothing dropped");
+    let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn a_client_without_the_id_is_served_only_the_identity_request() {
+    let key = key_file("any", [0x19; 32]);
+    let sim = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let mut any = Signed::unidentified(&sim, &key, 4);
+    let bytes = any.sign("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    sim.socket.send(&bytes).unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    let mut arm = Signed::new(&sim, &key, 5);
+    assert_eq!(arm.counts()[5], 1.0, "CM for any controller: forged");
     let _ = std::fs::remove_file(&key);
 }

@@ -5,14 +5,19 @@
 //! at least one more than the last one this client used: it increases across restarts of the
 //! client as long as the computer's clock does not go back. Clients that run at the same time
 //! need link ids of their own: the controller keeps one timestamp per link id.
+//!
+//! Every tag covers the controller's id ([`ControllerId`]): a signer made without one learns it
+//! from the controller's first signed answer, the identity report (`SQ` index 6), which the
+//! controller serves signed for any controller.
 
 use std::path::Path;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use armgate_protocol::client::MESSAGE_LEN;
 use armgate_protocol::client::signed::{
-    CONTROLLER_LINK, SIGNED_LEN, Signature, Signed, SigningKey, timestamp_from_unix_us,
+    CONTROLLER_LINK, ControllerId, IdentityReport, SIGNED_LEN, Signature, Signed, SigningKey,
+    timestamp_from_unix_us,
 };
+use armgate_protocol::client::{MESSAGE_LEN, Message, Reply};
 
 use crate::ClientError;
 
@@ -54,6 +59,16 @@ impl Signer {
         self.link
     }
 
+    /// The controller the signatures are for ([`ControllerId::ANY`]: not known yet).
+    pub fn controller(&self) -> ControllerId {
+        self.key.controller()
+    }
+
+    /// Signs for `controller` from now on.
+    pub fn set_controller(&mut self, controller: ControllerId) {
+        self.key = self.key.for_controller(controller);
+    }
+
     /// A signer with the same key on the next link id (255 is followed by 1): for a second
     /// socket of the same program (teleop's jog stream), whose requests would otherwise race
     /// the first one's timestamps on one link.
@@ -82,9 +97,20 @@ impl Signer {
     /// The message of a datagram from the controller, if it is signed with the key on the
     /// controller's link and not older than `not_before` (the request it may answer): a
     /// forged, unsigned or replayed answer is `None`.
+    /// Before the controller is known, only its identity report opens, checked with the key
+    /// for the id it names.
     pub fn open(&self, datagram: &[u8], not_before: u64) -> Option<[u8; MESSAGE_LEN]> {
         let signed = Signed::new_checked(datagram).ok()?;
-        let signature = Signature::parse(&signed, &self.key).ok()?;
+        let key = match self.controller() {
+            ControllerId::ANY => {
+                let message = Message::new_checked(signed.message()).ok()?;
+                let reply = Reply::parse(&message).ok()?;
+                let named = IdentityReport::from_reply(&reply).ok()?.controller;
+                self.key.for_controller(named)
+            }
+            _ => self.key.clone(),
+        };
+        let signature = Signature::parse(&signed, &key).ok()?;
         if signature.link != CONTROLLER_LINK || signature.timestamp < not_before {
             return None;
         }
@@ -103,8 +129,10 @@ mod tests {
 
     const KEY: &str = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
 
+    const ARM: ControllerId = ControllerId(0x1234_5678);
+
     fn key() -> SigningKey {
-        SigningKey::parse(KEY).unwrap()
+        SigningKey::parse(KEY).unwrap().for_controller(ARM)
     }
 
     #[test]
@@ -127,6 +155,7 @@ mod tests {
     #[test]
     fn only_fresh_answers_signed_by_the_controller_open() {
         let signer = Signer::new(key(), 1).unwrap();
+        assert_eq!(signer.controller(), ARM);
         let reply = [b'G'; MESSAGE_LEN];
         let by = |link, timestamp| Signature { link, timestamp }.emit(&reply, &key());
         assert_eq!(signer.open(&by(0, 100), 100), Some(reply));
@@ -137,5 +166,41 @@ mod tests {
         let mut altered = by(0, 100);
         altered[2] ^= 1;
         assert_eq!(signer.open(&altered, 100), None);
+        // Signed for another controller.
+        let other = Signature {
+            link: 0,
+            timestamp: 100,
+        }
+        .emit(&reply, &key().for_controller(ControllerId(7)));
+        assert_eq!(signer.open(&other, 100), None);
+    }
+
+    #[test]
+    fn a_signer_without_the_id_learns_it_from_the_identity_report_only() {
+        let mut signer = Signer::new(key().for_controller(ControllerId::ANY), 1).unwrap();
+        let identity = IdentityReport {
+            controller: ARM,
+            ..IdentityReport::default()
+        }
+        .to_reply()
+        .to_bytes();
+        let by = |message: &[u8; MESSAGE_LEN], key: &SigningKey| {
+            Signature {
+                link: 0,
+                timestamp: 100,
+            }
+            .emit(message, key)
+        };
+        assert_eq!(signer.open(&by(&identity, &key()), 100), Some(identity));
+        // Another reply, or the report signed for another id than it names: not opened.
+        assert_eq!(signer.open(&by(&[b'G'; MESSAGE_LEN], &key()), 100), None);
+        let lying = by(&identity, &key().for_controller(ControllerId(9)));
+        assert_eq!(signer.open(&lying, 100), None);
+        signer.set_controller(ARM);
+        assert_eq!(signer.controller(), ARM);
+        assert_eq!(
+            signer.open(&by(&[b'G'; MESSAGE_LEN], &key()), 100),
+            Some([b'G'; MESSAGE_LEN])
+        );
     }
 }

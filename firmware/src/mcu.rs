@@ -12,6 +12,9 @@ use crate::{clocks, config, control, drives, eth, net, settings, telemetry};
 
 /// The network driver of this board.
 pub type NetDevice = eth::Device;
+/// Where the replay reservation is kept across restarts: not yet in flash on the board
+/// (docs/firmware.md, "Signing"): a reset starts as a new controller.
+pub type ReplayStore = armgate_core::cycle::Unkept;
 /// The watchdog the control task feeds.
 pub type Watchdog = IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG1>;
 
@@ -73,7 +76,8 @@ fn main() -> ! {
     let watchdog = IndependentWatchdog::new(p.IWDG1, timeout_us);
     interrupt::UART4.set_priority(CONTROL_PRIORITY);
     let control_spawner = CONTROL_EXECUTOR.start(interrupt::UART4);
-    match control::run(robot, drives, watchdog, settings::signing()) {
+    let signing = (settings::signing(), armgate_core::cycle::Unkept);
+    match control::run(robot, drives, watchdog, signing) {
         Ok(task) => control_spawner.spawn(task),
         Err(e) => defmt::panic!("cannot spawn the control task: {}", e),
     }

@@ -29,9 +29,12 @@ class ArmError(Exception):
 class ReplyTimeout(ArmError, TimeoutError):
     """No reply arrived: every attempt (the first send and each retry) timed out."""
 
-    def __init__(self, command: str, attempts: int, timeout: float) -> None:
+    def __init__(self, command: str, attempts: int, timeout: float, signed: bool = False) -> None:
+        # A controller never answers a request signed with another key or for another id.
+        hint = " (is the controller running, or has it another key?)" if signed else ""
         super().__init__(
             f"no reply to {command} after {attempts} attempt(s) of {timeout * 1e3:.0f} ms each"
+            + hint
         )
         self.command = command
         self.attempts = attempts

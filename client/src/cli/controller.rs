@@ -47,6 +47,11 @@ pub struct ControllerArgs {
     /// their own (teleop also uses the next one, for its jog stream).
     #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
     pub link_id: u8,
+    /// With --key: the controller's id (8 hex digits, as armgate-sim and the firmware print it
+    /// at start); signatures for one controller are forged to every other. Default: the id the
+    /// controller names in its first signed answer (SQ index 6).
+    #[arg(long, env = "ARMGATE_CONTROLLER_ID", value_name = "HEX")]
+    pub controller_id: Option<armgate_protocol::client::signed::ControllerId>,
 }
 
 /// The value of `id` if it was typed on the command line (not from the environment or a
@@ -79,6 +84,9 @@ impl ControllerArgs {
         if let Some(link_id) = typed(given, "link_id") {
             self.link_id = link_id;
         }
+        if let Some(id) = typed(given, "controller_id") {
+            self.controller_id = Some(id);
+        }
     }
 
     /// The options typed before `record`, as `armgate-viz record` takes them (it reads the
@@ -93,6 +101,11 @@ impl ControllerArgs {
         }
         if let Some(link_id) = typed::<u8>(matches, "link_id") {
             args.extend(["--link-id".into(), link_id.to_string().into()]);
+        }
+        if let Some(id) =
+            typed::<armgate_protocol::client::signed::ControllerId>(matches, "controller_id")
+        {
+            args.extend(["--controller-id".into(), id.to_string().into()]);
         }
         args
     }

@@ -2,6 +2,7 @@
 
 use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, waits};
 use super::counters::bump;
+use super::replay::{ReplayStore, Unkept};
 use super::signing::Gate;
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
@@ -34,9 +35,10 @@ pub struct TickOutcome {
 
 /// The command handler and the drives, ticked on a fixed schedule.
 ///
-/// `P` is the shell's peer address (a socket address, an embassy endpoint).
+/// `P` is the shell's peer address (a socket address, an embassy endpoint); `S` keeps the
+/// signed timestamps' reservation across restarts ([`ReplayStore`]; none by default).
 #[derive(Clone, Debug)]
-pub struct Cycle<D, P> {
+pub struct Cycle<D, P, S = Unkept> {
     handler: CommandHandler,
     drives: D,
     /// The control period (s), and in whole microseconds for the shell's clock.
@@ -51,6 +53,8 @@ pub struct Cycle<D, P> {
     waiting: Waiting<P>,
     /// The signature checks every datagram passes first.
     gate: Gate,
+    /// Where the replay reservation is kept.
+    store: S,
 }
 
 impl<D: DriveSide, P: Peer> Cycle<D, P> {
@@ -67,15 +71,49 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             previous: None,
             counters: CycleCounters::default(),
             waiting: Waiting::new(),
-            gate: Gate::new(Signing::default()),
+            gate: Gate::new(Signing::default(), 0),
+            store: Unkept,
+        }
+    }
+}
+
+impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
+    /// The same cycle with these signing settings (a key for this controller, what unsigned
+    /// datagrams may do), after the reservation its store kept.
+    pub fn with_signing(mut self, signing: Signing) -> Self {
+        let reserved = self.store.load();
+        self.gate = Gate::new(signing, reserved);
+        self.handler.set_signing_report(self.gate.report());
+        self.handler.set_identity(self.gate.identity());
+        self
+    }
+
+    /// The same cycle, keeping the replay reservation in `store` across restarts. Give it
+    /// before [`with_signing`](Self::with_signing), which reads what `store` kept.
+    pub fn with_store<T: ReplayStore>(self, store: T) -> Cycle<D, P, T> {
+        Cycle {
+            handler: self.handler,
+            drives: self.drives,
+            period: self.period,
+            period_us: self.period_us,
+            next: self.next,
+            previous: self.previous,
+            counters: self.counters,
+            waiting: self.waiting,
+            gate: self.gate,
+            store,
         }
     }
 
-    /// The same cycle with these signing settings (a key, what unsigned datagrams may do).
-    pub fn with_signing(mut self, signing: Signing) -> Self {
-        self.gate = Gate::new(signing);
-        self.handler.set_signing_report(self.gate.report());
-        self
+    /// The replay store (a shell reads its errors).
+    pub fn store_mut(&mut self) -> &mut S {
+        &mut self.store
+    }
+
+    /// Reservations the replay store could not keep (each a window in which a restart could
+    /// serve a replay); 0 without a store.
+    pub fn store_failures(&self) -> u32 {
+        self.gate.store_failures()
     }
 
     /// When the next tick is due on the shell's clock (µs since the cycle started).
@@ -198,7 +236,8 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
                         break;
                     };
                     // Dropped datagrams are counted by the gate and never answered.
-                    let Some(admitted) = self.gate.admit(datagram.payload()) else {
+                    let Some(admitted) = self.gate.admit(datagram.payload(), &mut self.store)
+                    else {
                         continue;
                     };
                     self.handler.set_signing_report(self.gate.report());
