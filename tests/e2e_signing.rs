@@ -435,3 +435,56 @@ fn a_client_without_the_id_is_served_only_the_identity_request() {
     assert_eq!(arm.counts()[5], 1.0, "CM for any controller: forged");
     let _ = std::fs::remove_file(&key);
 }
+
+#[test]
+fn an_unsigned_poller_beside_a_signed_holder_gets_no_notices_and_does_not_feed_its_watchdog() {
+    let key = key_file("poller", [0x3e; 32]);
+    let sim = Sim::start_with(
+        "ranger-mk1",
+        &["--key", key.to_str().unwrap(), "--allow-unsigned", "read"],
+    );
+    let mut arm = Signed::new(&sim, &key, 7);
+    arm.wait_running();
+    let home: Vec<f32> = arm.ok("jP", [0.0; 7], 0)[..6].to_vec();
+    let mut far = home.clone();
+    far[0] += 0.5;
+    arm.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    arm.ok("WD", [300.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    arm.ok("jG", with_joints(&far, 0.0), 0);
+    arm.ok("jB", [0.0; 7], 0);
+    // The signed client goes silent; an unsigned poller polls from its very address (the
+    // same socket) every 50 ms.
+    let mut signed_notices = Vec::new();
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_millis(1500) {
+        sim.socket.send(&datagram("PS", [0.0; 7], 0)).unwrap();
+        std::thread::sleep(Duration::from_millis(50));
+        let mut buf = [0u8; 64];
+        sim.socket.set_nonblocking(true).unwrap();
+        while let Ok(n) = sim.socket.recv(&mut buf) {
+            if n == SIGNED_LEN {
+                let message = arm
+                    .signer
+                    .open(&buf[..n], 0)
+                    .expect("a notice signed with the key");
+                signed_notices.push(decode(&message));
+            } else {
+                // Unsigned: only the poller's answers, never a notice.
+                assert!(matches!(decode(&buf[..n]), Answer::Reply(c, _, _) if &c == b"SP"));
+            }
+        }
+        sim.socket.set_nonblocking(false).unwrap();
+    }
+    assert!(
+        signed_notices
+            .iter()
+            .any(|n| matches!(n, Answer::Text(t) if t.starts_with("ER41"))),
+        "the watchdog fired, told signed: {signed_notices:?}"
+    );
+    let jp = arm.ok("jP", [0.0; 7], 0);
+    assert!(
+        (jp[0] - far[0]).abs() > 0.05,
+        "stopped short of the goal: {jp:?}"
+    );
+    let _ = std::fs::remove_file(&key);
+}

@@ -15,7 +15,11 @@ use armgate_core::config::ValidRobot;
 use std::cell::Cell;
 use std::rc::Rc;
 
-use armgate_core::cycle::{Cycle, Datagram, ReplayStore, Signing, UnsignedAccess};
+use std::net::SocketAddr;
+
+use armgate_core::cycle::{
+    Cycle, Datagram, Dropped, Link, Outgoing, ReplayStore, Signing, UnsignedAccess,
+};
 use armgate_core::kinematics::Joints;
 use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::signed::{
@@ -95,7 +99,7 @@ fn report(cycle: &mut Cycle<SimulatedDrives, ()>, timestamp: u64) -> SigningRepo
 
 /// A signed answer, checked as a client checks it: the key's tag, the controller's link, a
 /// timestamp no older than the request's.
-fn verified(datagram: &Datagram<()>, request_timestamp: u64) -> Reply {
+fn verified<P>(datagram: &Datagram<P>, request_timestamp: u64) -> Reply {
     let bytes = datagram.payload();
     assert_eq!(
         bytes.len(),
@@ -255,7 +259,7 @@ fn a_replayed_or_forged_motion_request_does_not_move_the_arm() {
 #[test]
 fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
     let mut cycle = cycle(Some(UnsignedAccess::Read));
-    // Every request the session answers to everyone (KS included), and the stops.
+    // The reads and the stops; not KS, which plans (the planning slot is the signed clients').
     let reads = [
         Command::Pose,
         Command::JointPosition,
@@ -267,9 +271,9 @@ fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
     let mode = message(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
     waiting.push(&mode);
     let replies = exchange(&mut cycle, &waiting);
-    assert_eq!(replies.len(), 4, "CM is not a read");
+    assert_eq!(replies.len(), 3, "KS plans, CM is not a read");
     assert!(replies.iter().all(|r| r.payload().len() == MESSAGE_LEN));
-    assert_eq!(cycle.signing().dropped_unsigned, 1);
+    assert_eq!(cycle.signing().dropped_unsigned, 2);
     assert_eq!(cycle.signing().policy, Some(SigningPolicy::UnsignedRead));
     // A signed client beside it is answered signed.
     let replies = exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 4, 1)]);
@@ -504,4 +508,127 @@ fn a_signed_stop_is_obeyed_and_answered_even_when_it_is_not_newer() {
         (1, true)
     );
     assert_eq!(cycle.signing().dropped_replayed, 0);
+}
+
+/// A network of several source addresses: requests in, everything sent out with its kind.
+#[derive(Default)]
+struct Net {
+    requests: std::collections::VecDeque<Datagram<SocketAddr>>,
+    sent: Vec<(Datagram<SocketAddr>, Outgoing)>,
+}
+
+impl Link<SocketAddr> for Net {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        self.requests.pop_front()
+    }
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
+        self.sent.push((*datagram, kind));
+        Ok(())
+    }
+}
+
+#[test]
+fn with_a_key_the_session_follows_the_link_id_and_each_answer_is_signed_for_its_recipient() {
+    let config = robot("ranger-mk1");
+    let arm = IdealArm::new(config.home());
+    let mut cycle: Cycle<SimulatedDrives, SocketAddr> =
+        Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm))).with_signing(Signing {
+            key: Some(key()),
+            unsigned: UnsignedAccess::Read,
+        });
+    let a: SocketAddr = "192.168.1.2:5000".parse().unwrap();
+    let b: SocketAddr = "192.168.1.3:6000".parse().unwrap();
+    let mut net = Net::default();
+    let tick = |cycle: &mut Cycle<SimulatedDrives, SocketAddr>,
+                net: &mut Net,
+                from: &[(&[u8], SocketAddr)]| {
+        for (bytes, peer) in from {
+            net.requests.push_back(Datagram::new(bytes, *peer));
+        }
+        cycle.tick(cycle.next_due_us(), net);
+    };
+    // Link 1 from A takes the arm, with a 300 ms watchdog, and moves it.
+    let goal = [1.7, 0.1, 1.5, 0.1, 1.2, 0.1, 0.0];
+    let mut t = NOW;
+    let mut next = |command, values| {
+        t += 1;
+        signed(command, values, 1, t)
+    };
+    let start = [
+        next(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        next(Command::Watchdog, [300.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        next(Command::JointGoal, goal),
+        next(Command::JointBegin, [0.0; 7]),
+    ];
+    for d in &start {
+        tick(&mut cycle, &mut net, &[(d, a)]);
+    }
+    assert!(cycle.handler().controller().is_moving());
+    // The same link from B (the client on a new port): the same client, the holder.
+    let mut sq = message(Command::Status, [0.0; 7]);
+    sq[30] = 3;
+    let session = Signature {
+        link: 1,
+        timestamp: NOW + 10,
+    }
+    .emit(&sq, &key());
+    net.sent.clear();
+    tick(&mut cycle, &mut net, &[(&session, b)]);
+    let (reply, _) = net.sent[0];
+    assert_eq!((reply.peer, reply.payload().len()), (b, SIGNED_LEN));
+    assert_eq!(verified(&reply, NOW + 10).values[0], 1.0, "holder: you");
+    // An unsigned poller from A's very address, every tick: answered unsigned, another client
+    // (the holder is someone else to it), and it does not feed link 1's watchdog.
+    let ps = message(Command::Pose, [0.0; 7]);
+    net.sent.clear();
+    tick(&mut cycle, &mut net, &[(&sq, a)]);
+    let (reply, _) = net.sent[0];
+    assert_eq!(reply.payload().len(), MESSAGE_LEN);
+    assert_eq!(
+        Reply::parse(&Message::new_checked(reply.payload()).unwrap())
+            .unwrap()
+            .values[0],
+        2.0
+    );
+    net.sent.clear();
+    for _ in 0..40 {
+        tick(&mut cycle, &mut net, &[(&ps, a)]);
+    }
+    assert!(
+        !cycle.handler().controller().is_moving(),
+        "the watchdog stopped the arm"
+    );
+    let notices: Vec<_> = net
+        .sent
+        .iter()
+        .filter(|(_, k)| *k == Outgoing::Notice)
+        .collect();
+    assert!(!notices.is_empty());
+    for (notice, _) in notices {
+        // To link 1, where it was last heard from, signed; never to the unsigned poller.
+        assert_eq!((notice.peer, notice.payload().len()), (b, SIGNED_LEN));
+        let block = Signed::new_checked(notice.payload()).unwrap();
+        assert!(Signature::parse(&block, &key()).is_ok());
+    }
+    assert!(
+        net.sent
+            .iter()
+            .any(|(d, _)| d.payload().starts_with(b"ER41")
+                || Signed::new_checked(d.payload())
+                    .is_ok_and(|b| b.message().starts_with(b"ER41")))
+    );
+    // Two sources interleaved on link 1 are counted (SQ index 6).
+    let identity = cycle.identity();
+    assert_eq!(
+        (identity.shared_links, identity.last_shared),
+        (0, 0),
+        "A, then B: a move"
+    );
+    let ps1 = Signature {
+        link: 1,
+        timestamp: NOW + 20,
+    }
+    .emit(&ps, &key());
+    tick(&mut cycle, &mut net, &[(&ps1, a)]);
+    assert_eq!(cycle.identity().last_shared, 1);
 }

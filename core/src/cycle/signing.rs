@@ -18,11 +18,12 @@
 use core::fmt;
 use core::str::FromStr;
 
+use super::budget::Work;
 use super::replay::{Freshness, Replay, ReplayStore};
 use crate::command::Class;
 use armgate_protocol::client::signed::{
-    CONTROLLER_LINK, ControllerId, IDENTITY_INDEX, IdentityReport, SIGNED_LEN, Signature,
-    SignatureError, Signed, SigningKey, SigningPolicy, SigningReport,
+    CONTROLLER_LINK, ControllerId, IDENTITY_INDEX, SIGNED_LEN, Signature, SignatureError, Signed,
+    SigningKey, SigningPolicy, SigningReport,
 };
 use armgate_protocol::client::{Command, MESSAGE_LEN};
 
@@ -33,7 +34,7 @@ pub enum UnsignedAccess {
     #[default]
     Refused,
     /// Read (what the session answers to everyone, [`Class::Read`]: pose, joints,
-    /// temperatures, status, IK solutions) and stop ([`Class::Stop`], `ST`, `jR`: the arm
+    /// temperatures, status; not the IK solutions, which plan) and stop ([`Class::Stop`], `ST`, `jR`: the arm
     /// holds, the principle that any client can stop it); anything else is dropped.
     Read,
     /// Everything: the key then only signs the answers to signed clients (a lab moving its
@@ -108,11 +109,12 @@ impl Signing {
     }
 }
 
-/// A datagram let through: the message to handle, and whether its answers are signed.
+/// A datagram let through: the message to handle, and its link id if it came signed (its
+/// answers are then signed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Admitted<'a> {
     pub message: &'a [u8],
-    pub signed: bool,
+    pub link: Option<u8>,
 }
 
 /// An answer ready to send: the 31-byte message, signed or not.
@@ -136,8 +138,6 @@ pub(super) struct Gate {
     /// The key for [`ControllerId::ANY`]: the identity request's.
     any: Option<SigningKey>,
     replay: Replay,
-    /// Whether the last datagram served was signed (its sender gets the notices).
-    last_signed: bool,
     report: SigningReport,
 }
 
@@ -156,17 +156,13 @@ impl Gate {
             signing,
             any,
             replay: Replay::new(reserved),
-            last_signed: false,
             report,
         }
     }
 
-    /// The controller's id and what it saw of shared link ids (`SQ` index 6).
-    pub fn identity(&self) -> IdentityReport {
-        IdentityReport {
-            controller: self.signing.controller(),
-            ..IdentityReport::default()
-        }
+    /// The controller's id (`SQ` index 6).
+    pub fn controller(&self) -> ControllerId {
+        self.signing.controller()
     }
 
     /// Reservations the replay store could not keep.
@@ -177,11 +173,6 @@ impl Gate {
     /// The counters and the policy.
     pub fn report(&self) -> SigningReport {
         self.report
-    }
-
-    /// Whether the last datagram served was signed.
-    pub fn last_signed(&self) -> bool {
-        self.last_signed
     }
 
     /// `datagram` if it may be served; `None` (counted) if it is dropped. `store` keeps the
@@ -206,16 +197,15 @@ impl Gate {
             },
             _ => Some(Admitted {
                 message: datagram,
-                signed: false,
+                link: None,
             }),
         };
         let admitted = admitted?;
-        bump(if admitted.signed {
+        bump(if admitted.link.is_some() {
             &mut report.signed
         } else {
             &mut report.unsigned
         });
-        self.last_signed = admitted.signed;
         Some(admitted)
     }
 
@@ -287,7 +277,7 @@ fn verify<'a>(
     }
     Some(Admitted {
         message: datagram.get(..MESSAGE_LEN).unwrap_or_default(),
-        signed: true,
+        link: Some(signature.link),
     })
 }
 
@@ -300,8 +290,11 @@ fn unsigned<'a>(
     let allowed = match access {
         UnsignedAccess::Refused => false,
         UnsignedAccess::Read => {
+            // Reads and stops, but none that plans (KS): the planning slot is the signed
+            // clients' (module `budget`).
             let chars = [0, 1].map(|i| datagram.get(i).copied().unwrap_or_default());
             Command::from_chars(chars).is_some_and(|c| Class::of(c) != Class::Command)
+                && !matches!(Work::of(datagram), Work::Plans(_))
         }
         UnsignedAccess::All => true,
     };
@@ -311,7 +304,7 @@ fn unsigned<'a>(
     }
     Some(Admitted {
         message: datagram,
-        signed: false,
+        link: None,
     })
 }
 

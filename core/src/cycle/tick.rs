@@ -2,6 +2,7 @@
 
 use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, waits};
 use super::counters::bump;
+use super::links::{Links, identity, link_of};
 use super::replay::{ReplayStore, Unkept};
 use super::signing::Gate;
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
@@ -9,8 +10,9 @@ use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
-use armgate_protocol::client::signed::SigningReport;
+use armgate_protocol::client::signed::{IdentityReport, SigningReport};
 use armgate_protocol::client::{MESSAGE_LEN, Notice};
+use core::net::SocketAddr;
 use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
@@ -55,6 +57,8 @@ pub struct Cycle<D, P, S = Unkept> {
     gate: Gate,
     /// Where the replay reservation is kept.
     store: S,
+    /// Signed clients by link id: where their answers and notices go.
+    links: Links<P>,
 }
 
 impl<D: DriveSide, P: Peer> Cycle<D, P> {
@@ -73,6 +77,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             waiting: Waiting::new(),
             gate: Gate::new(Signing::default(), 0),
             store: Unkept,
+            links: Links::new(),
         }
     }
 }
@@ -84,7 +89,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
         let reserved = self.store.load();
         self.gate = Gate::new(signing, reserved);
         self.handler.set_signing_report(self.gate.report());
-        self.handler.set_identity(self.gate.identity());
+        self.handler.set_identity(self.identity());
         self
     }
 
@@ -102,6 +107,16 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             waiting: self.waiting,
             gate: self.gate,
             store,
+            links: self.links,
+        }
+    }
+
+    /// The controller's id and the shared links seen (`SQ` index 6).
+    pub fn identity(&self) -> IdentityReport {
+        IdentityReport {
+            controller: self.gate.controller(),
+            shared_links: self.links.shared,
+            last_shared: self.links.last_shared,
         }
     }
 
@@ -159,7 +174,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             bump(&mut self.counters.tick_errors);
         }
         self.drives.transmit(time, elapsed, command.ok().flatten());
-        self.handle_requests(link);
+        self.handle_requests(link, time);
         self.send_notices(link);
         TickOutcome {
             time,
@@ -195,15 +210,23 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
     }
 
     /// Where notices go: the client that holds the arm, or the last one that sent a valid
-    /// request.
+    /// request (a signed client: where its link was last heard from).
     pub fn notice_recipient(&self) -> Option<P> {
-        self.handler.notice_recipient().map(P::from_address)
+        self.peer_of(self.handler.notice_recipient()?)
     }
 
     /// The client that holds the arm ([`goes_ahead`](super::goes_ahead) serves its requests
     /// first).
     pub fn holder(&self) -> Option<P> {
-        self.handler.holder().map(P::from_address)
+        self.peer_of(self.handler.holder()?)
+    }
+
+    /// The peer of a session client: a signed link's last source, or the address itself.
+    fn peer_of(&self, client: SocketAddr) -> Option<P> {
+        match link_of(client) {
+            Some(link) => self.links.peer(link),
+            None => Some(P::from_address(client)),
+        }
     }
 
     /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
@@ -217,12 +240,18 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
-        bump(&mut self.counters.requests);
-        self.handler
-            .handle_from(datagram, peer.address(), &mut self.drives)
+        self.answer_from(datagram, peer.address())
     }
 
-    fn handle_requests(&mut self, link: &mut impl Link<P>) {
+    /// Answers one request from the session's `client` (a signed link's identity, or an
+    /// address).
+    #[inline(never)]
+    fn answer_from(&mut self, datagram: &[u8], client: SocketAddr) -> [u8; MESSAGE_LEN] {
+        bump(&mut self.counters.requests);
+        self.handler.handle_from(datagram, client, &mut self.drives)
+    }
+
+    fn handle_requests(&mut self, link: &mut impl Link<P>, now: f64) {
         let drops = self.counters.send_dropped.saturating_add(link.dropped());
         self.handler.set_send_drops(drops);
         // The work budget (module `budget`): requests waiting from earlier ticks first.
@@ -240,10 +269,15 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                     else {
                         continue;
                     };
+                    if let Some(signed) = admitted.link {
+                        let holder = self.handler.holder().and_then(link_of);
+                        self.links.heard(signed, datagram.peer, now, holder);
+                        self.handler.set_identity(self.identity());
+                    }
                     self.handler.set_signing_report(self.gate.report());
                     Pending {
                         datagram: Datagram::new(admitted.message, datagram.peer),
-                        signed: admitted.signed,
+                        link: admitted.link,
                     }
                 }
             };
@@ -258,7 +292,10 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             if work == Work::Stops {
                 self.cancel_waiting(&mut later, link);
             }
-            let reply = self.answer(request.datagram.payload(), request.datagram.peer);
+            let client = request
+                .link
+                .map_or(request.datagram.peer.address(), identity);
+            let reply = self.answer_from(request.datagram.payload(), client);
             self.reply(link, &reply, &request);
         }
         // What waited before stays ahead of what the link still holds. (Together never more
@@ -289,7 +326,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
 
     /// Sends `reply` to the client of `request`, sealed if the request was signed.
     fn reply(&mut self, link: &mut impl Link<P>, reply: &[u8; MESSAGE_LEN], request: &Pending<P>) {
-        let sealed = self.gate.seal(reply, request.signed);
+        let sealed = self.gate.seal(reply, request.link.is_some());
         let peer = request.datagram.peer;
         self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Reply);
     }
@@ -299,10 +336,13 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             let Some(text) = self.handler.next_notice() else {
                 break;
             };
-            match self.notice_recipient() {
+            // Signed to a signed client (a link's identity), unsigned to an address.
+            let recipient = self.handler.notice_recipient();
+            let signed = recipient.and_then(link_of).is_some();
+            match recipient.and_then(|r| self.peer_of(r)) {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
-                    let sealed = self.gate.seal(&text.to_bytes(), self.gate.last_signed());
+                    let sealed = self.gate.seal(&text.to_bytes(), signed);
                     self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Notice);
                 }
                 None => bump(&mut self.counters.notices_unaddressed),
