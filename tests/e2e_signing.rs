@@ -49,7 +49,7 @@ impl<'a> Signed<'a> {
     fn unidentified(sim: &'a Sim, key: &PathBuf, link: u8) -> Self {
         Self {
             sim,
-            signer: Signer::from_file(key, link).unwrap(),
+            signer: Signer::from_file(key, Some(link)).unwrap(),
             key: SigningKey::parse(&std::fs::read_to_string(key).unwrap()).unwrap(),
             at: 0,
         }
@@ -486,5 +486,53 @@ fn an_unsigned_poller_beside_a_signed_holder_gets_no_notices_and_does_not_feed_i
         (jp[0] - far[0]).abs() > 0.05,
         "stopped short of the goal: {jp:?}"
     );
+    let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn two_clients_started_with_default_options_sign_on_distinct_links_and_nothing_is_dropped() {
+    let key = key_file("two-clients", [0x2b; 32]);
+    let sim = Sim::start_with("ranger-mk1", &["--key", key.to_str().unwrap()]);
+    let addr = sim.socket.peer_addr().unwrap();
+    let config = armgate_client::ClientConfig {
+        timeout: Duration::from_secs(2),
+        ..armgate_client::ClientConfig::default()
+    };
+    let client = || {
+        let mut client = armgate_client::Client::connect_with(addr, config.clone()).unwrap();
+        client.set_signer(Some(Signer::from_file(&key, None).unwrap()));
+        client
+    };
+    let (mut a, mut b) = (client(), client());
+    // Both ask at once; each gets a link of its own.
+    let (ra, rb) = (a.identify().unwrap(), b.identify().unwrap());
+    assert_eq!(ra.controller, rb.controller);
+    let links = [a.signer().unwrap().link(), b.signer().unwrap().link()];
+    assert_ne!(links[0], links[1], "{links:?}");
+    // Both poll at the same time, each from its own thread: every request answered at once.
+    let threads: Vec<_> = [a, b]
+        .into_iter()
+        .map(|mut c| {
+            std::thread::spawn(move || {
+                for _ in 0..40 {
+                    c.status().unwrap();
+                }
+                c
+            })
+        })
+        .collect();
+    let mut clients: Vec<_> = threads.into_iter().map(|t| t.join().unwrap()).collect();
+    let counts = armgate_protocol::client::signed::SigningReport::from_reply(
+        &clients[0]
+            .request(armgate_protocol::client::Request {
+                command: armgate_protocol::client::Command::Status,
+                values: [0.0; 7],
+                index: 4,
+            })
+            .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(counts.dropped(), 0, "{counts:?}");
+    assert_eq!(clients[0].identify().unwrap().shared_links, 0);
     let _ = std::fs::remove_file(&key);
 }

@@ -227,13 +227,11 @@ pub fn main() -> u8 {
     }
 }
 
-/// Learns the controller's id if it is not given, and says on stderr which arm the signed
-/// requests are for (a key may be shared by several arms; the id tells them apart).
+/// Learns the controller's id and a free link id if they are not given, and says on stderr
+/// which arm the signed requests are for and on which link (a key may be shared by several
+/// arms, and a link id by mistake by several clients).
 fn say_which_arm(client: &mut Client) -> Result<(), CliError> {
-    if client
-        .signer()
-        .is_some_and(|s| s.controller() == armgate_protocol::client::signed::ControllerId::ANY)
-    {
+    if client.signer().is_some_and(crate::Signer::needs_identity) {
         client.identify()?;
     }
     if let Some(signer) = client.signer() {

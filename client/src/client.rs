@@ -5,7 +5,7 @@ use std::io::ErrorKind;
 use std::net::{Ipv4Addr, Ipv6Addr, SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::{Duration, Instant};
 
-use armgate_protocol::client::signed::{ControllerId, IDENTITY_INDEX, IdentityReport};
+use armgate_protocol::client::signed::{IDENTITY_INDEX, IdentityReport};
 use armgate_protocol::client::{Command, MESSAGE_LEN, Message, Reply, Request, Text, VALUES};
 
 use crate::ClientError;
@@ -137,7 +137,8 @@ impl Client {
 
     /// The controller's identity report (`SQ` index 6). With a signer that does not know the
     /// controller's id yet, the request is signed for any controller and the signer takes the
-    /// id the signed answer names; every request does this first while the id is unknown.
+    /// id the signed answer names, and the link id set aside for it unless it was given; every
+    /// request does this first while they are unknown.
     pub fn identify(&mut self) -> Result<IdentityReport, ClientError> {
         let reply = self.request(Request {
             command: Command::Status,
@@ -147,7 +148,7 @@ impl Client {
         let report = IdentityReport::from_reply(&reply)
             .map_err(|e| ClientError::InvalidArgument(format!("SQ {IDENTITY_INDEX}: {e}")))?;
         if let Some(signer) = &mut self.signer {
-            signer.set_controller(report.controller);
+            signer.identified(&report);
         }
         Ok(report)
     }
@@ -288,12 +289,7 @@ impl Client {
     ) -> Result<[u8; MESSAGE_LEN], ClientError> {
         let identity = datagram.get(..2) == Some(&Command::Status.chars()[..])
             && datagram.get(MESSAGE_LEN - 1) == Some(&IDENTITY_INDEX);
-        if !identity
-            && self
-                .signer
-                .as_ref()
-                .is_some_and(|s| s.controller() == ControllerId::ANY)
-        {
+        if !identity && self.signer.as_ref().is_some_and(Signer::needs_identity) {
             self.identify()?;
         }
         // Whatever arrived before this request cannot be its reply.

@@ -4,7 +4,10 @@
 //! The timestamp is the wall-clock time in 10 µs steps since 2015-01-01 UTC (MAVLink's), and
 //! at least one more than the last one this client used: it increases across restarts of the
 //! client as long as the computer's clock does not go back. Clients that run at the same time
-//! need link ids of their own: the controller keeps one timestamp per link id.
+//! need link ids of their own: the controller keeps one timestamp per link id. Unless told one
+//! (`--link-id`), a client takes the link id the controller sets aside for it in its identity
+//! report (a free one: clients that start together get different ones), asking on a random
+//! link id first.
 //!
 //! Every tag covers the controller's id ([`ControllerId`]): a signer made without one learns it
 //! from the controller's first signed answer, the identity report (`SQ` index 6), which the
@@ -21,30 +24,49 @@ use armgate_protocol::client::{MESSAGE_LEN, Message, Reply};
 
 use crate::ClientError;
 
-/// The link id a client signs with unless told otherwise.
-pub const DEFAULT_LINK: u8 = 1;
+/// Where a signer's link id comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LinkSource {
+    /// Given (`--link-id`).
+    Given,
+    /// Set aside by the controller for this client.
+    Assigned,
+    /// Not yet: a random one, until the controller sets one aside.
+    Unassigned,
+}
 
 /// A key, a link id and the last timestamp used.
 #[derive(Clone, Debug)]
 pub struct Signer {
     key: SigningKey,
     link: u8,
+    source: LinkSource,
     last: u64,
 }
 
 impl Signer {
-    /// Signs with `key` on `link` (1..=255; 0 is the controller's).
-    pub fn new(key: SigningKey, link: u8) -> Result<Self, ClientError> {
-        if link == CONTROLLER_LINK {
-            return Err(ClientError::InvalidArgument(
-                "link id 0 is the controller's: use 1..=255".into(),
-            ));
-        }
-        Ok(Self { key, link, last: 0 })
+    /// Signs with `key` on `link` (1..=255; 0 is the controller's), or with `None` on the link
+    /// the controller sets aside for this client (a random one until then).
+    pub fn new(key: SigningKey, link: Option<u8>) -> Result<Self, ClientError> {
+        let (link, source) = match link {
+            Some(CONTROLLER_LINK) => {
+                return Err(ClientError::InvalidArgument(
+                    "link id 0 is the controller's: use 1..=255".into(),
+                ));
+            }
+            Some(link) => (link, LinkSource::Given),
+            None => (random_link(), LinkSource::Unassigned),
+        };
+        Ok(Self {
+            key,
+            link,
+            source,
+            last: 0,
+        })
     }
 
     /// Reads the key file at `path` (64 hex digits on one line).
-    pub fn from_file(path: &Path, link: u8) -> Result<Self, ClientError> {
+    pub fn from_file(path: &Path, link: Option<u8>) -> Result<Self, ClientError> {
         let text = std::fs::read_to_string(path).map_err(|e| {
             ClientError::InvalidArgument(format!("key file {}: {e}", path.display()))
         })?;
@@ -69,13 +91,37 @@ impl Signer {
         self.key = self.key.for_controller(controller);
     }
 
-    /// A signer with the same key on the next link id (255 is followed by 1): for a second
-    /// socket of the same program (teleop's jog stream), whose requests would otherwise race
-    /// the first one's timestamps on one link.
+    /// True until the controller and the link id are known: the next request asks the
+    /// controller's identity report first.
+    pub fn needs_identity(&self) -> bool {
+        self.controller() == ControllerId::ANY || self.source == LinkSource::Unassigned
+    }
+
+    /// Takes what the identity report says: the controller's id, and the link set aside for
+    /// this client unless one was given (0: none set aside, the random one stays).
+    pub fn identified(&mut self, report: &IdentityReport) {
+        self.set_controller(report.controller);
+        if self.source == LinkSource::Unassigned {
+            if report.free_link != CONTROLLER_LINK {
+                self.link = report.free_link;
+            }
+            self.source = LinkSource::Assigned;
+        }
+    }
+
+    /// A signer with the same key on another link id: for a second socket of the same program
+    /// (teleop's jog stream), whose requests would otherwise race the first one's timestamps
+    /// on one link. The next one (255 is followed by 1) after a given link id; else one the
+    /// controller sets aside.
     pub fn next_link(&self) -> Self {
+        let (link, source) = match self.source {
+            LinkSource::Given => (self.link % 255 + 1, LinkSource::Given),
+            _ => (random_link(), LinkSource::Unassigned),
+        };
         Self {
             key: self.key.clone(),
-            link: self.link % 255 + 1,
+            link,
+            source,
             last: 0,
         }
     }
@@ -123,6 +169,15 @@ impl Signer {
     }
 }
 
+/// A random link id, 1..=255 (the standard library's per-process random hash keys, and the
+/// clock).
+fn random_link() -> u8 {
+    use std::hash::BuildHasher;
+    let seed = (SystemTime::now(), std::process::id());
+    let random = std::collections::hash_map::RandomState::new().hash_one(seed);
+    u8::try_from(random % 255).unwrap_or(0) + 1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,7 +192,7 @@ mod tests {
 
     #[test]
     fn timestamps_come_from_the_clock_and_always_increase() {
-        let mut signer = Signer::new(key(), 7).unwrap();
+        let mut signer = Signer::new(key(), Some(7)).unwrap();
         let message = [0u8; MESSAGE_LEN];
         let (first, t1) = signer.sign(&message);
         let (_, t2) = signer.sign(&message);
@@ -147,14 +202,15 @@ mod tests {
         let block = Signed::new_checked(&first[..]).unwrap();
         assert_eq!(block.link(), 7);
         assert_eq!(block.timestamp(), t1);
-        assert!(Signer::new(key(), 0).is_err());
+        assert!(Signer::new(key(), Some(0)).is_err());
         assert_eq!(signer.next_link().link(), 8);
-        assert_eq!(Signer::new(key(), 255).unwrap().next_link().link(), 1);
+        assert_eq!(Signer::new(key(), Some(255)).unwrap().next_link().link(), 1);
+        assert!(!signer.needs_identity());
     }
 
     #[test]
     fn only_fresh_answers_signed_by_the_controller_open() {
-        let signer = Signer::new(key(), 1).unwrap();
+        let signer = Signer::new(key(), Some(1)).unwrap();
         assert_eq!(signer.controller(), ARM);
         let reply = [b'G'; MESSAGE_LEN];
         let by = |link, timestamp| Signature { link, timestamp }.emit(&reply, &key());
@@ -177,13 +233,15 @@ mod tests {
 
     #[test]
     fn a_signer_without_the_id_learns_it_from_the_identity_report_only() {
-        let mut signer = Signer::new(key().for_controller(ControllerId::ANY), 1).unwrap();
-        let identity = IdentityReport {
+        let mut signer = Signer::new(key().for_controller(ControllerId::ANY), None).unwrap();
+        assert!(signer.needs_identity());
+        assert!((1..=255).contains(&signer.link()));
+        let report = IdentityReport {
             controller: ARM,
+            free_link: 101,
             ..IdentityReport::default()
-        }
-        .to_reply()
-        .to_bytes();
+        };
+        let identity = report.to_reply().to_bytes();
         let by = |message: &[u8; MESSAGE_LEN], key: &SigningKey| {
             Signature {
                 link: 0,
@@ -196,8 +254,14 @@ mod tests {
         assert_eq!(signer.open(&by(&[b'G'; MESSAGE_LEN], &key()), 100), None);
         let lying = by(&identity, &key().for_controller(ControllerId(9)));
         assert_eq!(signer.open(&lying, 100), None);
-        signer.set_controller(ARM);
-        assert_eq!(signer.controller(), ARM);
+        signer.identified(&report);
+        assert_eq!((signer.controller(), signer.link()), (ARM, 101));
+        assert!(!signer.needs_identity());
+        // Its second socket asks for a link of its own; a given link stays.
+        assert!(signer.next_link().needs_identity());
+        let mut given = Signer::new(key(), Some(9)).unwrap();
+        given.identified(&report);
+        assert_eq!(given.link(), 9);
         assert_eq!(
             signer.open(&by(&[b'G'; MESSAGE_LEN], &key()), 100),
             Some([b'G'; MESSAGE_LEN])

@@ -114,8 +114,9 @@ class Arm:
     ``key``: sign every request and accept only answers signed with this key (32 bytes, a string
     of 64 hex digits, or the path of a key file: 64 hex digits on one line, readable by its
     owner only), on link ``link_id`` (1..255; clients that run at the same time need their
-    own), for the controller ``controller_id`` (default: the id the controller names in its
-    first signed answer, :attr:`controller_id`). See docs/safety.md, "Signing".
+    own; default: a free one the controller sets aside, :attr:`link_id`), for the controller
+    ``controller_id`` (default: the id the controller names in its first signed answer,
+    :attr:`controller_id`). See docs/safety.md, "Signing".
     """
 
     def __init__(
@@ -129,7 +130,7 @@ class Arm:
         on_notice: Optional[NoticeCallback] = None,
         wait_options: WaitOptions = WaitOptions(),
         key: Optional[KeyLike] = None,
-        link_id: int = 1,
+        link_id: Optional[int] = None,
         controller_id: Optional[int] = None,
     ) -> None:
         self._signer = Signer(key, link_id, controller_id) if key is not None else None
@@ -666,20 +667,31 @@ class Arm:
             self.identify()
         return self._signer.controller_id
 
+    @property
+    def link_id(self) -> Optional[int]:
+        """The link id the signed requests go on (None without a key); a free one set aside by
+        the controller if not given."""
+        if self._signer is None:
+            return None
+        if self._signer.needs_identity:
+            self.identify()
+        return self._signer.link_id
+
     def identify(self) -> int:
         """The controller's id, from its identity report (``SQ`` index 6); a signer that did
-        not know it signs for it from now on."""
+        not know it signs for it from now on, on the link the controller set aside for it
+        unless one was given."""
         reply = self.request("SQ", index=IDENTITY_INDEX)
         high, low = int(reply.values[0]), int(reply.values[1])
         controller = high << 16 | low
         if self._signer is not None:
-            self._signer.controller_id = controller
+            self._signer.identified(controller, int(reply.values[4]))
         return controller
 
     def _exchange(self, chars: str, datagram: bytes, index: int) -> bytes:
         if (
             self._signer is not None
-            and self._signer.controller_id is None
+            and self._signer.needs_identity
             and not (chars == "SQ" and index == IDENTITY_INDEX)
         ):
             self.identify()

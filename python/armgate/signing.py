@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import os
+import secrets
 import time
 from typing import Optional, Tuple, Union
 
@@ -124,22 +125,41 @@ def identity_of(message: bytes) -> Optional[int]:
 
 
 class Signer:
-    """A key, a link id (1..255), the controller's id (None: learnt from its identity report)
-    and the last timestamp used. Timestamps come from the wall clock (10 us since 2015) and
-    always increase, also across restarts while the clock does not go back; clients that run
-    at the same time need link ids of their own."""
+    """A key, a link id (1..255; None: the one the controller sets aside for this client, a
+    random one until then), the controller's id (None: learnt from its identity report) and the
+    last timestamp used. Timestamps come from the wall clock (10 us since 2015) and always
+    increase, also across restarts while the clock does not go back; clients that run at the
+    same time need link ids of their own."""
 
     def __init__(
-        self, key: KeyLike, link_id: int = 1, controller_id: Optional[int] = None
+        self,
+        key: KeyLike,
+        link_id: Optional[int] = None,
+        controller_id: Optional[int] = None,
     ) -> None:
         self._key = load_key(key)
-        if not 1 <= link_id <= 255:
+        if link_id is not None and not 1 <= link_id <= 255:
             raise ValueError(f"link id {link_id}: use 1..255 (0 is the controller's)")
         if controller_id is not None and not 1 <= controller_id <= 0xFFFFFFFF:
             raise ValueError(f"controller id {controller_id}: use 1..0xffffffff")
-        self.link_id = link_id
+        self.link_assigned = link_id is not None
+        self.link_id = link_id if link_id is not None else secrets.randbelow(255) + 1
         self.controller_id = controller_id
         self.last = 0
+
+    @property
+    def needs_identity(self) -> bool:
+        """True until the controller's id and the link id are known."""
+        return self.controller_id is None or not self.link_assigned
+
+    def identified(self, controller_id: int, free_link: int) -> None:
+        """Takes the identity report's controller id, and the link set aside for this client
+        unless one was given (0: none, the random one stays)."""
+        self.controller_id = controller_id
+        if not self.link_assigned:
+            if free_link:
+                self.link_id = free_link
+            self.link_assigned = True
 
     def __repr__(self) -> str:
         # Never the key.

@@ -137,3 +137,17 @@ def test_a_signed_client_says_when_the_controller_answers_unsigned(mk1, key_file
     with armgate.Arm("127.0.0.1", mk1.port, timeout=0.1, retries=0, joints=6, key=key_file) as arm:
         with pytest.raises(armgate.SignatureMismatch):
             arm.get_tcp_pose()
+
+
+def test_two_arms_with_default_options_sign_on_distinct_links(sim_factory, key_file: Path) -> None:  # type: ignore[no-untyped-def]
+    sim = sim_factory("ranger-mk1", "--key", str(key_file))
+    with armgate.Arm("127.0.0.1", sim.port, key=key_file) as a, armgate.Arm(
+        "127.0.0.1", sim.port, key=key_file
+    ) as b:
+        assert a.link_id != b.link_id
+        assert a.controller_id == b.controller_id
+        for _ in range(20):
+            a.get_tcp_pose()
+            b.get_tcp_pose()
+        # Nothing dropped as replayed (SQ index 4, f6).
+        assert a.request("SQ", index=4).values[6] == 0.0

@@ -121,13 +121,13 @@ impl Stopper {
         }
     }
 
-    /// The same destination, signing on the next link id (two stoppers' timestamps must not
-    /// race).
+    /// The same destination and link: a signed stop is obeyed even when its timestamp races
+    /// another's on the link (docs/protocol.md, "Signed datagrams").
     fn next(&self) -> Self {
         Self {
             peer: self.peer,
             config: self.config.clone(),
-            signer: self.signer.as_ref().map(crate::Signer::next_link),
+            signer: self.signer.clone(),
         }
     }
 }
@@ -223,13 +223,14 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
         retries: 0,
         ..client.config().clone()
     };
-    // Signed on the next link id: its timestamps would race the polls' on one link.
+    // Signed on a link of its own: its timestamps would race the polls' on one link.
     let signer = client.signer().map(crate::Signer::next_link);
     let stopper = Stopper {
         peer: client.peer(),
         config: client.config().clone(),
-        // A link of its own again: the stop must not race the jog stream's timestamps.
-        signer: signer.as_ref().map(crate::Signer::next_link),
+        // The polls' link: a stop is obeyed however its timestamp races (and it must not wait
+        // for an identity request).
+        signer: client.signer().cloned(),
     };
     // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
     let signalled = crate::interrupt::ctrl_c().map_err(std::io::Error::other)?;
@@ -237,9 +238,20 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<()> {
     stop_on_signal(signalled.clone(), done.clone(), stopper.next())?;
     let _stop = StopOnExit(Some(stopper));
     let streamer = Client::connect_with(client.peer(), config)
-        .map(|mut streamer| {
+        .and_then(|mut streamer| {
             streamer.set_signer(signer);
-            streamer
+            if let (Some(polls), true) = (client.signer(), streamer.signer().is_some()) {
+                // The jog stream's link, set aside by the controller: said before the screen
+                // is taken over.
+                streamer.identify()?;
+                let jogs = streamer.signer().map_or(0, crate::Signer::link);
+                eprintln!(
+                    "armgate teleop: signing for controller {}, polls on link {}, jogs on link {jogs}",
+                    polls.controller(),
+                    polls.link()
+                );
+            }
+            Ok(streamer)
         })
         .map_err(|e| std::io::Error::other(e.to_string()))
         .and_then(VelocityStreamer::spawn)?;

@@ -17,6 +17,10 @@ use super::link::Peer;
 /// holder's).
 pub const LINKS: usize = 16;
 
+/// The first link id set aside for a client that asks for one: above the small ones people
+/// type (`--link-id 1`, 2, ...).
+const FIRST_FREE: u8 = 101;
+
 /// A source heard on a link within this long of another is a second client on it (s).
 pub const SHARED_WITHIN: f64 = 1.0;
 
@@ -57,6 +61,8 @@ pub(super) struct Links<P> {
     pub shared: u32,
     /// The last link seen shared (0: none).
     pub last_shared: u8,
+    /// Where the search for a free link starts next.
+    next_free: u8,
 }
 
 impl<P: Peer> Links<P> {
@@ -65,7 +71,23 @@ impl<P: Peer> Links<P> {
             entries: [None; LINKS],
             shared: 0,
             last_shared: 0,
+            next_free: FIRST_FREE,
         }
+    }
+
+    /// A link id not in the table, set aside for `peer` at `now` (as if heard from it), so
+    /// that the next client to ask gets another; 0 if every one is taken. `keep` as for
+    /// [`heard`](Self::heard). The search goes round from where the last one ended.
+    pub fn set_aside(&mut self, peer: P, now: f64, keep: Option<u8>) -> u8 {
+        for _ in 0..u8::MAX {
+            let link = self.next_free;
+            self.next_free = if link == u8::MAX { 1 } else { link + 1 };
+            if self.peer(link).is_none() {
+                self.heard(link, peer, now, keep);
+                return link;
+            }
+        }
+        0
     }
 
     /// Notes that `link` was heard from `peer` at `now`; `keep` is the holder's link (never
@@ -172,5 +194,19 @@ mod tests {
         }
         assert!(links.peer(1).is_some());
         assert_eq!(links.peer(2), None, "replaced");
+    }
+
+    #[test]
+    fn links_set_aside_are_free_and_never_the_same_twice_in_a_row() {
+        let mut links: Links<SocketAddr> = Links::new();
+        links.heard(FIRST_FREE, at(2, 1), 0.0, None);
+        let first = links.set_aside(at(3, 1), 0.1, None);
+        let second = links.set_aside(at(4, 1), 0.1, None);
+        assert_eq!((first, second), (FIRST_FREE + 1, FIRST_FREE + 2));
+        assert_eq!(links.peer(first), Some(at(3, 1)));
+        // Round past 255 to 1.
+        links.next_free = u8::MAX;
+        assert_eq!(links.set_aside(at(5, 1), 0.2, None), u8::MAX);
+        assert_eq!(links.set_aside(at(5, 1), 0.2, None), 1);
     }
 }

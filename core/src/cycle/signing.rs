@@ -254,9 +254,7 @@ fn verify<'a>(
     let command = Command::from_chars(chars);
     let parsed = Signature::parse(signed, keys.key).or_else(|e| {
         // Only an identity request may be for any controller: it only reads the id.
-        let identity = command == Some(Command::Status)
-            && datagram.get(MESSAGE_LEN - 1) == Some(&IDENTITY_INDEX);
-        if identity {
+        if is_identity_request(datagram) {
             Signature::parse(signed, keys.any)
         } else {
             Err(e)
@@ -279,6 +277,12 @@ fn verify<'a>(
         message: datagram.get(..MESSAGE_LEN).unwrap_or_default(),
         link: Some(signature.link),
     })
+}
+
+/// True if `message` is `SQ` index 6, the identity request.
+pub(super) fn is_identity_request(message: &[u8]) -> bool {
+    message.get(..2) == Some(&Command::Status.chars()[..])
+        && message.get(MESSAGE_LEN - 1) == Some(&IDENTITY_INDEX)
 }
 
 /// An unsigned datagram while a key is set, served as `access` allows.

@@ -4,7 +4,7 @@ use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_planning, 
 use super::counters::bump;
 use super::links::{Links, identity, link_of};
 use super::replay::{ReplayStore, Unkept};
-use super::signing::Gate;
+use super::signing::{Gate, is_identity_request};
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
@@ -117,6 +117,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             controller: self.gate.controller(),
             shared_links: self.links.shared,
             last_shared: self.links.last_shared,
+            free_link: 0,
         }
     }
 
@@ -272,7 +273,12 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                     if let Some(signed) = admitted.link {
                         let holder = self.handler.holder().and_then(link_of);
                         self.links.heard(signed, datagram.peer, now, holder);
-                        self.handler.set_identity(self.identity());
+                        let mut identity = self.identity();
+                        if is_identity_request(admitted.message) {
+                            // A link of its own for a client that starts (it may take it).
+                            identity.free_link = self.links.set_aside(datagram.peer, now, holder);
+                        }
+                        self.handler.set_identity(identity);
                     }
                     self.handler.set_signing_report(self.gate.report());
                     Pending {

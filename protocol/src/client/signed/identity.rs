@@ -87,6 +87,9 @@ pub struct IdentityReport {
     pub shared_links: u32,
     /// f3: the last link id seen shared (0: none).
     pub last_shared: u8,
+    /// f4: a link id no client was heard on lately, set aside for the asking client (0: none):
+    /// clients that start at the same time get different ones.
+    pub free_link: u8,
 }
 
 impl IdentityReport {
@@ -100,7 +103,7 @@ impl IdentityReport {
                 (id & 0xffff) as f32,
                 self.shared_links as f32,
                 f32::from(self.last_shared),
-                0.0,
+                f32::from(self.free_link),
                 0.0,
                 0.0,
             ],
@@ -113,7 +116,7 @@ impl IdentityReport {
         if reply.command != Command::Status || reply.index != IDENTITY_INDEX {
             return Err(DecodeError::WrongCommand);
         }
-        let [high, low, shared, last, ..] = reply.values.map(whole);
+        let [high, low, shared, last, free, ..] = reply.values.map(whole);
         let report = || -> Option<Self> {
             let (high, low) = (
                 high.filter(|h| *h <= 0xffff)?,
@@ -123,6 +126,7 @@ impl IdentityReport {
                 controller: ControllerId(high << 16 | low),
                 shared_links: shared?,
                 last_shared: u8::try_from(last?).ok()?,
+                free_link: u8::try_from(free?).ok()?,
             })
         };
         report().ok_or(DecodeError::BadField)
@@ -157,9 +161,10 @@ mod tests {
             controller: ControllerId(0xed0a_5e0c),
             shared_links: 3,
             last_shared: 1,
+            free_link: 101,
         };
         let reply = report.to_reply();
-        assert_eq!(reply.values[..4], [60682.0, 24076.0, 3.0, 1.0]);
+        assert_eq!(reply.values[..5], [60682.0, 24076.0, 3.0, 1.0, 101.0]);
         let bytes = reply.to_bytes();
         let parsed = Reply::parse(&Message::new_checked(&bytes[..]).unwrap()).unwrap();
         assert_eq!(IdentityReport::from_reply(&parsed), Ok(report));
