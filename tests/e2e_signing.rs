@@ -21,7 +21,13 @@ fn key_file(sim_dir: &str, key: [u8; 32]) -> PathBuf {
         std::env::temp_dir().join(format!("armgate-e2e-key-{}-{sim_dir}", std::process::id()));
     let hex: String = key.iter().map(|b| format!("{b:02x}")).collect();
     std::fs::write(&path, format!("# e2e key\n{hex}\n")).unwrap();
+    set_mode(&path, 0o600);
     path
+}
+
+fn set_mode(path: &std::path::Path, mode: u32) {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).unwrap();
 }
 
 /// A client that signs with `signer` and reads only answers it can verify.
@@ -534,5 +540,29 @@ fn two_clients_started_with_default_options_sign_on_distinct_links_and_nothing_i
     .unwrap();
     assert_eq!(counts.dropped(), 0, "{counts:?}");
     assert_eq!(clients[0].identify().unwrap().shared_links, 0);
+    let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn a_key_file_others_may_read_is_refused_with_the_chmod_that_fixes_it() {
+    if super::firmware().is_some() {
+        return; // armgate-sim's option; the firmware on Linux reads the key the same way.
+    }
+    let key = key_file("mode", [0x55; 32]);
+    set_mode(&key, 0o640);
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
+        .current_dir(root)
+        .args(["--listen", "127.0.0.1:0", "--duration", "0", "--key"])
+        .arg(&key)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("(mode 640): chmod 600 {}", key.display())),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("5555"), "never the key: {stderr}");
     let _ = std::fs::remove_file(&key);
 }

@@ -18,7 +18,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use armgate_protocol::client::signed::{
     CONTROLLER_LINK, ControllerId, IdentityReport, SIGNED_LEN, Signature, Signed, SigningKey,
-    timestamp_from_unix_us,
+    read_key_file, timestamp_from_unix_us,
 };
 use armgate_protocol::client::{MESSAGE_LEN, Message, Reply};
 
@@ -65,14 +65,11 @@ impl Signer {
         })
     }
 
-    /// Reads the key file at `path` (64 hex digits on one line).
+    /// Reads the key file at `path` (64 hex digits on one line; refused if group or others may
+    /// read it).
     pub fn from_file(path: &Path, link: Option<u8>) -> Result<Self, ClientError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            ClientError::InvalidArgument(format!("key file {}: {e}", path.display()))
-        })?;
-        let key = SigningKey::parse(&text).map_err(|e| {
-            ClientError::InvalidArgument(format!("key file {}: {e}", path.display()))
-        })?;
+        let key = read_key_file(path)
+            .map_err(|e| ClientError::InvalidArgument(format!("key file {e}")))?;
         Self::new(key, link)
     }
 

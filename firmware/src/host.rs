@@ -22,7 +22,7 @@ use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::cycle::{Cycle, Signing, StateFile};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::sim::replay::{self, Replay};
-use armgate_protocol::client::signed::SigningKey;
+use armgate_protocol::client::signed::read_key_file;
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;
@@ -188,10 +188,8 @@ fn signing() -> Result<(Signing, ReplayStore), String> {
         Err(_) => settings::CONTROLLER_ID,
     };
     if let Some(path) = std::env::var_os("ARMGATE_KEY_FILE") {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
-        let key = SigningKey::parse(&text)
-            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
+        let key = read_key_file(std::path::Path::new(&path))
+            .map_err(|e| format!("ARMGATE_KEY_FILE: {e}"))?;
         signing.key = Some(key);
     }
     signing.key = signing.key.map(|k| k.for_controller(controller));

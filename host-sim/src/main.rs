@@ -29,7 +29,7 @@ use armgate_core::math::{self, Quaternion};
 use armgate_core::sim::ArmModel;
 use armgate_core::sim::replay::{self, Replay};
 use armgate_core::sim::{IdealArm, RateLimitedArm};
-use armgate_protocol::client::signed::{ControllerId, SigningKey};
+use armgate_protocol::client::signed::{ControllerId, read_key_file};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
@@ -380,9 +380,7 @@ fn signing(args: &Args, local: SocketAddr) -> Result<(Signing, Option<StateFile>
     let Some(path) = &args.key else {
         return Ok((Signing::default(), None));
     };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("--key {}: {e}", path.display()))?;
-    let key = SigningKey::parse(&text).map_err(|e| format!("--key {}: {e}", path.display()))?;
+    let key = read_key_file(path).map_err(|e| format!("--key {e}"))?;
     let robot = args.robot.file_name().unwrap_or_default().to_string_lossy();
     let controller = args
         .controller_id

@@ -25,12 +25,16 @@
 mod block;
 mod identity;
 mod key;
+#[cfg(feature = "std")]
+mod key_file;
 mod report;
 mod timestamp;
 
 pub use block::{Signature, SignatureError, Signed};
 pub use identity::{BadControllerId, ControllerId, IDENTITY_INDEX, IdentityReport};
 pub use key::{KEY_LEN, KeyError, SigningKey, parse_key};
+#[cfg(feature = "std")]
+pub use key_file::read_key_file;
 pub use report::{SIGNING_INDEX, SigningPolicy, SigningReport};
 pub use timestamp::{
     TIMESTAMP_EPOCH_UNIX, TIMESTAMP_MAX, TIMESTAMP_UNIT_US, timestamp_from_unix_us,
