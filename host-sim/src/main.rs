@@ -59,7 +59,7 @@ struct Args {
     /// datagrams signed with it are served, the rest dropped and counted.
     #[arg(long, value_name = "FILE")]
     key: Option<PathBuf>,
-    /// With --key: what unsigned datagrams may do: `no` (dropped), `read` (PS, jP, TM, SQ, KS and
+    /// With --key: what unsigned datagrams may do: `no` (dropped), `read` (PS, jP, TM, SQ and
     /// the stops ST, jR) or `all` (a lab moving its clients to signing).
     #[arg(
         long,
