@@ -629,6 +629,16 @@ fn with_a_key_the_session_follows_the_link_id_and_each_answer_is_signed_for_its_
         timestamp: NOW + 20,
     }
     .emit(&ps, &key());
+    net.sent.clear();
     tick(&mut cycle, &mut net, &[(&ps1, a)]);
     assert_eq!(cycle.identity().last_shared, 1);
+    // And said: WN14, to link 1 (where it was last heard from), signed.
+    let shared = net
+        .sent
+        .iter()
+        .find(|(_, k)| *k == Outgoing::Notice)
+        .expect("a notice");
+    assert_eq!(shared.0.peer, a);
+    let block = Signed::new_checked(shared.0.payload()).unwrap();
+    assert!(block.message().starts_with(b"WN14 link 1 shared"));
 }

@@ -249,6 +249,11 @@ class HeldAtWorkspaceEdge(ControllerWarning):
     edge or before an exclusion box."""
 
 
+class LinkShared(ControllerWarning):
+    """``WN14 link 7 shared``: signed requests from two clients interleave on one link id (the
+    older timestamps of each are dropped); give each client its own link id."""
+
+
 class IkDivergence(ControllerWarning):
     """``WN22 Inv Kin Divergence.``: the IK could not track the set-point; the arm holds."""
 
@@ -276,6 +281,7 @@ _ERRORS: Dict[int, Type[ControllerMessage]] = {
 _WARNINGS: Dict[int, Type[ControllerMessage]] = {
     12: JointLimitWarning,
     13: HeldAtWorkspaceEdge,
+    14: LinkShared,
     22: IkDivergence,
     27: ViaPointMissed,
 }

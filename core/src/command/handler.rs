@@ -177,6 +177,11 @@ impl CommandHandler {
         out
     }
 
+    /// Queues an unsolicited notice the cycle observed (a link id shared by two clients).
+    pub fn announce(&mut self, notice: Notice) {
+        self.relay.announce(notice.text());
+    }
+
     /// The next unsolicited warning for the client, if any.
     pub fn next_notice(&mut self) -> Option<Text> {
         self.relay.pop()

@@ -63,6 +63,8 @@ pub(super) struct Links<P> {
     pub last_shared: u8,
     /// Where the search for a free link starts next.
     next_free: u8,
+    /// When a shared link was last announced (s): at most one notice per [`SHARED_WITHIN`].
+    announced: Option<f64>,
 }
 
 impl<P: Peer> Links<P> {
@@ -72,7 +74,18 @@ impl<P: Peer> Links<P> {
             shared: 0,
             last_shared: 0,
             next_free: FIRST_FREE,
+            announced: None,
         }
+    }
+
+    /// True if a shared link seen at `now` is to be announced (a notice): at most once per
+    /// [`SHARED_WITHIN`], however fast two clients interleave.
+    pub fn announce(&mut self, now: f64) -> bool {
+        let due = self.announced.is_none_or(|at| now - at > SHARED_WITHIN);
+        if due {
+            self.announced = Some(now);
+        }
+        due
     }
 
     /// A link id not in the table, set aside for `peer` at `now` (as if heard from it), so
@@ -183,6 +196,10 @@ mod tests {
         assert!(links.heard(1, at(3, 6000), 5.4, None));
         assert!(!links.heard(1, at(3, 6000), 5.5, None));
         assert_eq!((links.shared, links.last_shared), (2, 1));
+        // Said at most once a second.
+        assert!(links.announce(5.3));
+        assert!(!links.announce(5.4));
+        assert!(links.announce(6.4));
         // The table is bounded and keeps the holder's link.
         for k in 0..100u8 {
             links.heard(

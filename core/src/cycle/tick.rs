@@ -272,7 +272,11 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                     };
                     if let Some(signed) = admitted.link {
                         let holder = self.handler.holder().and_then(link_of);
-                        self.links.heard(signed, datagram.peer, now, holder);
+                        if self.links.heard(signed, datagram.peer, now, holder)
+                            && self.links.announce(now)
+                        {
+                            self.handler.announce(Notice::LinkShared(signed));
+                        }
                         let mut identity = self.identity();
                         if is_identity_request(admitted.message) {
                             // A link of its own for a client that starts (it may take it).
