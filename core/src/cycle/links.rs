@@ -1,15 +1,17 @@
 //! Signed clients by link id: with a key the session follows the link id, not the source
 //! address (a source address proves nothing, and anyone may send from the holder's).
 //!
-//! A signed request reaches the command handler as from its link's *identity*, an address in
-//! `100::/64` (RFC 6666's discard-only prefix, never a real client's) that holds the link id:
-//! the session, the watchdog and the resend check then know the client by its link id, and an
-//! unsigned datagram — from any address, the holder's included — is another client. The
+//! A signed request reaches the command handler as from its link's *identity*, the address
+//! `0.0.0.N`, port 0, for link N (`0.0.0.0/8` is "this network", never a datagram's source, and
+//! an IPv4 address is cheap to compare in the session's scans): the session, the watchdog and
+//! the resend check then know the client by its link id, and an unsigned datagram — from any
+//! address, the holder's included — is another client. `ER40` names a signed holder
+//! `by 0.0.0.N`, its link id. The
 //! table here maps each link id back to the address it was last heard from: where its answers
 //! and notices go, signed. It also notices two sources interleaved on one link id (two
 //! clients that chose the same link id), counted for `SQ` index 6.
 
-use core::net::{IpAddr, Ipv6Addr, SocketAddr};
+use core::net::{Ipv4Addr, SocketAddr};
 
 use super::link::Peer;
 
@@ -24,19 +26,17 @@ const FIRST_FREE: u8 = 101;
 /// A source heard on a link within this long of another is a second client on it (s).
 pub const SHARED_WITHIN: f64 = 1.0;
 
-/// The identity of signed link `link`: `100::<link>`, port 0.
+/// The identity of signed link `link`: `0.0.0.<link>`, port 0.
 pub(super) fn identity(link: u8) -> SocketAddr {
-    SocketAddr::new(
-        IpAddr::V6(Ipv6Addr::new(0x0100, 0, 0, 0, 0, 0, 0, u16::from(link))),
-        0,
-    )
+    SocketAddr::from((Ipv4Addr::new(0, 0, 0, link), 0))
 }
 
-/// The link id whose identity `address` is, if it is one.
+/// The link id whose identity `address` is, if it is one (link 0 is the controller's: the
+/// unspecified address of a shell without addresses is none).
 pub(super) fn link_of(address: SocketAddr) -> Option<u8> {
     match address {
-        SocketAddr::V6(a) if a.port() == 0 => match a.ip().segments() {
-            [0x0100, 0, 0, 0, 0, 0, 0, link] => u8::try_from(link).ok(),
+        SocketAddr::V4(a) if a.port() == 0 => match a.ip().octets() {
+            [0, 0, 0, link] if link != 0 => Some(link),
             _ => None,
         },
         _ => None,
@@ -178,8 +178,14 @@ mod tests {
             assert_eq!(link_of(identity(link)), Some(link));
         }
         assert_eq!(link_of(at(2, 0)), None);
-        assert_eq!(link_of("[100::7]:5000".parse().unwrap()), None);
-        assert_eq!(link_of("[100::1:7]:0".parse().unwrap()), None);
+        assert_eq!(link_of("0.0.0.7:5000".parse().unwrap()), None);
+        assert_eq!(link_of("0.0.1.7:0".parse().unwrap()), None);
+        assert_eq!(
+            link_of("0.0.0.0:0".parse().unwrap()),
+            None,
+            "no address: ()"
+        );
+        assert_eq!(link_of("[::7]:0".parse().unwrap()), None);
     }
 
     #[test]
