@@ -43,6 +43,7 @@
 mod budget;
 mod can_drives;
 mod counters;
+mod flash_log;
 mod link;
 mod links;
 mod replay;
@@ -56,6 +57,7 @@ mod tick;
 pub use budget::PLANNING_PER_TICK;
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
+pub use flash_log::{FlashLog, FlashSectors, RECORD_LEN};
 pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
 pub use links::{LINKS, SHARED_WITHIN};
 pub use replay::{FIRST_WINDOW, RESERVE_AHEAD, ReplayStore, Unkept};
