@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use armgate_core::command::{Network, NetworkError};
 use armgate_core::cycle::UnsignedAccess;
-use armgate_protocol::client::signed::parse_key;
+use armgate_protocol::client::signed::{ControllerId, parse_key};
 
 include!("../tools/embed_robot.rs");
 
@@ -196,13 +196,26 @@ fn settings() -> Result<String, String> {
         );
     }
     let _ = writeln!(out, "];");
-    out.push_str(&signing_settings()?);
+    let robot = std::env::var("ROBOT").unwrap_or_else(|_| DEFAULT_ROBOT.to_owned());
+    out.push_str(&signing_settings(&robot, &format!("{address}:{port}"))?);
     Ok(out)
 }
 
 /// The signing constants: the key of the file `ARMGATE_KEY_FILE` names (none: unsigned, as
-/// the seed), and what unsigned datagrams may do (`ARMGATE_ALLOW_UNSIGNED`: no, read, all).
-fn signing_settings() -> Result<String, String> {
+/// the seed; set but empty or unreadable fails the build), the controller's id
+/// (`ARMGATE_CONTROLLER_ID`, default derived from the robot file's name and `address`, as
+/// `armgate-sim` derives its own) and what unsigned datagrams may do (`ARMGATE_ALLOW_UNSIGNED`:
+/// no, read, all).
+fn signing_settings(robot: &str, address: &str) -> Result<String, String> {
+    // Set but empty is a mistake (an unset variable in a script), not a wish to sign nothing.
+    println!("cargo:rerun-if-env-changed=ARMGATE_KEY_FILE");
+    if std::env::var_os("ARMGATE_KEY_FILE").is_some_and(|v| v.to_string_lossy().trim().is_empty()) {
+        return Err(
+            "ARMGATE_KEY_FILE is set but empty: name the key file, or unset it to \
+                    build a firmware that signs nothing"
+                .to_owned(),
+        );
+    }
     let key = match env("ARMGATE_KEY_FILE") {
         None => None,
         Some(path) => {
@@ -211,6 +224,16 @@ fn signing_settings() -> Result<String, String> {
                 .map_err(|e| format!("ARMGATE_KEY_FILE: {path}: {e}"))?;
             Some(parse_key(&text).map_err(|e| format!("ARMGATE_KEY_FILE: {path}: {e}"))?)
         }
+    };
+    let robot_name = Path::new(robot)
+        .file_name()
+        .unwrap_or_default()
+        .to_string_lossy();
+    let controller = match env("ARMGATE_CONTROLLER_ID") {
+        None => ControllerId::derive(&[&robot_name, address]),
+        Some(text) => text
+            .parse()
+            .map_err(|e| format!("ARMGATE_CONTROLLER_ID: `{text}`: {e}"))?,
     };
     let unsigned: UnsignedAccess = match env("ARMGATE_ALLOW_UNSIGNED") {
         None => UnsignedAccess::default(),
@@ -234,6 +257,16 @@ fn signing_settings() -> Result<String, String> {
             let _ = writeln!(out, "pub const SIGNING_KEY: Option<[u8; 32]> = None;");
         }
     }
+    let _ = writeln!(
+        out,
+        "/// This controller's id (`ARMGATE_CONTROLLER_ID`; default from the robot file's name \
+         and the address): every signature covers it."
+    );
+    let _ = writeln!(
+        out,
+        "pub const CONTROLLER_ID: ControllerId = ControllerId({:#010x});",
+        controller.0
+    );
     let variant = match unsigned {
         UnsignedAccess::Refused => "Refused",
         UnsignedAccess::Read => "Read",

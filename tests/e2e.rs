@@ -168,11 +168,16 @@ impl Sim {
                 // build only); the rest of its settings are the build's.
                 let mut command = Command::new(firmware);
                 command.env("ARMGATE_ROBOT_FILE", &file);
+                if extra.contains(&"--key") && !extra.contains(&"--state") {
+                    command.env("ARMGATE_STATE_FILE", dir.join("replay-state"));
+                }
                 let mut args = extra.iter();
                 while let Some(arg) = args.next() {
                     match (*arg, args.next()) {
                         ("--start", Some(q)) => command.env("ARMGATE_START", q),
                         ("--key", Some(file)) => command.env("ARMGATE_KEY_FILE", file),
+                        ("--state", Some(file)) => command.env("ARMGATE_STATE_FILE", file),
+                        ("--controller-id", Some(id)) => command.env("ARMGATE_CONTROLLER_ID", id),
                         ("--allow-unsigned", Some(access)) => {
                             command.env("ARMGATE_ALLOW_UNSIGNED", access)
                         }
@@ -190,6 +195,10 @@ impl Sim {
                 let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
                 if let Some((iface, _)) = &can {
                     command.arg("--can").arg(format!("socketcan:{iface}"));
+                }
+                // A test's replay state is its own (never the user's default location).
+                if extra.contains(&"--key") && !extra.contains(&"--state") {
+                    command.arg("--state").arg(dir.join("replay-state"));
                 }
                 command
                     .args(listen)

@@ -46,7 +46,7 @@ sim_key=
 if [[ ${ARMGATE_SIGNED:-} == 1 ]]; then
     key=$shim/arm.key
     (umask 077 && od -An -N32 -tx1 /dev/urandom | tr -d ' \n' >"$key" && echo >>"$key")
-    sim_key="--key $key"
+    sim_key="--key $key --state $shim/replay-state"
     export ARMGATE_KEY_FILE=$key
     echo "signed pass: key file $key"
 fi

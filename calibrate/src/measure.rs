@@ -44,9 +44,13 @@ pub struct MeasureArgs {
     /// Sign the requests with the key in this file (a controller with a key).
     #[arg(long, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
     pub key: Option<PathBuf>,
-    /// With --key: the link id to sign with, 1..=255.
-    #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = armgate_client::DEFAULT_LINK)]
-    pub link_id: u8,
+    /// With --key: the link id to sign with, 1..=255 (default: a free one the controller sets
+    /// aside).
+    #[arg(long, env = "ARMGATE_LINK_ID")]
+    pub link_id: Option<u8>,
+    /// With --key: the controller's id, 8 hex digits (default: the one it names).
+    #[arg(long, env = "ARMGATE_CONTROLLER_ID", value_name = "HEX")]
+    pub controller_id: Option<armgate_protocol::client::signed::ControllerId>,
     /// The instrument's reading by a command run at each pose (see above); without it and
     /// without --joints-only, a prompt.
     #[arg(long, value_name = "CMD", conflicts_with = "joints_only")]
@@ -80,7 +84,10 @@ pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
     let mut client = Client::connect_with(args.addr.as_str(), ClientConfig::default())
         .map_err(|e| e.to_string())?;
     if let Some(key) = &args.key {
-        let signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        let mut signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        if let Some(id) = args.controller_id {
+            signer.set_controller(id);
+        }
         client.set_signer(Some(signer));
     }
     client

@@ -221,10 +221,33 @@ pub fn main() -> u8 {
                     "hint: a controller with a signing key never answers unsigned requests: \
                      --key FILE (or ARMGATE_KEY_FILE)"
                 );
+            } else if matches!(e, CliError::Client(ClientError::Timeout { .. })) {
+                eprintln!(
+                    "hint: a controller never answers a request signed with another key, or \
+                     for another controller id: is it running, or has it another key?"
+                );
             }
             e.exit_code()
         }
     }
+}
+
+/// Learns the controller's id and a free link id if they are not given, and says on stderr
+/// which arm the signed requests are for and on which link (a key may be shared by several
+/// arms, and a link id by mistake by several clients).
+fn say_which_arm(client: &mut Client) -> Result<(), CliError> {
+    if client.signer().is_some_and(crate::Signer::needs_identity) {
+        client.identify()?;
+    }
+    if let Some(signer) = client.signer() {
+        eprintln!(
+            "armgate: signing for controller {} at {}, link {}",
+            signer.controller(),
+            client.peer(),
+            signer.link()
+        );
+    }
+    Ok(())
 }
 
 /// A refusal with its hint, asking the controller's state when it can tell (a refusal of `SQ`
@@ -260,10 +283,12 @@ pub fn run(cli: &Cli, out: &mut impl Write) -> Result<(), CliError> {
     };
     let mut client = Client::connect_with(cli.controller.addr.as_str(), config)?;
     if let Some(path) = &cli.controller.key {
-        client.set_signer(Some(crate::Signer::from_file(
-            path,
-            cli.controller.link_id,
-        )?));
+        let mut signer = crate::Signer::from_file(path, cli.controller.link_id)?;
+        if let Some(id) = cli.controller.controller_id {
+            signer.set_controller(id);
+        }
+        client.set_signer(Some(signer));
+        say_which_arm(&mut client)?;
     }
     if let Cmd::Teleop(args) = &cli.command {
         return teleop::run(args, cli, client);

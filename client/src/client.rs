@@ -5,7 +5,8 @@ use std::io::ErrorKind;
 use std::net::{Ipv4Addr, Ipv6Addr, SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::{Duration, Instant};
 
-use armgate_protocol::client::{MESSAGE_LEN, Message, Reply, Request, Text, VALUES};
+use armgate_protocol::client::signed::{IDENTITY_INDEX, IdentityReport};
+use armgate_protocol::client::{Command, MESSAGE_LEN, Message, Reply, Request, Text, VALUES};
 
 use crate::ClientError;
 use crate::matching::{Expect, Incoming, classify_unsolicited};
@@ -132,6 +133,24 @@ impl Client {
     /// The signer, if requests are signed.
     pub fn signer(&self) -> Option<&Signer> {
         self.signer.as_ref()
+    }
+
+    /// The controller's identity report (`SQ` index 6). With a signer that does not know the
+    /// controller's id yet, the request is signed for any controller and the signer takes the
+    /// id the signed answer names, and the link id set aside for it unless it was given; every
+    /// request does this first while they are unknown.
+    pub fn identify(&mut self) -> Result<IdentityReport, ClientError> {
+        let reply = self.request(Request {
+            command: Command::Status,
+            values: [0.0; VALUES],
+            index: IDENTITY_INDEX,
+        })?;
+        let report = IdentityReport::from_reply(&reply)
+            .map_err(|e| ClientError::InvalidArgument(format!("SQ {IDENTITY_INDEX}: {e}")))?;
+        if let Some(signer) = &mut self.signer {
+            signer.identified(&report);
+        }
+        Ok(report)
     }
 
     /// How many datagrams were dropped because they were not signed with the key, or were
@@ -268,6 +287,11 @@ impl Client {
         datagram: &[u8; MESSAGE_LEN],
         expect: Expect,
     ) -> Result<[u8; MESSAGE_LEN], ClientError> {
+        let identity = datagram.get(..2) == Some(&Command::Status.chars()[..])
+            && datagram.get(MESSAGE_LEN - 1) == Some(&IDENTITY_INDEX);
+        if !identity && self.signer.as_ref().is_some_and(Signer::needs_identity) {
+            self.identify()?;
+        }
         // Whatever arrived before this request cannot be its reply.
         self.poll_notices()?;
         let attempts = self.config.retries.saturating_add(1);

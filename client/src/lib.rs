@@ -72,7 +72,7 @@ pub use error::ClientError;
 pub use ik::IkSolution;
 pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
-pub use signer::{DEFAULT_LINK, Signer};
+pub use signer::Signer;
 pub use status::{DriveStatus, Motion, Status};
 pub use velocity::{StreamEvent, Velocity, VelocityStreamer};
 pub use wait::{Progress, WaitOptions};

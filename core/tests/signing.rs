@@ -12,11 +12,19 @@
 mod drives_rig;
 
 use armgate_core::config::ValidRobot;
-use armgate_core::cycle::{Cycle, Datagram, Signing, UnsignedAccess};
+use std::cell::Cell;
+use std::rc::Rc;
+
+use std::net::SocketAddr;
+
+use armgate_core::cycle::{
+    Cycle, Datagram, Dropped, Link, Outgoing, ReplayStore, Signing, UnsignedAccess,
+};
 use armgate_core::kinematics::Joints;
 use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::signed::{
-    CONTROLLER_LINK, SIGNED_LEN, Signature, Signed, SigningKey, SigningPolicy, SigningReport,
+    CONTROLLER_LINK, ControllerId, IDENTITY_INDEX, IdentityReport, SIGNED_LEN, Signature, Signed,
+    SigningKey, SigningPolicy, SigningReport,
 };
 use armgate_protocol::client::{Command, MESSAGE_LEN, Message, Reply, Request};
 use drives_rig::{Client, request, robot};
@@ -24,8 +32,12 @@ use drives_rig::{Client, request, robot};
 const KEY: &str = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
 const OTHER_KEY: &str = "ff0102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
 
+/// The controller id of the tests' controller.
+const ARM: ControllerId = ControllerId(0x0a4d_0001);
+
+/// The tests' key, for their controller.
 fn key() -> SigningKey {
-    SigningKey::parse(KEY).unwrap()
+    SigningKey::parse(KEY).unwrap().for_controller(ARM)
 }
 
 fn cycle(unsigned: Option<UnsignedAccess>) -> Cycle<SimulatedDrives, ()> {
@@ -87,7 +99,7 @@ fn report(cycle: &mut Cycle<SimulatedDrives, ()>, timestamp: u64) -> SigningRepo
 
 /// A signed answer, checked as a client checks it: the key's tag, the controller's link, a
 /// timestamp no older than the request's.
-fn verified(datagram: &Datagram<()>, request_timestamp: u64) -> Reply {
+fn verified<P>(datagram: &Datagram<P>, request_timestamp: u64) -> Reply {
     let bytes = datagram.payload();
     assert_eq!(
         bytes.len(),
@@ -247,7 +259,7 @@ fn a_replayed_or_forged_motion_request_does_not_move_the_arm() {
 #[test]
 fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
     let mut cycle = cycle(Some(UnsignedAccess::Read));
-    // Every request the session answers to everyone (KS included), and the stops.
+    // The reads and the stops; not KS, which plans (the planning slot is the signed clients').
     let reads = [
         Command::Pose,
         Command::JointPosition,
@@ -259,9 +271,9 @@ fn unsigned_clients_may_read_and_stop_or_do_everything_as_configured() {
     let mode = message(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
     waiting.push(&mode);
     let replies = exchange(&mut cycle, &waiting);
-    assert_eq!(replies.len(), 4, "CM is not a read");
+    assert_eq!(replies.len(), 3, "KS plans, CM is not a read");
     assert!(replies.iter().all(|r| r.payload().len() == MESSAGE_LEN));
-    assert_eq!(cycle.signing().dropped_unsigned, 1);
+    assert_eq!(cycle.signing().dropped_unsigned, 2);
     assert_eq!(cycle.signing().policy, Some(SigningPolicy::UnsignedRead));
     // A signed client beside it is answered signed.
     let replies = exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 4, 1)]);
@@ -302,4 +314,331 @@ fn notices_to_a_signed_client_are_signed() {
         assert!(signature.timestamp > 12);
         assert!(notice.payload().starts_with(b"ER21"));
     }
+}
+
+/// 10 µs steps in a day; a timestamp in 2024.
+const DAY: u64 = 86_400 * 100_000;
+const NOW: u64 = 3_300 * DAY;
+
+/// A cycle with the key for `controller` (unsigned datagrams refused).
+fn cycle_of(controller: ControllerId) -> Cycle<SimulatedDrives, ()> {
+    let config = robot("ranger-mk1");
+    let arm = IdealArm::new(config.home());
+    Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm))).with_signing(Signing {
+        key: Some(key().for_controller(controller)),
+        unsigned: UnsignedAccess::Refused,
+    })
+}
+
+/// `CM 1`, `jG` a little away from home, `jB`: a sequence that moves the arm, signed on `link`
+/// from `timestamp` on.
+fn move_sequence(link: u8, timestamp: u64) -> [[u8; SIGNED_LEN]; 3] {
+    let goal = [1.7, 0.1, 1.5, 0.1, 1.2, 0.1, 0.0];
+    [
+        signed(
+            Command::ChangeMode,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            link,
+            timestamp,
+        ),
+        signed(Command::JointGoal, goal, link, timestamp + 1),
+        signed(Command::JointBegin, [0.0; 7], link, timestamp + 2),
+    ]
+}
+
+/// Sends `datagrams` one a tick; how many were answered, and whether the arm then moves.
+fn run(cycle: &mut Cycle<SimulatedDrives, ()>, datagrams: &[[u8; SIGNED_LEN]]) -> (usize, bool) {
+    let answered = datagrams.iter().map(|d| exchange(cycle, &[d]).len()).sum();
+    for _ in 0..5 {
+        exchange(cycle, &[]);
+    }
+    (answered, cycle.handler().controller().is_moving())
+}
+
+#[test]
+fn a_datagram_signed_for_another_controller_is_forged_there_and_the_identity_request_names_it() {
+    let (a, b) = (ControllerId(0x0a4d_0001), ControllerId(0x0b4d_0002));
+    let mut arm_b = cycle_of(b);
+    // Arm A's sequence (the tests' key is A's) moves nothing on B: forged there.
+    assert_eq!(run(&mut arm_b, &move_sequence(1, NOW)), (0, false));
+    assert_eq!(arm_b.signing().dropped_forged, 3);
+    // Signed for any controller, only the identity request is served; its answer names B,
+    // signed for B.
+    let any = key().for_controller(ControllerId::ANY);
+    let mut sq = message(Command::Status, [0.0; 7]);
+    sq[30] = IDENTITY_INDEX;
+    let identity = Signature {
+        link: 1,
+        timestamp: NOW + 10,
+    }
+    .emit(&sq, &any);
+    let mode = Signature {
+        link: 1,
+        timestamp: NOW + 11,
+    }
+    .emit(
+        &message(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        &any,
+    );
+    let replies = exchange(&mut arm_b, &[&identity, &mode]);
+    assert_eq!(replies.len(), 1, "CM for any controller is forged");
+    let block = Signed::new_checked(replies[0].payload()).unwrap();
+    assert!(Signature::parse(&block, &key().for_controller(a)).is_err());
+    assert!(Signature::parse(&block, &key().for_controller(b)).is_ok());
+    let reply = Reply::parse(&Message::new_checked(block.message()).unwrap()).unwrap();
+    assert_eq!(IdentityReport::from_reply(&reply).unwrap().controller, b);
+    assert_eq!(arm_b.signing().dropped_forged, 4);
+    // Signed for B, the same sequence moves B.
+    let for_b = key().for_controller(b);
+    let sequence = move_sequence(1, NOW + 20).map(|d| {
+        let block = Signed::new_checked(&d[..]).unwrap();
+        let mut m = [0; MESSAGE_LEN];
+        m.copy_from_slice(block.message());
+        Signature {
+            link: 1,
+            timestamp: block.timestamp(),
+        }
+        .emit(&m, &for_b)
+    });
+    assert_eq!(run(&mut arm_b, &sequence), (3, true));
+}
+
+#[test]
+fn a_day_old_sequence_on_an_unused_link_is_dropped_as_replayed() {
+    let mut cycle = cycle(Some(UnsignedAccess::Refused));
+    assert_eq!(
+        exchange(&mut cycle, &[&signed(Command::Pose, [0.0; 7], 1, NOW)]).len(),
+        1
+    );
+    assert_eq!(run(&mut cycle, &move_sequence(2, NOW - DAY)), (0, false));
+    assert_eq!(cycle.signing().dropped_replayed, 3);
+    // A minute behind is the limit for a link's first timestamp (a client's clock slightly
+    // behind another's still works).
+    let behind = NOW - armgate_core::cycle::FIRST_WINDOW;
+    assert_eq!(run(&mut cycle, &move_sequence(3, behind)), (3, true));
+}
+
+/// A store shared with the test: what it keeps outlives the cycle (the file, the flash).
+#[derive(Clone, Default)]
+struct Kept(Rc<Cell<u64>>, Rc<Cell<u32>>);
+
+impl ReplayStore for Kept {
+    fn load(&mut self) -> u64 {
+        self.0.get()
+    }
+    fn keep(&mut self, reserved: u64) -> bool {
+        self.0.set(reserved);
+        self.1.set(self.1.get() + 1);
+        true
+    }
+}
+
+#[test]
+fn after_a_restart_with_the_kept_reservation_nothing_served_before_is_served_again() {
+    let store = Kept::default();
+    let start = |store: &Kept| {
+        let config = robot("ranger-mk1");
+        let arm = IdealArm::new(config.home());
+        Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm)))
+            .with_store(store.clone())
+            .with_signing(Signing {
+                key: Some(key()),
+                unsigned: UnsignedAccess::Refused,
+            })
+    };
+    let mut first = start(&store);
+    let sequence = move_sequence(1, NOW);
+    let mut client = Client::default();
+    for d in &sequence {
+        client.requests.push_back(Datagram::new(d, ()));
+        first.tick(first.next_due_us(), &mut client);
+    }
+    assert_eq!(client.replies.len(), 3);
+    assert!(first.handler().controller().is_moving());
+    // Three requests within 2 s: one write.
+    assert_eq!(store.1.get(), 1);
+    drop(first);
+    let mut second = start(&store);
+    let mut client = Client::default();
+    for d in &sequence {
+        client.requests.push_back(Datagram::new(d, ()));
+    }
+    for _ in 0..10 {
+        second.tick(second.next_due_us(), &mut client);
+    }
+    assert!(client.replies.is_empty());
+    assert!(!second.handler().controller().is_moving());
+    assert_eq!(second.signing().dropped_replayed, 3);
+    // Nor on another link; a client whose clock has passed the reservation is served.
+    let reserved = store.0.get();
+    let mut client = Client::default();
+    for d in move_sequence(2, NOW + 3)
+        .iter()
+        .chain(&move_sequence(3, reserved + 1))
+    {
+        client.requests.push_back(Datagram::new(d, ()));
+    }
+    for _ in 0..10 {
+        second.tick(second.next_due_us(), &mut client);
+    }
+    assert_eq!(client.replies.len(), 3);
+    assert!(second.handler().controller().is_moving());
+}
+
+#[test]
+fn a_signed_stop_is_obeyed_and_answered_even_when_it_is_not_newer() {
+    let mut cycle = cycle(Some(UnsignedAccess::Refused));
+    assert_eq!(run(&mut cycle, &move_sequence(1, NOW)), (3, true));
+    // Another operator on the same link, its clock 5 s behind: its ST is obeyed, answered.
+    let stop = signed(Command::Stop, [0.0; 7], 1, NOW - 500_000);
+    let replies = exchange(&mut cycle, &[&stop]);
+    assert_eq!(verified(&replies[0], NOW - 500_000).command, Command::Stop);
+    for _ in 0..200 {
+        exchange(&mut cycle, &[]);
+    }
+    assert!(!cycle.handler().controller().is_moving());
+    // A replayed stop only stops: the link's floor did not move, the sequence goes on.
+    let replies = exchange(&mut cycle, &[&stop]);
+    assert_eq!(verified(&replies[0], NOW).command, Command::Stop);
+    assert_eq!(
+        run(
+            &mut cycle,
+            &[signed(Command::JointBegin, [0.0; 7], 1, NOW + 3)]
+        ),
+        (1, true)
+    );
+    assert_eq!(cycle.signing().dropped_replayed, 0);
+}
+
+/// A network of several source addresses: requests in, everything sent out with its kind.
+#[derive(Default)]
+struct Net {
+    requests: std::collections::VecDeque<Datagram<SocketAddr>>,
+    sent: Vec<(Datagram<SocketAddr>, Outgoing)>,
+}
+
+impl Link<SocketAddr> for Net {
+    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
+        self.requests.pop_front()
+    }
+    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
+        self.sent.push((*datagram, kind));
+        Ok(())
+    }
+}
+
+#[test]
+fn with_a_key_the_session_follows_the_link_id_and_each_answer_is_signed_for_its_recipient() {
+    let config = robot("ranger-mk1");
+    let arm = IdealArm::new(config.home());
+    let mut cycle: Cycle<SimulatedDrives, SocketAddr> =
+        Cycle::new(&config, SimulatedDrives::new(ArmModel::Ideal(arm))).with_signing(Signing {
+            key: Some(key()),
+            unsigned: UnsignedAccess::Read,
+        });
+    let a: SocketAddr = "192.168.1.2:5000".parse().unwrap();
+    let b: SocketAddr = "192.168.1.3:6000".parse().unwrap();
+    let mut net = Net::default();
+    let tick = |cycle: &mut Cycle<SimulatedDrives, SocketAddr>,
+                net: &mut Net,
+                from: &[(&[u8], SocketAddr)]| {
+        for (bytes, peer) in from {
+            net.requests.push_back(Datagram::new(bytes, *peer));
+        }
+        cycle.tick(cycle.next_due_us(), net);
+    };
+    // Link 1 from A takes the arm, with a 300 ms watchdog, and moves it.
+    let goal = [1.7, 0.1, 1.5, 0.1, 1.2, 0.1, 0.0];
+    let mut t = NOW;
+    let mut next = |command, values| {
+        t += 1;
+        signed(command, values, 1, t)
+    };
+    let start = [
+        next(Command::ChangeMode, [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        next(Command::Watchdog, [300.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        next(Command::JointGoal, goal),
+        next(Command::JointBegin, [0.0; 7]),
+    ];
+    for d in &start {
+        tick(&mut cycle, &mut net, &[(d, a)]);
+    }
+    assert!(cycle.handler().controller().is_moving());
+    // The same link from B (the client on a new port): the same client, the holder.
+    let mut sq = message(Command::Status, [0.0; 7]);
+    sq[30] = 3;
+    let session = Signature {
+        link: 1,
+        timestamp: NOW + 10,
+    }
+    .emit(&sq, &key());
+    net.sent.clear();
+    tick(&mut cycle, &mut net, &[(&session, b)]);
+    let (reply, _) = net.sent[0];
+    assert_eq!((reply.peer, reply.payload().len()), (b, SIGNED_LEN));
+    assert_eq!(verified(&reply, NOW + 10).values[0], 1.0, "holder: you");
+    // An unsigned poller from A's very address, every tick: answered unsigned, another client
+    // (the holder is someone else to it), and it does not feed link 1's watchdog.
+    let ps = message(Command::Pose, [0.0; 7]);
+    net.sent.clear();
+    tick(&mut cycle, &mut net, &[(&sq, a)]);
+    let (reply, _) = net.sent[0];
+    assert_eq!(reply.payload().len(), MESSAGE_LEN);
+    assert_eq!(
+        Reply::parse(&Message::new_checked(reply.payload()).unwrap())
+            .unwrap()
+            .values[0],
+        2.0
+    );
+    net.sent.clear();
+    for _ in 0..40 {
+        tick(&mut cycle, &mut net, &[(&ps, a)]);
+    }
+    assert!(
+        !cycle.handler().controller().is_moving(),
+        "the watchdog stopped the arm"
+    );
+    let notices: Vec<_> = net
+        .sent
+        .iter()
+        .filter(|(_, k)| *k == Outgoing::Notice)
+        .collect();
+    assert!(!notices.is_empty());
+    for (notice, _) in notices {
+        // To link 1, where it was last heard from, signed; never to the unsigned poller.
+        assert_eq!((notice.peer, notice.payload().len()), (b, SIGNED_LEN));
+        let block = Signed::new_checked(notice.payload()).unwrap();
+        assert!(Signature::parse(&block, &key()).is_ok());
+    }
+    assert!(
+        net.sent
+            .iter()
+            .any(|(d, _)| d.payload().starts_with(b"ER41")
+                || Signed::new_checked(d.payload())
+                    .is_ok_and(|b| b.message().starts_with(b"ER41")))
+    );
+    // Two sources interleaved on link 1 are counted (SQ index 6).
+    let identity = cycle.identity();
+    assert_eq!(
+        (identity.shared_links, identity.last_shared),
+        (0, 0),
+        "A, then B: a move"
+    );
+    let ps1 = Signature {
+        link: 1,
+        timestamp: NOW + 20,
+    }
+    .emit(&ps, &key());
+    net.sent.clear();
+    tick(&mut cycle, &mut net, &[(&ps1, a)]);
+    assert_eq!(cycle.identity().last_shared, 1);
+    // And said: WN14, to link 1 (where it was last heard from), signed.
+    let shared = net
+        .sent
+        .iter()
+        .find(|(_, k)| *k == Outgoing::Notice)
+        .expect("a notice");
+    assert_eq!(shared.0.peer, a);
+    let block = Signed::new_checked(shared.0.payload()).unwrap();
+    assert!(block.message().starts_with(b"WN14 link 1 shared"));
 }

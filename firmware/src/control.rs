@@ -15,13 +15,13 @@ use core::net::SocketAddr;
 
 use embassy_time::{Duration, Instant, Timer};
 
-use crate::board::Watchdog;
+use crate::board::{ReplayStore, Watchdog};
 use crate::drives::BoardDrives;
 use crate::link::{COUNTERS, OUTGOING, count, read, set_holder, take};
 use crate::telemetry::{STATUS, Status};
 
 /// The cycle as the board runs it.
-type BoardCycle = Cycle<BoardDrives, SocketAddr>;
+type BoardCycle = Cycle<BoardDrives, SocketAddr, ReplayStore>;
 
 /// Interval between two status snapshots.
 const REPORT_INTERVAL: Duration = Duration::from_secs(1);
@@ -89,14 +89,15 @@ impl Interval {
 }
 
 /// The control task: one tick every `robot.control_period`, forever, checking signatures as
-/// `signing` says. Starts the watchdog.
+/// `signing` says and keeping the replay reservation in `store`. Starts the watchdog.
 #[embassy_executor::task]
 pub async fn run(
     robot: &'static ValidRobot,
     drives: BoardDrives,
     mut watchdog: Watchdog,
-    signing: Signing,
+    signing: (Signing, ReplayStore),
 ) {
+    let (signing, store) = signing;
     let period = period(robot);
     defmt::info!(
         "control: {} ({} joints), period {} us, watchdog {} ms",
@@ -105,7 +106,17 @@ pub async fn run(
         period.as_micros(),
         watchdog_timeout(period).as_millis()
     );
-    let mut cycle = BoardCycle::new(robot, drives).with_signing(signing);
+    match &signing.key {
+        Some(key) => defmt::info!(
+            "signing: required for controller {=u32:08x} (unsigned: {})",
+            key.controller().0,
+            defmt::Display2Format(&signing.unsigned)
+        ),
+        None => defmt::info!("signing: off (no key): every datagram is served unsigned"),
+    }
+    let mut cycle: BoardCycle = Cycle::new(robot, drives)
+        .with_store(store)
+        .with_signing(signing);
     let mut interval = Interval::default();
     let epoch = Instant::now();
     let mut next_report = epoch + REPORT_INTERVAL;

@@ -19,10 +19,10 @@
 //! the board's linker script and probe); the start-up line is printed on stderr.
 
 use armgate_core::config::{ValidRobot, load_file};
-use armgate_core::cycle::{Cycle, Signing};
+use armgate_core::cycle::{Cycle, Signing, StateFile};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::sim::replay::{self, Replay};
-use armgate_protocol::client::signed::SigningKey;
+use armgate_protocol::client::signed::read_key_file;
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;
@@ -119,8 +119,17 @@ pub fn main() {
     device.set_hardware_address(net::mac_address(HOST_UID));
     let drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
     let (stack, runner) = net::stack(device, HOST_UID);
+    let signing_note = match (&signing.0.key, &signing.1) {
+        (Some(key), Some(store)) => format!(
+            ", signing for controller {} (unsigned: {}; replay state {})",
+            key.controller(),
+            signing.0.unsigned,
+            store.path().display()
+        ),
+        _ => ", signing off (no key)".to_owned(),
+    };
     eprintln!(
-        "armgate-firmware (host): {} ({} joints, {:.2} ms period, embedded robot {} bytes, drives: {}) on udp://{}:{}, via {tap}",
+        "armgate-firmware (host): {} ({} joints, {:.2} ms period, embedded robot {} bytes, drives: {}) on udp://{}:{}, via {tap}{signing_note}",
         robot.name.as_str(),
         robot.dof(),
         robot.control_period * 1e3,
@@ -163,23 +172,43 @@ fn replay_exchange(
     Ok(())
 }
 
-/// The build's signing settings, or the key file `ARMGATE_KEY_FILE` names and the access
-/// `ARMGATE_ALLOW_UNSIGNED` gives (no, read, all) at run time.
-fn signing() -> Result<Signing, String> {
+/// Where the replay reservation is kept across restarts on Linux: a state file.
+pub type ReplayStore = Option<StateFile>;
+
+/// The build's signing settings, or the key file `ARMGATE_KEY_FILE` names, the controller id
+/// `ARMGATE_CONTROLLER_ID` gives and the access `ARMGATE_ALLOW_UNSIGNED` gives (no, read, all)
+/// at run time; with a key, the replay state file `ARMGATE_STATE_FILE` names (default: as
+/// `armgate-sim`'s, by the controller's id).
+fn signing() -> Result<(Signing, ReplayStore), String> {
     let mut signing = settings::signing();
+    let controller = match std::env::var("ARMGATE_CONTROLLER_ID") {
+        Ok(text) => text
+            .parse()
+            .map_err(|e| format!("ARMGATE_CONTROLLER_ID: `{text}`: {e}"))?,
+        Err(_) => settings::CONTROLLER_ID,
+    };
     if let Some(path) = std::env::var_os("ARMGATE_KEY_FILE") {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
-        let key = SigningKey::parse(&text)
-            .map_err(|e| format!("ARMGATE_KEY_FILE: {}: {e}", path.display()))?;
+        let key = read_key_file(std::path::Path::new(&path))
+            .map_err(|e| format!("ARMGATE_KEY_FILE: {e}"))?;
         signing.key = Some(key);
     }
+    signing.key = signing.key.map(|k| k.for_controller(controller));
     if let Ok(text) = std::env::var("ARMGATE_ALLOW_UNSIGNED") {
         signing.unsigned = text
             .parse()
             .map_err(|e| format!("ARMGATE_ALLOW_UNSIGNED: `{text}`: {e}"))?;
     }
-    Ok(signing)
+    let store = match signing.key {
+        None => None,
+        Some(_) => {
+            let path = std::env::var_os("ARMGATE_STATE_FILE").map_or_else(
+                || StateFile::default_path(controller),
+                std::path::PathBuf::from,
+            );
+            Some(StateFile::open(&path).map_err(|e| format!("ARMGATE_STATE_FILE: {e}"))?)
+        }
+    };
+    Ok((signing, store))
 }
 
 /// The embedded robot, or the one `ARMGATE_ROBOT_FILE` names.

@@ -1,7 +1,9 @@
 //! Start-up: clocks, the embedded robot, the watchdog, Ethernet, the executors and their tasks.
 
 use armgate_core::config::ValidRobot;
+use armgate_core::cycle::{FlashLog, FlashSectors, RECORD_LEN};
 use embassy_executor::{Executor, InterruptExecutor};
+use embassy_stm32::flash::{Blocking, Flash};
 use embassy_stm32::interrupt;
 use embassy_stm32::interrupt::{InterruptExt, Priority};
 use embassy_stm32::wdg::IndependentWatchdog;
@@ -12,6 +14,55 @@ use crate::{clocks, config, control, drives, eth, net, settings, telemetry};
 
 /// The network driver of this board.
 pub type NetDevice = eth::Device;
+/// Where the replay reservation is kept across restarts: a log in the last two sectors of
+/// flash bank 2 (`memory.x` leaves them out of the image).
+pub type ReplayStore = FlashLog<ReplaySectors>;
+
+/// The flash sectors of the replay log: the last two of bank 2 (offsets from the flash's
+/// start), 128 KiB each.
+const REPLAY_SECTORS: [u32; 2] = [0x1C_0000, 0x1E_0000];
+/// Bytes per sector.
+const SECTOR_LEN: u32 = 128 * 1024;
+
+/// The replay log's two sectors through embassy's blocking flash driver. A record is programmed
+/// in one flash word (from the control task, at most once per 2 s of signed use); sectors are
+/// erased only at start.
+pub struct ReplaySectors(Flash<'static, Blocking>);
+
+impl ReplaySectors {
+    /// The offset of `record` in `sector`, if both exist.
+    fn offset(sector: u8, record: u32) -> Option<u32> {
+        let start = REPLAY_SECTORS.get(usize::from(sector))?;
+        let at = record.checked_mul(RECORD_LEN as u32)?;
+        (at < SECTOR_LEN).then(|| start.saturating_add(at))
+    }
+}
+
+impl FlashSectors for ReplaySectors {
+    fn records(&self) -> u32 {
+        SECTOR_LEN / RECORD_LEN as u32
+    }
+
+    fn read(&mut self, sector: u8, record: u32) -> Option<[u8; RECORD_LEN]> {
+        let mut bytes = [0; RECORD_LEN];
+        let offset = Self::offset(sector, record)?;
+        self.0.blocking_read(offset, &mut bytes).ok()?;
+        Some(bytes)
+    }
+
+    fn write(&mut self, sector: u8, record: u32, bytes: &[u8; RECORD_LEN]) -> bool {
+        Self::offset(sector, record).is_some_and(|at| self.0.blocking_write(at, bytes).is_ok())
+    }
+
+    fn erase(&mut self, sector: u8) -> bool {
+        REPLAY_SECTORS
+            .get(usize::from(sector))
+            .is_some_and(|start| {
+                let end = start.saturating_add(SECTOR_LEN);
+                self.0.blocking_erase(*start, end).is_ok()
+            })
+    }
+}
 /// The watchdog the control task feeds.
 pub type Watchdog = IndependentWatchdog<'static, embassy_stm32::peripherals::IWDG1>;
 
@@ -64,6 +115,9 @@ fn main() -> ! {
         Err(e) => defmt::panic!("{}", e),
     };
 
+    // The replay log before the watchdog: opening it may erase a flash sector (seconds).
+    let store = FlashLog::open(ReplaySectors(Flash::new_blocking(p.FLASH)));
+
     // The control task first: from here on the watchdog runs and only the control task feeds
     // it; the control task preempts everything below.
     let drives = drives::new(robot, drives::bus::open(robot, p.FDCAN1, p.PD0, p.PD1));
@@ -73,7 +127,8 @@ fn main() -> ! {
     let watchdog = IndependentWatchdog::new(p.IWDG1, timeout_us);
     interrupt::UART4.set_priority(CONTROL_PRIORITY);
     let control_spawner = CONTROL_EXECUTOR.start(interrupt::UART4);
-    match control::run(robot, drives, watchdog, settings::signing()) {
+    let signing = (settings::signing(), store);
+    match control::run(robot, drives, watchdog, signing) {
         Ok(task) => control_spawner.spawn(task),
         Err(e) => defmt::panic!("cannot spawn the control task: {}", e),
     }

@@ -115,8 +115,6 @@ struct Client {
     key: SigningKey,
     /// Per link id, the last timestamp served (the model of the controller's replay table).
     last: [Option<u64>; 8],
-    /// The timestamp of the last signed request served: notices after it are signed.
-    signed_at: Option<u64>,
 }
 
 impl Default for Client {
@@ -127,7 +125,6 @@ impl Default for Client {
             unanswered: VecDeque::new(),
             key: SigningKey::new(&KEY),
             last: [None; 8],
-            signed_at: None,
         }
     }
 }
@@ -150,10 +147,14 @@ impl Client {
         let len = if control & 0x80 != 0 { 40 } else { SIGNED_LEN };
         self.waiting.push_back(Datagram::new(&signed[..len], ()));
         let fresh = self.last[slot].is_none_or(|last| timestamp > last);
-        if link == CONTROLLER_LINK || forged || len < SIGNED_LEN || !fresh {
+        // A validly signed stop is served even when not fresh (and moves nothing on).
+        let stop = matches!(bytes[..2], [b'S', b'T'] | [b'j', b'R']);
+        if link == CONTROLLER_LINK || forged || len < SIGNED_LEN || !(fresh || stop) {
             return;
         }
-        self.last[slot] = Some(timestamp);
+        if fresh {
+            self.last[slot] = Some(timestamp);
+        }
         let expected = check_parsers(&bytes);
         self.unanswered
             .push_back((bytes.to_vec(), expected, Some(timestamp)));
@@ -189,10 +190,14 @@ impl Link<()> for Client {
                 let (request, expected, signed) =
                     self.unanswered.pop_front().expect("a reply to nothing");
                 let bytes = self.open(datagram.payload(), signed);
-                self.signed_at = signed;
                 check_reply(&request, expected, &bytes);
             }
-            Outgoing::Notice => check_notice(&self.open(datagram.payload(), self.signed_at)),
+            // Signed for a signed recipient (the holder, or the last sender, by link id),
+            // unsigned for an unsigned one: whichever it is, a signed one must be genuine.
+            Outgoing::Notice => {
+                let signed = (datagram.payload().len() == SIGNED_LEN).then_some(0);
+                check_notice(&self.open(datagram.payload(), signed));
+            }
         }
         Ok(())
     }

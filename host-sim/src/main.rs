@@ -25,13 +25,13 @@ use std::time::{Duration, Instant};
 use armgate_core::command::Network;
 use armgate_core::config::SAMPLE_TIME;
 use armgate_core::config::{Streaming, ValidRobot};
-use armgate_core::cycle::{Cycle, DriveSide, Signing, UnsignedAccess};
+use armgate_core::cycle::{Cycle, DriveSide, Signing, StateFile, UnsignedAccess};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::math::{self, Quaternion};
 use armgate_core::sim::ArmModel;
 use armgate_core::sim::replay::{self, Replay};
 use armgate_core::sim::{IdealArm, RateLimitedArm};
-use armgate_protocol::client::signed::SigningKey;
+use armgate_protocol::client::signed::{ControllerId, read_key_file};
 use backend::{Backend, CanChoice};
 use clap::{Parser, ValueEnum};
 use log::{Logger, Record, Tick};
@@ -62,7 +62,7 @@ struct Args {
     /// datagrams signed with it are served, the rest dropped and counted.
     #[arg(long, value_name = "FILE")]
     key: Option<PathBuf>,
-    /// With --key: what unsigned datagrams may do: `no` (dropped), `read` (PS, jP, TM, SQ, KS and
+    /// With --key: what unsigned datagrams may do: `no` (dropped), `read` (PS, jP, TM, SQ and
     /// the stops ST, jR) or `all` (a lab moving its clients to signing).
     #[arg(
         long,
@@ -71,6 +71,16 @@ struct Args {
         requires = "key"
     )]
     allow_unsigned: UnsignedAccess,
+    /// With --key: this controller's id, 8 hex digits, covered by every signature (a key shared
+    /// by two arms moves only the one addressed). Default: derived from the robot file's name
+    /// and the address listened on (printed at start).
+    #[arg(long, value_name = "HEX", requires = "key")]
+    controller_id: Option<ControllerId>,
+    /// With --key: the replay state file, which keeps the newest signed timestamp served across
+    /// restarts (written at most once per 2 s of signed use). Default:
+    /// $XDG_STATE_HOME/armgate/replay-<controller id> ($HOME/.local/state/... without it).
+    #[arg(long, value_name = "FILE", requires = "key")]
+    state: Option<PathBuf>,
     /// Where set-points go: `sim` = one simulated Elmo Whistle per drive of the robot file on
     /// a virtual CAN bus; `socketcan:IFACE` = real drives through Linux SocketCAN (e.g.
     /// socketcan:can0); `off` = no drives, a simulated arm (see --arm).
@@ -216,12 +226,21 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     if let Some(replay) = &args.replay {
         return replay_exchange(config, drives, replay);
     }
-    let signing = signing(args)?;
-    let signing_note = match &signing.key {
-        Some(_) => format!(", signing key set (unsigned: {})", signing.unsigned),
-        None => String::new(),
+    let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
+    let local = socket.local_addr().map_err(|e| e.to_string())?;
+    let (signing, store) = signing(args, local)?;
+    let signing_note = match (&signing.key, &store) {
+        (Some(key), Some(store)) => format!(
+            ", signing key set for controller {} (unsigned: {}; replay state {})",
+            key.controller(),
+            signing.unsigned,
+            store.path().display()
+        ),
+        _ => String::new(),
     };
-    let mut cycle: Cycle<Backend, SocketAddr> = Cycle::new(config, drives).with_signing(signing);
+    let mut cycle: SimCycle = Cycle::new(config, drives)
+        .with_store(store)
+        .with_signing(signing);
     let allow = args::allow_list(&args.allow);
     let logger = match &args.log_dir {
         Some(dir) => Logger::start(dir, n).map_err(|e| format!("{}: {e}", dir.display()))?,
@@ -244,8 +263,6 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     } else {
         None
     };
-    let socket = bind(args.listen).map_err(|e| format!("{}: {e}", args.listen))?;
-    let local = socket.local_addr().map_err(|e| e.to_string())?;
     socket
         .set_nonblocking(true)
         .map_err(|e| format!("{}: {e}", args.listen))?;
@@ -299,6 +316,11 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
         let outcome = cycle.tick(micros(elapsed), &mut link);
         if let Some(error) = link.error {
             return Err(error);
+        }
+        if let Some(error) = cycle.store_mut().as_mut().and_then(StateFile::take_error) {
+            eprintln!(
+                "armgate-sim: replay state not kept: {error} (a restart could serve replays)"
+            );
         }
         if logger.enabled()
             && let Ok(out) = outcome.step
@@ -374,19 +396,31 @@ fn serve_whistles(args: &Args, config: &ValidRobot, start: &Joints) -> Result<()
     whistles::serve(config, start, iface, args.duration, &running)
 }
 
-/// `--key` and `--allow-unsigned`.
-fn signing(args: &Args) -> Result<Signing, String> {
+/// `--key`, `--allow-unsigned`, `--controller-id` (default from the robot file's name and
+/// `local`, the address listened on) and `--state`.
+fn signing(args: &Args, local: SocketAddr) -> Result<(Signing, Option<StateFile>), String> {
     let Some(path) = &args.key else {
-        return Ok(Signing::default());
+        return Ok((Signing::default(), None));
     };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("--key {}: {e}", path.display()))?;
-    let key = SigningKey::parse(&text).map_err(|e| format!("--key {}: {e}", path.display()))?;
-    Ok(Signing {
-        key: Some(key),
+    let key = read_key_file(path).map_err(|e| format!("--key {e}"))?;
+    let robot = args.robot.file_name().unwrap_or_default().to_string_lossy();
+    let controller = args
+        .controller_id
+        .unwrap_or_else(|| ControllerId::derive(&[&robot, &local.to_string()]));
+    let state = args
+        .state
+        .clone()
+        .unwrap_or_else(|| StateFile::default_path(controller));
+    let store = StateFile::open(&state).map_err(|e| format!("--state {e}"))?;
+    let signing = Signing {
+        key: Some(key.for_controller(controller)),
         unsigned: args.allow_unsigned,
-    })
+    };
+    Ok((signing, Some(store)))
 }
+
+/// The cycle `armgate-sim` runs: its replay store a state file when it has a key.
+pub type SimCycle = Cycle<Backend, SocketAddr, Option<StateFile>>;
 
 /// `--replay FILE TICKS`: the cycle as `run` builds it, on the recorded exchange.
 fn replay_exchange(config: &ValidRobot, drives: Backend, replay: &[String]) -> Result<(), String> {

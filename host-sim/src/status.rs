@@ -1,13 +1,11 @@
 //! The status line on the terminal and the summary at exit.
 
-use std::net::SocketAddr;
-
 use armgate_core::command::Status;
-use armgate_core::cycle::{Cycle, CycleCounters};
+use armgate_core::cycle::CycleCounters;
 use armgate_protocol::client::DriveStatus;
 use armgate_protocol::client::signed::{SigningPolicy, SigningReport};
 
-use crate::backend::Backend;
+use crate::SimCycle;
 use crate::log::Logger;
 use crate::udp::Stats;
 
@@ -28,12 +26,12 @@ pub fn drive_state(status: &Status) -> String {
 }
 
 /// The core's status snapshot (what `SQ` reports).
-pub fn snapshot(cycle: &Cycle<Backend, SocketAddr>) -> Status {
+pub fn snapshot(cycle: &SimCycle) -> Status {
     cycle.handler().status(cycle.drives())
 }
 
 /// One status line: mode, drives, motion, pose, counters (from the core's status snapshot).
-pub fn line(cycle: &Cycle<Backend, SocketAddr>, stats: &Stats, logger: &Logger) -> String {
+pub fn line(cycle: &SimCycle, stats: &Stats, logger: &Logger) -> String {
     let status = snapshot(cycle);
     let ctrl = cycle.handler().controller();
     let pose = ctrl

@@ -26,7 +26,7 @@
 //! (`0x300 + node`) and answered in TPDO2 (`0x280 + node`): two command letters, a 14-bit array
 //! index, a type/error byte and an optional 32-bit value. The CANopen services the controller
 //! also needs are NMT commands, emergency messages, heartbeats and expedited SDO transfers.
-#![cfg_attr(not(test), no_std)]
+#![cfg_attr(not(any(test, feature = "std")), no_std)]
 
 pub mod can;
 pub mod client;

@@ -20,7 +20,7 @@ from typing import (
 )
 
 from . import wire
-from .signing import KeyLike, Signer
+from .signing import IDENTITY_INDEX, KeyLike, Signer
 from .errors import (
     ArmError,
     BadIndex,
@@ -89,9 +89,12 @@ class Arm(Waiting):
     ``host`` may also be ``"host:port"`` (as the Rust client's ``--addr``) when ``port`` is left
     at its default. An address that does not resolve raises :class:`ValueError`.
 
-    ``key``: sign every request and accept only answers signed with this key (32 bytes, or the
-    path of a key file: 64 hex digits on one line), on link ``link_id`` (1..255; clients that
-    run at the same time need their own). See docs/safety.md, "Signing".
+    ``key``: sign every request and accept only answers signed with this key (32 bytes, a string
+    of 64 hex digits, or the path of a key file: 64 hex digits on one line, readable by its
+    owner only), on link ``link_id`` (1..255; clients that run at the same time need their
+    own; default: a free one the controller sets aside, :attr:`link_id`), for the controller
+    ``controller_id`` (default: the id the controller names in its first signed answer,
+    :attr:`controller_id`). See docs/safety.md, "Signing".
     """
 
     def __init__(
@@ -105,9 +108,10 @@ class Arm(Waiting):
         on_notice: Optional[NoticeCallback] = None,
         wait_options: WaitOptions = WaitOptions(),
         key: Optional[KeyLike] = None,
-        link_id: int = 1,
+        link_id: Optional[int] = None,
+        controller_id: Optional[int] = None,
     ) -> None:
-        self._signer = Signer(key, link_id) if key is not None else None
+        self._signer = Signer(key, link_id, controller_id) if key is not None else None
         self._signed_at = 0
         self.unverified = 0
         """Datagrams dropped because they were not signed with the key, or were old."""
@@ -529,7 +533,44 @@ class Arm(Waiting):
             )
         return error
 
+    @property
+    def controller_id(self) -> Optional[int]:
+        """The id of the controller the signed requests are for (None without a key); asked of
+        the controller (``SQ`` index 6) if not given."""
+        if self._signer is None:
+            return None
+        if self._signer.controller_id is None:
+            self.identify()
+        return self._signer.controller_id
+
+    @property
+    def link_id(self) -> Optional[int]:
+        """The link id the signed requests go on (None without a key); a free one set aside by
+        the controller if not given."""
+        if self._signer is None:
+            return None
+        if self._signer.needs_identity:
+            self.identify()
+        return self._signer.link_id
+
+    def identify(self) -> int:
+        """The controller's id, from its identity report (``SQ`` index 6); a signer that did
+        not know it signs for it from now on, on the link the controller set aside for it
+        unless one was given."""
+        reply = self.request("SQ", index=IDENTITY_INDEX)
+        high, low = int(reply.values[0]), int(reply.values[1])
+        controller = high << 16 | low
+        if self._signer is not None:
+            self._signer.identified(controller, int(reply.values[4]))
+        return controller
+
     def _exchange(self, chars: str, datagram: bytes, index: int) -> bytes:
+        if (
+            self._signer is not None
+            and self._signer.needs_identity
+            and not (chars == "SQ" and index == IDENTITY_INDEX)
+        ):
+            self.identify()
         # Whatever arrived before this request cannot be its reply.
         self._drain()
         attempts = self.retries + 1
@@ -558,7 +599,7 @@ class Arm(Waiting):
             )
         if self.unverified > unverified:
             raise SignatureMismatch(chars, self.unverified - unverified)
-        raise ReplyTimeout(chars, attempts, self.timeout)
+        raise ReplyTimeout(chars, attempts, self.timeout, signed=self._signer is not None)
 
     def _verified(self, datagram: bytes) -> Optional[bytes]:
         """The datagram as it is without a key; with one, its message if signed with the key

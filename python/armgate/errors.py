@@ -29,9 +29,12 @@ class ArmError(Exception):
 class ReplyTimeout(ArmError, TimeoutError):
     """No reply arrived: every attempt (the first send and each retry) timed out."""
 
-    def __init__(self, command: str, attempts: int, timeout: float) -> None:
+    def __init__(self, command: str, attempts: int, timeout: float, signed: bool = False) -> None:
+        # A controller never answers a request signed with another key or for another id.
+        hint = " (is the controller running, or has it another key?)" if signed else ""
         super().__init__(
             f"no reply to {command} after {attempts} attempt(s) of {timeout * 1e3:.0f} ms each"
+            + hint
         )
         self.command = command
         self.attempts = attempts
@@ -291,6 +294,11 @@ class HeldAtWorkspaceEdge(ControllerWarning):
     edge or before an exclusion box."""
 
 
+class LinkShared(ControllerWarning):
+    """``WN14 link 7 shared``: signed requests from two clients interleave on one link id (the
+    older timestamps of each are dropped); give each client its own link id."""
+
+
 class IkDivergence(ControllerWarning):
     """``WN22 Inv Kin Divergence.``: the IK could not track the set-point; the arm holds."""
 
@@ -318,6 +326,7 @@ _ERRORS: Dict[int, Type[ControllerMessage]] = {
 _WARNINGS: Dict[int, Type[ControllerMessage]] = {
     12: JointLimitWarning,
     13: HeldAtWorkspaceEdge,
+    14: LinkShared,
     22: IkDivergence,
     27: ViaPointMissed,
 }

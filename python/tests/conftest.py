@@ -11,6 +11,7 @@ import os
 import re
 import socket
 import subprocess
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -68,6 +69,10 @@ class Sim:
     def __init__(self, robot: str, extra: List[str], ready: bool = True) -> None:
         self.robot = REPO / "robots" / f"{robot}.toml"
         self.port = free_port()
+        if "--key" in extra and "--state" not in extra:
+            # A test's replay state is its own, never the user's default location.
+            self._state = Path(tempfile.mkdtemp(prefix="armgate-state-"))
+            extra = [*extra, "--state", str(self._state / "replay")]
         self.process = subprocess.Popen(
             [str(sim_binary()), "--quiet", "--robot", str(self.robot),
              "--listen", f"127.0.0.1:{self.port}", *extra],

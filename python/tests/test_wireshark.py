@@ -241,7 +241,7 @@ def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
         # signed notice from the controller (link 0) at 2026-01-01 00:00:00 UTC, 18: a cut-off
         # block, 19: the signing counters (QS index 4).
         _udp(40000, 7031, signing.sign(bytes(range(32)), armgate.wire.encode("BG"), 1,
-                                       0x0123456789AB)),
+                                       0x0123456789AB, 0xED0A5E0C)),
         _udp(7031, 40000, signing.sign(bytes(range(32)),
                                        b"WN27 Via point missed.".ljust(31, b"\0"), 0,
                                        (1_767_225_600 - 1_420_070_400) * 100_000)),
@@ -302,7 +302,7 @@ def test_signature_blocks_are_decoded(tshark: str, crafted: dict) -> None:
         return fields(tshark, crafted, f"frame.number == {n}", *names)[0]
 
     assert row(16, "armgate.command", "armgate.signature.link", "armgate.signature.timestamp",
-               "armgate.signature.tag") == ["BG", "1", str(0x0123456789AB), "b224bae2fc46"]
+               "armgate.signature.tag") == ["BG", "1", str(0x0123456789AB), "6efbddaa1201"]
     assert row(17, "armgate.text", "armgate.signature.link", "armgate.signature.time") == [
         "WN27 Via point missed.", "0", "2026-01-01 00:00:00"]
     info = fields(tshark, crafted, "frame.number == 18", "_ws.col.Info")[0][0]

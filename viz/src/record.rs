@@ -46,9 +46,13 @@ pub struct RecordArgs {
     /// (docs/safety.md, "Signing").
     #[arg(long, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
     key: Option<PathBuf>,
-    /// With --key: the link id to sign with, 1..=255.
-    #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = armgate_client::DEFAULT_LINK)]
-    link_id: u8,
+    /// With --key: the link id to sign with, 1..=255 (default: a free one the controller sets
+    /// aside).
+    #[arg(long, env = "ARMGATE_LINK_ID")]
+    link_id: Option<u8>,
+    /// With --key: the controller's id, 8 hex digits (default: the one it names).
+    #[arg(long, env = "ARMGATE_CONTROLLER_ID", value_name = "HEX")]
+    controller_id: Option<armgate_protocol::client::signed::ControllerId>,
 }
 
 impl RecordArgs {
@@ -81,7 +85,10 @@ pub fn run(args: &RecordArgs, robot: &ValidRobot) -> Result<(), String> {
     };
     let mut client = Client::connect_with(&args.addr, config).map_err(|e| e.to_string())?;
     if let Some(key) = &args.key {
-        let signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        let mut signer = Signer::from_file(key, args.link_id).map_err(|e| e.to_string())?;
+        if let Some(id) = args.controller_id {
+            signer.set_controller(id);
+        }
         client.set_signer(Some(signer));
     }
     let peer = client.peer();
@@ -234,7 +241,8 @@ mod tests {
             rate: 20.0,
             duration: Some(0.5),
             key: None,
-            link_id: 1,
+            link_id: None,
+            controller_id: None,
         }
     }
 

@@ -44,9 +44,15 @@ pub struct ControllerArgs {
     #[arg(long, env = "ARMGATE_KEY_FILE", value_name = "FILE")]
     pub key: Option<std::path::PathBuf>,
     /// With --key: the link id to sign with, 1..=255; clients that run at the same time need
-    /// their own (teleop also uses the next one, for its jog stream).
-    #[arg(long, env = "ARMGATE_LINK_ID", default_value_t = crate::DEFAULT_LINK)]
-    pub link_id: u8,
+    /// their own (teleop also uses the next one, for its jog stream). Default: a free one the
+    /// controller sets aside (printed).
+    #[arg(long, env = "ARMGATE_LINK_ID")]
+    pub link_id: Option<u8>,
+    /// With --key: the controller's id (8 hex digits, as armgate-sim and the firmware print it
+    /// at start); signatures for one controller are forged to every other. Default: the id the
+    /// controller names in its first signed answer (SQ index 6).
+    #[arg(long, env = "ARMGATE_CONTROLLER_ID", value_name = "HEX")]
+    pub controller_id: Option<armgate_protocol::client::signed::ControllerId>,
 }
 
 /// The value of `id` if it was typed on the command line (not from the environment or a
@@ -77,7 +83,10 @@ impl ControllerArgs {
             self.key = Some(key);
         }
         if let Some(link_id) = typed(given, "link_id") {
-            self.link_id = link_id;
+            self.link_id = Some(link_id);
+        }
+        if let Some(id) = typed(given, "controller_id") {
+            self.controller_id = Some(id);
         }
     }
 
@@ -93,6 +102,11 @@ impl ControllerArgs {
         }
         if let Some(link_id) = typed::<u8>(matches, "link_id") {
             args.extend(["--link-id".into(), link_id.to_string().into()]);
+        }
+        if let Some(id) =
+            typed::<armgate_protocol::client::signed::ControllerId>(matches, "controller_id")
+        {
+            args.extend(["--controller-id".into(), id.to_string().into()]);
         }
         args
     }

@@ -67,6 +67,8 @@ use std::time::Duration;
 
 use ratatui::crossterm::event::{self, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
 
+use armgate_protocol::client::signed::link_identity;
+
 use crate::velocity::{StreamEvent, VelocityStreamer};
 use crate::{Client, ClientError};
 use jog::{FIRST_HOLD, HeldKey};
@@ -153,13 +155,13 @@ impl StopSender {
         }
     }
 
-    /// The same destination, signing on the next link id (two stoppers' timestamps must not
-    /// race).
+    /// The same destination and link: a signed stop is obeyed even when its timestamp races
+    /// another's on the link (docs/protocol.md, "Signed datagrams").
     fn next(&self) -> Self {
         Self {
             peer: self.peer,
             config: self.config.clone(),
-            signer: self.signer.as_ref().map(crate::Signer::next_link),
+            signer: self.signer.clone(),
             own: self.own.clone(),
         }
     }
@@ -269,19 +271,43 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
         retries: 0,
         ..client.config().clone()
     };
-    // Signed on the next link id: its timestamps would race the polls' on one link.
+    // Signed on a link of its own: its timestamps would race the polls' on one link.
     let signer = client.signer().map(crate::Signer::next_link);
     let stream_client = Client::connect_with(client.peer(), config)
+        .and_then(|mut streamer| {
+            streamer.set_signer(signer);
+            if let (Some(polls), true) = (client.signer(), streamer.signer().is_some()) {
+                // The jog stream's link, set aside by the controller: said before the screen
+                // is taken over.
+                streamer.identify()?;
+                let jogs = streamer.signer().map_or(0, crate::Signer::link);
+                eprintln!(
+                    "armgate teleop: signing for controller {}, polls on link {}, jogs on link {jogs}",
+                    polls.controller(),
+                    polls.link()
+                );
+            }
+            Ok(streamer)
+        })
         .map_err(|e| std::io::Error::other(e.to_string()))?;
-    let own = [client.local_addr(), stream_client.local_addr()]
+    // Who this teleop is to the controller: its sockets' addresses, or with a key its links
+    // (a signed client's session is its link, reported as 0.0.0.N port 0).
+    let own = [&client, &stream_client]
         .into_iter()
-        .filter_map(Result::ok)
+        .flat_map(|c| {
+            [
+                c.local_addr().ok(),
+                c.signer().map(|s| link_identity(s.link())),
+            ]
+        })
+        .flatten()
         .collect();
     let stopper = StopSender {
         peer: client.peer(),
         config: client.config().clone(),
-        // A link of its own again: the stop must not race the jog stream's timestamps.
-        signer: signer.as_ref().map(crate::Signer::next_link),
+        // The polls' link: a stop is obeyed however its timestamp races (and it must not wait
+        // for an identity request).
+        signer: client.signer().cloned(),
         own,
     };
     // SIGTERM and SIGHUP (a closed terminal) end the loop as `q` does; Ctrl-C is a key here.
@@ -289,8 +315,6 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
     let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     stop_on_signal(signalled.clone(), done.clone(), stopper.next())?;
     let _stop = StopOnExit(Some(stopper));
-    let mut stream_client = stream_client;
-    stream_client.set_signer(signer);
     let streamer = VelocityStreamer::spawn(stream_client)?;
     let io = io::spawn(client, options.joints, options.poll)?;
     let mut state = TeleopState::new(options.addr, options.joints, options.live);

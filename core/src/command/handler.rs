@@ -13,7 +13,7 @@ mod power;
 mod reads;
 mod replies;
 
-use armgate_protocol::client::signed::SigningReport;
+use armgate_protocol::client::signed::{IdentityReport, SigningReport};
 use core::net::{Ipv4Addr, SocketAddr};
 
 use armgate_protocol::client::{
@@ -65,6 +65,8 @@ pub struct CommandHandler {
     refused: u32,
     /// The cycle's signing counters, for `SQ` index 4.
     signing: SigningReport,
+    /// The controller's id and shared links, for `SQ` index 6.
+    identity: IdentityReport,
     /// Time of the last tick (s).
     now: f64,
     /// The client whose request is being handled.
@@ -94,6 +96,7 @@ impl CommandHandler {
             name: RobotName::new(&config.name),
             refused: 0,
             signing: SigningReport::default(),
+            identity: IdentityReport::default(),
             now: 0.0,
             client: ANONYMOUS,
             stopped_by: None,
@@ -119,6 +122,12 @@ impl CommandHandler {
     /// before a datagram reaches the handler).
     pub fn set_signing_report(&mut self, report: SigningReport) {
         self.signing = report;
+    }
+
+    /// Who the controller is and what it saw of shared link ids, for `SQ` index 6 (kept by the
+    /// cycle, as the signing counters).
+    pub fn set_identity(&mut self, identity: IdentityReport) {
+        self.identity = identity;
     }
 
     /// The controller.
@@ -174,6 +183,11 @@ impl CommandHandler {
         self.relay.observe_fault(faulted, || drives.fault());
         self.relay.observe_drive_notice(drives.notice());
         out
+    }
+
+    /// Queues an unsolicited notice the cycle observed (a link id shared by two clients).
+    pub fn announce(&mut self, notice: Notice) {
+        self.relay.announce(notice.text());
     }
 
     /// The next unsolicited warning for the client, if any.

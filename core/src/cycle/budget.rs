@@ -59,12 +59,12 @@ impl Work {
     }
 }
 
-/// A request past the signature check: the message, its client, and whether it came signed
-/// (its reply is sealed alike).
+/// A request past the signature check: the message, its client, and its link id if it came
+/// signed (its reply is sealed alike).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Pending<P> {
     pub datagram: Datagram<P>,
-    pub signed: bool,
+    pub link: Option<u8>,
 }
 
 /// Requests that wait for a later tick, in arrival order.

@@ -43,17 +43,27 @@
 mod budget;
 mod can_drives;
 mod counters;
+mod flash_log;
 mod link;
+mod links;
+mod replay;
 mod shares;
 mod side;
 mod signing;
+#[cfg(feature = "std")]
+mod state_file;
 mod tick;
 
 pub use budget::PLANNING_PER_TICK;
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
+pub use flash_log::{FlashLog, FlashSectors, RECORD_LEN};
 pub use link::{Datagram, Dropped, Link, Outgoing, Peer};
+pub use links::{LINKS, SHARED_WITHIN};
+pub use replay::{FIRST_WINDOW, RESERVE_AHEAD, ReplayStore, Unkept};
 pub use shares::{Shares, answers_a_stop, goes_ahead};
 pub use side::DriveSide;
 pub use signing::{Signing, UnknownAccess, UnsignedAccess};
+#[cfg(feature = "std")]
+pub use state_file::StateFile;
 pub use tick::{Cycle, MAX_CATCH_UP, REQUESTS_PER_TICK, TickOutcome};

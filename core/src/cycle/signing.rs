@@ -1,24 +1,29 @@
 //! Signature checks: the first thing the cycle does with a datagram, before anything reads it.
 //!
-//! With a key ([`Signing::key`]), a request is served only if it carries a signature block
-//! (`armgate_protocol::client::signed`) whose tag is the key's and whose timestamp is newer
-//! than the last one served on its link id. Anything else is dropped and counted by cause
+//! With a key ([`Signing::key`], for this controller's id), a request is served only if it
+//! carries a signature block (`armgate_protocol::client::signed`) whose tag is the key's for
+//! this controller and whose timestamp is new (module `replay`: newer than the last one served
+//! on its link id, within a minute of the newest on any link for a link's first, newer than
+//! anything served before a restart). A validly signed stop (`ST`, `jR`) is served even when
+//! not new: a replayed stop only stops. `SQ` index 6 signed for [`ControllerId::ANY`] is
+//! served too: it tells a client the id to sign for. Anything else is dropped and counted by cause
 //! ([`SigningReport`], `SQ` index 4), never answered: an attacker learns nothing from the
 //! controller's silence. The answers to a signed request, and the notices that follow it, are
 //! signed with the controller's link id ([`CONTROLLER_LINK`]) and a timestamp no older than
 //! any request served. Without a key every datagram is served unsigned, as the seed's were.
 //!
 //! The replay table is keyed by link id alone: a source address proves nothing, so a captured
-//! datagram sent again from another address is still a replay. One slot per possible link id
-//! (256), so no link is ever evicted (an evicted link would accept its old datagrams again).
+//! datagram sent again from another address is still a replay.
 
 use core::fmt;
 use core::str::FromStr;
 
+use super::budget::Work;
+use super::replay::{Freshness, Replay, ReplayStore};
 use crate::command::Class;
 use armgate_protocol::client::signed::{
-    CONTROLLER_LINK, SIGNED_LEN, Signature, SignatureError, Signed, SigningKey, SigningPolicy,
-    SigningReport, TIMESTAMP_MAX,
+    CONTROLLER_LINK, ControllerId, IDENTITY_INDEX, SIGNED_LEN, Signature, SignatureError, Signed,
+    SigningKey, SigningPolicy, SigningReport,
 };
 use armgate_protocol::client::{Command, MESSAGE_LEN};
 
@@ -29,7 +34,7 @@ pub enum UnsignedAccess {
     #[default]
     Refused,
     /// Read (what the session answers to everyone, [`Class::Read`]: pose, joints,
-    /// temperatures, status, IK solutions) and stop ([`Class::Stop`], `ST`, `jR`: the arm
+    /// temperatures, status; not the IK solutions, which plan) and stop ([`Class::Stop`], `ST`, `jR`: the arm
     /// holds, the principle that any client can stop it); anything else is dropped.
     Read,
     /// Everything: the key then only signs the answers to signed clients (a lab moving its
@@ -78,7 +83,8 @@ impl std::error::Error for UnknownAccess {}
 /// A cycle's signing settings (none by default: everything unsigned, as the seed).
 #[derive(Clone, Debug, Default)]
 pub struct Signing {
-    /// The shared key, if any.
+    /// The shared key, if any, for this controller's id
+    /// ([`SigningKey::for_controller`]; docs/protocol.md says how the shells choose it).
     pub key: Option<SigningKey>,
     /// What unsigned datagrams may do while a key is set.
     pub unsigned: UnsignedAccess,
@@ -94,13 +100,21 @@ impl Signing {
             (Some(_), UnsignedAccess::All) => SigningPolicy::UnsignedAll,
         }
     }
+
+    /// The controller id the tags are for ([`ControllerId::ANY`] without a key).
+    pub fn controller(&self) -> ControllerId {
+        self.key
+            .as_ref()
+            .map_or(ControllerId::ANY, SigningKey::controller)
+    }
 }
 
-/// A datagram let through: the message to handle, and whether its answers are signed.
+/// A datagram let through: the message to handle, and its link id if it came signed (its
+/// answers are then signed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Admitted<'a> {
     pub message: &'a [u8],
-    pub signed: bool,
+    pub link: Option<u8>,
 }
 
 /// An answer ready to send: the 31-byte message, signed or not.
@@ -121,27 +135,39 @@ impl Sealed {
 #[derive(Clone, Debug)]
 pub(super) struct Gate {
     signing: Signing,
+    /// The key for [`ControllerId::ANY`]: the identity request's.
+    any: Option<SigningKey>,
     replay: Replay,
-    /// Whether the last datagram served was signed (its sender gets the notices).
-    last_signed: bool,
     report: SigningReport,
 }
 
 impl Gate {
-    pub fn new(signing: Signing) -> Self {
+    /// The gate of `signing`, after a start whose store kept the reservation `reserved`.
+    pub fn new(signing: Signing, reserved: u64) -> Self {
         let report = SigningReport {
             policy: Some(signing.policy()),
             ..SigningReport::default()
         };
+        let any = signing
+            .key
+            .as_ref()
+            .map(|k| k.for_controller(ControllerId::ANY));
         Self {
             signing,
-            replay: Replay {
-                floors: [0; 256],
-                clock: 0,
-            },
-            last_signed: false,
+            any,
+            replay: Replay::new(reserved),
             report,
         }
+    }
+
+    /// The controller's id (`SQ` index 6).
+    pub fn controller(&self) -> ControllerId {
+        self.signing.controller()
+    }
+
+    /// Reservations the replay store could not keep.
+    pub fn store_failures(&self) -> u32 {
+        self.replay.store_failures
     }
 
     /// The counters and the policy.
@@ -149,35 +175,37 @@ impl Gate {
         self.report
     }
 
-    /// Whether the last datagram served was signed.
-    pub fn last_signed(&self) -> bool {
-        self.last_signed
-    }
-
-    /// `datagram` if it may be served; `None` (counted) if it is dropped.
-    pub fn admit<'a>(&mut self, datagram: &'a [u8]) -> Option<Admitted<'a>> {
+    /// `datagram` if it may be served; `None` (counted) if it is dropped. `store` keeps the
+    /// replay reservation across restarts.
+    pub fn admit<'a>(
+        &mut self,
+        datagram: &'a [u8],
+        store: &mut impl ReplayStore,
+    ) -> Option<Admitted<'a>> {
         let report = &mut self.report;
-        let admitted = match &self.signing.key {
-            None => Some(Admitted {
-                message: datagram,
-                signed: false,
-            }),
-            Some(key) => match Signed::new_checked(datagram) {
-                Ok(signed) => verify(key, &signed, datagram, &mut self.replay, report),
+        let admitted = match (&self.signing.key, &self.any) {
+            (Some(key), Some(any)) => match Signed::new_checked(datagram) {
+                Ok(signed) => {
+                    let keys = Keys { key, any };
+                    verify(keys, &signed, datagram, (&mut self.replay, store), report)
+                }
                 Err(SignatureError::Truncated) => {
                     bump(&mut report.dropped_truncated);
                     None
                 }
                 Err(_) => unsigned(self.signing.unsigned, datagram, report),
             },
+            _ => Some(Admitted {
+                message: datagram,
+                link: None,
+            }),
         };
         let admitted = admitted?;
-        bump(if admitted.signed {
+        bump(if admitted.link.is_some() {
             &mut report.signed
         } else {
             &mut report.unsigned
         });
-        self.last_signed = admitted.signed;
         Some(admitted)
     }
 
@@ -206,60 +234,55 @@ impl Gate {
     }
 }
 
-/// The timestamps: per link the lowest one still new, and the controller's own.
-#[derive(Clone, Debug)]
-struct Replay {
-    /// Per link id, the last timestamp served + 1 (0: none yet).
-    floors: [u64; 256],
-    /// The controller's timestamp: the last it signed with, raised to every request served.
-    clock: u64,
+/// The key for this controller, and for any (the identity request's).
+#[derive(Clone, Copy)]
+struct Keys<'k> {
+    key: &'k SigningKey,
+    any: &'k SigningKey,
 }
 
-impl Replay {
-    /// Serves `signature` if its timestamp is new on its link.
-    fn accept(&mut self, signature: Signature) -> bool {
-        let Some(floor) = self.floors.get_mut(usize::from(signature.link)) else {
-            return false;
-        };
-        if signature.timestamp < *floor {
-            return false;
-        }
-        *floor = signature.timestamp.saturating_add(1);
-        // Answers are never older than a request served, so a client can refuse old ones.
-        self.clock = self.clock.max(signature.timestamp.saturating_sub(1));
-        true
-    }
-
-    /// The timestamp of the controller's next signature.
-    fn tick_clock(&mut self) -> u64 {
-        self.clock = self.clock.saturating_add(1).min(TIMESTAMP_MAX);
-        self.clock
-    }
-}
-
-/// A signed datagram, served if its tag is `key`'s, its link a client's and its timestamp new.
+/// A signed datagram, served if its tag is the key's for this controller (or for any, on an
+/// identity request), its link a client's and its timestamp new, or if it is a stop.
 fn verify<'a>(
-    key: &SigningKey,
+    keys: Keys<'_>,
     signed: &Signed<&'a [u8]>,
     datagram: &'a [u8],
-    replay: &mut Replay,
+    (replay, store): (&mut Replay, &mut impl ReplayStore),
     report: &mut SigningReport,
 ) -> Option<Admitted<'a>> {
-    let signature = match Signature::parse(signed, key) {
+    let chars = [0, 1].map(|i| datagram.get(i).copied().unwrap_or_default());
+    let command = Command::from_chars(chars);
+    let parsed = Signature::parse(signed, keys.key).or_else(|e| {
+        // Only an identity request may be for any controller: it only reads the id.
+        if is_identity_request(datagram) {
+            Signature::parse(signed, keys.any)
+        } else {
+            Err(e)
+        }
+    });
+    let signature = match parsed {
         Ok(s) if s.link != CONTROLLER_LINK => s,
         _ => {
             bump(&mut report.dropped_forged);
             return None;
         }
     };
-    if !replay.accept(signature) {
+    // A stop that is not new is served all the same (it only stops) and moves nothing on.
+    let stop = command.is_some_and(|c| Class::of(c) == Class::Stop);
+    if replay.accept(signature, store) == Freshness::Old && !stop {
         bump(&mut report.dropped_replayed);
         return None;
     }
     Some(Admitted {
         message: datagram.get(..MESSAGE_LEN).unwrap_or_default(),
-        signed: true,
+        link: Some(signature.link),
     })
+}
+
+/// True if `message` is `SQ` index 6, the identity request.
+pub(super) fn is_identity_request(message: &[u8]) -> bool {
+    message.get(..2) == Some(&Command::Status.chars()[..])
+        && message.get(MESSAGE_LEN - 1) == Some(&IDENTITY_INDEX)
 }
 
 /// An unsigned datagram while a key is set, served as `access` allows.
@@ -271,8 +294,11 @@ fn unsigned<'a>(
     let allowed = match access {
         UnsignedAccess::Refused => false,
         UnsignedAccess::Read => {
+            // Reads and stops, but none that plans (KS): the planning slot is the signed
+            // clients' (module `budget`).
             let chars = [0, 1].map(|i| datagram.get(i).copied().unwrap_or_default());
             Command::from_chars(chars).is_some_and(|c| Class::of(c) != Class::Command)
+                && !matches!(Work::of(datagram), Work::Plans(_))
         }
         UnsignedAccess::All => true,
     };
@@ -282,7 +308,7 @@ fn unsigned<'a>(
     }
     Some(Admitted {
         message: datagram,
-        signed: false,
+        link: None,
     })
 }
 

@@ -2,14 +2,17 @@
 
 use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_motion, waits};
 use super::counters::bump;
-use super::signing::Gate;
+use super::links::{Links, identity, link_of};
+use super::replay::{ReplayStore, Unkept};
+use super::signing::{Gate, is_identity_request};
 use super::{CycleCounters, Datagram, DriveSide, Link, Outgoing, Peer, Signing};
 use crate::command::{CommandHandler, NOTICE_CAPACITY};
 use crate::config::ValidRobot;
 use crate::kinematics::KinematicsError;
 use crate::motion::StepOutput;
-use armgate_protocol::client::signed::SigningReport;
+use armgate_protocol::client::signed::{IdentityReport, SigningReport};
 use armgate_protocol::client::{MESSAGE_LEN, Notice};
+use core::net::SocketAddr;
 use core::num::NonZeroU64;
 
 /// Client requests handled per tick at most; more wait for the next tick. A client waits for
@@ -34,9 +37,10 @@ pub struct TickOutcome {
 
 /// The command handler and the drives, ticked on a fixed schedule.
 ///
-/// `P` is the shell's peer address (a socket address, an embassy endpoint).
+/// `P` is the shell's peer address (a socket address, an embassy endpoint); `S` keeps the
+/// signed timestamps' reservation across restarts ([`ReplayStore`]; none by default).
 #[derive(Clone, Debug)]
-pub struct Cycle<D, P> {
+pub struct Cycle<D, P, S = Unkept> {
     handler: CommandHandler,
     drives: D,
     /// The control period (s), and in whole microseconds for the shell's clock.
@@ -51,6 +55,10 @@ pub struct Cycle<D, P> {
     waiting: Waiting<P>,
     /// The signature checks every datagram passes first.
     gate: Gate,
+    /// Where the replay reservation is kept.
+    store: S,
+    /// Signed clients by link id: where their answers and notices go.
+    links: Links<P>,
 }
 
 impl<D: DriveSide, P: Peer> Cycle<D, P> {
@@ -67,15 +75,61 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             previous: None,
             counters: CycleCounters::default(),
             waiting: Waiting::new(),
-            gate: Gate::new(Signing::default()),
+            gate: Gate::new(Signing::default(), 0),
+            store: Unkept,
+            links: Links::new(),
+        }
+    }
+}
+
+impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
+    /// The same cycle with these signing settings (a key for this controller, what unsigned
+    /// datagrams may do), after the reservation its store kept.
+    pub fn with_signing(mut self, signing: Signing) -> Self {
+        let reserved = self.store.load();
+        self.gate = Gate::new(signing, reserved);
+        self.handler.set_signing_report(self.gate.report());
+        self.handler.set_identity(self.identity());
+        self
+    }
+
+    /// The same cycle, keeping the replay reservation in `store` across restarts. Give it
+    /// before [`with_signing`](Self::with_signing), which reads what `store` kept.
+    pub fn with_store<T: ReplayStore>(self, store: T) -> Cycle<D, P, T> {
+        Cycle {
+            handler: self.handler,
+            drives: self.drives,
+            period: self.period,
+            period_us: self.period_us,
+            next: self.next,
+            previous: self.previous,
+            counters: self.counters,
+            waiting: self.waiting,
+            gate: self.gate,
+            store,
+            links: self.links,
         }
     }
 
-    /// The same cycle with these signing settings (a key, what unsigned datagrams may do).
-    pub fn with_signing(mut self, signing: Signing) -> Self {
-        self.gate = Gate::new(signing);
-        self.handler.set_signing_report(self.gate.report());
-        self
+    /// The controller's id and the shared links seen (`SQ` index 6).
+    pub fn identity(&self) -> IdentityReport {
+        IdentityReport {
+            controller: self.gate.controller(),
+            shared_links: self.links.shared,
+            last_shared: self.links.last_shared,
+            free_link: 0,
+        }
+    }
+
+    /// The replay store (a shell reads its errors).
+    pub fn store_mut(&mut self) -> &mut S {
+        &mut self.store
+    }
+
+    /// Reservations the replay store could not keep (each a window in which a restart could
+    /// serve a replay); 0 without a store.
+    pub fn store_failures(&self) -> u32 {
+        self.gate.store_failures()
     }
 
     /// When the next tick is due on the shell's clock (µs since the cycle started).
@@ -121,7 +175,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             bump(&mut self.counters.tick_errors);
         }
         self.drives.transmit(time, elapsed, command.ok().flatten());
-        self.handle_requests(link);
+        self.handle_requests(link, time);
         self.send_notices(link);
         TickOutcome {
             time,
@@ -157,15 +211,23 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
     }
 
     /// Where notices go: the client that holds the arm, or the last one that sent a valid
-    /// request.
+    /// request (a signed client: where its link was last heard from).
     pub fn notice_recipient(&self) -> Option<P> {
-        self.handler.notice_recipient().map(P::from_address)
+        self.peer_of(self.handler.notice_recipient()?)
     }
 
     /// The client that holds the arm ([`goes_ahead`](super::goes_ahead) serves its requests
     /// first).
     pub fn holder(&self) -> Option<P> {
-        self.handler.holder().map(P::from_address)
+        self.peer_of(self.handler.holder()?)
+    }
+
+    /// The peer of a session client: a signed link's last source, or the address itself.
+    fn peer_of(&self, client: SocketAddr) -> Option<P> {
+        match link_of(client) {
+            Some(link) => self.links.peer(link),
+            None => Some(P::from_address(client)),
+        }
     }
 
     /// The signing policy and counters (served, dropped by cause): `SQ` index 4.
@@ -179,12 +241,18 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
-        bump(&mut self.counters.requests);
-        self.handler
-            .handle_from(datagram, peer.address(), &mut self.drives)
+        self.answer_from(datagram, peer.address())
     }
 
-    fn handle_requests(&mut self, link: &mut impl Link<P>) {
+    /// Answers one request from the session's `client` (a signed link's identity, or an
+    /// address).
+    #[inline(never)]
+    fn answer_from(&mut self, datagram: &[u8], client: SocketAddr) -> [u8; MESSAGE_LEN] {
+        bump(&mut self.counters.requests);
+        self.handler.handle_from(datagram, client, &mut self.drives)
+    }
+
+    fn handle_requests(&mut self, link: &mut impl Link<P>, now: f64) {
         let drops = self.counters.send_dropped.saturating_add(link.dropped());
         self.handler.set_send_drops(drops);
         // The work budget (module `budget`): requests waiting from earlier ticks first.
@@ -198,13 +266,28 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
                         break;
                     };
                     // Dropped datagrams are counted by the gate and never answered.
-                    let Some(admitted) = self.gate.admit(datagram.payload()) else {
+                    let Some(admitted) = self.gate.admit(datagram.payload(), &mut self.store)
+                    else {
                         continue;
                     };
+                    if let Some(signed) = admitted.link {
+                        let holder = self.handler.holder().and_then(link_of);
+                        if self.links.heard(signed, datagram.peer, now, holder)
+                            && self.links.announce(now)
+                        {
+                            self.handler.announce(Notice::LinkShared(signed));
+                        }
+                        let mut identity = self.identity();
+                        if is_identity_request(admitted.message) {
+                            // A link of its own for a client that starts (it may take it).
+                            identity.free_link = self.links.set_aside(datagram.peer, now, holder);
+                        }
+                        self.handler.set_identity(identity);
+                    }
                     self.handler.set_signing_report(self.gate.report());
                     Pending {
                         datagram: Datagram::new(admitted.message, datagram.peer),
-                        signed: admitted.signed,
+                        link: admitted.link,
                     }
                 }
             };
@@ -221,7 +304,10 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             if work == Work::Stops {
                 self.cancel_waiting(&mut later, link);
             }
-            let reply = self.answer(request.datagram.payload(), request.datagram.peer);
+            let client = request
+                .link
+                .map_or(request.datagram.peer.address(), identity);
+            let reply = self.answer_from(request.datagram.payload(), client);
             self.reply(link, &reply, &request);
         }
         // What waited before stays ahead of what the link still holds. (Together never more
@@ -252,7 +338,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
 
     /// Sends `reply` to the client of `request`, sealed if the request was signed.
     fn reply(&mut self, link: &mut impl Link<P>, reply: &[u8; MESSAGE_LEN], request: &Pending<P>) {
-        let sealed = self.gate.seal(reply, request.signed);
+        let sealed = self.gate.seal(reply, request.link.is_some());
         let peer = request.datagram.peer;
         self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Reply);
     }
@@ -262,10 +348,13 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             let Some(text) = self.handler.next_notice() else {
                 break;
             };
-            match self.notice_recipient() {
+            // Signed to a signed client (a link's identity), unsigned to an address.
+            let recipient = self.handler.notice_recipient();
+            let signed = recipient.and_then(link_of).is_some();
+            match recipient.and_then(|r| self.peer_of(r)) {
                 Some(peer) => {
                     bump(&mut self.counters.notices);
-                    let sealed = self.gate.seal(&text.to_bytes(), self.gate.last_signed());
+                    let sealed = self.gate.seal(&text.to_bytes(), signed);
                     self.send(link, Datagram::new(sealed.bytes(), peer), Outgoing::Notice);
                 }
                 None => bump(&mut self.counters.notices_unaddressed),

@@ -7,7 +7,9 @@ use core::hint::black_box;
 
 use armgate_core::config::ValidRobot;
 use armgate_core::cycle::{Signing, UnsignedAccess};
-use armgate_protocol::client::signed::{SIGNED_LEN, Signature, Signed, SigningKey};
+use armgate_protocol::client::signed::{
+    ControllerId, SIGNED_LEN, Signature, Signed, SigningKey,
+};
 use armgate_protocol::client::{Command, Request};
 
 use super::Session;
@@ -27,7 +29,8 @@ pub(super) struct Costs {
 
 /// Measures them on a session of `config` from `start`, holding.
 pub(super) fn costs(config: &ValidRobot, start: Option<&[f64]>) -> Result<Costs, &'static str> {
-    let key = SigningKey::new(&KEY);
+    // For a controller: the tag covers its id as well (4 more bytes in the same SHA-256 block).
+    let key = SigningKey::new(&KEY).for_controller(ControllerId(0x5eed_0001));
     let pose = Request {
         command: Command::Pose,
         values: [0.0; 7],

@@ -2,7 +2,7 @@
 //! temperatures (`TM`) and the status reports of `SQ` that are seven floats.
 
 use armgate_protocol::client::branch::BRANCH_INDEX;
-use armgate_protocol::client::signed::SIGNING_INDEX;
+use armgate_protocol::client::signed::{IDENTITY_INDEX, SIGNING_INDEX};
 use armgate_protocol::client::{
     CAUSE_INDEX, CauseReport, NO_JOINT_TEMPERATURE, Notice, Reply, Request, STATUS_INDEX,
 };
@@ -68,6 +68,7 @@ impl CommandHandler {
                 Ok(CauseReport { cause, joint, by }.to_reply())
             }
             SIGNING_INDEX => Ok(self.signing.to_reply()),
+            IDENTITY_INDEX => Ok(self.identity.to_reply()),
             BRANCH_INDEX => {
                 let present = self.controller.measured().map(|(q, _)| q);
                 Ok(ik::present_branch(

@@ -62,15 +62,21 @@ pub enum Notice {
     Cancelled(Command),
     /// `WN12 jN at limit L` / `WN13 Held at workspace edge.`: a stream holds the arm there.
     Held(Hold),
+    /// `WN14 link 7 shared`: signed datagrams from two sources interleave on
+    /// this link id; the older timestamps of each are dropped as replays (docs/protocol.md,
+    /// "Signed datagrams").
+    LinkShared(u8),
 }
 
 impl Notice {
     /// Error or warning.
     pub const fn severity(self) -> Severity {
         match self {
-            Self::JointLimit | Self::IkDivergence | Self::ViaPointMissed | Self::Held(_) => {
-                Severity::Warning
-            }
+            Self::JointLimit
+            | Self::IkDivergence
+            | Self::ViaPointMissed
+            | Self::Held(_)
+            | Self::LinkShared(_) => Severity::Warning,
             _ => Severity::Error,
         }
     }
@@ -96,6 +102,7 @@ impl Notice {
             Self::Cancelled(_) => 42,
             Self::Held(Hold::JointLimit(_)) => 12,
             Self::Held(Hold::Workspace) => 13,
+            Self::LinkShared(_) => 14,
         }
     }
 
@@ -157,6 +164,7 @@ const ANOTHER_CLIENT: &str = "another client";
 const CLIENT_SILENT: (&str, &str) = ("client silent ", " ms");
 const CANCELLED: &str = "cancelled by ST";
 const AT_LIMIT: &str = " at limit ";
+const LINK_SHARED: (&str, &str) = ("link ", " shared");
 
 /// The text after the code.
 struct Body(Notice);
@@ -189,6 +197,7 @@ impl fmt::Display for Body {
             Notice::Held(Hold::JointLimit(bound)) => {
                 write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))
             }
+            Notice::LinkShared(link) => write!(f, "{}{link}{}", LINK_SHARED.0, LINK_SHARED.1),
             fixed => f.write_str(phrase(&PHRASES, &fixed).unwrap_or_default()),
         }
     }

@@ -66,6 +66,11 @@ impl Notice {
                 .map(Self::ClientSilent),
             (Severity::Error, 42) => with(CANCELLED, Self::Cancelled),
             (Severity::Warning, 12) => held_at_limit(body),
+            (Severity::Warning, 14) => body
+                .strip_prefix(LINK_SHARED.0)
+                .and_then(|rest| rest.strip_suffix(LINK_SHARED.1))
+                .and_then(decimal)
+                .map(Self::LinkShared),
             // The fixed phrases, matched above.
             (Severity::Error, 21) | (Severity::Warning, 13 | 22 | 27) => None,
             _ => return Err(NoticeError::UnknownCode),
@@ -133,7 +138,7 @@ mod tests {
 
     #[test]
     fn literal_datagrams_read_as_their_notices() {
-        let cases: [(&[u8], Notice); 9] = [
+        let cases: [(&[u8], Notice); 10] = [
             (
                 b"ER20 Cmd BG busy\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0",
                 Notice::Rejected(Command::Begin, Rejection::Busy),
@@ -167,6 +172,7 @@ mod tests {
                 Notice::HeldBy(Command::Begin, Some([10, 0, 0, 7])),
             ),
             (b"ER41 client silent 500 ms", Notice::ClientSilent(500)),
+            (b"WN14 link 7 shared", Notice::LinkShared(7)),
             (b"ER01 Msg B? undersized.", Notice::Undersized(*b"B?")),
             (
                 b"WN12 j5 at limit -1.745",

@@ -56,6 +56,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::Cancelled(IkGoal),
         Notice::Held(Hold::JointLimit(bound(5, true, 2.967, PathPoint::Goal))),
         Notice::Held(Hold::Workspace),
+        Notice::LinkShared(255),
     ]
     .into_iter()
     .chain(rejections)
@@ -85,12 +86,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::Cancelled(_) => 15,
         Notice::Held(Hold::JointLimit(_)) => 16,
         Notice::Held(Hold::Workspace) => 17,
+        Notice::LinkShared(_) => 18,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 18];
+    let mut seen = [false; 19];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }

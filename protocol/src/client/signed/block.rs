@@ -141,16 +141,26 @@ impl Signature {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::client::signed::ControllerId;
     use crate::client::signed::key::tests::TEST_KEY;
 
-    /// `BG` signed on link 1 at timestamp 0x0123456789ab with the test key. Python:
+    /// `BG` signed on link 1 at timestamp 0x0123456789ab with the test key for controller
+    /// 0xed0a5e0c. Python (python/tests/test_signing.py computes the same):
     /// `m = b"BG" + bytes(29) + bytes([1]) + (0x0123456789ab).to_bytes(6, "little")`,
-    /// `m + hmac.new(bytes(range(32)), m, hashlib.sha256).digest()[:6]`.
+    /// `c = (0xed0a5e0c).to_bytes(4, "little")`,
+    /// `m + hmac.new(bytes(range(32)), c + m, hashlib.sha256).digest()[:6]`.
     const SIGNED_BG: &str =
-        "4247000000000000000000000000000000000000000000000000000000000001ab8967452301b224bae2fc46";
+        "4247000000000000000000000000000000000000000000000000000000000001ab89674523016efbddaa1201";
     /// Its reply `GB`, signed by the controller (link 0) one step later.
     const SIGNED_GB: &str =
-        "4742000000000000000000000000000000000000000000000000000000000000ac89674523012afe02a8d44f";
+        "4742000000000000000000000000000000000000000000000000000000000000ac89674523013291c1d28978";
+
+    /// The test key for controller 0xed0a5e0c.
+    fn arm_key() -> SigningKey {
+        SigningKey::parse(TEST_KEY)
+            .unwrap()
+            .for_controller(ControllerId(0xed0a_5e0c))
+    }
 
     fn hex(text: &str) -> [u8; SIGNED_LEN] {
         let mut out = [0; SIGNED_LEN];
@@ -168,7 +178,7 @@ mod tests {
 
     #[test]
     fn emit_gives_the_known_bytes() {
-        let key = SigningKey::parse(TEST_KEY).unwrap();
+        let key = arm_key();
         let bg = Signature {
             link: 1,
             timestamp: 0x0123_4567_89ab,
@@ -189,13 +199,13 @@ mod tests {
 
     #[test]
     fn parse_reads_the_fields_and_checks_the_tag() {
-        let key = SigningKey::parse(TEST_KEY).unwrap();
+        let key = arm_key();
         let bytes = hex(SIGNED_BG);
         let signed = Signed::new_checked(&bytes[..]).unwrap();
         assert_eq!(signed.message(), &message(b"BG")[..]);
         assert_eq!(signed.link(), 1);
         assert_eq!(signed.timestamp(), 0x0123_4567_89ab);
-        assert_eq!(signed.tag(), [0xb2, 0x24, 0xba, 0xe2, 0xfc, 0x46]);
+        assert_eq!(signed.tag(), [0x6e, 0xfb, 0xdd, 0xaa, 0x12, 0x01]);
         assert_eq!(
             Signature::parse(&signed, &key),
             Ok(Signature {
@@ -214,12 +224,20 @@ mod tests {
                 "byte {k}"
             );
         }
-        // Another key.
-        let other = SigningKey::parse(&TEST_KEY.replace("1f", "20")).unwrap();
-        assert_eq!(
-            Signature::parse(&signed, &other),
-            Err(SignatureError::BadTag)
-        );
+        // Another key, or the same key for another controller (or for any).
+        let other = SigningKey::parse(&TEST_KEY.replace("1f", "20"))
+            .unwrap()
+            .for_controller(key.controller());
+        for other in [
+            other,
+            key.for_controller(ControllerId(0xed0a_5e0d)),
+            key.for_controller(ControllerId::ANY),
+        ] {
+            assert_eq!(
+                Signature::parse(&signed, &other),
+                Err(SignatureError::BadTag)
+            );
+        }
     }
 
     #[test]
@@ -241,7 +259,7 @@ mod tests {
         let mut long = [0u8; 50];
         long[..SIGNED_LEN].copy_from_slice(&bytes);
         long[SIGNED_LEN..].fill(0xff);
-        let key = SigningKey::parse(TEST_KEY).unwrap();
+        let key = arm_key();
         let signed = Signed::new_checked(&long[..]).unwrap();
         assert!(Signature::parse(&signed, &key).is_ok());
     }

@@ -5,17 +5,19 @@ use core::fmt;
 use hmac::{Hmac, Mac};
 use sha2::Sha256;
 
-use super::TAG_LEN;
+use super::{ControllerId, TAG_LEN};
 
 /// The length of a key in bytes.
 pub const KEY_LEN: usize = 32;
 
-/// A signing key, with HMAC-SHA256's inner and outer states computed once when it is made, so
-/// that one tag costs two SHA-256 compressions (the signed part, 38 bytes, and the outer hash
-/// each fit one block).
+/// A signing key for one controller, with HMAC-SHA256's inner and outer states computed once
+/// when it is made, so that one tag costs two SHA-256 compressions (the controller id and the
+/// signed part, 4 + 38 bytes, and the outer hash each fit one block).
 #[derive(Clone)]
 pub struct SigningKey {
     mac: Hmac<Sha256>,
+    /// The controller the tags are for (covered by every tag, never sent).
+    controller: ControllerId,
 }
 
 /// Why a text is not a key.
@@ -46,7 +48,8 @@ impl fmt::Display for KeyError {
 impl core::error::Error for KeyError {}
 
 impl SigningKey {
-    /// The key of these bytes.
+    /// The key of these bytes, for [`ControllerId::ANY`] until
+    /// [`for_controller`](Self::for_controller) names one.
     pub fn new(bytes: &[u8; KEY_LEN]) -> Self {
         // HMAC pads a key shorter than the hash's 64-byte block with zeros: padded here, the
         // block-sized constructor cannot fail (`new_from_slice` could, in its signature).
@@ -54,7 +57,22 @@ impl SigningKey {
         block.iter_mut().zip(bytes).for_each(|(b, k)| *b = *k);
         Self {
             mac: <Hmac<Sha256> as Mac>::new(&block.into()),
+            controller: ControllerId::ANY,
         }
+    }
+
+    /// The same key, its tags for `controller`: a datagram signed for one controller is
+    /// forged to every other one that has the key.
+    pub fn for_controller(&self, controller: ControllerId) -> Self {
+        Self {
+            mac: self.mac.clone(),
+            controller,
+        }
+    }
+
+    /// The controller the tags are for.
+    pub fn controller(&self) -> ControllerId {
+        self.controller
     }
 
     /// Reads a key file (see [`parse_key`]).
@@ -62,9 +80,11 @@ impl SigningKey {
         parse_key(text).map(|bytes| Self::new(&bytes))
     }
 
-    /// The tag of `signed`: the first [`TAG_LEN`] bytes of HMAC-SHA256 over it.
+    /// The tag of `signed`: the first [`TAG_LEN`] bytes of HMAC-SHA256 over the controller id
+    /// (4 bytes, little-endian) and `signed`.
     pub fn tag(&self, signed: &[u8]) -> [u8; TAG_LEN] {
         let mut mac = self.mac.clone();
+        mac.update(&self.controller.to_bytes());
         mac.update(signed);
         let full = mac.finalize().into_bytes();
         let mut tag = [0; TAG_LEN];
@@ -75,6 +95,7 @@ impl SigningKey {
     /// True if `tag` is the tag of `signed` (compared in constant time).
     pub fn verify(&self, signed: &[u8], tag: &[u8; TAG_LEN]) -> bool {
         let mut mac = self.mac.clone();
+        mac.update(&self.controller.to_bytes());
         mac.update(signed);
         mac.verify_truncated_left(tag).is_ok()
     }
@@ -113,7 +134,7 @@ pub fn parse_key(text: &str) -> Result<[u8; KEY_LEN], KeyError> {
 impl fmt::Debug for SigningKey {
     /// Never shows the key.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("SigningKey(..)")
+        write!(f, "SigningKey(.., controller {})", self.controller)
     }
 }
 
@@ -126,9 +147,9 @@ pub(super) mod tests {
         "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
 
     #[test]
-    fn the_tag_is_hmac_sha256_truncated_to_6_bytes() {
-        // Python: hmac.new(bytes(range(32)), b"abc", hashlib.sha256).hexdigest()
-        // = f0133729c4163dede81e21cd47839256da58171238c8a0d874397c73b14e1e47.
+    fn the_tag_is_hmac_sha256_over_the_controller_id_and_the_bytes_truncated_to_6_bytes() {
+        // Python: hmac.new(bytes(range(32)), bytes(4) + b"abc", hashlib.sha256).hexdigest()
+        // starts 3961210c3c17; with the id 0xed0a5e0c (0c 5e 0a ed) before b"abc", 345451bf5251.
         let key = SigningKey::parse(TEST_KEY).unwrap();
         let tag = key.tag(b"abc");
         assert_eq!(tag, ABC_TAG);
@@ -137,9 +158,17 @@ pub(super) mod tests {
         wrong[5] ^= 1;
         assert!(!key.verify(b"abc", &wrong));
         assert!(!key.verify(b"abd", &ABC_TAG));
+        let arm = key.for_controller(ControllerId(0xed0a_5e0c));
+        assert_eq!(arm.controller(), ControllerId(0xed0a_5e0c));
+        assert_eq!(arm.tag(b"abc"), [0x34, 0x54, 0x51, 0xbf, 0x52, 0x51]);
+        assert!(!arm.verify(b"abc", &ABC_TAG), "another controller's tag");
+        assert!(
+            arm.for_controller(ControllerId::ANY)
+                .verify(b"abc", &ABC_TAG)
+        );
     }
 
-    const ABC_TAG: [u8; TAG_LEN] = [0xf0, 0x13, 0x37, 0x29, 0xc4, 0x16];
+    const ABC_TAG: [u8; TAG_LEN] = [0x39, 0x61, 0x21, 0x0c, 0x3c, 0x17];
 
     #[test]
     fn key_files_are_64_hex_digits_on_one_line() {
@@ -161,6 +190,6 @@ pub(super) mod tests {
             SigningKey::parse(&"0".repeat(64)).unwrap_err(),
             KeyError::AllZero
         );
-        assert_eq!(format!("{key:?}"), "SigningKey(..)");
+        assert_eq!(format!("{key:?}"), "SigningKey(.., controller 00000000)");
     }
 }

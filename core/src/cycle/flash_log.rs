@@ -1,0 +1,229 @@
+//! The replay reservation in two flash sectors (the board's [`ReplayStore`]): a log of 32-byte
+//! records (the STM32H7's flash word), written one after the other, the two sectors used in
+//! turn so that one is always erased and ready.
+//!
+//! * **Write.** [`keep`](ReplayStore::keep) programs the next record of the active sector:
+//!   one flash word, no erase. A full sector hands over to the other one, erased at the start.
+//! * **Start.** [`FlashLog::open`] reads both sectors (the newest valid record wins), erases the
+//!   other sector if it is not, and moves the reservation over to it if the active one is half
+//!   full, so that every run has at least a sector and a half of records. Erasing takes seconds
+//!   on the board: `open` runs before the control loop and its watchdog.
+//! * **Power loss.** A record is valid only if its magic and its value's complement match: a
+//!   torn write is skipped, and the record before it (written before anything above it was
+//!   served) still holds.
+//!
+//! Wear, at one write per [`RESERVE_AHEAD`](super::RESERVE_AHEAD) of signed use: docs/safety.md.
+
+use super::replay::ReplayStore;
+
+/// Bytes per record (one flash word on the STM32H7).
+pub const RECORD_LEN: usize = 32;
+
+/// What a valid record starts with.
+const MAGIC: [u8; 4] = *b"AGR1";
+
+/// Two flash sectors of records: what the board's flash driver provides.
+pub trait FlashSectors {
+    /// Records per sector.
+    fn records(&self) -> u32;
+    /// Record `record` of sector `sector` (0 or 1); `None` if it cannot be read.
+    fn read(&mut self, sector: u8, record: u32) -> Option<[u8; RECORD_LEN]>;
+    /// Programs record `record` of `sector` (erased before); `false` if that failed.
+    fn write(&mut self, sector: u8, record: u32, bytes: &[u8; RECORD_LEN]) -> bool;
+    /// Erases `sector`; `false` if that failed.
+    fn erase(&mut self, sector: u8) -> bool;
+}
+
+/// The reservation's log in two sectors.
+#[derive(Clone, Debug)]
+pub struct FlashLog<F> {
+    flash: F,
+    /// The sector written to.
+    active: u8,
+    /// Its next free record.
+    next: u32,
+    /// The reservation found at the start.
+    loaded: u64,
+}
+
+impl<F: FlashSectors> FlashLog<F> {
+    /// Opens the log in `flash`: the newest reservation, and a sector and a half free to write
+    /// (erasing as needed; seconds on the board).
+    pub fn open(mut flash: F) -> Self {
+        let [(a, a_free), (b, b_free)] = [0, 1].map(|s| scan(&mut flash, s));
+        let active = u8::from(b > a);
+        let (loaded, free) = if active == 1 {
+            (b.unwrap_or(0), b_free)
+        } else {
+            (a.unwrap_or(0), a_free)
+        };
+        let other = active ^ 1;
+        let mut log = Self {
+            flash,
+            active,
+            next: free,
+            loaded,
+        };
+        if !log.erased(other) {
+            let _ = log.flash.erase(other);
+        }
+        if log.next >= log.flash.records() / 2
+            && log.flash.write(other, 0, &encode(loaded))
+            && log.flash.erase(active)
+        {
+            log.active = other;
+            log.next = 1;
+        }
+        log
+    }
+
+    /// The flash, for a shell that reads what was written (tests).
+    pub fn flash(&self) -> &F {
+        &self.flash
+    }
+
+    /// True if `sector`'s first record is erased (records are written in order).
+    fn erased(&mut self, sector: u8) -> bool {
+        self.flash
+            .read(sector, 0)
+            .is_some_and(|r| r.iter().all(|b| *b == 0xff))
+    }
+}
+
+impl<F: FlashSectors> ReplayStore for FlashLog<F> {
+    fn load(&mut self) -> u64 {
+        self.loaded
+    }
+
+    fn keep(&mut self, reserved: u64) -> bool {
+        if self.next >= self.flash.records() {
+            let other = self.active ^ 1;
+            if !self.erased(other) {
+                return false;
+            }
+            self.active = other;
+            self.next = 0;
+        }
+        let written = self.flash.write(self.active, self.next, &encode(reserved));
+        self.next = self.next.saturating_add(1);
+        written
+    }
+}
+
+/// The newest valid value in `sector`, and its first erased record (its end if full).
+fn scan(flash: &mut impl FlashSectors, sector: u8) -> (Option<u64>, u32) {
+    let records = flash.records();
+    let mut newest = None;
+    for k in 0..records {
+        let Some(record) = flash.read(sector, k) else {
+            continue;
+        };
+        if record.iter().all(|b| *b == 0xff) {
+            return (newest, k);
+        }
+        newest = newest.max(decode(&record));
+    }
+    (newest, records)
+}
+
+/// A record: the magic, the value and its complement (little-endian), zeros.
+fn encode(value: u64) -> [u8; RECORD_LEN] {
+    let mut record = [0; RECORD_LEN];
+    let (low, high) = (value.to_le_bytes(), (!value).to_le_bytes());
+    let parts = MAGIC.iter().chain(&low).chain(&high);
+    record.iter_mut().zip(parts).for_each(|(r, p)| *r = *p);
+    record
+}
+
+/// The value of a valid record.
+fn decode(record: &[u8; RECORD_LEN]) -> Option<u64> {
+    let word = |at: usize| -> Option<u64> {
+        let bytes: [u8; 8] = record.get(at..at + 8)?.try_into().ok()?;
+        Some(u64::from_le_bytes(bytes))
+    };
+    let value = word(4)?;
+    (record.get(..4) == Some(&MAGIC[..]) && word(12)? == !value).then_some(value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two sectors of 8 records in RAM, counting erases.
+    #[derive(Clone, Debug)]
+    struct Ram {
+        sectors: [[[u8; RECORD_LEN]; 8]; 2],
+        erases: [u32; 2],
+    }
+
+    impl Ram {
+        fn new() -> Self {
+            Self {
+                sectors: [[[0xff; RECORD_LEN]; 8]; 2],
+                erases: [0; 2],
+            }
+        }
+    }
+
+    impl FlashSectors for Ram {
+        fn records(&self) -> u32 {
+            8
+        }
+        fn read(&mut self, sector: u8, record: u32) -> Option<[u8; RECORD_LEN]> {
+            Some(self.sectors[usize::from(sector)][record as usize])
+        }
+        fn write(&mut self, sector: u8, record: u32, bytes: &[u8; RECORD_LEN]) -> bool {
+            let slot = &mut self.sectors[usize::from(sector)][record as usize];
+            assert!(slot.iter().all(|b| *b == 0xff), "programmed twice");
+            *slot = *bytes;
+            true
+        }
+        fn erase(&mut self, sector: u8) -> bool {
+            self.sectors[usize::from(sector)] = [[0xff; RECORD_LEN]; 8];
+            self.erases[usize::from(sector)] += 1;
+            true
+        }
+    }
+
+    #[test]
+    fn the_newest_reservation_survives_restarts_and_torn_writes_and_sectors_take_turns() {
+        let mut log = FlashLog::open(Ram::new());
+        assert_eq!(log.load(), 0);
+        let mut value = 1_000;
+        let mut flash = log.flash().clone();
+        for restart in 0..10 {
+            for _ in 0..restart % 7 + 1 {
+                value += 200_000;
+                assert!(log.keep(value), "restart {restart}");
+            }
+            flash = log.flash().clone();
+            log = FlashLog::open(flash.clone());
+            assert_eq!(log.load(), value, "restart {restart}");
+        }
+        // A sector and a half free after every start: 12 writes in a row fit.
+        for _ in 0..12 {
+            value += 1;
+            assert!(log.keep(value));
+        }
+        assert_eq!(FlashLog::open(log.flash().clone()).load(), value);
+        // A torn record (power lost while programming) is skipped; the one before holds.
+        let mut torn = log.flash().clone();
+        let sector = usize::from(log.active);
+        let last = log.next as usize - 1;
+        torn.sectors[sector][last][10] ^= 0x40;
+        assert_eq!(FlashLog::open(torn).load(), value - 1);
+        let erases = flash.erases[0] + flash.erases[1];
+        assert!(erases <= 10, "sectors erased only at starts: {erases}");
+    }
+
+    #[test]
+    fn records_are_the_magic_the_value_and_its_complement() {
+        let record = encode(0x0123_4567_89ab_cdef);
+        assert_eq!(&record[..4], b"AGR1");
+        assert_eq!(decode(&record), Some(0x0123_4567_89ab_cdef));
+        assert_eq!(decode(&[0xff; RECORD_LEN]), None);
+        let mut bad = record;
+        bad[15] ^= 1;
+        assert_eq!(decode(&bad), None);
+    }
+}
