@@ -1571,3 +1571,32 @@ fn the_half_turn_line_is_refused_before_the_arm_moves() {
     assert_eq!(status(&sim)[4], 0.0, "nothing moves");
     assert_eq!(sim.ok("jP", [0.0; 7], 0), before);
 }
+
+#[test]
+fn the_gl_gt_round_trip_from_home_arrives() {
+    // The legacy client's step (issue 33): from home (the wrist centre on joint 1's axis) a
+    // `GL` 3 cm along x, `BG`, arrive; then `GT` back to the pose it started from and `BG`.
+    // The way back used to be accepted and then lost with WN22 about a quarter of the way,
+    // the arm 23 mm short: now the check plans both lines as slow as joint 1 needs them.
+    let sim = Sim::start("ranger-mk1");
+    if !knows_status(&sim) {
+        return;
+    }
+    assert_eq!(sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0)[0], 2.0);
+    wait_drives(&sim, 2.0);
+    let start = sim.ok("PS", [0.0; 7], 0);
+    let mut there = start;
+    there[0] += 0.03;
+    sim.ok("GL", there, 0);
+    sim.start_motion("BG");
+    sim.wait_pose([there[0], there[1], there[2]], 1e-3, 60.0);
+    let [roll, pitch, yaw] = rpy_of(&start[3..]);
+    sim.ok(
+        "GT",
+        [start[0], start[1], start[2], roll, pitch, yaw, 0.0],
+        0,
+    );
+    sim.start_motion("BG");
+    sim.wait_pose([start[0], start[1], start[2]], 1e-3, 60.0);
+    assert_eq!(stop_cause(&sim)[0], 0.0, "no stop on the way");
+}
