@@ -54,7 +54,7 @@ pub struct Supervisor {
     stopping: Option<Stopping>,
     /// The cause in force: the last stop's, until the next motion starts.
     cause: Option<StopCause>,
-    /// The joint (0-based) a stream holds at its limit.
+    /// The joint (0-based) a stream holds at its limit, or a following error stopped the arm for.
     held_joint: Option<u8>,
     /// The cause in force is a stream's hold: it ends with the hold.
     holding: bool,
@@ -85,9 +85,10 @@ impl Supervisor {
                 along,
                 brake: Brake::default(),
             });
+            // A new stop: the joint a hold or an earlier stop named is no longer the point.
+            self.held_joint = None;
         }
         self.cause = Some(self.stopping.as_ref().map_or(cause, |s| s.cause));
-        self.held_joint = None;
         self.holding = false;
     }
 
@@ -166,12 +167,23 @@ impl Supervisor {
         self.holding = hold.is_some();
     }
 
+    /// Names the joint (0-based) the stop of `cause` is for (a following error's), if that
+    /// is the cause in force.
+    pub fn blame(&mut self, cause: StopCause, joint: u8) {
+        if self.cause == Some(cause) {
+            self.held_joint = Some(joint);
+        } else if self.cause.is_none() && self.stopping.is_none() {
+            // At rest the stop has nothing to decelerate: the cause is told all the same.
+            (self.cause, self.held_joint) = (Some(cause), Some(joint));
+        }
+    }
+
     /// The cause in force.
     pub fn cause(&self) -> Option<StopCause> {
         self.cause
     }
 
-    /// The joint (0-based) a stream holds at its limit.
+    /// The joint (0-based) a stream holds at its limit, or a following error stopped the arm for.
     pub fn held_joint(&self) -> Option<u8> {
         self.held_joint
     }

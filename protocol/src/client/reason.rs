@@ -264,6 +264,57 @@ impl JointBound {
     }
 }
 
+/// `ER43 jN following error E`: how far a joint's measured position was from its command (rad
+/// or m) when the controller stopped the arm for it (beyond the robot file's
+/// `max_following_error`, which the text leaves out: it would not fit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Lag {
+    /// The joint, numbered from 1.
+    pub joint: u8,
+    /// The error in thousandths (of a radian, or millimetres), as the text shows it: at most
+    /// [`MAX_LAG_MILLI`].
+    pub error_milli: i32,
+}
+
+/// The largest error a [`Lag`] shows (99.999): every text fits its 30 characters.
+pub const MAX_LAG_MILLI: i32 = 99_999;
+
+/// The words between a [`Lag`]'s joint and its error.
+const FOLLOWING_ERROR: &str = " following error ";
+
+impl Lag {
+    /// Joint `index` (0-based) off by `error` (rad or m) from its command, rounded to
+    /// thousandths and shown at most as [`MAX_LAG_MILLI`].
+    pub fn new(index: usize, error: f64) -> Self {
+        // Saturating casts, as for JointBound (NaN shows as 0).
+        let milli = round_half_away(libm::fabs(error) * 1000.0) as i32;
+        Self {
+            joint: u8::try_from(index.saturating_add(1)).unwrap_or(u8::MAX),
+            error_milli: milli.min(MAX_LAG_MILLI),
+        }
+    }
+
+    /// Reads `jN following error E` back.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        let (joint, error) = s.strip_prefix('j')?.split_once(FOLLOWING_ERROR)?;
+        Some(Self {
+            joint: decimal(joint)?,
+            error_milli: Milli::parse(error)?.0,
+        })
+    }
+}
+
+impl fmt::Display for Lag {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "j{}{FOLLOWING_ERROR}{}",
+            self.joint,
+            Milli(self.error_milli)
+        )
+    }
+}
+
 /// Rounds half away from zero without `std` (the cast then saturates).
 fn round_half_away(x: f64) -> f64 {
     if x >= 0.0 { x + 0.5 } else { x - 0.5 }

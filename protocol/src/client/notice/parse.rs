@@ -65,6 +65,7 @@ impl Notice {
                 .and_then(decimal)
                 .map(Self::ClientSilent),
             (Severity::Error, 42) => with(CANCELLED, Self::Cancelled),
+            (Severity::Error, 43) => Lag::parse(body).map(Self::FollowingError),
             (Severity::Warning, 12) => held_at_limit(body),
             // The fixed phrases, matched above.
             (Severity::Error, 21) | (Severity::Warning, 13 | 22 | 27) => None,

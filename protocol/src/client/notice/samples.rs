@@ -2,7 +2,8 @@
 //! table for other clients (`table.rs`).
 
 use crate::client::{
-    Command, DriveStatus, Hold, JointBound, Mode, Notice, PathPoint, Rejection, WorkspaceReason,
+    Command, DriveStatus, Hold, JointBound, Lag, Mode, Notice, PathPoint, Rejection,
+    WorkspaceReason,
 };
 
 /// At least one of every variant and every reason, each distinct in its text.
@@ -53,6 +54,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::Cancelled(IkGoal),
         Notice::Held(Hold::JointLimit(bound(5, true, 2.967, PathPoint::Goal))),
         Notice::Held(Hold::Workspace),
+        Notice::FollowingError(Lag::new(2, 4.4)),
     ]
     .into_iter()
     .chain(rejections)
@@ -82,12 +84,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::Cancelled(_) => 15,
         Notice::Held(Hold::JointLimit(_)) => 16,
         Notice::Held(Hold::Workspace) => 17,
+        Notice::FollowingError(_) => 18,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 18];
+    let mut seen = [false; 19];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }
