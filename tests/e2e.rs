@@ -1687,3 +1687,50 @@ fn the_ur5_plan_move_runs_on_drives_as_fast_as_its_joints_or_is_stopped_by_its_l
     assert_eq!(cause[0], 9.0, "{cause:?}");
     assert!((1.0..=6.0).contains(&cause[1]), "{cause:?}");
 }
+
+#[test]
+fn a_long_joint_1_move_whose_outer_arc_crosses_a_box_is_refused() {
+    // Issue 33: joint 1 from −4 to +4 rad, the tool round the base on a circle. The check
+    // used to evaluate 16 chords, which cut inside the arc (by 19 mm on ranger-mk1 here); a
+    // small box on the arc between two of them went unseen. Now the pieces are halved until
+    // the arc cannot stray past the box unseen.
+    use armgate_core::kinematics::{Chain, Joints};
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robots/ranger-mk1.toml");
+    let chain = Chain::new(&armgate_core::config::load_file(&root).unwrap());
+    let at = |q1: f64| {
+        let q = Joints::from_slice(&[q1, 0.6, -0.4, 0.2, 1.8, 0.1]).unwrap();
+        chain.forward(&q).unwrap().translation.vector
+    };
+    // Halfway between the old samples 7 and 8 (of 16, from −4 to 4 rad).
+    let (a, b, arc) = (at(-0.5), at(0.0), at(-0.25));
+    let h = (arc - (a + b) / 2.0).norm() / 4.0;
+    let cube = [
+        arc.x - h,
+        arc.x + h,
+        arc.y - h,
+        arc.y + h,
+        arc.z - h,
+        arc.z + h,
+    ];
+    let sim = Sim::start_edited(
+        "ranger-mk1",
+        |text| {
+            text.replace(
+                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]]",
+                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4], {cube:?}]"),
+            )
+        },
+        &["--start", "-4.0,0.6,-0.4,0.2,1.8,0.1"],
+    );
+    if !knows_status(&sim) {
+        return;
+    }
+    assert_eq!(sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0)[0], 1.0);
+    wait_drives(&sim, 2.0);
+    sim.ok("jG", with_joints(&[4.0, 0.6, -0.4, 0.2, 1.8, 0.1], 0.0), 0);
+    assert_eq!(
+        sim.text("jB", [0.0; 7], 0),
+        "ER25 Cmd jB crosses box at 46%"
+    );
+    assert_eq!(status(&sim)[4], 0.0, "nothing moves");
+}

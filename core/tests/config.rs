@@ -425,3 +425,16 @@ fn joints_faster_than_their_drives_are_refused_naming_both_values() {
         "joints[1].max_following_error: must be greater than zero"
     );
 }
+
+#[test]
+fn flat_exclusion_boxes_are_refused() {
+    let text = mk1_text().replacen(
+        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]",
+        "[-0.2, 0.2, 0.1, 0.1, -0.1, 0.4]",
+        1,
+    );
+    assert_eq!(
+        refusal(&text),
+        "robot file: workspace.boxes: a box must be thicker than zero on every axis"
+    );
+}

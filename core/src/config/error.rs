@@ -64,6 +64,8 @@ pub enum ConfigReason {
     TrackingIterations,
     /// A line may be slowed down 1 to 1000 times (`config::MAX_LINE_SLOWDOWN`).
     LineSlowdown,
+    /// An exclusion box is flat: its minimum equals its maximum on some axis.
+    NoVolume,
     /// A joint's limit exceeds what its drive is configured for: the limit and the drive's
     /// value (thousandths, rounded up) and the drive's field.
     ExceedsDrive {
@@ -142,6 +144,7 @@ impl fmt::Display for ConfigReason {
             Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
             Self::TrackingIterations => "must be 1 to 100",
             Self::LineSlowdown => "must be 1 to 1000",
+            Self::NoVolume => "a box must be thicker than zero on every axis",
             Self::CountsOverflow => {
                 "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
             }

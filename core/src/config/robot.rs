@@ -364,6 +364,14 @@ impl RobotConfig {
         check_box(&self.workspace.bounds).map_err(|r| top("workspace.bounds", r))?;
         for b in &self.workspace.boxes {
             check_box(b).map_err(|r| top("workspace.boxes", r))?;
+            // An exclusion box of zero thickness excludes nothing a straight piece of a way
+            // could not slip through between two points (issue 33): refused.
+            let flat = b
+                .chunks_exact(2)
+                .any(|pair| matches!(pair, [lo, hi] if lo >= hi));
+            if flat {
+                return Err(top("workspace.boxes", ConfigReason::NoVolume));
+            }
         }
         self.ik.validate().map_err(|(f, r)| top(f, r))?;
         not_negative(self.blend.cartesian).map_err(|r| top("blend.cartesian", r))?;

@@ -175,6 +175,9 @@ pub enum WorkspaceReason {
     /// `jN too fast at NN%`: joint N would need more than its rate limit there at the
     /// planned speed (the IK solution jumps to another branch, or a singularity).
     TooFast(u8, PathPoint),
+    /// `near edge at NN%`: a joint move's way comes so near an exclusion box or the bounds
+    /// there that the check, within its work budget, cannot tell that it stays clear.
+    NearEdge(PathPoint),
 }
 
 impl WorkspaceReason {
@@ -186,6 +189,7 @@ impl WorkspaceReason {
     const CROSSES_BOX: &'static str = "crosses box at ";
     const UNREACHABLE: &'static str = "unreachable";
     const TOO_FAST: &'static str = " too fast";
+    const NEAR_EDGE: &'static str = "near edge";
 
     /// Reads the reason back from the text after `ER25 Cmd XX `.
     pub(super) fn parse(s: &str) -> Option<Self> {
@@ -199,6 +203,9 @@ impl WorkspaceReason {
         if head == Self::UNREACHABLE {
             return Some(Self::Unreachable(at));
         }
+        if head == Self::NEAR_EDGE {
+            return Some(Self::NearEdge(at));
+        }
         let joint = head.strip_prefix('j')?.strip_suffix(Self::TOO_FAST)?;
         Some(Self::TooFast(decimal(joint)?, at))
     }
@@ -210,6 +217,7 @@ impl fmt::Display for WorkspaceReason {
             Self::CrossesBox(percent) => write!(f, "{}{percent}%", Self::CROSSES_BOX),
             Self::Unreachable(at) => write!(f, "{}{}", Self::UNREACHABLE, At(at)),
             Self::TooFast(joint, at) => write!(f, "j{joint}{}{}", Self::TOO_FAST, At(at)),
+            Self::NearEdge(at) => write!(f, "{}{}", Self::NEAR_EDGE, At(at)),
             fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }

@@ -32,6 +32,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         WorkspaceReason::ArmOutside,
         WorkspaceReason::TooFast(3, PathPoint::Goal),
         WorkspaceReason::TooFast(6, PathPoint::Along(1)),
+        WorkspaceReason::NearEdge(PathPoint::Along(37)),
     ]
     .map(|why| Notice::OutsideWorkspace(ViaExecute, why));
     let states = DriveStatus::ALL
