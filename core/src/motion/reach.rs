@@ -22,6 +22,12 @@
 //! the doubt. What a check costs on the Cortex-M7 (`qemu-bench/run.sh`, row "Cartesian line
 //! check") is in docs/kinematics.md; the worst measured stays within one period at 480 MHz.
 //!
+//! The check also measures how long each step needs at the joints' rate limits, and the line
+//! is planned to last long enough for its peak speed to need at most [`RATE_SHARE`] of any
+//! joint's rate at every checked step ([`planned_duration`]): the tick's time scale slows a
+//! line only as fast as the acceleration limits let it, and lost lines whose joint rates grew
+//! faster than that (issue 33: ranger-mk1 back to its home pose, `WN22` 23 mm short).
+//!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
 
@@ -292,7 +298,7 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
 /// The share of its `max_rate` a joint may need at a checked step at the line's planned peak
 /// speed ([`planned_duration`]): the rest is left for what happens between the checked points,
 /// where the tick's time scale slows the motion down if it must.
-pub const RATE_SHARE: f64 = 0.9;
+const RATE_SHARE: f64 = 0.9;
 
 /// The duration (s) to plan a line for so that at its peak speed no checked step needs more
 /// than [`RATE_SHARE`] of a joint's `max_rate`: `min_duration` (≥ 0, the client's) if that is
@@ -375,6 +381,18 @@ mod tests {
             fault(&q, &step(0.21, 1.0), &rate, 1.0, 1.0),
             Some(Fault::Rate(1))
         ));
+    }
+
+    #[test]
+    fn a_line_is_planned_slower_only_where_its_joints_need_it() {
+        // 10 s at the Cartesian limits; a step needing the whole line to last 5 s at the
+        // joints' rates is fine (0.5 of the rate at the peak), one needing 18 s is not: then
+        // planned for 2 × 18 / 0.9 = 40 s, the triangle's peak at twice the average.
+        assert_eq!(planned_duration(0.0, 10.0, 5.0), 0.0);
+        assert!((planned_duration(0.0, 10.0, 18.0) - 40.0).abs() < 1e-9);
+        // A client's 50 s is slow enough already (peak 2/50 of the way per second).
+        assert_eq!(planned_duration(50.0, 10.0, 18.0), 50.0);
+        assert_eq!(planned_duration(0.0, 0.0, 0.0), 0.0);
     }
 
     #[test]
