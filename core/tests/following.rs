@@ -4,7 +4,8 @@
     missing_docs,
     clippy::unwrap_used,
     clippy::panic,
-    clippy::indexing_slicing
+    clippy::indexing_slicing,
+    clippy::approx_constant
 )]
 
 mod common;
@@ -20,7 +21,7 @@ fn drives_that_fall_behind_stop_the_arm_once_with_the_joint_and_the_lag() {
     let config = common::robot("ur5");
     let start = Joints::from_slice(&[0.0, -1.5, 1.5, -1.5, -1.5, 0.0]).unwrap();
     let limit = config.following_limits();
-    assert!((limit[0] - (10.0 * 3.141592653589793 * 0.00504 + 0.01)).abs() < 1e-12);
+    assert!((limit[0] - (10.0 * std::f64::consts::PI * 0.00504 + 0.01)).abs() < 1e-12);
     let slow = config.per_joint(|j| j.max_rate.min(0.9));
     let mut arm = RateLimitedArm::new(start, slow, config.per_joint(|j| j.max_acceleration));
     let mut ctrl = Controller::new(&config);

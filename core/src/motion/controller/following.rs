@@ -48,7 +48,7 @@ fn first_lag(command: &Joints, measured: &Joints, limit: &Joints) -> Option<(usi
         .zip(limit.iter())
         .map(|((c, m), l)| (libm::fabs(c - m), *l))
         .enumerate()
-        .find(|(_, (error, limit))| !(error <= limit))
+        .find(|(_, (error, limit))| error > limit || error.is_nan())
         .map(|(joint, (error, _))| (joint, error))
 }
 
