@@ -141,7 +141,7 @@ impl Reach<'_> {
         let duration = cruise.max(min_duration);
         let mut needs = 0.0_f64;
         let full_step = 1.0 / LINE_SAMPLES as f64;
-        let (mut done, mut step) = (0.0, MIN_JUMP_STEP);
+        let (mut done, mut step) = (0.0, full_step);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
         let reached = Reached {
