@@ -63,6 +63,7 @@ impl Name for StopCause {
             Self::StreamTimeout => "stream timeout",
             Self::JointLimit => "joint limit",
             Self::ClientSilent => "client silent",
+            Self::FollowingError => "following error",
         }
     }
 }

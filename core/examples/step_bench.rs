@@ -39,6 +39,7 @@ fn main() {
             .edit(|config| {
                 for j in config.joints.iter_mut() {
                     j.max_rate = 10.0;
+                    j.drive.max_speed = 10.0;
                 }
             })
             .unwrap();

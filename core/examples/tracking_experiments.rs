@@ -176,6 +176,7 @@ fn config() -> ValidRobot {
         .edit(|config| {
             for joint in config.joints.iter_mut() {
                 joint.max_rate = JOINT_RATE;
+                joint.drive.max_speed = JOINT_RATE;
             }
         })
         .expect("valid with the raised rate");

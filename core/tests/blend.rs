@@ -629,6 +629,7 @@ fn random_cartesian_sequences_on_ranger_mk1_blend_within_the_tolerance_and_the_l
             // would slow the blends down below their Cartesian plan.
             for j in c.joints.iter_mut() {
                 j.max_rate = 2.0;
+                j.drive.max_speed = 2.0;
                 j.max_acceleration = 4.0;
             }
         })

@@ -408,3 +408,60 @@ fn revolute_limits_beyond_a_turn_are_flagged_and_no_shipped_file_has_them() {
         assert_eq!(common::robot(name).wide_limits().count(), 0, "{name}");
     }
 }
+
+#[test]
+fn joints_faster_than_their_drives_are_refused_naming_both_values() {
+    // Issue 33: ur5's joints at 3.14 rad/s on drives configured for 0.9 (the default) fell
+    // 4.4 rad behind their commands. Without the drives' max_speed the file is refused.
+    let ur5 = std::fs::read_to_string(common::robots_dir().join("ur5.toml")).unwrap();
+    let slow_drives = ur5.replace(", max_speed = 3.141592653589793 }", " }");
+    assert_eq!(
+        refusal(&slow_drives),
+        "robot file: joints[0].max_rate: 3.142 exceeds the drive.max_speed 0.900 the drive is \
+         configured for (it would fall behind its commands)"
+    );
+    let robot = common::robot("ranger-mk1");
+    let e = robot
+        .clone()
+        .edit(|c| c.joints[2].drive.max_acceleration = Some(0.4))
+        .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "joints[2].max_acceleration: 0.500 exceeds the drive.max_acceleration 0.400 the drive \
+         is configured for (it would fall behind its commands)"
+    );
+    assert!(matches!(e.reason, ConfigReason::ExceedsDrive { .. }));
+    // Exactly at the drive's values is fine, and a joint without a drive has none to exceed.
+    assert!(
+        robot
+            .clone()
+            .edit(|c| {
+                c.joints[2].drive.max_acceleration = Some(0.5);
+                c.joints[2].drive.max_speed = 0.2;
+            })
+            .is_ok()
+    );
+    let hybrid = common::robot("hybrid").edit(|c| c.joints[0].drive.max_speed = 0.01);
+    assert!(hybrid.is_ok());
+    // A following-error limit must be positive.
+    let e = robot
+        .edit(|c| c.joints[1].max_following_error = Some(0.0))
+        .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "joints[1].max_following_error: must be greater than zero"
+    );
+}
+
+#[test]
+fn flat_exclusion_boxes_are_refused() {
+    let text = mk1_text().replacen(
+        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]",
+        "[-0.2, 0.2, 0.1, 0.1, -0.1, 0.4]",
+        1,
+    );
+    assert_eq!(
+        refusal(&text),
+        "robot file: workspace.boxes: a box must be thicker than zero on every axis"
+    );
+}

@@ -29,6 +29,7 @@ fn mk1_fast() -> ValidRobot {
                 joint.max_velocity = 0.4;
                 joint.max_acceleration = 1.0;
                 joint.max_rate = 2.0;
+                joint.drive.max_speed = 2.0;
             }
         })
         .unwrap()

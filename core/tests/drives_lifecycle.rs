@@ -35,6 +35,7 @@ fn mk1_fast() -> ValidRobot {
                 joint.max_velocity = 0.4;
                 joint.max_acceleration = 1.0;
                 joint.max_rate = 2.0;
+                joint.drive.max_speed = 2.0;
             }
         })
         .unwrap()
@@ -175,6 +176,7 @@ fn mk2_streams_a_minute_to_eight_drives() {
             for joint in config.joints.iter_mut() {
                 joint.max_velocity = 0.4;
                 joint.max_rate = 2.0;
+                joint.drive.max_speed = 2.0;
             }
         })
         .unwrap();

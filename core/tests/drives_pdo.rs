@@ -33,6 +33,7 @@ fn mk1_pdo(fallback: bool) -> ValidRobot {
                 joint.max_velocity = 0.4;
                 joint.max_acceleration = 1.0;
                 joint.max_rate = 2.0;
+                joint.drive.max_speed = 2.0;
             }
             config.drives.streaming = Streaming::Pdo;
             config.drives.pdo_fallback = fallback;

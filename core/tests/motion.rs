@@ -81,6 +81,7 @@ fn mk1_fast() -> ValidRobot {
             // joints' acceleration limits).
             for j in config.joints.iter_mut() {
                 j.max_rate = 2.0;
+                j.drive.max_speed = 2.0;
                 j.max_acceleration = 4.0;
             }
         })

@@ -2,8 +2,10 @@
 //! joint acceleration is within `max_acceleration` (+1e-9 relative), every tick of a stop along
 //! a Cartesian path changes each axis's set-point velocity within its Cartesian
 //! `max_acceleration` (+1e-6 relative), the tool never gets strictly inside an exclusion box it
-//! was not already in, and after a stop (`ST`, `OF`) no stream starts until a move or a zero
-//! stream re-arms it (issue 33).
+//! was not already in, and after a stop (`ST`, `OF`, a following error) no stream starts until
+//! a move or a zero stream re-arms it (issue 33). Among the requests, the arm is now and then
+//! held where it is for a while (a blocked drive): the following-error stop it causes (stop
+//! cause 9) is held to the same limits.
 #![allow(
     clippy::approx_constant,
     missing_docs,
@@ -104,7 +106,8 @@ impl Oracle {
     }
 }
 
-fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
+/// Runs `requests` random requests; returns how many following-error stops began.
+fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) -> usize {
     let mut ctrl = Controller::new(&config);
     let mut arm = IdealArm::new(Joints::from_slice(start).unwrap());
     let mut rng = SplitMix64::new(seed);
@@ -120,13 +123,19 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
     oracle.inside = oracle.boxes_holding(&p0);
     let dt = config.control_period;
     let mut now = 0.0;
+    // Ticks the arm is still held where it is, and the following-error stops seen.
+    let (held, lagged) = (std::cell::Cell::new(0_u64), std::cell::Cell::new(0_usize));
     let mut step = |ctrl: &mut Controller, arm: &mut IdealArm, oracle: &mut Oracle| {
         now += dt;
         let stopping = ctrl.motion() == Motion::Stopping;
         let out = ctrl.step(now, &arm.measured()).unwrap();
         oracle.check(ctrl, out.command);
         oracle.check_setpoint(stopping, out.setpoint);
-        arm.step(out.command.as_ref());
+        lagged.set(lagged.get() + usize::from(out.events.following_error.is_some()));
+        match held.get() {
+            0 => arm.step(out.command.as_ref()),
+            ticks => held.set(ticks - 1),
+        }
     };
     step(&mut ctrl, &mut arm, &mut oracle);
     let c = &config.cartesian;
@@ -144,8 +153,14 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
             *latched = false;
         }
     };
+    let mut lags_seen = 0;
     for _ in 0..requests {
-        match rng.next_u64() % 9 {
+        // A following-error stop latches as any stop.
+        if lagged.get() > lags_seen {
+            lags_seen = lagged.get();
+            latched = true;
+        }
+        match rng.next_u64() % 10 {
             0 => {
                 let mode = [Mode::Off, Mode::Joint, Mode::Cartesian][(rng.next_u64() % 3) as usize];
                 let _ = ctrl.set_mode(mode);
@@ -208,15 +223,17 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) {
                 ctrl.stop(StopCause::Stop);
                 latched = true;
             }
-            _ => {
+            8 => {
                 ctrl.stop(StopCause::PowerOff);
                 latched = true;
             }
+            _ => held.set(10 + rng.next_u64() % 60),
         }
         for _ in 0..(rng.next_u64() % 120) {
             step(&mut ctrl, &mut arm, &mut oracle);
         }
     }
+    lagged.get()
 }
 
 #[test]
@@ -233,12 +250,14 @@ fn random_requests_never_exceed_the_acceleration_or_enter_a_box() {
                 .unwrap();
         })
         .unwrap();
+    let mut lagged = 0;
     for seed in 0..6 {
-        run(ranger.clone(), &READY, seed, 60);
+        lagged += run(ranger.clone(), &READY, seed, 60);
     }
     let ur5 = common::robot("ur5");
     let mid = Controller::new(&ur5).chain().mid_range();
     for seed in 0..3 {
-        run(ur5.clone(), &mid, 100 + seed, 60);
+        lagged += run(ur5.clone(), &mid, 100 + seed, 60);
     }
+    assert!(lagged > 0, "no following-error stop was tried");
 }

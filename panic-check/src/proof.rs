@@ -52,10 +52,13 @@ fn robot() -> Option<ValidRobot> {
         max_acceleration: 1.0,
         max_rate: 1.0,
         max_jerk: None,
+        max_following_error: None,
         drive: JointDrive {
             node_id: 101,
             counts_per_rev: 1 << 20,
             home: 0.0,
+            max_speed: 1.0,
+            max_acceleration: None,
         },
     };
     let mut joints = heapless::Vec::new();

@@ -200,7 +200,7 @@ class Arm(Waiting):
 
     def get_stop_cause(self) -> Tuple[Optional[StopCause], Optional[int]]:
         """``SQ`` index 2: why the arm last stopped or is held, and the joint (1-based) of a
-        joint-limit hold; ``(None, None)`` for none (or from a controller without index 2)."""
+        joint-limit hold or a following error; ``(None, None)`` for none (or from a controller without index 2)."""
         cause, joint, _ = self._stop_report()
         return cause, joint
 

@@ -184,11 +184,11 @@ class ControllerMessage(ArmError):
     @property
     def ends_motion(self) -> bool:
         """Whether a running motion will not complete: ``ER21`` (workspace limit), ``WN22`` (IK
-        divergence), ``WN27`` (via point missed), ``ER41`` (the client watchdog stopped the arm)
-        and drive faults ``ER30``..``ER39``."""
+        divergence), ``WN27`` (via point missed), ``ER41`` (the client watchdog stopped the arm),
+        ``ER43`` (a following error stopped it) and drive faults ``ER30``..``ER39``."""
         if self.is_warning:
             return self.code in (22, 27)
-        return self.code in (21, 41) or 30 <= self.code <= 39
+        return self.code in (21, 41, 43) or 30 <= self.code <= 39
 
     @classmethod
     def from_text(cls, text: str) -> "ControllerMessage":
@@ -284,6 +284,12 @@ class Cancelled(ControllerError):
     was cancelled by a stop that came after it."""
 
 
+class FollowingError(ControllerError):
+    """``ER43 j3 following error 0.123``: joint 3's measured position was this far from its
+    command, more than the robot file's ``max_following_error``: the arm was stopped (ends a
+    motion)."""
+
+
 class JointLimitWarning(ControllerWarning):
     """``WN12 Joint limit.``: a joint set-point was clamped (the motion goes on); ``WN12 j6 at
     limit 2.967``: a velocity stream holds joint 6 before its limit."""
@@ -321,6 +327,7 @@ _ERRORS: Dict[int, Type[ControllerMessage]] = {
     40: HeldByOther,
     41: ClientSilent,
     42: Cancelled,
+    43: FollowingError,
 }
 
 _WARNINGS: Dict[int, Type[ControllerMessage]] = {

@@ -67,6 +67,9 @@ class StopCause(enum.IntEnum):
     """A stream holds a joint at its limit (the joint is reported with it)."""
     CLIENT_SILENT = 8
     """The controlling client was silent for longer than its watchdog (``WD``)."""
+    FOLLOWING_ERROR = 9
+    """A joint's measured position was further from its command than the robot file's
+    ``max_following_error`` (``ER43``; the joint is reported with it)."""
 
     @property
     def label(self) -> str:

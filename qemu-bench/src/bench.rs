@@ -13,6 +13,12 @@
 //! straight line to the goal by tracking IK before starting) is measured on the first
 //! [`LINE_CHECKS`] configurations, each with a goal 2–60 cm and up to 1 rad away (drawn from a
 //! generator of its own, distributed as in `core/examples/reach_bench.rs`).
+//!
+//! The up-front check of a joint move (`Controller::move_joints`: the tool's way, in pieces
+//! halved until the arm cannot stray past a box or a bound unseen, `motion/joint_path.rs`) is
+//! measured from the same configurations to the next one, and in its worst case: joint 1
+//! turned 2 rad with the bounds' top 1 mm above the tool, which the way runs along, so that
+//! the check spends its whole budget of FK evaluations and refuses (`near edge`).
 
 use core::hint::black_box;
 
@@ -54,6 +60,9 @@ struct Results {
     solutions: u64,
     line_check: Timing,
     lines_refused: u32,
+    joint_path: Timing,
+    joint_path_worst: Timing,
+    worst_refused: bool,
     unreachable: Timing,
     unreachable_iterations: u32,
     iterations: u64,
@@ -126,6 +135,8 @@ fn measure_robot(config: &ValidRobot) -> Results {
 
         if sample < LINE_CHECKS {
             check_line(config, &q, &target, &mut goals, &mut results);
+            let next = chain.random_joints(&mut goals);
+            check_joint_path(config, &q, &next, &mut results.joint_path);
         }
 
         let mut seed = q;
@@ -160,6 +171,7 @@ fn measure_robot(config: &ValidRobot) -> Results {
             Err(_) => results.errors += 1,
         }
     }
+    check_worst_joint_path(config, &chain, &mut results);
     // The worst case of a global solve: a target 10 m out is never reached, so every solve
     // spends the whole budget (`ik.global_iterations` Newton steps).
     for k in 0..UNREACHABLE_SAMPLES {
@@ -204,6 +216,42 @@ fn check_line(
     let (ticks, verdict) = measure(|| black_box(&mut ctrl).move_cartesian(black_box(goal), 0.0));
     results.line_check.add(ticks);
     results.lines_refused += u32::from(verdict.is_err());
+}
+
+/// One up-front check of a joint move from `q` to `goal`, timed into `timing`; whether it
+/// was refused.
+fn check_joint_path(config: &ValidRobot, q: &Joints, goal: &Joints, timing: &mut Timing) -> bool {
+    let mut ctrl = Controller::new(config);
+    if ctrl.step(0.0, q).is_err() || ctrl.set_mode(Mode::Joint).is_err() {
+        return false;
+    }
+    let (ticks, verdict) = measure(|| black_box(&mut ctrl).move_joints(black_box(goal), 0.0));
+    timing.add(ticks);
+    verdict.is_err()
+}
+
+/// The joint-path check's worst case: joint 1 turned 2 rad from the drives' home (the tool's
+/// height does not change) under bounds whose top is 1 mm above the tool.
+fn check_worst_joint_path(config: &ValidRobot, chain: &Chain, results: &mut Results) {
+    let home = config.home();
+    let Ok(tool) = chain.forward(&home) else {
+        results.errors += 1;
+        return;
+    };
+    let top = tool.translation.vector.z + 0.001;
+    let Ok(grazed) = config.clone().edit(|c| {
+        if let Some(z_max) = c.workspace.bounds.get_mut(5) {
+            *z_max = top;
+        }
+    }) else {
+        results.errors += 1;
+        return;
+    };
+    let mut goal = home;
+    if let (Some(q1), Some(max)) = (goal.get_mut(0), chain.max().first()) {
+        *q1 = (*q1 + 2.0).min(*max);
+    }
+    results.worst_refused = check_joint_path(&grazed, &home, &goal, &mut results.joint_path_worst);
 }
 
 /// A vector with components uniform in −0.5..0.5.
@@ -274,6 +322,23 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         mean,
         max,
         100.0 * f64::from(results.lines_refused) / f64::from(results.line_check.calls.max(1))
+    );
+    let (mean, max) = results.joint_path.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - |         - |",
+        name,
+        "joint path check",
+        mean,
+        max
+    );
+    let (mean, _) = results.joint_path_worst.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - | {:>9} |",
+        name,
+        "joint path worst",
+        mean,
+        mean,
+        if results.worst_refused { "refused" } else { "passed" }
     );
     let (mean, max) = results.unreachable.instructions(counter);
     hprintln!(

@@ -59,8 +59,9 @@ const OFFSET: [f64; 3] = [0.05, -0.05, 0.05];
 const TURN: f64 = 0.1;
 /// ... in at least this long (s).
 const MIN_DURATION: f64 = 4.0;
-/// Upper bound on the ticks of the move.
-const MAX_TICKS: u32 = 2_000;
+/// Upper bound on the ticks of the move (78 s at ranger-mk1's period: from its home pose the
+/// line check now plans the move for about 57 s, as slow as joint 1 needs it, issue 33).
+const MAX_TICKS: u32 = 4_000;
 /// Ticks measured after the move, the arm holding in Cartesian mode.
 const HOLD_TICKS: u32 = 50;
 /// PS requests measured after the move.
@@ -199,7 +200,14 @@ impl Session {
         let (ticks, ()) = measure(|| self.tick());
         match self.link.answer {
             Some(reply) if reply.payload().starts_with(expect) => Ok(ticks),
-            _ => Err("a request of the move was refused"),
+            answer => {
+                // What it was answered instead, for the reader of the failure.
+                let payload = answer.as_ref().map_or(&[][..], |reply| reply.payload());
+                let end = payload.iter().position(|&b| b == 0).unwrap_or(payload.len());
+                let text = payload.get(..end.min(30)).unwrap_or_default();
+                hprintln!("answered {:?}", core::str::from_utf8(text).unwrap_or("(not text)"));
+                Err("a request of the move was refused")
+            }
         }
     }
 

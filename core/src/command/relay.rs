@@ -73,6 +73,9 @@ impl NoticeRelay {
             }
             channel.active = raised;
         }
+        if let Some(lag) = events.following_error {
+            self.announce(Notice::FollowingError(lag).text());
+        }
         if events.hold != self.hold {
             self.hold = events.hold;
             if let Some(hold) = events.hold

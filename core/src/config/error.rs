@@ -64,6 +64,18 @@ pub enum ConfigReason {
     TrackingIterations,
     /// A line may be slowed down 1 to 1000 times (`config::MAX_LINE_SLOWDOWN`).
     LineSlowdown,
+    /// An exclusion box is flat: its minimum equals its maximum on some axis.
+    NoVolume,
+    /// A joint's limit exceeds what its drive is configured for: the limit and the drive's
+    /// value (thousandths, rounded up) and the drive's field.
+    ExceedsDrive {
+        /// The joint's limit, thousandths.
+        value_milli: u32,
+        /// The drive's value, thousandths.
+        drive_milli: u32,
+        /// The drive's field, e.g. `drive.max_speed`.
+        drive_field: &'static str,
+    },
 }
 
 impl ConfigError {
@@ -103,6 +115,22 @@ impl fmt::Display for ConfigReason {
                  (1.08 ms to 0.99972 s)"
             }
             Self::HomeOutsideLimits => "home must lie within the joint's min and max",
+            Self::ExceedsDrive {
+                value_milli,
+                drive_milli,
+                drive_field,
+            } => {
+                let (v, d) = (value_milli, drive_milli);
+                return write!(
+                    f,
+                    "{}.{:03} exceeds the {drive_field} {}.{:03} the drive is configured for \
+                     (it would fall behind its commands)",
+                    v / 1000,
+                    v % 1000,
+                    d / 1000,
+                    d % 1000
+                );
+            }
             Self::BusOverloaded { percent } => {
                 return write!(
                     f,
@@ -116,6 +144,7 @@ impl fmt::Display for ConfigReason {
             Self::PdoLeadRaise => "plus drives.pdo_lead must be at most 8 points",
             Self::TrackingIterations => "must be 1 to 100",
             Self::LineSlowdown => "must be 1 to 1000",
+            Self::NoVolume => "a box must be thicker than zero on every axis",
             Self::CountsOverflow => {
                 "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
             }

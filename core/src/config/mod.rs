@@ -22,9 +22,10 @@ pub use drives::{DrivesConfig, MAX_PDO_LEAD, PDO_TARGET_LEAD, Streaming, TIME_ST
 pub use error::{ConfigError, ConfigReason};
 pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{
-    BaseConfig, BlendConfig, CartesianLimits, IkConfig, JointConfig, JointDrive, JointType,
-    MAX_BOXES, MAX_LINE_SLOWDOWN, MAX_NAME_LEN, MAX_PERIOD_SAMPLES, MAX_TRACKING_ITERATIONS,
-    MIN_PERIOD_SAMPLES, RobotConfig, ToolConfig, WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, DRIVE_MAX_SPEED, IkConfig, JointConfig, JointDrive,
+    JointType, MAX_BOXES, MAX_LINE_SLOWDOWN, MAX_NAME_LEN, MAX_PERIOD_SAMPLES,
+    MAX_TRACKING_ITERATIONS, MIN_PERIOD_SAMPLES, RobotConfig, ToolConfig, WorkspaceConfig,
+    default_following_error,
 };
 #[cfg(feature = "std")]
 pub use toml_file::{LoadError, load_file, parse_toml};

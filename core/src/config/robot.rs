@@ -104,6 +104,10 @@ pub struct JointConfig {
     /// Joint generator jerk limit (rad/s³ or m/s³); required by the jerk-limited profile.
     #[serde(default)]
     pub max_jerk: Option<f64>,
+    /// The most the measured position may differ from the command (rad or m) before the
+    /// controller stops the arm (`ER43`, stop cause 9); none: [`default_following_error`].
+    #[serde(default)]
+    pub max_following_error: Option<f64>,
     /// The servo drive of this joint.
     pub drive: JointDrive,
 }
@@ -119,6 +123,37 @@ pub struct JointDrive {
     pub counts_per_rev: i32,
     /// Joint position at zero encoder counts (rad or m).
     pub home: f64,
+    /// The speed the drive is configured to move at most (rad/s or m/s): a joint whose
+    /// `max_rate` is higher is refused at load, since the drive would fall behind its
+    /// commands. None: [`DRIVE_MAX_SPEED`], the seed's Whistles (the simulated Whistle follows
+    /// this value).
+    #[serde(default = "default_drive_speed")]
+    pub max_speed: f64,
+    /// The acceleration the drive is configured for at most (rad/s² or m/s²), if it limits
+    /// one: a joint whose `max_acceleration` is higher is refused at load.
+    #[serde(default)]
+    pub max_acceleration: Option<f64>,
+}
+
+/// The speed limit of a drive the robot file says nothing about (rad/s or m/s): the thesis
+/// observed the seed's Whistles to move at about 0.9 rad/s.
+pub const DRIVE_MAX_SPEED: f64 = 0.9;
+
+fn default_drive_speed() -> f64 {
+    DRIVE_MAX_SPEED
+}
+
+/// Control periods of command a joint may lag behind at its `max_rate` by default (the drives
+/// execute a set-point two or three periods after it is sent, and report it a period later).
+const FOLLOWING_PERIODS: f64 = 10.0;
+/// The following error always allowed by default (rad or m): the servo's own settling.
+const FOLLOWING_FLOOR: f64 = 0.01;
+
+/// The default `max_following_error` of a joint (rad or m): what it travels in
+/// [`FOLLOWING_PERIODS`] control periods at its `max_rate`, plus [`FOLLOWING_FLOOR`]
+/// (ranger-mk1: 0.049 rad; ur5: 0.168 rad).
+pub fn default_following_error(max_rate: f64, control_period: f64) -> f64 {
+    FOLLOWING_PERIODS * max_rate * control_period + FOLLOWING_FLOOR
 }
 
 /// The tool frame relative to the last link frame:
@@ -238,6 +273,15 @@ impl RobotConfig {
         self.joints.len()
     }
 
+    /// Each joint's `max_following_error`, or its [`default_following_error`].
+    pub fn following_limits(&self) -> Joints {
+        self.per_joint(|joint| {
+            joint
+                .max_following_error
+                .unwrap_or_else(|| default_following_error(joint.max_rate, self.control_period))
+        })
+    }
+
     /// Every joint at its drive's home position (zero encoder counts).
     pub fn home(&self) -> Joints {
         self.per_joint(|joint| joint.drive.home)
@@ -320,6 +364,14 @@ impl RobotConfig {
         check_box(&self.workspace.bounds).map_err(|r| top("workspace.bounds", r))?;
         for b in &self.workspace.boxes {
             check_box(b).map_err(|r| top("workspace.boxes", r))?;
+            // An exclusion box of zero thickness excludes nothing a straight piece of a way
+            // could not slip through between two points (issue 33): refused.
+            let flat = b
+                .chunks_exact(2)
+                .any(|pair| matches!(pair, [lo, hi] if lo >= hi));
+            if flat {
+                return Err(top("workspace.boxes", ConfigReason::NoVolume));
+            }
         }
         self.ik.validate().map_err(|(f, r)| top(f, r))?;
         not_negative(self.blend.cartesian).map_err(|r| top("blend.cartesian", r))?;
@@ -383,6 +435,10 @@ impl JointConfig {
         positive(self.max_velocity).map_err(|r| ("max_velocity", r))?;
         positive(self.max_acceleration).map_err(|r| ("max_acceleration", r))?;
         positive(self.max_rate).map_err(|r| ("max_rate", r))?;
+        if let Some(limit) = self.max_following_error {
+            positive(limit).map_err(|r| ("max_following_error", r))?;
+        }
+        self.within_drive()?;
         finite(self.drive.home).map_err(|r| ("drive.home", r))?;
         if !(self.min..=self.max).contains(&self.drive.home) {
             return Err(("drive.home", ConfigReason::HomeOutsideLimits));
@@ -403,6 +459,42 @@ impl JointConfig {
         }
         Ok(())
     }
+}
+
+impl JointConfig {
+    /// Refuses a joint whose rate or acceleration limit exceeds what its drive is configured
+    /// for, naming both: the drive would fall behind the commands (issue 33: ur5's joints at
+    /// 3.14 rad/s on drives limited to 0.9 lagged 4.4 rad). A joint without a drive (node 0)
+    /// has nothing to exceed.
+    fn within_drive(&self) -> Result<(), (&'static str, ConfigReason)> {
+        if self.drive.node_id == 0 {
+            return Ok(());
+        }
+        positive(self.drive.max_speed).map_err(|r| ("drive.max_speed", r))?;
+        let exceeds = |value: f64, drive: f64, drive_field| ConfigReason::ExceedsDrive {
+            value_milli: milli(value),
+            drive_milli: milli(drive),
+            drive_field,
+        };
+        if self.max_rate > self.drive.max_speed {
+            let why = exceeds(self.max_rate, self.drive.max_speed, "drive.max_speed");
+            return Err(("max_rate", why));
+        }
+        if let Some(drive) = self.drive.max_acceleration {
+            positive(drive).map_err(|r| ("drive.max_acceleration", r))?;
+            if self.max_acceleration > drive {
+                let why = exceeds(self.max_acceleration, drive, "drive.max_acceleration");
+                return Err(("max_acceleration", why));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A positive value in thousandths, rounded up (so that a value above its limit never prints
+/// equal to it); saturating.
+fn milli(v: f64) -> u32 {
+    libm::ceil(v * 1000.0) as u32
 }
 
 impl ToolConfig {

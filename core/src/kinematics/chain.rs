@@ -127,6 +127,30 @@ impl Chain {
         self.max.get(..self.n).unwrap_or(&[])
     }
 
+    /// The length of the tool frame's offset from the last link frame (m).
+    pub(super) fn tool_offset(&self) -> f64 {
+        self.tool.translation.vector.norm()
+    }
+
+    /// The most link `i` (0-based) can translate what lies beyond the joint before it: its
+    /// `|a|` plus its `|d|`, for a prismatic joint at the larger end of its range (m; 0 past
+    /// the last joint).
+    pub(super) fn link_reach(&self, i: usize) -> f64 {
+        let Some(link) = self.links.get(i).filter(|_| i < self.n) else {
+            return 0.0;
+        };
+        let d = if link.prismatic {
+            let (lo, hi) = (
+                self.min.get(i).copied().unwrap_or(0.0),
+                self.max.get(i).copied().unwrap_or(0.0),
+            );
+            libm::fabs(link.d + lo).max(libm::fabs(link.d + hi))
+        } else {
+            libm::fabs(link.d)
+        };
+        libm::fabs(link.a) + d
+    }
+
     /// True if joint `i` is prismatic.
     pub fn is_prismatic(&self, i: usize) -> bool {
         self.links.get(i).is_some_and(|l| l.prismatic)

@@ -25,6 +25,7 @@ mod screws;
 mod spherical_shoulder;
 mod spherical_wrist;
 mod subproblems;
+mod sweep;
 mod three_parallel;
 mod velocity;
 
@@ -35,3 +36,4 @@ pub use evaluation::LastEvaluation;
 pub use family::{Family, FamilyFit};
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;
+pub use sweep::Levers;

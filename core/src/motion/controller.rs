@@ -9,6 +9,7 @@
 
 mod cartesian_requests;
 mod cartesian_tick;
+mod following;
 mod joint_requests;
 mod joint_tick;
 mod stopping;
@@ -115,6 +116,10 @@ pub struct Controller {
     fixed_point: FixedPoint,
     /// The tracking solves' last pose evaluation: the next tick's seed, evaluated already.
     last_evaluation: LastEvaluation,
+    /// Each joint's `max_following_error` (`following.rs`).
+    following_limit: Joints,
+    /// A following error stopped the arm and some joint is still beyond its limit.
+    lagging: bool,
 }
 
 impl Controller {
@@ -156,6 +161,8 @@ impl Controller {
             max_rate: config.per_joint(|j| j.max_rate),
             fixed_point: FixedPoint::default(),
             last_evaluation: LastEvaluation::default(),
+            following_limit: config.following_limits(),
+            lagging: false,
         }
     }
 
@@ -178,6 +185,7 @@ impl Controller {
             workspace_limit: !self.workspace.allows(&f_m.translation.vector),
             ..Events::default()
         };
+        self.check_following(&q_m, &mut events);
         let mut stream_finished = false;
         let running = match self.mode {
             _ if self.supervisor.is_stopping() => None,

@@ -1,6 +1,6 @@
 //! What happened during one control tick.
 
-use armgate_protocol::client::Hold;
+use armgate_protocol::client::{Hold, Lag};
 
 /// Conditions and happenings of one tick. Conditions (limits, divergence) are raised on every
 /// tick while they hold; the message relay decides how often to tell the client.
@@ -23,4 +23,7 @@ pub struct Events {
     /// A velocity stream holds the arm where its command would drive it on (`WN12 jN at limit
     /// L`, `WN13`): told once when the hold begins.
     pub hold: Option<Hold>,
+    /// A joint's measured position was further from its command than the robot file allows:
+    /// the arm is stopped (`ER43 jN following error E`), told once.
+    pub following_error: Option<Lag>,
 }

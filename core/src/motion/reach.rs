@@ -22,6 +22,12 @@
 //! the doubt. What a check costs on the Cortex-M7 (`qemu-bench/run.sh`, row "Cartesian line
 //! check") is in docs/kinematics.md; the worst measured stays within one period at 480 MHz.
 //!
+//! The check also measures how long each step needs at the joints' rate limits, and the line
+//! is planned to last long enough for its peak speed to need at most [`RATE_SHARE`] of any
+//! joint's rate at every checked step ([`planned_duration`]): the tick's time scale slows a
+//! line only as fast as the acceleration limits let it, and lost lines whose joint rates grew
+//! faster than that (issue 33: ranger-mk1 back to its home pose, `WN22` 23 mm short).
+//!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
 
@@ -88,9 +94,11 @@ pub const MAX_JOINT_STEP: f64 = 0.25;
 
 impl Reach<'_> {
     /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
-    /// `goal`, planned to last at least `min_duration` (s); returns the joints at the goal.
-    /// (If the budget runs out the move gets the benefit of the doubt, and the joints reached
-    /// so far are returned.)
+    /// `goal`, planned to last at least `min_duration` (s); returns the joints at the goal and
+    /// the duration to plan the line for ([`planned_duration`]: longer than `min_duration`
+    /// where the joints need the line slower than the Cartesian limits, so that the tick
+    /// follows the line without losing it, issue 33). (If the budget runs out the move gets the
+    /// benefit of the doubt, and the joints reached so far are returned.)
     ///
     /// Between two samples no joint may move more than [`MAX_JOINT_STEP`] (at the shortest
     /// step) or need more than `ik.line_slowdown` times its rate limit at the line's cruise
@@ -103,7 +111,7 @@ impl Reach<'_> {
         goal: &Frame,
         seed: &Joints,
         min_duration: f64,
-    ) -> Result<Joints, Refusal> {
+    ) -> Result<Checked, Refusal> {
         let (from, to) = (&start.translation.vector, &goal.translation.vector);
         if let Some(entry) = self.workspace.first_box_crossing(from, to) {
             return match PathPoint::at(entry) {
@@ -124,11 +132,14 @@ impl Reach<'_> {
         };
         // The time the whole line takes at cruise speed (s): the slowest component.
         let delta: [f64; 6] = math::diff(start, goal).into();
-        let duration = delta
+        let min_duration = min_duration.max(0.0);
+        let cruise = delta
             .iter()
             .zip(self.speed.iter())
             .map(|(d, v)| libm::fabs(*d) / v)
-            .fold(min_duration.max(0.0), f64::max);
+            .fold(0.0, f64::max);
+        let duration = cruise.max(min_duration);
+        let mut needs = 0.0_f64;
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step) = (0.0, full_step);
         // The last point reached and the step being tried: the two swap roles, never copied
@@ -183,11 +194,16 @@ impl Reach<'_> {
                 }
                 None => {}
             }
+            needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
-        too_fast.map_or(Ok(q), Err)
+        let checked = Checked {
+            q,
+            duration: planned_duration(min_duration, cruise, needs),
+        };
+        too_fast.map_or(Ok(checked), Err)
     }
 
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
@@ -223,6 +239,15 @@ impl Reach<'_> {
     }
 }
 
+/// A line that passed the check: the joints at its end, and the duration to plan it for.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Checked {
+    /// The joints at the goal.
+    pub q: Joints,
+    /// The least duration (s) to plan the line for ([`planned_duration`]).
+    pub duration: f64,
+}
+
 /// A point of the line: the joints there, their pose (which spares the next solve the FK), and
 /// their angles if a closed-form solve gave them (which spares it their `sincos`).
 #[derive(Clone, Copy)]
@@ -242,6 +267,20 @@ enum Fault {
     Jump(u8),
 }
 
+/// How long (s) the whole line would last at a constant speed at which the step from `q` to
+/// `next` (a fraction `step` of the way) needs no joint faster than `max_rate`: the largest
+/// `|Δq| / (max_rate · step)` (a NaN is infinite).
+fn step_needs(q: &Joints, next: &Joints, max_rate: &Joints, step: f64) -> f64 {
+    q.iter()
+        .zip(next.iter())
+        .zip(max_rate.iter())
+        .map(|((a, b), rate)| {
+            let need = libm::fabs(b - a) / (rate * step);
+            if need.is_nan() { f64::INFINITY } else { need }
+        })
+        .fold(0.0, f64::max)
+}
+
 /// The first joint that cannot move from `q` to `next` in `time` (s) at `slowdown` times
 /// `max_rate`, a jump first (a NaN is a jump).
 fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64) -> Option<Fault> {
@@ -254,6 +293,30 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
         .zip(max_rate.iter())
         .position(|(m, rate)| m > slowdown * rate * time)
         .map(|joint| Fault::Rate(number(joint)))
+}
+
+/// The share of its `max_rate` a joint may need at a checked step at the line's planned peak
+/// speed ([`planned_duration`]): the rest is left for what happens between the checked points,
+/// where the tick's time scale slows the motion down if it must.
+const RATE_SHARE: f64 = 0.9;
+
+/// The duration (s) to plan a line for so that at its peak speed no checked step needs more
+/// than [`RATE_SHARE`] of a joint's `max_rate`: `min_duration` (≥ 0, the client's) if that is
+/// slow enough, else longer. `cruise`: how long the line lasts at the Cartesian speed limits
+/// (s); `needs`: the largest [`step_needs`] of its steps. A profile stretched to a duration
+/// `D` peaks at no more than twice the average speed (at `2/D` of the way per second, the
+/// triangle), and no profile exceeds the speed limits (`1/cruise`).
+fn planned_duration(min_duration: f64, cruise: f64, needs: f64) -> f64 {
+    let peak = if min_duration > 0.0 {
+        (2.0 / min_duration).min(1.0 / cruise)
+    } else {
+        1.0 / cruise
+    };
+    if needs <= 0.0 || peak * needs <= RATE_SHARE {
+        min_duration
+    } else {
+        min_duration.max(2.0 * needs / RATE_SHARE)
+    }
 }
 
 /// The first joint of `q` at (within [`PINNED`]) or beyond one of its limits.
@@ -318,6 +381,18 @@ mod tests {
             fault(&q, &step(0.21, 1.0), &rate, 1.0, 1.0),
             Some(Fault::Rate(1))
         ));
+    }
+
+    #[test]
+    fn a_line_is_planned_slower_only_where_its_joints_need_it() {
+        // 10 s at the Cartesian limits; a step needing the whole line to last 5 s at the
+        // joints' rates is fine (0.5 of the rate at the peak), one needing 18 s is not: then
+        // planned for 2 × 18 / 0.9 = 40 s, the triangle's peak at twice the average.
+        assert_eq!(planned_duration(0.0, 10.0, 5.0), 0.0);
+        assert!((planned_duration(0.0, 10.0, 18.0) - 40.0).abs() < 1e-9);
+        // A client's 50 s is slow enough already (peak 2/50 of the way per second).
+        assert_eq!(planned_duration(50.0, 10.0, 18.0), 50.0);
+        assert_eq!(planned_duration(0.0, 0.0, 0.0), 0.0);
     }
 
     #[test]

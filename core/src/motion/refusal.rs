@@ -29,6 +29,9 @@ pub enum Refusal {
     /// line to a Cartesian goal at the planned speed (a jump to another IK branch, or a
     /// singularity).
     TooFast(u8, PathPoint),
+    /// A joint move's way comes so near a box or the bounds at this point that the check
+    /// cannot tell within its work budget that it stays clear (`joint_path.rs`).
+    NearEdge(PathPoint),
     /// The arm itself is in a forbidden region (drive it out in joint mode).
     ArmOutsideWorkspace,
     /// A via-point index is not below the number of slots.
@@ -62,6 +65,10 @@ impl core::fmt::Display for Refusal {
             }
             Self::TooFast(joint, PathPoint::Along(percent)) => {
                 write!(f, "joint {joint} too fast at {percent}% of the line")
+            }
+            Self::NearEdge(PathPoint::Goal) => f.write_str("too near a box or bound at the goal"),
+            Self::NearEdge(PathPoint::Along(percent)) => {
+                write!(f, "too near a box or bound at {percent}% of the way")
             }
             Self::ArmOutsideWorkspace => f.write_str("the arm is outside the workspace"),
             Self::IndexOutOfRange => f.write_str("via-point index out of range"),

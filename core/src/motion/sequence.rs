@@ -128,6 +128,12 @@ impl<P: Copy> Sequence<P> {
 
     /// Starts the sequence; returns the first leg to command.
     pub fn start(&mut self) -> Result<ViaPoint<P>, Refusal> {
+        self.start_planned(&[])
+    }
+
+    /// [`start`](Self::start), each leg `k` lasting at least `durations[k]` (s) as well as its
+    /// own minimum: what the up-front check of the legs found they need (`reach.rs`).
+    pub fn start_planned(&mut self, durations: &[f64]) -> Result<ViaPoint<P>, Refusal> {
         if self.run.is_some() {
             return Err(Refusal::Busy);
         }
@@ -137,14 +143,22 @@ impl<P: Copy> Sequence<P> {
             .copied()
             .flatten()
             .ok_or(Refusal::NoGoal)?;
+        let planned = |via: ViaPoint<P>, k: usize| ViaPoint {
+            min_duration: durations
+                .get(k)
+                .map_or(via.min_duration, |d| via.min_duration.max(*d)),
+            ..via
+        };
+        let first = planned(first, 0);
         let mut points = [None; VIA_SLOTS];
         // The contiguous prefix of ready slots (all 20 if every slot is ready, spec §9 item 21).
-        for (dst, src) in points
+        for (k, (dst, src)) in points
             .iter_mut()
             .zip(&self.slots)
             .take_while(|(_, s)| s.is_some())
+            .enumerate()
         {
-            *dst = *src;
+            *dst = src.map(|via| planned(via, k));
         }
         let blends = self.blends.map(|own| own.unwrap_or(self.default_blend));
         self.run = Some(Run {

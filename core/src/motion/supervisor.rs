@@ -24,7 +24,7 @@ pub use armgate_protocol::client::StopCause;
 /// a motion on purpose (a move, or a zero twist or zero joint rates that re-arm a stream), so
 /// that a stream still being sent cannot undo it a period later (docs/safety.md). The stops
 /// that latch are the ones that come from outside the holder's own stream: `ST`/`jR` from
-/// anyone, `OF`, the workspace, IK divergence, the client watchdog. A stream's own timeout is
+/// anyone, `OF`, the workspace, IK divergence, the client watchdog, a following error. A stream's own timeout is
 /// the protocol's way to end a stream (its client stopped sending), a mode change is the
 /// holder's own request, and a joint-limit hold is no stop: they do not latch.
 pub fn latches(cause: StopCause) -> bool {
@@ -33,7 +33,8 @@ pub fn latches(cause: StopCause) -> bool {
         | StopCause::PowerOff
         | StopCause::Workspace
         | StopCause::IkDivergence
-        | StopCause::ClientSilent => true,
+        | StopCause::ClientSilent
+        | StopCause::FollowingError => true,
         StopCause::ModeChange | StopCause::StreamTimeout | StopCause::JointLimit => false,
     }
 }
@@ -72,7 +73,7 @@ pub struct Supervisor {
     stopping: Option<Stopping>,
     /// The cause in force: the last stop's, until the next motion starts.
     cause: Option<StopCause>,
-    /// The joint (0-based) a stream holds at its limit.
+    /// The joint (0-based) a stream holds at its limit, or a following error stopped the arm for.
     held_joint: Option<u8>,
     /// The cause in force is a stream's hold: it ends with the hold.
     holding: bool,
@@ -106,9 +107,10 @@ impl Supervisor {
                 along,
                 brake: Brake::default(),
             });
+            // A new stop: the joint a hold or an earlier stop named is no longer the point.
+            self.held_joint = None;
         }
         self.cause = Some(self.stopping.as_ref().map_or(cause, |s| s.cause));
-        self.held_joint = None;
         self.holding = false;
         self.latch_for(cause);
     }
@@ -212,12 +214,23 @@ impl Supervisor {
         self.holding = hold.is_some();
     }
 
+    /// Names the joint (0-based) the stop of `cause` is for (a following error's), if that
+    /// is the cause in force.
+    pub fn blame(&mut self, cause: StopCause, joint: u8) {
+        if self.cause == Some(cause) {
+            self.held_joint = Some(joint);
+        } else if self.cause.is_none() && self.stopping.is_none() {
+            // At rest the stop has nothing to decelerate: the cause is told all the same.
+            (self.cause, self.held_joint) = (Some(cause), Some(joint));
+        }
+    }
+
     /// The cause in force.
     pub fn cause(&self) -> Option<StopCause> {
         self.cause
     }
 
-    /// The joint (0-based) a stream holds at its limit.
+    /// The joint (0-based) a stream holds at its limit, or a following error stopped the arm for.
     pub fn held_joint(&self) -> Option<u8> {
         self.held_joint
     }

@@ -57,26 +57,39 @@ impl Workspace {
             .reduce(f64::min)
     }
 
-    /// [`first_box_crossing`](Self::first_box_crossing) for the boxes that do not hold
-    /// `origin`: a motion that starts inside a box may drive out of it, never into another.
-    pub fn first_new_box(
+    /// Where the segment from `a` to `b` first comes within `clearance` (m, ≥ 0) of an
+    /// exclusion box that does not hold `origin` (a motion that starts inside a box may drive
+    /// out of it, never into another), as a fraction 0..=1 of the way: it enters the box grown
+    /// by `clearance` on every side. `None` if it never does.
+    pub fn first_new_box_near(
         &self,
         a: &Vector3<f64>,
         b: &Vector3<f64>,
         origin: &Vector3<f64>,
+        clearance: f64,
     ) -> Option<f64> {
         self.boxes
             .iter()
             .filter(|bx| !strictly_inside(bx, origin))
-            .filter_map(|bx| segment_enters(bx, a, b))
+            .filter_map(|bx| segment_enters(&grown(bx, clearance), a, b))
             .reduce(f64::min)
     }
 
     /// True if `p` lies within the bounds (inclusive), boxes aside.
     pub fn within_bounds(&self, p: &Vector3<f64>) -> bool {
-        let [x0, x1, y0, y1, z0, z1] = self.bounds;
+        self.within_bounds_by(p, 0.0)
+    }
+
+    /// True if `p` lies at least `inset` (m) inside the bounds (inclusive).
+    pub fn within_bounds_by(&self, p: &Vector3<f64>, inset: f64) -> bool {
+        let [x0, x1, y0, y1, z0, z1] = grown(&self.bounds, -inset);
         x0 <= p.x && p.x <= x1 && y0 <= p.y && p.y <= y1 && z0 <= p.z && p.z <= z1
     }
+}
+
+/// The box `bx` grown by `by` on every side (shrunk for a negative `by`).
+fn grown(&[x0, x1, y0, y1, z0, z1]: &[f64; 6], by: f64) -> [f64; 6] {
+    [x0 - by, x1 + by, y0 - by, y1 + by, z0 - by, z1 + by]
 }
 
 /// True if `p` lies strictly inside the open box `bx`.

@@ -104,6 +104,7 @@ pub fn rectangle_config(config: ValidRobot) -> ValidRobot {
             config.cartesian.max_acceleration = [0.10, 0.10, 0.10, 0.2, 0.2, 0.2];
             for j in config.joints.iter_mut() {
                 j.max_rate = 100.0;
+                j.drive.max_speed = 100.0;
             }
             config.workspace.boxes.clear();
         })

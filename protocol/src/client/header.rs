@@ -8,7 +8,7 @@
 use core::ops::RangeInclusive;
 
 use super::words::decimal;
-use super::{Command, DriveStatus, Notice, Severity, Text};
+use super::{Command, DriveStatus, Lag, Notice, Severity, Text};
 
 /// The codes of drive faults (`ER30`..`ER39`, docs/drives.md): formed above the drives, by the
 /// core, from the fault. Each ends a running motion.
@@ -94,14 +94,18 @@ impl<'a> Header<'a> {
     }
 
     /// Whether a running motion will not complete: `ER21` (workspace limit), `WN22` (IK
-    /// divergence), `WN27` (via point missed), `ER41` (the client watchdog stopped the arm)
-    /// and the drive faults.
+    /// divergence), `WN27` (via point missed), `ER41` (the client watchdog stopped the arm),
+    /// `ER43` (a following error stopped it) and the drive faults.
     pub fn ends_motion(&self) -> bool {
-        const ENDING: [Notice; 4] = [
+        const ENDING: [Notice; 5] = [
             Notice::WorkspaceLimit,
             Notice::IkDivergence,
             Notice::ViaPointMissed,
             Notice::ClientSilent(0),
+            Notice::FollowingError(Lag {
+                joint: 0,
+                error_milli: 0,
+            }),
         ];
         ENDING
             .iter()

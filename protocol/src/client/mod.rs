@@ -70,7 +70,9 @@ pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;
 pub use orientation::{Quaternion, rpy};
-pub use reason::{DriveStatus, Hold, JointBound, PathPoint, Rejection, WorkspaceReason};
+pub use reason::{
+    DriveStatus, Hold, JointBound, Lag, MAX_LAG_MILLI, PathPoint, Rejection, WorkspaceReason,
+};
 pub use reply::Reply;
 pub use request::Request;
 pub use session::{Holder, SESSION_INDEX, SessionReport};

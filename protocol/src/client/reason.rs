@@ -140,6 +140,7 @@ fn stop_name(cause: StopCause) -> &'static str {
         StopCause::StreamTimeout => "idle",
         StopCause::JointLimit => "WN12",
         StopCause::ClientSilent => "ER41",
+        StopCause::FollowingError => "ER43",
     }
 }
 
@@ -212,6 +213,9 @@ pub enum WorkspaceReason {
     /// `jN too fast at NN%`: joint N would need more than its rate limit there at the
     /// planned speed (the IK solution jumps to another branch, or a singularity).
     TooFast(u8, PathPoint),
+    /// `near edge at NN%`: a joint move's way comes so near an exclusion box or the bounds
+    /// there that the check, within its work budget, cannot tell that it stays clear.
+    NearEdge(PathPoint),
 }
 
 impl WorkspaceReason {
@@ -223,6 +227,7 @@ impl WorkspaceReason {
     const CROSSES_BOX: &'static str = "crosses box at ";
     const UNREACHABLE: &'static str = "unreachable";
     const TOO_FAST: &'static str = " too fast";
+    const NEAR_EDGE: &'static str = "near edge";
 
     /// Reads the reason back from the text after `ER25 Cmd XX `.
     pub(super) fn parse(s: &str) -> Option<Self> {
@@ -236,6 +241,9 @@ impl WorkspaceReason {
         if head == Self::UNREACHABLE {
             return Some(Self::Unreachable(at));
         }
+        if head == Self::NEAR_EDGE {
+            return Some(Self::NearEdge(at));
+        }
         let joint = head.strip_prefix('j')?.strip_suffix(Self::TOO_FAST)?;
         Some(Self::TooFast(decimal(joint)?, at))
     }
@@ -247,6 +255,7 @@ impl fmt::Display for WorkspaceReason {
             Self::CrossesBox(percent) => write!(f, "{}{percent}%", Self::CROSSES_BOX),
             Self::Unreachable(at) => write!(f, "{}{}", Self::UNREACHABLE, At(at)),
             Self::TooFast(joint, at) => write!(f, "j{joint}{}{}", Self::TOO_FAST, At(at)),
+            Self::NearEdge(at) => write!(f, "{}{}", Self::NEAR_EDGE, At(at)),
             fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }
@@ -298,6 +307,57 @@ impl JointBound {
             limit_milli: Milli::parse(limit)?.0,
             at,
         })
+    }
+}
+
+/// `ER43 jN following error E`: how far a joint's measured position was from its command (rad
+/// or m) when the controller stopped the arm for it (beyond the robot file's
+/// `max_following_error`, which the text leaves out: it would not fit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Lag {
+    /// The joint, numbered from 1.
+    pub joint: u8,
+    /// The error in thousandths (of a radian, or millimetres), as the text shows it: at most
+    /// [`MAX_LAG_MILLI`].
+    pub error_milli: i32,
+}
+
+/// The largest error a [`Lag`] shows (99.999): every text fits its 30 characters.
+pub const MAX_LAG_MILLI: i32 = 99_999;
+
+/// The words between a [`Lag`]'s joint and its error.
+const FOLLOWING_ERROR: &str = " following error ";
+
+impl Lag {
+    /// Joint `index` (0-based) off by `error` (rad or m) from its command, rounded to
+    /// thousandths and shown at most as [`MAX_LAG_MILLI`].
+    pub fn new(index: usize, error: f64) -> Self {
+        // Saturating casts, as for JointBound (NaN shows as 0).
+        let milli = round_half_away(libm::fabs(error) * 1000.0) as i32;
+        Self {
+            joint: u8::try_from(index.saturating_add(1)).unwrap_or(u8::MAX),
+            error_milli: milli.min(MAX_LAG_MILLI),
+        }
+    }
+
+    /// Reads `jN following error E` back.
+    pub(super) fn parse(s: &str) -> Option<Self> {
+        let (joint, error) = s.strip_prefix('j')?.split_once(FOLLOWING_ERROR)?;
+        Some(Self {
+            joint: decimal(joint)?,
+            error_milli: Milli::parse(error)?.0,
+        })
+    }
+}
+
+impl fmt::Display for Lag {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "j{}{FOLLOWING_ERROR}{}",
+            self.joint,
+            Milli(self.error_milli)
+        )
     }
 }
 

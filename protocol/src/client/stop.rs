@@ -28,11 +28,14 @@ pub enum StopCause {
     JointLimit = 7,
     /// The controlling client was silent for longer than its watchdog (`ER41`).
     ClientSilent = 8,
+    /// A joint's measured position fell further behind (or ahead of) its command than the
+    /// robot file allows (`ER43 jN following error E`).
+    FollowingError = 9,
 }
 
 impl StopCause {
     /// Every cause, by code.
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 9] = [
         Self::Stop,
         Self::ModeChange,
         Self::PowerOff,
@@ -41,6 +44,7 @@ impl StopCause {
         Self::StreamTimeout,
         Self::JointLimit,
         Self::ClientSilent,
+        Self::FollowingError,
     ];
 
     /// The cause with this code.
@@ -58,7 +62,8 @@ impl StopCause {
 pub struct CauseReport {
     /// The cause in force: the last stop's until the next motion starts, or a stream's hold.
     pub cause: Option<StopCause>,
-    /// The joint a [`StopCause::JointLimit`] holds (0-based).
+    /// The joint a [`StopCause::JointLimit`] holds, or the one a [`StopCause::FollowingError`]
+    /// was found on (0-based).
     pub joint: Option<u8>,
     /// The client whose request set the cause, if a client did and its address is IPv4.
     pub by: Option<SocketAddrV4>,

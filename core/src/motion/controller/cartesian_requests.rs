@@ -6,7 +6,7 @@ use crate::kinematics::Joints;
 use crate::math::{self, Frame};
 use crate::motion::Refusal;
 use crate::motion::reach::{Reach, check_iterations};
-use crate::motion::sequence::ViaPoint;
+use crate::motion::sequence::{VIA_SLOTS, ViaPoint};
 use crate::motion::shape::Shape;
 
 impl Controller {
@@ -16,10 +16,10 @@ impl Controller {
     /// follow is refused with where and why.
     pub fn move_cartesian(&mut self, goal: Frame, min_duration: f64) -> Result<f64, Refusal> {
         self.ready_for_cartesian_motion(&goal, min_duration)?;
-        let min_duration = min_duration.max(0.0);
+        let mut min_duration = min_duration.max(0.0);
         if let Some(mut reach) = self.reach() {
             let (start, seed) = self.cartesian_start();
-            reach.line(&start, &goal, &seed, min_duration)?;
+            min_duration = reach.line(&start, &goal, &seed, min_duration)?.duration;
         }
         self.supervisor.clear_cause();
         self.cartesian_generator.move_to(goal, min_duration)
@@ -98,17 +98,20 @@ impl Controller {
     }
 
     /// Runs the Cartesian via points 0, 1, … up to the first empty slot. Cartesian mode only.
-    /// Every leg's straight line is checked first, as for a move.
+    /// Every leg's straight line is checked first, as for a move, and planned to last as long
+    /// as the check says.
     pub fn start_cartesian_sequence(&mut self) -> Result<(), Refusal> {
         self.ready_for_cartesian_motion(&self.cartesian_generator.setpoint(), 0.0)?;
+        let mut durations = [0.0; VIA_SLOTS];
         if let Some(mut reach) = self.reach() {
             let (mut from, mut q) = self.cartesian_start();
-            for via in self.cartesian_sequence.ready() {
-                q = reach.line(&from, &via.point, &q, via.min_duration)?;
+            for (via, duration) in self.cartesian_sequence.ready().zip(durations.iter_mut()) {
+                let checked = reach.line(&from, &via.point, &q, via.min_duration)?;
+                (q, *duration) = (checked.q, checked.duration);
                 from = via.point;
             }
         }
-        let first = self.cartesian_sequence.start()?;
+        let first = self.cartesian_sequence.start_planned(&durations)?;
         self.supervisor.clear_cause();
         let then = self.cartesian_sequence.towards();
         self.cartesian_generator

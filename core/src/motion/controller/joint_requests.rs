@@ -2,7 +2,7 @@
 //! their sequence, and the checks of a joint goal.
 
 use super::{Controller, Mode};
-use crate::kinematics::{Joints, KinematicsError};
+use crate::kinematics::{Joints, KinematicsError, Levers};
 use crate::motion::Refusal;
 use crate::motion::joint_path::check_joint_path;
 use crate::motion::reach::joint_beyond_limit;
@@ -15,7 +15,7 @@ impl Controller {
     pub fn move_joints(&mut self, goal: &[f64], min_duration: f64) -> Result<f64, Refusal> {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
         let start = self.joint_generator.setpoint();
-        check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
+        check_joint_path(&self.chain, &self.workspace, &start, &goal, 0.0)?;
         self.supervisor.clear_cause();
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
@@ -51,7 +51,10 @@ impl Controller {
         self.joint_sequence.clear()
     }
 
-    /// Runs the joint via points 0, 1, … up to the first empty slot. Joint mode only.
+    /// Runs the joint via points 0, 1, … up to the first empty slot. Joint mode only. Every
+    /// leg's way is checked first, as for a move, keeping clear of the boxes and the bounds by
+    /// as much as a blend at either end may stray from it (its tolerance times
+    /// [`Levers::per_joint_distance`]).
     pub fn start_joint_sequence(&mut self) -> Result<(), Refusal> {
         if self.mode != Mode::Joint {
             return Err(Refusal::WrongMode);
@@ -59,10 +62,19 @@ impl Controller {
         if self.is_moving() {
             return Err(Refusal::Busy);
         }
-        let mut from = self.joint_generator.setpoint();
-        for via in self.joint_sequence.ready() {
-            check_joint_path(&self.chain, &self.workspace, &from, &via.point)?;
-            from = via.point;
+        let per_joint = Levers::of(&self.chain).per_joint_distance();
+        let legs = self.joint_sequence.ready().count();
+        let (mut from, mut blend_in) = (self.joint_generator.setpoint(), 0.0_f64);
+        for (k, via) in self.joint_sequence.ready().enumerate() {
+            // A via point is blended only into a leg after it.
+            let blend_out = if k + 1 < legs {
+                self.joint_sequence.blend(k).unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            let clearance = per_joint * blend_in.max(blend_out);
+            check_joint_path(&self.chain, &self.workspace, &from, &via.point, clearance)?;
+            (from, blend_in) = (via.point, blend_out);
         }
         let first = self.joint_sequence.start()?;
         self.supervisor.clear_cause();

@@ -79,7 +79,8 @@ pub struct WhistleConfig {
     pub node: NodeId,
     /// Its joint's units (for the speed limit in joint units).
     pub units: JointUnits,
-    /// Speed limit (rad/s or m/s); the thesis observed about 0.9 rad/s.
+    /// Speed limit (rad/s or m/s): the robot file's `drive.max_speed` (by default 0.9, as the
+    /// thesis observed).
     pub max_speed: f64,
     /// Time constant of the position loop's lag (s).
     pub lag: f64,
@@ -110,7 +111,7 @@ impl WhistleConfig {
         Some(Self {
             node,
             units: JointUnits::new(joint)?,
-            max_speed: 0.9,
+            max_speed: joint.drive.max_speed,
             lag: 0.004,
             interpreter_time: 250e-6,
             clock_error_ppm: 0.0,

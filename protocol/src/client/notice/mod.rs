@@ -13,7 +13,7 @@ use super::header::{CMD, MSG};
 use super::words::{Milli, phrase};
 
 use super::{
-    Command, DriveStatus, Error, Hold, JointBound, Rejection, Severity, Text, WorkspaceReason,
+    Command, DriveStatus, Error, Hold, JointBound, Lag, Rejection, Severity, Text, WorkspaceReason,
 };
 
 /// A fixed error or warning. Add a variant (with its [`code`](Self::code), severity and body) for
@@ -66,6 +66,9 @@ pub enum Notice {
     /// this link id; the older timestamps of each are dropped as replays (docs/protocol.md,
     /// "Signed datagrams").
     LinkShared(u8),
+    /// `ER43 jN following error E`: joint N's measured position was E from its command, more
+    /// than the robot file's `max_following_error`: the arm was stopped (stop cause 9).
+    FollowingError(Lag),
 }
 
 impl Notice {
@@ -100,6 +103,7 @@ impl Notice {
             Self::HeldBy(..) => 40,
             Self::ClientSilent(_) => 41,
             Self::Cancelled(_) => 42,
+            Self::FollowingError(_) => 43,
             Self::Held(Hold::JointLimit(_)) => 12,
             Self::Held(Hold::Workspace) => 13,
             Self::LinkShared(_) => 14,
@@ -194,6 +198,7 @@ impl fmt::Display for Body {
             Notice::HeldBy(c, None) => write!(f, "{CMD} {} {BY}{ANOTHER_CLIENT}", cmd(c)),
             Notice::ClientSilent(ms) => write!(f, "{}{ms}{}", CLIENT_SILENT.0, CLIENT_SILENT.1),
             Notice::Cancelled(c) => write!(f, "{CMD} {} {CANCELLED}", cmd(c)),
+            Notice::FollowingError(lag) => write!(f, "{lag}"),
             Notice::Held(Hold::JointLimit(bound)) => {
                 write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))
             }

@@ -65,6 +65,7 @@ impl Notice {
                 .and_then(decimal)
                 .map(Self::ClientSilent),
             (Severity::Error, 42) => with(CANCELLED, Self::Cancelled),
+            (Severity::Error, 43) => Lag::parse(body).map(Self::FollowingError),
             (Severity::Warning, 12) => held_at_limit(body),
             (Severity::Warning, 14) => body
                 .strip_prefix(LINK_SHARED.0)

@@ -2,7 +2,7 @@
 //! table for other clients (`table.rs`).
 
 use crate::client::{
-    Command, DriveStatus, Hold, JointBound, Mode, Notice, PathPoint, Rejection, StopCause,
+    Command, DriveStatus, Hold, JointBound, Lag, Mode, Notice, PathPoint, Rejection, StopCause,
     WorkspaceReason,
 };
 
@@ -34,6 +34,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         WorkspaceReason::ArmOutside,
         WorkspaceReason::TooFast(3, PathPoint::Goal),
         WorkspaceReason::TooFast(6, PathPoint::Along(1)),
+        WorkspaceReason::NearEdge(PathPoint::Along(37)),
     ]
     .map(|why| Notice::OutsideWorkspace(ViaExecute, why));
     let states = DriveStatus::ALL
@@ -57,6 +58,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::Held(Hold::JointLimit(bound(5, true, 2.967, PathPoint::Goal))),
         Notice::Held(Hold::Workspace),
         Notice::LinkShared(255),
+        Notice::FollowingError(Lag::new(2, 4.4)),
     ]
     .into_iter()
     .chain(rejections)
@@ -87,12 +89,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::Held(Hold::JointLimit(_)) => 16,
         Notice::Held(Hold::Workspace) => 17,
         Notice::LinkShared(_) => 18,
+        Notice::FollowingError(_) => 19,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 19];
+    let mut seen = [false; 20];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }
