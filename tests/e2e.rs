@@ -1721,7 +1721,7 @@ fn the_ur5_plan_move_runs_on_drives_as_fast_as_its_joints_or_is_stopped_by_its_l
         assert_eq!(out.status.code(), Some(1), "{stderr}");
         assert!(
             stderr.contains(
-                "joints[0].max_rate: 3.142 exceeds the drive.max_speed 0.900 the drive is \
+                "joint 1, max_rate: 3.142 exceeds the drive.max_speed 0.900 the drive is \
                  configured for"
             ),
             "{stderr}"

@@ -36,7 +36,7 @@ pub const TABLE: [(u8, &str); 7] = [
     (
         STOPPED,
         "the motion was stopped before its goal, by the controller (ER21, WN22, WN27, ER3x, \
-         ER41) or by a client's ST, CM or OF; the cause and who are printed",
+         ER41, ER43) or by a client's ST, CM or OF; the cause and who are printed",
     ),
     (
         NOT_ARRIVED,

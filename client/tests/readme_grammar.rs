@@ -103,6 +103,7 @@ fn every_status_index_is_named() {
         armgate_protocol::client::SESSION_INDEX,
         armgate_protocol::client::signed::SIGNING_INDEX,
         armgate_protocol::client::branch::BRANCH_INDEX,
+        armgate_protocol::client::signed::IDENTITY_INDEX,
     ];
     for index in indices {
         assert!(

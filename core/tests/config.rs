@@ -417,7 +417,7 @@ fn joints_faster_than_their_drives_are_refused_naming_both_values() {
     let slow_drives = ur5.replace(", max_speed = 3.141592653589793 }", " }");
     assert_eq!(
         refusal(&slow_drives),
-        "robot file: joints[0].max_rate: 3.142 exceeds the drive.max_speed 0.900 the drive is \
+        "robot file: joint 1, max_rate: 3.142 exceeds the drive.max_speed 0.900 the drive is \
          configured for (it would fall behind its commands)"
     );
     let robot = common::robot("ranger-mk1");
@@ -427,7 +427,7 @@ fn joints_faster_than_their_drives_are_refused_naming_both_values() {
         .unwrap_err();
     assert_eq!(
         e.to_string(),
-        "joints[2].max_acceleration: 0.500 exceeds the drive.max_acceleration 0.400 the drive \
+        "joint 3, max_acceleration: 0.500 exceeds the drive.max_acceleration 0.400 the drive \
          is configured for (it would fall behind its commands)"
     );
     assert!(matches!(e.reason, ConfigReason::ExceedsDrive { .. }));
@@ -449,7 +449,7 @@ fn joints_faster_than_their_drives_are_refused_naming_both_values() {
         .unwrap_err();
     assert_eq!(
         e.to_string(),
-        "joints[1].max_following_error: must be greater than zero"
+        "joint 2, max_following_error: must be greater than zero"
     );
 }
 

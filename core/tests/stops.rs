@@ -363,6 +363,8 @@ struct Stopped {
     after: [f64; 3],
     off: f64,
     left_path: bool,
+    /// The line itself was lost before the stop began (the tick left it for joint space).
+    lost_before: bool,
 }
 
 /// `robot` from `q0`, a line by `by` (m), stopped by `ST` at `fraction` of its planned duration
@@ -407,6 +409,7 @@ fn line_stopped_at(
     }
     assert!(!ctrl.is_moving(), "never came to rest");
     let left_path = points[from..points.len() - 1].iter().any(Option::is_none);
+    let lost_before = points[..from].iter().skip(2).any(Option::is_none);
     let points: Vec<Vector3<f64>> = points.into_iter().flatten().collect();
     let a_max = config.cartesian.max_acceleration;
     let (mut before, mut after) = ([0.0f64; 3], [0.0f64; 3]);
@@ -430,6 +433,7 @@ fn line_stopped_at(
         after,
         off,
         left_path,
+        lost_before,
     })
 }
 
@@ -471,11 +475,13 @@ fn a_cartesian_stop_stays_within_each_axis_acceleration_limit() {
 /// axes and the diagonal, `ST` at half way: a stop that keeps to the line keeps each axis within
 /// its limit and stays on it; on every robot but ranger-mk2 and ur5 every stop keeps to its
 /// line (on those two, 2 and 1 lines still leave it where the joints cannot follow the line's
-/// end at the stop's speed: a joint-space stop, within the joints' limits).
+/// end at the stop's speed: a joint-space stop, within the joints' limits). A line that the
+/// tick loses before the stop begins (ur5's +y line, since lines are planned as slow as their
+/// joints need) is listed apart: that is the up-front line check's open case, not the stop's.
 #[test]
 fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
     use armgate_core::motion::Controller;
-    let mut left = Vec::new();
+    let (mut left, mut lost) = (Vec::new(), Vec::new());
     for (name, config) in common::all_robots() {
         let chain = Controller::new(&config).chain().clone();
         let mut q0 = chain.mid_range();
@@ -501,7 +507,11 @@ fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
                 let Some(s) = line_stopped_at(&config, &q0, by, 0.5) else {
                     continue;
                 };
-                if s.left_path {
+                if s.lost_before {
+                    // Not the stop's doing: the line was lost before it (issue 33's open
+                    // property test, `no_accepted_line_is_lost_on_any_robot`).
+                    lost.push(format!("{name} {by:.3?}"));
+                } else if s.left_path {
                     left.push(format!("{name} {by:.3?}"));
                 } else {
                     assert!(s.off < 1e-9, "{name} {by:?}: {} m off the line", s.off);
@@ -513,7 +523,8 @@ fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
             }
         }
     }
-    println!("stops that left their line: {left:?}");
+    println!("stops that left their line: {left:?}; lines lost before the stop: {lost:?}");
+    assert!(lost.iter().all(|l| l.starts_with("ur5 ")), "{lost:?}");
     assert!(
         left.iter()
             .all(|l| l.starts_with("ranger-mk2 ") || l.starts_with("ur5 ")),
