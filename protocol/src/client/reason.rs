@@ -5,8 +5,8 @@
 
 use core::fmt;
 
-use super::Mode;
 use super::words::{Milli, decimal, phrase, value_of};
+use super::{Hit, Mode};
 
 /// The drives' state, as a status reply (`QS` f1) and refusals report it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -175,6 +175,10 @@ pub enum WorkspaceReason {
     /// `jN too fast at NN%`: joint N would need more than its rate limit there at the
     /// planned speed (the IK solution jumps to another branch, or a singularity).
     TooFast(u8, PathPoint),
+    /// `L3 hits B1 at 40%`, `L5 hits L2`, `L3 out at 99%`: a link of the arm (its capsule,
+    /// inflated by what it may sweep between checked samples) would come within the margin of
+    /// a box, another link or the bounds there (docs/safety.md).
+    Hits(Hit, PathPoint),
 }
 
 impl WorkspaceReason {
@@ -199,6 +203,9 @@ impl WorkspaceReason {
         if head == Self::UNREACHABLE {
             return Some(Self::Unreachable(at));
         }
+        if let Some(hit) = Hit::parse(head) {
+            return Some(Self::Hits(hit, at));
+        }
         let joint = head.strip_prefix('j')?.strip_suffix(Self::TOO_FAST)?;
         Some(Self::TooFast(decimal(joint)?, at))
     }
@@ -210,6 +217,7 @@ impl fmt::Display for WorkspaceReason {
             Self::CrossesBox(percent) => write!(f, "{}{percent}%", Self::CROSSES_BOX),
             Self::Unreachable(at) => write!(f, "{}{}", Self::UNREACHABLE, At(at)),
             Self::TooFast(joint, at) => write!(f, "j{joint}{}{}", Self::TOO_FAST, At(at)),
+            Self::Hits(hit, at) => write!(f, "{hit}{}", At(at)),
             fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }

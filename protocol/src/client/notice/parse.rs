@@ -66,8 +66,9 @@ impl Notice {
                 .map(Self::ClientSilent),
             (Severity::Error, 42) => with(CANCELLED, Self::Cancelled),
             (Severity::Warning, 12) => held_at_limit(body),
+            (Severity::Error, 21) => super::super::Hit::parse(body).map(Self::Collision),
             // The fixed phrases, matched above.
-            (Severity::Error, 21) | (Severity::Warning, 13 | 22 | 27) => None,
+            (Severity::Warning, 13 | 22 | 27) => None,
             _ => return Err(NoticeError::UnknownCode),
         };
         parsed.ok_or(NoticeError::UnknownForm)

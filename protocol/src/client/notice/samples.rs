@@ -2,7 +2,8 @@
 //! table for other clients (`table.rs`).
 
 use crate::client::{
-    Command, DriveStatus, Hold, JointBound, Mode, Notice, PathPoint, Rejection, WorkspaceReason,
+    Command, DriveStatus, Hit, Hold, JointBound, Mode, Notice, Obstacle, PathPoint, Rejection,
+    WorkspaceReason,
 };
 
 /// At least one of every variant and every reason, each distinct in its text.
@@ -23,6 +24,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         ])
         .chain(Mode::ALL.map(Rejection::NeedsMode))
         .map(|why| Notice::Rejected(Begin, why));
+    let hit = |link, obstacle| Hit { link, obstacle };
     let reasons = [
         WorkspaceReason::Goal,
         WorkspaceReason::CrossesBox(40),
@@ -31,6 +33,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         WorkspaceReason::ArmOutside,
         WorkspaceReason::TooFast(3, PathPoint::Goal),
         WorkspaceReason::TooFast(6, PathPoint::Along(1)),
+        WorkspaceReason::Hits(hit(3, Obstacle::Box(1)), PathPoint::Along(40)),
+        WorkspaceReason::Hits(hit(5, Obstacle::Link(2)), PathPoint::Goal),
+        WorkspaceReason::Hits(hit(3, Obstacle::Bounds), PathPoint::Along(99)),
     ]
     .map(|why| Notice::OutsideWorkspace(ViaExecute, why));
     let states = DriveStatus::ALL
@@ -40,6 +45,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::NotUnderstood(*b"XY"),
         Notice::Undersized(*b"B?"),
         Notice::WorkspaceLimit,
+        Notice::Collision(hit(3, Obstacle::Box(1))),
+        Notice::Collision(hit(5, Obstacle::Link(2))),
+        Notice::Collision(hit(6, Obstacle::Bounds)),
         Notice::JointLimit,
         Notice::IkDivergence,
         Notice::BadNumber(GoalQuaternion),
@@ -82,12 +90,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::Cancelled(_) => 15,
         Notice::Held(Hold::JointLimit(_)) => 16,
         Notice::Held(Hold::Workspace) => 17,
+        Notice::Collision(_) => 18,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 18];
+    let mut seen = [false; 19];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }
