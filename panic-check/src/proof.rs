@@ -4,8 +4,9 @@
 use core::hint::black_box;
 
 use armgate_core::config::{
-    BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
-    JointType, MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot, WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, CollisionConfig, DrivesConfig, IkConfig, JointConfig,
+    JointDrive, JointType, MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot,
+    WorkspaceConfig,
 };
 use armgate_core::cycle::{
     CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing, UnsignedAccess,
@@ -57,6 +58,7 @@ fn robot() -> Option<ValidRobot> {
             counts_per_rev: 1 << 20,
             home: 0.0,
         },
+        link_radius: None,
     };
     let mut joints = heapless::Vec::new();
     for _ in 0..black_box(6) {
@@ -91,6 +93,7 @@ fn robot() -> Option<ValidRobot> {
         ik: IkConfig::default(),
         blend: BlendConfig::default(),
         motion: MotionConfig::default(),
+        collision: CollisionConfig::default(),
     };
     black_box(config).validate().ok()
 }
