@@ -73,6 +73,14 @@ impl NoticeRelay {
             }
             channel.active = raised;
         }
+        if let Some(hit) = events.collision
+            && self
+                .outbox
+                .push_back(Notice::Collision(hit).text())
+                .is_err()
+        {
+            self.dropped = self.dropped.saturating_add(1);
+        }
         if events.hold != self.hold {
             self.hold = events.hold;
             if let Some(hold) = events.hold

@@ -277,7 +277,8 @@ impl Envelope {
 
     /// Calls `visit` with every hit of the placed capsules, each grown by `grow[c]` (m), and
     /// the gap it was found at, until `visit` returns false: a capsule within the margin of a
-    /// box or of the bounds' faces, or of another capsule it is checked against.
+    /// box or of the bounds' faces, or of another capsule it is checked against (touching
+    /// included: with the margin 0, a gap of 0 is a hit).
     pub fn hits(
         &self,
         placed: &Placed,
@@ -288,7 +289,7 @@ impl Envelope {
         let body = self.capsules.iter().zip(placed).zip(grow);
         for ((c, p), g) in body.clone() {
             let gap = p.clearance_in(&self.bounds) - g;
-            if gap < margin && !visit(hit(c.link, Obstacle::Bounds), gap) {
+            if gap <= margin && !visit(hit(c.link, Obstacle::Bounds), gap) {
                 return;
             }
             for (k, bx) in self.boxes.iter().enumerate() {
@@ -296,7 +297,7 @@ impl Envelope {
                     continue;
                 }
                 let gap = p.gap_to_box(bx) - g;
-                if gap < margin && !visit(hit(c.link, Obstacle::Box(k as u8 + 1)), gap) {
+                if gap <= margin && !visit(hit(c.link, Obstacle::Box(k as u8 + 1)), gap) {
                     return;
                 }
             }
@@ -313,7 +314,7 @@ impl Envelope {
             let gap = pa.gap_to_capsule(pb) - grown;
             // Named from the outer link, against the inner one: `L5 hits L2`.
             let (outer, inner) = (a.link.max(b.link), a.link.min(b.link));
-            if gap < margin && !visit(hit(outer, Obstacle::Link(inner)), gap) {
+            if gap <= margin && !visit(hit(outer, Obstacle::Link(inner)), gap) {
                 return;
             }
         }

@@ -1,6 +1,6 @@
 //! What happened during one control tick.
 
-use armgate_protocol::client::Hold;
+use armgate_protocol::client::{Hit, Hold};
 
 /// Conditions and happenings of one tick. Conditions (limits, divergence) are raised on every
 /// tick while they hold; the message relay decides how often to tell the client.
@@ -23,4 +23,8 @@ pub struct Events {
     /// A velocity stream holds the arm where its command would drive it on (`WN12 jN at limit
     /// L`, `WN13`): told once when the hold begins.
     pub hold: Option<Hold>,
+    /// A link of the arm, where it is commanded or where a stop begun now would end, came
+    /// within the margin of a box, another link or the bounds: the motion stops (`ER21 L3 hits
+    /// B1`); raised on the tick the stop begins.
+    pub collision: Option<Hit>,
 }

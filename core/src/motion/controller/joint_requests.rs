@@ -16,6 +16,7 @@ impl Controller {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
         let start = self.joint_generator.setpoint();
         check_joint_path(&self.chain, &self.workspace, &start, &goal)?;
+        self.body.check_path(&self.chain, &start, &goal)?;
         self.supervisor.clear_cause();
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
@@ -62,6 +63,7 @@ impl Controller {
         let mut from = self.joint_generator.setpoint();
         for via in self.joint_sequence.ready() {
             check_joint_path(&self.chain, &self.workspace, &from, &via.point)?;
+            self.body.check_path(&self.chain, &from, &via.point)?;
             from = via.point;
         }
         let first = self.joint_sequence.start()?;

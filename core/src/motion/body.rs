@@ -1,0 +1,184 @@
+//! The whole arm inside the envelope: its body ([`Envelope`], capsules on every link) kept out
+//! of the exclusion boxes, inside the bounds and clear of itself (docs/safety.md, "The whole
+//! arm inside the envelope").
+//!
+//! * **Before a joint move starts** ([`Body::check_path`]) its whole straight way in joint
+//!   space is checked at samples, every capsule grown by half of what it can sweep between two
+//!   samples (a bound from the joint steps and each link's reach from every axis), so no
+//!   contact between samples is missed: `ER25 Cmd jB L3 hits B1 at 40%`.
+//! * **Every tick** ([`Body::check_tick`]) the commanded pose and the pose where a stop begun
+//!   now would end are checked; a new hit stops the motion (`ER21 L3 hits B1`).
+//!
+//! Hits present where a motion starts (the arm already in contact) do not count, so the arm can
+//! always be driven out; only new ones do.
+
+use heapless::Vec;
+
+use super::Refusal;
+use crate::MAX_JOINTS;
+use crate::config::{Envelope, Frames, MAX_CAPSULES, Placed, ValidRobot};
+use crate::geometry::Capsule;
+use crate::kinematics::{Chain, Joints};
+use crate::math::Frame;
+use armgate_protocol::client::{Hit, PathPoint};
+
+/// The most a capsule may sweep between two samples of a checked joint move (m): the samples
+/// are spaced so, up to [`MAX_PATH_SAMPLES`].
+pub const SWEEP_STEP: f64 = 0.01;
+/// The most samples of one joint move's check (each a pose and all its pairs): beyond it the
+/// capsules grow by more than half of [`SWEEP_STEP`].
+pub const MAX_PATH_SAMPLES: u16 = 256;
+/// The most hits remembered as already present.
+const PRESENT: usize = 8;
+
+/// The body, its checks and the hits already present.
+#[derive(Clone, Debug)]
+pub struct Body {
+    envelope: Envelope,
+    /// Per joint: the acceleration a stop brakes with (rad/s² or m/s²).
+    a_max: Joints,
+    /// Control period (s).
+    period: f64,
+    /// The hits of the last tick's poses: a stop is for new ones.
+    present: Vec<Hit, PRESENT>,
+}
+
+impl Body {
+    /// The body of a robot.
+    pub fn new(config: &ValidRobot) -> Self {
+        Self {
+            envelope: Envelope::new(config),
+            a_max: config.per_joint(|j| j.max_acceleration),
+            period: config.control_period,
+            present: Vec::new(),
+        }
+    }
+
+    /// The body model.
+    pub fn envelope(&self) -> &Envelope {
+        &self.envelope
+    }
+
+    /// The capsules at pose `q`, placed by the chain's frames.
+    pub fn place(&self, chain: &Chain, q: &Joints, out: &mut Placed) -> bool {
+        let Some(frames) = frames(chain, q) else {
+            return false;
+        };
+        self.envelope.place(&frames, out);
+        true
+    }
+
+    /// Refuses the joint move from `from` to `to` if a capsule would come within the margin of
+    /// a box, the bounds or another capsule on the way, naming the link, the obstacle and
+    /// where (percent of the way). Hits present at `from` do not count.
+    pub fn check_path(&self, chain: &Chain, from: &Joints, to: &Joints) -> Result<(), Refusal> {
+        if self.envelope.is_empty() {
+            return Ok(());
+        }
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if !self.place(chain, from, &mut placed) {
+            return Ok(());
+        }
+        let mut start: Vec<Hit, PRESENT> = Vec::new();
+        self.envelope.hits(&placed, &[0.0; MAX_CAPSULES], |hit, _| {
+            start.push(hit).is_ok()
+        });
+        let mut step = *to;
+        for (s, f) in step.iter_mut().zip(from.iter()) {
+            *s -= f;
+        }
+        let mut whole = [0.0; MAX_CAPSULES];
+        self.envelope.sweep(&step, &mut whole);
+        let longest = whole.iter().fold(0.0f64, |m, s| m.max(*s));
+        // Saturating cast: NaN becomes 0, then 1 sample.
+        let samples = ((longest / SWEEP_STEP) as u16).clamp(1, MAX_PATH_SAMPLES);
+        let mut grow = whole;
+        for g in &mut grow {
+            *g *= 0.5 / f64::from(samples);
+        }
+        for k in 0..=samples {
+            let f = f64::from(k) / f64::from(samples);
+            let mut q = *from;
+            for (q, s) in q.iter_mut().zip(step.iter()) {
+                *q += f * s;
+            }
+            if !self.place(chain, &q, &mut placed) {
+                continue;
+            }
+            let mut found = None;
+            self.envelope.hits(&placed, &grow, |hit, _| {
+                if start.contains(&hit) {
+                    return true;
+                }
+                found = Some(hit);
+                false
+            });
+            if let Some(hit) = found {
+                return Err(Refusal::Hits(hit, PathPoint::at(f)));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks the tick's command `q` and the pose where a stop from the commanded `velocity`
+    /// would end: a hit that was not present at the last check is returned (the caller stops
+    /// the motion). Where the stop ends is estimated as the joint-space stop does it: every
+    /// joint braking by one fraction, in the time the slowest needs at its acceleration
+    /// limit, after the period already commanded: `q + v (T/2 + period)`, `T = max |v|/a`.
+    pub fn check_tick(&mut self, chain: &Chain, q: &Joints, velocity: &Joints) -> Option<Hit> {
+        if self.envelope.is_empty() {
+            return None;
+        }
+        let brake = velocity
+            .iter()
+            .zip(self.a_max.iter())
+            .fold(0.0f64, |t, (v, a)| t.max(libm::fabs(*v) / a));
+        let ahead = 0.5 * brake + self.period;
+        let mut rest = *q;
+        for (r, v) in rest.iter_mut().zip(velocity.iter()) {
+            *r += v * ahead;
+        }
+        let mut now: Vec<Hit, PRESENT> = Vec::new();
+        let mut new = None;
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        for pose in [q, &rest] {
+            if !self.place(chain, pose, &mut placed) {
+                continue;
+            }
+            self.envelope.hits(&placed, &[0.0; MAX_CAPSULES], |hit, _| {
+                if !self.present.contains(&hit) && new.is_none() {
+                    new = Some(hit);
+                }
+                if !now.contains(&hit) {
+                    // Full: the rest are remembered next tick.
+                    let _ = now.push(hit);
+                }
+                true
+            });
+        }
+        self.present = now;
+        new
+    }
+
+    /// Forgets the hits present: the next check reports every hit as new.
+    pub fn forget(&mut self) {
+        self.present.clear();
+    }
+}
+
+/// The frames of pose `q` from the chain: {0}, {1}..{n}, the tool.
+fn frames(chain: &Chain, q: &Joints) -> Option<Frames> {
+    let mut links = [Frame::identity(); MAX_JOINTS];
+    let tool = chain.link_frames(q, &mut links).ok()?;
+    let mut frames = [Frame::identity(); MAX_JOINTS + 2];
+    let n = chain.dof();
+    let (first, rest) = frames.split_first_mut()?;
+    *first = *chain.base();
+    for (f, l) in rest.iter_mut().zip(links.iter()).take(n) {
+        *f = *l;
+    }
+    if let Some(f) = rest.get_mut(n) {
+        *f = tool;
+    }
+    Some(frames)
+}
