@@ -7,7 +7,7 @@
 //!
 //! * **Default geometry**: joint i's DH row joins frame {i−1}'s origin to {i}'s by two
 //!   segments, `a` along {i−1}'s x axis and `d` along {i}'s z axis; both belong to link i−1.
-//!   Zero-length segments are left out, and so is a prismatic joint's travel (its `d`), which
+//!   Segments shorter than 5 mm are left out (a calibration's offsets), and so is a prismatic joint's travel (its `d`), which
 //!   no fixed segment describes: give its rail by hand. The tool is one capsule from {n}'s origin to the
 //!   tool point. Radii: `[[joints]] link_radius` (link i), `collision.base_radius` (link 0),
 //!   `collision.tool_radius`.
@@ -15,7 +15,7 @@
 //!   (also across links without any capsule: a wrist's centre), to a listed pair, or both never
 //!   move.
 //! * **Boxes** are checked against every capsule except where a capsule has an end fixed in
-//!   the world (on every joint axis before it) within the box: the links the box's column
+//!   the world (within about 1 cm of every joint axis before it) within the box: the links the box's column
 //!   carries (the base, a shoulder), which no pose can take out of it.
 //! * **Bounds**: every capsule must stay inside.
 
@@ -37,10 +37,16 @@ const MAX_PAIRS: usize = MAX_CAPSULES * (MAX_CAPSULES - 1) / 2;
 pub type Frames = [Frame; MAX_JOINTS + 2];
 /// Capsules placed in the world, one per [`Envelope`] capsule, in its order.
 pub type Placed = [Capsule; MAX_CAPSULES];
+/// DH segments shorter than this are left out of the default body (m): a calibrated file's
+/// sub-millimetre offsets would otherwise put a capsule of a link's whole radius where the
+/// arm has no link of its own (ranger-mk1's wrist centre, 2 mm above its column at home).
+const SHORTEST_SEGMENT: f64 = 0.005;
 /// How far a joint is moved to find the points it moves (rad or m).
 const PROBE: f64 = 0.5;
-/// A point moved by less than this under every probe is fixed (m).
-const FIXED: f64 = 1e-9;
+/// A point moved by less than this under every probe counts as fixed (m): it lies within
+/// about 1 cm of every joint axis before it, so a calibrated file's sub-millimetre offsets
+/// (`armgate calibrate`) do not take the shoulder out of the column that carries it.
+const FIXED: f64 = 0.005;
 
 /// A point fixed in one of the frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -149,10 +155,10 @@ impl Envelope {
                 continue;
             }
             let corner = at(i, joint.a);
-            if joint.a != 0.0 {
+            if libm::fabs(joint.a) >= SHORTEST_SEGMENT {
                 self.push(i, at(i, 0.0), corner, radius(i));
             }
-            if joint.d != 0.0 && joint.kind == JointType::Revolute {
+            if libm::fabs(joint.d) >= SHORTEST_SEGMENT && joint.kind == JointType::Revolute {
                 self.push(i, corner, at(i + 1, 0.0), radius(i));
             }
         }
