@@ -3,6 +3,7 @@
 //! the obstacle and where named; what the check accepts, a dense walk of the way confirms; a
 //! stream towards the base column is stopped before any link reaches it.
 #![allow(
+    clippy::approx_constant,
     missing_docs,
     clippy::unwrap_used,
     clippy::panic,

@@ -24,7 +24,7 @@ use heapless::Vec;
 use super::collision::{DEFAULT_LINK_RADIUS, MAX_CUSTOM_CAPSULES};
 use super::{JointType, RobotConfig};
 use crate::MAX_JOINTS;
-use crate::geometry::{Capsule, Segment, segment_box};
+use crate::geometry::{Capsule, Segment, point_box};
 use crate::math::{Frame, Rotation3, Vector3};
 use armgate_protocol::client::{Hit, Obstacle};
 
@@ -215,8 +215,7 @@ impl Envelope {
                 }
                 let p = place(&frames, end);
                 for (k, bx) in boxes.iter().enumerate() {
-                    let segment = Segment::new(p, p);
-                    if segment_box(&segment, bx) <= c.radius + margin {
+                    if point_box(&p, bx) <= c.radius + margin {
                         c.mounted |= 1 << k;
                     }
                 }
@@ -260,9 +259,16 @@ impl Envelope {
 
     /// The capsules placed by the frames of a pose (`out[..len()]`).
     pub fn place(&self, frames: &Frames, out: &mut Placed) {
+        self.place_by(|i| frames.get(i), out);
+    }
+
+    /// [`place`](Self::place) with frame `i` (as in [`Frames`]) from `frame(i)`: the tick's
+    /// chain hands its link frames over where they are, without gathering them first.
+    pub fn place_by<'a>(&self, frame: impl Fn(usize) -> Option<&'a Frame>, out: &mut Placed) {
+        let at = |anchor: &Anchor| point_in(frame(usize::from(anchor.frame)), anchor);
         for (c, o) in self.capsules.iter().zip(out.iter_mut()) {
             *o = Capsule {
-                segment: Segment::new(place(frames, &c.a), place(frames, &c.b)),
+                segment: Segment::new(at(&c.a), at(&c.b)),
                 radius: c.radius,
             };
         }
@@ -351,11 +357,14 @@ fn hit(link: u8, obstacle: Obstacle) -> Hit {
 
 /// An anchor's point in the world.
 fn place(frames: &Frames, anchor: &Anchor) -> Vector3<f64> {
-    frames
-        .get(usize::from(anchor.frame))
-        .map_or(anchor.point, |f| {
-            f.rotation * anchor.point + f.translation.vector
-        })
+    point_in(frames.get(usize::from(anchor.frame)), anchor)
+}
+
+/// An anchor's point, its frame given.
+fn point_in(frame: Option<&Frame>, anchor: &Anchor) -> Vector3<f64> {
+    frame.map_or(anchor.point, |f| {
+        f.rotation * anchor.point + f.translation.vector
+    })
 }
 
 /// The longest the way from frame {i}'s origin to {i+1}'s can be, for i = 0..n (the last:

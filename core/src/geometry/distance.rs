@@ -78,13 +78,18 @@ fn excess(v: f64, lo: f64, hi: f64) -> f64 {
 
 /// The distance of the point `p` to the box `[x_min, x_max, y_min, y_max, z_min, z_max]`
 /// (0 inside or on it).
-pub fn point_box(p: &Vector3<f64>, &[x0, x1, y0, y1, z0, z1]: &[f64; 6]) -> f64 {
+pub fn point_box(p: &Vector3<f64>, bx: &[f64; 6]) -> f64 {
+    sqrt(squared_to_box(p, bx))
+}
+
+/// The squared distance of `p` to the box (no root: the segment's pieces compare squares).
+fn squared_to_box(p: &Vector3<f64>, &[x0, x1, y0, y1, z0, z1]: &[f64; 6]) -> f64 {
     let (dx, dy, dz) = (
         excess(p.x, x0, x1),
         excess(p.y, y0, y1),
         excess(p.z, z0, z1),
     );
-    sqrt(dx * dx + dy * dy + dz * dz)
+    dx * dx + dy * dy + dz * dz
 }
 
 /// The closest distance of a segment to the box `[x_min, x_max, y_min, y_max, z_min, z_max]`
@@ -157,9 +162,9 @@ pub fn segment_box(s: &Segment, bx: &[f64; 6]) -> f64 {
         } else {
             t0
         };
-        best = best.min(point_box(&s.at(t), bx));
+        best = best.min(squared_to_box(&s.at(t), bx));
     }
-    best
+    sqrt(best)
 }
 
 /// Sorts a few values in place, ascending (NaN-free input; bounded by the slice's length).

@@ -11,4 +11,4 @@ mod capsule;
 mod distance;
 
 pub use capsule::Capsule;
-pub use distance::{Segment, segment_box, segment_segment};
+pub use distance::{Segment, point_box, segment_box, segment_segment};

@@ -16,7 +16,7 @@ use heapless::Vec;
 
 use super::Refusal;
 use crate::MAX_JOINTS;
-use crate::config::{Envelope, Frames, MAX_CAPSULES, Placed, ValidRobot};
+use crate::config::{Envelope, MAX_CAPSULES, Placed, ValidRobot};
 use crate::geometry::Capsule;
 use crate::kinematics::{Chain, Joints};
 use crate::math::Frame;
@@ -59,12 +59,22 @@ impl Body {
         &self.envelope
     }
 
-    /// The capsules at pose `q`, placed by the chain's frames.
+    /// The capsules at pose `q`, placed by the chain's frames (false if `q` does not fit the
+    /// chain).
     pub fn place(&self, chain: &Chain, q: &Joints, out: &mut Placed) -> bool {
-        let Some(frames) = frames(chain, q) else {
+        let mut links = [Frame::identity(); MAX_JOINTS];
+        let Ok(tool) = chain.link_frames(q, &mut links) else {
             return false;
         };
-        self.envelope.place(&frames, out);
+        let n = chain.dof();
+        self.envelope.place_by(
+            |i| match i {
+                0 => Some(chain.base()),
+                i if i <= n => links.get(i - 1),
+                _ => Some(&tool),
+            },
+            out,
+        );
         true
     }
 
@@ -141,7 +151,9 @@ impl Body {
         let mut now: Vec<Hit, PRESENT> = Vec::new();
         let mut new = None;
         let mut placed = [Capsule::default(); MAX_CAPSULES];
-        for pose in [q, &rest] {
+        // At rest (no velocity) the stop ends where the arm is: one pose to check.
+        let poses = if rest == *q { 1 } else { 2 };
+        for pose in [q, &rest].into_iter().take(poses) {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
@@ -164,21 +176,4 @@ impl Body {
     pub fn forget(&mut self) {
         self.present.clear();
     }
-}
-
-/// The frames of pose `q` from the chain: {0}, {1}..{n}, the tool.
-fn frames(chain: &Chain, q: &Joints) -> Option<Frames> {
-    let mut links = [Frame::identity(); MAX_JOINTS];
-    let tool = chain.link_frames(q, &mut links).ok()?;
-    let mut frames = [Frame::identity(); MAX_JOINTS + 2];
-    let n = chain.dof();
-    let (first, rest) = frames.split_first_mut()?;
-    *first = *chain.base();
-    for (f, l) in rest.iter_mut().zip(links.iter()).take(n) {
-        *f = *l;
-    }
-    if let Some(f) = rest.get_mut(n) {
-        *f = tool;
-    }
-    Some(frames)
 }
