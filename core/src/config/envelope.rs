@@ -216,7 +216,7 @@ impl Envelope {
                 let p = place(&frames, end);
                 for (k, bx) in boxes.iter().enumerate() {
                     if point_box(&p, bx) <= c.radius + margin {
-                        c.mounted |= 1 << k;
+                        c.mounted |= box_bit(k);
                     }
                 }
             }
@@ -305,11 +305,13 @@ impl Envelope {
                 return;
             }
             for (k, bx) in self.boxes.iter().enumerate() {
-                if c.mounted & (1 << k) != 0 {
+                if c.mounted & box_bit(k) != 0 {
                     continue;
                 }
                 let gap = p.gap_to_box(bx) - g;
-                if gap <= margin && !visit(hit(c.link, Obstacle::Box(k as u8 + 1)), gap) {
+                if gap <= margin
+                    && !visit(hit(c.link, Obstacle::Box((k as u8).saturating_add(1))), gap)
+                {
                     return;
                 }
             }
@@ -349,6 +351,14 @@ impl Envelope {
         });
         nearest
     }
+}
+
+/// Box `k`'s bit in [`BodyCapsule::mounted`] (none past the 16 a file may hold).
+fn box_bit(k: usize) -> u16 {
+    u32::try_from(k)
+        .ok()
+        .and_then(|k| 1u16.checked_shl(k))
+        .unwrap_or(0)
 }
 
 fn hit(link: u8, obstacle: Obstacle) -> Hit {
