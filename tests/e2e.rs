@@ -1558,8 +1558,9 @@ fn a_joint_move_that_swings_the_forearm_through_the_base_column_is_refused() {
     let through = [0.727f32, 1.084, 1.506, -2.849, 3.481, -1.322];
     sim.ok("jG", with_joints(&through, 0.0), 0);
     let text = sim.text("jB", [0.0; 7], 0);
-    // The link and the box, and where: `ER25 Cmd jB L3 hits B1 at 40%`.
-    assert!(text.starts_with("ER25 Cmd jB L3 hits B1 at "), "{text}");
+    // The link, the box and where: the tool's shaft (link 6, from the wrist centre) enters
+    // the column first, `ER25 Cmd jB L6 hits B1 at 89%`.
+    assert!(text.starts_with("ER25 Cmd jB L6 hits B1 at "), "{text}");
     assert!(text.ends_with('%'), "{text}");
     assert!(status(&sim)[4] == 0.0, "nothing moves");
 }

@@ -171,9 +171,4 @@ impl Body {
         self.present = now;
         new
     }
-
-    /// Forgets the hits present: the next check reports every hit as new.
-    pub fn forget(&mut self) {
-        self.present.clear();
-    }
 }
