@@ -157,8 +157,9 @@ pub fn segment_box(s: &Segment, bx: &[f64; 6]) -> f64 {
             cg += c * g;
             gg += g * g;
         }
+        // `max`/`min`, not `clamp`, which would assert t0 ≤ t1 (a panic path).
         let t = if gg > 0.0 {
-            (-cg / gg).clamp(t0, t1)
+            (-cg / gg).max(t0).min(t1)
         } else {
             t0
         };
@@ -168,15 +169,14 @@ pub fn segment_box(s: &Segment, bx: &[f64; 6]) -> f64 {
 }
 
 /// Sorts a few values in place, ascending (NaN-free input; bounded by the slice's length).
+/// Neighbours are swapped through a pattern, which has no bounds check to panic on.
 fn insertion_sort(v: &mut [f64]) {
     for i in 1..v.len() {
-        let mut j = i;
-        while j > 0 {
-            match (v.get(j - 1), v.get(j)) {
-                (Some(&a), Some(&b)) if a > b => v.swap(j - 1, j),
+        for j in (1..=i).rev() {
+            match v.get_mut(j - 1..=j) {
+                Some([a, b]) if *a > *b => core::mem::swap(a, b),
                 _ => break,
             }
-            j -= 1;
         }
     }
 }
