@@ -28,7 +28,7 @@ fn place(envelope: &Envelope, config: &RobotConfig, q: &[f64]) -> Placed {
 
 fn first_hit(envelope: &Envelope, placed: &Placed) -> Option<Hit> {
     let mut first = None;
-    envelope.hits(placed, &[0.0; MAX_CAPSULES], |hit, _| {
+    envelope.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
         first = Some(hit);
         false
     });

@@ -259,12 +259,12 @@ impl Envelope {
 
     /// The capsules placed by the frames of a pose (`out[..len()]`).
     pub fn place(&self, frames: &Frames, out: &mut Placed) {
-        self.place_by(|i| frames.get(i), out);
+        self.place_by(&|i| frames.get(i), out);
     }
 
     /// [`place`](Self::place) with frame `i` (as in [`Frames`]) from `frame(i)`: the tick's
     /// chain hands its link frames over where they are, without gathering them first.
-    pub fn place_by<'a>(&self, frame: impl Fn(usize) -> Option<&'a Frame>, out: &mut Placed) {
+    pub fn place_by<'a>(&self, frame: &dyn Fn(usize) -> Option<&'a Frame>, out: &mut Placed) {
         let at = |anchor: &Anchor| point_in(frame(usize::from(anchor.frame)), anchor);
         for (c, o) in self.capsules.iter().zip(out.iter_mut()) {
             *o = Capsule {
@@ -295,7 +295,7 @@ impl Envelope {
         &self,
         placed: &Placed,
         grow: &[f64; MAX_CAPSULES],
-        mut visit: impl FnMut(Hit, f64) -> bool,
+        visit: &mut dyn FnMut(Hit, f64) -> bool,
     ) {
         let margin = self.margin;
         let body = self.capsules.iter().zip(placed).zip(grow);
@@ -343,7 +343,7 @@ impl Envelope {
             margin: f64::INFINITY,
             ..self.clone()
         };
-        all.hits(placed, &[0.0; MAX_CAPSULES], |hit, gap| {
+        all.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, gap| {
             if gap < nearest.0 {
                 nearest = (gap, Some(hit));
             }

@@ -348,10 +348,14 @@ impl RobotConfig {
         let mut placed: Placed = [Capsule::default(); super::envelope::MAX_CAPSULES];
         envelope.place(&frames_at(self, &self.home()), &mut placed);
         let mut first = None;
-        envelope.hits(&placed, &[0.0; super::envelope::MAX_CAPSULES], |hit, _| {
-            first = Some(hit);
-            false
-        });
+        envelope.hits(
+            &placed,
+            &[0.0; super::envelope::MAX_CAPSULES],
+            &mut |hit, _| {
+                first = Some(hit);
+                false
+            },
+        );
         match first {
             Some(hit) => Err(ConfigError::top(
                 "collision",

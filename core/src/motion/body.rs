@@ -3,9 +3,9 @@
 //! arm inside the envelope").
 //!
 //! * **Before a joint move starts** ([`Body::check_path`]) its whole straight way in joint
-//!   space is checked at samples, every capsule grown by half of what it can sweep between two
-//!   samples (a bound from the joint steps and each link's reach from every axis), so no
-//!   contact between samples is missed: `ER25 Cmd jB L3 hits B1 at 40%`.
+//!   space is checked piece by piece, every capsule grown by what it can sweep over half a
+//!   piece (a bound from the joint steps and each link's reach from every axis), so no
+//!   contact between the checked poses is missed: `ER25 Cmd jB L3 hits B1 at 40%`.
 //! * **Every tick** ([`Body::check_tick`]) the commanded pose and the pose where a stop begun
 //!   now would end are checked; a new hit stops the motion (`ER21 L3 hits B1`).
 //!
@@ -22,12 +22,17 @@ use crate::kinematics::{Chain, Joints};
 use crate::math::Frame;
 use armgate_protocol::client::{Hit, PathPoint};
 
-/// The most a capsule may sweep between two samples of a checked joint move (m): the samples
-/// are spaced so, up to [`MAX_PATH_SAMPLES`].
+/// The most a capsule may sweep over one piece of a checked joint move (m): the pieces are
+/// cut so, up to [`MAX_PATH_SAMPLES`].
 pub const SWEEP_STEP: f64 = 0.01;
-/// The most samples of one joint move's check (each a pose and all its pairs): beyond it the
-/// capsules grow by more than half of [`SWEEP_STEP`].
+/// The most pieces of one joint move's check: beyond it the capsules grow by more than half
+/// of [`SWEEP_STEP`] (and more pieces are halved).
 pub const MAX_PATH_SAMPLES: u16 = 256;
+/// How often a piece of a checked joint move may be halved where its grown check hits.
+const HALVINGS: u8 = 8;
+/// The most checks (a pose and all its pairs) of one joint move: the pieces and their halves.
+/// Spent, a piece that would need halving is refused.
+pub const MAX_PATH_CHECKS: u16 = 2048;
 /// The most hits remembered as already present.
 const PRESENT: usize = 8;
 
@@ -68,7 +73,7 @@ impl Body {
         };
         let n = chain.dof();
         self.envelope.place_by(
-            |i| match i {
+            &|i| match i {
                 0 => Some(chain.base()),
                 i if i <= n => links.get(i - 1),
                 _ => Some(&tool),
@@ -81,6 +86,13 @@ impl Body {
     /// Refuses the joint move from `from` to `to` if a capsule would come within the margin of
     /// a box, the bounds or another capsule on the way, naming the link, the obstacle and
     /// where (percent of the way). Hits present at `from` do not count.
+    ///
+    /// The way is cut into pieces over which no capsule sweeps more than [`SWEEP_STEP`]; each
+    /// piece is checked at its middle with every capsule grown by what it may sweep over half
+    /// the piece, which covers the whole piece. A piece whose grown check hits but whose
+    /// middle does not is halved and each half checked the same way (down to 1/256 of a
+    /// piece; a hit still there refuses), so an arm that starts or passes close to an obstacle
+    /// is not refused for the growth alone.
     pub fn check_path(&self, chain: &Chain, from: &Joints, to: &Joints) -> Result<(), Refusal> {
         if self.envelope.is_empty() {
             return Ok(());
@@ -90,9 +102,10 @@ impl Body {
             return Ok(());
         }
         let mut start: Vec<Hit, PRESENT> = Vec::new();
-        self.envelope.hits(&placed, &[0.0; MAX_CAPSULES], |hit, _| {
-            start.push(hit).is_ok()
-        });
+        self.envelope
+            .hits(&placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+                start.push(hit).is_ok()
+            });
         let mut step = *to;
         for (s, f) in step.iter_mut().zip(from.iter()) {
             *s -= f;
@@ -100,31 +113,56 @@ impl Body {
         let mut whole = [0.0; MAX_CAPSULES];
         self.envelope.sweep(&step, &mut whole);
         let longest = whole.iter().fold(0.0f64, |m, s| m.max(*s));
-        // Saturating cast: NaN becomes 0, then 1 sample.
-        let samples = ((longest / SWEEP_STEP) as u16).clamp(1, MAX_PATH_SAMPLES);
-        let mut grow = whole;
-        for g in &mut grow {
-            *g *= 0.5 / f64::from(samples);
-        }
-        for k in 0..=samples {
-            let f = f64::from(k) / f64::from(samples);
-            let mut q = *from;
-            for (q, s) in q.iter_mut().zip(step.iter()) {
-                *q += f * s;
-            }
-            if !self.place(chain, &q, &mut placed) {
-                continue;
-            }
-            let mut found = None;
-            self.envelope.hits(&placed, &grow, |hit, _| {
-                if start.contains(&hit) {
-                    return true;
+        // Saturating cast: NaN becomes 0, then 1 piece.
+        let pieces = ((longest / SWEEP_STEP) as u16).clamp(1, MAX_PATH_SAMPLES);
+        let piece = 1.0 / f64::from(pieces);
+        let mut budget = MAX_PATH_CHECKS;
+        // Pieces still to check, as (start, length) fractions; the nearest first.
+        let mut todo: Vec<(f64, f64), { HALVINGS as usize + 2 }> = Vec::new();
+        for k in 0..pieces {
+            let _ = todo.push((f64::from(k) * piece, piece));
+            while let Some((a, length)) = todo.pop() {
+                budget = budget.saturating_sub(1);
+                let middle = a + 0.5 * length;
+                let mut q = *from;
+                for (q, s) in q.iter_mut().zip(step.iter()) {
+                    *q += middle * s;
                 }
-                found = Some(hit);
-                false
-            });
-            if let Some(hit) = found {
-                return Err(Refusal::Hits(hit, PathPoint::at(f)));
+                if !self.place(chain, &q, &mut placed) {
+                    continue;
+                }
+                let mut grow = whole;
+                for g in &mut grow {
+                    *g *= 0.5 * length;
+                }
+                let new_hit = |grow: &[f64; MAX_CAPSULES]| {
+                    let mut found = None;
+                    self.envelope.hits(&placed, grow, &mut |hit, _| {
+                        if start.contains(&hit) {
+                            return true;
+                        }
+                        found = Some(hit);
+                        false
+                    });
+                    found
+                };
+                let Some(grown) = new_hit(&grow) else {
+                    continue;
+                };
+                let halves_left = length > piece / f64::from(1u32 << HALVINGS) && budget > 0;
+                let refuse = |hit| Err(Refusal::Hits(hit, PathPoint::at(middle)));
+                if !halves_left {
+                    return refuse(grown);
+                }
+                if let Some(hit) = new_hit(&[0.0; MAX_CAPSULES]) {
+                    return refuse(hit);
+                }
+                // The far half below the near one: the nearest hit is found first. (The list
+                // holds a piece and its halvings by construction; were it full, refuse.)
+                let half = 0.5 * length;
+                if todo.push((a + half, half)).is_err() || todo.push((a, half)).is_err() {
+                    return refuse(grown);
+                }
             }
         }
         Ok(())
@@ -157,16 +195,18 @@ impl Body {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
-            self.envelope.hits(&placed, &[0.0; MAX_CAPSULES], |hit, _| {
-                if !self.present.contains(&hit) && new.is_none() {
-                    new = Some(hit);
-                }
-                if !now.contains(&hit) {
-                    // Full: the rest are remembered next tick.
-                    let _ = now.push(hit);
-                }
-                true
-            });
+            let present = &self.present;
+            self.envelope
+                .hits(&placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+                    if !present.contains(&hit) && new.is_none() {
+                        new = Some(hit);
+                    }
+                    if !now.contains(&hit) {
+                        // Full: the rest are remembered next tick.
+                        let _ = now.push(hit);
+                    }
+                    true
+                });
         }
         self.present = now;
         new
