@@ -270,15 +270,18 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                     else {
                         continue;
                     };
-                    if let Some(signed) = admitted.link {
-                        let holder = self.handler.holder().and_then(link_of);
-                        if self.links.heard(signed, datagram.peer, now, holder)
-                            && self.links.announce(now)
-                        {
-                            self.handler.announce(Notice::LinkShared(signed));
-                        }
+                    // A signed link's holder, for the link table (it never drops the holder's).
+                    let holder = admitted.link.and(self.handler.holder()).and_then(link_of);
+                    if let Some(signed) = admitted.link
+                        && self.links.heard(signed, datagram.peer, now, holder)
+                        && self.links.announce(now)
+                    {
+                        self.handler.announce(Notice::LinkShared(signed));
+                    }
+                    // The identity report is read only by `SQ` 6: built for it alone.
+                    if is_identity_request(admitted.message) {
                         let mut identity = self.identity();
-                        if is_identity_request(admitted.message) {
+                        if admitted.link.is_some() {
                             // A link of its own for a client that starts (it may take it).
                             identity.free_link = self.links.set_aside(datagram.peer, now, holder);
                         }
