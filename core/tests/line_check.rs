@@ -12,41 +12,39 @@
 mod common;
 
 use armgate_core::config::ValidRobot;
-use armgate_core::kinematics::Joints;
 use armgate_core::math::{self, Frame, Rotation3, Vector3};
-use armgate_core::motion::{Controller, Mode, StepOutput};
+use armgate_core::motion::{Controller, Mode};
 use armgate_core::rng::SplitMix64;
-use armgate_core::sim::IdealArm;
+use common::arm_rig::ArmRig;
 
-/// A controller and an ideal arm, stepped together at the robot's period.
+/// The shared rig in Cartesian mode, and the last line's outcome.
 struct Rig {
-    ctrl: Controller,
-    arm: IdealArm,
-    period: f64,
-    now: f64,
+    base: ArmRig,
     /// The last line's outcome: whether it diverged, how far (m + rad) from its goal it ended.
     last: (bool, f64),
 }
 
+impl std::ops::Deref for Rig {
+    type Target = ArmRig;
+    fn deref(&self) -> &ArmRig {
+        &self.base
+    }
+}
+
+impl std::ops::DerefMut for Rig {
+    fn deref_mut(&mut self) -> &mut ArmRig {
+        &mut self.base
+    }
+}
+
 impl Rig {
     fn new(config: &ValidRobot, q0: &[f64]) -> Self {
-        let mut rig = Self {
-            ctrl: Controller::new(config),
-            arm: IdealArm::new(Joints::from_slice(q0).unwrap()),
-            period: config.control_period,
-            now: 0.0,
+        let mut base = ArmRig::new(config, q0);
+        base.ctrl.set_mode(Mode::Cartesian).unwrap();
+        Self {
+            base,
             last: (false, 0.0),
-        };
-        rig.tick();
-        rig.ctrl.set_mode(Mode::Cartesian).unwrap();
-        rig
-    }
-
-    fn tick(&mut self) -> StepOutput {
-        self.now += self.period;
-        let out = self.ctrl.step(self.now, &self.arm.measured()).unwrap();
-        self.arm.step(out.command.as_ref());
-        out
+        }
     }
 
     /// Runs the motion to its end (at most `max_ticks`): whether the IK was lost on the way.
@@ -60,10 +58,6 @@ impl Rig {
             }
         }
         panic!("still moving after {max_ticks} ticks");
-    }
-
-    fn pose(&self) -> Frame {
-        self.ctrl.chain().forward(&self.arm.measured()).unwrap()
     }
 
     /// Moves to `goal` if the check accepts the line: `Some(true)` if it arrived (the tool
@@ -135,7 +129,8 @@ fn no_accepted_line_is_lost_on_any_robot() {
                     .collect(),
             };
             let mut rig = Rig::new(&config, &q0);
-            if rig.ctrl.move_cartesian(rig.pose(), 0.0).is_err() {
+            let here = rig.pose();
+            if rig.ctrl.move_cartesian(here, 0.0).is_err() {
                 // Outside the workspace: nothing to try from here.
                 continue;
             }

@@ -17,56 +17,10 @@ use armgate_core::motion::{
     StopCause, Trapezoid,
 };
 use armgate_core::rng::SplitMix64;
-use armgate_core::sim::{IdealArm, RateLimitedArm};
+use armgate_core::sim::RateLimitedArm;
 use armgate_protocol::client::{JointBound, PathPoint};
 
-/// A controller and an ideal arm, stepped together at the robot's period.
-struct Rig {
-    ctrl: Controller,
-    arm: IdealArm,
-    period: f64,
-    now: f64,
-}
-
-impl Rig {
-    fn new(config: &ValidRobot, q0: &[f64]) -> Self {
-        let mut rig = Self {
-            ctrl: Controller::new(config),
-            arm: IdealArm::new(Joints::from_slice(q0).unwrap()),
-            period: config.control_period,
-            now: 0.0,
-        };
-        rig.tick();
-        rig
-    }
-
-    fn tick(&mut self) -> StepOutput {
-        self.now += self.period;
-        let out = self.ctrl.step(self.now, &self.arm.measured()).unwrap();
-        self.arm.step(out.command.as_ref());
-        out
-    }
-
-    /// Ticks until nothing moves (bounded), returning every output.
-    fn settle(&mut self, max_ticks: usize) -> Vec<StepOutput> {
-        let mut outs = Vec::new();
-        for _ in 0..max_ticks {
-            outs.push(self.tick());
-            if !self.ctrl.is_moving() {
-                break;
-            }
-        }
-        assert!(
-            !self.ctrl.is_moving(),
-            "still moving after {max_ticks} ticks"
-        );
-        outs
-    }
-
-    fn pose(&self) -> Frame {
-        self.ctrl.chain().forward(&self.arm.measured()).unwrap()
-    }
-}
+use common::arm_rig::ArmRig as Rig;
 
 const MK1_HOME: [f64; 6] = [1.5708, 0.0, 1.5708, 0.0, 1.5708, 0.0];
 /// A comfortable ranger-mk1 pose in front of the base, away from limits and singularities.

@@ -6,6 +6,7 @@
     clippy::indexing_slicing
 )]
 
+pub mod arm_rig;
 pub mod experiments;
 
 use std::path::PathBuf;
