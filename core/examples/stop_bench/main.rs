@@ -133,24 +133,36 @@ fn start_pose(config: &ValidRobot) -> Joints {
 /// A straight Cartesian line from the start that the controller accepts: the first of ±x, ±y,
 /// ±z, of a length that reaches cruise.
 fn line_goal(run: &mut Run, length: f64) -> Option<(Frame, Vector3<f64>)> {
-    let start = run.ctrl.cartesian_setpoint();
-    for dir in [
+    let ways = [
         Vector3::x(),
         -Vector3::x(),
         Vector3::z(),
         -Vector3::z(),
         Vector3::y(),
         -Vector3::y(),
-    ] {
-        for scale in [1.0, 0.5, 0.25] {
+    ];
+    first_accepted(run, &ways, &[length, 0.5 * length, 0.25 * length])
+}
+
+/// The first line along one of `ways` (in order), each tried at `lengths` (in order), that the
+/// line check accepts from the set-point: its goal and unit direction. The accepted probe is
+/// stopped, settled and forgotten, so the caller starts the measured run afresh.
+fn first_accepted(
+    run: &mut Run,
+    ways: &[Vector3<f64>],
+    lengths: &[f64],
+) -> Option<(Frame, Vector3<f64>)> {
+    let start = run.ctrl.cartesian_setpoint();
+    for way in ways {
+        for length in lengths {
             let mut goal = start;
-            goal.translation.vector += dir * length * scale;
+            goal.translation.vector += way * *length;
             if run.ctrl.move_cartesian(goal, 0.0).is_ok() {
                 stop_now(run, Cause::St);
                 settle(run);
                 run.commands.clear();
                 run.setpoints.clear();
-                return Some((goal, dir));
+                return Some((goal, way.normalize()));
             }
         }
     }
@@ -162,21 +174,8 @@ fn line_goal(run: &mut Run, length: f64) -> Option<(Frame, Vector3<f64>)> {
 fn diagonal_goal(run: &mut Run) -> Option<(Frame, Vector3<f64>)> {
     let c = &run.config.config().cartesian;
     let x = (1.11 * c.max_velocity[0] * c.max_velocity[0] / c.max_acceleration[0]).clamp(0.02, 0.2);
-    let start = run.ctrl.cartesian_setpoint();
-    for way in [Vector3::new(1.0, -1.0, 0.5), Vector3::new(-1.0, 1.0, -0.5)] {
-        for scale in [1.0, 0.5] {
-            let mut goal = start;
-            goal.translation.vector += way * x * scale;
-            if run.ctrl.move_cartesian(goal, 0.0).is_ok() {
-                stop_now(run, Cause::St);
-                settle(run);
-                run.commands.clear();
-                run.setpoints.clear();
-                return Some((goal, way.normalize()));
-            }
-        }
-    }
-    None
+    let ways = [Vector3::new(1.0, -1.0, 0.5), Vector3::new(-1.0, 1.0, -0.5)];
+    first_accepted(run, &ways, &[x, 0.5 * x])
 }
 
 fn settle(run: &mut Run) {
