@@ -215,13 +215,11 @@ impl Supervisor {
     }
 
     /// Names the joint (0-based) the stop of `cause` is for (a following error's), if that
-    /// is the cause in force.
+    /// is the cause in force. (A stop sets its cause in motion and at rest alike: `begin`,
+    /// `at_rest`.)
     pub fn blame(&mut self, cause: StopCause, joint: u8) {
         if self.cause == Some(cause) {
             self.held_joint = Some(joint);
-        } else if self.cause.is_none() && self.stopping.is_none() {
-            // At rest the stop has nothing to decelerate: the cause is told all the same.
-            (self.cause, self.held_joint) = (Some(cause), Some(joint));
         }
     }
 
