@@ -64,7 +64,8 @@ impl<F: FlashSectors> FlashLog<F> {
             next: free,
             loaded,
         };
-        if !log.erased(other) {
+        // Every record checked: an erase cut by a power loss may leave the first erased only.
+        if !log.erased(other, log.flash.records()) {
             let _ = log.flash.erase(other);
         }
         if log.next >= log.flash.records() / 2
@@ -82,11 +83,13 @@ impl<F: FlashSectors> FlashLog<F> {
         &self.flash
     }
 
-    /// True if `sector`'s first record is erased (records are written in order).
-    fn erased(&mut self, sector: u8) -> bool {
-        self.flash
-            .read(sector, 0)
-            .is_some_and(|r| r.iter().all(|b| *b == 0xff))
+    /// True if `sector`'s first `records` records are erased.
+    fn erased(&mut self, sector: u8, records: u32) -> bool {
+        (0..records).all(|k| {
+            self.flash
+                .read(sector, k)
+                .is_some_and(|r| r.iter().all(|b| *b == 0xff))
+        })
     }
 }
 
@@ -98,7 +101,8 @@ impl<F: FlashSectors> ReplayStore for FlashLog<F> {
     fn keep(&mut self, reserved: u64) -> bool {
         if self.next >= self.flash.records() {
             let other = self.active ^ 1;
-            if !self.erased(other) {
+            // Checked whole at the start (records are written in order): the first suffices.
+            if !self.erased(other, 1) {
                 return false;
             }
             self.active = other;
@@ -149,23 +153,54 @@ fn decode(record: &[u8; RECORD_LEN]) -> Option<u64> {
 mod tests {
     use super::*;
 
-    /// Two sectors of 8 records in RAM, counting erases.
+    /// Two sectors of 8 records of NOR flash, counting erases: an erase sets every bit,
+    /// programming only clears bits, one 32-byte flash word at a time and only an erased one
+    /// (the STM32H7 refuses to program a word twice). A power cut at operation `cut` (counted
+    /// from 0) tears it, a write leaving the first `torn` bytes of its word programmed and the
+    /// rest erased, an erase setting the first half of the sector only; after it nothing
+    /// changes until [`restored`](Self::restored).
     #[derive(Clone, Debug)]
-    struct Ram {
+    struct Nor {
         sectors: [[[u8; RECORD_LEN]; 8]; 2],
         erases: [u32; 2],
+        operations: u32,
+        cut: Option<u32>,
+        torn: usize,
     }
 
-    impl Ram {
+    impl Nor {
         fn new() -> Self {
             Self {
                 sectors: [[[0xff; RECORD_LEN]; 8]; 2],
                 erases: [0; 2],
+                operations: 0,
+                cut: None,
+                torn: 0,
+            }
+        }
+
+        /// Power on: the flash as the cut left it.
+        fn restored(&self) -> Self {
+            Self {
+                cut: None,
+                ..self.clone()
+            }
+        }
+
+        /// Counts an operation: `Some(true)` if it completes, `Some(false)` if power is cut
+        /// during it, `None` if power is gone.
+        fn power(&mut self) -> Option<bool> {
+            let k = self.operations;
+            self.operations += 1;
+            match self.cut {
+                Some(cut) if k > cut => None,
+                Some(cut) => Some(k != cut),
+                None => Some(true),
             }
         }
     }
 
-    impl FlashSectors for Ram {
+    impl FlashSectors for Nor {
         fn records(&self) -> u32 {
             8
         }
@@ -173,21 +208,52 @@ mod tests {
             Some(self.sectors[usize::from(sector)][record as usize])
         }
         fn write(&mut self, sector: u8, record: u32, bytes: &[u8; RECORD_LEN]) -> bool {
-            let slot = &mut self.sectors[usize::from(sector)][record as usize];
-            assert!(slot.iter().all(|b| *b == 0xff), "programmed twice");
-            *slot = *bytes;
-            true
+            let word = &mut self.sectors[usize::from(sector)][record as usize];
+            if word.iter().any(|b| *b != 0xff) {
+                return false;
+            }
+            let Some(whole) = self.power() else {
+                return false;
+            };
+            let word = &mut self.sectors[usize::from(sector)][record as usize];
+            let programmed = if whole { RECORD_LEN } else { self.torn };
+            for (w, b) in word.iter_mut().zip(bytes).take(programmed) {
+                *w &= *b;
+            }
+            whole
         }
         fn erase(&mut self, sector: u8) -> bool {
-            self.sectors[usize::from(sector)] = [[0xff; RECORD_LEN]; 8];
+            let Some(whole) = self.power() else {
+                return false;
+            };
+            let records = if whole { 8 } else { 4 };
+            for word in self.sectors[usize::from(sector)].iter_mut().take(records) {
+                *word = [0xff; RECORD_LEN];
+            }
             self.erases[usize::from(sector)] += 1;
-            true
+            whole
         }
+    }
+
+    /// Writes 1, 2, ... with a restart after every `restart_every` writes (`writes` in all),
+    /// on `flash`; the last value written whole (its write reported done) and the flash.
+    fn run(flash: Nor, writes: u64, restart_every: u64) -> (u64, Nor) {
+        let mut log = FlashLog::open(flash);
+        let mut kept = 0;
+        for value in 1..=writes {
+            if log.keep(value) {
+                kept = value;
+            }
+            if value % restart_every == 0 {
+                log = FlashLog::open(log.flash().clone());
+            }
+        }
+        (kept, log.flash().clone())
     }
 
     #[test]
     fn the_newest_reservation_survives_restarts_and_torn_writes_and_sectors_take_turns() {
-        let mut log = FlashLog::open(Ram::new());
+        let mut log = FlashLog::open(Nor::new());
         assert_eq!(log.load(), 0);
         let mut value = 1_000;
         let mut flash = log.flash().clone();
@@ -207,13 +273,36 @@ mod tests {
         }
         assert_eq!(FlashLog::open(log.flash().clone()).load(), value);
         // A torn record (power lost while programming) is skipped; the one before holds.
-        let mut torn = log.flash().clone();
-        let sector = usize::from(log.active);
-        let last = log.next as usize - 1;
-        torn.sectors[sector][last][10] ^= 0x40;
-        assert_eq!(FlashLog::open(torn).load(), value - 1);
         let erases = flash.erases[0] + flash.erases[1];
         assert!(erases <= 10, "sectors erased only at starts: {erases}");
+    }
+
+    #[test]
+    fn a_power_cut_at_any_write_or_erase_never_lowers_the_value_found_at_the_next_start() {
+        let (writes, restart_every) = (40, 5);
+        let operations = run(Nor::new(), writes, restart_every).1.operations;
+        for cut in 0..operations {
+            for torn in [0, 4, 12, 19, 20, 31] {
+                let flash = Nor {
+                    cut: Some(cut),
+                    torn,
+                    ..Nor::new()
+                };
+                let (kept, cut_flash) = run(flash, writes, restart_every);
+                let mut log = FlashLog::open(cut_flash.restored());
+                let found = log.load();
+                assert!(
+                    (kept..=writes).contains(&found),
+                    "cut at {cut}, {torn} bytes: {found}, last written whole {kept}"
+                );
+                // The log goes on: a sector and a half of values kept, found after a restart.
+                let (more, _) = (writes + 1..=writes + 12).fold((found, ()), |(_, ()), v| {
+                    assert!(log.keep(v), "cut at {cut}, {torn} bytes: writing {v}");
+                    (v, ())
+                });
+                assert_eq!(FlashLog::open(log.flash().clone()).load(), more);
+            }
+        }
     }
 
     #[test]
