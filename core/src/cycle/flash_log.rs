@@ -252,7 +252,7 @@ mod tests {
     }
 
     #[test]
-    fn the_newest_reservation_survives_restarts_and_torn_writes_and_sectors_take_turns() {
+    fn the_newest_reservation_survives_restarts_and_sectors_take_turns() {
         let mut log = FlashLog::open(Nor::new());
         assert_eq!(log.load(), 0);
         let mut value = 1_000;
