@@ -125,11 +125,20 @@ impl Signature {
     pub fn emit(&self, message: &[u8; MESSAGE_LEN], key: &SigningKey) -> [u8; SIGNED_LEN] {
         let mut out = [0u8; SIGNED_LEN];
         let timestamp = (self.timestamp & TIMESTAMP_MAX).to_le_bytes();
-        let link = [self.link];
-        let head = message.iter().chain(&link).chain(&timestamp);
-        out.iter_mut()
-            .zip(head.take(field::SIGNED.end))
-            .for_each(|(o, b)| *o = *b);
+        // Copied as slices (a chain of byte iterators cost the controller's signing of every
+        // answer about 400 instructions more, qemu-bench).
+        if let Some(slot) = out.get_mut(..MESSAGE_LEN) {
+            slot.copy_from_slice(message);
+        }
+        if let Some(slot) = out.get_mut(field::LINK) {
+            *slot = self.link;
+        }
+        if let (Some(slot), Some(bytes)) = (
+            out.get_mut(field::TIMESTAMP),
+            timestamp.get(..field::TIMESTAMP.len()),
+        ) {
+            slot.copy_from_slice(bytes);
+        }
         let tag = key.tag(out.get(field::SIGNED).unwrap_or_default());
         if let Some(slot) = out.get_mut(field::TAG) {
             slot.copy_from_slice(&tag);
