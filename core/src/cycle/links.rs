@@ -42,9 +42,6 @@ struct Entry<P> {
 #[derive(Clone, Debug)]
 pub(super) struct Links<P> {
     entries: [Option<Entry<P>>; LINKS],
-    /// Per link id, its entry's index + 1 (0: not in the table): a signed datagram finds its
-    /// link without a scan of the table (qemu-bench's signed tick).
-    slots: [u8; 256],
     /// Signed datagrams that came on a link from the source before its last, within
     /// [`SHARED_WITHIN`] of the last: two sources interleaved.
     pub shared: u32,
@@ -60,7 +57,6 @@ impl<P: Peer> Links<P> {
     pub fn new() -> Self {
         Self {
             entries: [None; LINKS],
-            slots: [0; 256],
             shared: 0,
             last_shared: 0,
             next_free: FIRST_FREE,
@@ -99,7 +95,10 @@ impl<P: Peer> Links<P> {
     /// B, is not counted; A, B, A is.)
     pub fn heard(&mut self, link: u8, peer: P, now: f64, keep: Option<u8>) -> bool {
         let same = |p: Option<P>| p.is_some_and(|p| p.address() == peer.address());
-        let found = self.slot(link);
+        let found = self
+            .entries
+            .iter()
+            .position(|e| e.is_some_and(|e| e.link == link));
         let last = found.and_then(|k| self.entries.get(k).copied().flatten());
         let (shared, before) = match last {
             Some(e) if same(Some(e.peer)) => (false, e.before),
@@ -110,15 +109,7 @@ impl<P: Peer> Links<P> {
             None => (false, None),
         };
         let slot = found.or_else(|| self.free_or_oldest(now, keep));
-        if let Some((k, entry)) = slot.and_then(|k| Some((k, self.entries.get_mut(k)?))) {
-            if let Some(replaced) = entry.take()
-                && let Some(s) = self.slots.get_mut(usize::from(replaced.link))
-            {
-                *s = 0;
-            }
-            if let Some(s) = self.slots.get_mut(usize::from(link)) {
-                *s = u8::try_from(k + 1).unwrap_or(0);
-            }
+        if let Some(entry) = slot.and_then(|k| self.entries.get_mut(k)) {
             *entry = Some(Entry {
                 link,
                 peer,
@@ -135,14 +126,11 @@ impl<P: Peer> Links<P> {
 
     /// Where link `link`'s answers and notices go.
     pub fn peer(&self, link: u8) -> Option<P> {
-        let entry = self.entries.get(self.slot(link)?)?;
-        entry.map(|e| e.peer)
-    }
-
-    /// The index of `link`'s entry, if it is in the table.
-    fn slot(&self, link: u8) -> Option<usize> {
-        let slot = *self.slots.get(usize::from(link))?;
-        usize::from(slot).checked_sub(1)
+        self.entries
+            .iter()
+            .flatten()
+            .find(|e| e.link == link)
+            .map(|e| e.peer)
     }
 
     fn free_or_oldest(&self, now: f64, keep: Option<u8>) -> Option<usize> {
@@ -216,15 +204,6 @@ mod tests {
         }
         assert!(links.peer(1).is_some());
         assert_eq!(links.peer(2), None, "replaced");
-        // The entries kept are found by link id, each with its last source.
-        for k in 85..100u8 {
-            assert_eq!(
-                links.peer(k + 2),
-                Some(at(9, u16::from(k))),
-                "link {}",
-                k + 2
-            );
-        }
     }
 
     #[test]
