@@ -16,7 +16,8 @@
 //! 3. **Stack**: the stack is painted below the caller, the move runs again, and the lowest
 //!    word written gives the stack the control work needs.
 //! 4. **Signing** ([`signing`]): one signature check and one signing on their own, and the
-//!    tick that carries a signed `PS` (checked, answered signed) with a key set.
+//!    tick that carries a signed `PS` (checked, answered signed) with a key set; one write of
+//!    the replay reservation to the flash log (on sectors in RAM).
 //! 5. **Planning burst** ([`planning`]), on every embedded robot: eight planning requests to
 //!    unreachable goals in one tick, served one a tick; the worst of those ticks, also as a
 //!    share of the control period at 480 MHz ([`BOARD_HZ`], one instruction a cycle assumed).
@@ -473,6 +474,11 @@ fn measure_robot(
         "tick with signed PS, holding (key set)",
         &signing.pose,
         "window per tick",
+    );
+    row(
+        "reservation kept (flash log, RAM): once per 2 s",
+        &signing.keep,
+        "window per write",
     );
     hprintln!(
         "{}: {} moving ticks ({:.2} s); stack high-water of requests + ticks: {} bytes",
