@@ -12,6 +12,7 @@ use armgate_protocol::client::signed::{
     ControllerId, IDENTITY_INDEX, SIGNED_LEN, Signature, Signed as Block, SigningKey,
     timestamp_from_unix_us,
 };
+use armgate_protocol::client::{Command, Request};
 
 use super::{Answer, Sim, datagram, decode, is_unsolicited, with_joints};
 
@@ -565,4 +566,49 @@ fn a_key_file_others_may_read_is_refused_with_the_chmod_that_fixes_it() {
     );
     assert!(!stderr.contains("5555"), "never the key: {stderr}");
     let _ = std::fs::remove_file(&key);
+}
+
+#[test]
+fn right_after_a_restart_the_client_resends_until_the_reservation_passes_and_is_served() {
+    let key = key_file("restart-resend", [0x3e; 32]);
+    let state = key.with_extension("state");
+    let _ = std::fs::remove_file(&state);
+    let args = [
+        "--key",
+        key.to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+        "--controller-id",
+        "5eed0002",
+    ];
+    // The client's defaults: 4 sends 0.2 s apart, less than the 2 s a restart refuses for.
+    let client = |sim: &Sim| {
+        let addr = sim.socket.peer_addr().unwrap();
+        let mut client = armgate_client::Client::connect(addr).unwrap();
+        client.set_signer(Some(Signer::from_file(&key, Some(1)).unwrap()));
+        client
+    };
+    let sim = Sim::start_with("ranger-mk1", &args);
+    Signed::new(&sim, &key, 2).wait_running();
+    client(&sim).pose().unwrap();
+    drop(sim);
+    let sim = Sim::start_with("ranger-mk1", &args);
+    // Its first sends are refused (not newer than the reservation kept before the restart);
+    // it resends, signed anew, until they are newer.
+    let mut after = client(&sim);
+    after.pose().unwrap();
+    let report = after
+        .request(Request {
+            command: Command::Status,
+            values: [0.0; 7],
+            index: 4,
+        })
+        .unwrap();
+    assert!(
+        report.values[6] >= 1.0,
+        "refused first: {:?}",
+        report.values
+    );
+    let _ = std::fs::remove_file(&key);
+    let _ = std::fs::remove_file(&state);
 }

@@ -224,7 +224,9 @@ pub fn main() -> u8 {
             } else if matches!(e, CliError::Client(ClientError::Timeout { .. })) {
                 eprintln!(
                     "hint: a controller never answers a request signed with another key, or \
-                     for another controller id: is it running, or has it another key?"
+                     for another controller id: is it running, or has it another key? (One \
+                     that has just restarted refuses signed requests other than stops for up \
+                     to 2 s; they were resent for that long.)"
                 );
             }
             e.exit_code()

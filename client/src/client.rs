@@ -5,7 +5,9 @@ use std::io::ErrorKind;
 use std::net::{Ipv4Addr, Ipv6Addr, SocketAddr, ToSocketAddrs, UdpSocket};
 use std::time::{Duration, Instant};
 
-use armgate_protocol::client::signed::{IDENTITY_INDEX, IdentityReport};
+use armgate_protocol::client::signed::{
+    IDENTITY_INDEX, IdentityReport, RESERVE_AHEAD, TIMESTAMP_UNIT_US,
+};
 use armgate_protocol::client::{Command, MESSAGE_LEN, Message, Reply, Request, Text, VALUES};
 
 use crate::ClientError;
@@ -295,9 +297,24 @@ impl Client {
         // Whatever arrived before this request cannot be its reply.
         self.poll_notices()?;
         let attempts = self.config.retries.saturating_add(1);
+        // A controller that has just restarted drops signed requests other than stops for up
+        // to RESERVE_AHEAD (docs/safety.md): with a key, resends go on for at least that long.
+        let window = match self.signer {
+            Some(_) => Duration::from_micros(RESERVE_AHEAD.saturating_mul(TIMESTAMP_UNIT_US)),
+            None => Duration::ZERO,
+        };
+        let timeout_us = self.config.timeout.as_micros().max(1);
+        let extra = u32::try_from(window.as_micros().div_ceil(timeout_us)).unwrap_or(u32::MAX);
+        let started = Instant::now();
         let mut refused = false;
         let unverified = self.unverified;
-        for attempt in 0..attempts {
+        let mut sent = 0;
+        for attempt in 0..attempts.saturating_add(extra) {
+            let answered = self.unverified > unverified;
+            if attempt >= attempts && (refused || answered || started.elapsed() >= window) {
+                break;
+            }
+            sent += 1;
             // Each attempt signed anew: the controller serves a timestamp once.
             let signed = self.signer.as_mut().map(|s| s.sign(datagram));
             let bytes = match &signed {
@@ -334,7 +351,7 @@ impl Client {
         } else {
             Err(ClientError::Timeout {
                 command,
-                attempts,
+                attempts: sent,
                 timeout: self.config.timeout,
             })
         }

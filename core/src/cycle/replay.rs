@@ -17,9 +17,9 @@ use armgate_protocol::client::signed::{Signature, TIMESTAMP_MAX};
 /// How far a link's first timestamp may lie behind the newest served (60 s in 10 µs steps).
 pub const FIRST_WINDOW: u64 = 6_000_000;
 
-/// How far ahead of a served timestamp the kept reservation goes (2 s in 10 µs steps): one
-/// store write per 2 s of use at most.
-pub const RESERVE_AHEAD: u64 = 200_000;
+/// How far ahead of a served timestamp the kept reservation goes: the wire's rule (clients
+/// resend for that long after a restart's refusal).
+pub use armgate_protocol::client::signed::RESERVE_AHEAD;
 
 /// Where the reservation survives a restart: what the shell provides (`armgate-sim`'s state
 /// file, the firmware's flash or file). Called from the tick, at most once per

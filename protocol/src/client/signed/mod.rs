@@ -50,3 +50,8 @@ pub const SIGNED_LEN: usize = super::MESSAGE_LEN + SIGNATURE_LEN;
 pub const TAG_LEN: usize = 6;
 /// The link id the controller signs with; a request on it is refused.
 pub const CONTROLLER_LINK: u8 = 0;
+/// How far ahead of a served timestamp the controller's kept replay reservation goes (2 s in
+/// 10 µs steps): one store write per 2 s of use at most, and after a restart signed requests
+/// other than stops are refused until the clients' clocks pass it, for up to this long (the
+/// controller's `cycle::replay`; clients resend for this long).
+pub const RESERVE_AHEAD: u64 = 200_000;
