@@ -309,12 +309,15 @@ impl Client {
         let mut refused = false;
         let unverified = self.unverified;
         let mut sent = 0;
-        for attempt in 0..attempts.saturating_add(extra) {
+        // When the last send left: the resends end only after one sent `window` after the first.
+        let mut last_sent = Duration::ZERO;
+        for attempt in 0..attempts.saturating_add(extra).saturating_add(1) {
             let answered = self.unverified > unverified;
-            if attempt >= attempts && (refused || answered || started.elapsed() >= window) {
+            if attempt >= attempts && (refused || answered || last_sent >= window) {
                 break;
             }
             sent += 1;
+            last_sent = started.elapsed();
             // Each attempt signed anew: the controller serves a timestamp once.
             let signed = self.signer.as_mut().map(|s| s.sign(datagram));
             let bytes = match &signed {
