@@ -108,8 +108,20 @@ fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
     let (result, moved) = armgate(&sim, &[&["ik-move", "--no-wait"][..], &pose].concat());
     result.unwrap();
     assert!(
-        moved.contains(&format!("(branch {chosen})")),
+        moved.contains(&format!("(branch {chosen} ")),
         "ik marked {chosen}: {out}\nik-move: {moved}"
+    );
+    // The same branch by the names ik printed for it.
+    let name = marked[0].split_whitespace().nth(2).unwrap();
+    assert!(name.starts_with("shoulder-"), "{out}");
+    let (result, again) = armgate(
+        &sim,
+        &[&["ik-move", "--no-wait", "--branch", name][..], &pose].concat(),
+    );
+    result.unwrap();
+    assert!(
+        again.contains(&format!("(branch {chosen} {name}")),
+        "{again}"
     );
     let _ = sim.ok("ST", [0.0; 7], 0);
 }
