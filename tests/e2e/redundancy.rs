@@ -111,7 +111,9 @@ fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
         moved.contains(&format!("(branch {chosen} ")),
         "ik marked {chosen}: {out}\nik-move: {moved}"
     );
-    // The same branch by the names ik printed for it.
+    // The same branch by the names ik printed for it, once the first move is stopped.
+    let _ = sim.ok("ST", [0.0; 7], 0);
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0));
     let name = marked[0].split_whitespace().nth(2).unwrap();
     assert!(name.starts_with("shoulder-"), "{out}");
     let (result, again) = armgate(

@@ -285,7 +285,9 @@ impl VelocityStream {
         self.within_cartesian_limits(xi)
     }
 
-    fn within_cartesian_limits(&self, xi: Twist) -> Twist {
+    /// `xi` scaled down by one factor to within the Cartesian speed limits (`TW`'s reply
+    /// echoes it, so a client can say that and how a twist was cut).
+    pub fn within_cartesian_limits(&self, xi: Twist) -> Twist {
         let over = xi
             .iter()
             .zip(self.cartesian_speed)
