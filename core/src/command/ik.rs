@@ -113,14 +113,7 @@ pub(super) fn goal(
     if !chosen && let Some(kept) = already_there(chain, &target, reference, branch) {
         return Ok(kept);
     }
-    let solve = |root| {
-        let found = if chosen {
-            chain.solve_nearest_keeping(&target, reference, root)
-        } else {
-            chain.solve_nearest(&target, reference, root)
-        };
-        found.ok().flatten()
-    };
+    let solve = |root| nearest(chain, &target, (reference, chosen), root);
     let Some(wanted) = branch else {
         return solve(None)
             .map(|s| (s.q, bits(chain, &s)))
@@ -137,6 +130,24 @@ pub(super) fn goal(
         None if solve(None).is_some() => Err(IkRequestError::BranchBeyondLimits),
         None => Err(out_of_reach),
     }
+}
+
+/// The solution of `target` nearest `reference` on the solver's `root` branch (if given),
+/// keeping the reference's redundancy values if `chosen`. Out of line: inlined at `goal`'s
+/// three calls it cost the firmware 3 KB of flash.
+#[inline(never)]
+fn nearest(
+    chain: &Chain,
+    target: &Frame,
+    (reference, chosen): (&Joints, bool),
+    root: Option<Branch>,
+) -> Option<BranchSolution> {
+    let found = if chosen {
+        chain.solve_nearest_keeping(target, reference, root)
+    } else {
+        chain.solve_nearest(target, reference, root)
+    };
+    found.ok().flatten()
 }
 
 /// The squared distance between two joint vectors.
