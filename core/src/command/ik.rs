@@ -119,12 +119,10 @@ pub(super) fn goal(
             .map(|s| (s.q, bits(chain, &s)))
             .ok_or(out_of_reach);
     };
-    // The solver's root branch of each solution, tried for the one in the configuration asked
-    // for (one of them on a six-joint arm, itself on the others).
+    // The solver's root branches tried for the one in the configuration asked for: one root
+    // gives each configuration of a pose (itself on the families named by their roots).
     let on_branch = (0..NEAREST_BRANCH)
-        .filter_map(|root| solve(Branch::from_bits(root)))
-        .filter(|s| bits(chain, s) == wanted)
-        .min_by(|a, b| dist_to(&a.q, reference).total_cmp(&dist_to(&b.q, reference)));
+        .find_map(|root| solve(Branch::from_bits(root)).filter(|s| bits(chain, s) == wanted));
     match on_branch {
         Some(found) => Ok((found.q, wanted)),
         None if solve(None).is_some() => Err(IkRequestError::BranchBeyondLimits),
@@ -148,11 +146,6 @@ fn nearest(
         chain.solve_nearest(target, reference, root)
     };
     found.ok().flatten()
-}
-
-/// The squared distance between two joint vectors.
-fn dist_to(a: &Joints, b: &Joints) -> f64 {
-    a.iter().zip(b.iter()).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
 /// How near a `KG` goal the arm may already be for the goal to be the present joints: a pose

@@ -8,7 +8,7 @@ use armgate_protocol::client::branch::{ELBOW, SHOULDER, WRIST};
 
 use super::chain::{Axes, Chain};
 use super::family::Family;
-use super::screws::{closest_meeting, misalignment};
+use super::screws::closest_meeting;
 
 /// A wrist centre offset along axis 2 (m) below this is no offset (a shoulder in line with
 /// the base axis).
@@ -33,19 +33,17 @@ impl Chain {
         }
         let q = self.checked(q).ok()?;
         let mut axes = Axes::default();
-        let flange = self.tool_and_axes(&q, &mut axes).translation.vector;
-        let n = self.dof();
+        self.tool_and_axes(&q, &mut axes);
+        // Both families have six joints: the wrist is axes 4 to 6.
         let axis = |i: usize| Some((axes.origin.get(i)?, axes.z.get(i)?));
         let (p1, h1) = axis(0)?;
         let (o2, h2) = axis(1)?;
         let (oe, he) = axis(2)?;
-        let (_, ha) = axis(n.checked_sub(3)?)?;
-        let (om, hm) = axis(n.saturating_sub(2))?;
-        let (ol, hl) = axis(n.saturating_sub(1))?;
+        let (o4, ha) = axis(3)?;
+        let (om, hm) = axis(4)?;
+        let (ol, hl) = axis(5)?;
         // The wrist centre: where the last two axes meet.
-        let centre = closest_meeting(om, hm, ol, hl).map_or(flange, |(x, _)| x);
-        // The shoulder: where the upper arm leaves the base axis.
-        let shoulder = closest_meeting(p1, h1, o2, h2).map_or(*o2, |(x, _)| x);
+        let (centre, _) = closest_meeting(om, hm, ol, hl)?;
         // Left: the upper arm lies left of the base axis seen towards the wrist centre (axis 1
         // up): the wrist centre's offset along axis 2 (constant on a six-joint arm: the joints
         // between turn about axes parallel to it) times its distance ahead of the plane of
@@ -60,15 +58,15 @@ impl Chain {
             ahead * offset
         };
         // Up: the elbow lies on axis 1's side of the line from the shoulder to the wrist
-        // (in the arm's plane, across the elbow axis; a parallel next axis stands for the
-        // wrist, as ur5's axis 4).
-        let (next_o, next_h) = axis(3)?;
-        let reach = if misalignment(he, next_h) < FLAT {
-            next_o
+        // (in the arm's plane, across the elbow axis; three parallel axes: axis 4 stands for
+        // the wrist). Axis 2 is parallel to the elbow's, so any point of it is the shoulder.
+        let wrist = if form.fit.family == Family::ThreeParallel {
+            o4
         } else {
             &centre
-        } - shoulder;
-        let bend = he.dot(&(oe - shoulder).cross(&reach)) * he.dot(&h1.cross(&reach));
+        };
+        let reach = wrist - o2;
+        let bend = he.dot(&(oe - o2).cross(&reach)) * he.dot(&h1.cross(&reach));
         // Flip: the wrist's middle axis against the others' cross product (the middle joint's
         // sign, whatever its zero).
         let flip = ha.cross(hl).dot(hm);
