@@ -35,6 +35,13 @@ fn known_configurations_of_puma560() {
         puma.configuration(&[0.0, 0.0, 0.0, 0.0, 0.5, 0.0]),
         Some(ELBOW)
     );
+    // The same pose's other root of θ1 (about 2.74 rad away) reaches the wrist centre from
+    // behind, the upper arm on the other side: shoulder right, and only there.
+    for s in puma.solve_all(&puma.forward(&q).unwrap(), &q).unwrap() {
+        let right = s.q[0].abs() > 1.0;
+        let bits = puma.configuration(&s.q).unwrap();
+        assert_eq!(bits & SHOULDER != 0, right, "{s:?}");
+    }
     // The classic eight: the first random pose that all eight reach within the limits, one in
     // each configuration.
     let mut rng = SplitMix64::new(560);

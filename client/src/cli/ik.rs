@@ -130,7 +130,7 @@ pub(super) fn ik(
 
 /// The names of branch `bits`: `shoulder-left,elbow-up,wrist-noflip (lun)`.
 pub(super) fn branch_name(bits: u8) -> String {
-    let named = NAMES.map(|(bit, states)| states[usize::from(bits & bit != 0)]);
+    let named = NAMES.map(|(bit, [clear, set])| if bits & bit != 0 { set } else { clear });
     let short: String = named.iter().map(|(_, c)| c).collect();
     let long: Vec<&str> = named.iter().map(|(n, _)| *n).collect();
     format!("{} ({short})", long.join(","))
@@ -149,13 +149,11 @@ fn parse_branch(s: &str) -> Result<u8, String> {
     if let Ok(bits) = s.parse::<u8>() {
         return if bits <= 7 { Ok(bits) } else { Err(refused()) };
     }
-    let words: Vec<&str> = if s.contains(',') {
-        s.split(',').map(str::trim).collect()
+    let words: Vec<String> = if s.contains(',') {
+        s.split(',').map(|w| w.trim().to_owned()).collect()
     } else {
         // The short form: one letter each.
-        s.char_indices()
-            .map(|(i, c)| &s[i..i + c.len_utf8()])
-            .collect()
+        s.chars().map(String::from).collect()
     };
     let mut bits = 0;
     for (bit, states) in NAMES {

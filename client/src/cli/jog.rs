@@ -31,20 +31,23 @@ pub struct JogArgs {
 /// echo): `jog 0 0 1` says the 1 m/s was clamped, and to what.
 fn cut_warning(asked: &[f64], cut: [f64; 6]) -> String {
     let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let (linear, angular) = (norm(&asked[..3]), norm(asked.get(3..).unwrap_or(&[])));
+    let (linear, angular) = (
+        norm(asked.get(..3).unwrap_or(&[])),
+        norm(asked.get(3..).unwrap_or(&[])),
+    );
     let [x, y, z, a, b, c] = cut;
     let speeds = if angular > 0.0 {
         format!(
             "{linear:.3} m/s, {angular:.3} rad/s is beyond the robot's Cartesian speed limits \
              (robot file [cartesian] max_velocity): clamped to {:.3} m/s, {:.3} rad/s",
-            norm(&cut[..3]),
-            norm(&cut[3..])
+            norm(&[x, y, z]),
+            norm(&[a, b, c])
         )
     } else {
         format!(
             "{linear:.3} m/s is beyond the robot's Cartesian speed limits (robot file \
              [cartesian] max_velocity): clamped to {:.3} m/s",
-            norm(&cut[..3])
+            norm(&[x, y, z])
         )
     };
     format!("warning: {speeds} (vx vy vz {x:.3} {y:.3} {z:.3}, wx wy wz {a:.3} {b:.3} {c:.3})")
