@@ -39,7 +39,8 @@ fn ik_and_ik_move_take_a_chosen_theta3_on_a_seven_joint_arm() {
     let listed: Vec<&str> = out.lines().filter(|l| l.contains("branch ")).collect();
     assert!(listed.len() >= 2, "{out}");
     for line in &listed {
-        let third = line.split_whitespace().nth(4).unwrap();
+        // "branch N shoulder-…,elbow-…,wrist-… (lun) q1 q2 q3 …"
+        let third = line.split_whitespace().nth(6).unwrap();
         assert_eq!(third, "-0.600000", "{out}");
     }
     // The controller refuses what the arm does not have, and values beyond the limits.
