@@ -1641,6 +1641,26 @@ fn a_jog_into_a_joint_limit_is_announced() {
 }
 
 #[test]
+fn a_jog_beyond_the_speed_limit_says_it_was_clamped_and_to_what() {
+    // `jog 0 0 1` asks 1 m/s; the test's ranger-mk1 has [cartesian] max_velocity 0.1 m/s
+    // (`Sim::start`'s faster limits).
+    let sim = sessions::ready("1.5708,0.6,-0.4,0.2,1.8,0.1", 2.0);
+    let (result, out) = armgate(&sim, &["jog", "0", "0", "1", "--for", "0.3"]);
+    result.unwrap();
+    assert!(
+        out.contains(
+            "warning: 1.000 m/s is beyond the robot's Cartesian speed limits (robot file \
+             [cartesian] max_velocity): clamped to 0.100 m/s (vx vy vz 0.000 0.000 0.100"
+        ),
+        "{out}"
+    );
+    // Within the limits: no warning.
+    let (result, out) = armgate(&sim, &["jog", "0", "0", "0.01", "--for", "0.3"]);
+    result.unwrap();
+    assert!(!out.contains("warning"), "{out}");
+}
+
+#[test]
 fn the_half_turn_line_is_refused_before_the_arm_moves() {
     // After the README's `armgate jmove 1.5708 0.4 1.2 0 1.2 0` the tool is 6 cm from joint
     // 1's axis; armgate-sim's help example passes the wrist centre within 6 mm of it, where

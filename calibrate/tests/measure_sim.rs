@@ -1,7 +1,8 @@
-//! A scripted calibration run (issue 37): `armgate calibrate measure` moves ur5 in armgate-sim
-//! through a plan's poses, its hook takes each reading from a perturbed "true" ur5
-//! (`simulate --perturb 7` on the reported joints), and the fit of what it wrote is accepted
-//! (exit 0: better than nominal, residual within 3 × the noise, else it refuses).
+//! A scripted calibration run (issue 37): `armgate calibrate measure` moves ur5, and ranger-mk1,
+//! in armgate-sim through a plan's poses, its hook takes each reading from a perturbed "true"
+//! arm (`simulate --perturb 7` on the reported joints), and the fit of what it wrote is
+//! accepted (exit 0: better than nominal, residual within 3 × the noise, else it refuses) and
+//! finds the perturbation (fitting poses' rms error below 0.2 mm, from 20 times that nominal).
 //!
 //! armgate-sim is `$ARMGATE_SIM`, else `armgate-sim` next to this package's binary (built with
 //! cargo if missing), as python/tests/conftest.py finds it.
@@ -74,13 +75,51 @@ fn calibrate(args: &[&str], dir: &Path) -> std::process::Output {
 
 #[test]
 fn a_measuring_run_on_ur5_in_the_simulator_is_fitted() {
-    let dir = std::env::temp_dir().join(format!("armgate-measure-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let robot = repo().join("robots/ur5.toml");
-    let robot = robot.to_str().unwrap();
+    measure_and_fit("ur5", robot.to_str().unwrap(), 14, 10);
+}
+
+/// ranger-mk1's geometry with its joints as fast as the simulated drives allow (0.07–0.1
+/// rad/s took minutes between random plan poses): its kinematics, and so the fit, are
+/// ranger-mk1's.
+#[test]
+fn a_measuring_run_on_ranger_mk1_in_the_simulator_is_fitted() {
+    let dir = scratch("ranger-mk1-file");
+    let text = std::fs::read_to_string(repo().join("robots/ranger-mk1.toml")).unwrap();
+    let mut fast = String::new();
+    for line in text.lines() {
+        let key = line.split('=').next().unwrap_or("").trim();
+        fast.push_str(match key {
+            "max_velocity" if !line.contains('[') => "max_velocity = 0.8",
+            "max_rate" => "max_rate = 0.85",
+            "max_acceleration" if !line.contains('[') => "max_acceleration = 2.0",
+            _ => line,
+        });
+        fast.push('\n');
+    }
+    let robot = dir.join("ranger-mk1.toml");
+    std::fs::write(&robot, fast).unwrap();
+    measure_and_fit("ranger-mk1", robot.to_str().unwrap(), 16, 12);
+}
+
+/// A folder of its own under the temporary one.
+fn scratch(what: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("armgate-measure-{what}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Plans `poses` poses for `robot`, measures them with `armgate calibrate measure` in
+/// armgate-sim (at least `at_least` reached), the hook reading a perturbed copy of the robot
+/// (`simulate --perturb 7`), and fits the file it wrote: accepted, and the fit finds the
+/// perturbation (the calibrated file reproduces the perturbed arm's positions far better than
+/// the nominal one, as docs/calibration.md's simulated example).
+fn measure_and_fit(name: &str, robot: &str, poses: usize, at_least: usize) {
+    let dir = scratch(name);
+    let count = poses.to_string();
     let plan = calibrate(
         &[
-            "plan", "--robot", robot, "--poses", "14", "--out", "plan.csv",
+            "plan", "--robot", robot, "--poses", &count, "--out", "plan.csv",
         ],
         &dir,
     );
@@ -119,11 +158,11 @@ fn a_measuring_run_on_ur5_in_the_simulator_is_fitted() {
         .count();
     assert_eq!(rows, said.matches(": measured").count(), "{said}");
     let skipped = said.matches(": skipped").count();
-    assert_eq!(rows + skipped, 14, "{said}");
-    assert!(rows >= 10, "{said}");
+    assert_eq!(rows + skipped, poses, "{said}");
+    assert!(rows >= at_least, "{name}: {said}");
     assert_eq!(
         measured.matches("# plan pose").count(),
-        14,
+        poses,
         "every plan pose is named: {measured}"
     );
     // The fit accepts it.
@@ -146,4 +185,17 @@ fn a_measuring_run_on_ur5_in_the_simulator_is_fitted() {
         String::from_utf8_lossy(&fit.stdout).into_owned() + &String::from_utf8_lossy(&fit.stderr);
     assert!(fit.status.success(), "{report}");
     assert!(dir.join("calibrated.toml").is_file());
+    // The perturbation found: the fitting poses' rms error, nominal then calibrated.
+    let rms = |row: &str| -> f64 {
+        let line = report.lines().find(|l| l.starts_with(row)).expect(row);
+        line.split_whitespace().nth(5).unwrap().parse().unwrap()
+    };
+    let (nominal, calibrated) = (
+        rms("fitting poses, nominal"),
+        rms("fitting poses, calibrated"),
+    );
+    eprintln!("{name}: rms {nominal} mm nominal, {calibrated} mm calibrated\n{report}");
+    assert!(calibrated < 0.2, "{name}: {report}");
+    assert!(nominal > 20.0 * calibrated, "{name}: {report}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

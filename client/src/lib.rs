@@ -74,5 +74,5 @@ pub use pose::{Mode, Pose, Quaternion, next_mode};
 pub use runfile::{RunFile, RunFileError};
 pub use signer::Signer;
 pub use status::{DriveStatus, Motion, Status};
-pub use velocity::{StreamEvent, Velocity, VelocityStreamer};
+pub use velocity::{StreamEvent, Streamed, Velocity, VelocityStreamer};
 pub use wait::{Progress, WaitOptions};

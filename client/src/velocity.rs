@@ -72,6 +72,30 @@ fn hold_time(reply: &Reply) -> Option<Duration> {
     (seconds.is_finite() && seconds > 0.0).then(|| Duration::from_secs_f64(seconds))
 }
 
+/// What [`Client::stream_for`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Streamed {
+    /// The commands sent.
+    pub sent: u32,
+    /// A twist beyond the robot's Cartesian speed limits: the twist the controller cut it to
+    /// (its echo: vx, vy, vz, ωx, ωy, ωz), all components by one factor.
+    pub cut_to: Option<[f64; 6]>,
+}
+
+/// The twist `reply` echoes, if it is smaller than `sent` (by more than the wire's rounding):
+/// the controller cut it to its Cartesian speed limits.
+fn cut_twist(sent: [f64; 6], reply: &Reply) -> Option<[f64; 6]> {
+    let mut echo = [0.0; 6];
+    for (e, v) in echo.iter_mut().zip(reply.values) {
+        *e = f64::from(v);
+    }
+    let cut = sent
+        .iter()
+        .zip(echo)
+        .any(|(s, e)| e.abs() < s.abs() * (1.0 - 1e-5));
+    cut.then_some(echo)
+}
+
 impl Client {
     /// `TW`: streams a tool twist (Cartesian mode). Returns how long it holds (three control
     /// periods, from the echo); send the next one before then.
@@ -81,12 +105,23 @@ impl Client {
         angular: [f64; 3],
         frame: TwistFrame,
     ) -> Result<Option<Duration>, ClientError> {
+        self.twist_reply(linear, angular, frame)
+            .map(|r| hold_time(&r))
+    }
+
+    /// `TW`, its reply: the twist within the Cartesian speed limits and the hold time.
+    fn twist_reply(
+        &mut self,
+        linear: [f64; 3],
+        angular: [f64; 3],
+        frame: TwistFrame,
+    ) -> Result<Reply, ClientError> {
         let twist = Twist {
             linear: linear.map(|v| v as f32),
             angular: angular.map(|v| v as f32),
             frame,
         };
-        self.request(twist.to_request()).map(|r| hold_time(&r))
+        self.request(twist.to_request())
     }
 
     /// `jW`: streams joint rates (joint mode); for more than six joints bank 2 is sent first.
@@ -117,23 +152,38 @@ impl Client {
         velocity: &Velocity,
         duration: Duration,
         interrupted: impl Fn() -> bool,
-    ) -> Result<u32, ClientError> {
+    ) -> Result<Streamed, ClientError> {
         // None: a duration beyond the clock's range, streamed until interrupted.
         let end = Instant::now().checked_add(duration);
         self.velocity(&velocity.at_rest())?;
         let mut sent = 0u32;
+        let mut cut_to = None;
         while end.is_none_or(|end| Instant::now() < end) {
             if interrupted() {
                 return Err(ClientError::Interrupted);
             }
             let sent_at = Instant::now();
-            let interval = self.velocity(velocity)?.map_or(DEFAULT_INTERVAL, |h| h / 3);
+            let hold = match velocity {
+                Velocity::Twist {
+                    linear,
+                    angular,
+                    frame,
+                } => {
+                    let reply = self.twist_reply(*linear, *angular, *frame)?;
+                    let [x, y, z] = *linear;
+                    let [a, b, c] = *angular;
+                    cut_to = cut_to.or(cut_twist([x, y, z, a, b, c], &reply));
+                    hold_time(&reply)
+                }
+                Velocity::Joints(rates) => self.joint_velocity(rates)?,
+            };
+            let interval = hold.map_or(DEFAULT_INTERVAL, |h| h / 3);
             sent = sent.saturating_add(1);
             // Once per period from send to send, the reply's wait included.
             let next = end.map_or(sent_at + interval, |end| (sent_at + interval).min(end));
             std::thread::sleep(next.saturating_duration_since(Instant::now()));
         }
-        Ok(sent)
+        Ok(Streamed { sent, cut_to })
     }
 
     /// Sends one velocity command ([`twist`](Self::twist) or
@@ -324,9 +374,11 @@ mod tests {
         let fake = controller();
         let mut c = fake.client();
         let rates = Velocity::Joints(vec![0.0, 0.1]);
-        let sent = c
+        let streamed = c
             .stream_for(&rates, Duration::from_millis(200), || false)
             .unwrap();
+        let sent = streamed.sent;
+        assert_eq!(streamed.cut_to, None);
         // Every 10 ms (a third of the 30 ms hold) for 200 ms, after the zero that re-arms.
         assert!((10..=21).contains(&sent), "{sent}");
         let received = fake.received();

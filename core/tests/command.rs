@@ -421,8 +421,11 @@ fn list_choose_and_report(
 ) -> Vec<u8> {
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!((&sq[..2], sq[30]), (&b"QS"[..], 5));
-    let branch = chain.branch_of(present).unwrap();
-    assert_eq!(floats(&sq)[0], f32::from(branch.bits()));
+    // The configuration as arms name it; the solver's roots on a prismatic base.
+    let branch = chain
+        .configuration(present)
+        .unwrap_or_else(|| chain.branch_of(present).unwrap().bits());
+    assert_eq!(floats(&sq)[0], f32::from(branch));
 
     let pose = chain.forward(target_q).unwrap();
     let [r, p, y] = math::rpy(&pose.rotation);
@@ -457,6 +460,13 @@ fn list_choose_and_report(
     rig.request("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
     rig.tick();
     assert!(rig.text("KG", values, 9).starts_with("ER24"));
+    // A branch without a solution within the limits is refused as such.
+    for other in (0..8).filter(|b| !branches.contains(b)) {
+        assert_eq!(
+            rig.text("KG", values, other),
+            "ER44 Cmd KG branch past limits"
+        );
+    }
     let gk = rig.request("KG", values, target_branch);
     assert_eq!((&gk[..2], gk[30]), (&b"GK"[..], target_branch));
     for (a, b) in floats(&gk).iter().zip(target_q) {
@@ -514,7 +524,8 @@ fn closed_form_requests_list_choose_and_report_branches() {
 }
 
 /// hybrid (two slides, then four revolute joints): the same requests, on its closed form; no
-/// branch sets the wrist bit (docs/kinematics.md), so `KG` on it has no solution.
+/// branch sets the wrist bit (docs/kinematics.md), so `KG` on it is refused as a branch past
+/// the limits.
 #[test]
 fn closed_form_requests_on_a_prismatic_base() {
     let config = common::robot("hybrid");
@@ -531,7 +542,7 @@ fn closed_form_requests_on_a_prismatic_base() {
     let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
     assert!(
         rig.text("KG", values, 4)
-            .starts_with("ER25 Cmd KG unreachable")
+            .starts_with("ER44 Cmd KG branch past limits")
     );
 }
 

@@ -10,6 +10,8 @@
 Standard library only. See README.md and docs/protocol.md of the armgate repository.
 """
 
+from . import branch
+from .branch import branch_name, parse_branch
 from .client import (
     DEFAULT_PORT,
     DEFAULT_RETRIES,
@@ -24,6 +26,7 @@ from .errors import (
     BadIndex,
     BadNumber,
     BeyondJointLimit,
+    BranchBeyondLimits,
     Cancelled,
     ClientSilent,
     FollowingError,
@@ -68,7 +71,11 @@ __all__ = [
     "BadIndex",
     "BadNumber",
     "BeyondJointLimit",
+    "BranchBeyondLimits",
     "Cancelled",
+    "branch",
+    "branch_name",
+    "parse_branch",
     "ClientSilent",
     "FollowingError",
     "CommandRejected",

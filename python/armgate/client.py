@@ -20,6 +20,7 @@ from typing import (
 )
 
 from . import wire
+from .branch import parse_branch
 from .signing import IDENTITY_INDEX, KeyLike, Signer
 from .errors import (
     ArmError,
@@ -367,7 +368,8 @@ class Arm(Waiting):
         theta5: Optional[float] = None,
     ) -> Optional[List[Tuple[int, List[float]]]]:
         """Every closed-form IK solution of ``pose`` within the joint limits (``KS``), as
-        (branch bits, joints) pairs; branch bit 1 shoulder, 2 elbow, 4 wrist. None if the robot
+        (branch bits, joints) pairs; branch bit 1 shoulder right, 2 elbow down, 4 wrist flip
+        (``armgate.branch.branch_name`` names them). None if the robot
         has no closed form (docs/kinematics.md). On an arm of more than six joints a second
         ``KS`` with index bit 7 reads each solution's joints 7.. (bank 2); its solutions are
         those for the present values of the redundancy parameters (θ3, and θ5 on eight), or
@@ -393,21 +395,24 @@ class Arm(Waiting):
     def move_j_to_pose(
         self,
         pose: PoseLike,
-        branch: Optional[int] = None,
+        branch: Optional[Union[int, str]] = None,
         time: Optional[float] = None,
         wait: bool = True,
         theta3: Optional[float] = None,
         theta5: Optional[float] = None,
     ) -> Tuple[List[float], int]:
         """A joint move (joint mode) to the IK solution of ``pose`` on configuration ``branch``
-        (bits 1 shoulder, 2 elbow, 4 wrist), or without one the solution nearest the present
+        (``"shoulder-left,elbow-up,wrist-noflip"``, ``"lun"`` or its number: bits 1 shoulder
+        right, 2 elbow down, 4 wrist flip; ``BranchBeyondLimits`` if it has no solution within
+        the joint limits, ValueError for no branch), or without one the solution nearest the present
         joints (``KG``); on a 7–8 joint arm with the present θ3 (θ5), or ``theta3``
         (``theta5``) where given (sent first with ``KR``; no solution for them: refused, no
         other values are tried). Returns the goal's joints 1–6 and the branch taken (8: none,
         a robot without a closed form); with ``wait`` the joints are polled until reached."""
         goal = as_pose(pose)
+        bits = 8 if branch is None else parse_branch(branch)
         chosen = self._chosen(theta3, theta5)
-        index = (8 if branch is None else int(branch)) | chosen
+        index = bits | chosen
         reply = self.request("KG", goal.xyz + goal.rpy + (float(time or 0.0),), index)
         q = list(reply.values[:6])
         if wait:

@@ -309,6 +309,11 @@ class IkDivergence(ControllerWarning):
     """``WN22 Inv Kin Divergence.``: the IK could not track the set-point; the arm holds."""
 
 
+class BranchBeyondLimits(ControllerError):
+    """``ER44 Cmd KG branch past limits``: the pose has IK solutions within the joint limits,
+    none in the configuration (``branch``) asked for; ``ik_solutions`` lists those it has."""
+
+
 class ViaPointMissed(ControllerWarning):
     """``WN27 Via point missed.``: a sequence stopped."""
 
@@ -328,6 +333,7 @@ _ERRORS: Dict[int, Type[ControllerMessage]] = {
     41: ClientSilent,
     42: Cancelled,
     43: FollowingError,
+    44: BranchBeyondLimits,
 }
 
 _WARNINGS: Dict[int, Type[ControllerMessage]] = {

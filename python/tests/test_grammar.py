@@ -49,3 +49,26 @@ def test_every_form_reads_back_as_in_rust() -> None:
         assert e.ends_motion == row["ends_motion"], text
         for chars in {row["refuses"], row["command"], "OF", "ON", "BG"} - {None}:
             assert wire.answers(chars, text) == (chars == row["refuses"]), (text, chars)
+
+
+def test_branch_names_are_the_protocols() -> None:
+    from armgate import branch
+
+    table = [
+        (row["bit"], (tuple(row["clear"]), tuple(row["set"]))) for row in TABLE["branches"]
+    ]
+    assert branch.NAMES == table
+    for bits in range(8):
+        assert branch.parse_branch(branch.branch_name(bits)) == bits
+        assert branch.parse_branch(branch.short_name(bits)) == bits
+        assert branch.parse_branch(bits) == bits
+        assert branch.parse_branch(str(bits)) == bits
+    assert branch.branch_name(5) == "shoulder-right,elbow-up,wrist-flip"
+    assert branch.parse_branch("wrist-noflip, elbow-down,shoulder-left") == 2
+    for bad in (8, -1, "8", "lu", "lunf", "shoulder-left,elbow-up", "lrn", True):
+        try:
+            branch.parse_branch(bad)
+        except ValueError as e:
+            assert "a branch is its three names" in str(e)
+        else:
+            raise AssertionError(bad)

@@ -143,7 +143,9 @@ def test_ik_solutions_and_a_joint_move_on_a_chosen_branch(mk1) -> None:  # type:
         present = [b for b, s in solutions if math.dist(s, q) < 1e-3]
         assert len(present) == 1
         goal = dataclasses.replace(pose, z=pose.z + 0.02)
-        target, branch = arm.move_j_to_pose(goal, branch=present[0])
+        # By name, as ik-move's --branch reads it: shoulder-left,elbow-up,wrist-noflip.
+        name = armgate.branch.branch_name(present[0])
+        target, branch = arm.move_j_to_pose(goal, branch=name)
         assert branch == present[0]
         assert math.dist(arm.get_joints(), target) <= 0.001
 

@@ -39,7 +39,8 @@ fn ik_and_ik_move_take_a_chosen_theta3_on_a_seven_joint_arm() {
     let listed: Vec<&str> = out.lines().filter(|l| l.contains("branch ")).collect();
     assert!(listed.len() >= 2, "{out}");
     for line in &listed {
-        let third = line.split_whitespace().nth(4).unwrap();
+        // "branch N shoulder-…,elbow-…,wrist-… (lun) q1 q2 q3 …"
+        let third = line.split_whitespace().nth(6).unwrap();
         assert_eq!(third, "-0.600000", "{out}");
     }
     // The controller refuses what the arm does not have, and values beyond the limits.
@@ -108,8 +109,22 @@ fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
     let (result, moved) = armgate(&sim, &[&["ik-move", "--no-wait"][..], &pose].concat());
     result.unwrap();
     assert!(
-        moved.contains(&format!("(branch {chosen})")),
+        moved.contains(&format!("(branch {chosen} ")),
         "ik marked {chosen}: {out}\nik-move: {moved}"
+    );
+    // The same branch by the names ik printed for it, once the first move is stopped.
+    let _ = sim.ok("ST", [0.0; 7], 0);
+    assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0));
+    let name = marked[0].split_whitespace().nth(2).unwrap();
+    assert!(name.starts_with("shoulder-"), "{out}");
+    let (result, again) = armgate(
+        &sim,
+        &[&["ik-move", "--no-wait", "--branch", name][..], &pose].concat(),
+    );
+    result.unwrap();
+    assert!(
+        again.contains(&format!("(branch {chosen} {name}")),
+        "{again}"
     );
     let _ = sim.ok("ST", [0.0; 7], 0);
 }

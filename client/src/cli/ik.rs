@@ -2,6 +2,8 @@
 
 use std::io::Write;
 
+use armgate_protocol::client::branch::NAMES;
+
 use clap::Args;
 
 use super::CliError;
@@ -50,8 +52,10 @@ pub struct IkMoveArgs {
     /// The pose.
     #[command(flatten)]
     pub pose: PoseArgs,
-    /// Branch bits: 1 shoulder, 2 elbow, 4 wrist, 0..=7 (as `armgate ik` prints them);
-    /// without it, the solution nearest the present joints.
+    /// The configuration: `shoulder-left,elbow-up,wrist-noflip` (each of the three, any
+    /// order), its short form `lun` (l/r, u/d, n/f), or its number 0..=7 (1 shoulder right,
+    /// 2 elbow down, 4 wrist flip), as `armgate ik` prints them; without it, the solution
+    /// nearest the present joints.
     #[arg(long, value_parser = parse_branch)]
     pub branch: Option<u8>,
     /// The redundancy values (no solution for them: refused, no others are tried).
@@ -81,7 +85,7 @@ pub(super) fn ik(
     };
     writeln!(
         out,
-        "{} solutions (branch: shoulder 1, elbow 2, wrist 4)",
+        "{} solutions (branch: number = 1 shoulder right + 2 elbow down + 4 wrist flip)",
         solutions.len()
     )?;
     // The arm's own branch, and the solution nearest its joints: what ik-move without
@@ -108,7 +112,13 @@ pub(super) fn ik(
         } else {
             format!("   <- {}", marks.join("; "))
         };
-        writeln!(out, "  branch {} {}{marks}", s.branch, fmt_values(&s.q, 6))?;
+        writeln!(
+            out,
+            "  branch {} {:<40} {}{marks}",
+            s.branch,
+            branch_name(s.branch),
+            fmt_values(&s.q, 6)
+        )?;
     }
     if solutions.is_empty() {
         return Err(CliError::NoSolution(
@@ -118,15 +128,47 @@ pub(super) fn ik(
     Ok(())
 }
 
-/// `--branch`: the bits 0..=7.
+/// The names of branch `bits`: `shoulder-left,elbow-up,wrist-noflip (lun)`.
+pub(super) fn branch_name(bits: u8) -> String {
+    let named = NAMES.map(|(bit, [clear, set])| if bits & bit != 0 { set } else { clear });
+    let short: String = named.iter().map(|(_, c)| c).collect();
+    let long: Vec<&str> = named.iter().map(|(n, _)| *n).collect();
+    format!("{} ({short})", long.join(","))
+}
+
+/// `--branch`: the three names (any order), their short form, or the bits 0..=7.
 fn parse_branch(s: &str) -> Result<u8, String> {
-    match s.parse::<u8>() {
-        Ok(bits) if bits <= 7 => Ok(bits),
-        _ => Err(format!(
-            "`{s}`: a branch is 0 to 7, the sum of 1 shoulder, 2 elbow, 4 wrist (`armgate ik` \
-             lists those with a solution); leave --branch out for the solution nearest the \
-             present joints"
-        )),
+    let refused = || {
+        format!(
+            "`{s}`: a branch is its three names, e.g. `shoulder-left,elbow-up,wrist-noflip`, \
+             short `lun` (shoulder l/r, elbow u/d, wrist n/f), or its number 0 to 7 (1 \
+             shoulder right + 2 elbow down + 4 wrist flip); `armgate ik` lists those with a \
+             solution; leave --branch out for the solution nearest the present joints"
+        )
+    };
+    if let Ok(bits) = s.parse::<u8>() {
+        return if bits <= 7 { Ok(bits) } else { Err(refused()) };
+    }
+    let words: Vec<String> = if s.contains(',') {
+        s.split(',').map(|w| w.trim().to_owned()).collect()
+    } else {
+        // The short form: one letter each.
+        s.chars().map(String::from).collect()
+    };
+    let mut bits = 0;
+    for (bit, states) in NAMES {
+        let found = states
+            .iter()
+            .position(|(name, short)| words.iter().any(|w| *w == *name || w.chars().eq([*short])));
+        match found {
+            Some(set) => bits |= if set == 1 { bit } else { 0 },
+            None => return Err(refused()),
+        }
+    }
+    if words.len() == NAMES.len() {
+        Ok(bits)
+    } else {
+        Err(refused())
     }
 }
 
@@ -158,9 +200,10 @@ pub(super) fn ik_move(
     let goal = start(client, |c| c.ik_move(xyz, rpy, (*branch, choice), *time))?;
     writeln!(
         out,
-        "moving to {} (branch {})",
+        "moving to {} (branch {} {})",
         fmt_values(&goal.q, 4),
-        goal.branch
+        goal.branch,
+        branch_name(goal.branch)
     )?;
     if wait.no_wait {
         return Ok(());
@@ -196,9 +239,10 @@ mod tests {
         ]);
         let message = cli.unwrap_err().to_string();
         assert!(
-            message.contains("a branch is 0 to 7, the sum of 1 shoulder"),
+            message.contains("a branch is its three names, e.g. `shoulder-left,elbow-up"),
             "{message}"
         );
+        assert!(message.contains("number 0 to 7"), "{message}");
         // Two solutions: success.
         let fake = cartesian_controller(|r, reply| {
             if r.command == Command::IkSolution {
@@ -208,5 +252,35 @@ mod tests {
         let (result, out) = run_with(&fake, &["ik", "0", "0.2", "0.8", "0", "0", "0"]);
         result.unwrap();
         assert!(out.starts_with("2 solutions"), "{out}");
+    }
+
+    #[test]
+    fn branches_are_read_by_name_short_form_or_number() {
+        use super::{branch_name, parse_branch};
+        assert_eq!(parse_branch("shoulder-left,elbow-up,wrist-noflip"), Ok(0));
+        assert_eq!(parse_branch("wrist-flip, shoulder-right,elbow-up"), Ok(5));
+        assert_eq!(parse_branch("rdf"), Ok(7));
+        assert_eq!(parse_branch("lun"), Ok(0));
+        assert_eq!(parse_branch("ldn"), Ok(2));
+        assert_eq!(parse_branch("6"), Ok(6));
+        for bad in [
+            "8",
+            "lu",
+            "lunn",
+            "shoulder-left,elbow-up",
+            "xyz",
+            "rr n",
+            "l,u,n,f",
+        ] {
+            assert!(parse_branch(bad).is_err(), "{bad}");
+        }
+        assert_eq!(branch_name(0), "shoulder-left,elbow-up,wrist-noflip (lun)");
+        assert_eq!(branch_name(6), "shoulder-left,elbow-down,wrist-flip (ldf)");
+        for bits in 0..8 {
+            let name = branch_name(bits);
+            let (long, short) = name.split_once(' ').unwrap();
+            assert_eq!(parse_branch(long), Ok(bits));
+            assert_eq!(parse_branch(short.trim_matches(['(', ')'])), Ok(bits));
+        }
     }
 }

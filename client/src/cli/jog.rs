@@ -27,6 +27,32 @@ pub struct JogArgs {
     pub rates: bool,
 }
 
+/// What a twist beyond the robot's Cartesian speed limits was cut to (the controller's `TW`
+/// echo): `jog 0 0 1` says the 1 m/s was clamped, and to what.
+fn cut_warning(asked: &[f64], cut: [f64; 6]) -> String {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let (linear, angular) = (
+        norm(asked.get(..3).unwrap_or(&[])),
+        norm(asked.get(3..).unwrap_or(&[])),
+    );
+    let [x, y, z, a, b, c] = cut;
+    let speeds = if angular > 0.0 {
+        format!(
+            "{linear:.3} m/s, {angular:.3} rad/s is beyond the robot's Cartesian speed limits \
+             (robot file [cartesian] max_velocity): clamped to {:.3} m/s, {:.3} rad/s",
+            norm(&[x, y, z]),
+            norm(&[a, b, c])
+        )
+    } else {
+        format!(
+            "{linear:.3} m/s is beyond the robot's Cartesian speed limits (robot file \
+             [cartesian] max_velocity): clamped to {:.3} m/s",
+            norm(&[x, y, z])
+        )
+    };
+    format!("warning: {speeds} (vx vy vz {x:.3} {y:.3} {z:.3}, wx wy wz {a:.3} {b:.3} {c:.3})")
+}
+
 /// `armgate jog`: a TW or jW stream for `seconds`, then wait until the arm has ramped to rest.
 pub(super) fn jog(
     args: &JogArgs,
@@ -81,11 +107,17 @@ pub(super) fn jog(
     let interrupted = || interrupt.as_ref().is_some_and(interrupt::Interrupt::is_set);
     let started = std::time::Instant::now();
     match client.stream_for(&velocity, duration, interrupted) {
-        Ok(sent) => writeln!(
-            out,
-            "streamed {sent} commands over {:.2} s; the arm ramps to rest",
-            started.elapsed().as_secs_f64()
-        )?,
+        Ok(streamed) => {
+            if let Some(cut) = streamed.cut_to {
+                writeln!(out, "{}", cut_warning(values, cut))?;
+            }
+            writeln!(
+                out,
+                "streamed {} commands over {:.2} s; the arm ramps to rest",
+                streamed.sent,
+                started.elapsed().as_secs_f64()
+            )?;
+        }
         Err(ClientError::Interrupted) => {
             return Err(CliError::Interrupted(
                 "stopped streaming: the arm ramps to rest".to_owned(),

@@ -9,7 +9,7 @@ use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 
 use super::redundancy::{self, Values};
 use crate::config::IkConfig;
-use crate::kinematics::{Branch, Chain, Family, IkResult, Joints};
+use crate::kinematics::{Branch, BranchSolution, Chain, Family, IkResult, Joints};
 use crate::math::{Frame, Rotation3, Vector3, dist};
 use crate::motion::Refusal;
 
@@ -23,6 +23,8 @@ pub(super) enum IkRequestError {
     BadIndex,
     /// The controller refuses it (no solution: the goal is out of reach).
     Refused(Refusal),
+    /// The goal has solutions within the joint limits, none on the branch asked for.
+    BranchBeyondLimits,
 }
 
 /// The pose in f0..f5 (position, roll/pitch/yaw), if finite.
@@ -72,6 +74,12 @@ pub(super) fn reference(
     Ok((present, true))
 }
 
+/// The branch bits of solution `s` on the wire: its configuration (shoulder, elbow, wrist as
+/// arms name them) on a six-revolute-joint family, its solver's roots on the others.
+fn bits(chain: &Chain, s: &BranchSolution) -> u8 {
+    chain.configuration(&s.q).unwrap_or(s.branch.bits())
+}
+
 /// The joints of `KG`'s goal and the branch bits they lie on ([`NEAREST_BRANCH`] on a robot
 /// without a closed form, solved by global IK from the present joints). `reference` is the
 /// present joints, with the client's choice of the redundancy parameters if `chosen`: then
@@ -87,7 +95,11 @@ pub(super) fn goal(
     let out_of_reach = IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
     let branch = match index & !CHOSEN {
         NEAREST_BRANCH => None,
-        bits => Some(Branch::from_bits(bits).ok_or(IkRequestError::BadIndex)?),
+        bits => Some(
+            Branch::from_bits(bits)
+                .ok_or(IkRequestError::BadIndex)?
+                .bits(),
+        ),
     };
     if chain.family().family == Family::Numeric {
         if branch.is_some() {
@@ -101,15 +113,39 @@ pub(super) fn goal(
     if !chosen && let Some(kept) = already_there(chain, &target, reference, branch) {
         return Ok(kept);
     }
-    let found = if chosen {
-        chain.solve_nearest_keeping(&target, reference, branch)
-    } else {
-        chain.solve_nearest(&target, reference, branch)
+    let solve = |root| nearest(chain, &target, (reference, chosen), root);
+    let Some(wanted) = branch else {
+        return solve(None)
+            .map(|s| (s.q, bits(chain, &s)))
+            .ok_or(out_of_reach);
     };
-    match found {
-        Ok(Some(found)) => Ok((found.q, found.branch.bits())),
-        _ => Err(out_of_reach),
+    // The solver's root branches tried for the one in the configuration asked for: one root
+    // gives each configuration of a pose (itself on the families named by their roots).
+    let on_branch = (0..NEAREST_BRANCH)
+        .find_map(|root| solve(Branch::from_bits(root)).filter(|s| bits(chain, s) == wanted));
+    match on_branch {
+        Some(found) => Ok((found.q, wanted)),
+        None if solve(None).is_some() => Err(IkRequestError::BranchBeyondLimits),
+        None => Err(out_of_reach),
     }
+}
+
+/// The solution of `target` nearest `reference` on the solver's `root` branch (if given),
+/// keeping the reference's redundancy values if `chosen`. Out of line: inlined at `goal`'s
+/// three calls it cost the firmware 3 KB of flash.
+#[inline(never)]
+fn nearest(
+    chain: &Chain,
+    target: &Frame,
+    (reference, chosen): (&Joints, bool),
+    root: Option<Branch>,
+) -> Option<BranchSolution> {
+    let found = if chosen {
+        chain.solve_nearest_keeping(target, reference, root)
+    } else {
+        chain.solve_nearest(target, reference, root)
+    };
+    found.ok().flatten()
 }
 
 /// How near a `KG` goal the arm may already be for the goal to be the present joints: a pose
@@ -125,16 +161,22 @@ fn already_there(
     chain: &Chain,
     target: &Frame,
     present: &Joints,
-    branch: Option<Branch>,
+    branch: Option<u8>,
 ) -> Option<(Joints, u8)> {
     let pose = chain.forward(present).ok()?;
     if dist(&pose, target) > ALREADY_THERE {
         return None;
     }
-    let on = chain.branch_of(present)?;
-    branch
-        .is_none_or(|b| b == on)
-        .then(|| (*present, on.bits()))
+    let on = present_bits(chain, present)?;
+    branch.is_none_or(|b| b == on).then_some((*present, on))
+}
+
+/// The branch bits of the present joints: their configuration, or (on a family named by its
+/// roots) the root branch that reproduces them.
+fn present_bits(chain: &Chain, present: &Joints) -> Option<u8> {
+    chain
+        .configuration(present)
+        .or_else(|| chain.branch_of(present).map(Branch::bits))
 }
 
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the
@@ -166,14 +208,14 @@ pub(super) fn solution(
     for (o, q) in values.iter_mut().zip(joints).take(VALUES - 1) {
         *o = *q as f32;
     }
-    Ok(reply(Command::IkSolution, values, found.branch.bits()))
+    Ok(reply(Command::IkSolution, values, bits(chain, found)))
 }
 
 /// `QS` index 5: the branch of the present joints in f0 (−1: none, or no closed form).
 pub(super) fn present_branch(chain: &Chain, present: Option<&Joints>) -> Reply {
     let bits = present
-        .and_then(|q| chain.branch_of(q))
-        .map_or(-1.0, |b| f32::from(b.bits()));
+        .and_then(|q| present_bits(chain, q))
+        .map_or(-1.0, f32::from);
     let mut values = [0.0f32; VALUES];
     values[0] = bits;
     reply(Command::Status, values, BRANCH_INDEX)

@@ -196,7 +196,7 @@ impl Chain {
     /// [`check`](Self::check) into the fixed array the walk reads (entries past `n` zero).
     /// Returning the bare array, not a `Joints` through `Option` and `Result`, spares the
     /// Cortex-M7 several unaligned 72-byte copies per call.
-    fn checked(&self, q: &[f64]) -> Result<[f64; MAX_JOINTS], KinematicsError> {
+    pub(super) fn checked(&self, q: &[f64]) -> Result<[f64; MAX_JOINTS], KinematicsError> {
         if q.len() != self.n {
             return Err(KinematicsError::WrongJointCount);
         }

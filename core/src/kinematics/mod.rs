@@ -14,6 +14,7 @@
 mod calibrated;
 mod chain;
 mod closed_form;
+mod configuration;
 mod descent;
 mod evaluation;
 mod family;

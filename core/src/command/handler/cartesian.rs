@@ -84,6 +84,7 @@ impl CommandHandler {
             .stream_twist(xi, twist.frame)
             .map_err(|r| refusal_notice(cmd, r))?;
         let timeout = self.controller.stream_timeout();
+        let [vx, vy, vz, wx, wy, wz] = self.controller.stream().within_cartesian_limits(xi).into();
         Ok(values_reply(
             cmd,
             &[vx, vy, vz, wx, wy, wz, timeout],

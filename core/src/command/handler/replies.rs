@@ -46,6 +46,7 @@ pub(super) fn ik_notice(cmd: Command, error: IkRequestError) -> Notice {
     match error {
         IkRequestError::BadNumber => Notice::BadNumber(cmd),
         IkRequestError::BadIndex => Notice::BadIndex(cmd),
+        IkRequestError::BranchBeyondLimits => Notice::BranchBeyondLimits(cmd),
         IkRequestError::Refused(r) => refusal_notice(cmd, r),
     }
 }

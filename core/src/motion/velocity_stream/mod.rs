@@ -285,7 +285,11 @@ impl VelocityStream {
         self.within_cartesian_limits(xi)
     }
 
-    fn within_cartesian_limits(&self, xi: Twist) -> Twist {
+    /// `xi` scaled down by one factor to within the Cartesian speed limits (`TW`'s reply
+    /// echoes it, so a client can say that and how a twist was cut). Out of line: the stream
+    /// and the reply share one copy (flash).
+    #[inline(never)]
+    pub fn within_cartesian_limits(&self, xi: Twist) -> Twist {
         let over = xi
             .iter()
             .zip(self.cartesian_speed)

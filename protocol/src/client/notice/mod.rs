@@ -69,6 +69,9 @@ pub enum Notice {
     /// `ER43 jN following error E`: joint N's measured position was E from its command, more
     /// than the robot file's `max_following_error`: the arm was stopped (stop cause 9).
     FollowingError(Lag),
+    /// `ER44 Cmd KG branch past limits`: the pose is reached within the limits, but
+    /// not in the configuration asked for.
+    BranchBeyondLimits(Command),
 }
 
 impl Notice {
@@ -104,6 +107,7 @@ impl Notice {
             Self::ClientSilent(_) => 41,
             Self::Cancelled(_) => 42,
             Self::FollowingError(_) => 43,
+            Self::BranchBeyondLimits(_) => 44,
             Self::Held(Hold::JointLimit(_)) => 12,
             Self::Held(Hold::Workspace) => 13,
             Self::LinkShared(_) => 14,
@@ -167,6 +171,7 @@ const BY: &str = "by ";
 const ANOTHER_CLIENT: &str = "another client";
 const CLIENT_SILENT: (&str, &str) = ("client silent ", " ms");
 const CANCELLED: &str = "cancelled by ST";
+const BRANCH_BEYOND_LIMITS: &str = "branch past limits";
 const AT_LIMIT: &str = " at limit ";
 const LINK_SHARED: (&str, &str) = ("link ", " shared");
 
@@ -198,6 +203,7 @@ impl fmt::Display for Body {
             Notice::HeldBy(c, None) => write!(f, "{CMD} {} {BY}{ANOTHER_CLIENT}", cmd(c)),
             Notice::ClientSilent(ms) => write!(f, "{}{ms}{}", CLIENT_SILENT.0, CLIENT_SILENT.1),
             Notice::Cancelled(c) => write!(f, "{CMD} {} {CANCELLED}", cmd(c)),
+            Notice::BranchBeyondLimits(c) => write!(f, "{CMD} {} {BRANCH_BEYOND_LIMITS}", cmd(c)),
             Notice::FollowingError(lag) => write!(f, "{lag}"),
             Notice::Held(Hold::JointLimit(bound)) => {
                 write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))

@@ -66,6 +66,7 @@ impl Notice {
                 .map(Self::ClientSilent),
             (Severity::Error, 42) => with(CANCELLED, Self::Cancelled),
             (Severity::Error, 43) => Lag::parse(body).map(Self::FollowingError),
+            (Severity::Error, 44) => with(BRANCH_BEYOND_LIMITS, Self::BranchBeyondLimits),
             (Severity::Warning, 12) => held_at_limit(body),
             (Severity::Warning, 14) => body
                 .strip_prefix(LINK_SHARED.0)

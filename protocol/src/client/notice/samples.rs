@@ -59,6 +59,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::Held(Hold::Workspace),
         Notice::LinkShared(255),
         Notice::FollowingError(Lag::new(2, 4.4)),
+        Notice::BranchBeyondLimits(IkGoal),
     ]
     .into_iter()
     .chain(rejections)
@@ -90,12 +91,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::Held(Hold::Workspace) => 17,
         Notice::LinkShared(_) => 18,
         Notice::FollowingError(_) => 19,
+        Notice::BranchBeyondLimits(_) => 20,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 20];
+    let mut seen = [false; 21];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }

@@ -111,6 +111,19 @@ fn table() -> String {
         .map(|t| std::format!("    {}", text_row(t)))
         .collect();
     out.push_str(&rows.join(",\n"));
+    // The names of the IK branch bits (`branch::NAMES`), for Python's `armgate.branch`.
+    out.push_str("\n  ],\n  \"branches\": [\n");
+    let rows: Vec<String> = crate::client::branch::NAMES
+        .iter()
+        .map(|(bit, [(clear, c), (set, s)])| {
+            std::format!(
+                "    {{\"bit\": {bit}, \"clear\": [{}, \"{c}\"], \"set\": [{}, \"{s}\"]}}",
+                string(clear),
+                string(set)
+            )
+        })
+        .collect();
+    out.push_str(&rows.join(",\n"));
     let _ = writeln!(out, "\n  ]\n}}");
     out
 }
