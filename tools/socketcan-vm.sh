@@ -26,7 +26,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 # -- inside the VM -------------------------------------------------------------------------------
 if [[ "${1:-}" == "--inside" ]]; then
-    out=$2 bin=$3
+    out=$2 bin=$3 e2e=$4 e2e_tests=$5
     export TMPDIR=$out/tmp
     mkdir -p "$TMPDIR"
     sim=$bin/armgate-sim client=$bin/armgate
@@ -47,13 +47,13 @@ if [[ "${1:-}" == "--inside" ]]; then
         echo "$recipe" | sed "s/can0/$1/g; s/^sudo //" | grep -v -e "${2:-^$}" | bash -eu
     }
     # A drive-side process (the Whistle simulator) and a controller (armgate-sim) on IFACE.
-    whistles_on() {
-        "$sim" --whistles --can "socketcan:$1" --robot "$robot" </dev/null 2>"$out/$2" &
+    whistles_on() { # IFACE LOG [ARGS...]
+        "$sim" --whistles --can "socketcan:$1" --robot "$robot" "${@:3}" </dev/null 2>"$out/$2" &
         whistles=$!
         sleep 2
     }
-    controller_on() {
-        "$sim" --can "socketcan:$1" --robot "$robot" --quiet 2>"$out/$2" &
+    controller_on() { # IFACE LOG [ARGS...]
+        "$sim" --can "socketcan:$1" --robot "$robot" --quiet "${@:3}" 2>"$out/$2" &
         controller=$!
         for _ in 1 2 3 4 5 6 7 8 9 10; do # until it answers
             "$client" --timeout 1s status >/dev/null 2>&1 && return
@@ -98,8 +98,8 @@ if [[ "${1:-}" == "--inside" ]]; then
     dumpcap -q -i can0 -w "$out/can0.pcapng" 2>"$out/dumpcap.txt" &
     dumpcap=$!
     sleep 1
-    whistles_on can1 whistles.txt
-    controller_on can0 sim.txt
+    whistles_on can1 whistles.txt --pace-can
+    controller_on can0 sim.txt --pace-can
     "$client" --timeout 1s on >/dev/null 2>&1 || true
     sleep 3
     echo "with the Whistles on can1 (3 s after ON): drives: $(drives)"
@@ -117,7 +117,27 @@ if [[ "${1:-}" == "--inside" ]]; then
         exit 1
     fi
 
-    # 3. The kernel's counters, and the frames the emulated controllers lost: QEMU's bus has no
+    # 3. The end-to-end tests over the bus: each test starts armgate-sim on can0 and the Whistle
+    # simulator on can1 (ARMGATE_E2E_CAN), both writing at the robot file's bit rate
+    # (--pace-can: QEMU's bus has none), one test at a time. The emulated controllers' receive
+    # overruns before and after say whether the bus lost frames under them.
+    overruns() { echo "can0 $(cat /sys/class/net/can0/statistics/rx_over_errors), can1 $(cat /sys/class/net/can1/statistics/rx_over_errors)"; }
+    echo "receive overruns before the end-to-end tests: $(overruns)"
+    e2e_started=$SECONDS
+    e2e_status=0
+    # shellcheck disable=SC2086 # the test names, one word each
+    ARMGATE_E2E_CAN=can0,can1 "$e2e" --test-threads 1 --exact $e2e_tests >"$out/e2e.txt" 2>&1 ||
+        e2e_status=$?
+    grep -E '^test |^test result|panicked|Whistles stopped' "$out/e2e.txt" | sed 's/^/    /' || true
+    echo "the end-to-end tests over can0/can1: $((SECONDS - e2e_started)) s; receive overruns after: $(overruns)"
+    ip -s link show can0
+    ip -s link show can1
+    if [[ $e2e_status -ne 0 ]]; then
+        echo "socketcan-vm: end-to-end tests failed over SocketCAN"
+        exit 1
+    fi
+
+    # 4. The kernel's counters, and the frames the emulated controllers lost: QEMU's bus has no
     # bit timing, so a control cycle's burst (13 to 28 frames) reaches the other controller's
     # SJA1000 receive FIFO (64 bytes, a few frames) at once, and what does not fit is an overrun.
     ip -s -d link show can0
@@ -149,6 +169,15 @@ if [[ ! -x "$venv/bin/vng" ]]; then
 fi
 
 cargo build -q -p armgate-sim -p armgate-client
+e2e=$(cargo test -q -p armgate-sim --test e2e --no-run --message-format=json-render-diagnostics |
+    sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | grep "/deps/e2e-" | tail -n 1)
+# A small representative set (about a minute in the VM): start-up and a Cartesian session on
+# the interpreter schedule, the PDO schedule's session, ST at cruise, a drive's emergency, and
+# the Whistle simulator killed mid-move.
+e2e_tests="a_full_session_over_udp the_pdo_schedule_runs_a_session
+    st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits
+    socketcan::an_emergency_from_a_drive_on_the_bus_stops_the_arm_and_on_starts_it_again
+    socketcan::the_whistles_killed_mid_move_stop_the_arm_as_drives_not_answering"
 
 out=$target/socketcan-vm
 rm -rf "$out"
@@ -163,7 +192,7 @@ vm_status=0
 PATH=$venv/bin:$PATH timeout 600 nice -n -19 vng -r "$kernel" --disable-kvm --cpus 2 --memory 1G --user root \
     --rwdir "$out" \
     --qemu-opts="-object can-bus,id=canbus0 -device kvaser_pci,canbus=canbus0 -device kvaser_pci,canbus=canbus0" \
-    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" </dev/null || vm_status=$?
+    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" "$e2e" "$e2e_tests" </dev/null || vm_status=$?
 echo "socketcan-vm: the VM ran $((SECONDS - started)) s (exit code $vm_status)"
 if [[ ! -f "$out/passed" ]]; then
     echo "socketcan-vm: the tests in the VM failed (above)"
