@@ -110,6 +110,10 @@ impl Tally {
 /// hundred frames where a process is not scheduled for a while (each costs about 1 KiB there).
 const RECEIVE_BUFFER: usize = 1 << 20;
 
+/// Frames a paced writer may send back to back after falling behind: four 8-byte frames fit the
+/// receive FIFO of an emulated SJA1000 (64 bytes, 11 to 13 a frame) with room to spare.
+const BURST: u32 = 4;
+
 /// Writes held to a bus's bit rate: when the bus is next free, on the wall clock.
 #[derive(Debug)]
 pub struct Pacer {
@@ -135,12 +139,13 @@ impl Pacer {
     }
 
     /// `frame` went out (a refused frame took no time): the bus is busy for its length. A
-    /// writer that slept too long may send the next frame at once, as the bus would have
-    /// carried it meanwhile; it never gets more than one frame ahead of the bit rate.
+    /// writer that slept too long (a sleep overshoots by milliseconds in an emulated machine)
+    /// may send up to [`BURST`] frames at once, as the bus would have carried them meanwhile;
+    /// it never gets further ahead of the bit rate than that.
     fn sent(&mut self, frame: &CanFrame) {
         let length = self.bit_time * exact_bits_on_wire(frame);
         let now = Instant::now();
-        let start = self.free_at.max(now.checked_sub(length).unwrap_or(now));
+        let start = self.free_at.max(now.checked_sub(length * BURST).unwrap_or(now));
         self.free_at = start + length;
     }
 }
