@@ -145,7 +145,9 @@ impl Pacer {
     fn sent(&mut self, frame: &CanFrame) {
         let length = self.bit_time * exact_bits_on_wire(frame);
         let now = Instant::now();
-        let start = self.free_at.max(now.checked_sub(length * BURST).unwrap_or(now));
+        let start = self
+            .free_at
+            .max(now.checked_sub(length * BURST).unwrap_or(now));
         self.free_at = start + length;
     }
 }
