@@ -81,6 +81,7 @@ fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child 
     let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
         .args([
             "--whistles",
+            "--pace-can",
             "--can",
             &format!("socketcan:{iface}"),
             "--robot",
@@ -194,7 +195,11 @@ impl Sim {
                 };
                 let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
                 if let Some((iface, _)) = &can {
-                    command.arg("--can").arg(format!("socketcan:{iface}"));
+                    // vcan and QEMU's bus have no bit timing: frames paced as a real bus would.
+                    command
+                        .arg("--can")
+                        .arg(format!("socketcan:{iface}"))
+                        .arg("--pace-can");
                 }
                 // A test's replay state is its own (never the user's default location).
                 if extra.contains(&"--key") && !extra.contains(&"--state") {

@@ -12,21 +12,25 @@
 #   2. ENOBUFS: armgate-sim on can0 at the default txqueuelen of 10, the Whistle simulator
 #      (`armgate-sim --whistles`) on can1: frames refused by the full queue are counted and the
 #      drives fault, as the README says;
-#   3. the recipe in full: armgate-sim on can0 with its Whistles on can1 (can0 captured with
-#      dumpcap), then the Whistle simulator killed: `ON` faults with ER30 (drive not answering);
-#   4. `ip -s -d link` of both interfaces (frames counted by the kernel) and the receive overruns
+#   3. the recipe in full: armgate-sim on can0 with its Whistles on can1, both --pace-can
+#      (can0 captured with dumpcap), then the Whistle simulator killed: `ON` faults with ER30 (drive not answering);
+#   4. a set of the end-to-end tests (tests/e2e.rs with ARMGATE_E2E_CAN=can0,can1): each test
+#      starts armgate-sim on can0 and the Whistle simulator on can1, both with --pace-can; the
+#      tests passed and the receive overruns before and after are printed, not asserted;
+#   5. `ip -s -d link` of both interfaces (frames counted by the kernel) and the receive overruns
 #      of the emulated controllers.
 # Back on the host, the capture is decoded frame by frame by Wireshark's CANopen dissector and by
 # tools/wireshark/armgate.lua: every frame must be decoded by both.
 # What it does not show (docs/drives.md, "SocketCAN in a VM"): QEMU's CAN bus has no bit timing,
 # so bus load and latency stay the simulated bus's; and the end-to-end tests over it
-# (ARMGATE_E2E_CAN) do not pass under TCG: the two processes' clocks jitter by milliseconds.
+# (ARMGATE_E2E_CAN) do not pass under TCG on a loaded machine: the emulated machine stalls for
+# tenths of a second, and the drives fault during moves.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 # -- inside the VM -------------------------------------------------------------------------------
 if [[ "${1:-}" == "--inside" ]]; then
-    out=$2 bin=$3
+    out=$2 bin=$3 e2e=$4 e2e_tests=$5
     export TMPDIR=$out/tmp
     mkdir -p "$TMPDIR"
     sim=$bin/armgate-sim client=$bin/armgate
@@ -47,13 +51,13 @@ if [[ "${1:-}" == "--inside" ]]; then
         echo "$recipe" | sed "s/can0/$1/g; s/^sudo //" | grep -v -e "${2:-^$}" | bash -eu
     }
     # A drive-side process (the Whistle simulator) and a controller (armgate-sim) on IFACE.
-    whistles_on() {
-        "$sim" --whistles --can "socketcan:$1" --robot "$robot" </dev/null 2>"$out/$2" &
+    whistles_on() { # IFACE LOG [ARGS...]
+        "$sim" --whistles --can "socketcan:$1" --robot "$robot" "${@:3}" </dev/null 2>"$out/$2" &
         whistles=$!
         sleep 2
     }
-    controller_on() {
-        "$sim" --can "socketcan:$1" --robot "$robot" --quiet 2>"$out/$2" &
+    controller_on() { # IFACE LOG [ARGS...]
+        "$sim" --can "socketcan:$1" --robot "$robot" --quiet "${@:3}" 2>"$out/$2" &
         controller=$!
         for _ in 1 2 3 4 5 6 7 8 9 10; do # until it answers
             "$client" --timeout 1s status >/dev/null 2>&1 && return
@@ -98,16 +102,20 @@ if [[ "${1:-}" == "--inside" ]]; then
     dumpcap -q -i can0 -w "$out/can0.pcapng" 2>"$out/dumpcap.txt" &
     dumpcap=$!
     sleep 1
-    whistles_on can1 whistles.txt
-    controller_on can0 sim.txt
+    whistles_on can1 whistles.txt --pace-can
+    controller_on can0 sim.txt --pace-can
     "$client" --timeout 1s on >/dev/null 2>&1 || true
     sleep 3
     echo "with the Whistles on can1 (3 s after ON): drives: $(drives)"
     stop "$whistles"
     sed 's/^/    /' "$out/whistles.txt"
     "$client" --timeout 1s on >/dev/null 2>&1 || true
-    sleep 1
-    state=$(drives)
+    # Drives still starting when the simulator went time out first (up to 10 s here).
+    for _ in 1 2 3 4 5 6 7 8 9 10; do
+        sleep 1
+        state=$(drives)
+        [[ "$state" == faulted* ]] && break
+    done
     echo "the Whistle simulator killed, then ON: drives: $state"
     stop "$controller"
     stop "$dumpcap"
@@ -117,7 +125,29 @@ if [[ "${1:-}" == "--inside" ]]; then
         exit 1
     fi
 
-    # 3. The kernel's counters, and the frames the emulated controllers lost: QEMU's bus has no
+    # 3. The end-to-end tests over the bus: each test starts armgate-sim on can0 and the Whistle
+    # simulator on can1 (ARMGATE_E2E_CAN), both writing at the robot file's bit rate
+    # (--pace-can: QEMU's bus has none), one test at a time. The emulated controllers' receive
+    # overruns before and after say whether the bus lost frames under them.
+    overruns() { echo "can0 $(cat /sys/class/net/can0/statistics/rx_over_errors), can1 $(cat /sys/class/net/can1/statistics/rx_over_errors)"; }
+    echo "receive overruns before the end-to-end tests: $(overruns)"
+    e2e_started=$SECONDS
+    e2e_status=0
+    # shellcheck disable=SC2086 # the test names, one word each
+    ARMGATE_E2E_CAN=can0,can1 "$e2e" --test-threads 1 --exact $e2e_tests >"$out/e2e.txt" 2>&1 ||
+        e2e_status=$?
+    grep -E '^test |^test result|panicked|drive fault|NotStarted' "$out/e2e.txt" | sed 's/^/    /' || true
+    echo "the end-to-end tests over can0/can1: $((SECONDS - e2e_started)) s, exit code $e2e_status; receive overruns after: $(overruns)"
+    ip -s link show can0
+    ip -s link show can1
+    # Reported, not asserted: on a 2-core machine shared with builds the emulated machine still
+    # stalls for tenths of a second, longer than the drives' PT lead and heartbeat allow, and the
+    # drives fault during moves (docs/drives.md, "SocketCAN in a VM").
+    if [[ $e2e_status -ne 0 ]]; then
+        echo "socketcan-vm: NOT ASSERTED: end-to-end tests failed over SocketCAN in the VM (above)"
+    fi
+
+    # 4. The kernel's counters, and the frames the emulated controllers lost: QEMU's bus has no
     # bit timing, so a control cycle's burst (13 to 28 frames) reaches the other controller's
     # SJA1000 receive FIFO (64 bytes, a few frames) at once, and what does not fit is an overrun.
     ip -s -d link show can0
@@ -148,7 +178,23 @@ if [[ ! -x "$venv/bin/vng" ]]; then
     "$venv/bin/python" -m pip install -q --retries 5 --timeout 60 virtme-ng
 fi
 
-cargo build -q -p armgate-sim -p armgate-client
+# The test executable and the client as `cargo test` builds them (nothing to build in CI).
+cargo build -q -p armgate-client
+e2e=$(cargo test -q -p armgate-sim --test e2e --no-run --message-format=json-render-diagnostics |
+    sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | grep "/deps/e2e-" | tail -n 1)
+# armgate-sim itself with armgate-core optimised, in its usual place (target/debug, where the
+# tests start it): the simulated Whistles run against the wall clock, and unoptimised they fell
+# seconds behind under TCG (a loop turn of up to 1.8 s, against 0.1 to 0.3 s optimised) and the
+# drives timed out. Not in everyone's dev builds: it triples core's compile time. The next
+# plain `cargo build` puts the unoptimised one back without building anything.
+cargo build -q --config 'profile.dev.package.armgate-core.opt-level=2' -p armgate-sim
+# A small representative set (about a minute in the VM): start-up and a Cartesian session on
+# the interpreter schedule, the PDO schedule's session, ST at cruise, a drive's emergency, and
+# the Whistle simulator killed mid-move.
+e2e_tests="a_full_session_over_udp the_pdo_schedule_runs_a_session
+    st_at_cruise_brings_the_arm_to_rest_within_its_acceleration_limits
+    socketcan::an_emergency_from_a_drive_on_the_bus_stops_the_arm_and_on_starts_it_again
+    socketcan::the_whistles_killed_mid_move_stop_the_arm_as_drives_not_answering"
 
 out=$target/socketcan-vm
 rm -rf "$out"
@@ -160,10 +206,14 @@ vm_status=0
 # a 50 ms reply timeout): on a 2-core machine busy compiling, an emulated machine at the default
 # priority loses whole periods. For its two minutes the VM runs at a higher priority than builds
 # (QEMU's -icount, a clock of the guest's own, was tried: the guest did not boot in 10 minutes).
+# tsc=reliable: under TCG the kernel finds the two vCPUs' TSCs unsynchronised and falls back to
+# the HPET, every clock read an emulated device access; the processes then stall for up to a
+# second at a time (measured with the Whistle simulator's late loop turns).
 PATH=$venv/bin:$PATH timeout 600 nice -n -19 vng -r "$kernel" --disable-kvm --cpus 2 --memory 1G --user root \
+    --append "tsc=reliable clocksource=tsc" \
     --rwdir "$out" \
     --qemu-opts="-object can-bus,id=canbus0 -device kvaser_pci,canbus=canbus0 -device kvaser_pci,canbus=canbus0" \
-    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" </dev/null || vm_status=$?
+    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" "$e2e" "$e2e_tests" </dev/null || vm_status=$?
 echo "socketcan-vm: the VM ran $((SECONDS - started)) s (exit code $vm_status)"
 if [[ ! -f "$out/passed" ]]; then
     echo "socketcan-vm: the tests in the VM failed (above)"

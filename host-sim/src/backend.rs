@@ -14,7 +14,7 @@ use armgate_core::sim::{ArmModel, SimulatedDrives};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{DriveStatus, Text};
 
-use crate::socketcan::{self, SocketCan};
+use crate::socketcan::{self, Pacer, SocketCan};
 
 /// The `--can` choice.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -59,10 +59,12 @@ pub enum Bus {
 }
 
 impl Backend {
-    /// Opens the drives chosen with `--can`, with the joints at `start`. Like the seed's robot
+    /// Opens the drives chosen with `--can`, with the joints at `start` (SocketCAN writes held
+    /// to the robot file's bit rate if `paced`: `--pace-can`). Like the seed's robot
     /// component, CAN drives are started at once.
     pub fn open(
         choice: &CanChoice,
+        paced: bool,
         config: &ValidRobot,
         start: &Joints,
         arm: impl FnOnce() -> ArmModel,
@@ -71,7 +73,10 @@ impl Backend {
             CanChoice::Off => return Ok(Self::Direct(Box::new(SimulatedDrives::new(arm())))),
             CanChoice::Sim => Bus::Virtual(Box::new(VirtualBus::for_robot_at(config, start))),
             CanChoice::SocketCan(iface) => {
-                Bus::Socket(SocketCan::open(iface).map_err(|e| socketcan::explain(iface, &e))?)
+                let pacer = paced.then(|| Pacer::new(config.drives.can_bitrate));
+                Bus::Socket(
+                    SocketCan::open(iface, pacer).map_err(|e| socketcan::explain(iface, &e))?,
+                )
             }
         };
         let drives = CanDrives::started(config, &DriveSettings::default(), bus)

@@ -86,6 +86,11 @@ struct Args {
     /// socketcan:can0); `off` = no drives, a simulated arm (see --arm).
     #[arg(long, default_value = "sim", value_name = "sim|socketcan:IFACE|off")]
     can: CanChoice,
+    /// With --can socketcan:IFACE: write frames no faster than the robot file's bit rate
+    /// carries them, for a bus without bit timing (vcan, QEMU's emulated CAN bus), where a
+    /// cycle's burst would arrive at once and overrun the receiver (docs/drives.md).
+    #[arg(long)]
+    pace_can: bool,
     /// With --can off: how the simulated joints follow the commands.
     #[arg(long, value_enum, default_value_t = ArmKind::Ideal)]
     arm: ArmKind,
@@ -219,7 +224,7 @@ fn run(args: &Args, config: &ValidRobot) -> Result<(), String> {
     if args.whistles {
         return serve_whistles(args, config, &start);
     }
-    let drives = Backend::open(&args.can, config, &start, || {
+    let drives = Backend::open(&args.can, args.pace_can, config, &start, || {
         arm_model(args.arm, config, start)
     })?;
     let describe = drives.describe();
@@ -393,7 +398,13 @@ fn serve_whistles(args: &Args, config: &ValidRobot, start: &Joints) -> Result<()
     let stop = running.clone();
     ctrlc::set_handler(move || stop.store(false, Ordering::SeqCst))
         .map_err(|e| format!("Ctrl-C handler: {e}"))?;
-    whistles::serve(config, start, iface, args.duration, &running)
+    whistles::serve(
+        config,
+        start,
+        (iface, args.pace_can),
+        args.duration,
+        &running,
+    )
 }
 
 /// `--key`, `--allow-unsigned`, `--controller-id` (default from the robot file's name and

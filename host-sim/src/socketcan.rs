@@ -15,12 +15,22 @@
 //! [`TxError::QueueFull`], which the drive manager turns into the fault `ER35 CAN send queue
 //! full` (it stops the drives; nothing is lost silently); `ENETDOWN` is bus-off; any other
 //! error is counted and reported as a full queue.
+//!
+//! On a bus without bit timing (`vcan`, QEMU's emulated CAN bus) a cycle's burst of frames
+//! arrives at once, and an emulated SJA1000's 64-byte receive FIFO (five 8-byte frames)
+//! overruns. Opened [`paced`](SocketCan::open) with the robot file's bit rate, writes are held
+//! to what a real bus of that rate carries: each frame waits until the previous one would have
+//! left, by its exact stuffed length ([`exact_bits_on_wire`]).
 
 use std::io::{self, ErrorKind};
-use std::time::Duration;
+use std::os::fd::AsFd;
+use std::time::{Duration, Instant};
 
 use armgate_core::drives::{BusState, CanBus, TxError};
-use armgate_protocol::can::CanFrame;
+use armgate_protocol::can::{CanFrame, exact_bits_on_wire};
+use nix::errno::Errno;
+use nix::poll::{PollFd, PollFlags, ppoll};
+use nix::sys::time::TimeSpec;
 use socketcan::{CanSocket, EmbeddedFrame, Frame, Socket, SocketOptions, StandardId};
 
 /// Frames read per [`CanBus::try_receive`] call at most while skipping frames of no interest.
@@ -96,33 +106,86 @@ impl Tally {
     }
 }
 
+/// Receive buffer asked of the kernel (it caps it at `net.core.rmem_max`): room for a few
+/// hundred frames where a process is not scheduled for a while (each costs about 1 KiB there).
+const RECEIVE_BUFFER: usize = 1 << 20;
+
+/// Frames a paced writer may send back to back after falling behind: four 8-byte frames fit the
+/// receive FIFO of an emulated SJA1000 (64 bytes, 11 to 13 a frame) with room to spare.
+const BURST: u32 = 4;
+
+/// Writes held to a bus's bit rate: when the bus is next free, on the wall clock.
+#[derive(Debug)]
+pub struct Pacer {
+    bit_time: Duration,
+    free_at: Instant,
+}
+
+impl Pacer {
+    /// Frames as a bus of `bitrate` bit/s carries them.
+    pub fn new(bitrate: u32) -> Self {
+        Self {
+            bit_time: Duration::from_secs(1) / bitrate.max(1),
+            free_at: Instant::now(),
+        }
+    }
+
+    /// Waits until the bus is free for `frame`.
+    fn wait(&self) {
+        let now = Instant::now();
+        if self.free_at > now {
+            std::thread::sleep(self.free_at - now);
+        }
+    }
+
+    /// `frame` went out (a refused frame took no time): the bus is busy for its length. A
+    /// writer that slept too long (a sleep overshoots by milliseconds in an emulated machine)
+    /// may send up to [`BURST`] frames at once, as the bus would have carried them meanwhile;
+    /// it never gets further ahead of the bit rate than that.
+    fn sent(&mut self, frame: &CanFrame) {
+        let length = self.bit_time * exact_bits_on_wire(frame);
+        let now = Instant::now();
+        let start = self
+            .free_at
+            .max(now.checked_sub(length * BURST).unwrap_or(now));
+        self.free_at = start + length;
+    }
+}
+
 /// A raw CAN socket bound to one interface, non-blocking.
 pub struct SocketCan {
     socket: CanSocket,
     tally: Tally,
+    pacer: Option<Pacer>,
 }
 
 impl SocketCan {
-    /// Opens interface `name`. Fails with `EAFNOSUPPORT` where the kernel has no CAN support
-    /// and `ENODEV` where the interface does not exist.
-    pub fn open(name: &str) -> io::Result<Self> {
+    /// Opens interface `name`, its writes held to `pacer`'s bit rate if given (a bus without
+    /// bit timing). Fails with `EAFNOSUPPORT` where the kernel has no CAN support and `ENODEV`
+    /// where the interface does not exist.
+    pub fn open(name: &str, pacer: Option<Pacer>) -> io::Result<Self> {
         let socket = CanSocket::open(name)?;
         socket.set_nonblocking(true)?;
         // Bus-off and restart reports arrive as error frames.
         socket.set_error_filter(libc::CAN_ERR_BUSOFF | libc::CAN_ERR_RESTARTED)?;
+        socket2::SockRef::from(&socket).set_recv_buffer_size(RECEIVE_BUFFER)?;
         Ok(Self {
             socket,
             tally: Tally::default(),
+            pacer,
         })
     }
 
-    /// Makes reads wait up to `timeout` for a frame instead of returning at once (the Whistle
-    /// simulator: woken by the frame itself, not by a sleep that ends later). Writes still
-    /// return at once: a full transmit queue is `ENOBUFS` either way.
-    pub fn wait_for_frames(&self, timeout: Duration) -> io::Result<()> {
-        self.socket.set_nonblocking(false)?;
-        self.socket.set_read_timeout(timeout)?;
-        self.socket.set_write_timeout(Duration::from_micros(1))
+    /// Waits up to `timeout` for a frame to read (the Whistle simulator: woken by the frame
+    /// itself, not by a sleep that ends later). A `ppoll`, timed to the microsecond: a socket's
+    /// read timeout is rounded up to the kernel's tick (4 ms at 250 Hz), and a blocking read
+    /// loop would not stop reading while frames keep coming.
+    pub fn wait_readable(&self, timeout: Duration) -> io::Result<()> {
+        let mut fds = [PollFd::new(self.socket.as_fd(), PollFlags::POLLIN)];
+        match ppoll(&mut fds, Some(TimeSpec::from_duration(timeout)), None) {
+            Ok(_) | Err(Errno::EINTR) => Ok(()),
+            Err(e) => Err(e.into()),
+        }
     }
 
     /// What was ignored or failed so far.
@@ -137,9 +200,17 @@ impl CanBus for SocketCan {
             return Err(TxError::BusOff);
         }
         let id = StandardId::new(frame.id()).ok_or(TxError::QueueFull)?;
-        let frame = socketcan::CanFrame::new(id, frame.data()).ok_or(TxError::QueueFull)?;
-        match self.socket.write_frame(&frame) {
-            Ok(()) => Ok(()),
+        let raw = socketcan::CanFrame::new(id, frame.data()).ok_or(TxError::QueueFull)?;
+        if let Some(pacer) = &self.pacer {
+            pacer.wait();
+        }
+        match self.socket.write_frame(&raw) {
+            Ok(()) => {
+                if let Some(pacer) = &mut self.pacer {
+                    pacer.sent(frame);
+                }
+                Ok(())
+            }
             Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
                 self.tally.went_bus_off();
                 Err(TxError::BusOff)
@@ -277,9 +348,29 @@ mod tests {
     }
 
     #[test]
+    fn a_paced_bus_is_busy_for_each_frame_by_its_exact_length() {
+        // 500 kbit/s: 2 µs a bit. A bus busy for another second: each frame adds its length.
+        let mut pacer = Pacer::new(500_000);
+        let busy = Instant::now() + Duration::from_secs(1);
+        pacer.free_at = busy;
+        let sync = CanFrame::new(0x80, &[]).unwrap();
+        let point = CanFrame::new(0x301, &[0x51, 0x50, 3, 0, 0x10, 0x27, 0, 0]).unwrap();
+        pacer.sent(&sync);
+        pacer.sent(&point);
+        let bits = exact_bits_on_wire(&sync) + exact_bits_on_wire(&point);
+        assert_eq!(
+            pacer.free_at - busy,
+            Duration::from_micros(2 * u64::from(bits))
+        );
+        // A SYNC is 47 bits and some stuffing; an 8-byte frame under 135 bits.
+        assert!((47..=55).contains(&exact_bits_on_wire(&sync)));
+        assert!((111..=135).contains(&exact_bits_on_wire(&point)));
+    }
+
+    #[test]
     fn opening_without_kernel_support_or_interface_explains_what_to_do() {
         // This kernel may have no CAN support (EAFNOSUPPORT); either way the error says why.
-        let Err(error) = SocketCan::open("armgate-no-such-can") else {
+        let Err(error) = SocketCan::open("armgate-no-such-can", None) else {
             panic!("an interface that does not exist opened");
         };
         let text = explain("armgate-no-such-can", &error);

@@ -32,11 +32,15 @@ use armgate_core::kinematics::Joints;
 use armgate_core::sim::{Stalled, VirtualBus};
 use armgate_protocol::can::CanFrame;
 
-use crate::socketcan::{self, SocketCan};
+use crate::socketcan::{self, Pacer, SocketCan};
 
-/// How long a read waits for a frame: the loop runs the drives at least this often, so their
+/// How long the loop waits for a frame: it runs the drives at least this often, so their
 /// answers (250 µs after a command) leave about on time, and a frame read wakes it at once.
 const WAIT: Duration = Duration::from_micros(200);
+
+/// A turn of the loop later than this after the previous one is counted (s): the drives'
+/// answers are held up, and with 5 ms a PT stream underflows (docs/drives.md).
+const LATE: f64 = 2e-3;
 
 /// Frames read from the interface and waiting for room on the virtual bus, at most: a few
 /// cycles of the busiest schedule (28 frames), for a process that was not scheduled for a while.
@@ -159,18 +163,17 @@ impl Whistles {
 }
 
 /// Serves the simulated Whistles of `config`, with their encoders at `start`, on interface
-/// `iface` until `running` turns false or `duration` (s) has passed.
+/// `iface` (writes held to the robot file's bit rate if `paced`) until `running` turns false
+/// or `duration` (s) has passed.
 pub fn serve(
     config: &ValidRobot,
     start: &Joints,
-    iface: &str,
+    (iface, paced): (&str, bool),
     duration: Option<f64>,
     running: &Arc<AtomicBool>,
 ) -> Result<(), String> {
-    let mut socket = SocketCan::open(iface).map_err(|e| socketcan::explain(iface, &e))?;
-    socket
-        .wait_for_frames(WAIT)
-        .map_err(|e| format!("socketcan:{iface}: {e}"))?;
+    let pacer = paced.then(|| Pacer::new(config.drives.can_bitrate));
+    let mut socket = SocketCan::open(iface, pacer).map_err(|e| socketcan::explain(iface, &e))?;
     let mut whistles = Whistles::new(config, start);
     let nodes: Vec<String> = whistles
         .bus
@@ -184,8 +187,17 @@ pub fn serve(
         nodes.join(", "),
     );
     let epoch = Instant::now();
+    let (mut last, mut worst_gap, mut late) = (0.0f64, 0.0f64, 0u64);
     while running.load(Ordering::SeqCst) {
+        socket
+            .wait_readable(WAIT)
+            .map_err(|e| format!("socketcan:{iface}: {e}"))?;
         let now = epoch.elapsed().as_secs_f64();
+        worst_gap = worst_gap.max(now - last);
+        if now - last > LATE {
+            late += 1;
+        }
+        last = now;
         if duration.is_some_and(|d| now >= d) {
             break;
         }
@@ -200,13 +212,15 @@ pub fn serve(
     }
     let (counters, c) = (whistles.counters, socket.counters());
     eprintln!(
-        "armgate-sim: Whistles stopped; {} frames received, {} sent, {} dropped inbound (backlog full), {} refused by the interface; SocketCAN: {} bus-offs, {} frames refused by a full transmit queue",
+        "armgate-sim: Whistles stopped; {} frames received, {} sent, {} dropped inbound (backlog full), {} refused by the interface; SocketCAN: {} bus-offs, {} frames refused by a full transmit queue; {late} turns of the loop came over {:.0} ms late, the worst {:.1} ms",
         counters.received,
         counters.sent,
         counters.dropped_in,
         counters.dropped_out,
         c.bus_offs,
-        c.queue_full
+        c.queue_full,
+        LATE * 1e3,
+        worst_gap * 1e3,
     );
     Ok(())
 }
