@@ -166,10 +166,48 @@ fn a_stop_latches_a_stream_until_its_holder_sends_a_zero_twist() {
     assert_eq!(rig.motion(), Motion::Streaming);
 }
 
-/// The same for joint rates, after an `ST` that found the arm at rest and after the client
-/// watchdog's stop (`ER41`); a stream's own timeout, its normal end, does not latch.
+/// A stream whose datagrams stall for longer than its timeout (a network stall): the arm
+/// ramps to rest, and the delayed twists that follow are refused, naming the timeout, and
+/// never move the arm again; a zero twist re-arms and the next twist moves it.
 #[test]
-fn joint_rates_latch_after_st_and_the_watchdog_but_not_after_their_own_timeout() {
+fn a_stream_timeout_latches_until_a_zero_twist() {
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", CARTESIAN, 0);
+    for _ in 0..20 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Streaming);
+    // The stall: no twist for 40 ticks.
+    for _ in 0..40 {
+        rig.tick();
+    }
+    assert_eq!((rig.motion(), rig.cause()), (Motion::Holding, 6.0));
+    let rest = rig.last();
+    // The delayed twists arrive: each refused, the arm stays.
+    for _ in 0..20 {
+        assert_eq!(
+            rig.send(a(), "TW", ALONG_Y, 0),
+            "ER20 Cmd TW after idle: send 0"
+        );
+        rig.tick();
+    }
+    assert_eq!(rig.last(), rest, "a delayed twist moved the arm");
+    assert_eq!(rig.cause(), 6.0, "SQ 2 keeps the timeout");
+    rig.ok(a(), "TW", [0.0; 7], 0);
+    for _ in 0..10 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_ne!(rig.last(), rest);
+    assert_eq!(rig.motion(), Motion::Streaming);
+}
+
+/// The same for joint rates, after an `ST` that found the arm at rest, after their own
+/// timeout and after the client watchdog's stop (`ER41`); a stream ended with zero rates ends
+/// without a stop.
+#[test]
+fn joint_rates_latch_after_st_their_timeout_and_the_watchdog() {
     let rates = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0];
     let mut rig = Rig::new(&MK1_READY);
     rig.ok(a(), "CM", JOINT, 0);
@@ -181,13 +219,28 @@ fn joint_rates_latch_after_st_and_the_watchdog_but_not_after_their_own_timeout()
     );
     assert_eq!(rig.cause(), 1.0);
     rig.ok(a(), "jW", [0.0; 7], 0);
-    // A stream that its client lets run out: cause 6, and the next jW simply starts again.
+    // A stream that its client lets run out: cause 6, latched like any stop.
     rig.ok(a(), "jW", rates, 0);
     for _ in 0..40 {
         rig.tick();
     }
     assert_eq!(rig.motion(), Motion::Holding);
     assert_eq!(rig.cause(), 6.0);
+    assert_eq!(
+        rig.send(a(), "jW", rates, 0),
+        "ER20 Cmd jW after idle: send 0"
+    );
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    rig.ok(a(), "jW", rates, 0);
+    rig.tick();
+    assert_eq!(rig.motion(), Motion::Streaming);
+    // Ended on purpose: zero rates, then silence. The arm ramps to rest with no stop, and
+    // the next stream needs no re-arming.
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    for _ in 0..40 {
+        rig.tick();
+    }
+    assert_eq!((rig.motion(), rig.cause()), (Motion::Holding, 0.0));
     rig.ok(a(), "jW", rates, 0);
     rig.tick();
     assert_eq!(rig.motion(), Motion::Streaming);
