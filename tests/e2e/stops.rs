@@ -97,7 +97,10 @@ fn a_stream_resumed_after_its_timeout_is_refused_and_the_arm_stays_at_rest() {
     // The stall: five times the timeout (3 periods of 19.44 ms), long enough to come to rest.
     std::thread::sleep(Duration::from_millis(300));
     let stalled = sim.ok("PS", [0.0; 7], 0);
-    assert!(moved(&start, &stalled) > 0.0001, "the stream moved the tool");
+    assert!(
+        moved(&start, &stalled) > 0.0001,
+        "the stream moved the tool"
+    );
     for _ in 0..50 {
         assert_eq!(sim.text("TW", ALONG_Y, 0), "ER20 Cmd TW after idle: send 0");
         std::thread::sleep(Duration::from_millis(10));
