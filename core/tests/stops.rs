@@ -13,13 +13,13 @@
 
 mod common;
 
-use std::collections::VecDeque;
 use std::net::SocketAddr;
 
-use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{Cycle, Datagram};
 use armgate_core::kinematics::Joints;
 use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::Motion;
+use common::clients::{Clients, reply_text};
 use common::datagram;
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
@@ -34,39 +34,6 @@ fn a() -> SocketAddr {
 
 fn b() -> SocketAddr {
     SocketAddr::from(([192, 168, 1, 3], 6000))
-}
-
-/// Requests queued for the next tick, and what came back.
-#[derive(Default)]
-struct Clients {
-    requests: VecDeque<Datagram<SocketAddr>>,
-    replies: Vec<(SocketAddr, String)>,
-}
-
-impl Link<SocketAddr> for Clients {
-    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
-        self.requests.pop_front()
-    }
-
-    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
-        if kind == Outgoing::Reply {
-            self.replies
-                .push((datagram.peer, reply_text(datagram.payload())));
-        }
-        Ok(())
-    }
-}
-
-/// A reply as text: an `ER`/`WN` text, or the reply's two characters.
-fn reply_text(reply: &[u8]) -> String {
-    let text = String::from_utf8_lossy(reply)
-        .trim_end_matches('\0')
-        .to_owned();
-    if text.starts_with("ER") || text.starts_with("WN") {
-        text
-    } else {
-        String::from_utf8_lossy(&reply[..2]).into_owned()
-    }
 }
 
 /// ranger-mk1 on an ideal simulated arm, every tick's set-point kept.

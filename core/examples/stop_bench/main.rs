@@ -128,7 +128,11 @@ impl Run {
             self.ik_divergence = Some(self.commands.len() - 1);
         }
         if let (Some(lag), None) = (out.events.following_error, &self.following_error) {
-            let note = format!("j{} {:.3} behind", lag.joint, f64::from(lag.error_milli) / 1e3);
+            let note = format!(
+                "j{} {:.3} behind",
+                lag.joint,
+                f64::from(lag.error_milli) / 1e3
+            );
             self.following_error = Some((self.commands.len() - 1, note));
         }
     }

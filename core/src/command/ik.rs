@@ -8,8 +8,7 @@ use armgate_protocol::client::redundancy::{CHOSEN, Redundancy};
 use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 
 use super::redundancy::{self, Values};
-use crate::config::IkConfig;
-use crate::kinematics::{Branch, Chain, Family, IkResult, Joints};
+use crate::kinematics::{Branch, Chain, Family, Joints};
 use crate::math::{Frame, Rotation3, Vector3, dist};
 use crate::motion::Refusal;
 
@@ -24,6 +23,19 @@ pub(super) enum IkRequestError {
     /// The controller refuses it (no solution: the goal is out of reach).
     Refused(Refusal),
 }
+
+/// Where a `KG` goal stands: found (its joints and branch bits), or (a chain without a closed
+/// form) a pose for a global search to run, in slices across ticks.
+pub(super) enum Goal {
+    /// The joints and the branch they lie on.
+    Found(Joints, u8),
+    /// The pose to search for from the present joints, answered [`NEAREST_BRANCH`].
+    Search(Frame),
+}
+
+/// The refusal of a `KG` goal out of reach.
+pub(super) const OUT_OF_REACH: IkRequestError =
+    IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
 
 /// The pose in f0..f5 (position, roll/pitch/yaw), if finite.
 fn pose(v: &[f64; VALUES]) -> Result<Frame, IkRequestError> {
@@ -72,19 +84,17 @@ pub(super) fn reference(
     Ok((present, true))
 }
 
-/// The joints of `KG`'s goal and the branch bits they lie on ([`NEAREST_BRANCH`] on a robot
-/// without a closed form, solved by global IK from the present joints). `reference` is the
-/// present joints, with the client's choice of the redundancy parameters if `chosen`: then
-/// the goal keeps them (no other values are tried).
+/// The joints of `KG`'s goal and the branch bits they lie on, or on a robot without a closed
+/// form the pose for a global IK search from the present joints ([`Goal`]). `reference`
+/// is the present joints, with the client's choice of the redundancy parameters if `chosen`:
+/// then the goal keeps them (no other values are tried).
 pub(super) fn goal(
     chain: &Chain,
-    ik: &IkConfig,
     (reference, chosen): (&Joints, bool),
     v: &[f64; VALUES],
     index: u8,
-) -> Result<(Joints, u8), IkRequestError> {
+) -> Result<Goal, IkRequestError> {
     let target = pose(v)?;
-    let out_of_reach = IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
     let branch = match index & !CHOSEN {
         NEAREST_BRANCH => None,
         bits => Some(Branch::from_bits(bits).ok_or(IkRequestError::BadIndex)?),
@@ -93,13 +103,10 @@ pub(super) fn goal(
         if branch.is_some() {
             return Err(IkRequestError::BadIndex);
         }
-        return match chain.solve_global(&target, reference, ik, 0) {
-            Ok(IkResult::Converged(s)) => Ok((s.q, NEAREST_BRANCH)),
-            _ => Err(out_of_reach),
-        };
+        return Ok(Goal::Search(target));
     }
-    if !chosen && let Some(kept) = already_there(chain, &target, reference, branch) {
-        return Ok(kept);
+    if !chosen && let Some((q, bits)) = already_there(chain, &target, reference, branch) {
+        return Ok(Goal::Found(q, bits));
     }
     let found = if chosen {
         chain.solve_nearest_keeping(&target, reference, branch)
@@ -107,8 +114,8 @@ pub(super) fn goal(
         chain.solve_nearest(&target, reference, branch)
     };
     match found {
-        Ok(Some(found)) => Ok((found.q, found.branch.bits())),
-        _ => Err(out_of_reach),
+        Ok(Some(found)) => Ok(Goal::Found(found.q, found.branch.bits())),
+        _ => Err(OUT_OF_REACH),
     }
 }
 
