@@ -29,8 +29,9 @@ use crate::command::Class;
 /// Planning requests handled per tick at most.
 pub const PLANNING_PER_TICK: usize = 1;
 
-/// Newton steps of a `KG`'s global search per tick at most: four attempts, about 0.6 M
-/// Cortex-M7 instructions (qemu-bench), less than one planning request of a line may take.
+/// Newton steps of a `KG`'s global search per tick at most: four attempts, at most 0.53 M
+/// Cortex-M7 instructions (qemu-bench, "KG slice"), less than one planning request of a line
+/// may take.
 pub const SEARCH_SLICE: u16 = 120;
 
 /// What a request costs, as the budget sees it.
