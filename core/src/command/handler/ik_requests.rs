@@ -102,11 +102,6 @@ impl CommandHandler {
             .is_some_and(|s| core::mem::replace(&mut s.fresh, false))
     }
 
-    /// True while a `KG`'s global search runs.
-    pub fn searching(&self) -> bool {
-        self.search.is_some()
-    }
-
     /// Runs the `KG` search on for at most `slice` Newton steps; once it has ended, starts the
     /// move (if the arm may still move for its client) and returns the `KG`'s answer.
     pub fn continue_search(
