@@ -37,7 +37,7 @@ impl Chain {
         }
         let mut search = self.global_search(target, seed, config, rng_seed)?;
         // One slice of the whole budget: every attempt fits.
-        Ok(self.finish_search(&mut search, config.global_iterations, &mut || {}))
+        Ok(self.finish_search(&mut search, config.global_iterations, &mut quiet))
     }
 
     /// `result`, or if its best pose is within [`CLOSE`] but not converged, that pose taken
@@ -95,7 +95,7 @@ impl Chain {
     /// make progress: a slice ends between attempts); its answer once it has converged or
     /// spent its budget, `None` while it goes on.
     pub fn continue_search(&self, search: &mut GlobalSearch, slice: u16) -> Option<IkResult> {
-        self.continue_search_counted(search, slice, &mut || {})
+        self.continue_search_counted(search, slice, &mut quiet)
     }
 
     /// [`continue_search`](Self::continue_search) until the answer, in slices of `slice`.
@@ -111,7 +111,7 @@ impl Chain {
                 return answer;
             }
         }
-        IkResult::NotConverged(search.best_or_seed(self))
+        IkResult::NotConverged(search.best_or_seed(self, on_step))
     }
 
     /// [`continue_search`](Self::continue_search), calling `on_step` once per Newton step
@@ -157,7 +157,7 @@ impl Chain {
             }
             search.q = self.random_configuration(&mut search.rng);
         }
-        let answer = IkResult::NotConverged(search.best_or_seed(self));
+        let answer = IkResult::NotConverged(search.best_or_seed(self, on_step));
         Some(self.finished(&search.target, answer, search.tolerance))
     }
 
@@ -200,16 +200,20 @@ pub struct GlobalSearch {
 
 impl GlobalSearch {
     /// The best pose found, or with no attempt made (a zero budget) the clamped seed.
-    fn best_or_seed(&self, chain: &Chain) -> IkSolution {
+    fn best_or_seed(&self, chain: &Chain, on_step: &mut impl FnMut()) -> IkSolution {
         let mut best = self.best.unwrap_or_else(|| {
             let bounds = (Bounds::Wrapping, &mut LastEvaluation::default());
-            let seed = chain.descend(&self.target, self.q, 0, self.tolerance, bounds, &mut || {});
+            let seed = chain.descend(&self.target, self.q, 0, self.tolerance, bounds, on_step);
             seed.best
         });
         best.iterations = self.used;
         best
     }
 }
+
+/// The step hook of every search outside tests: one function, so that the search and its
+/// descents are compiled once (a closure of each caller's would be a copy of each).
+fn quiet() {}
 
 /// The seed's mixed metric: metres plus radians.
 fn score(s: &IkSolution) -> f64 {
