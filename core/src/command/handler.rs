@@ -226,7 +226,8 @@ impl CommandHandler {
         if !self.search_started() {
             return reply;
         }
-        self.continue_search(u16::MAX, drives).unwrap_or(reply)
+        self.continue_search(u16::MAX, datagram, drives)
+            .unwrap_or(reply)
     }
 
     /// Handles one datagram of any length from `client` and returns the reply datagram. A

@@ -332,7 +332,9 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             }
         }
         if let Some(request) = self.searching
-            && let Some(reply) = self.handler.continue_search(SEARCH_SLICE, &self.drives)
+            && let Some(reply) =
+                self.handler
+                    .continue_search(SEARCH_SLICE, request.datagram.payload(), &self.drives)
         {
             self.searching = None;
             self.reply(link, &reply, &request);

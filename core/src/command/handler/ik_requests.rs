@@ -23,7 +23,8 @@ use crate::kinematics::{GlobalSearch, IkResult, Joints};
 #[derive(Clone, Debug)]
 pub(super) struct GoalSearch {
     search: GlobalSearch,
-    request: Request,
+    /// The move's duration (s).
+    duration: f64,
     client: SocketAddr,
     /// The request that started it is still being answered (its reply is not the answer).
     fresh: bool,
@@ -65,7 +66,7 @@ impl CommandHandler {
                     .map_err(|_| ik_notice(cmd, OUT_OF_REACH))?;
                 self.search = Some(GoalSearch {
                     search,
-                    request: *req,
+                    duration,
                     client: self.client,
                     fresh: true,
                 });
@@ -103,10 +104,12 @@ impl CommandHandler {
     }
 
     /// Runs the `KG` search on for at most `slice` Newton steps; once it has ended, starts the
-    /// move (if the arm may still move for its client) and returns the `KG`'s answer.
+    /// move (if the arm may still move for its client) and returns the answer to `datagram`,
+    /// the `KG` that started it.
     pub fn continue_search(
         &mut self,
         slice: u16,
+        datagram: &[u8],
         drives: &(impl Drives + ?Sized),
     ) -> Option<[u8; MESSAGE_LEN]> {
         let pending = self.search.as_mut()?;
@@ -115,11 +118,10 @@ impl CommandHandler {
             .chain()
             .continue_search(&mut pending.search, slice)?;
         let GoalSearch {
-            request, client, ..
+            duration, client, ..
         } = self.search.take()?;
-        let cmd = request.command;
+        let cmd = Command::IkGoal;
         self.client = client;
-        let duration = non_negative(f64::from(request.values[VALUES - 1])).unwrap_or(0.0);
         let answer = match result {
             // Another client took control meanwhile (the arm at rest): not its goal to run.
             _ if self.session.holder() != Some(client) => {
@@ -133,9 +135,8 @@ impl CommandHandler {
         let reply = answer
             .map(|r| r.to_bytes())
             .unwrap_or_else(|notice| self.refuse(notice));
-        let datagram = request.to_bytes();
         self.session
-            .answered(client, cmd, &datagram, &reply, self.now);
+            .answered(client, cmd, datagram, &reply, self.now);
         Some(reply)
     }
 
