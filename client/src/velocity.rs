@@ -7,6 +7,12 @@
 //! * [`VelocityStreamer`]: a thread with a socket of its own that re-sends the latest command
 //!   until a deadline, so that the caller (a UI, a control loop) only says what it wants.
 //!
+//! Every stop latches, a stream's own timeout included (docs/safety.md): a stream started on
+//! purpose first sends its command at rest ([`Velocity::at_rest`]), which re-arms it, and a
+//! stream ended on purpose ends with it, so that its end is no timeout. A stream refused
+//! because of a stop (`ER20 Cmd TW after ST: send 0`) ends there and says so: it never
+//! re-arms by itself after a stop it did not ask for.
+//!
 //! ```no_run
 //! use std::time::{Duration, Instant};
 //! use armgate_client::{Client, Mode, TwistFrame, Velocity, VelocityStreamer};
@@ -144,9 +150,10 @@ impl Client {
 
     /// Streams `velocity` from this thread for `duration`, once per control period (a third
     /// of the hold time the controller echoes), or until `interrupted()` says so; then the arm
-    /// ramps to rest. A stream started here is started on purpose: it first sends the command
-    /// at rest ([`Velocity::at_rest`]), which re-arms streaming after a stop. Returns the
-    /// number of commands sent after it.
+    /// ramps to rest. A stream started here is started and ended on purpose: it first sends
+    /// the command at rest ([`Velocity::at_rest`]), which re-arms streaming after a stop, and
+    /// ends with it (interrupted too); a refusal ends it with no more sent. Returns the number
+    /// of commands sent between the two.
     pub fn stream_for(
         &mut self,
         velocity: &Velocity,
@@ -155,11 +162,13 @@ impl Client {
     ) -> Result<Streamed, ClientError> {
         // None: a duration beyond the clock's range, streamed until interrupted.
         let end = Instant::now().checked_add(duration);
-        self.velocity(&velocity.at_rest())?;
+        let rest = velocity.at_rest();
+        self.velocity(&rest)?;
         let mut sent = 0u32;
         let mut cut_to = None;
         while end.is_none_or(|end| Instant::now() < end) {
             if interrupted() {
+                self.velocity(&rest)?;
                 return Err(ClientError::Interrupted);
             }
             let sent_at = Instant::now();
@@ -183,6 +192,7 @@ impl Client {
             let next = end.map_or(sent_at + interval, |end| (sent_at + interval).min(end));
             std::thread::sleep(next.saturating_duration_since(Instant::now()));
         }
+        self.velocity(&rest)?;
         Ok(Streamed { sent, cut_to })
     }
 
@@ -210,11 +220,13 @@ pub enum StreamEvent {
 }
 
 /// Re-sends the latest velocity command from a thread of its own, once per control period
-/// (a third of the hold time the controller echoes), until its deadline; then sends nothing
-/// more and the controller ramps the arm to rest. Dropping it ends the thread.
+/// (a third of the hold time the controller echoes), until its deadline; then sends the
+/// command at rest once and nothing more, and the arm ramps to rest. A refused or failed
+/// command ends the stream (reported in `events`) until the next [`start`](Self::start) or
+/// [`stream`](Self::stream). Dropping it ends the thread.
 #[derive(Debug)]
 pub struct VelocityStreamer {
-    commands: Sender<Option<Order>>,
+    commands: Sender<Control>,
     /// Failures and notices.
     pub events: Receiver<StreamEvent>,
     /// The thread.
@@ -241,7 +253,7 @@ impl VelocityStreamer {
     /// the controller refuses it until a stream is started on purpose ([`start`](Self::start)).
     pub fn stream(&self, velocity: Velocity, until: Instant) {
         // A send fails only if the thread has ended, which `events` has told.
-        let _ = self.commands.send(Some(Order {
+        let _ = self.commands.send(Control::Stream(Order {
             velocity,
             until,
             rearm: false,
@@ -252,17 +264,33 @@ impl VelocityStreamer {
     /// the command at rest first, which re-arms streaming after a stop, then streams as
     /// [`stream`](Self::stream).
     pub fn start(&self, velocity: Velocity, until: Instant) {
-        let _ = self.commands.send(Some(Order {
+        let _ = self.commands.send(Control::Stream(Order {
             velocity,
             until,
             rearm: true,
         }));
     }
 
-    /// Stops sending at once; the controller ramps the arm to rest after its hold time.
+    /// Ends the stream on purpose (a key released, the program quitting): if one is being
+    /// sent, its command at rest goes out once and the arm ramps to rest; then nothing.
     pub fn stop(&self) {
-        let _ = self.commands.send(None);
+        let _ = self.commands.send(Control::End { at_rest: true });
     }
+
+    /// Stops sending at once, without the command at rest: after this client's own `ST`, which
+    /// that command would re-arm. The stream times out and the arm stays stopped.
+    pub fn halt(&self) {
+        let _ = self.commands.send(Control::End { at_rest: false });
+    }
+}
+
+/// What the streaming thread is told.
+#[derive(Debug)]
+enum Control {
+    /// Stream this.
+    Stream(Order),
+    /// End the stream; `at_rest`: with its command at rest.
+    End { at_rest: bool },
 }
 
 /// What the streaming thread is told: a velocity until a deadline, re-armed first or not.
@@ -273,31 +301,35 @@ struct Order {
     rearm: bool,
 }
 
-fn run(mut client: Client, commands: &Receiver<Option<Order>>, events: &Sender<StreamEvent>) {
+fn run(mut client: Client, commands: &Receiver<Control>, events: &Sender<StreamEvent>) {
     let mut current: Option<(Velocity, Instant)> = None;
     let mut interval = DEFAULT_INTERVAL;
     let mut next_send = Instant::now();
+    // A failure to report; the stream has ended.
+    let failed = |error| events.send(StreamEvent::Failed(error)).is_ok();
     loop {
         let received = match &current {
             None => commands.recv().map_err(|_| RecvTimeoutError::Disconnected),
             Some(_) => commands.recv_timeout(next_send.saturating_duration_since(Instant::now())),
         };
+        // The stream ends on purpose now: with its command at rest, or (`None`) silently.
+        let mut end = None;
         match received {
-            Ok(order) => {
+            Ok(Control::Stream(order)) => {
                 // A new command goes out at once, after the re-arming one if asked for.
                 let rearm = order
-                    .as_ref()
-                    .filter(|o| o.rearm)
-                    .map(|o| client.velocity(&o.velocity.at_rest()));
-                current = order.map(|o| (o.velocity, o.until));
+                    .rearm
+                    .then(|| client.velocity(&order.velocity.at_rest()));
+                current = Some((order.velocity, order.until));
                 next_send = Instant::now();
                 if let Some(Err(error)) = rearm {
                     current = None;
-                    if events.send(StreamEvent::Failed(error)).is_err() {
+                    if !failed(error) {
                         return;
                     }
                 }
             }
+            Ok(Control::End { at_rest }) => end = Some(at_rest),
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => return,
         }
@@ -306,7 +338,16 @@ fn run(mut client: Client, commands: &Receiver<Option<Order>>, events: &Sender<S
             continue;
         };
         if now >= *until {
+            end = Some(true);
+        }
+        if let Some(at_rest) = end {
+            let sent = at_rest.then(|| client.velocity(&velocity.at_rest()));
             current = None;
+            if let Some(Err(error)) = sent
+                && !failed(error)
+            {
+                return;
+            }
             continue;
         }
         if now < next_send {
@@ -320,7 +361,7 @@ fn run(mut client: Client, commands: &Receiver<Option<Order>>, events: &Sender<S
             }
             Err(error) => {
                 current = None;
-                if events.send(StreamEvent::Failed(error)).is_err() {
+                if !failed(error) {
                     return;
                 }
             }
@@ -379,13 +420,24 @@ mod tests {
             .unwrap();
         let sent = streamed.sent;
         assert_eq!(streamed.cut_to, None);
-        // Every 10 ms (a third of the 30 ms hold) for 200 ms, after the zero that re-arms.
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms, between the zero that re-arms
+        // and the zero that ends the stream on purpose.
         assert!((10..=21).contains(&sent), "{sent}");
         let received = fake.received();
-        assert_eq!(received.len(), sent as usize + 1);
+        assert_eq!(received.len(), sent as usize + 2);
         assert_eq!(&received[0][2..30], &[0; 28], "rates at rest first");
+        assert_eq!(&received[1][6..10], &0.1f32.to_le_bytes());
+        assert_eq!(&received[sent as usize + 1][2..30], &[0; 28], "and last");
         let stopped = c.stream_for(&rates, Duration::from_secs(5), || true);
         assert!(matches!(stopped, Err(ClientError::Interrupted)));
+        // Interrupted on purpose: at rest, then at rest again.
+        let received = fake.received();
+        assert_eq!(received.len(), sent as usize + 4);
+        assert!(
+            received[sent as usize + 2..]
+                .iter()
+                .all(|r| r[2..30] == [0; 28])
+        );
         // A duration beyond the clock's range streams (until interrupted) instead of panicking.
         let endless = c.stream_for(&rates, Duration::MAX, || true);
         assert!(matches!(endless, Err(ClientError::Interrupted)));
@@ -402,11 +454,67 @@ mod tests {
         };
         streamer.stream(up, Instant::now() + Duration::from_millis(200));
         std::thread::sleep(Duration::from_millis(400));
-        // Every 10 ms (a third of the 30 ms hold) for 200 ms, then nothing.
-        let sent = fake.received().len();
-        assert!((10..=25).contains(&sent), "{sent} sends");
+        // Every 10 ms (a third of the 30 ms hold) for 200 ms, then the twist at rest once
+        // (the stream's end on purpose, no timeout), then nothing.
+        let received = fake.received();
+        assert!(
+            (10..=25).contains(&received.len()),
+            "{} sends",
+            received.len()
+        );
+        assert_eq!(&received[0][10..14], &0.01f32.to_le_bytes());
+        assert_eq!(&received.last().unwrap()[2..30], &[0; 28]);
         std::thread::sleep(Duration::from_millis(100));
-        assert_eq!(fake.received().len(), sent);
+        assert_eq!(fake.received().len(), received.len());
+    }
+
+    /// `stop` ends a stream with the command at rest, `halt` (after the client's own `ST`)
+    /// without; a refusal (a stop that latched) ends the stream, is reported, and nothing is
+    /// sent after it: the streamer never re-arms by itself.
+    #[test]
+    fn the_streamer_ends_at_rest_on_purpose_and_never_rearms_after_a_refusal() {
+        let up = Velocity::Joints(vec![0.1, 0.0]);
+        let long = || Instant::now() + Duration::from_secs(10);
+        let at_rest = |r: &Vec<u8>| r[2..30] == [0; 28];
+        for (halt, rests) in [(false, 1), (true, 0)] {
+            let fake = controller();
+            let streamer = VelocityStreamer::spawn(fake.client()).unwrap();
+            streamer.stream(up.clone(), long());
+            std::thread::sleep(Duration::from_millis(50));
+            if halt {
+                streamer.halt();
+            } else {
+                streamer.stop();
+            }
+            std::thread::sleep(Duration::from_millis(50));
+            let received = fake.received();
+            assert_eq!(received.iter().filter(|r| at_rest(r)).count(), rests);
+            assert_eq!(at_rest(received.last().unwrap()), !halt);
+            std::thread::sleep(Duration::from_millis(50));
+            assert_eq!(fake.received().len(), received.len(), "nothing after");
+            // Not streaming: nothing to end.
+            streamer.stop();
+            std::thread::sleep(Duration::from_millis(30));
+            assert_eq!(fake.received().len(), received.len());
+        }
+        let refusing = FakeController::spawn(|request| {
+            if request[2..30] == [0; 28] {
+                vec![echo(request)]
+            } else {
+                vec![crate::fake::text("ER20 Cmd jW after ST: send 0")]
+            }
+        });
+        let streamer = VelocityStreamer::spawn(refusing.client()).unwrap();
+        streamer.stream(up, long());
+        let event = streamer.events.recv_timeout(Duration::from_secs(2));
+        assert!(
+            matches!(&event, Ok(StreamEvent::Failed(ClientError::Rejected(t))) if t.to_string().contains("after ST")),
+            "{event:?}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+        streamer.stop();
+        std::thread::sleep(Duration::from_millis(50));
+        assert_eq!(refusing.received().len(), 1, "no retry, no command at rest");
     }
 
     #[test]

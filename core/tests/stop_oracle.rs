@@ -2,8 +2,8 @@
 //! joint acceleration is within `max_acceleration` (+1e-9 relative), every tick of a stop along
 //! a Cartesian path changes each axis's set-point velocity within its Cartesian
 //! `max_acceleration` (+1e-6 relative), the tool never gets strictly inside an exclusion box it
-//! was not already in, and after a stop (`ST`, `OF`, a following error) no stream starts until
-//! a move or a zero stream re-arms it (issue 33). Among the requests, the arm is now and then
+//! was not already in, and after a stop (`ST`, `OF`, a following error, a stream's own
+//! timeout) no stream starts until a move or a zero stream re-arms it (issue 33). Among the requests, the arm is now and then
 //! held where it is for a while (a blocked drive): the following-error stop it causes (stop
 //! cause 9) is held to the same limits.
 #![allow(
@@ -160,6 +160,9 @@ fn run(config: ValidRobot, start: &[f64], seed: u64, requests: usize) -> usize {
             lags_seen = lagged.get();
             latched = true;
         }
+        // So does a stream's timeout (its client went quiet while it moved the arm): its
+        // cause stays in force until the re-arming that clears the latch too.
+        latched |= ctrl.stop_cause().0 == Some(StopCause::StreamTimeout);
         match rng.next_u64() % 10 {
             0 => {
                 let mode = [Mode::Off, Mode::Joint, Mode::Cartesian][(rng.next_u64() % 3) as usize];

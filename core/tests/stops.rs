@@ -13,13 +13,13 @@
 
 mod common;
 
-use std::collections::VecDeque;
 use std::net::SocketAddr;
 
-use armgate_core::cycle::{Cycle, Datagram, Dropped, Link, Outgoing};
+use armgate_core::cycle::{Cycle, Datagram};
 use armgate_core::kinematics::Joints;
 use armgate_core::sim::{ArmModel, IdealArm, SimulatedDrives};
 use armgate_protocol::client::Motion;
+use common::clients::{Clients, reply_text};
 use common::datagram;
 
 const MK1_READY: [f64; 6] = [1.5708, 0.6, -0.4, 0.2, 1.8, 0.1];
@@ -34,39 +34,6 @@ fn a() -> SocketAddr {
 
 fn b() -> SocketAddr {
     SocketAddr::from(([192, 168, 1, 3], 6000))
-}
-
-/// Requests queued for the next tick, and what came back.
-#[derive(Default)]
-struct Clients {
-    requests: VecDeque<Datagram<SocketAddr>>,
-    replies: Vec<(SocketAddr, String)>,
-}
-
-impl Link<SocketAddr> for Clients {
-    fn receive(&mut self) -> Option<Datagram<SocketAddr>> {
-        self.requests.pop_front()
-    }
-
-    fn send(&mut self, datagram: &Datagram<SocketAddr>, kind: Outgoing) -> Result<(), Dropped> {
-        if kind == Outgoing::Reply {
-            self.replies
-                .push((datagram.peer, reply_text(datagram.payload())));
-        }
-        Ok(())
-    }
-}
-
-/// A reply as text: an `ER`/`WN` text, or the reply's two characters.
-fn reply_text(reply: &[u8]) -> String {
-    let text = String::from_utf8_lossy(reply)
-        .trim_end_matches('\0')
-        .to_owned();
-    if text.starts_with("ER") || text.starts_with("WN") {
-        text
-    } else {
-        String::from_utf8_lossy(&reply[..2]).into_owned()
-    }
 }
 
 /// ranger-mk1 on an ideal simulated arm, every tick's set-point kept.
@@ -166,10 +133,48 @@ fn a_stop_latches_a_stream_until_its_holder_sends_a_zero_twist() {
     assert_eq!(rig.motion(), Motion::Streaming);
 }
 
-/// The same for joint rates, after an `ST` that found the arm at rest and after the client
-/// watchdog's stop (`ER41`); a stream's own timeout, its normal end, does not latch.
+/// A stream whose datagrams stall for longer than its timeout (a network stall): the arm
+/// ramps to rest, and the delayed twists that follow are refused, naming the timeout, and
+/// never move the arm again; a zero twist re-arms and the next twist moves it.
 #[test]
-fn joint_rates_latch_after_st_and_the_watchdog_but_not_after_their_own_timeout() {
+fn a_stream_timeout_latches_until_a_zero_twist() {
+    let mut rig = Rig::new(&MK1_READY);
+    rig.ok(a(), "CM", CARTESIAN, 0);
+    for _ in 0..20 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_eq!(rig.motion(), Motion::Streaming);
+    // The stall: no twist for 40 ticks.
+    for _ in 0..40 {
+        rig.tick();
+    }
+    assert_eq!((rig.motion(), rig.cause()), (Motion::Holding, 6.0));
+    let rest = rig.last();
+    // The delayed twists arrive: each refused, the arm stays.
+    for _ in 0..20 {
+        assert_eq!(
+            rig.send(a(), "TW", ALONG_Y, 0),
+            "ER20 Cmd TW after idle: send 0"
+        );
+        rig.tick();
+    }
+    assert_eq!(rig.last(), rest, "a delayed twist moved the arm");
+    assert_eq!(rig.cause(), 6.0, "SQ 2 keeps the timeout");
+    rig.ok(a(), "TW", [0.0; 7], 0);
+    for _ in 0..10 {
+        rig.ok(a(), "TW", ALONG_Y, 0);
+        rig.tick();
+    }
+    assert_ne!(rig.last(), rest);
+    assert_eq!(rig.motion(), Motion::Streaming);
+}
+
+/// The same for joint rates, after an `ST` that found the arm at rest, after their own
+/// timeout and after the client watchdog's stop (`ER41`); a stream ended with zero rates ends
+/// without a stop.
+#[test]
+fn joint_rates_latch_after_st_their_timeout_and_the_watchdog() {
     let rates = [0.0, 0.0, 0.05, 0.0, 0.0, 0.0, 0.0];
     let mut rig = Rig::new(&MK1_READY);
     rig.ok(a(), "CM", JOINT, 0);
@@ -181,13 +186,28 @@ fn joint_rates_latch_after_st_and_the_watchdog_but_not_after_their_own_timeout()
     );
     assert_eq!(rig.cause(), 1.0);
     rig.ok(a(), "jW", [0.0; 7], 0);
-    // A stream that its client lets run out: cause 6, and the next jW simply starts again.
+    // A stream that its client lets run out: cause 6, latched like any stop.
     rig.ok(a(), "jW", rates, 0);
     for _ in 0..40 {
         rig.tick();
     }
     assert_eq!(rig.motion(), Motion::Holding);
     assert_eq!(rig.cause(), 6.0);
+    assert_eq!(
+        rig.send(a(), "jW", rates, 0),
+        "ER20 Cmd jW after idle: send 0"
+    );
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    rig.ok(a(), "jW", rates, 0);
+    rig.tick();
+    assert_eq!(rig.motion(), Motion::Streaming);
+    // Ended on purpose: zero rates, then silence. The arm ramps to rest with no stop, and
+    // the next stream needs no re-arming.
+    rig.ok(a(), "jW", [0.0; 7], 0);
+    for _ in 0..40 {
+        rig.tick();
+    }
+    assert_eq!((rig.motion(), rig.cause()), (Motion::Holding, 0.0));
     rig.ok(a(), "jW", rates, 0);
     rig.tick();
     assert_eq!(rig.motion(), Motion::Streaming);

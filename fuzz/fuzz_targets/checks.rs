@@ -91,7 +91,9 @@ pub fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[
     );
 }
 
-/// An unsolicited notice from the relay: a motion warning, or a drive fault (`ER3x`).
+/// An unsolicited notice from the relay: a motion warning, a stop's notice (the client
+/// watchdog's `ER41`, a following error's `ER43`: a drive that does not follow, or a position
+/// report the fuzzer injected), or a drive fault (`ER3x`).
 pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
     check_text_bytes(bytes);
     let text = Text::parse(&Message::new_checked(&bytes[..]).expect("31 bytes")).expect("a text");
@@ -106,10 +108,14 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::ViaPointMissed,
         Notice::Held(Hold::Workspace),
     ];
-    // A stream held at a joint limit names the joint and the limit.
-    let held_at_limit = matches!(notice, Notice::Held(Hold::JointLimit(_)));
+    // A stream held at a joint limit names the joint and the limit; stops name their time or
+    // their joint and its lag.
+    let named = matches!(
+        notice,
+        Notice::Held(Hold::JointLimit(_)) | Notice::ClientSilent(_) | Notice::FollowingError(_)
+    );
     assert!(
-        held_at_limit || allowed.contains(&notice),
+        named || allowed.contains(&notice),
         "unexpected unsolicited text {:?}",
         text.as_str()
     );

@@ -38,8 +38,9 @@
 //!
 //! and for every tick: every joint command is finite and within the joint limits, its
 //! acceleration (against the two commands before it) within `max_acceleration` (+1e-9
-//! relative), and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`, `WN27` or
-//! a drive fault `ER3x`.
+//! relative) — a following-error stop (cause 9, `ER43`, which an injected position report can
+//! cause) included — and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`,
+//! `WN27`, `ER41`, `ER43` or a drive fault `ER3x`.
 #![no_main]
 
 use std::collections::VecDeque;

@@ -57,6 +57,7 @@ from .errors import (
 from .pose import Pose
 from .signing import Signer
 from .status import DriveState, Holder, Mode, Motion, Status, StopCause
+from .streaming import VelocityStream
 from .waiting import WaitOptions
 
 __all__ = [
@@ -105,6 +106,7 @@ __all__ = [
     "StopCause",
     "Stopped",
     "Undersized",
+    "VelocityStream",
     "ViaPointMissed",
     "WaitFailed",
     "WaitOptions",

@@ -22,6 +22,7 @@ from typing import (
 from . import wire
 from .branch import parse_branch
 from .signing import IDENTITY_INDEX, KeyLike, Signer
+from .streaming import Streaming
 from .errors import (
     ArmError,
     BadIndex,
@@ -74,7 +75,7 @@ def _split_host_port(host: str, port: int) -> Tuple[str, int]:
     return name, int(number)
 
 
-class Arm(Waiting):
+class Arm(Waiting, Streaming):
     """A client of one armgate controller.
 
     ``Arm("127.0.0.1", port=7031)`` opens a UDP socket; nothing is sent until a request. Every
@@ -276,9 +277,10 @@ class Arm(Waiting):
         (rad/s), in the base frame or the tool frame. It holds for three control periods, the
         time returned (s): send the next one before then, or the arm ramps to rest.
 
-        After a stop (``ST`` from any client, ``OF``, ``ER21``, ``WN22``, ``ER41``) the stream
-        is latched: a twist other than zero is refused (``ER20 Cmd TW after ST: send 0``) until
-        a zero twist re-arms it, sent on purpose when a stream starts."""
+        After a stop (``ST`` from any client, ``OF``, ``ER21``, ``WN22``, ``ER41``, ``ER43``, or
+        this stream's own timeout) the stream is latched: a twist other than zero is refused
+        (``ER20 Cmd TW after ST: send 0``, ``after idle: send 0``) until a zero twist re-arms
+        it, sent on purpose when a stream starts: :meth:`velocity_stream` does so."""
         values = [float(v) for v in linear] + [float(v) for v in angular]
         if len(values) != 6:
             raise ValueError("a twist has three linear and three angular components")

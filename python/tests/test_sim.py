@@ -89,17 +89,20 @@ def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: igno
         arm.recalibrate(COMFORTABLE)
         arm.set_mode("cartesian")
         start = arm.get_tcp_pose()
-        # 1 cm/s down for 0.5 s, re-sent every control period (a third of the hold time).
+        # 1 cm/s down for 0.5 s, re-sent more often than once per control period (a third of
+        # the hold time): a stream that goes quiet for its hold time is stopped, and stays so.
         deadline = time.monotonic() + 0.5
-        while time.monotonic() < deadline:
-            hold = arm.twist([0.0, 0.0, -0.01])
-            time.sleep(hold / 3)
+        with arm.velocity_stream() as stream:
+            while time.monotonic() < deadline:
+                hold = stream.twist([0.0, 0.0, -0.01])
+                time.sleep(hold / 4)
         assert hold == pytest.approx(3 * 0.01944, abs=1e-6)
-        time.sleep(0.5)  # the hold time and the ramp to rest
+        time.sleep(0.5)  # the ramp to rest
         assert arm.get_status().motion == armgate.Motion.IDLE
+        # Ended on purpose with a zero twist: no stop.
+        assert arm.get_stop_cause() == (None, None)
         moved = arm.get_tcp_pose()
-        # At most 0.5 s at 1 cm/s; at least some of it (a loaded machine may sleep past the hold
-        # time, and the arm then ramps to rest until the next twist).
+        # At most 0.5 s at 1 cm/s; at least some of it.
         assert -0.0055 < moved.z - start.z < -0.001
         assert math.hypot(moved.x - start.x, moved.y - start.y) < 2e-5
         with pytest.raises(armgate.CommandRejected):
@@ -107,13 +110,55 @@ def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: igno
         arm.set_mode("joint")
         q0 = arm.get_joints()
         deadline = time.monotonic() + 0.5
-        while time.monotonic() < deadline:
-            hold = arm.joint_velocity([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])
-            time.sleep(hold / 3)
+        with arm.velocity_stream() as stream:
+            while time.monotonic() < deadline:
+                hold = stream.joint_velocity([0.0, 0.0, 0.05, 0.0, 0.0, 0.0])
+                time.sleep(hold / 4)
         time.sleep(0.5)
         q = arm.get_joints()
         assert 0.005 < q[2] - q0[2] < 0.0275  # at most 0.5 s at 0.05 rad/s (plus the ramp)
         assert close(q[:2] + q[3:], q0[:2] + q0[3:], 1e-9)
+
+
+def test_a_stopped_stream_stays_stopped_until_started_again(mk1) -> None:  # type: ignore[no-untyped-def]
+    """A stream that stalls for longer than its hold time (a network stall), or that another
+    client stops, is refused with the stop's reason; the stream ends there without re-arming
+    (the cause stays in force), and a new stream started on purpose moves the arm again."""
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm, armgate.Arm(
+        "127.0.0.1", port=mk1.port
+    ) as other:
+        arm.recalibrate(COMFORTABLE)
+        arm.set_mode("cartesian")
+        down = [0.0, 0.0, -0.01]
+        with pytest.raises(armgate.CommandRejected) as idle:
+            with arm.velocity_stream() as stream:
+                for _ in range(10):
+                    time.sleep(stream.twist(down) / 4)
+                time.sleep(0.3)  # the stall
+                stream.twist(down)
+        assert idle.value.text == "ER20 Cmd TW after idle: send 0"
+        time.sleep(0.2)
+        assert arm.get_stop_cause() == (armgate.StopCause.STREAM_TIMEOUT, None)
+        rest = arm.get_tcp_pose()
+        with pytest.raises(armgate.CommandRejected) as stopped:
+            with arm.velocity_stream() as stream:
+                for _ in range(10):
+                    time.sleep(stream.twist(down) / 4)
+                other.stop()
+                for _ in range(10):
+                    time.sleep(stream.twist(down) / 4)
+        assert stopped.value.text == "ER20 Cmd TW after ST: send 0"
+        time.sleep(0.3)
+        assert arm.get_stop_cause()[0] == armgate.StopCause.STOP
+        held = arm.get_tcp_pose()
+        assert rest.z - held.z > 0.0001  # the second stream moved the arm before the ST
+        time.sleep(0.3)
+        assert arm.get_tcp_pose().distance(held) < 2e-6  # and nothing since
+        with arm.velocity_stream() as stream:
+            for _ in range(10):
+                time.sleep(stream.twist(down) / 4)
+        assert arm.get_stop_cause() == (None, None)
+        assert held.z - arm.get_tcp_pose().z > 0.0001
 
 
 def test_joint_moves_arrive(mk1) -> None:  # type: ignore[no-untyped-def]

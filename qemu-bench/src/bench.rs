@@ -19,10 +19,16 @@
 //! measured from the same configurations to the next one, and in its worst case: joint 1
 //! turned 2 rad with the bounds' top 1 mm above the tool, which the way runs along, so that
 //! the check spends its whole budget of FK evaluations and refuses (`near edge`).
+//!
+//! `KG` on a chain without a closed form (hybrid with its second slide moved to the third
+//! joint, as `core/tests/kg_search.rs`) to an unreachable goal: its global search runs a slice
+//! of at most `SEARCH_SLICE` Newton steps a tick; the row gives the instructions per slice,
+//! mean and worst (the work a tick adds while the search runs), and the number of slices.
 
 use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
+use armgate_core::cycle::SEARCH_SLICE;
 use armgate_core::kinematics::{Chain, Family, Joints, Solutions};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode};
@@ -86,6 +92,9 @@ pub fn run(counter: &Counter) -> bool {
     );
     let mut ok = true;
     for (name, bytes) in ROBOTS {
+        if *name == "hybrid" {
+            ok &= measure_search(bytes, counter);
+        }
         let config = postcard::from_bytes::<RobotConfig>(bytes).ok();
         match config.map(RobotConfig::validate) {
             Some(Ok(config)) => {
@@ -103,6 +112,42 @@ pub fn run(counter: &Counter) -> bool {
         }
     }
     ok
+}
+
+/// `KG`'s global search on hybrid without its closed form, to a goal 10 m out, slice by slice
+/// as the cycle runs it: prints the instructions per slice; false if it cannot be measured.
+fn measure_search(bytes: &[u8], counter: &Counter) -> bool {
+    let config = postcard::from_bytes::<RobotConfig>(bytes).ok();
+    let Some(Ok(config)) = config.map(|c| c.validate().and_then(|v| v.edit(|c| c.joints.swap(1, 2))))
+    else {
+        return false;
+    };
+    let chain = Chain::new(&config);
+    let target = Frame::from_parts(Vector3::new(10.0, 0.0, 0.3).into(), Rotation3::identity());
+    let Ok(mut search) = chain.global_search(&target, &chain.mid_range(), &config.ik, 0) else {
+        return false;
+    };
+    let mut slices = Timing::default();
+    let mut answer = None;
+    // Every slice spends at least one step of the budget.
+    for _ in 0..=config.ik.global_iterations {
+        let (ticks, done) = measure(|| chain.continue_search(black_box(&mut search), SEARCH_SLICE));
+        slices.add(ticks);
+        if done.is_some() {
+            answer = done;
+            break;
+        }
+    }
+    let (mean, max) = slices.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15} |         - |",
+        "hybrid, numeric",
+        "KG slice to 10 m",
+        mean,
+        max,
+        slices.calls
+    );
+    chain.family().family == Family::Numeric && answer.is_some_and(|a| !a.is_converged())
 }
 
 fn measure_robot(config: &ValidRobot) -> Results {

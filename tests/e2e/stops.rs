@@ -1,6 +1,6 @@
 //! A stop stays a stop, and a goal stays its owner's (issue 33), over UDP with two clients:
-//! a stream after another client's `ST` is refused and the arm stays at rest; a goal one
-//! client set never moves the arm for another.
+//! a stream after another client's `ST`, or resumed after its own timeout, is refused and the
+//! arm stays at rest; a goal one client set never moves the arm for another.
 
 use super::sessions::{START, ask, second_client};
 use super::*;
@@ -72,6 +72,47 @@ fn a_stream_after_another_clients_st_is_refused_and_the_arm_stays_at_rest() {
     // A re-arms on purpose: a zero twist, then its jog moves the arm again.
     sim.ok("TW", [0.0; 7], 0);
     assert_eq!(stop_cause(&sim)[0], 0.0, "a new motion clears the cause");
+    for _ in 0..30 {
+        sim.ok("TW", ALONG_Y, 0);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(moved(&end, &sim.ok("PS", [0.0; 7], 0)) > 0.0005);
+}
+
+/// A network stall: A's twists pause for longer than the stream's timeout, then resume (the
+/// delayed datagrams arrive). The stream timed out and that latches: every resumed twist is
+/// refused naming the timeout, the arm stays at rest, `SQ` 2 reports cause 6; a zero twist
+/// re-arms and the jog moves the arm again.
+#[test]
+fn a_stream_resumed_after_its_timeout_is_refused_and_the_arm_stays_at_rest() {
+    let Some(sim) = ready() else {
+        return;
+    };
+    sim.ok("CM", [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let start = sim.ok("PS", [0.0; 7], 0);
+    for _ in 0..30 {
+        sim.ok("TW", ALONG_Y, 0);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // The stall: five times the timeout (3 periods of 19.44 ms), long enough to come to rest.
+    std::thread::sleep(Duration::from_millis(300));
+    let stalled = sim.ok("PS", [0.0; 7], 0);
+    assert!(
+        moved(&start, &stalled) > 0.0001,
+        "the stream moved the tool"
+    );
+    for _ in 0..50 {
+        assert_eq!(sim.text("TW", ALONG_Y, 0), "ER20 Cmd TW after idle: send 0");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let end = sim.ok("PS", [0.0; 7], 0);
+    assert!(
+        moved(&stalled, &end) < 2e-5,
+        "a delayed twist moved the arm"
+    );
+    assert_eq!(status(&sim)[4], 0.0, "holding");
+    assert_eq!(stop_cause(&sim)[0], 6.0, "SQ 2 keeps the stream timeout");
+    sim.ok("TW", [0.0; 7], 0);
     for _ in 0..30 {
         sim.ok("TW", ALONG_Y, 0);
         std::thread::sleep(Duration::from_millis(10));

@@ -24,7 +24,11 @@
 //! key streams a velocity — `TW` in the base frame for the Cartesian keys, 5 mm/s × scale
 //! along the axis; `jW` for the joint keys, 0.02 rad/s × scale on the selected joint — through
 //! a [`VelocityStreamer`] on a socket of its own, re-sent every control period until shortly
-//! after the key's last auto-repeat ([`jog`]); then the controller ramps the arm to rest. The
+//! after the key's last auto-repeat ([`jog`]) or its release; then the command at rest ends the
+//! stream on purpose (a stream that just stops sending times out, which latches like any
+//! stop) and the arm ramps to rest. A fresh press re-arms the stream with a command at rest
+//! first; a stream refused because of a stop (`after ST: send 0`, `after idle: send 0`, a
+//! network stall) ends, the refusal is shown, and only the next fresh press re-arms it. The
 //! mode must match the keys (cartesian / joint), else the controller's refusal is shown.
 //!
 //! **Step keys** (the seed's): a Cartesian step is 1 mm × scale, a joint step 0.01 rad ×
@@ -368,10 +372,11 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
                     true
                 }
                 Some(Action::Stop) => {
-                    // The jog stream stops with the arm: a held key must not drive it on.
+                    // The jog stream stops with the arm: a held key must not drive it on,
+                    // and no command at rest may re-arm the stream after the ST.
                     jog_key = None;
                     held = HeldKey::default();
-                    streamer.stop();
+                    streamer.halt();
                     io.actions.send(Action::Stop).is_ok()
                 }
                 Some(action) => io.actions.send(action).is_ok(),
@@ -382,7 +387,8 @@ pub fn run(client: Client, options: TeleopOptions) -> std::io::Result<Ended> {
             }
         }
     }
-    streamer.stop();
+    // Silently: the ST on exit must not meet a command at rest that re-arms after it.
+    streamer.halt();
     done.store(true, std::sync::atomic::Ordering::SeqCst);
     // Dropping the sender ends the I/O thread after its current request; it is not joined, so
     // that quitting never waits for a timeout.

@@ -4,7 +4,8 @@
 //!
 //! For every robot file in `robots/` × {joint move, Cartesian line, diagonal Cartesian line,
 //! blended sequence, twist stream, joint-velocity stream} × {ST, CM, OF, workspace boundary,
-//! stream timeout, IK divergence}, an ideal arm follows the commands; from the stop's cause on,
+//! stream timeout, IK divergence, following error}, an ideal arm follows the commands; from the
+//! stop's cause on,
 //! per tick of commanded joints: the peak acceleration over `max_acceleration` (the worst
 //! joint), the peak jerk over `max_jerk` (where the robot file sets one), per tick of Cartesian
 //! set-points (Cartesian motions that stop along their path): the peak change of an axis's
@@ -22,6 +23,10 @@
 //! as long as the workspace bounds allow (up to 1 m), on which the tick loses its IK solution;
 //! figures from the tick that raised it, whose speed is in the note ("at N mm/s": the tick may
 //! have slowed the line down before it gave up).
+//!
+//! Following error (cause 9): at the same point as `ST`, the arm is held where it is (a blocked
+//! drive; streams keep sending) until the controller finds a joint too far behind its command
+//! and stops; figures from that tick, with the joint and its lag in the note.
 #![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
 
 mod figures;
@@ -52,6 +57,7 @@ enum Cause {
     Boundary,
     Timeout,
     Wn22,
+    FollowingError,
 }
 
 const MOTIONS: [Motion; 6] = [
@@ -62,13 +68,14 @@ const MOTIONS: [Motion; 6] = [
     Motion::Twist,
     Motion::JointRates,
 ];
-const CAUSES: [Cause; 6] = [
+const CAUSES: [Cause; 7] = [
     Cause::St,
     Cause::Cm,
     Cause::Of,
     Cause::Boundary,
     Cause::Timeout,
     Cause::Wn22,
+    Cause::FollowingError,
 ];
 /// Ticks after the cause at most (rest is normally reached much earlier).
 const MAX_TICKS: usize = 20_000;
@@ -84,6 +91,11 @@ struct Run {
     setpoints: Vec<Option<Frame>>,
     /// The index in `commands` of the first tick that raised `WN22`.
     ik_divergence: Option<usize>,
+    /// The arm is held where it is (a blocked drive): it takes no commands.
+    held: bool,
+    /// The index in `commands` of the first tick that raised `ER43`, with its text's joint
+    /// and lag.
+    following_error: Option<(usize, String)>,
 }
 
 impl Run {
@@ -96,6 +108,8 @@ impl Run {
             commands: Vec::new(),
             setpoints: Vec::new(),
             ik_divergence: None,
+            held: false,
+            following_error: None,
         };
         run.tick();
         run
@@ -104,13 +118,44 @@ impl Run {
     fn tick(&mut self) {
         self.now += self.config.control_period;
         let out = self.ctrl.step(self.now, &self.arm.measured()).unwrap();
-        self.arm.step(out.command.as_ref());
+        if !self.held {
+            self.arm.step(out.command.as_ref());
+        }
         self.commands
             .push(out.command.unwrap_or(self.arm.measured()));
         self.setpoints.push(out.setpoint);
         if out.events.ik_divergence && self.ik_divergence.is_none() {
             self.ik_divergence = Some(self.commands.len() - 1);
         }
+        if let (Some(lag), None) = (out.events.following_error, &self.following_error) {
+            let note = format!(
+                "j{} {:.3} behind",
+                lag.joint,
+                f64::from(lag.error_milli) / 1e3
+            );
+            self.following_error = Some((self.commands.len() - 1, note));
+        }
+    }
+
+    /// The figures from tick `from` on, or for a following error from the tick that found it.
+    fn measure(
+        &self,
+        from: usize,
+        line: Option<(Vector3<f64>, Vector3<f64>)>,
+        boxed: Option<[f64; 6]>,
+    ) -> Figures {
+        if !self.held {
+            return measure(self, from, line, boxed);
+        }
+        let Some((from, note)) = &self.following_error else {
+            return Figures {
+                note: "no following error".to_string(),
+                ..refused()
+            };
+        };
+        let mut f = measure(self, *from, line, boxed);
+        f.note.clone_from(note);
+        f
     }
 
     fn pose(&self, q: &Joints) -> Vector3<f64> {
@@ -199,6 +244,7 @@ fn stop_now(run: &mut Run, cause: Cause) {
             run.ctrl.set_mode(other).unwrap();
         }
         Cause::Of => run.ctrl.stop(StopCause::PowerOff),
+        Cause::FollowingError => run.held = true,
         Cause::Boundary | Cause::Timeout | Cause::Wn22 => {}
     }
 }
@@ -292,7 +338,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
             let from = run.commands.len();
             stop_now(&mut run, cause);
             settle(&mut run);
-            Some(measure(&run, from, None, None))
+            Some(run.measure(from, None, None))
         }
         Motion::Line | Motion::Diagonal | Motion::Blended => {
             let length = cruise_length(config);
@@ -362,7 +408,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
             stop_now(&mut run, cause);
             settle(&mut run);
             let line = (motion != Motion::Blended).then_some((origin, dir));
-            Some(measure(&run, from, line, None))
+            Some(run.measure(from, line, None))
         }
         Motion::Twist | Motion::JointRates => {
             let mut run = Run::new(config, &q0);
@@ -432,9 +478,17 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 return Some(measure(&run, from, line, boxed));
             }
             stop_now(&mut run, cause);
+            // A held arm: the stream goes on until the controller finds the lag.
+            for _ in 0..MAX_TICKS / 4 {
+                if !run.held || run.following_error.is_some() {
+                    break;
+                }
+                send(&mut run, motion, speed, &dir, &rates);
+                run.tick();
+            }
             settle(&mut run);
             let line = (motion == Motion::Twist).then_some((origin, dir));
-            Some(measure(&run, from, line, None))
+            Some(run.measure(from, line, None))
         }
     }
 }
@@ -528,6 +582,6 @@ fn main() {
     }
     println!("\nworst accel/max over every case: {worst:.2}");
     println!(
-        "worst Cartesian axis acc/max of a stop along a Cartesian path (ST, OF, boundary): {worst_cartesian:.2}"
+        "worst Cartesian axis acc/max of a stop along a Cartesian path (ST, OF, boundary, following error): {worst_cartesian:.2}"
     );
 }

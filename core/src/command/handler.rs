@@ -32,6 +32,7 @@ use crate::kinematics::{Joints, KinematicsError};
 use crate::math::Frame;
 use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
 use handover::Cleared;
+use ik_requests::GoalSearch;
 use replies::{operational, refusal_notice, values_reply};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
@@ -77,6 +78,8 @@ pub struct CommandHandler {
     power_off_at: Option<f64>,
     /// The longest a stop from full speed may take (s), with a margin: the bound on `OF`'s wait.
     stop_within: f64,
+    /// A `KG`'s global search in progress (a chain without a closed form).
+    search: Option<GoalSearch>,
 }
 
 impl CommandHandler {
@@ -102,6 +105,7 @@ impl CommandHandler {
             stopped_by: None,
             power_off_at: None,
             stop_within: stop_time_bound(config),
+            search: None,
         }
     }
 
@@ -207,7 +211,23 @@ impl CommandHandler {
         datagram: &[u8],
         drives: &mut (impl Drives + ?Sized),
     ) -> [u8; MESSAGE_LEN] {
-        self.handle_from(datagram, ANONYMOUS, drives)
+        self.handle_at_once(datagram, ANONYMOUS, drives)
+    }
+
+    /// [`handle_from`](Self::handle_from), with a `KG`'s global search run to its end at once
+    /// (callers outside the cycle's ticks: tests, protocol checks between ticks).
+    pub fn handle_at_once(
+        &mut self,
+        datagram: &[u8],
+        client: SocketAddr,
+        drives: &mut (impl Drives + ?Sized),
+    ) -> [u8; MESSAGE_LEN] {
+        let reply = self.handle_from(datagram, client, drives);
+        if !self.search_started() {
+            return reply;
+        }
+        self.continue_search(u16::MAX, datagram, drives)
+            .unwrap_or(reply)
     }
 
     /// Handles one datagram of any length from `client` and returns the reply datagram. A
@@ -239,6 +259,10 @@ impl CommandHandler {
             .unwrap_or_else(|notice| self.refuse(notice));
         if self.controller.stop_cause().0 != cause {
             self.stopped_by = Some(client);
+        }
+        if self.search.as_ref().is_some_and(GoalSearch::is_fresh) {
+            // Not the answer: that comes when the search ends, and is recorded then.
+            return reply;
         }
         self.session
             .answered(client, request.command, datagram, &reply, self.now);

@@ -8,8 +8,7 @@ use armgate_protocol::client::redundancy::{CHOSEN, Redundancy};
 use armgate_protocol::client::{Command, PathPoint, Reply, VALUES};
 
 use super::redundancy::{self, Values};
-use crate::config::IkConfig;
-use crate::kinematics::{Branch, BranchSolution, Chain, Family, IkResult, Joints};
+use crate::kinematics::{Branch, BranchSolution, Chain, Family, Joints};
 use crate::math::{Frame, Rotation3, Vector3, dist};
 use crate::motion::Refusal;
 
@@ -26,6 +25,19 @@ pub(super) enum IkRequestError {
     /// The goal has solutions within the joint limits, none on the branch asked for.
     BranchBeyondLimits,
 }
+
+/// Where a `KG` goal stands: found (its joints and branch bits), or (a chain without a closed
+/// form) a pose for a global search to run, in slices across ticks.
+pub(super) enum Goal {
+    /// The joints and the branch they lie on.
+    Found(Joints, u8),
+    /// The pose to search for from the present joints, answered [`NEAREST_BRANCH`].
+    Search(Frame),
+}
+
+/// The refusal of a `KG` goal out of reach.
+pub(super) const OUT_OF_REACH: IkRequestError =
+    IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
 
 /// The pose in f0..f5 (position, roll/pitch/yaw), if finite.
 fn pose(v: &[f64; VALUES]) -> Result<Frame, IkRequestError> {
@@ -80,19 +92,17 @@ fn bits(chain: &Chain, s: &BranchSolution) -> u8 {
     chain.configuration(&s.q).unwrap_or(s.branch.bits())
 }
 
-/// The joints of `KG`'s goal and the branch bits they lie on ([`NEAREST_BRANCH`] on a robot
-/// without a closed form, solved by global IK from the present joints). `reference` is the
-/// present joints, with the client's choice of the redundancy parameters if `chosen`: then
-/// the goal keeps them (no other values are tried).
+/// The joints of `KG`'s goal and the branch bits they lie on, or on a robot without a closed
+/// form the pose for a global IK search from the present joints ([`Goal`]). `reference`
+/// is the present joints, with the client's choice of the redundancy parameters if `chosen`:
+/// then the goal keeps them (no other values are tried).
 pub(super) fn goal(
     chain: &Chain,
-    ik: &IkConfig,
     (reference, chosen): (&Joints, bool),
     v: &[f64; VALUES],
     index: u8,
-) -> Result<(Joints, u8), IkRequestError> {
+) -> Result<Goal, IkRequestError> {
     let target = pose(v)?;
-    let out_of_reach = IkRequestError::Refused(Refusal::Unreachable(PathPoint::Goal));
     let branch = match index & !CHOSEN {
         NEAREST_BRANCH => None,
         bits => Some(
@@ -105,28 +115,25 @@ pub(super) fn goal(
         if branch.is_some() {
             return Err(IkRequestError::BadIndex);
         }
-        return match chain.solve_global(&target, reference, ik, 0) {
-            Ok(IkResult::Converged(s)) => Ok((s.q, NEAREST_BRANCH)),
-            _ => Err(out_of_reach),
-        };
+        return Ok(Goal::Search(target));
     }
-    if !chosen && let Some(kept) = already_there(chain, &target, reference, branch) {
-        return Ok(kept);
+    if !chosen && let Some((q, bits)) = already_there(chain, &target, reference, branch) {
+        return Ok(Goal::Found(q, bits));
     }
     let solve = |root| nearest(chain, &target, (reference, chosen), root);
     let Some(wanted) = branch else {
         return solve(None)
-            .map(|s| (s.q, bits(chain, &s)))
-            .ok_or(out_of_reach);
+            .map(|s| Goal::Found(s.q, bits(chain, &s)))
+            .ok_or(OUT_OF_REACH);
     };
     // The solver's root branches tried for the one in the configuration asked for: one root
     // gives each configuration of a pose (itself on the families named by their roots).
     let on_branch = (0..NEAREST_BRANCH)
         .find_map(|root| solve(Branch::from_bits(root)).filter(|s| bits(chain, s) == wanted));
     match on_branch {
-        Some(found) => Ok((found.q, wanted)),
+        Some(found) => Ok(Goal::Found(found.q, wanted)),
         None if solve(None).is_some() => Err(IkRequestError::BranchBeyondLimits),
-        None => Err(out_of_reach),
+        None => Err(OUT_OF_REACH),
     }
 }
 

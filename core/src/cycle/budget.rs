@@ -11,6 +11,13 @@
 //! client's requests: it is handled at once and cancels the requests still waiting that would
 //! start motion (the planning ones and the streams `TW`, `jW`), which arrived before it: each
 //! is answered `ER42 Cmd XX cancelled by ST` rather than started after the stop.
+//!
+//! `KG` on a chain without a closed form searches globally: up to `ik.global_iterations`
+//! (at most 65,535) Newton steps to a goal out of reach, 10.5 M Cortex-M7 instructions at the
+//! default 2,000. That search runs in slices of [`SEARCH_SLICE`] steps, one a tick in the
+//! tick's planning slot, and the `KG` is answered when it ends; meanwhile the other planning
+//! requests wait, and so does everything from its client, as behind a waiting request. A stop
+//! cancels it as it cancels the requests waiting.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;
@@ -21,6 +28,11 @@ use crate::command::Class;
 
 /// Planning requests handled per tick at most.
 pub const PLANNING_PER_TICK: usize = 1;
+
+/// Newton steps of a `KG`'s global search per tick at most: four attempts, at most 0.53 M
+/// Cortex-M7 instructions (qemu-bench, "KG slice"), less than one planning request of a line
+/// may take.
+pub const SEARCH_SLICE: u16 = 120;
 
 /// What a request costs, as the budget sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

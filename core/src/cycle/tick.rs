@@ -1,6 +1,8 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
-use super::budget::{PLANNING_PER_TICK, Pending, Waiting, Work, cancel_motion, waits};
+use super::budget::{
+    PLANNING_PER_TICK, Pending, SEARCH_SLICE, Waiting, Work, cancel_motion, waits,
+};
 use super::counters::bump;
 use super::links::{Links, identity, link_of};
 use super::replay::{ReplayStore, Unkept};
@@ -53,6 +55,8 @@ pub struct Cycle<D, P, S = Unkept> {
     counters: CycleCounters,
     /// Requests the work budget left for a later tick.
     waiting: Waiting<P>,
+    /// The `KG` whose global search runs, one slice a tick: answered when it ends.
+    searching: Option<Pending<P>>,
     /// The signature checks every datagram passes first.
     gate: Gate,
     /// Where the replay reservation is kept.
@@ -75,6 +79,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             previous: None,
             counters: CycleCounters::default(),
             waiting: Waiting::new(),
+            searching: None,
             gate: Gate::new(Signing::default(), 0),
             store: Unkept,
             links: Links::new(),
@@ -105,6 +110,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             previous: self.previous,
             counters: self.counters,
             waiting: self.waiting,
+            searching: self.searching,
             gate: self.gate,
             store,
             links: self.links,
@@ -235,13 +241,16 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
         self.gate.report()
     }
 
-    /// Answers one request from `peer`. [`tick`](Self::tick) calls it for the requests its
-    /// link delivers; protocol tests call it between ticks.
+    /// Answers one request from `peer` between ticks (protocol tests), a `KG`'s global search
+    /// run to its end at once. [`tick`](Self::tick) answers the requests its link delivers.
     // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
     pub fn answer(&mut self, datagram: &[u8], peer: P) -> [u8; MESSAGE_LEN] {
-        self.answer_from(datagram, peer.address())
+        bump(&mut self.counters.requests);
+        let drives = &mut self.drives;
+        self.handler
+            .handle_at_once(datagram, peer.address(), drives)
     }
 
     /// Answers one request from the session's `client` (a signed link's identity, or an
@@ -255,8 +264,9 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
     fn handle_requests(&mut self, link: &mut impl Link<P>, now: f64) {
         let drops = self.counters.send_dropped.saturating_add(link.dropped());
         self.handler.set_send_drops(drops);
-        // The work budget (module `budget`): requests waiting from earlier ticks first.
-        let mut planned = 0;
+        // The work budget (module `budget`): requests waiting from earlier ticks first; a
+        // `KG` search takes the tick's planning slot.
+        let mut planned = usize::from(self.searching.is_some());
         let mut later = Waiting::new();
         for _ in 0..REQUESTS_PER_TICK {
             let request = match self.waiting.pop_front() {
@@ -297,7 +307,11 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             let work = Work::of(request.datagram.payload());
             let plans = matches!(work, Work::Plans(_));
             // A stop waits for nothing, not even its own client's requests: it cancels them.
-            let queued = work != Work::Stops && waits(&later, request.datagram.peer);
+            let peer = request.datagram.peer;
+            let behind_search = self
+                .searching
+                .is_some_and(|s| s.datagram.peer.address() == peer.address());
+            let queued = work != Work::Stops && (behind_search || waits(&later, peer));
             if queued || (plans && planned >= PLANNING_PER_TICK) {
                 // Room: at most one a pass.
                 let _ = later.push_back(request);
@@ -311,6 +325,18 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                 .link
                 .map_or(request.datagram.peer.address(), identity);
             let reply = self.answer_from(request.datagram.payload(), client);
+            if self.handler.search_started() {
+                self.searching = Some(request);
+            } else {
+                self.reply(link, &reply, &request);
+            }
+        }
+        if let Some(request) = self.searching
+            && let Some(reply) =
+                self.handler
+                    .continue_search(SEARCH_SLICE, request.datagram.payload(), &self.drives)
+        {
+            self.searching = None;
             self.reply(link, &reply, &request);
         }
         // What waited before stays ahead of what the link still holds. (Together never more
@@ -330,12 +356,21 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                 let _ = cancelled.push_back(request);
             });
         }
+        if let Some(request) = self.searching.take() {
+            self.handler.cancel_search();
+            self.cancel(link, &request);
+        }
         while let Some(request) = cancelled.pop_front() {
-            self.handler.count_refusal();
-            if let Some(command) = Work::of(request.datagram.payload()).cancelled_by_stop() {
-                let reply = Notice::Cancelled(command).text().to_bytes();
-                self.reply(link, &reply, &request);
-            }
+            self.cancel(link, &request);
+        }
+    }
+
+    /// Answers `request` as cancelled by a stop.
+    fn cancel(&mut self, link: &mut impl Link<P>, request: &Pending<P>) {
+        self.handler.count_refusal();
+        if let Some(command) = Work::of(request.datagram.payload()).cancelled_by_stop() {
+            let reply = Notice::Cancelled(command).text().to_bytes();
+            self.reply(link, &reply, request);
         }
     }
 

@@ -35,8 +35,9 @@ impl Chain {
         {
             return Ok(IkResult::Converged(solution));
         }
-        let result = self.solve_global_counted(target, seed, config, rng_seed, &mut || {})?;
-        Ok(self.finished(target, result, config.tolerance))
+        let mut search = self.global_search(target, seed, config, rng_seed)?;
+        // One slice of the whole budget: every attempt fits.
+        Ok(self.finish_search(&mut search, config.global_iterations, &mut quiet))
     }
 
     /// `result`, or if its best pose is within [`CLOSE`] but not converged, that pose taken
@@ -67,67 +68,97 @@ impl Chain {
         }
     }
 
-    /// [`solve_global`](Self::solve_global), calling `on_step` once per Newton step taken, so a
-    /// test can count the budget spent independently of the reported `iterations`.
-    fn solve_global_counted(
+    /// A global search from `seed` to `target` (no closed form tried), to be run in slices by
+    /// [`continue_search`](Self::continue_search): the same attempts, in the same order, with
+    /// the same answer as [`solve_global`](Self::solve_global) on a chain without one.
+    pub fn global_search(
         &self,
         target: &Frame,
         seed: &[f64],
         config: &IkConfig,
         rng_seed: u64,
-        on_step: &mut impl FnMut(),
-    ) -> Result<IkResult, IkError> {
+    ) -> Result<GlobalSearch, IkError> {
         let mut start = [0.0; MAX_JOINTS];
         self.prepare(target, seed, &mut start)?;
-        let mut q = start;
-        let mut rng = SplitMix64::new(rng_seed);
-        let mut budget = config.global_iterations;
-        let mut best: Option<IkSolution> = None;
-        let mut used = 0u32;
+        Ok(GlobalSearch {
+            target: *target,
+            tolerance: config.tolerance,
+            q: start,
+            rng: SplitMix64::new(rng_seed),
+            budget: config.global_iterations,
+            best: None,
+            used: 0,
+        })
+    }
+
+    /// Runs `search` on for at most `slice` Newton steps (at least [`ATTEMPT_ITERATIONS`]
+    /// make progress: a slice ends between attempts); its answer once it has converged or
+    /// spent its budget, `None` while it goes on.
+    pub fn continue_search(&self, search: &mut GlobalSearch, slice: u16) -> Option<IkResult> {
+        self.continue_search_counted(search, slice, &mut quiet)
+    }
+
+    /// [`continue_search`](Self::continue_search) until the answer, in slices of `slice`.
+    fn finish_search(
+        &self,
+        search: &mut GlobalSearch,
+        slice: u16,
+        on_step: &mut impl FnMut(),
+    ) -> IkResult {
+        // Every slice spends at least one step of the budget, so this bound is never reached.
+        for _ in 0..=search.budget {
+            if let Some(answer) = self.continue_search_counted(search, slice, on_step) {
+                return answer;
+            }
+        }
+        IkResult::NotConverged(search.best_or_seed(self, on_step))
+    }
+
+    /// [`continue_search`](Self::continue_search), calling `on_step` once per Newton step
+    /// taken, so a test can count the work independently of the reported `iterations`.
+    fn continue_search_counted(
+        &self,
+        search: &mut GlobalSearch,
+        slice: u16,
+        on_step: &mut impl FnMut(),
+    ) -> Option<IkResult> {
+        let passes = slice.max(ATTEMPT_ITERATIONS);
+        let mut left = passes;
         let mut last = LastEvaluation::default();
-        // Each attempt spends at least one iteration, so this bound is never the binding one.
-        for _ in 0..config.global_iterations {
-            let limit = budget.min(ATTEMPT_ITERATIONS);
-            let descent = self.descend(
-                target,
-                q,
-                limit,
-                config.tolerance,
-                (Bounds::Wrapping, &mut last),
-                on_step,
-            );
-            used += descent.steps;
+        // Each attempt spends at least one step of `left`: with one pass more than it has, the
+        // loop always ends at a `return` or a `break`.
+        for _ in 0..=passes {
+            let limit = search.budget.min(ATTEMPT_ITERATIONS);
+            if limit == 0 {
+                break;
+            }
+            if limit > left {
+                return None;
+            }
+            let target = &search.target;
+            let bounds = (Bounds::Wrapping, &mut last);
+            let descent = self.descend(target, search.q, limit, search.tolerance, bounds, on_step);
+            search.used += descent.steps;
             // The steps actually taken (at most `limit`), not the index of the best pose: the
             // budget bounds the work. An attempt takes at least one step unless it converged.
             let spent = u16::try_from(descent.steps).unwrap_or(u16::MAX).max(1);
-            budget = budget.saturating_sub(spent);
+            search.budget = search.budget.saturating_sub(spent);
+            left = left.saturating_sub(spent);
             let mut found = descent.best;
-            found.iterations = used;
+            found.iterations = search.used;
             if descent.converged {
-                return Ok(IkResult::Converged(found));
+                return Some(IkResult::Converged(found));
             }
-            if best.is_none_or(|b| score(&found) < score(&b)) {
-                best = Some(found);
+            if search.best.is_none_or(|b| score(&found) < score(&b)) {
+                search.best = Some(found);
             }
-            if budget == 0 {
+            if search.budget == 0 {
                 break;
             }
-            q = self.random_configuration(&mut rng);
+            search.q = self.random_configuration(&mut search.rng);
         }
-        // Only a zero budget leaves no attempt: then the answer is the (clamped) seed itself.
-        let mut best = best.unwrap_or_else(|| {
-            self.descend(
-                target,
-                start,
-                0,
-                config.tolerance,
-                (Bounds::Wrapping, &mut last),
-                on_step,
-            )
-            .best
-        });
-        best.iterations = used;
-        Ok(IkResult::NotConverged(best))
+        let answer = IkResult::NotConverged(search.best_or_seed(self, on_step));
+        Some(self.finished(&search.target, answer, search.tolerance))
     }
 
     /// A configuration drawn uniformly within the limits (revolute ranges capped at ±π about
@@ -150,6 +181,39 @@ impl Chain {
         q
     }
 }
+
+/// A global search between slices ([`Chain::global_search`]): its target, the attempt to
+/// make next, the budget left and the best pose so far.
+#[derive(Clone, Debug)]
+pub struct GlobalSearch {
+    target: Frame,
+    tolerance: f64,
+    /// The start of the next attempt.
+    q: [f64; MAX_JOINTS],
+    rng: SplitMix64,
+    /// Newton steps left.
+    budget: u16,
+    best: Option<IkSolution>,
+    /// Newton steps taken.
+    used: u32,
+}
+
+impl GlobalSearch {
+    /// The best pose found, or with no attempt made (a zero budget) the clamped seed.
+    fn best_or_seed(&self, chain: &Chain, on_step: &mut impl FnMut()) -> IkSolution {
+        let mut best = self.best.unwrap_or_else(|| {
+            let bounds = (Bounds::Wrapping, &mut LastEvaluation::default());
+            let seed = chain.descend(&self.target, self.q, 0, self.tolerance, bounds, on_step);
+            seed.best
+        });
+        best.iterations = self.used;
+        best
+    }
+}
+
+/// The step hook of every search outside tests: one function, so that the search and its
+/// descents are compiled once (a closure of each caller's would be a copy of each).
+fn quiet() {}
 
 /// The seed's mixed metric: metres plus radians.
 fn score(s: &IkSolution) -> f64 {
@@ -185,15 +249,10 @@ mod tests {
                 let target =
                     Frame::from_parts(Vector3::new(-0.5, 4.0, 0.7).into(), Rotation3::new(turn));
                 let mut steps = 0u32;
-                let result = chain
-                    .solve_global_counted(
-                        &target,
-                        &chain.mid_range(),
-                        &ik,
-                        u64::from(k),
-                        &mut || steps += 1,
-                    )
+                let mut search = chain
+                    .global_search(&target, &chain.mid_range(), &ik, u64::from(k))
                     .unwrap();
+                let result = chain.finish_search(&mut search, budget, &mut || steps += 1);
                 assert!(!result.is_converged());
                 assert_eq!(steps, u32::from(budget), "budget {budget}, seed {k}");
                 assert_eq!(result.solution().iterations, steps);
@@ -210,11 +269,55 @@ mod tests {
             let q = chain.random_joints(&mut rng);
             let target = chain.forward(&q).unwrap();
             let mut steps = 0u32;
-            let result = chain
-                .solve_global_counted(&target, &chain.mid_range(), &ik, k, &mut || steps += 1)
+            let mut search = chain
+                .global_search(&target, &chain.mid_range(), &ik, k)
                 .unwrap();
+            let result = chain.finish_search(&mut search, ik.global_iterations, &mut || steps += 1);
             assert_eq!(result.solution().iterations, steps);
             assert!(steps <= u32::from(ik.global_iterations));
         }
+    }
+
+    /// In slices, the search takes at most a slice's steps at a time (at least one attempt's)
+    /// and gives exactly the answer of the whole search: reachable targets and unreachable.
+    #[test]
+    fn a_search_in_slices_is_bounded_per_slice_and_gives_the_same_answer() {
+        let (chain, ik) = ranger();
+        let ik = IkConfig {
+            global_iterations: 400,
+            ..ik
+        };
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut reached = 0;
+        for k in 0..40u64 {
+            let target = if k % 2 == 0 {
+                chain.forward(&chain.random_joints(&mut rng)).unwrap()
+            } else {
+                let out = Vector3::new(-0.5, 4.0, 0.1 * k as f64);
+                Frame::from_parts(out.into(), Rotation3::identity())
+            };
+            // The whole search in one slice, as `solve_global` runs it without a closed form.
+            let mut search = chain
+                .global_search(&target, &chain.mid_range(), &ik, k)
+                .unwrap();
+            let whole = chain.finish_search(&mut search, ik.global_iterations, &mut || {});
+            for slice in [1, 30, 45, 120] {
+                let mut search = chain
+                    .global_search(&target, &chain.mid_range(), &ik, k)
+                    .unwrap();
+                let mut answer = None;
+                let mut slices = 0;
+                while answer.is_none() {
+                    let mut steps = 0u16;
+                    answer = chain.continue_search_counted(&mut search, slice, &mut || steps += 1);
+                    assert!(steps <= slice.max(ATTEMPT_ITERATIONS), "{steps} > {slice}");
+                    slices += 1;
+                    assert!(slices <= 400, "no end");
+                }
+                assert_eq!(answer, Some(whole), "target {k}, slice {slice}");
+                reached += usize::from(whole.is_converged());
+            }
+        }
+        assert!(reached > 40, "{reached} reached");
     }
 }

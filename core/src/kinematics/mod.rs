@@ -35,6 +35,7 @@ pub use chain::{Chain, KinematicsError};
 pub use closed_form::{Branch, BranchSolution, CHECK, MAX_SOLUTIONS, SeedAngles, Solutions};
 pub use evaluation::LastEvaluation;
 pub use family::{Family, FamilyFit};
+pub use global::GlobalSearch;
 pub use ik::{IkError, IkResult, IkSolution, TRACKING_JUMP, diverges};
 pub use jacobian::Jacobian;
 pub use sweep::Levers;

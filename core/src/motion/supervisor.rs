@@ -22,21 +22,13 @@ pub use armgate_protocol::client::StopCause;
 
 /// True if a stop of `cause` latches: afterwards the arm stays at rest until its holder starts
 /// a motion on purpose (a move, or a zero twist or zero joint rates that re-arm a stream), so
-/// that a stream still being sent cannot undo it a period later (docs/safety.md). The stops
-/// that latch are the ones that come from outside the holder's own stream: `ST`/`jR` from
-/// anyone, `OF`, the workspace, IK divergence, the client watchdog, a following error. A stream's own timeout is
-/// the protocol's way to end a stream (its client stopped sending), a mode change is the
-/// holder's own request, and a joint-limit hold is no stop: they do not latch.
+/// that a stream still being sent cannot undo it a period later (docs/safety.md): `ST`/`jR`
+/// from anyone, `OF`, the workspace, IK divergence, the client watchdog, a following error,
+/// and a stream's timeout (a network stall must not let delayed jog datagrams move the arm
+/// again; a stream ended on purpose with a zero command ends without one). A mode change is
+/// the holder's own request, and a joint-limit hold is no stop: they do not latch.
 pub fn latches(cause: StopCause) -> bool {
-    match cause {
-        StopCause::Stop
-        | StopCause::PowerOff
-        | StopCause::Workspace
-        | StopCause::IkDivergence
-        | StopCause::ClientSilent
-        | StopCause::FollowingError => true,
-        StopCause::ModeChange | StopCause::StreamTimeout | StopCause::JointLimit => false,
-    }
+    !matches!(cause, StopCause::ModeChange | StopCause::JointLimit)
 }
 
 /// How a stop in progress brings the arm to rest.

@@ -7,6 +7,7 @@
 )]
 
 pub mod arm_rig;
+pub mod clients;
 pub mod experiments;
 
 use std::path::PathBuf;

@@ -1,14 +1,41 @@
 //! The inverse-kinematics requests: `KG` (move the joints to a pose, on a chosen branch),
 //! `KR` (choose the redundancy values of the next `KG`) and `KS` (one IK solution, nothing
 //! moves).
+//!
+//! On a chain without a closed form `KG`'s goal is found by a global search that may take
+//! tens of thousands of Newton steps: it runs in slices, one a tick ([`GoalSearch`]), and the
+//! `KG` is answered when it ends (by the cycle; direct callers of the handler finish it at
+//! once).
 
+use armgate_protocol::client::branch::NEAREST_BRANCH;
 use armgate_protocol::client::redundancy::Redundancy;
-use armgate_protocol::client::{Notice, Reply, Request, VALUES};
+use armgate_protocol::client::{Command, MESSAGE_LEN, Notice, Rejection, Reply, Request, VALUES};
+use core::net::SocketAddr;
 
 use super::CommandHandler;
 use super::replies::{ik_notice, no_measurement, non_negative, refusal_notice, values_reply};
 use crate::command::drives::Drives;
+use crate::command::ik::{Goal, OUT_OF_REACH};
 use crate::command::{ik, redundancy};
+use crate::kinematics::{GlobalSearch, IkResult, Joints};
+
+/// A `KG` whose global search runs in slices across ticks.
+#[derive(Clone, Debug)]
+pub(super) struct GoalSearch {
+    search: GlobalSearch,
+    /// The move's duration (s).
+    duration: f64,
+    client: SocketAddr,
+    /// The request that started it is still being answered (its reply is not the answer).
+    fresh: bool,
+}
+
+impl GoalSearch {
+    /// The request that started it is still being answered.
+    pub(super) fn is_fresh(&self) -> bool {
+        self.fresh
+    }
+}
 
 impl CommandHandler {
     /// `KG`: the joint move to the IK solution of a pose on a branch (with the client's `KR`
@@ -29,10 +56,36 @@ impl CommandHandler {
         let ik = self.controller.ik_config();
         let (reference, chosen) =
             ik::reference(chain, present, req.index, choice).map_err(|e| ik_notice(cmd, e))?;
-        let (goal, branch) = ik::goal(chain, ik, (&reference, chosen), &v, req.index)
-            .map_err(|e| ik_notice(cmd, e))?;
+        let goal =
+            ik::goal(chain, (&reference, chosen), &v, req.index).map_err(|e| ik_notice(cmd, e))?;
+        match goal {
+            Goal::Found(goal, branch) => self.move_to_goal(cmd, &goal, duration, branch),
+            Goal::Search(target) => {
+                let search = chain
+                    .global_search(&target, &reference, ik, 0)
+                    .map_err(|_| ik_notice(cmd, OUT_OF_REACH))?;
+                self.search = Some(GoalSearch {
+                    search,
+                    duration,
+                    client: self.client,
+                    fresh: true,
+                });
+                // Neither sent nor recorded: the answer comes when the search ends.
+                Ok(values_reply(cmd, &[0.0; VALUES], NEAREST_BRANCH))
+            }
+        }
+    }
+
+    /// The joint move of a `KG` to `goal` (on `branch`), and its reply.
+    fn move_to_goal(
+        &mut self,
+        cmd: Command,
+        goal: &Joints,
+        duration: f64,
+        branch: u8,
+    ) -> Result<Reply, Notice> {
         self.controller
-            .move_joints(&goal, duration)
+            .move_joints(goal, duration)
             .map_err(|r| refusal_notice(cmd, r))?;
         let mut values = [0.0; VALUES];
         for (o, q) in values.iter_mut().zip(goal.iter()) {
@@ -40,6 +93,56 @@ impl CommandHandler {
         }
         values[VALUES - 1] = duration;
         Ok(values_reply(cmd, &values, branch))
+    }
+
+    /// True once, just after a `KG` started a global search: its answer comes from
+    /// [`continue_search`](Self::continue_search), not from the request's own reply.
+    pub fn search_started(&mut self) -> bool {
+        self.search
+            .as_mut()
+            .is_some_and(|s| core::mem::replace(&mut s.fresh, false))
+    }
+
+    /// Runs the `KG` search on for at most `slice` Newton steps; once it has ended, starts the
+    /// move (if the arm may still move for its client) and returns the answer to `datagram`,
+    /// the `KG` that started it.
+    pub fn continue_search(
+        &mut self,
+        slice: u16,
+        datagram: &[u8],
+        drives: &(impl Drives + ?Sized),
+    ) -> Option<[u8; MESSAGE_LEN]> {
+        let pending = self.search.as_mut()?;
+        let result = self
+            .controller
+            .chain()
+            .continue_search(&mut pending.search, slice)?;
+        let GoalSearch {
+            duration, client, ..
+        } = self.search.take()?;
+        let cmd = Command::IkGoal;
+        self.client = client;
+        let answer = match result {
+            // Another client took control meanwhile (the arm at rest): not its goal to run.
+            _ if self.session.holder() != Some(client) => {
+                Err(Notice::Rejected(cmd, Rejection::HolderChanged))
+            }
+            IkResult::Converged(s) => self
+                .ready_to_move(cmd, drives)
+                .and_then(|()| self.move_to_goal(cmd, &s.q, duration, NEAREST_BRANCH)),
+            IkResult::NotConverged(_) => Err(ik_notice(cmd, OUT_OF_REACH)),
+        };
+        let reply = answer
+            .map(|r| r.to_bytes())
+            .unwrap_or_else(|notice| self.refuse(notice));
+        self.session
+            .answered(client, cmd, datagram, &reply, self.now);
+        Some(reply)
+    }
+
+    /// Drops the `KG` search (a stop cancelled it).
+    pub fn cancel_search(&mut self) {
+        self.search = None;
     }
 
     /// `KR`: the values of the redundancy parameters for this client's next `KG` (and its

@@ -41,11 +41,7 @@ impl Controller {
         if !twist.iter().all(|v| v.is_finite()) {
             return Err(Refusal::InvalidNumber);
         }
-        let zero = twist.iter().all(|v| *v == 0.0);
-        self.ready_for_stream(Mode::Cartesian, zero)?;
-        self.supervisor.clear_cause();
-        self.stream.command(StreamCommand::Twist(twist, frame));
-        Ok(())
+        self.start_stream(Mode::Cartesian, StreamCommand::Twist(twist, frame))
     }
 
     /// Streams joint rates (rad/s, or m/s for prismatic joints), one per joint, valid for
@@ -56,10 +52,14 @@ impl Controller {
             KinematicsError::WrongJointCount => Refusal::WrongJointCount,
             KinematicsError::NonFiniteJoints => Refusal::InvalidNumber,
         })?;
-        let zero = rates.iter().all(|v| *v == 0.0);
-        self.ready_for_stream(Mode::Joint, zero)?;
+        self.start_stream(Mode::Joint, StreamCommand::JointRates(rates))
+    }
+
+    /// Hands a checked command to the stream if it may run in `mode` now.
+    fn start_stream(&mut self, mode: Mode, command: StreamCommand) -> Result<(), Refusal> {
+        self.ready_for_stream(mode, command.is_zero())?;
         self.supervisor.clear_cause();
-        self.stream.command(StreamCommand::JointRates(rates));
+        self.stream.command(command);
         Ok(())
     }
 

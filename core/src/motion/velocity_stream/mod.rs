@@ -64,6 +64,16 @@ pub enum StreamCommand {
     JointRates(Joints),
 }
 
+impl StreamCommand {
+    /// True if it asks for rest: every component zero (it re-arms a latched stream).
+    pub fn is_zero(&self) -> bool {
+        match self {
+            Self::Twist(twist, _) => twist.iter().all(|v| *v == 0.0),
+            Self::JointRates(rates) => rates.iter().all(|v| *v == 0.0),
+        }
+    }
+}
+
 /// What one streaming tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StreamStep {
@@ -160,9 +170,11 @@ impl VelocityStream {
         self.acceleration = *acceleration;
     }
 
-    /// True if the command is too old to hold on the next step: the client has gone quiet.
+    /// True if the command is too old to hold on the next step: the client has gone quiet
+    /// while asking for motion. A zero command running out is the stream's end on purpose:
+    /// the step drops it and the arm ramps to rest as the zero asked.
     pub fn expires(&self) -> bool {
-        self.command.is_some() && self.age >= TIMEOUT_PERIODS
+        self.age >= TIMEOUT_PERIODS && self.command.is_some_and(|c| !c.is_zero())
     }
 
     /// True while a command holds or the arm has not yet ramped to rest.
