@@ -80,8 +80,12 @@ pub(super) struct Reach<'a> {
     pub iterations_left: u32,
     /// The Cartesian speed limits (x, y, z, rx, ry, rz): how fast the line is planned.
     pub speed: &'a [f64; 6],
+    /// The Cartesian acceleration limits (x, y, z, rx, ry, rz): how fast it speeds up.
+    pub acceleration: &'a [f64; 6],
     /// The joints' rate limits.
     pub max_rate: &'a Joints,
+    /// The joints' acceleration limits.
+    pub max_acceleration: &'a Joints,
 }
 
 /// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
@@ -139,7 +143,11 @@ impl Reach<'_> {
             .map(|(d, v)| libm::fabs(*d) / v)
             .fold(0.0, f64::max);
         let duration = cruise.max(min_duration);
-        let mut needs = 0.0_f64;
+        let shape = Shape::of(&delta, self.speed, self.acceleration);
+        let (mut needs, mut accelerates) = (0.0_f64, 0.0_f64);
+        // The joints' rates of change along the line (per fraction of the way) at the last
+        // step, none before the first.
+        let mut slope: Option<Joints> = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
         let (mut done, mut step) = (0.0, full_step);
         // The last point reached and the step being tried: the two swap roles, never copied
@@ -195,13 +203,20 @@ impl Reach<'_> {
                 None => {}
             }
             needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
+            let mut rates = tried.q;
+            let h = next - done;
+            rates.iter_mut().zip(here.q.iter()).for_each(|(r, a)| *r = (*r - a) / h);
+            let bends = slope.as_ref().unwrap_or(&rates);
+            accelerates = accelerates.max(shape.needs(&rates, bends, h, self.max_acceleration));
+            slope = Some(rates);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
         let checked = Checked {
             q,
-            duration: planned_duration(min_duration, cruise, needs),
+            duration: planned_duration(min_duration, cruise, needs)
+                .max(math::sqrt(accelerates / RATE_SHARE)),
         };
         too_fast.map_or(Ok(checked), Err)
     }
@@ -293,6 +308,71 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
         .zip(max_rate.iter())
         .position(|(m, rate)| m > slowdown * rate * time)
         .map(|joint| Fault::Rate(number(joint)))
+}
+
+/// How fast a line's profile moves along the way (fractions of it per second, and per second
+/// squared) when stretched to last `D` s: no faster than `speed / D`, and no more sharply
+/// than `acceleration / D²` (a trapezoid stretched in time). The translation's and the
+/// rotation's profiles each, whichever is larger.
+#[derive(Clone, Copy)]
+struct Shape {
+    speed: f64,
+    acceleration: f64,
+}
+
+impl Shape {
+    /// The shape of the generator's trapezoids for a line by `delta` (x, y, z, rx, ry, rz)
+    /// within the Cartesian `speed` and `acceleration` limits (as [`StraightLine`]: each
+    /// component group's path limits are those of its most binding axis).
+    ///
+    /// [`StraightLine`]: super::straight_line::StraightLine
+    fn of(delta: &[f64; 6], speed: &[f64; 6], acceleration: &[f64; 6]) -> Self {
+        let mut shape = Self {
+            speed: 0.0,
+            acceleration: 0.0,
+        };
+        for group in [0..3, 3..6] {
+            let (mut v, mut a) = (f64::INFINITY, f64::INFINITY);
+            for k in group {
+                let (d, vk, ak) = (delta.get(k), speed.get(k), acceleration.get(k));
+                if let (Some(&d), Some(vk), Some(ak)) = (d, vk, ak)
+                    && d != 0.0
+                {
+                    (v, a) = (v.min(vk / libm::fabs(d)), a.min(ak / libm::fabs(d)));
+                }
+            }
+            // Its minimum time: a triangle if it cannot reach its speed limit, else a
+            // trapezoid; then its peak speed and its acceleration scaled to last 1 s.
+            let (speed, acceleration) = if !a.is_finite() {
+                (0.0, 0.0)
+            } else if v * v >= a {
+                (2.0, 4.0)
+            } else {
+                let time = 1.0 / v + v / a;
+                (v * time, a * time * time)
+            };
+            shape.speed = shape.speed.max(speed);
+            shape.acceleration = shape.acceleration.max(acceleration);
+        }
+        shape
+    }
+
+    /// The least `D²` (s²) for which a step of `h` of the way, where the joints change at
+    /// `rates` per way and did at `before` the step before, needs no joint's acceleration
+    /// beyond its `max_acceleration`: `|q'| · a / D² + |q''| · v² / D²` (a NaN is infinite).
+    fn needs(&self, rates: &Joints, before: &Joints, h: f64, max_acceleration: &Joints) -> f64 {
+        let v2 = self.speed * self.speed;
+        rates
+            .iter()
+            .zip(before.iter())
+            .zip(max_acceleration.iter())
+            .map(|((r, b), a)| {
+                let bend = libm::fabs(r - b) / h;
+                let need = (libm::fabs(*r) * self.acceleration + bend * v2) / a;
+                if need.is_nan() { f64::INFINITY } else { need }
+            })
+            .fold(0.0, f64::max)
+    }
 }
 
 /// The share of its `max_rate` a joint may need at a checked step at the line's planned peak
