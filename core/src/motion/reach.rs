@@ -149,7 +149,7 @@ impl Reach<'_> {
         // step, none before the first.
         let mut slope: Option<Joints> = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
-        let (mut done, mut step) = (0.0, full_step);
+        let (mut done, mut step) = (0.0, MIN_JUMP_STEP);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
         let reached = Reached {
