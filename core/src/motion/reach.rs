@@ -205,7 +205,10 @@ impl Reach<'_> {
             needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
             let mut rates = tried.q;
             let h = next - done;
-            rates.iter_mut().zip(here.q.iter()).for_each(|(r, a)| *r = (*r - a) / h);
+            rates
+                .iter_mut()
+                .zip(here.q.iter())
+                .for_each(|(r, a)| *r = (*r - a) / h);
             let bends = slope.as_ref().unwrap_or(&rates);
             accelerates = accelerates.max(shape.needs(&rates, bends, h, self.max_acceleration));
             slope = Some(rates);

@@ -84,19 +84,28 @@ impl Controller {
         let eased = self.within_cartesian_limits(t0, &before, braked, from);
         // The joints first: where they cannot follow the eased step (near a singularity the
         // joints' speed along the path is not the tool's), the brake's own.
-        let mut tracked = None;
+        // A step the joints reach only beyond an acceleration limit is still taken if none
+        // is within them, as the tick takes one: the limiter eases it and the tool leaves the
+        // path by a little, rather than the stop leaving it for joint space.
+        let (mut tracked, mut abrupt) = (None, None);
         for scale in [eased, braked] {
             let t_next = t0 + scale * self.period;
             let sample = self.cartesian_generator.sample(t_next);
-            if let Tracking::Reached(q) = self.track(&sample.0, q_cmd) {
-                tracked = Some((scale, t_next, sample, q));
-                break;
+            match self.track(&sample.0, q_cmd) {
+                Tracking::Reached(q) => {
+                    tracked = Some((scale, t_next, sample, q));
+                    break;
+                }
+                Tracking::Abrupt(q) => {
+                    abrupt.get_or_insert((scale, t_next, sample, q));
+                }
+                Tracking::TooFast | Tracking::Unreachable => {}
             }
             if eased <= braked {
                 break;
             }
         }
-        let (scale, t_next, sample, q) = tracked?;
+        let (scale, t_next, sample, q) = tracked.or(abrupt)?;
         let (setpoint, finished) = sample;
         if scale > braked {
             brake.ease_to(scale, from);
