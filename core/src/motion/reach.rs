@@ -149,6 +149,9 @@ impl Reach<'_> {
         // step, none before the first.
         let mut slope: Option<Joints> = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
+        // The first step is the shortest: the tick starts from rest, in short steps, and from
+        // an exact singularity (hybrid's home) a sixteenth of the way hid a joint the tick
+        // cannot move fast enough there (issue 33).
         let (mut done, mut step) = (0.0, MIN_JUMP_STEP);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
@@ -212,8 +215,15 @@ impl Reach<'_> {
             let bends = slope.as_ref().unwrap_or(&rates);
             accelerates = accelerates.max(shape.needs(&rates, bends, h, self.max_acceleration));
             slope = Some(rates);
+            // After the first short step, on at full steps (one solve more than the
+            // sixteenths; halving down from them cost ranger-mk1's BG tick 80,000
+            // instructions).
+            step = if done == 0.0 {
+                full_step
+            } else {
+                (step * 2.0).min(full_step)
+            };
             (done, last) = (next, 1 - last);
-            step = (step * 2.0).min(full_step);
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
         let checked = Checked {
