@@ -149,10 +149,11 @@ impl Reach<'_> {
         // step, none before the first.
         let mut slope: Option<Joints> = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
-        // The first step is the shortest: the tick starts from rest, in short steps, and from
-        // an exact singularity (hybrid's home) a sixteenth of the way hid a joint the tick
-        // cannot move fast enough there (issue 33).
-        let (mut done, mut step) = (0.0, MIN_JUMP_STEP);
+        // First a probe of the shortest step: the tick starts from rest, in short steps, and
+        // from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
+        // tick cannot move fast enough there (issue 33). One solve more per line; following
+        // the line up from the probe's step cost ranger-mk1's BG tick 80,000 instructions.
+        let (mut done, mut step, mut probing) = (0.0, MIN_JUMP_STEP, true);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
         let reached = Reached {
@@ -206,6 +207,11 @@ impl Reach<'_> {
                 None => {}
             }
             needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
+            if probing {
+                // The probe passed: the line is followed from its start in sixteenths.
+                (probing, step) = (false, full_step);
+                continue;
+            }
             let mut rates = tried.q;
             let h = next - done;
             rates
@@ -215,15 +221,8 @@ impl Reach<'_> {
             let bends = slope.as_ref().unwrap_or(&rates);
             accelerates = accelerates.max(shape.needs(&rates, bends, h, self.max_acceleration));
             slope = Some(rates);
-            // After the first short step, on at full steps (one solve more than the
-            // sixteenths; halving down from them cost ranger-mk1's BG tick 80,000
-            // instructions).
-            step = if done == 0.0 {
-                full_step
-            } else {
-                (step * 2.0).min(full_step)
-            };
             (done, last) = (next, 1 - last);
+            step = (step * 2.0).min(full_step);
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
         let checked = Checked {
