@@ -35,6 +35,7 @@ use armgate_protocol::client::{JointBound, PathPoint};
 
 use super::Refusal;
 use super::workspace::Workspace;
+use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints, SeedAngles};
 use crate::math::{self, Frame, Rotation3};
@@ -147,7 +148,7 @@ impl Reach<'_> {
         let (mut needs, mut accelerates) = (0.0_f64, 0.0_f64);
         // The joints' rates of change along the line (per fraction of the way) at the last
         // step, none before the first.
-        let mut slope: Option<Joints> = None;
+        let mut slope = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
         // First a probe of the shortest step: the tick starts from rest, in short steps, and
         // from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
@@ -212,15 +213,8 @@ impl Reach<'_> {
                 (probing, step) = (false, full_step);
                 continue;
             }
-            let mut rates = tried.q;
-            let h = next - done;
-            rates
-                .iter_mut()
-                .zip(here.q.iter())
-                .for_each(|(r, a)| *r = (*r - a) / h);
-            let bends = slope.as_ref().unwrap_or(&rates);
-            accelerates = accelerates.max(shape.needs(&rates, bends, h, self.max_acceleration));
-            slope = Some(rates);
+            let step_needs = shape.needs(&mut slope, (&here.q, &tried.q), next - done, self);
+            accelerates = accelerates.max(step_needs);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
         }
@@ -369,21 +363,38 @@ impl Shape {
         shape
     }
 
-    /// The least `D²` (s²) for which a step of `h` of the way, where the joints change at
-    /// `rates` per way and did at `before` the step before, needs no joint's acceleration
-    /// beyond its `max_acceleration`: `|q'| · a / D² + |q''| · v² / D²` (a NaN is infinite).
-    fn needs(&self, rates: &Joints, before: &Joints, h: f64, max_acceleration: &Joints) -> f64 {
+    /// The least `D²` (s²) for which the step of `h` of the way from `q` to `next` needs no
+    /// joint's acceleration beyond its `max_acceleration`: `(|q'| · a + |q''| · v²) / D²`, with
+    /// `q'` the step's rate of change along the way and `q''` its change from the step before
+    /// (`slope`, none at the first step; left there for the next). A NaN is infinite.
+    fn needs(
+        &self,
+        slope: &mut Option<[f64; MAX_JOINTS]>,
+        (q, next): (&Joints, &Joints),
+        h: f64,
+        reach: &Reach<'_>,
+    ) -> f64 {
         let v2 = self.speed * self.speed;
-        rates
-            .iter()
-            .zip(before.iter())
-            .zip(max_acceleration.iter())
-            .map(|((r, b), a)| {
-                let bend = libm::fabs(r - b) / h;
-                let need = (libm::fabs(*r) * self.acceleration + bend * v2) / a;
-                if need.is_nan() { f64::INFINITY } else { need }
-            })
-            .fold(0.0, f64::max)
+        let first = slope.is_none();
+        let before = slope.get_or_insert([0.0; MAX_JOINTS]);
+        let mut most = 0.0_f64;
+        let joints = q.iter().zip(next.iter()).zip(reach.max_acceleration.iter());
+        for (((a, b), limit), before) in joints.zip(before.iter_mut()) {
+            let rate = (b - a) / h;
+            let bend = if first {
+                0.0
+            } else {
+                libm::fabs(rate - *before) / h
+            };
+            *before = rate;
+            let need = (libm::fabs(rate) * self.acceleration + bend * v2) / limit;
+            most = if need.is_nan() {
+                f64::INFINITY
+            } else {
+                most.max(need)
+            };
+        }
+        most
     }
 }
 
