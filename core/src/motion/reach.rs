@@ -218,7 +218,12 @@ impl Reach<'_> {
                 (probing, step) = (false, full_step);
                 continue;
             }
-            let step_needs = shape.needs(&mut slope, (&here.q, &tried.q), next - done, self);
+            let step_needs = shape.needs(
+                &mut slope,
+                (&here.q, &tried.q),
+                next - done,
+                self.max_acceleration,
+            );
             accelerates = accelerates.max(step_needs);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
@@ -377,13 +382,13 @@ impl Shape {
         slope: &mut Option<[f64; MAX_JOINTS]>,
         (q, next): (&Joints, &Joints),
         h: f64,
-        reach: &Reach<'_>,
+        max_acceleration: &Joints,
     ) -> f64 {
         let v2 = self.speed * self.speed;
         let first = slope.is_none();
         let before = slope.get_or_insert([0.0; MAX_JOINTS]);
         let mut most = 0.0_f64;
-        let joints = q.iter().zip(next.iter()).zip(reach.max_acceleration.iter());
+        let joints = q.iter().zip(next.iter()).zip(max_acceleration.iter());
         for (((a, b), limit), before) in joints.zip(before.iter_mut()) {
             let rate = (b - a) / h;
             let bend = if first {
@@ -501,6 +506,33 @@ mod tests {
         // A client's 50 s is slow enough already (peak 2/50 of the way per second).
         assert_eq!(planned_duration(50.0, 10.0, 18.0), 50.0);
         assert_eq!(planned_duration(0.0, 0.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn a_line_s_shape_is_its_stretched_trapezoid() {
+        let (v, a) = (
+            [0.1, 0.1, 0.1, 0.5, 0.5, 0.5],
+            [0.1, 1.0, 1.0, 1.0, 1.0, 1.0],
+        );
+        // 0.1 m along x: a triangle (1 way/s² never reaches 1 way/s), 2 s at its fastest.
+        let shape = Shape::of(&[0.1, 0.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
+        assert_eq!((shape.speed, shape.acceleration), (2.0, 4.0));
+        // 1 m along y: 0.1 way/s after 0.1 s, 10.1 s in all; no rotation.
+        let shape = Shape::of(&[0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
+        assert!((shape.speed - 1.01).abs() < 1e-12);
+        assert!((shape.acceleration - 102.01).abs() < 1e-9);
+        // A joint changing at 0.5 rad per way over a tenth of it, then at 0.6 (a change of 1
+        // per way²): at 1 rad/s² its steps need 0.5 · 102.01 and 0.6 · 102.01 + 1 · 1.01² s².
+        let joints = |v: f64| Joints::from_slice(&[v]).unwrap();
+        let limit = joints(1.0);
+        let mut slope = None;
+        let first = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, &limit);
+        assert!((first - 0.5 * 102.01).abs() < 1e-9);
+        let next = shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, &limit);
+        assert!(
+            (next - (0.6 * 102.01 + 1.0 * 1.01 * 1.01)).abs() < 1e-9,
+            "{next}"
+        );
     }
 
     #[test]
