@@ -155,11 +155,14 @@ impl Reach<'_> {
         // step, none before the first.
         let mut slope = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
-        // First a probe of the shortest step: the tick starts from rest, in short steps, and
-        // from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
-        // tick cannot move fast enough there (issue 33). One solve more per line; following
-        // the line up from the probe's step cost ranger-mk1's BG tick 80,000 instructions.
-        let (mut done, mut step, mut probing) = (0.0, MIN_JUMP_STEP, true);
+        // Where a joint's rate along the line falls by more than half from the first step to
+        // the second (as `√s` does, from a singularity), the line is followed again from its
+        // start after a probe of the shortest step: the tick starts from rest, in short steps,
+        // and from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
+        // tick cannot move fast enough there (issue 33). Probing every line cost ranger-mk1's
+        // BG tick 12,000 instructions, following it up from the probe's step 80,000.
+        let (mut done, mut step) = (0.0, full_step);
+        let (mut probing, mut probed, mut followed) = (false, false, 0_u8);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
         let reached = Reached {
@@ -167,7 +170,7 @@ impl Reach<'_> {
             pose: *start,
             angles: SeedAngles::default(),
         };
-        let mut points = [reached, reached];
+        let mut points = [reached; 2];
         let mut last = 0;
         let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
@@ -218,7 +221,7 @@ impl Reach<'_> {
                 (probing, step) = (false, full_step);
                 continue;
             }
-            let step_needs = shape.needs(
+            let (step_needs, slowed) = shape.needs(
                 &mut slope,
                 (&here.q, &tried.q),
                 next - done,
@@ -227,6 +230,11 @@ impl Reach<'_> {
             accelerates = accelerates.max(step_needs);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
+            followed = followed.saturating_add(1);
+            if followed == 2 && slowed && !probed {
+                (probing, probed, done, step, last) = (true, true, 0.0, MIN_JUMP_STEP, 0);
+                (points, slope) = ([reached; 2], None);
+            }
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
         let checked = Checked {
@@ -376,18 +384,19 @@ impl Shape {
     /// The least `D²` (s²) for which the step of `h` of the way from `q` to `next` needs no
     /// joint's acceleration beyond its `max_acceleration`: `(|q'| · a + |q''| · v²) / D²`, with
     /// `q'` the step's rate of change along the way and `q''` its change from the step before
-    /// (`slope`, none at the first step; left there for the next). A NaN is infinite.
+    /// (`slope`, none at the first step; left there for the next). A NaN is infinite. Also
+    /// whether some joint's rate fell by more than half from the step before.
     fn needs(
         &self,
         slope: &mut Option<[f64; MAX_JOINTS]>,
         (q, next): (&Joints, &Joints),
         h: f64,
         max_acceleration: &Joints,
-    ) -> f64 {
+    ) -> (f64, bool) {
         let v2 = self.speed * self.speed;
         let first = slope.is_none();
         let before = slope.get_or_insert([0.0; MAX_JOINTS]);
-        let mut most = 0.0_f64;
+        let (mut most, mut slowed) = (0.0_f64, false);
         let joints = q.iter().zip(next.iter()).zip(max_acceleration.iter());
         for (((a, b), limit), before) in joints.zip(before.iter_mut()) {
             let rate = (b - a) / h;
@@ -396,6 +405,7 @@ impl Shape {
             } else {
                 libm::fabs(rate - *before) / h
             };
+            slowed |= !first && libm::fabs(*before) > 2.0 * libm::fabs(rate);
             *before = rate;
             let need = (libm::fabs(rate) * self.acceleration + bend * v2) / limit;
             most = if need.is_nan() {
@@ -404,7 +414,7 @@ impl Shape {
                 most.max(need)
             };
         }
-        most
+        (most, slowed)
     }
 }
 
@@ -526,13 +536,14 @@ mod tests {
         let joints = |v: f64| Joints::from_slice(&[v]).unwrap();
         let limit = joints(1.0);
         let mut slope = None;
-        let first = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, &limit);
+        let (first, _) = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, &limit);
         assert!((first - 0.5 * 102.01).abs() < 1e-9);
-        let next = shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, &limit);
-        assert!(
-            (next - (0.6 * 102.01 + 1.0 * 1.01 * 1.01)).abs() < 1e-9,
-            "{next}"
-        );
+        let (next, slowed) = shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, &limit);
+        assert!((next - (0.6 * 102.01 + 1.01 * 1.01)).abs() < 1e-9, "{next}");
+        assert!(!slowed);
+        // Then at 0.2 per way: its rate fell by more than half.
+        let (_, slowed) = shape.needs(&mut slope, (&joints(0.11), &joints(0.13)), 0.1, &limit);
+        assert!(slowed);
     }
 
     #[test]
