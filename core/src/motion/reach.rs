@@ -29,9 +29,10 @@
 //! faster than that (issue 33: ranger-mk1 back to its home pose, `WN22` 23 mm short). So long,
 //! too, that no checked step needs more than that share of a joint's acceleration ([`Shape`]):
 //! puma560's lines, planned at Cartesian accelerations its joints cannot take, stalled in the
-//! tick for minutes or ended in `WN22`. A first step of 1/1024 of the line probes its start,
-//! where the tick starts from rest: from an exact singularity a sixteenth of the way hid a
-//! joint the tick cannot move fast enough (hybrid's home).
+//! tick for minutes or ended in `WN22`. Where the joints' rates fall sharply after the first
+//! step, a step of 1/1024 of the line probes its start, where the tick starts from rest: from
+//! an exact singularity a sixteenth of the way hid a joint the tick cannot move fast enough
+//! (hybrid's home).
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
