@@ -216,19 +216,16 @@ impl Reach<'_> {
                 }
                 None => {}
             }
-            needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
+            let limits = (self.max_rate, self.max_acceleration);
+            let (rate, acceleration, slowed) =
+                shape.needs(&mut slope, (&here.q, &tried.q), next - done, limits);
+            needs = needs.max(rate);
             if probing {
                 // The probe passed: the line is followed from its start in sixteenths.
-                (probing, step) = (false, full_step);
+                (probing, step, slope) = (false, full_step, None);
                 continue;
             }
-            let (step_needs, slowed) = shape.needs(
-                &mut slope,
-                (&here.q, &tried.q),
-                next - done,
-                self.max_acceleration,
-            );
-            accelerates = accelerates.max(step_needs);
+            accelerates = accelerates.max(acceleration);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
             followed = followed.saturating_add(1);
@@ -307,20 +304,6 @@ enum Fault {
     Jump(u8),
 }
 
-/// How long (s) the whole line would last at a constant speed at which the step from `q` to
-/// `next` (a fraction `step` of the way) needs no joint faster than `max_rate`: the largest
-/// `|Δq| / (max_rate · step)` (a NaN is infinite).
-fn step_needs(q: &Joints, next: &Joints, max_rate: &Joints, step: f64) -> f64 {
-    q.iter()
-        .zip(next.iter())
-        .zip(max_rate.iter())
-        .map(|((a, b), rate)| {
-            let need = libm::fabs(b - a) / (rate * step);
-            if need.is_nan() { f64::INFINITY } else { need }
-        })
-        .fold(0.0, f64::max)
-}
-
 /// The first joint that cannot move from `q` to `next` in `time` (s) at `slowdown` times
 /// `max_rate`, a jump first (a NaN is a jump).
 fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64) -> Option<Fault> {
@@ -335,71 +318,57 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
         .map(|joint| Fault::Rate(number(joint)))
 }
 
-/// How fast a line's profile moves along the way (fractions of it per second, and per second
-/// squared) when stretched to last `D` s: no faster than `speed / D`, and no more sharply
-/// than `acceleration / D²` (a trapezoid stretched in time). The translation's and the
-/// rotation's profiles each, whichever is larger.
+/// How sharply a line's profile moves along the way (fractions of it per second squared) when
+/// stretched to last `D` s: no more than `acceleration / D²` (a trapezoid stretched in time),
+/// and no faster than `2 / D` (a triangle's peak).
 #[derive(Clone, Copy)]
 struct Shape {
-    speed: f64,
     acceleration: f64,
 }
 
+/// A bound on `(D · peak speed)²` of a stretched trapezoid, over the way: a triangle's.
+const SPEED_SQUARED: f64 = 4.0;
+
 impl Shape {
     /// The shape of the generator's trapezoids for a line by `delta` (x, y, z, rx, ry, rz)
-    /// within the Cartesian `speed` and `acceleration` limits (as [`StraightLine`]: each
-    /// component group's path limits are those of its most binding axis).
+    /// within the Cartesian `speed` and `acceleration` limits. With path limits `V` and `A`
+    /// (fractions of the way, those of the most binding axis of each group, as
+    /// [`StraightLine`]), a trapezoid's `A · T²` is `A / V² + 2 + V² / A`, at most
+    /// `3 + A / V²` (`V² < A`), and `A / V²` at most `a_k · |δ_k| / v_k²` of the axis that binds
+    /// `V`; a triangle's is 4.
     ///
     /// [`StraightLine`]: super::straight_line::StraightLine
     fn of(delta: &[f64; 6], speed: &[f64; 6], acceleration: &[f64; 6]) -> Self {
-        let mut shape = Self {
-            speed: 0.0,
-            acceleration: 0.0,
-        };
-        for group in [0..3, 3..6] {
-            let (mut v, mut a) = (f64::INFINITY, f64::INFINITY);
-            for k in group {
-                let (d, vk, ak) = (delta.get(k), speed.get(k), acceleration.get(k));
-                if let (Some(&d), Some(vk), Some(ak)) = (d, vk, ak)
-                    && d != 0.0
-                {
-                    (v, a) = (v.min(vk / libm::fabs(d)), a.min(ak / libm::fabs(d)));
-                }
-            }
-            // Its minimum time: a triangle if it cannot reach its speed limit, else a
-            // trapezoid; then its peak speed and its acceleration scaled to last 1 s.
-            let (speed, acceleration) = if !a.is_finite() {
-                (0.0, 0.0)
-            } else if v * v >= a {
-                (2.0, 4.0)
-            } else {
-                let time = 1.0 / v + v / a;
-                (v * time, a * time * time)
-            };
-            shape.speed = shape.speed.max(speed);
-            shape.acceleration = shape.acceleration.max(acceleration);
+        let steep = delta
+            .iter()
+            .zip(speed.iter().zip(acceleration))
+            .map(|(d, (v, a))| a * libm::fabs(*d) / (v * v))
+            .fold(0.0, f64::max);
+        Self {
+            acceleration: (3.0 + steep).max(4.0),
         }
-        shape
     }
 
     /// The least `D²` (s²) for which the step of `h` of the way from `q` to `next` needs no
     /// joint's acceleration beyond its `max_acceleration`: `(|q'| · a + |q''| · v²) / D²`, with
     /// `q'` the step's rate of change along the way and `q''` its change from the step before
     /// (`slope`, none at the first step; left there for the next). A NaN is infinite. Also
-    /// whether some joint's rate fell by more than half from the step before.
+    /// how long (s) the whole line would last at a constant speed at which the step needs no
+    /// joint faster than its `max_rate` (`|Δq| / (max_rate · h)`), and whether some joint's
+    /// rate fell by more than half from the step before.
     fn needs(
         &self,
         slope: &mut Option<[f64; MAX_JOINTS]>,
         (q, next): (&Joints, &Joints),
         h: f64,
-        max_acceleration: &Joints,
-    ) -> (f64, bool) {
-        let v2 = self.speed * self.speed;
+        (max_rate, max_acceleration): (&Joints, &Joints),
+    ) -> (f64, f64, bool) {
         let first = slope.is_none();
         let before = slope.get_or_insert([0.0; MAX_JOINTS]);
-        let (mut most, mut slowed) = (0.0_f64, false);
-        let joints = q.iter().zip(next.iter()).zip(max_acceleration.iter());
-        for (((a, b), limit), before) in joints.zip(before.iter_mut()) {
+        let (mut fastest, mut most, mut slowed) = (0.0_f64, 0.0_f64, false);
+        let limits = max_rate.iter().zip(max_acceleration.iter());
+        let joints = q.iter().zip(next.iter()).zip(limits);
+        for (((a, b), (max_rate, limit)), before) in joints.zip(before.iter_mut()) {
             let rate = (b - a) / h;
             let bend = if first {
                 0.0
@@ -408,14 +377,21 @@ impl Shape {
             };
             slowed |= !first && libm::fabs(*before) > 2.0 * libm::fabs(rate);
             *before = rate;
-            let need = (libm::fabs(rate) * self.acceleration + bend * v2) / limit;
+            let need = (libm::fabs(rate) * self.acceleration + bend * SPEED_SQUARED) / limit;
+            let fast = libm::fabs(rate) / max_rate;
+            // Written so that a NaN counts as infinite.
             most = if need.is_nan() {
                 f64::INFINITY
             } else {
                 most.max(need)
             };
+            fastest = if fast.is_nan() {
+                f64::INFINITY
+            } else {
+                fastest.max(fast)
+            };
         }
-        (most, slowed)
+        (fastest, most, slowed)
     }
 }
 
@@ -427,7 +403,7 @@ const RATE_SHARE: f64 = 0.9;
 /// The duration (s) to plan a line for so that at its peak speed no checked step needs more
 /// than [`RATE_SHARE`] of a joint's `max_rate`: `min_duration` (≥ 0, the client's) if that is
 /// slow enough, else longer. `cruise`: how long the line lasts at the Cartesian speed limits
-/// (s); `needs`: the largest [`step_needs`] of its steps. A profile stretched to a duration
+/// (s); `needs`: the largest of its steps' rate needs ([`Shape::needs`]). A profile stretched to a duration
 /// `D` peaks at no more than twice the average speed (at `2/D` of the way per second, the
 /// triangle), and no profile exceeds the speed limits (`1/cruise`).
 fn planned_duration(min_duration: f64, cruise: f64, needs: f64) -> f64 {
@@ -525,25 +501,27 @@ mod tests {
             [0.1, 0.1, 0.1, 0.5, 0.5, 0.5],
             [0.1, 1.0, 1.0, 1.0, 1.0, 1.0],
         );
-        // 0.1 m along x: a triangle (1 way/s² never reaches 1 way/s), 2 s at its fastest.
+        // 0.1 m along x: a triangle (1 way/s² never reaches 1 way/s).
         let shape = Shape::of(&[0.1, 0.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
-        assert_eq!((shape.speed, shape.acceleration), (2.0, 4.0));
-        // 1 m along y: 0.1 way/s after 0.1 s, 10.1 s in all; no rotation.
+        assert_eq!(shape.acceleration, 4.0);
+        // 1 m along y: 0.1 way/s after 0.1 s, 10.1 s in all: A · T² = 102.01 ≤ 103.
         let shape = Shape::of(&[0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
-        assert!((shape.speed - 1.01).abs() < 1e-12);
-        assert!((shape.acceleration - 102.01).abs() < 1e-9);
+        assert!((shape.acceleration - 103.0).abs() < 1e-9);
         // A joint changing at 0.5 rad per way over a tenth of it, then at 0.6 (a change of 1
-        // per way²): at 1 rad/s² its steps need 0.5 · 102.01 and 0.6 · 102.01 + 1 · 1.01² s².
+        // per way²): at 1 rad/s² its steps need 0.5 · 103 and 0.6 · 103 + 1 · 4 s².
         let joints = |v: f64| Joints::from_slice(&[v]).unwrap();
         let limit = joints(1.0);
         let mut slope = None;
-        let (first, _) = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, &limit);
-        assert!((first - 0.5 * 102.01).abs() < 1e-9);
-        let (next, slowed) = shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, &limit);
-        assert!((next - (0.6 * 102.01 + 1.01 * 1.01)).abs() < 1e-9, "{next}");
+        let limits = (&limit, &limit);
+        let (fast, first, _) = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, limits);
+        assert!((fast - 0.5).abs() < 1e-12);
+        assert!((first - 0.5 * 103.0).abs() < 1e-9);
+        let (_, next, slowed) =
+            shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, limits);
+        assert!((next - (0.6 * 103.0 + 4.0)).abs() < 1e-9, "{next}");
         assert!(!slowed);
         // Then at 0.2 per way: its rate fell by more than half.
-        let (_, slowed) = shape.needs(&mut slope, (&joints(0.11), &joints(0.13)), 0.1, &limit);
+        let (_, _, slowed) = shape.needs(&mut slope, (&joints(0.11), &joints(0.13)), 0.1, limits);
         assert!(slowed);
     }
 

@@ -84,28 +84,22 @@ impl Controller {
         let eased = self.within_cartesian_limits(t0, &before, braked, from);
         // The joints first: where they cannot follow the eased step (near a singularity the
         // joints' speed along the path is not the tool's), the brake's own.
-        // A step the joints reach only beyond an acceleration limit is still taken if none
-        // is within them, as the tick takes one: the limiter eases it and the tool leaves the
-        // path by a little, rather than the stop leaving it for joint space.
-        let (mut tracked, mut abrupt) = (None, None);
+        // A step the joints reach only beyond an acceleration limit is taken too, as the tick
+        // takes one: the limiter eases it and the tool leaves the path by a little, rather
+        // than the stop leaving it for joint space (issue 33).
+        let mut tracked = None;
         for scale in [eased, braked] {
             let t_next = t0 + scale * self.period;
             let sample = self.cartesian_generator.sample(t_next);
-            match self.track(&sample.0, q_cmd) {
-                Tracking::Reached(q) => {
-                    tracked = Some((scale, t_next, sample, q));
-                    break;
-                }
-                Tracking::Abrupt(q) => {
-                    abrupt.get_or_insert((scale, t_next, sample, q));
-                }
-                Tracking::TooFast | Tracking::Unreachable => {}
+            if let Tracking::Reached(q) | Tracking::Abrupt(q) = self.track(&sample.0, q_cmd) {
+                tracked = Some((scale, t_next, sample, q));
+                break;
             }
             if eased <= braked {
                 break;
             }
         }
-        let (scale, t_next, sample, q) = tracked.or(abrupt)?;
+        let (scale, t_next, sample, q) = tracked?;
         let (setpoint, finished) = sample;
         if scale > braked {
             brake.ease_to(scale, from);
