@@ -496,12 +496,9 @@ fn a_cartesian_stop_stays_within_each_axis_acceleration_limit() {
 /// space: 15 of the 49 lines below (iiwa14's +x line in stop_bench, 0.022 mm off; ranger-mk1's
 /// diagonal). Every shipped robot, from stop_bench's start (mid-range, nudged), lines along the
 /// axes and the diagonal, `ST` at half way: a stop that keeps to the line keeps each axis within
-/// its limit and stays on it; some stops still leave their line where the joints cannot follow
-/// the line's end at the stop's speed (a joint-space stop, within the joints' limits; see the
-/// bound at the end). A line that the
-/// tick loses before the stop begins is listed apart and not judged here: that is the up-front
-/// line check's open case (issue 33, `no_accepted_line_is_lost_on_any_robot`, ignored), not the
-/// stop's; ur5's +y line is lost so.
+/// its limit and stays on it, and every stop keeps to its line (where the joints cannot follow
+/// it within their accelerations, the limiter eases the step, as in the tick). No line is lost
+/// before its stop begins (the up-front check, `no_accepted_line_is_lost_on_any_robot`).
 #[test]
 fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
     use armgate_core::motion::Controller;
@@ -532,8 +529,7 @@ fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
                     continue;
                 };
                 if s.lost_before {
-                    // Not the stop's doing: the line was lost before it (issue 33's open
-                    // property test, `no_accepted_line_is_lost_on_any_robot`).
+                    // The line was lost before its stop: the check's doing, not the stop's.
                     lost.push(format!("{name} {by:.3?}"));
                 } else if s.left_path {
                     left.push(format!("{name} {by:.3?}"));
@@ -548,9 +544,11 @@ fn a_cartesian_stop_brakes_from_the_speed_the_line_runs_at() {
         }
     }
     println!("stops that left their line: {left:?}; lines lost before the stop: {lost:?}");
-    // Since lines are planned as slow as their joints need (the `checks` merge), stops in
-    // iiwa14's and puma560's lines leave them too (7 lines now, before 3, all ranger-mk2
-    // and ur5): a joint-space stop, within the joints' limits, but not along the path. Open in
-    // issue 33; this bound keeps it from growing unseen.
-    assert!(left.len() <= 7, "{left:?}");
+    // None: a step the joints reach only beyond an acceleration limit is taken as the tick
+    // takes one (the limiter eases it). Before, 7 stops left their line for joint space
+    // (iiwa14, puma560, ranger-mk2, ur5), 3 before lines were planned as slow as their joints
+    // need. No line is lost before its stop since the check plans within the joints'
+    // accelerations too.
+    assert!(left.is_empty(), "{left:?}");
+    assert!(lost.is_empty(), "{lost:?}");
 }

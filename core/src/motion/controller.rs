@@ -109,9 +109,11 @@ pub struct Controller {
     /// Cartesian limits (x, y, z, rx, ry, rz): acceleration, and jerk if set.
     cartesian_acceleration: [f64; 6],
     cartesian_jerk: Option<[f64; 6]>,
-    /// Cartesian speed limits, and the joints' rate limits (for the line check).
+    /// Cartesian speed limits, and the joints' rate and acceleration limits (for the line
+    /// check).
     cartesian_speed: [f64; 6],
     max_rate: Joints,
+    max_acceleration: Joints,
     /// The last tracking solve that returned its seed: a holding arm's solve, not repeated.
     fixed_point: FixedPoint,
     /// The tracking solves' last pose evaluation: the next tick's seed, evaluated already.
@@ -159,6 +161,7 @@ impl Controller {
             cartesian_jerk: cartesian_j_max,
             cartesian_speed: cartesian.max_velocity,
             max_rate: config.per_joint(|j| j.max_rate),
+            max_acceleration: a_max,
             fixed_point: FixedPoint::default(),
             last_evaluation: LastEvaluation::default(),
             following_limit: config.following_limits(),

@@ -26,7 +26,13 @@
 //! is planned to last long enough for its peak speed to need at most [`RATE_SHARE`] of any
 //! joint's rate at every checked step ([`planned_duration`]): the tick's time scale slows a
 //! line only as fast as the acceleration limits let it, and lost lines whose joint rates grew
-//! faster than that (issue 33: ranger-mk1 back to its home pose, `WN22` 23 mm short).
+//! faster than that (issue 33: ranger-mk1 back to its home pose, `WN22` 23 mm short). So long,
+//! too, that no checked step needs more than that share of a joint's acceleration ([`Shape`]):
+//! puma560's lines, planned at Cartesian accelerations its joints cannot take, stalled in the
+//! tick for minutes or ended in `WN22`. Where the joints' rates fall sharply after the first
+//! step, a step of 1/1024 of the line probes its start, where the tick starts from rest: from
+//! an exact singularity a sixteenth of the way hid a joint the tick cannot move fast enough
+//! (hybrid's home).
 //!
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
@@ -35,6 +41,7 @@ use armgate_protocol::client::{JointBound, PathPoint};
 
 use super::Refusal;
 use super::workspace::Workspace;
+use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints, SeedAngles};
 use crate::math::{self, Frame, Rotation3};
@@ -80,8 +87,12 @@ pub(super) struct Reach<'a> {
     pub iterations_left: u32,
     /// The Cartesian speed limits (x, y, z, rx, ry, rz): how fast the line is planned.
     pub speed: &'a [f64; 6],
+    /// The Cartesian acceleration limits (x, y, z, rx, ry, rz): how fast it speeds up.
+    pub acceleration: &'a [f64; 6],
     /// The joints' rate limits.
     pub max_rate: &'a Joints,
+    /// The joints' acceleration limits.
+    pub max_acceleration: &'a Joints,
 }
 
 /// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
@@ -139,9 +150,20 @@ impl Reach<'_> {
             .map(|(d, v)| libm::fabs(*d) / v)
             .fold(0.0, f64::max);
         let duration = cruise.max(min_duration);
-        let mut needs = 0.0_f64;
+        let shape = Shape::of(&delta, self.speed, self.acceleration);
+        let (mut needs, mut accelerates) = (0.0_f64, 0.0_f64);
+        // The joints' rates of change along the line (per fraction of the way) at the last
+        // step, none before the first.
+        let mut slope = None;
         let full_step = 1.0 / LINE_SAMPLES as f64;
+        // Where a joint's rate along the line falls by more than half from the first step to
+        // the second (as `√s` does, from a singularity), the line is followed again from its
+        // start after a probe of the shortest step: the tick starts from rest, in short steps,
+        // and from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
+        // tick cannot move fast enough there (issue 33). Probing every line cost ranger-mk1's
+        // BG tick 12,000 instructions, following it up from the probe's step 80,000.
         let (mut done, mut step) = (0.0, full_step);
+        let (mut probing, mut probed, mut followed) = (false, false, 0_u8);
         // The last point reached and the step being tried: the two swap roles, never copied
         // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
         let reached = Reached {
@@ -149,7 +171,7 @@ impl Reach<'_> {
             pose: *start,
             angles: SeedAngles::default(),
         };
-        let mut points = [reached, reached];
+        let mut points = [reached; 2];
         let mut last = 0;
         let mut too_fast = None;
         for _ in 0..SOLVES_PER_LINE {
@@ -194,14 +216,29 @@ impl Reach<'_> {
                 }
                 None => {}
             }
-            needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
+            let limits = (self.max_rate, self.max_acceleration);
+            let (rate, acceleration, slowed) =
+                shape.needs(&mut slope, (&here.q, &tried.q), next - done, limits);
+            needs = needs.max(rate);
+            if probing {
+                // The probe passed: the line is followed from its start in sixteenths.
+                (probing, step, slope) = (false, full_step, None);
+                continue;
+            }
+            accelerates = accelerates.max(acceleration);
             (done, last) = (next, 1 - last);
             step = (step * 2.0).min(full_step);
+            followed = followed.saturating_add(1);
+            if followed == 2 && slowed && !probed {
+                (probing, probed, done, step, last) = (true, true, 0.0, MIN_JUMP_STEP, 0);
+                (points, slope) = ([reached; 2], None);
+            }
         }
         let q = points.get(last).map_or(*seed, |reached| reached.q);
         let checked = Checked {
             q,
-            duration: planned_duration(min_duration, cruise, needs),
+            duration: planned_duration(min_duration, cruise, needs)
+                .max(math::sqrt(accelerates / RATE_SHARE)),
         };
         too_fast.map_or(Ok(checked), Err)
     }
@@ -267,20 +304,6 @@ enum Fault {
     Jump(u8),
 }
 
-/// How long (s) the whole line would last at a constant speed at which the step from `q` to
-/// `next` (a fraction `step` of the way) needs no joint faster than `max_rate`: the largest
-/// `|Δq| / (max_rate · step)` (a NaN is infinite).
-fn step_needs(q: &Joints, next: &Joints, max_rate: &Joints, step: f64) -> f64 {
-    q.iter()
-        .zip(next.iter())
-        .zip(max_rate.iter())
-        .map(|((a, b), rate)| {
-            let need = libm::fabs(b - a) / (rate * step);
-            if need.is_nan() { f64::INFINITY } else { need }
-        })
-        .fold(0.0, f64::max)
-}
-
 /// The first joint that cannot move from `q` to `next` in `time` (s) at `slowdown` times
 /// `max_rate`, a jump first (a NaN is a jump).
 fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64) -> Option<Fault> {
@@ -295,6 +318,83 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
         .map(|joint| Fault::Rate(number(joint)))
 }
 
+/// How sharply a line's profile moves along the way (fractions of it per second squared) when
+/// stretched to last `D` s: no more than `acceleration / D²` (a trapezoid stretched in time),
+/// and no faster than `2 / D` (a triangle's peak).
+#[derive(Clone, Copy)]
+struct Shape {
+    acceleration: f64,
+}
+
+/// A bound on `(D · peak speed)²` of a stretched trapezoid, over the way: a triangle's.
+const SPEED_SQUARED: f64 = 4.0;
+
+impl Shape {
+    /// The shape of the generator's trapezoids for a line by `delta` (x, y, z, rx, ry, rz)
+    /// within the Cartesian `speed` and `acceleration` limits. With path limits `V` and `A`
+    /// (fractions of the way, those of the most binding axis of each group, as
+    /// [`StraightLine`]), a trapezoid's `A · T²` is `A / V² + 2 + V² / A`, at most
+    /// `3 + A / V²` (`V² < A`), and `A / V²` at most `a_k · |δ_k| / v_k²` of the axis that binds
+    /// `V`; a triangle's is 4.
+    ///
+    /// [`StraightLine`]: super::straight_line::StraightLine
+    fn of(delta: &[f64; 6], speed: &[f64; 6], acceleration: &[f64; 6]) -> Self {
+        let steep = delta
+            .iter()
+            .zip(speed.iter().zip(acceleration))
+            .map(|(d, (v, a))| a * libm::fabs(*d) / (v * v))
+            .fold(0.0, f64::max);
+        Self {
+            acceleration: (3.0 + steep).max(4.0),
+        }
+    }
+
+    /// The least `D²` (s²) for which the step of `h` of the way from `q` to `next` needs no
+    /// joint's acceleration beyond its `max_acceleration`: `(|q'| · a + |q''| · v²) / D²`, with
+    /// `q'` the step's rate of change along the way and `q''` its change from the step before
+    /// (`slope`, none at the first step; left there for the next). A NaN is infinite. Also
+    /// how long (s) the whole line would last at a constant speed at which the step needs no
+    /// joint faster than its `max_rate` (`|Δq| / (max_rate · h)`), and whether some joint's
+    /// rate fell by more than half from the step before.
+    fn needs(
+        &self,
+        slope: &mut Option<[f64; MAX_JOINTS]>,
+        (q, next): (&Joints, &Joints),
+        h: f64,
+        (max_rate, max_acceleration): (&Joints, &Joints),
+    ) -> (f64, f64, bool) {
+        let first = slope.is_none();
+        let before = slope.get_or_insert([0.0; MAX_JOINTS]);
+        let (mut fastest, mut most, mut slowed) = (0.0_f64, 0.0_f64, false);
+        let limits = max_rate.iter().zip(max_acceleration.iter());
+        let joints = q.iter().zip(next.iter()).zip(limits);
+        for (((a, b), (max_rate, limit)), before) in joints.zip(before.iter_mut()) {
+            let rate = (b - a) / h;
+            let bend = if first {
+                0.0
+            } else {
+                libm::fabs(rate - *before) / h
+            };
+            slowed |= !first && libm::fabs(*before) > 2.0 * libm::fabs(rate);
+            *before = rate;
+            let need = (libm::fabs(rate) * self.acceleration + bend * SPEED_SQUARED) / limit;
+            let fast = libm::fabs(rate) / max_rate;
+            // Written so that a NaN counts as infinite.
+            most = if need.is_nan() {
+                f64::INFINITY
+            } else {
+                most.max(need)
+            };
+            fastest = if fast.is_nan() {
+                f64::INFINITY
+            } else {
+                fastest.max(fast)
+            };
+        }
+        (fastest, most, slowed)
+    }
+}
+
 /// The share of its `max_rate` a joint may need at a checked step at the line's planned peak
 /// speed ([`planned_duration`]): the rest is left for what happens between the checked points,
 /// where the tick's time scale slows the motion down if it must.
@@ -303,7 +403,7 @@ const RATE_SHARE: f64 = 0.9;
 /// The duration (s) to plan a line for so that at its peak speed no checked step needs more
 /// than [`RATE_SHARE`] of a joint's `max_rate`: `min_duration` (≥ 0, the client's) if that is
 /// slow enough, else longer. `cruise`: how long the line lasts at the Cartesian speed limits
-/// (s); `needs`: the largest [`step_needs`] of its steps. A profile stretched to a duration
+/// (s); `needs`: the largest of its steps' rate needs ([`Shape::needs`]). A profile stretched to a duration
 /// `D` peaks at no more than twice the average speed (at `2/D` of the way per second, the
 /// triangle), and no profile exceeds the speed limits (`1/cruise`).
 fn planned_duration(min_duration: f64, cruise: f64, needs: f64) -> f64 {
@@ -393,6 +493,36 @@ mod tests {
         // A client's 50 s is slow enough already (peak 2/50 of the way per second).
         assert_eq!(planned_duration(50.0, 10.0, 18.0), 50.0);
         assert_eq!(planned_duration(0.0, 0.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn a_line_s_shape_is_its_stretched_trapezoid() {
+        let (v, a) = (
+            [0.1, 0.1, 0.1, 0.5, 0.5, 0.5],
+            [0.1, 1.0, 1.0, 1.0, 1.0, 1.0],
+        );
+        // 0.1 m along x: a triangle (1 way/s² never reaches 1 way/s).
+        let shape = Shape::of(&[0.1, 0.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
+        assert_eq!(shape.acceleration, 4.0);
+        // 1 m along y: 0.1 way/s after 0.1 s, 10.1 s in all: A · T² = 102.01 ≤ 103.
+        let shape = Shape::of(&[0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &v, &a);
+        assert!((shape.acceleration - 103.0).abs() < 1e-9);
+        // A joint changing at 0.5 rad per way over a tenth of it, then at 0.6 (a change of 1
+        // per way²): at 1 rad/s² its steps need 0.5 · 103 and 0.6 · 103 + 1 · 4 s².
+        let joints = |v: f64| Joints::from_slice(&[v]).unwrap();
+        let limit = joints(1.0);
+        let mut slope = None;
+        let limits = (&limit, &limit);
+        let (fast, first, _) = shape.needs(&mut slope, (&joints(0.0), &joints(0.05)), 0.1, limits);
+        assert!((fast - 0.5).abs() < 1e-12);
+        assert!((first - 0.5 * 103.0).abs() < 1e-9);
+        let (_, next, slowed) =
+            shape.needs(&mut slope, (&joints(0.05), &joints(0.11)), 0.1, limits);
+        assert!((next - (0.6 * 103.0 + 4.0)).abs() < 1e-9, "{next}");
+        assert!(!slowed);
+        // Then at 0.2 per way: its rate fell by more than half.
+        let (_, _, slowed) = shape.needs(&mut slope, (&joints(0.11), &joints(0.13)), 0.1, limits);
+        assert!(slowed);
     }
 
     #[test]

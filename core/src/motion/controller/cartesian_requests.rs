@@ -43,7 +43,9 @@ impl Controller {
             tolerance: REACH_TOLERANCE,
             iterations_left: check_iterations(self.period),
             speed: &self.cartesian_speed,
+            acceleration: &self.cartesian_acceleration,
             max_rate: &self.max_rate,
+            max_acceleration: &self.max_acceleration,
         })
     }
 

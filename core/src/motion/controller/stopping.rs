@@ -84,11 +84,14 @@ impl Controller {
         let eased = self.within_cartesian_limits(t0, &before, braked, from);
         // The joints first: where they cannot follow the eased step (near a singularity the
         // joints' speed along the path is not the tool's), the brake's own.
+        // A step the joints reach only beyond an acceleration limit is taken too, as the tick
+        // takes one: the limiter eases it and the tool leaves the path by a little, rather
+        // than the stop leaving it for joint space (issue 33).
         let mut tracked = None;
         for scale in [eased, braked] {
             let t_next = t0 + scale * self.period;
             let sample = self.cartesian_generator.sample(t_next);
-            if let Tracking::Reached(q) = self.track(&sample.0, q_cmd) {
+            if let Tracking::Reached(q) | Tracking::Abrupt(q) = self.track(&sample.0, q_cmd) {
                 tracked = Some((scale, t_next, sample, q));
                 break;
             }
