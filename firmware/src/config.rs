@@ -42,6 +42,10 @@ impl defmt::Format for LoadError {
 }
 
 /// Decodes and validates the embedded robot description.
+// Once at boot, never on the tick: kept out of `main` and marked cold, which LTO compiles
+// smaller (docs/firmware.md, "Where 30 KiB could come from").
+#[inline(never)]
+#[cold]
 pub fn load() -> Result<ValidRobot, LoadError> {
     let config: RobotConfig =
         postcard::from_bytes(ROBOT_POSTCARD).map_err(|_| LoadError::Decode)?;

@@ -80,6 +80,10 @@ pub type BoardDrives = CanDrives<bus::Bus>;
 /// runs) if the drive manager refuses the robot, which `build.rs` already rules out for the
 /// embedded robot: it runs the same check with the same default settings and fails the build
 /// with the reason, so the reason's text is not linked for a message the board never prints.
+// Once at boot, never on the tick: kept out of `main` and marked cold, which LTO compiles
+// smaller (docs/firmware.md, "Where 30 KiB could come from").
+#[inline(never)]
+#[cold]
 pub fn new(robot: &ValidRobot, bus: bus::Bus) -> BoardDrives {
     match CanDrives::started(robot, &DriveSettings::default(), bus) {
         Ok(drives) => drives,
