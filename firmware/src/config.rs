@@ -43,7 +43,7 @@ impl defmt::Format for LoadError {
 
 /// Decodes and validates the embedded robot description.
 // Once at boot, never on the tick: kept out of `main` and marked cold, which LTO compiles
-// smaller (docs/firmware.md, "Where 30 KiB could come from").
+// smaller (docs/firmware.md, "The boot's share").
 #[inline(never)]
 #[cold]
 pub fn load() -> Result<ValidRobot, LoadError> {

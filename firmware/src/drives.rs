@@ -81,7 +81,7 @@ pub type BoardDrives = CanDrives<bus::Bus>;
 /// embedded robot: it runs the same check with the same default settings and fails the build
 /// with the reason, so the reason's text is not linked for a message the board never prints.
 // Once at boot, never on the tick: kept out of `main` and marked cold, which LTO compiles
-// smaller (docs/firmware.md, "Where 30 KiB could come from").
+// smaller (docs/firmware.md, "The boot's share").
 #[inline(never)]
 #[cold]
 pub fn new(robot: &ValidRobot, bus: bus::Bus) -> BoardDrives {
