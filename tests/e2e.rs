@@ -1627,6 +1627,27 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
 }
 
 #[test]
+fn a_joint_move_that_swings_the_forearm_through_the_base_column_is_refused() {
+    // Issue 35's measured repro: the tool ends just outside the column, the wrist centre
+    // 3.5 cm inside it, and the forearm sweeps through it on the way.
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    sim.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let through = [0.727f32, 1.084, 1.506, -2.849, 3.481, -1.322];
+    sim.ok("jG", with_joints(&through, 0.0), 0);
+    let text = sim.text("jB", [0.0; 7], 0);
+    // The link, the box and where: the tool's shaft (link 6, from the wrist centre) enters
+    // the column first, `ER25 Cmd jB L6 hits B1 at 89%`.
+    assert!(text.starts_with("ER25 Cmd jB L6 hits B1 at "), "{text}");
+    assert!(text.ends_with('%'), "{text}");
+    assert!(status(&sim)[4] == 0.0, "nothing moves");
+}
+
+#[test]
 fn a_jog_into_a_joint_limit_is_announced() {
     // Joint 6 at 3.09 rad, 52 mrad short of its 3.142 limit (inside the 2 % margin's reach).
     let sim = sessions::ready("1.5708,0.6,-0.4,0.2,1.8,3.09", 1.0);

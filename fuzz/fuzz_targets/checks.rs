@@ -106,8 +106,12 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::ViaPointMissed,
         Notice::Held(Hold::Workspace),
     ];
-    // A stream held at a joint limit names the joint and the limit.
-    let held_at_limit = matches!(notice, Notice::Held(Hold::JointLimit(_)));
+    // A stream held at a joint limit names the joint and the limit; a stop for the arm's
+    // body names the link and the obstacle.
+    let held_at_limit = matches!(
+        notice,
+        Notice::Held(Hold::JointLimit(_)) | Notice::Collision(_)
+    );
     assert!(
         held_at_limit || allowed.contains(&notice),
         "unexpected unsolicited text {:?}",

@@ -1,0 +1,194 @@
+//! The arm's body (`config::Envelope`): its frames agree with the chain's, every shipped robot
+//! has one and starts clear of everything, a home pose in collision is refused with the link
+//! and the obstacle named, and the sweep bound holds for every point of every capsule.
+#![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+
+mod common;
+
+use armgate_core::MAX_JOINTS;
+use armgate_core::config::{ConfigReason, Envelope, MAX_CAPSULES, Placed, RobotConfig, frames_at};
+use armgate_core::geometry::Capsule;
+use armgate_core::kinematics::Chain;
+use armgate_core::math::Frame;
+use armgate_core::rng::SplitMix64;
+use armgate_protocol::client::{Hit, Obstacle};
+use common::{all_robots, robot};
+
+fn placed(config: &RobotConfig, q: &[f64]) -> (Envelope, Placed) {
+    let envelope = Envelope::new(config);
+    let placed = place(&envelope, config, q);
+    (envelope, placed)
+}
+
+fn place(envelope: &Envelope, config: &RobotConfig, q: &[f64]) -> Placed {
+    let mut placed = [Capsule::default(); MAX_CAPSULES];
+    envelope.place(&frames_at(config, q), &mut placed);
+    placed
+}
+
+fn first_hit(envelope: &Envelope, placed: &Placed) -> Option<Hit> {
+    let mut first = None;
+    envelope.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+        first = Some(hit);
+        false
+    });
+    first
+}
+
+#[test]
+fn validation_frames_agree_with_the_chain() {
+    let mut rng = SplitMix64::new(7);
+    for (name, robot) in all_robots() {
+        let chain = Chain::new(&robot);
+        for _ in 0..50 {
+            let q = chain.random_joints(&mut rng);
+            let frames = frames_at(&robot, &q);
+            let mut links = [Frame::identity(); MAX_JOINTS];
+            let tool = chain.link_frames(&q, &mut links).unwrap();
+            let n = robot.dof();
+            let close = |a: &Frame, b: &Frame| {
+                (a.translation.vector - b.translation.vector).norm() < 1e-12
+                    && (a.rotation.matrix() - b.rotation.matrix()).norm() < 1e-12
+            };
+            assert!(close(&frames[0], chain.base()), "{name}");
+            for i in 0..n {
+                assert!(close(&frames[i + 1], &links[i]), "{name} frame {}", i + 1);
+            }
+            assert!(close(&frames[n + 1], &tool), "{name} tool");
+        }
+    }
+}
+
+#[test]
+fn every_shipped_robot_has_a_body_and_starts_clear() {
+    for (name, robot) in all_robots() {
+        let (envelope, placed) = placed(&robot, &robot.home());
+        assert!(envelope.len() >= 3, "{name}: {} capsules", envelope.len());
+        assert!(envelope.pair_count() >= 1, "{name}");
+        assert_eq!(first_hit(&envelope, &placed), None, "{name}");
+        let (gap, _) = envelope.nearest(&placed);
+        assert!(gap.is_finite() && gap >= 0.0, "{name}: {gap}");
+    }
+}
+
+#[test]
+fn a_home_pose_in_collision_is_refused_naming_the_link_and_obstacle() {
+    // ranger-mk1's stowed forearm lies 2 mm above the column: a 4 cm forearm reaches in.
+    let mut config = robot("ranger-mk1").into_config();
+    config.joints[2].link_radius = None;
+    let error = config.clone().validate().unwrap_err();
+    let hit = Hit {
+        link: 3,
+        obstacle: Obstacle::Box(1),
+    };
+    assert_eq!(error.reason, ConfigReason::HomeInCollision(hit));
+    assert!(
+        error
+            .to_string()
+            .starts_with("collision: the home pose is already in collision: L3 hits B1"),
+        "{error}"
+    );
+    // With the column gone the forearm and the tool still clear the bounds and each other.
+    config.workspace.boxes.clear();
+    config.validate().unwrap();
+
+    // Another link: ur5's wrist folded back onto its upper arm, capsules 10 cm thick.
+    let mut config = robot("ur5").into_config();
+    for joint in &mut config.joints {
+        joint.link_radius = Some(0.1);
+    }
+    let error = config.clone().validate().unwrap_err();
+    assert!(
+        matches!(
+            error.reason,
+            ConfigReason::HomeInCollision(Hit {
+                obstacle: Obstacle::Link(_),
+                ..
+            })
+        ),
+        "{error}"
+    );
+    // Excluding every pair it names clears it, and an unknown link is refused.
+    loop {
+        match config.clone().validate() {
+            Ok(_) => break,
+            Err(e) => match e.reason {
+                ConfigReason::HomeInCollision(Hit {
+                    link,
+                    obstacle: Obstacle::Link(other),
+                }) => {
+                    config.collision.exclude.push([link, other]).unwrap();
+                }
+                _ => panic!("{e}"),
+            },
+        }
+    }
+    config.collision.exclude.push([2, 7]).unwrap();
+    assert_eq!(
+        config.validate().unwrap_err().reason,
+        ConfigReason::NoSuchLink
+    );
+
+    // The bounds: iiwa14 upright, its flange 4.4 cm under the ceiling, with a 5 cm margin.
+    let mut config = robot("iiwa14").into_config();
+    config.collision.margin = 0.05;
+    let error = config.validate().unwrap_err();
+    assert!(
+        matches!(
+            error.reason,
+            ConfigReason::HomeInCollision(Hit {
+                obstacle: Obstacle::Bounds,
+                ..
+            })
+        ),
+        "{error}"
+    );
+}
+
+#[test]
+fn disabled_bodies_have_no_capsules() {
+    let mut config = robot("ranger-mk1").into_config();
+    config.joints[2].link_radius = None;
+    config.collision.enabled = false;
+    let (envelope, placed) = placed(&config.clone().validate().unwrap(), &config.home());
+    assert!(envelope.is_empty());
+    assert_eq!(first_hit(&envelope, &placed), None);
+}
+
+/// The sweep bound: over a joint step from random poses, no point of any capsule (its ends
+/// and points between, at any fraction of the step) moves further than the bound.
+#[test]
+fn no_point_of_a_capsule_sweeps_further_than_the_bound() {
+    let mut rng = SplitMix64::new(35);
+    for (name, robot) in all_robots() {
+        let chain = Chain::new(&robot);
+        let envelope = Envelope::new(&robot);
+        for _ in 0..200 {
+            let from = chain.random_joints(&mut rng);
+            let mut step = from;
+            for s in step.iter_mut() {
+                *s = rng.uniform(-0.3, 0.3);
+            }
+            let mut bound = [0.0; MAX_CAPSULES];
+            envelope.sweep(&step, &mut bound);
+            let start = place(&envelope, &robot, &from);
+            for k in 1..=8 {
+                let mut q = from;
+                for (q, s) in q.iter_mut().zip(step.iter()) {
+                    *q += s * f64::from(k) / 8.0;
+                }
+                let now = place(&envelope, &robot, &q);
+                for c in 0..envelope.len() {
+                    for t in [0.0, 0.3, 1.0] {
+                        let moved = (now[c].segment.at(t) - start[c].segment.at(t)).norm();
+                        assert!(
+                            moved <= bound[c] + 1e-12,
+                            "{name} capsule {c}: {moved} > {}",
+                            bound[c]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
