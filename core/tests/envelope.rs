@@ -73,9 +73,9 @@ fn every_shipped_robot_has_a_body_and_starts_clear() {
 
 #[test]
 fn a_home_pose_in_collision_is_refused_naming_the_link_and_obstacle() {
-    // ranger-mk1's stowed forearm lies 2 mm above the column: a 4 cm forearm reaches in.
+    // ranger-mk1's stowed forearm lies 5.2 cm above the column: a 6 cm forearm reaches in.
     let mut config = robot("ranger-mk1").into_config();
-    config.joints[2].link_radius = None;
+    config.joints[2].link_radius = Some(0.06);
     let error = config.clone().validate().unwrap_err();
     let hit = Hit {
         link: 3,
