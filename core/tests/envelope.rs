@@ -26,15 +26,6 @@ fn place(envelope: &Envelope, config: &RobotConfig, q: &[f64]) -> Placed {
     placed
 }
 
-fn first_hit(envelope: &Envelope, placed: &Placed) -> Option<Hit> {
-    let mut first = None;
-    envelope.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
-        first = Some(hit);
-        false
-    });
-    first
-}
-
 #[test]
 fn validation_frames_agree_with_the_chain() {
     let mut rng = SplitMix64::new(7);
@@ -65,7 +56,7 @@ fn every_shipped_robot_has_a_body_and_starts_clear() {
         let (envelope, placed) = placed(&robot, &robot.home());
         assert!(envelope.len() >= 3, "{name}: {} capsules", envelope.len());
         assert!(envelope.pair_count() >= 1, "{name}");
-        assert_eq!(first_hit(&envelope, &placed), None, "{name}");
+        assert_eq!(envelope.first_hit(&placed), None, "{name}");
         let (gap, _) = envelope.nearest(&placed);
         assert!(gap.is_finite() && gap >= 0.0, "{name}: {gap}");
     }
@@ -145,6 +136,41 @@ fn a_home_pose_in_collision_is_refused_naming_the_link_and_obstacle() {
     );
 }
 
+/// The bounds hold the tool's capsules; boxes keep out every link (docs/safety.md): ranger-mk1
+/// at home with its elbow past a bound is clear while its tool is inside, and a bound under
+/// the tool's shaft is a hit of link 6.
+#[test]
+fn the_bounds_hold_the_tool_and_boxes_keep_out_the_whole_arm() {
+    let mut config = robot("ranger-mk1").into_config();
+    // The elbow stands at y = 0.558, the tool's shaft at y = 0.02.
+    config.workspace.bounds[3] = 0.3;
+    let valid = config.clone().validate().unwrap();
+    let (envelope, placed) = placed(&valid, &config.home());
+    assert_eq!(envelope.first_hit(&placed), None);
+    // The tool's shaft reaches from z = 0.402 to 0.666.
+    config.workspace.bounds[5] = 0.6;
+    let error = config.clone().validate().unwrap_err();
+    let hit = Hit {
+        link: 6,
+        obstacle: Obstacle::Bounds,
+    };
+    assert_eq!(error.reason, ConfigReason::HomeInCollision(hit));
+    // The same elbow in a box is a hit.
+    config.workspace.bounds[5] = 2.0;
+    config.workspace.boxes.push([-0.1, 0.1, 0.5, 0.6, 0.3, 0.5]).unwrap();
+    let error = config.validate().unwrap_err();
+    assert!(
+        matches!(
+            error.reason,
+            ConfigReason::HomeInCollision(Hit {
+                link: 2 | 3,
+                obstacle: Obstacle::Box(2),
+            })
+        ),
+        "{error}"
+    );
+}
+
 #[test]
 fn disabled_bodies_have_no_capsules() {
     let mut config = robot("ranger-mk1").into_config();
@@ -152,7 +178,7 @@ fn disabled_bodies_have_no_capsules() {
     config.collision.enabled = false;
     let (envelope, placed) = placed(&config.clone().validate().unwrap(), &config.home());
     assert!(envelope.is_empty());
-    assert_eq!(first_hit(&envelope, &placed), None);
+    assert_eq!(envelope.first_hit(&placed), None);
 }
 
 /// The sweep bound: over a joint step from random poses, no point of any capsule (its ends

@@ -17,7 +17,9 @@
 //! * **Boxes** are checked against every capsule except where a capsule has an end fixed in
 //!   the world (within about 1 cm of every joint axis before it) within the box: the links the box's column
 //!   carries (the base, a shoulder), which no pose can take out of it.
-//! * **Bounds**: every capsule must stay inside.
+//! * **Bounds** hold the tool: its capsules (link n's) must stay inside. Bounds are drawn
+//!   around the tool's reach (ur5's calibration poses put the wrist's capsules past them while
+//!   the tool point is inside); a floor or wall the whole arm must clear is a box.
 
 use heapless::Vec;
 
@@ -82,6 +84,8 @@ pub struct Envelope {
     bounds: [f64; 6],
     boxes: Vec<[f64; 6], { super::MAX_BOXES }>,
     margin: f64,
+    /// The tool's link (n): only its capsules are held to the bounds.
+    tool: u8,
 }
 
 impl Envelope {
@@ -94,6 +98,7 @@ impl Envelope {
             bounds: config.workspace.bounds,
             boxes: config.workspace.boxes.clone(),
             margin: config.collision.margin,
+            tool: config.joints.len().min(MAX_JOINTS) as u8,
         };
         if !config.collision.enabled {
             return envelope;
@@ -300,9 +305,11 @@ impl Envelope {
         let margin = self.margin;
         let body = self.capsules.iter().zip(placed).zip(grow);
         for ((c, p), g) in body.clone() {
-            let gap = p.clearance_in(&self.bounds) - g;
-            if gap <= margin && !visit(hit(c.link, Obstacle::Bounds), gap) {
-                return;
+            if c.link == self.tool {
+                let gap = p.clearance_in(&self.bounds) - g;
+                if gap <= margin && !visit(hit(c.link, Obstacle::Bounds), gap) {
+                    return;
+                }
             }
             for (k, bx) in self.boxes.iter().enumerate() {
                 if c.mounted & box_bit(k) != 0 {
@@ -332,6 +339,17 @@ impl Envelope {
                 return;
             }
         }
+    }
+
+    /// The first hit of the placed capsules (not grown), if any: the check of a pose at rest
+    /// (a robot file's home, a calibration plan's poses).
+    pub fn first_hit(&self, placed: &Placed) -> Option<Hit> {
+        let mut first = None;
+        self.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+            first = Some(hit);
+            false
+        });
+        first
     }
 
     /// The smallest gap of the placed capsules (not grown) to anything they are checked

@@ -399,16 +399,7 @@ impl RobotConfig {
         let envelope = Envelope::new(self);
         let mut placed: Placed = [Capsule::default(); super::envelope::MAX_CAPSULES];
         envelope.place(&frames_at(self, &self.home()), &mut placed);
-        let mut first = None;
-        envelope.hits(
-            &placed,
-            &[0.0; super::envelope::MAX_CAPSULES],
-            &mut |hit, _| {
-                first = Some(hit);
-                false
-            },
-        );
-        match first {
+        match envelope.first_hit(&placed) {
             Some(hit) => Err(ConfigError::top(
                 "collision",
                 ConfigReason::HomeInCollision(hit),
