@@ -31,7 +31,7 @@ fn hits(envelope: &Envelope, config: &ValidRobot, q: &[f64]) -> Vec<Hit> {
     let mut placed: Placed = [Capsule::default(); MAX_CAPSULES];
     envelope.place(&frames_at(config, q), &mut placed);
     let mut all = Vec::new();
-    envelope.hits(&placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+    envelope.hits(&placed, &mut |hit, _| {
         all.push(hit);
         true
     });

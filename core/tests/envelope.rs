@@ -157,7 +157,11 @@ fn the_bounds_hold_the_tool_and_boxes_keep_out_the_whole_arm() {
     assert_eq!(error.reason, ConfigReason::HomeInCollision(hit));
     // The same elbow in a box is a hit.
     config.workspace.bounds[5] = 2.0;
-    config.workspace.boxes.push([-0.1, 0.1, 0.5, 0.6, 0.3, 0.5]).unwrap();
+    config
+        .workspace
+        .boxes
+        .push([-0.1, 0.1, 0.5, 0.6, 0.3, 0.5])
+        .unwrap();
     let error = config.validate().unwrap_err();
     assert!(
         matches!(
@@ -182,36 +186,47 @@ fn disabled_bodies_have_no_capsules() {
 }
 
 /// The sweep bound: over a joint step from random poses, no point of any capsule (its ends
-/// and points between, at any fraction of the step) moves further than the bound.
+/// and points between, at any fraction of the step) moves further than the bound, in the world
+/// and in the frame of every link inside it (what a pair's gap can close by).
 #[test]
 fn no_point_of_a_capsule_sweeps_further_than_the_bound() {
     let mut rng = SplitMix64::new(35);
     for (name, robot) in all_robots() {
         let chain = Chain::new(&robot);
         let envelope = Envelope::new(&robot);
+        let links = robot.joints.len() as u8;
         for _ in 0..200 {
             let from = chain.random_joints(&mut rng);
             let mut step = from;
             for s in step.iter_mut() {
                 *s = rng.uniform(-0.3, 0.3);
             }
-            let mut bound = [0.0; MAX_CAPSULES];
-            envelope.sweep(&step, &mut bound);
-            let start = place(&envelope, &robot, &from);
+            let (start, start_frames) = (place(&envelope, &robot, &from), frames_at(&robot, &from));
             for k in 1..=8 {
                 let mut q = from;
                 for (q, s) in q.iter_mut().zip(step.iter()) {
                     *q += s * f64::from(k) / 8.0;
                 }
-                let now = place(&envelope, &robot, &q);
+                let (now, frames) = (place(&envelope, &robot, &q), frames_at(&robot, &q));
                 for c in 0..envelope.len() {
-                    for t in [0.0, 0.3, 1.0] {
-                        let moved = (now[c].segment.at(t) - start[c].segment.at(t)).norm();
-                        assert!(
-                            moved <= bound[c] + 1e-12,
-                            "{name} capsule {c}: {moved} > {}",
-                            bound[c]
-                        );
+                    // Inner link 0 with the world's frame: the box's and the bounds' bound.
+                    for inner in 0..=envelope.link_of(c).unwrap().min(links) {
+                        let bound = envelope.sweep(c, &step, inner);
+                        let (before, after) = if inner == 0 {
+                            (Frame::identity(), Frame::identity())
+                        } else {
+                            let i = usize::from(inner);
+                            (start_frames[i].inverse(), frames[i].inverse())
+                        };
+                        for t in [0.0, 0.3, 1.0] {
+                            let was = before.transform_point(&start[c].segment.at(t).into());
+                            let is = after.transform_point(&now[c].segment.at(t).into());
+                            let moved = (is - was).norm();
+                            assert!(
+                                moved <= bound + 1e-12,
+                                "{name} capsule {c} against link {inner}: {moved} > {bound}"
+                            );
+                        }
                     }
                 }
             }

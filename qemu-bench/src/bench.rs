@@ -149,7 +149,9 @@ fn measure_robot(config: &ValidRobot) -> Results {
         for v in v.iter_mut() {
             *v *= velocities.uniform(-1.0, 1.0);
         }
-        let (ticks, _) = measure(|| black_box(&mut body).check_tick(&chain, black_box(&q), &v));
+        let (ticks, _) = measure(|| {
+            black_box(&mut body).check_tick(&chain, black_box(&q), &v, f64::INFINITY)
+        });
         results.body_tick.add(ticks);
 
         if sample < LINE_CHECKS {

@@ -279,35 +279,36 @@ impl Envelope {
         }
     }
 
-    /// How far each capsule can sweep when the joints step by `step` (m, `out[..len()]`): no
-    /// point of capsule c moves further than `out[c]` over the step, whatever the pose.
-    pub fn sweep(&self, step: &[f64], out: &mut [f64; MAX_CAPSULES]) {
-        for (c, o) in self.capsules.iter().zip(out.iter_mut()) {
-            *o = c
-                .reach
-                .iter()
-                .zip(step)
-                .map(|(r, dq)| r * libm::fabs(*dq))
-                .sum();
-        }
+    /// How far capsule `index` can sweep when the joints step by `step` (m), relative to link
+    /// `inner`'s frame (0: the world): no point of it moves further over the step, whatever
+    /// the pose. Joint k moves links k+1 onwards, so against a capsule on link `inner` only
+    /// the joints from `inner`'s on count: under the others both move as one and their gap
+    /// stays as it is (ur5's wrist capsules, 1.2 cm apart whatever joint 5 does, were grown by
+    /// the whole arm's sweep and refused `L6 hits L4`).
+    pub fn sweep(&self, index: usize, step: &[f64], inner: u8) -> f64 {
+        self.capsules.get(index).map_or(0.0, |c| {
+            let moving = c.reach.iter().zip(step).skip(usize::from(inner));
+            moving.map(|(r, dq)| r * libm::fabs(*dq)).sum()
+        })
     }
 
-    /// Calls `visit` with every hit of the placed capsules, each grown by `grow[c]` (m), and
-    /// the gap it was found at, until `visit` returns false: a capsule within the margin of a
-    /// box or of the bounds' faces, or of another capsule it is checked against (touching
-    /// included: with the margin 0, a gap of 0 is a hit).
-    pub fn hits(
+    /// Calls `visit(hit, gap, rate)` for everything the placed capsules are checked against
+    /// whose gap (m) is within `within` of the margin, until `visit` returns false: each
+    /// capsule against the boxes (and the tool's against the bounds' faces), and each pair.
+    /// `rate`: how far the gap can close when the joints step by `step` (0 without one).
+    pub fn gaps(
         &self,
         placed: &Placed,
-        grow: &[f64; MAX_CAPSULES],
-        visit: &mut dyn FnMut(Hit, f64) -> bool,
+        step: Option<&[f64]>,
+        within: f64,
+        visit: &mut dyn FnMut(Hit, f64, f64) -> bool,
     ) {
-        let margin = self.margin;
-        let body = self.capsules.iter().zip(placed).zip(grow);
-        for ((c, p), g) in body.clone() {
+        let near = self.margin + within;
+        let rate = |i: usize, inner: u8| step.map_or(0.0, |s| self.sweep(i, s, inner));
+        for (i, (c, p)) in self.capsules.iter().zip(placed).enumerate() {
             if c.link == self.tool {
-                let gap = p.clearance_in(&self.bounds) - g;
-                if gap <= margin && !visit(hit(c.link, Obstacle::Bounds), gap) {
+                let gap = p.clearance_in(&self.bounds);
+                if gap <= near && !visit(hit(c.link, Obstacle::Bounds), gap, rate(i, 0)) {
                     return;
                 }
             }
@@ -315,10 +316,9 @@ impl Envelope {
                 if c.mounted & box_bit(k) != 0 {
                     continue;
                 }
-                let gap = p.gap_to_box(bx) - g;
-                if gap <= margin
-                    && !visit(hit(c.link, Obstacle::Box((k as u8).saturating_add(1))), gap)
-                {
+                let gap = p.gap_to_box(bx);
+                let obstacle = Obstacle::Box((k as u8).saturating_add(1));
+                if gap <= near && !visit(hit(c.link, obstacle), gap, rate(i, 0)) {
                     return;
                 }
             }
@@ -331,37 +331,41 @@ impl Envelope {
             let (Some(pa), Some(pb)) = (placed.get(i), placed.get(j)) else {
                 continue;
             };
-            let grown = grow.get(i).unwrap_or(&0.0) + grow.get(j).unwrap_or(&0.0);
-            let gap = pa.gap_to_capsule(pb) - grown;
-            // Named from the outer link, against the inner one: `L5 hits L2`.
-            let (outer, inner) = (a.link.max(b.link), a.link.min(b.link));
-            if gap <= margin && !visit(hit(outer, Obstacle::Link(inner)), gap) {
+            let gap = pa.gap_to_capsule(pb);
+            // Named from the outer link, against the inner one: `L5 hits L2`; the outer one
+            // moves against the inner one's frame.
+            let (outer, inner) = if a.link > b.link { (i, b) } else { (j, a) };
+            let name = hit(a.link.max(b.link), Obstacle::Link(inner.link));
+            if gap <= near && !visit(name, gap, rate(outer, inner.link)) {
                 return;
             }
         }
     }
 
-    /// The first hit of the placed capsules (not grown), if any: the check of a pose at rest
-    /// (a robot file's home, a calibration plan's poses).
+    /// Calls `visit` with every hit of the placed capsules and the gap it was found at, until
+    /// `visit` returns false: a capsule within the margin of a box (the tool's: of the bounds'
+    /// faces), or of another capsule it is checked against (touching included: with the
+    /// margin 0, a gap of 0 is a hit).
+    pub fn hits(&self, placed: &Placed, visit: &mut dyn FnMut(Hit, f64) -> bool) {
+        self.gaps(placed, None, 0.0, &mut |hit, gap, _| visit(hit, gap));
+    }
+
+    /// The first hit of the placed capsules, if any: the check of a pose at rest (a robot
+    /// file's home, a calibration plan's poses).
     pub fn first_hit(&self, placed: &Placed) -> Option<Hit> {
         let mut first = None;
-        self.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+        self.hits(placed, &mut |hit, _| {
             first = Some(hit);
             false
         });
         first
     }
 
-    /// The smallest gap of the placed capsules (not grown) to anything they are checked
-    /// against (m; infinite for an empty body), and to what.
+    /// The smallest gap of the placed capsules to anything they are checked against (m;
+    /// infinite for an empty body), and to what.
     pub fn nearest(&self, placed: &Placed) -> (f64, Option<Hit>) {
         let mut nearest = (f64::INFINITY, None);
-        // Every gap counts: a margin of infinity reports them all.
-        let all = Self {
-            margin: f64::INFINITY,
-            ..self.clone()
-        };
-        all.hits(placed, &[0.0; MAX_CAPSULES], &mut |hit, gap| {
+        self.gaps(placed, None, f64::INFINITY, &mut |hit, gap, _| {
             if gap < nearest.0 {
                 nearest = (gap, Some(hit));
             }

@@ -3,9 +3,10 @@
 //! arm inside the envelope").
 //!
 //! * **Before a joint move starts** ([`Body::check_path`]) its whole straight way in joint
-//!   space is checked piece by piece, every capsule grown by what it can sweep over half a
-//!   piece (a bound from the joint steps and each link's reach from every axis), so no
-//!   contact between the checked poses is missed: `ER25 Cmd jB L3 hits B1 at 40%`.
+//!   space is checked by conservative advancement: from each checked pose on, the way is
+//!   clear as far as the nearest gap can close (a bound from the joint steps and each link's
+//!   reach from every axis), so no contact between the checked poses is missed:
+//!   `ER25 Cmd jB L3 hits B1 at 40%`.
 //! * **Every tick** ([`Body::check_tick`]) the commanded pose and the pose where a stop begun
 //!   now would end are checked; a new hit stops the motion (`ER21 L3 hits B1`).
 //!
@@ -15,6 +16,7 @@
 use heapless::Vec;
 
 use super::Refusal;
+use super::brake::budget;
 use crate::MAX_JOINTS;
 use crate::config::{Envelope, MAX_CAPSULES, Placed, ValidRobot};
 use crate::geometry::Capsule;
@@ -22,17 +24,16 @@ use crate::kinematics::{Chain, Joints};
 use crate::math::Frame;
 use armgate_protocol::client::{Hit, PathPoint};
 
-/// The most a capsule may sweep over one piece of a checked joint move (m): the pieces are
-/// cut so, up to [`MAX_PATH_SAMPLES`].
-pub const SWEEP_STEP: f64 = 0.01;
-/// The most pieces of one joint move's check: beyond it the capsules grow by more than half
-/// of [`SWEEP_STEP`] (and more pieces are halved).
-pub const MAX_PATH_SAMPLES: u16 = 256;
-/// How often a piece of a checked joint move may be halved where its grown check hits.
-const HALVINGS: u8 = 8;
-/// The most checks (a pose and all its pairs) of one joint move: the pieces and their halves.
-/// Spent, a piece that would need halving is refused.
-pub const MAX_PATH_CHECKS: u16 = 2048;
+/// The most poses one joint move's check places, per second of the control period: spent,
+/// the move is refused `near edge` at the point reached. One check (a pose, every gap) costs
+/// up to about 9,000 Cortex-M7 instructions (ur5, qemu-bench); at 480 MHz this keeps a check
+/// within a quarter of the period (ur5: 67 checks, ranger-mk1: 259), the planning request's
+/// share of a tick.
+pub const CHECKS_PER_SECOND: f64 = 13_333.0;
+/// The gap beyond the margin a joint move's check counts as contact (m): advancing towards an
+/// obstacle, each step covers a part of the room left, so contact itself is only ever
+/// approached; at 1 mm it is called.
+pub const CONTACT: f64 = 0.001;
 /// The most hits remembered as already present.
 const PRESENT: usize = 8;
 
@@ -44,6 +45,8 @@ pub struct Body {
     a_max: Joints,
     /// Control period (s).
     period: f64,
+    /// The most poses a joint move's check places ([`CHECKS_PER_SECOND`]).
+    max_checks: u16,
     /// The hits of the last tick's poses: a stop is for new ones.
     present: Vec<Hit, PRESENT>,
 }
@@ -55,6 +58,8 @@ impl Body {
             envelope: Envelope::new(config),
             a_max: config.per_joint(|j| j.max_acceleration),
             period: config.control_period,
+            // Saturating cast: at least one check.
+            max_checks: ((config.control_period * CHECKS_PER_SECOND) as u16).max(1),
             present: Vec::new(),
         }
     }
@@ -83,16 +88,22 @@ impl Body {
         true
     }
 
-    /// Refuses the joint move from `from` to `to` if a capsule would come within the margin of
-    /// a box, the bounds or another capsule on the way, naming the link, the obstacle and
-    /// where (percent of the way). Hits present at `from` do not count.
+    /// The most poses a joint move's check places.
+    pub fn max_checks(&self) -> u16 {
+        self.max_checks
+    }
+
+    /// Refuses the joint move from `from` to `to` if a capsule would come within the margin
+    /// (and [`CONTACT`]) of a box, the bounds or another capsule on the way, naming the link,
+    /// the obstacle and where (percent of the way). What is that near at `from` does not count.
     ///
-    /// The way is cut into pieces over which no capsule sweeps more than [`SWEEP_STEP`]; each
-    /// piece is checked at its middle with every capsule grown by what it may sweep over half
-    /// the piece, which covers the whole piece. A piece whose grown check hits but whose
-    /// middle does not is halved and each half checked the same way (down to 1/256 of a
-    /// piece; a hit still there refuses), so an arm that starts or passes close to an obstacle
-    /// is not refused for the growth alone.
+    /// Conservative advancement: at each checked pose every gap is measured, and the way is
+    /// clear as far as the nearest gap can close at its sweep bound (a joint step Δq moves a
+    /// point at most |Δq| times its distance from the joint's axis; a pair counts only the
+    /// joints between its links). The next pose is there, so no contact between checked
+    /// poses is missed and the steps are long where the arm is far from everything. A way
+    /// that needs more than [`max_checks`](Self::max_checks) poses (it grazes something) is
+    /// refused `near edge` where the check stopped.
     pub fn check_path(&self, chain: &Chain, from: &Joints, to: &Joints) -> Result<(), Refusal> {
         if self.envelope.is_empty() {
             return Ok(());
@@ -101,87 +112,75 @@ impl Body {
         if !self.place(chain, from, &mut placed) {
             return Ok(());
         }
+        // What is within contact at the start does not count.
         let mut start: Vec<Hit, PRESENT> = Vec::new();
         self.envelope
-            .hits(&placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
+            .gaps(&placed, None, CONTACT, &mut |hit, _, _| {
                 start.push(hit).is_ok()
             });
         let mut step = *to;
         for (s, f) in step.iter_mut().zip(from.iter()) {
             *s -= f;
         }
-        let mut whole = [0.0; MAX_CAPSULES];
-        self.envelope.sweep(&step, &mut whole);
-        let longest = whole.iter().fold(0.0f64, |m, s| m.max(*s));
-        // Saturating cast: NaN becomes 0, then 1 piece.
-        let pieces = ((longest / SWEEP_STEP) as u16).clamp(1, MAX_PATH_SAMPLES);
-        let piece = 1.0 / f64::from(pieces);
-        let mut budget = MAX_PATH_CHECKS;
-        // Pieces still to check, as (start, length) fractions; the nearest first.
-        let mut todo: Vec<(f64, f64), { HALVINGS as usize + 2 }> = Vec::new();
-        for k in 0..pieces {
-            let _ = todo.push((f64::from(k) * piece, piece));
-            while let Some((a, length)) = todo.pop() {
-                budget = budget.saturating_sub(1);
-                let middle = a + 0.5 * length;
-                let mut q = *from;
-                for (q, s) in q.iter_mut().zip(step.iter()) {
-                    *q += middle * s;
-                }
-                if !self.place(chain, &q, &mut placed) {
-                    continue;
-                }
-                let mut grow = whole;
-                for g in &mut grow {
-                    *g *= 0.5 * length;
-                }
-                let new_hit = |grow: &[f64; MAX_CAPSULES]| {
-                    let mut found = None;
-                    self.envelope.hits(&placed, grow, &mut |hit, _| {
-                        if start.contains(&hit) {
-                            return true;
-                        }
-                        found = Some(hit);
-                        false
-                    });
-                    found
-                };
-                let Some(grown) = new_hit(&grow) else {
-                    continue;
-                };
-                let halves_left = length > piece / f64::from(1u32 << HALVINGS) && budget > 0;
-                let refuse = |hit| Err(Refusal::Hits(hit, PathPoint::at(middle)));
-                if !halves_left {
-                    return refuse(grown);
-                }
-                if let Some(hit) = new_hit(&[0.0; MAX_CAPSULES]) {
-                    return refuse(hit);
-                }
-                // The far half below the near one: the nearest hit is found first. (The list
-                // holds a piece and its halvings by construction; were it full, refuse.)
-                let half = 0.5 * length;
-                if todo.push((a + half, half)).is_err() || todo.push((a, half)).is_err() {
-                    return refuse(grown);
-                }
+        let margin = self.envelope.margin();
+        let mut done = 0.0;
+        for _ in 0..self.max_checks {
+            let mut q = *from;
+            for (q, s) in q.iter_mut().zip(step.iter()) {
+                *q += done * s;
+            }
+            if !self.place(chain, &q, &mut placed) {
+                return Ok(());
+            }
+            let (mut advance, mut hit_here) = (f64::INFINITY, None);
+            self.envelope.gaps(
+                &placed,
+                Some(&step),
+                f64::INFINITY,
+                &mut |hit, gap, rate| {
+                    if start.contains(&hit) {
+                        return true;
+                    }
+                    let room = gap - margin;
+                    // Not clear (NaN included): a hit here.
+                    if !(room > CONTACT) {
+                        hit_here = Some(hit);
+                        return false;
+                    }
+                    advance = advance.min(room / rate);
+                    true
+                },
+            );
+            if let Some(hit) = hit_here {
+                return Err(Refusal::Hits(hit, PathPoint::at(done)));
+            }
+            done += advance;
+            if done >= 1.0 {
+                return Ok(());
             }
         }
-        Ok(())
+        Err(Refusal::NearEdge(PathPoint::at(done)))
     }
 
     /// Checks the tick's command `q` and the pose where a stop from the commanded `velocity`
     /// would end: a hit that was not present at the last check is returned (the caller stops
-    /// the motion). Where the stop ends is estimated as the joint-space stop does it: every
-    /// joint braking by one fraction, in the time the slowest needs at its acceleration
-    /// limit, after the period already commanded: `q + v (T/2 + period)`, `T = max |v|/a`.
-    pub fn check_tick(&mut self, chain: &Chain, q: &Joints, velocity: &Joints) -> Option<Hit> {
+    /// the motion). Where the stop ends is estimated by the supervisor's braking profile: the
+    /// speed scale falls by one fraction a tick, as fast as every joint's acceleration limit
+    /// and `path_rate` (a Cartesian path's stop also keeps its Cartesian limits: the fall a
+    /// tick they allow, [`budget`]; infinite for none) allow, so the stop takes
+    /// `T = period / rate` and ends near `q + v (T/2 + period)` (along a path to first order).
+    pub fn check_tick(
+        &mut self,
+        chain: &Chain,
+        q: &Joints,
+        velocity: &Joints,
+        path_rate: f64,
+    ) -> Option<Hit> {
         if self.envelope.is_empty() {
             return None;
         }
-        let brake = velocity
-            .iter()
-            .zip(self.a_max.iter())
-            .fold(0.0f64, |t, (v, a)| t.max(libm::fabs(*v) / a));
-        let ahead = 0.5 * brake + self.period;
+        let rate = budget(velocity, &self.a_max, self.period).min(path_rate);
+        let ahead = 0.5 * self.period / rate + self.period;
         let mut rest = *q;
         for (r, v) in rest.iter_mut().zip(velocity.iter()) {
             *r += v * ahead;
@@ -196,17 +195,16 @@ impl Body {
                 continue;
             }
             let present = &self.present;
-            self.envelope
-                .hits(&placed, &[0.0; MAX_CAPSULES], &mut |hit, _| {
-                    if !present.contains(&hit) && new.is_none() {
-                        new = Some(hit);
-                    }
-                    if !now.contains(&hit) {
-                        // Full: the rest are remembered next tick.
-                        let _ = now.push(hit);
-                    }
-                    true
-                });
+            self.envelope.hits(&placed, &mut |hit, _| {
+                if !present.contains(&hit) && new.is_none() {
+                    new = Some(hit);
+                }
+                if !now.contains(&hit) {
+                    // Full: the rest are remembered next tick.
+                    let _ = now.push(hit);
+                }
+                true
+            });
         }
         self.present = now;
         new

@@ -16,7 +16,7 @@ mod stopping;
 mod streaming;
 
 use super::body::Body;
-use super::brake::Brake;
+use super::brake::{Brake, budget};
 use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
@@ -238,10 +238,20 @@ impl Controller {
             }
         }
         // The body where it is commanded and where a stop begun now would end: a new hit stops.
+        // A Cartesian motion's stop brakes along its path within the Cartesian limits too.
+        let path_rate = if self.mode == Mode::Cartesian && !self.stream.is_active() {
+            budget(
+                &self.cartesian_step,
+                &self.cartesian_acceleration,
+                self.period,
+            )
+        } else {
+            f64::INFINITY
+        };
         if let Some(q) = &command
-            && let Some(hit) = self
-                .body
-                .check_tick(&self.chain, q, self.supervisor.velocity())
+            && let Some(hit) =
+                self.body
+                    .check_tick(&self.chain, q, self.supervisor.velocity(), path_rate)
             && !self.supervisor.is_stopping()
         {
             events.collision = Some(hit);

@@ -34,7 +34,7 @@ mod trapezoid;
 mod velocity_stream;
 mod workspace;
 
-pub use body::{Body, MAX_PATH_SAMPLES, SWEEP_STEP};
+pub use body::{Body, CHECKS_PER_SECOND};
 pub use cartesian_generator::CartesianGenerator;
 pub use controller::{Controller, Mode, StepOutput};
 pub use events::Events;
