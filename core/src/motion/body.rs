@@ -26,10 +26,10 @@ use armgate_protocol::client::{Hit, PathPoint};
 
 /// The most poses one joint move's check places, per second of the control period: spent,
 /// the move is refused `near edge` at the point reached. One check (a pose, every gap) costs
-/// up to about 9,000 Cortex-M7 instructions (ur5, qemu-bench); at 480 MHz this keeps a check
-/// within a quarter of the period (ur5: 67 checks, ranger-mk1: 259), the planning request's
-/// share of a tick.
-pub const CHECKS_PER_SECOND: f64 = 13_333.0;
+/// up to about 7,500 Cortex-M7 instructions (ur5, the most pairs; qemu-bench): at 480 MHz
+/// this keeps a check within 40 % of the period, the planning request's share of a tick
+/// (ur5: 129 checks, ranger-mk1: 497).
+pub const CHECKS_PER_SECOND: f64 = 25_600.0;
 /// The gap beyond the margin a joint move's check counts as contact (m): advancing towards an
 /// obstacle, each step covers a part of the room left, so contact itself is only ever
 /// approached; at 1 mm it is called.
