@@ -1641,7 +1641,7 @@ fn a_joint_move_that_swings_the_forearm_through_the_base_column_is_refused() {
     sim.ok("jG", with_joints(&through, 0.0), 0);
     let text = sim.text("jB", [0.0; 7], 0);
     // The link, the box and where: the tool's shaft (link 6, from the wrist centre) enters
-    // the column first, `ER25 Cmd jB L6 hits B1 at 89%`.
+    // the column first, `ER25 Cmd jB L6 hits B1 at 94%`.
     assert!(text.starts_with("ER25 Cmd jB L6 hits B1 at "), "{text}");
     assert!(text.ends_with('%'), "{text}");
     assert!(status(&sim)[4] == 0.0, "nothing moves");

@@ -239,3 +239,41 @@ fn ur5s_wrist_passes_its_neighbours_but_not_through_its_forearm() {
     assert_eq!(body.max_checks(), 129);
     assert_eq!(Body::new(&common::robot("ranger-mk1")).max_checks(), 497);
 }
+
+/// A Cartesian line is checked for the whole arm at each point of its up-front check:
+/// ranger-mk1's 3 cm step from home (the tool point far from everything) swings the elbow
+/// round and 5.6 cm down, into a box put there; refused before the arm moves, naming the
+/// forearm. Without the box the same line is accepted (`line_check.rs` runs it).
+#[test]
+fn a_cartesian_line_that_swings_the_elbow_into_a_box_is_refused() {
+    let config = common::robot("ranger-mk1")
+        .edit(|c| {
+            c.workspace
+                .boxes
+                .push([0.3, 0.6, 0.2, 0.45, 0.3, 0.37])
+                .unwrap()
+        })
+        .unwrap();
+    let mut ctrl = Controller::new(&config);
+    let arm = IdealArm::new(config.home());
+    ctrl.step(0.0, &arm.measured()).unwrap();
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    let home = ctrl.chain().forward(&config.home()).unwrap();
+    let mut there = home;
+    there.translation.vector.x += 0.03;
+    let refusal = ctrl.move_cartesian(there, 0.0).unwrap_err();
+    assert!(
+        matches!(
+            refusal,
+            Refusal::Hits(
+                Hit {
+                    link: 2 | 3,
+                    obstacle: Obstacle::Box(2)
+                },
+                PathPoint::Along(_)
+            )
+        ),
+        "{refusal}"
+    );
+    assert!(!ctrl.is_moving());
+}

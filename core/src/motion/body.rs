@@ -35,7 +35,7 @@ pub const CHECKS_PER_SECOND: f64 = 25_600.0;
 /// approached; at 1 mm it is called.
 pub const CONTACT: f64 = 0.001;
 /// The most hits remembered as already present.
-const PRESENT: usize = 8;
+pub const PRESENT: usize = 8;
 
 /// The body, its checks and the hits already present.
 #[derive(Clone, Debug)]
@@ -160,6 +160,34 @@ impl Body {
             }
         }
         Err(Refusal::NearEdge(PathPoint::at(done)))
+    }
+
+    /// The hits at pose `q` (up to [`PRESENT`]): what a motion from there may leave.
+    pub fn present_at(&self, chain: &Chain, q: &Joints) -> Vec<Hit, PRESENT> {
+        let mut present = Vec::new();
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if self.place(chain, q, &mut placed) {
+            self.envelope
+                .hits(&placed, &mut |hit, _| present.push(hit).is_ok());
+        }
+        present
+    }
+
+    /// The first hit at pose `q` that is not in `present`, if any: a point of a Cartesian
+    /// line's check.
+    pub fn new_hit(&self, chain: &Chain, q: &Joints, present: &[Hit]) -> Option<Hit> {
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        let mut new = None;
+        if self.place(chain, q, &mut placed) {
+            self.envelope.hits(&placed, &mut |hit, _| {
+                if present.contains(&hit) {
+                    return true;
+                }
+                new = Some(hit);
+                false
+            });
+        }
+        new
     }
 
     /// Checks the tick's command `q` and the pose where a stop from the commanded `velocity`

@@ -34,6 +34,7 @@
 use armgate_protocol::client::{JointBound, PathPoint};
 
 use super::Refusal;
+use super::body::Body;
 use super::workspace::Workspace;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints, SeedAngles};
@@ -82,6 +83,8 @@ pub(super) struct Reach<'a> {
     pub speed: &'a [f64; 6],
     /// The joints' rate limits.
     pub max_rate: &'a Joints,
+    /// The arm's body: each point of the line is checked for it.
+    pub body: &'a Body,
 }
 
 /// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
@@ -152,6 +155,8 @@ impl Reach<'_> {
         let mut points = [reached, reached];
         let mut last = 0;
         let mut too_fast = None;
+        // What the arm already touches at the start does not count (it may move out).
+        let present = self.body.present_at(self.chain, seed);
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
                 break;
@@ -193,6 +198,11 @@ impl Reach<'_> {
                     too_fast.get_or_insert(Refusal::TooFast(joint, at));
                 }
                 None => {}
+            }
+            // The whole arm at each point of the line (between points the tick's check
+            // stands guard: it stops the motion before a link arrives).
+            if let Some(hit) = self.body.new_hit(self.chain, &tried.q, &present) {
+                return Err(Refusal::Hits(hit, at));
             }
             needs = needs.max(step_needs(&here.q, &tried.q, self.max_rate, next - done));
             (done, last) = (next, 1 - last);

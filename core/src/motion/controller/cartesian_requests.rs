@@ -44,6 +44,7 @@ impl Controller {
             iterations_left: check_iterations(self.period),
             speed: &self.cartesian_speed,
             max_rate: &self.max_rate,
+            body: &self.body,
         })
     }
 
