@@ -143,7 +143,7 @@ impl Body {
                     }
                     let room = gap - margin;
                     // Not clear (NaN included): a hit here.
-                    if !(room > CONTACT) {
+                    if room.is_nan() || room <= CONTACT {
                         hit_here = Some(hit);
                         return false;
                     }
