@@ -72,6 +72,8 @@ struct Results {
     body_tick: Timing,
     body_path: Timing,
     paths_refused: u32,
+    /// The most poses one joint move's check places (`Body::max_checks`).
+    path_checks: u16,
     unreachable: Timing,
     unreachable_iterations: u32,
     iterations: u64,
@@ -117,7 +119,10 @@ pub fn run(counter: &Counter) -> bool {
 fn measure_robot(config: &ValidRobot) -> Results {
     let chain = Chain::new(config);
     let mut body = Body::new(config);
-    let mut results = Results::default();
+    let mut results = Results {
+        path_checks: body.max_checks(),
+        ..Results::default()
+    };
     let mut rng = SplitMix64::new(SEED);
     let mut goals = SplitMix64::new(LINE_SEED);
     let mut velocities = SplitMix64::new(BODY_SEED);
@@ -377,6 +382,14 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         mean,
         max,
         100.0 * f64::from(results.paths_refused) / f64::from(results.body_path.calls.max(1))
+    );
+    // The check's worst case: its poses are capped (each costs about what one pose of the
+    // tick's check costs, and the sweep bounds of every gap).
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9} poses at most |               - |         - |",
+        name,
+        "body check, jB cap",
+        results.path_checks
     );
     let (mean, max) = results.unreachable.instructions(counter);
     hprintln!(
