@@ -295,7 +295,9 @@ impl Envelope {
     /// Calls `visit(hit, gap, rate)` for everything the placed capsules are checked against
     /// whose gap (m) is within `within` of the margin, until `visit` returns false: each
     /// capsule against the boxes (and the tool's against the bounds' faces), and each pair.
-    /// `rate`: how far the gap can close when the joints step by `step` (0 without one).
+    /// `rate`: how far the gap can close when the joints step by `step` (0 without one). Out
+    /// of line on the microcontroller: one copy for its callers.
+    #[cfg_attr(target_os = "none", inline(never))]
     pub fn gaps(
         &self,
         placed: &Placed,

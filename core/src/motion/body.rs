@@ -70,7 +70,9 @@ impl Body {
     }
 
     /// The capsules at pose `q`, placed by the chain's frames (false if `q` does not fit the
-    /// chain).
+    /// chain). Out of line on the microcontroller: one copy of the chain's walk for the
+    /// checks' four callers.
+    #[cfg_attr(target_os = "none", inline(never))]
     pub fn place(&self, chain: &Chain, q: &Joints, out: &mut Placed) -> bool {
         let mut links = [Frame::identity(); MAX_JOINTS];
         let Ok(tool) = chain.link_frames(q, &mut links) else {
