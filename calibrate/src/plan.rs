@@ -2,16 +2,13 @@
 //! determined.
 //!
 //! Candidates are drawn uniformly within the joint limits (fixed seed) and kept if the nominal
-//! tool position lies in the robot's workspace and the whole arm is clear there by the core's
-//! own check (no link in a box or in another link, the tool's capsules inside the bounds), so
-//! the controller accepts every pose of a plan. From them, N poses are chosen greedily to
+//! tool position lies in the robot's workspace. From them, N poses are chosen greedily to
 //! maximise `det(JᵀJ)` of the scaled identification Jacobian — equivalently the observability
 //! index O1 = (σ₁…σ_m)^(1/m) / √N (Borm and Menq) — each step adding the candidate with the
 //! largest `det(I + B M⁻¹ Bᵀ)`, where B is its 3-row block and M the information so far; then
 //! exchange passes swap a chosen pose for a candidate while that raises the determinant.
 
-use armgate_core::config::{Envelope, MAX_CAPSULES, ValidRobot, frames_at};
-use armgate_core::geometry::Capsule;
+use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Chain;
 use armgate_core::motion::Workspace;
 use armgate_core::rng::SplitMix64;
@@ -29,7 +26,7 @@ const PRIOR: f64 = 1e-6;
 /// Why no plan could be made.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PlanError {
-    /// Too few random configurations put the tool inside the workspace with the arm clear.
+    /// Too few random configurations put the tool inside the workspace.
     Unreachable {
         /// Configurations found.
         found: usize,
@@ -43,7 +40,7 @@ impl std::fmt::Display for PlanError {
         match self {
             Self::Unreachable { found, wanted } => write!(
                 f,
-                "only {found} of {wanted} random configurations put the tool inside the workspace with the arm clear"
+                "only {found} of {wanted} random configurations put the tool inside the workspace"
             ),
         }
     }
@@ -52,7 +49,7 @@ impl std::fmt::Display for PlanError {
 impl std::error::Error for PlanError {}
 
 /// `count` random joint configurations within the limits whose nominal tool position the
-/// workspace allows and whose body is clear, from generator `seed`.
+/// workspace allows, from generator `seed`.
 pub fn random_poses(
     config: &ValidRobot,
     count: usize,
@@ -60,8 +57,6 @@ pub fn random_poses(
 ) -> Result<Vec<Vec<f64>>, PlanError> {
     let chain = Chain::new(config);
     let workspace = Workspace::new(&config.workspace);
-    let envelope = Envelope::new(config);
-    let mut placed = [Capsule::default(); MAX_CAPSULES];
     let mut rng = SplitMix64::new(seed);
     let mut poses = Vec::with_capacity(count);
     for _ in 0..count.saturating_mul(DRAWS_PER_POSE) {
@@ -73,10 +68,6 @@ pub fn random_poses(
             .forward(&q)
             .is_ok_and(|tool| workspace.allows(&tool.translation.vector))
         {
-            envelope.place(&frames_at(config, &q), &mut placed);
-            if envelope.first_hit(&placed).is_some() {
-                continue;
-            }
             poses.push(q.to_vec());
         }
     }
