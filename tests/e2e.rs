@@ -687,7 +687,8 @@ fn bad_input_gets_its_documented_reply_and_the_controller_keeps_answering() {
     );
 
     // An out-of-reach goal (inside the bounds, 1.8 m out) is refused up front, with where
-    // along the line the arm would lose it; the arm does not move.
+    // along the line the arm would lose it (or, from the stowed home, where the line would
+    // first lower the forearm into the base column, issue 35); the arm does not move.
     sim.ok("CM", [2.0, 0., 0., 0., 0., 0., 0.], 0);
     let ps = sim.ok("PS", [0.0; 7], 0);
     sim.ok("GL", [1.8, 0.0, 0.6, ps[3], ps[4], ps[5], ps[6]], 0);
@@ -701,7 +702,9 @@ fn bad_input_gets_its_documented_reply_and_the_controller_keeps_answering() {
         }
     };
     assert!(
-        refusal.starts_with("ER25 Cmd BG unreachable at ") || refusal.starts_with("ER26 Cmd BG j"),
+        refusal.starts_with("ER25 Cmd BG unreachable at ")
+            || refusal.starts_with("ER26 Cmd BG j")
+            || refusal.starts_with("ER25 Cmd BG L3 hits B1 at "),
         "{refusal}"
     );
     assert_eq!(&sim.ok("PS", [0.0; 7], 0)[..3], &ps[..3]);
@@ -1604,8 +1607,8 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
         "ranger-mk1",
         |text| {
             text.replace(
-                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]]",
-                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4], {b:?}]"),
+                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35]]",
+                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35], {b:?}]"),
             )
         },
         &start,
@@ -1630,6 +1633,27 @@ fn a_joint_move_into_an_exclusion_box_is_refused_and_of_while_moving_stops_first
     assert_eq!((s[1], s[4]), (2.0, 6.0), "{s:?}");
     assert_eq!(stop_cause(&sim)[0], 3.0);
     wait_drives(&sim, 0.0);
+}
+
+#[test]
+fn a_joint_move_that_swings_the_forearm_through_the_base_column_is_refused() {
+    // Issue 35's measured repro: the tool ends just outside the column, the wrist centre
+    // 3.5 cm inside it, and the forearm sweeps through it on the way.
+    let sim = Sim::start_with("ranger-mk1", &["--start", "1.5708,0.6,-0.4,0.2,1.8,0.1"]);
+    if !knows_status(&sim) {
+        return;
+    }
+    armgate(&sim, &["on"]).0.unwrap();
+    wait_drives(&sim, 2.0);
+    sim.ok("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let through = [0.727f32, 1.084, 1.506, -2.849, 3.481, -1.322];
+    sim.ok("jG", with_joints(&through, 0.0), 0);
+    let text = sim.text("jB", [0.0; 7], 0);
+    // The link, the box and where: the tool's shaft (link 6, from the wrist centre) enters
+    // the column first, `ER25 Cmd jB L6 hits B1 at 94%`.
+    assert!(text.starts_with("ER25 Cmd jB L6 hits B1 at "), "{text}");
+    assert!(text.ends_with('%'), "{text}");
+    assert!(status(&sim)[4] == 0.0, "nothing moves");
 }
 
 #[test]
@@ -1709,14 +1733,18 @@ fn the_gl_gt_round_trip_from_home_arrives() {
     assert_eq!(stop_cause(&sim)[0], 0.0, "no stop on the way");
 }
 
-/// The issue 33 ur5 `calibrate plan` move, from its first pose to its second.
+/// The issue 33 ur5 `calibrate plan` move, from its first pose to (nearly) its second. The
+/// second pose itself has the tool's capsule 4 mm past the bounds, and the straight way to it
+/// folds wrist 3 onto the forearm (their axes 2.85 cm apart at 73 %: a contact, refused
+/// `L5 hits L3`; issue 35): here joint 4 turns the other way round (−2π) and joint 3 stops
+/// 0.05 rad short, a way that keeps every link 1.2 cm clear.
 const UR5_PLAN_START: &str =
     "-2.425612749,-3.044014515,5.447551253,-3.289022200,4.742594440,4.336797611";
 const UR5_PLAN_GOAL: [&str; 6] = [
     "5.799175310",
     "0.862840213",
-    "5.716507350",
-    "3.602384237",
+    "5.666507350",
+    "-2.680801070",
     "-6.188119895",
     "1.181304767",
 ];
@@ -1826,8 +1854,8 @@ fn a_long_joint_1_move_whose_outer_arc_crosses_a_box_is_refused() {
         "ranger-mk1",
         |text| {
             text.replace(
-                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]]",
-                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4], {cube:?}]"),
+                "boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35]]",
+                &format!("boxes = [[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35], {cube:?}]"),
             )
         },
         &["--start", "-4.0,0.6,-0.4,0.2,1.8,0.1"],

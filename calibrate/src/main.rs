@@ -178,8 +178,9 @@ fn main() -> ExitCode {
             instrument.as_deref(),
             &out,
         ),
-        Some(Cmd::Measure(args)) => robot(&args.robot)
-            .and_then(|config| measure::run(&args, config.dof()).map_err(Into::into)),
+        Some(Cmd::Measure(args)) => {
+            robot(&args.robot).and_then(|config| measure::run(&args, &config).map_err(Into::into))
+        }
         None => run_fit(&cli.fit),
     };
     match result {

@@ -2,11 +2,17 @@
 //! configurations (`plan --out plan.csv`) with `jG` + `jB`, waits for each motion to end and
 //! the arm to settle, reads the joints the controller reports (`jP`), takes the instrument's
 //! reading, and writes the file the fit reads (`q1..qn,x,y,z,weight`, each line after a comment
-//! naming its plan pose). A pose the controller refuses from where the arm is (the joint
-//! path to it would leave the workspace, say) is tried again once after the others, from
-//! another pose; a pose refused again, or a motion the controller stops, is skipped with its
-//! reason (said on stderr and as a comment in the file), and the run goes on from where the
-//! arm is.
+//! naming its plan pose).
+//!
+//! The controller checks every joint move's straight way for the whole arm (a link through
+//! the base, the tool past the bounds: docs/safety.md), and the straight way between two
+//! calibration poses often fails it. So the run does not go through the plan in order: from
+//! where the arm is it goes to the nearest pose not yet measured whose way the controller
+//! accepts (a refused `jB` moves nothing); when it accepts none, the arm goes back the way it
+//! came (each way back is one the controller accepted forwards), one pose at a time down to
+//! the pose the run began from, and tries again from there. A pose refused from every pose
+//! the arm was at (its goal itself in collision, say), or a motion the controller stops, is
+//! skipped with its reason (said on stderr and as a comment in the file).
 //!
 //! The instrument's side is one of: a prompt (type `x,y,z` in metres, an empty line skips the
 //! pose), a hook (`--hook CMD`, run by `sh -c` at each pose with `ARMGATE_POSE` (1-based) and
@@ -23,6 +29,7 @@ use armgate_calibrate::fit::Measurement;
 use armgate_calibrate::measurements;
 use armgate_client::cli::parse_duration;
 use armgate_client::{Client, ClientConfig, ClientError, Mode, Signer, WaitOptions};
+use armgate_core::config::{JointConfig, JointType, RobotConfig};
 use clap::Args;
 use nalgebra::Vector3;
 
@@ -76,7 +83,8 @@ type Visit = Result<Vec<f64>, Refusal>;
 
 /// Runs the measuring run; returns an error only when the controller cannot be talked to or
 /// a file cannot be read or written (a pose that fails is skipped).
-pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
+pub fn run(args: &MeasureArgs, config: &RobotConfig) -> Result<(), String> {
+    let dof = config.dof();
     let text =
         std::fs::read_to_string(&args.plan).map_err(|e| format!("{}: {e}", args.plan.display()))?;
     let plan = measurements::parse_poses(&text, dof)
@@ -93,50 +101,85 @@ pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
     client
         .set_mode(Mode::Joint)
         .map_err(|e| format!("CM 1: {e}"))?;
+    let start = client.joints(dof).map_err(|e| format!("jP: {e}"))?;
     let mut out = String::new();
     let (mut measured, mut skipped) = (0usize, 0usize);
-    // Each plan pose with whether it was deferred already.
-    let mut queue: std::collections::VecDeque<(usize, bool)> =
-        (0..plan.len()).map(|k| (k, false)).collect();
-    while let Some((k, deferred)) = queue.pop_front() {
-        let Some(goal) = plan.get(k) else { continue };
-        let visit = match visit(&mut client, goal, args.settle)? {
-            Err(Refusal::Refused(why)) if !deferred => {
-                eprintln!("pose {}/{}: {why}; tried again later", k + 1, plan.len());
-                queue.push_back((k, true));
-                continue;
-            }
-            Err(Refusal::Refused(why) | Refusal::NotReached(why)) => Err(why),
-            Ok(q) => Ok(q),
-        };
-        let reading = visit.and_then(|q| read_instrument(args, k, &q).map(|p| (q, p)));
-        match reading {
+    let mut record =
+        |k: usize, reading: Result<(Vec<f64>, Option<Vector3<f64>>), String>| match reading {
             Ok((q, position)) => {
                 eprintln!("pose {}/{}: measured", k + 1, plan.len());
                 out += &format!("# plan pose {}\n", k + 1);
-                let row = match position {
-                    Some(position) => measurements::format(
-                        &[Measurement {
-                            q,
-                            position,
-                            weight: 1.0,
-                            line: 0,
-                        }],
-                        dof,
-                    ),
-                    None => measurements::format_poses(&[q], dof),
-                };
-                // The row without the header.
-                out += row.lines().nth(1).unwrap_or_default();
-                out.push('\n');
+                out += &row(q, position, dof);
                 measured += 1;
             }
             Err(why) => {
-                skipped += 1;
                 eprintln!("pose {}/{}: skipped: {why}", k + 1, plan.len());
                 out += &format!("# plan pose {} skipped: {why}\n", k + 1);
+                skipped += 1;
+            }
+        };
+    // The poses the arm went through, each reached from the one before: the way back.
+    let mut trail = vec![start];
+    let mut pending: Vec<usize> = (0..plan.len()).collect();
+    // Each plan pose's first refusal, its reason if it is never reached.
+    let mut refused: Vec<Option<String>> = vec![None; plan.len()];
+    // Each round measures or skips a pose or steps back one pose: bounded.
+    while !pending.is_empty() {
+        let Some(here) = trail.last().cloned() else {
+            break;
+        };
+        pending.sort_by(|&a, &b| distance(&here, &plan[a]).total_cmp(&distance(&here, &plan[b])));
+        let mut went = None;
+        'poses: for (i, &k) in pending.iter().enumerate() {
+            let near = nearest_turn(&here, &plan[k], &config.joints);
+            let goals = if near == plan[k] {
+                vec![near]
+            } else {
+                vec![near, plan[k].clone()]
+            };
+            for goal in goals {
+                match visit(&mut client, &goal, args.settle)? {
+                    Err(Refusal::Refused(why)) => {
+                        refused[k].get_or_insert(why);
+                    }
+                    done => {
+                        went = Some((i, k, goal, done));
+                        break 'poses;
+                    }
+                }
             }
         }
+        match went {
+            Some((i, k, goal, Ok(q))) => {
+                pending.remove(i);
+                record(k, read_instrument(args, k, &q).map(|p| (q, p)));
+                trail.push(goal);
+            }
+            Some((i, k, _, Err(Refusal::Refused(why) | Refusal::NotReached(why)))) => {
+                pending.remove(i);
+                record(k, Err(why));
+                // The arm stopped somewhere on a way accepted from here: back here.
+                if !step_back(&mut client, &here, args.settle)? {
+                    break;
+                }
+            }
+            None => {
+                // No pose left is accepted from here: back the way the arm came.
+                trail.pop();
+                match trail.last() {
+                    Some(back) if step_back(&mut client, back, args.settle)? => {}
+                    _ => break,
+                }
+            }
+        }
+    }
+    for k in pending {
+        let why = refused
+            .get(k)
+            .cloned()
+            .flatten()
+            .unwrap_or_else(|| "not tried".into());
+        record(k, Err(format!("{why} (from every pose the arm was at)")));
     }
     let header = if args.joints_only {
         measurements::format_poses(&[], dof)
@@ -153,6 +196,63 @@ pub fn run(args: &MeasureArgs, dof: usize) -> Result<(), String> {
         return Err("no pose was measured".into());
     }
     Ok(())
+}
+
+/// The joint-space distance between two configurations (the nearest pose next).
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| (a - b) * (a - b)).sum()
+}
+
+/// `goal` with each revolute joint turned by whole turns to the angle nearest `here` within
+/// its limits: the same arm shape and tool pose (the fit reads the reported joints), by a
+/// shorter way (a plan's joints span ±2π; 6 rad of elbow folds the forearm through the base).
+fn nearest_turn(here: &[f64], goal: &[f64], joints: &[JointConfig]) -> Vec<f64> {
+    let turn = std::f64::consts::TAU;
+    goal.iter()
+        .zip(here)
+        .zip(joints)
+        .map(|((&g, &h), j)| {
+            if j.kind != JointType::Revolute {
+                return g;
+            }
+            // Limits span at most a few turns: -2..=2 whole turns cover ±4π.
+            (-2..=2)
+                .map(|n| g + f64::from(n) * turn)
+                .filter(|v| (j.min..=j.max).contains(v))
+                .min_by(|a, b| (a - h).abs().total_cmp(&(b - h).abs()))
+                .unwrap_or(g)
+        })
+        .collect()
+}
+
+/// One line of the measurements file: the reported joints and the reading, or the joints only.
+fn row(q: Vec<f64>, position: Option<Vector3<f64>>, dof: usize) -> String {
+    let text = match position {
+        Some(position) => measurements::format(
+            &[Measurement {
+                q,
+                position,
+                weight: 1.0,
+                line: 0,
+            }],
+            dof,
+        ),
+        None => measurements::format_poses(&[q], dof),
+    };
+    // The row without the header.
+    text.lines().nth(1).unwrap_or_default().to_owned() + "\n"
+}
+
+/// Moves back to `pose` (the reverse of a way the controller accepted); `false`, said on
+/// stderr, if it refuses or the arm does not get there (the run ends there).
+fn step_back(client: &mut Client, pose: &[f64], settle: Duration) -> Result<bool, String> {
+    match visit(client, pose, settle)? {
+        Ok(_) => Ok(true),
+        Err(Refusal::Refused(why) | Refusal::NotReached(why)) => {
+            eprintln!("going back the way the arm came: {why}; the run ends here");
+            Ok(false)
+        }
+    }
 }
 
 /// Moves to `goal` and reads the joints once the arm has settled; a refusal or a motion that

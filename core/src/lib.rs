@@ -11,6 +11,7 @@
 //!   unsolicited warnings.
 //! * [`cycle`]: the control tick every shell runs: requests, drives, control step, notices.
 //! * [`math`]: vectors, rotations, frames, quaternion and roll/pitch/yaw conversions.
+//! * [`geometry`]: segment, capsule and box distances (the arm's envelope).
 //! * [`config`]: the robot description ([`config::RobotConfig`]) and its validation.
 //! * [`kinematics`]: forward kinematics, Jacobians, inverse position and velocity kinematics.
 //! * [`motion`]: generators, sequences, limiters, the mode switch and the control step.
@@ -24,6 +25,7 @@ pub mod command;
 pub mod config;
 pub mod cycle;
 pub mod drives;
+pub mod geometry;
 pub mod kinematics;
 pub mod math;
 pub mod motion;

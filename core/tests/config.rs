@@ -286,8 +286,8 @@ fn drive_errors_name_the_field() {
 #[test]
 fn workspace_boxes_must_be_ordered() {
     let text = mk1_text().replacen(
-        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]",
-        "[0.2, -0.2, -0.2, 0.2, -0.1, 0.4]",
+        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35]",
+        "[0.2, -0.2, -0.2, 0.2, -0.1, 0.35]",
         1,
     );
     assert_eq!(
@@ -456,8 +456,8 @@ fn joints_faster_than_their_drives_are_refused_naming_both_values() {
 #[test]
 fn flat_exclusion_boxes_are_refused() {
     let text = mk1_text().replacen(
-        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.4]",
-        "[-0.2, 0.2, 0.1, 0.1, -0.1, 0.4]",
+        "[-0.2, 0.2, -0.2, 0.2, -0.1, 0.35]",
+        "[-0.2, 0.2, 0.1, 0.1, -0.1, 0.35]",
         1,
     );
     assert_eq!(

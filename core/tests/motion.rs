@@ -740,7 +740,15 @@ fn accepted_random_lines_complete_and_refused_ones_do_not() {
     // check's verdict must match a run without it (reach_bench prints the rate on every arm).
     let config = mk1_fast();
     let chain = Chain::new(&config);
-    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
+    // Without the line check, and without the body's (which would stop some of these runs,
+    // ER21, before the IK loses the line: this is about the IK).
+    let unchecked = config
+        .clone()
+        .edit(|c| {
+            c.ik.check_lines = false;
+            c.collision.enabled = false;
+        })
+        .unwrap();
     let mut rng = SplitMix64::new(16);
     let (mut accepted, mut refused) = (0, 0);
     while accepted + refused < 40 {
@@ -797,7 +805,15 @@ fn refused_where_the_unchecked_run_stops(
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     assert_eq!(rig.ctrl.move_cartesian(goal, min_duration), Err(refusal));
     assert!(!rig.ctrl.is_moving());
-    let unchecked = config.clone().edit(|c| c.ik.check_lines = false).unwrap();
+    // Without the line check, and without the body's (which would stop some of these runs,
+    // ER21, before the IK loses the line: this is about the IK).
+    let unchecked = config
+        .clone()
+        .edit(|c| {
+            c.ik.check_lines = false;
+            c.collision.enabled = false;
+        })
+        .unwrap();
     let mut rig = Rig::new(&unchecked, start);
     rig.ctrl.set_mode(Mode::Cartesian).unwrap();
     rig.ctrl.move_cartesian(goal, min_duration).unwrap();

@@ -514,6 +514,9 @@ fn a_jog_towards_an_exclusion_box_ramps_to_rest_before_it() {
                 .boxes
                 .push([face, face + 0.2, p.y - 0.1, p.y + 0.1, p.z - 0.1, p.z + 0.1])
                 .unwrap();
+            // The tool point's own hold; with the body on, the stream holds 21.9 mm before the
+            // box, where the rest of the arm would come to rest in it (core/tests/body.rs).
+            c.collision.enabled = false;
         })
         .unwrap();
     let mut s = Stream::new(config, &MK1_READY, Mode::Cartesian);

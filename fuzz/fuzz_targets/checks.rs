@@ -108,11 +108,14 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::ViaPointMissed,
         Notice::Held(Hold::Workspace),
     ];
-    // A stream held at a joint limit names the joint and the limit; stops name their time or
-    // their joint and its lag.
+    // A stream held at a joint limit names the joint and the limit; stops name their time, their
+    // joint and its lag, or (for the arm's body) the link and the obstacle.
     let named = matches!(
         notice,
-        Notice::Held(Hold::JointLimit(_)) | Notice::ClientSilent(_) | Notice::FollowingError(_)
+        Notice::Held(Hold::JointLimit(_))
+            | Notice::ClientSilent(_)
+            | Notice::FollowingError(_)
+            | Notice::Collision(_)
     );
     assert!(
         named || allowed.contains(&notice),

@@ -4,8 +4,9 @@
 use core::hint::black_box;
 
 use armgate_core::config::{
-    BaseConfig, BlendConfig, CartesianLimits, DrivesConfig, IkConfig, JointConfig, JointDrive,
-    JointType, MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot, WorkspaceConfig,
+    BaseConfig, BlendConfig, CartesianLimits, CollisionConfig, DrivesConfig, IkConfig, JointConfig,
+    JointDrive, JointType, MotionConfig, RobotConfig, Streaming, ToolConfig, ValidRobot,
+    WorkspaceConfig,
 };
 use armgate_core::cycle::{
     CanDrives, Cycle, Datagram, Dropped, Link, Outgoing, Signing, UnsignedAccess,
@@ -60,6 +61,7 @@ fn robot() -> Option<ValidRobot> {
             max_speed: 1.0,
             max_acceleration: None,
         },
+        link_radius: None,
     };
     let mut joints = heapless::Vec::new();
     for _ in 0..black_box(6) {
@@ -94,6 +96,7 @@ fn robot() -> Option<ValidRobot> {
         ik: IkConfig::default(),
         blend: BlendConfig::default(),
         motion: MotionConfig::default(),
+        collision: CollisionConfig::default(),
     };
     black_box(config).validate().ok()
 }

@@ -9,6 +9,12 @@
 //! [`SAMPLES`] targets and seeds are the host benchmark's first ones. Success means position and
 //! orientation errors below 1e-5 (m, rad) and all joints within limits, as there.
 //!
+//! The arm's body (issue 35): one tick's check (`Body::check_tick`: the link frames and every
+//! capsule against the boxes, the bounds and each other, at the commanded pose and where a stop
+//! would end) at every configuration, with a random joint velocity up to each joint's limit;
+//! and the up-front check of a joint move (`Body::check_path`) to a random goal within the
+//! limits on the first [`LINE_CHECKS`].
+//!
 //! The up-front check of a Cartesian move (`Controller::move_cartesian`, which follows the
 //! straight line to the goal by tracking IK before starting) is measured on the first
 //! [`LINE_CHECKS`] configurations, each with a goal 2–60 cm and up to 1 rad away (drawn from a
@@ -31,7 +37,7 @@ use armgate_core::config::{RobotConfig, ValidRobot};
 use armgate_core::cycle::SEARCH_SLICE;
 use armgate_core::kinematics::{Chain, Family, Joints, Solutions};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
-use armgate_core::motion::{Controller, Mode};
+use armgate_core::motion::{Body, Controller, Mode};
 use armgate_core::rng::SplitMix64;
 use cortex_m_semihosting::hprintln;
 
@@ -69,6 +75,11 @@ struct Results {
     joint_path: Timing,
     joint_path_worst: Timing,
     worst_refused: bool,
+    body_tick: Timing,
+    body_path: Timing,
+    paths_refused: u32,
+    /// The most poses one joint move's check places (`Body::max_checks`).
+    path_checks: u16,
     unreachable: Timing,
     unreachable_iterations: u32,
     iterations: u64,
@@ -152,9 +163,15 @@ fn measure_search(bytes: &[u8], counter: &Counter) -> bool {
 
 fn measure_robot(config: &ValidRobot) -> Results {
     let chain = Chain::new(config);
-    let mut results = Results::default();
+    let mut body = Body::new(config);
+    let mut results = Results {
+        path_checks: body.max_checks(),
+        ..Results::default()
+    };
     let mut rng = SplitMix64::new(SEED);
     let mut goals = SplitMix64::new(LINE_SEED);
+    let mut velocities = SplitMix64::new(BODY_SEED);
+    let v_max = config.per_joint(|j| j.max_velocity);
     for sample in 0..SAMPLES {
         let q = chain.random_joints(&mut rng);
 
@@ -178,10 +195,23 @@ fn measure_robot(config: &ValidRobot) -> Results {
             continue;
         };
 
+        let mut v = v_max;
+        for v in v.iter_mut() {
+            *v *= velocities.uniform(-1.0, 1.0);
+        }
+        let (ticks, _) = measure(|| {
+            black_box(&mut body).check_tick(&chain, black_box(&q), &v, f64::INFINITY)
+        });
+        results.body_tick.add(ticks);
+
         if sample < LINE_CHECKS {
             check_line(config, &q, &target, &mut goals, &mut results);
             let next = chain.random_joints(&mut goals);
             check_joint_path(config, &q, &next, &mut results.joint_path);
+            let to = chain.random_joints(&mut velocities);
+            let (ticks, verdict) = measure(|| body.check_path(&chain, black_box(&q), &to));
+            results.body_path.add(ticks);
+            results.paths_refused += u32::from(verdict.is_err());
         }
 
         let mut seed = q;
@@ -308,6 +338,9 @@ fn random_direction(rng: &mut SplitMix64) -> Vector3<f64> {
     )
 }
 
+/// Seed of the body checks' joint velocities and joint-move goals.
+const BODY_SEED: u64 = 0x0B0D_0035;
+
 /// Global solves of unreachable targets per robot (each runs the whole budget).
 const UNREACHABLE_SAMPLES: u64 = 3;
 
@@ -384,6 +417,24 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         mean,
         mean,
         if results.worst_refused { "refused" } else { "passed" }
+    );
+    row("body check, tick", &results.body_tick);
+    let (mean, max) = results.body_path.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) |               - | {:>6.1} refused |",
+        name,
+        "body check, jB",
+        mean,
+        max,
+        100.0 * f64::from(results.paths_refused) / f64::from(results.body_path.calls.max(1))
+    );
+    // The check's worst case: its poses are capped (each costs about what one pose of the
+    // tick's check costs, and the sweep bounds of every gap).
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9} poses at most |               - |         - |",
+        name,
+        "body check, jB cap",
+        results.path_checks
     );
     let (mean, max) = results.unreachable.instructions(counter);
     hprintln!(

@@ -76,6 +76,9 @@ impl NoticeRelay {
         if let Some(lag) = events.following_error {
             self.announce(Notice::FollowingError(lag).text());
         }
+        if let Some(hit) = events.collision {
+            self.announce(Notice::Collision(hit).text());
+        }
         if events.hold != self.hold {
             self.hold = events.hold;
             if let Some(hold) = events.hold

@@ -2,6 +2,8 @@
 
 use core::fmt;
 
+use armgate_protocol::client::Hit;
+
 /// A refused robot description: which field, and why.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ConfigError {
@@ -76,6 +78,11 @@ pub enum ConfigReason {
         /// The drive's field, e.g. `drive.max_speed`.
         drive_field: &'static str,
     },
+    /// A link number beyond the last link (the number of joints).
+    NoSuchLink,
+    /// At home a link of the body already hits something (`L3 hits B1`: link 3 within
+    /// `collision.margin` of exclusion box 1; `L5 hits L2`; `L3 out`: the bounds).
+    HomeInCollision(Hit),
 }
 
 impl ConfigError {
@@ -145,6 +152,14 @@ impl fmt::Display for ConfigReason {
             Self::TrackingIterations => "must be 1 to 100",
             Self::LineSlowdown => "must be 1 to 1000",
             Self::NoVolume => "a box must be thicker than zero on every axis",
+            Self::NoSuchLink => "names a link the arm does not have (0 to the number of joints)",
+            Self::HomeInCollision(hit) => {
+                return write!(
+                    f,
+                    "the home pose is already in collision: {hit} (link L within the margin \
+                     of box B, of another link, or out of the bounds)"
+                );
+            }
             Self::CountsOverflow => {
                 "times the joint's min and max (from home) exceeds the drive's 32-bit counts"
             }

@@ -8,7 +8,9 @@
 
 mod bounded;
 pub mod bus_load;
+mod collision;
 mod drives;
+mod envelope;
 mod error;
 mod motion;
 mod robot;
@@ -18,7 +20,11 @@ mod units;
 mod valid;
 
 pub use bus_load::SAMPLE_TIME;
+pub use collision::{
+    CapsuleConfig, CollisionConfig, DEFAULT_LINK_RADIUS, MAX_CUSTOM_CAPSULES, MAX_EXCLUDED_PAIRS,
+};
 pub use drives::{DrivesConfig, MAX_PDO_LEAD, PDO_TARGET_LEAD, Streaming, TIME_STAMP_EVERY};
+pub use envelope::{Envelope, Frames, MAX_CAPSULES, Placed, frames_at};
 pub use error::{ConfigError, ConfigReason};
 pub use motion::{MotionConfig, ProfileKind};
 pub use robot::{

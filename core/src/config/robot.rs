@@ -4,13 +4,16 @@ use heapless::{String, Vec};
 use serde::{Deserialize, Serialize};
 
 use super::bus_load::whole_samples;
+use super::collision::{CollisionConfig, check_link_radius};
 use super::drives::DrivesConfig;
+use super::envelope::{Envelope, Placed, frames_at, tilt};
 use super::error::{ConfigError, ConfigReason};
 use super::motion::{MotionConfig, ProfileKind};
 use super::units::JointUnits;
 use super::valid::ValidRobot;
 use crate::MAX_JOINTS;
-use crate::math::Joints;
+use crate::geometry::Capsule;
+use crate::math::{Frame, Joints, Rotation3, Vector3};
 
 /// Longest robot name, in bytes.
 pub const MAX_NAME_LEN: usize = 32;
@@ -55,6 +58,10 @@ pub struct RobotConfig {
     /// The generators' velocity profile; absent = the seed's trapezoids.
     #[serde(default)]
     pub motion: MotionConfig,
+    /// The arm's body as capsules and what they are checked against; absent = the default
+    /// body from the DH parameters.
+    #[serde(default)]
+    pub collision: CollisionConfig,
 }
 
 /// Whether a joint turns (revolute) or slides (prismatic).
@@ -110,6 +117,10 @@ pub struct JointConfig {
     pub max_following_error: Option<f64>,
     /// The servo drive of this joint.
     pub drive: JointDrive,
+    /// The radius of this joint's link (the body it moves) in the collision model (m, ≥ 0);
+    /// absent = [`DEFAULT_LINK_RADIUS`](super::collision::DEFAULT_LINK_RADIUS).
+    #[serde(default)]
+    pub link_radius: Option<f64>,
 }
 
 /// The drive of one joint.
@@ -375,7 +386,35 @@ impl RobotConfig {
         }
         self.ik.validate().map_err(|(f, r)| top(f, r))?;
         not_negative(self.blend.cartesian).map_err(|r| top("blend.cartesian", r))?;
-        not_negative(self.blend.joint).map_err(|r| top("blend.joint", r))
+        not_negative(self.blend.joint).map_err(|r| top("blend.joint", r))?;
+        self.collision
+            .validate(self.dof() + 1)
+            .map_err(|(f, r)| top(f, r))?;
+        self.check_home_clear()
+    }
+
+    /// The arm must not start in collision: at home, no capsule of the body within the margin
+    /// of a box, the bounds or another capsule it is checked against.
+    fn check_home_clear(&self) -> Result<(), ConfigError> {
+        let envelope = Envelope::new(self);
+        let mut placed: Placed = [Capsule::default(); super::envelope::MAX_CAPSULES];
+        envelope.place(&frames_at(self, &self.home()), &mut placed);
+        match envelope.first_hit(&placed) {
+            Some(hit) => Err(ConfigError::top(
+                "collision",
+                ConfigReason::HomeInCollision(hit),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// `Trans(xyz) · RPY(rpy)`: the base frame {0} in the world.
+    pub fn base_frame(&self) -> Frame {
+        let [roll, pitch, yaw] = self.base.rpy;
+        Frame::from_parts(
+            Vector3::from(self.base.xyz).into(),
+            Rotation3::from_euler_angles(roll, pitch, yaw),
+        )
     }
 
     /// Jerk limits, where given, are finite and positive; the jerk-limited profile needs them
@@ -416,6 +455,18 @@ impl RobotConfig {
 }
 
 impl JointConfig {
+    /// The transform from the previous joint frame to this one at joint value `q`:
+    /// `RotX(alpha) · TransX(a) · RotY(beta) · RotZ(θ) · TransZ(d)`.
+    pub fn frame(&self, q: f64) -> Frame {
+        let (theta, d) = match self.kind {
+            JointType::Revolute => (self.theta + q, self.d),
+            JointType::Prismatic => (self.theta, self.d + q),
+        };
+        crate::math::dh(self.a, self.alpha, 0.0, 0.0)
+            * tilt(self.beta)
+            * crate::math::dh(0.0, 0.0, d, theta)
+    }
+
     fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
         let geometry = [
             ("alpha", self.alpha),
@@ -440,6 +491,7 @@ impl JointConfig {
         }
         self.within_drive()?;
         finite(self.drive.home).map_err(|r| ("drive.home", r))?;
+        check_link_radius(self.link_radius).map_err(|r| ("link_radius", r))?;
         if !(self.min..=self.max).contains(&self.drive.home) {
             return Err(("drive.home", ConfigReason::HomeOutsideLimits));
         }
@@ -498,6 +550,17 @@ fn milli(v: f64) -> u32 {
 }
 
 impl ToolConfig {
+    /// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)`: the tool frame in the last joint
+    /// frame.
+    pub fn frame(&self) -> Frame {
+        let [roll, pitch, yaw] = self.rpy;
+        crate::math::dh(self.a, self.alpha, self.d, self.theta)
+            * Frame::from_parts(
+                Vector3::from(self.xyz).into(),
+                Rotation3::from_euler_angles(roll, pitch, yaw),
+            )
+    }
+
     fn validate(&self) -> Result<(), (&'static str, ConfigReason)> {
         let dh = [self.a, self.alpha, self.d, self.theta];
         if dh.iter().any(|v| !v.is_finite()) {
@@ -529,7 +592,7 @@ impl IkConfig {
     }
 }
 
-fn not_negative(v: f64) -> Result<(), ConfigReason> {
+pub(super) fn not_negative(v: f64) -> Result<(), ConfigReason> {
     finite(v)?;
     if v < 0.0 {
         Err(ConfigReason::Negative)

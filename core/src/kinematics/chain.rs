@@ -6,9 +6,9 @@ use super::family::ClosedForm;
 use super::jacobian::Jacobian;
 use super::subproblems::Angle;
 use crate::MAX_JOINTS;
-use crate::config::{JointType, RobotConfig, ValidRobot};
+use crate::config::{JointType, ValidRobot};
+use crate::math::Frame;
 use crate::math::Joints;
-use crate::math::{self, Frame};
 use crate::rng::SplitMix64;
 
 /// Why a kinematics call was refused.
@@ -73,8 +73,8 @@ impl Chain {
         let mut chain = Self {
             links: [Link::default(); MAX_JOINTS],
             n: config.joints.len().min(MAX_JOINTS),
-            base: base_frame(config),
-            tool: tool_frame(config),
+            base: config.base_frame(),
+            tool: config.tool.frame(),
             min: [0.0; MAX_JOINTS],
             max: [0.0; MAX_JOINTS],
             closed_form: None,
@@ -321,6 +321,11 @@ impl Chain {
         )
     }
 
+    /// The base frame {0} in the world.
+    pub fn base(&self) -> &Frame {
+        &self.base
+    }
+
     /// The tool frame's rotation relative to the flange.
     pub(super) fn tool_rotation(&self) -> &Matrix3<f64> {
         self.tool.rotation.matrix()
@@ -420,24 +425,4 @@ fn by_trig(angles: &[Angle; MAX_JOINTS]) -> impl Fn(usize, &Link, f64) -> (f64, 
         let ct = link.cos_theta * cq - link.sin_theta * sq;
         (st, ct, link.d)
     }
-}
-
-/// `Trans(xyz) · RPY(rpy)` of the robot's base in the world.
-fn base_frame(config: &RobotConfig) -> Frame {
-    let [roll, pitch, yaw] = config.base.rpy;
-    Frame::from_parts(
-        Vector3::from(config.base.xyz).into(),
-        Rotation3::from_euler_angles(roll, pitch, yaw),
-    )
-}
-
-/// `DH(a, alpha, d, theta) · Trans(xyz) · RPY(rpy)` of the robot's tool.
-fn tool_frame(config: &RobotConfig) -> Frame {
-    let t = &config.tool;
-    let [roll, pitch, yaw] = t.rpy;
-    math::dh(t.a, t.alpha, t.d, t.theta)
-        * Frame::from_parts(
-            Vector3::from(t.xyz).into(),
-            Rotation3::from_euler_angles(roll, pitch, yaw),
-        )
 }

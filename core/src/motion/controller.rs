@@ -15,7 +15,8 @@ mod joint_tick;
 mod stopping;
 mod streaming;
 
-use super::brake::Brake;
+use super::body::Body;
+use super::brake::{Brake, budget};
 use super::cartesian_generator::CartesianGenerator;
 use super::fixed_point::FixedPoint;
 use super::joint_generator::JointGenerator;
@@ -83,6 +84,8 @@ pub struct Controller {
     ik: IkConfig,
     limiter: JointLimiter,
     workspace: Workspace,
+    /// The arm's body: capsules kept out of the boxes, in the bounds, clear of each other.
+    body: Body,
     mode: Mode,
     joint_generator: JointGenerator,
     cartesian_generator: CartesianGenerator,
@@ -138,6 +141,7 @@ impl Controller {
             ik: config.ik,
             limiter: JointLimiter::new(config),
             workspace: Workspace::new(&config.workspace),
+            body: Body::new(config),
             mode: Mode::Off,
             joint_generator: JointGenerator::new(Joints::zeros(n), v_max, a_max)
                 .with_jerk_limits(j_max),
@@ -235,6 +239,26 @@ impl Controller {
                 self.supervisor.reset();
                 self.command = None;
             }
+        }
+        // The body where it is commanded and where a stop begun now would end: a new hit stops.
+        // A Cartesian motion's stop brakes along its path within the Cartesian limits too.
+        let path_rate = if self.mode == Mode::Cartesian && !self.stream.is_active() {
+            budget(
+                &self.cartesian_step,
+                &self.cartesian_acceleration,
+                self.period,
+            )
+        } else {
+            f64::INFINITY
+        };
+        if let Some(q) = &command
+            && let Some(hit) =
+                self.body
+                    .check_tick(&self.chain, q, self.supervisor.velocity(), path_rate)
+            && !self.supervisor.is_stopping()
+        {
+            events.collision = Some(hit);
+            self.stop(StopCause::Workspace);
         }
         if stream_finished {
             // The generators take over where the stream came to rest.
@@ -412,6 +436,11 @@ impl Controller {
     /// The kinematic chain.
     pub fn chain(&self) -> &Chain {
         &self.chain
+    }
+
+    /// The arm's body and its checks.
+    pub fn body(&self) -> &Body {
+        &self.body
     }
 }
 

@@ -1,6 +1,6 @@
 //! What happened during one control tick.
 
-use armgate_protocol::client::{Hold, Lag};
+use armgate_protocol::client::{Hit, Hold, Lag};
 
 /// Conditions and happenings of one tick. Conditions (limits, divergence) are raised on every
 /// tick while they hold; the message relay decides how often to tell the client.
@@ -26,4 +26,8 @@ pub struct Events {
     /// A joint's measured position was further from its command than the robot file allows:
     /// the arm is stopped (`ER43 jN following error E`), told once.
     pub following_error: Option<Lag>,
+    /// A link of the arm, where it is commanded or where a stop begun now would end, came
+    /// within the margin of a box, another link or the bounds: the motion stops (`ER21 L3 hits
+    /// B1`); raised on the tick the stop begins.
+    pub collision: Option<Hit>,
 }

@@ -6,12 +6,14 @@
 //! * [`JointGenerator`], [`CartesianGenerator`], [`Shape`]: set-point sources (§4.2, §4.3, §4.5).
 //! * [`Sequence`]: via points (§4.4), stopping at each or blending through it within a
 //!   tolerance (`blend.rs`, beyond the seed: the next leg superposed on the running one).
-//! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2).
+//! * [`JointLimiter`], [`Workspace`]: limits (§5.1, §5.2); [`Body`]: the whole arm inside
+//!   the envelope (capsules against boxes, bounds and each other), beyond the seed.
 //! * [`Controller`]: the mode switch (§5.3) and the tick (§1.4); its supervisor
 //!   (`supervisor.rs`) owns every transition to rest ([`StopCause`]).
 //! * [`VelocityStream`]: twist and joint-rate streaming (`TW`, `jW`), beyond the seed.
 
 mod blend;
+mod body;
 mod brake;
 mod cartesian_generator;
 mod controller;
@@ -32,6 +34,7 @@ mod trapezoid;
 mod velocity_stream;
 mod workspace;
 
+pub use body::{Body, CHECKS_PER_SECOND};
 pub use cartesian_generator::CartesianGenerator;
 pub use controller::{Controller, Mode, StepOutput};
 pub use events::Events;

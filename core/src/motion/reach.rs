@@ -40,6 +40,7 @@
 use armgate_protocol::client::{JointBound, PathPoint};
 
 use super::Refusal;
+use super::body::Body;
 use super::workspace::Workspace;
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
@@ -93,6 +94,8 @@ pub(super) struct Reach<'a> {
     pub max_rate: &'a Joints,
     /// The joints' acceleration limits.
     pub max_acceleration: &'a Joints,
+    /// The arm's body: each point of the line is checked for it.
+    pub body: &'a Body,
 }
 
 /// The most a joint may move (rad, or m) in one step of the check. The nearest IK solution
@@ -174,6 +177,8 @@ impl Reach<'_> {
         let mut points = [reached; 2];
         let mut last = 0;
         let mut too_fast = None;
+        // What the arm already touches at the start does not count (it may move out).
+        let present = self.body.present_at(self.chain, seed);
         for _ in 0..SOLVES_PER_LINE {
             if done >= 1.0 || self.iterations_left == 0 {
                 break;
@@ -215,6 +220,11 @@ impl Reach<'_> {
                     too_fast.get_or_insert(Refusal::TooFast(joint, at));
                 }
                 None => {}
+            }
+            // The whole arm at each point of the line (between points the tick's check
+            // stands guard: it stops the motion before a link arrives).
+            if let Some(hit) = self.body.new_hit(self.chain, &tried.q, &present) {
+                return Err(Refusal::Hits(hit, at));
             }
             let limits = (self.max_rate, self.max_acceleration);
             let (rate, acceleration, slowed) =

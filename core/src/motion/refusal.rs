@@ -1,6 +1,6 @@
 //! Why a motion request was refused.
 
-use armgate_protocol::client::{JointBound, PathPoint, StopCause};
+use armgate_protocol::client::{Hit, JointBound, PathPoint, StopCause};
 
 /// Why the controller refused a request; the command handler maps each to an `ER` reply.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,6 +34,9 @@ pub enum Refusal {
     NearEdge(PathPoint),
     /// The arm itself is in a forbidden region (drive it out in joint mode).
     ArmOutsideWorkspace,
+    /// A link of the arm would hit a box, another link or the bounds at this point of the
+    /// way (its capsule within the margin).
+    Hits(Hit, PathPoint),
     /// A via-point index is not below the number of slots.
     IndexOutOfRange,
     /// The controller has not yet received a measurement.
@@ -71,6 +74,10 @@ impl core::fmt::Display for Refusal {
                 write!(f, "too near a box or bound at {percent}% of the way")
             }
             Self::ArmOutsideWorkspace => f.write_str("the arm is outside the workspace"),
+            Self::Hits(hit, PathPoint::Goal) => write!(f, "{hit} at the goal"),
+            Self::Hits(hit, PathPoint::Along(percent)) => {
+                write!(f, "{hit} at {percent}% of the way")
+            }
             Self::IndexOutOfRange => f.write_str("via-point index out of range"),
             Self::NotReady => f.write_str("no measurement yet"),
             Self::Stopped(cause) => {

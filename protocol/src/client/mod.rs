@@ -23,7 +23,7 @@
 //! * [`Command`]: the request command pairs.
 //! * [`Request`] and [`Reply`]: command, seven floats and the index.
 //! * [`Text`]: the `ER`/`WN` text messages; [`Notice`]: the fixed texts, with their typed
-//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`]), written and read back
+//!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`], [`Hit`]), written and read back
 //!   ([`Notice::parse`], [`NoticeError`]); [`Header`]: the parts every text shares, any
 //!   controller's (code, named command, detail; [`DRIVE_FAULT_CODES`]).
 //! * [`StatusReport`], [`RobotName`], [`CauseReport`] and [`SessionReport`]: the replies to the
@@ -43,6 +43,7 @@ pub mod branch;
 mod command;
 mod error;
 mod header;
+mod hit;
 mod message;
 mod mode;
 mod notice;
@@ -66,6 +67,7 @@ pub use blend::{BlendTolerance, ViaKind};
 pub use command::Command;
 pub use error::{DecodeError, Error};
 pub use header::{DRIVE_FAULT_CODES, Header, NoticeError};
+pub use hit::{Hit, Obstacle};
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
 pub use notice::Notice;

@@ -6,7 +6,7 @@
 use core::fmt;
 
 use super::words::{Milli, decimal, phrase, value_of};
-use super::{Mode, StopCause};
+use super::{Hit, Mode, StopCause};
 
 /// The drives' state, as a status reply (`QS` f1) and refusals report it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -216,6 +216,10 @@ pub enum WorkspaceReason {
     /// `near edge at NN%`: a joint move's way comes so near an exclusion box or the bounds
     /// there that the check, within its work budget, cannot tell that it stays clear.
     NearEdge(PathPoint),
+    /// `L3 hits B1 at 40%`, `L5 hits L2`, `L3 out at 99%`: a link of the arm (its capsule,
+    /// inflated by what it may sweep between checked samples) would come within the margin of
+    /// a box, another link or the bounds there (docs/safety.md).
+    Hits(Hit, PathPoint),
 }
 
 impl WorkspaceReason {
@@ -244,6 +248,9 @@ impl WorkspaceReason {
         if head == Self::NEAR_EDGE {
             return Some(Self::NearEdge(at));
         }
+        if let Some(hit) = Hit::parse(head) {
+            return Some(Self::Hits(hit, at));
+        }
         let joint = head.strip_prefix('j')?.strip_suffix(Self::TOO_FAST)?;
         Some(Self::TooFast(decimal(joint)?, at))
     }
@@ -256,6 +263,7 @@ impl fmt::Display for WorkspaceReason {
             Self::Unreachable(at) => write!(f, "{}{}", Self::UNREACHABLE, At(at)),
             Self::TooFast(joint, at) => write!(f, "j{joint}{}{}", Self::TOO_FAST, At(at)),
             Self::NearEdge(at) => write!(f, "{}{}", Self::NEAR_EDGE, At(at)),
+            Self::Hits(hit, at) => write!(f, "{hit}{}", At(at)),
             fixed => f.write_str(phrase(&Self::PHRASES, &fixed).unwrap_or_default()),
         }
     }

@@ -26,6 +26,7 @@ pub(super) fn refusal_notice(cmd: Command, refusal: Refusal) -> Notice {
         Refusal::ArmOutsideWorkspace => workspace(WorkspaceReason::ArmOutside),
         Refusal::TooFast(joint, at) => workspace(WorkspaceReason::TooFast(joint, at)),
         Refusal::NearEdge(at) => workspace(WorkspaceReason::NearEdge(at)),
+        Refusal::Hits(hit, at) => workspace(WorkspaceReason::Hits(hit, at)),
         Refusal::OutsideJointLimits(bound) => Notice::BeyondJointLimit(cmd, bound),
         Refusal::NoGoal => rejected(match cmd {
             Command::ViaExecute | Command::JointExecute => Rejection::NoViaPoint,

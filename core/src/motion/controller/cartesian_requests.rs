@@ -46,6 +46,7 @@ impl Controller {
             acceleration: &self.cartesian_acceleration,
             max_rate: &self.max_rate,
             max_acceleration: &self.max_acceleration,
+            body: &self.body,
         })
     }
 

@@ -16,6 +16,7 @@ impl Controller {
         let goal = self.ready_for_joint_motion(goal, min_duration)?;
         let start = self.joint_generator.setpoint();
         check_joint_path(&self.chain, &self.workspace, &start, &goal, 0.0)?;
+        self.body.check_path(&self.chain, &start, &goal)?;
         self.supervisor.clear_cause();
         self.joint_generator.move_to(goal, min_duration.max(0.0))
     }
@@ -74,6 +75,7 @@ impl Controller {
             };
             let clearance = per_joint * blend_in.max(blend_out);
             check_joint_path(&self.chain, &self.workspace, &from, &via.point, clearance)?;
+            self.body.check_path(&self.chain, &from, &via.point)?;
             (from, blend_in) = (via.point, blend_out);
         }
         let first = self.joint_sequence.start()?;

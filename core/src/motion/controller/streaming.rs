@@ -14,7 +14,9 @@ impl Controller {
     /// Either mode, while a velocity stream runs: its set-point from the last command.
     pub(super) fn stream_tick(&mut self, q_m: &Joints, events: &mut Events) -> StreamStep {
         let q = self.command.unwrap_or(*q_m);
-        let step = self.stream.step(&self.chain, &self.workspace, &q);
+        let step = self
+            .stream
+            .step(&self.chain, (&self.workspace, &self.body), &q);
         events.workspace_limit |= step.workspace_limit;
         events.hold = match step.held_joint {
             Some((i, upper)) => {

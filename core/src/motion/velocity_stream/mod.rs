@@ -23,7 +23,8 @@
 //! 4. **workspace**: if the tool would end outside the workspace or in an exclusion box at
 //!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
 //!    is not commanded at all (the arm holds). An arm already outside moves freely, so that it
-//!    can be driven out.
+//!    can be driven out. The same for the whole arm ([`Body`]): a link that would come to rest
+//!    in a box or another link it does not touch now ramps the stream to rest (`WN13`).
 //!
 //! The set-point is `q + v·T`. Each loop runs over the joints; no iteration is unbounded.
 
@@ -40,6 +41,7 @@ pub use joint_margin::MARGIN_SHARE;
 
 use armgate_protocol::client::TwistFrame;
 
+use super::body::Body;
 use super::joint_stop::StopLimits;
 use super::workspace::Workspace;
 use crate::config::ValidRobot;
@@ -188,7 +190,12 @@ impl VelocityStream {
     }
 
     /// One tick from the last joint command `q` (checked by the chain).
-    pub fn step(&mut self, chain: &Chain, workspace: &Workspace, q: &Joints) -> StreamStep {
+    pub fn step(
+        &mut self,
+        chain: &Chain,
+        (workspace, body): (&Workspace, &Body),
+        q: &Joints,
+    ) -> StreamStep {
         if self.age >= TIMEOUT_PERIODS {
             self.command = None;
         }
@@ -252,7 +259,18 @@ impl VelocityStream {
         let allowed = |q: &Joints| workspace.allows(&tool_pose(chain, q).translation.vector);
         let mut workspace_limit = false;
         let mut inside_now = None;
-        if !allowed(&self.resting_point(q, &velocity)) && *inside_now.get_or_insert(allowed(q)) {
+        let rest = self.resting_point(q, &velocity);
+        // The whole arm too: a link that would come to rest in contact with something it
+        // does not touch now holds the stream before it (issue 35), as the tool point does;
+        // seen from the next set-point, as the tick's own check of the body sees it.
+        let body_blocked = || {
+            let rest = advance(&rest, &velocity, self.period);
+            body.new_hit(chain, &rest, &[]).is_some()
+                && body
+                    .new_hit(chain, &rest, &body.present_at(chain, q))
+                    .is_some()
+        };
+        if (!allowed(&rest) && *inside_now.get_or_insert(allowed(q))) || body_blocked() {
             workspace_limit = true;
             velocity = self.ramp(&Joints::zeros(q.len()));
         }

@@ -13,7 +13,8 @@ use super::header::{CMD, MSG};
 use super::words::{Milli, phrase};
 
 use super::{
-    Command, DriveStatus, Error, Hold, JointBound, Lag, Rejection, Severity, Text, WorkspaceReason,
+    Command, DriveStatus, Error, Hit, Hold, JointBound, Lag, Rejection, Severity, Text,
+    WorkspaceReason,
 };
 
 /// A fixed error or warning. Add a variant (with its [`code`](Self::code), severity and body) for
@@ -35,6 +36,10 @@ pub enum Notice {
     Rejected(Command, Rejection),
     /// `ER21 Work space limit.`
     WorkspaceLimit,
+    /// `ER21 L3 hits B1`: the motion was stopped because a link of the arm, where it is
+    /// commanded or where it would come to rest, came within the margin of a box, another
+    /// link or the bounds (docs/safety.md).
+    Collision(Hit),
     /// `WN12 Joint limit.`
     JointLimit,
     /// `WN22 Inv Kin Divergence.`
@@ -95,7 +100,7 @@ impl Notice {
             Self::ArmDidNotStop(_) => 10,
             Self::ArmDidNotStart(_) => 11,
             Self::Rejected(..) => 20,
-            Self::WorkspaceLimit => 21,
+            Self::WorkspaceLimit | Self::Collision(_) => 21,
             Self::JointLimit => 12,
             Self::IkDivergence => 22,
             Self::BadNumber(_) => 23,
@@ -205,6 +210,7 @@ impl fmt::Display for Body {
             Notice::Cancelled(c) => write!(f, "{CMD} {} {CANCELLED}", cmd(c)),
             Notice::BranchBeyondLimits(c) => write!(f, "{CMD} {} {BRANCH_BEYOND_LIMITS}", cmd(c)),
             Notice::FollowingError(lag) => write!(f, "{lag}"),
+            Notice::Collision(hit) => write!(f, "{hit}"),
             Notice::Held(Hold::JointLimit(bound)) => {
                 write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))
             }
@@ -311,6 +317,26 @@ mod tests {
                 "ER20 Cmd PS no measurement",
             ),
             (Notice::WorkspaceLimit, "ER21 Work space limit."),
+            (
+                Notice::Collision(Hit {
+                    link: 5,
+                    obstacle: crate::client::Obstacle::Link(2),
+                }),
+                "ER21 L5 hits L2",
+            ),
+            (
+                Notice::OutsideWorkspace(
+                    Command::JointBegin,
+                    WorkspaceReason::Hits(
+                        Hit {
+                            link: 3,
+                            obstacle: crate::client::Obstacle::Box(16),
+                        },
+                        PathPoint::Along(40),
+                    ),
+                ),
+                "ER25 Cmd jB L3 hits B16 at 40%",
+            ),
             (Notice::JointLimit, "WN12 Joint limit."),
             (Notice::IkDivergence, "WN22 Inv Kin Divergence."),
             (

@@ -73,8 +73,9 @@ impl Notice {
                 .and_then(|rest| rest.strip_suffix(LINK_SHARED.1))
                 .and_then(decimal)
                 .map(Self::LinkShared),
+            (Severity::Error, 21) => super::super::Hit::parse(body).map(Self::Collision),
             // The fixed phrases, matched above.
-            (Severity::Error, 21) | (Severity::Warning, 13 | 22 | 27) => None,
+            (Severity::Warning, 13 | 22 | 27) => None,
             _ => return Err(NoticeError::UnknownCode),
         };
         parsed.ok_or(NoticeError::UnknownForm)

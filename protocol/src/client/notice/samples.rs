@@ -2,8 +2,8 @@
 //! table for other clients (`table.rs`).
 
 use crate::client::{
-    Command, DriveStatus, Hold, JointBound, Lag, Mode, Notice, PathPoint, Rejection, StopCause,
-    WorkspaceReason,
+    Command, DriveStatus, Hit, Hold, JointBound, Lag, Mode, Notice, Obstacle, PathPoint, Rejection,
+    StopCause, WorkspaceReason,
 };
 
 /// At least one of every variant and every reason, each distinct in its text.
@@ -26,6 +26,7 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         .chain(StopCause::ALL.map(Rejection::Stopped))
         .chain(Mode::ALL.map(Rejection::NeedsMode))
         .map(|why| Notice::Rejected(Begin, why));
+    let hit = |link, obstacle| Hit { link, obstacle };
     let reasons = [
         WorkspaceReason::Goal,
         WorkspaceReason::CrossesBox(40),
@@ -35,6 +36,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         WorkspaceReason::TooFast(3, PathPoint::Goal),
         WorkspaceReason::TooFast(6, PathPoint::Along(1)),
         WorkspaceReason::NearEdge(PathPoint::Along(37)),
+        WorkspaceReason::Hits(hit(3, Obstacle::Box(1)), PathPoint::Along(40)),
+        WorkspaceReason::Hits(hit(5, Obstacle::Link(2)), PathPoint::Goal),
+        WorkspaceReason::Hits(hit(3, Obstacle::Bounds), PathPoint::Along(99)),
     ]
     .map(|why| Notice::OutsideWorkspace(ViaExecute, why));
     let states = DriveStatus::ALL
@@ -44,6 +48,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::NotUnderstood(*b"XY"),
         Notice::Undersized(*b"B?"),
         Notice::WorkspaceLimit,
+        Notice::Collision(hit(3, Obstacle::Box(1))),
+        Notice::Collision(hit(5, Obstacle::Link(2))),
+        Notice::Collision(hit(6, Obstacle::Bounds)),
         Notice::JointLimit,
         Notice::IkDivergence,
         Notice::BadNumber(GoalQuaternion),
@@ -92,6 +99,7 @@ fn variant_number(notice: Notice) -> usize {
         Notice::LinkShared(_) => 18,
         Notice::FollowingError(_) => 19,
         Notice::BranchBeyondLimits(_) => 20,
+        Notice::Collision(_) => 21,
     }
 }
 
