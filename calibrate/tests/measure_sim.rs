@@ -1,7 +1,11 @@
 //! A scripted calibration run (issue 37): `armgate calibrate measure` moves ur5 in armgate-sim
 //! through a plan's poses, its hook takes each reading from a perturbed "true" ur5
 //! (`simulate --perturb 7` on the reported joints), and the fit of what it wrote is accepted
-//! (exit 0: better than nominal, residual within 3 × the noise, else it refuses).
+//! (exit 0: better than nominal, residual within 3 × the noise, else it refuses) and brings the
+//! tool's error from millimetres to under 0.1 mm. With the whole arm's check (issue 35) most
+//! straight joint moves between the plan's poses are refused: `measure` goes to the nearest
+//! pose the controller accepts, by whole turns of a joint where that is shorter, and back the
+//! way it came when none is.
 //!
 //! armgate-sim is `$ARMGATE_SIM`, else `armgate-sim` next to this package's binary (built with
 //! cargo if missing), as python/tests/conftest.py finds it.
@@ -146,4 +150,12 @@ fn a_measuring_run_on_ur5_in_the_simulator_is_fitted() {
         String::from_utf8_lossy(&fit.stdout).into_owned() + &String::from_utf8_lossy(&fit.stderr);
     assert!(fit.status.success(), "{report}");
     assert!(dir.join("calibrated.toml").is_file());
+    // The perturbation is recovered: millimetres before, a tenth of one after (simulated:
+    // 11 of 14 poses, rms 3.892 -> 0.046 mm).
+    let rms = |label: &str| -> f64 {
+        let line = report.lines().find(|l| l.starts_with(label)).expect(label);
+        line.split_whitespace().nth(5).unwrap().parse().unwrap()
+    };
+    assert!(rms("fitting poses, nominal") > 1.0, "{report}");
+    assert!(rms("fitting poses, calibrated") < 0.1, "{report}");
 }
