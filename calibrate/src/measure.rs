@@ -39,7 +39,7 @@ pub struct MeasureArgs {
     /// The robot file (its joint count reads the plan).
     #[arg(long)]
     pub robot: PathBuf,
-    /// The joint configurations to visit (CSV, as `plan` writes them), in order.
+    /// The joint configurations to visit (CSV, as `plan` writes them), nearest first.
     #[arg(long)]
     pub plan: PathBuf,
     /// Where to write the measurements (the fit's `--measurements`).
