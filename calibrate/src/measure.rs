@@ -39,7 +39,7 @@ pub struct MeasureArgs {
     /// The robot file (its joint count reads the plan).
     #[arg(long)]
     pub robot: PathBuf,
-    /// The joint configurations to visit (CSV, as `plan` writes them), in order.
+    /// The joint configurations to visit (CSV, as `plan` writes them), nearest first.
     #[arg(long)]
     pub plan: PathBuf,
     /// Where to write the measurements (the fit's `--measurements`).
@@ -123,24 +123,30 @@ pub fn run(args: &MeasureArgs, config: &RobotConfig) -> Result<(), String> {
     let mut pending: Vec<usize> = (0..plan.len()).collect();
     // Each plan pose's first refusal, its reason if it is never reached.
     let mut refused: Vec<Option<String>> = vec![None; plan.len()];
+    // Whether the arm could not go back the way it came (the poses left were not all tried).
+    let mut stranded = false;
     // Each round measures or skips a pose or steps back one pose: bounded.
     while !pending.is_empty() {
         let Some(here) = trail.last().cloned() else {
             break;
         };
-        pending.sort_by(|&a, &b| distance(&here, &plan[a]).total_cmp(&distance(&here, &plan[b])));
+        let away = |k: usize| plan.get(k).map_or(f64::INFINITY, |g| distance(&here, g));
+        pending.sort_by(|&a, &b| away(a).total_cmp(&away(b)));
         let mut went = None;
         'poses: for (i, &k) in pending.iter().enumerate() {
-            let near = nearest_turn(&here, &plan[k], &config.joints);
-            let goals = if near == plan[k] {
+            let Some(want) = plan.get(k) else { continue };
+            let near = nearest_turn(&here, want, &config.joints);
+            let goals = if near == *want {
                 vec![near]
             } else {
-                vec![near, plan[k].clone()]
+                vec![near, want.clone()]
             };
             for goal in goals {
                 match visit(&mut client, &goal, args.settle)? {
                     Err(Refusal::Refused(why)) => {
-                        refused[k].get_or_insert(why);
+                        if let Some(first) = refused.get_mut(k) {
+                            first.get_or_insert(why);
+                        }
                     }
                     done => {
                         went = Some((i, k, goal, done));
@@ -160,6 +166,7 @@ pub fn run(args: &MeasureArgs, config: &RobotConfig) -> Result<(), String> {
                 record(k, Err(why));
                 // The arm stopped somewhere on a way accepted from here: back here.
                 if !step_back(&mut client, &here, args.settle)? {
+                    stranded = true;
                     break;
                 }
             }
@@ -168,18 +175,22 @@ pub fn run(args: &MeasureArgs, config: &RobotConfig) -> Result<(), String> {
                 trail.pop();
                 match trail.last() {
                     Some(back) if step_back(&mut client, back, args.settle)? => {}
-                    _ => break,
+                    Some(_) => {
+                        stranded = true;
+                        break;
+                    }
+                    None => break,
                 }
             }
         }
     }
     for k in pending {
-        let why = refused
-            .get(k)
-            .cloned()
-            .flatten()
-            .unwrap_or_else(|| "not tried".into());
-        record(k, Err(format!("{why} (from every pose the arm was at)")));
+        let why = match refused.get(k).cloned().flatten() {
+            Some(why) if !stranded => format!("{why} (from every pose the arm was at)"),
+            Some(why) => format!("{why} (the arm could not go back to try it from elsewhere)"),
+            None => "not tried: the arm could not go back the way it came".into(),
+        };
+        record(k, Err(why));
     }
     let header = if args.joints_only {
         measurements::format_poses(&[], dof)

@@ -3,6 +3,9 @@
 //! arm (`simulate --perturb 7` on the reported joints), and the fit of what it wrote is
 //! accepted (exit 0: better than nominal, residual within 3 × the noise, else it refuses) and
 //! finds the perturbation (fitting poses' rms error below 0.2 mm, from 20 times that nominal).
+//! With the whole arm's check (issue 35) most straight joint moves between the plan's poses
+//! are refused: `measure` goes to the nearest pose the controller accepts, by whole turns of a
+//! joint where that is shorter, and back the way it came when none is.
 //!
 //! armgate-sim is `$ARMGATE_SIM`, else `armgate-sim` next to this package's binary (built with
 //! cargo if missing), as python/tests/conftest.py finds it.
