@@ -124,7 +124,10 @@ fn the_python_section_names_only_methods_the_client_has() {
     let readme = repo_file("README.md");
     let python = section(&readme, "Python client");
     assert!(!python.contains("will follow"), "{python}");
-    let client = repo_file("python/armgate/client.py");
+    // armgate.Arm and the classes it is built from (waits, streams).
+    let client = ["client.py", "waiting.py", "streaming.py"]
+        .map(|file| repo_file(&format!("python/armgate/{file}")))
+        .concat();
     let errors = repo_file("python/armgate/errors.py");
     // Every `name` in backticks that looks like a method or a class of the package.
     for name in python.split('`').skip(1).step_by(2) {
