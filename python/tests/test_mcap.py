@@ -171,7 +171,8 @@ def test_workspace_and_urdf_are_in_the_file(recording: dict) -> None:
     scene = payloads(recording, "/workspace")
     assert len(scene) == 1
     cubes = scene[0]["entities"][1]["cubes"]
-    assert len(cubes) == 1 and cubes[0]["size"] == pytest.approx({"x": 0.4, "y": 0.4, "z": 0.5})
+    # ranger-mk1's base column, z from -0.1 to 0.35 m (5.2 cm under the stowed arm, issue 35).
+    assert len(cubes) == 1 and cubes[0]["size"] == pytest.approx({"x": 0.4, "y": 0.4, "z": 0.45})
     assert recording["metadata"][0].metadata["robot"] == "ranger-mk1"
 
 
