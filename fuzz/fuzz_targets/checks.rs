@@ -83,6 +83,7 @@ pub fn check_reply(datagram: &[u8], expected: Result<Request, Notice>, reply: &[
             | Notice::BeyondJointLimit(..)
             | Notice::ArmDidNotStart(_)
             | Notice::ArmDidNotStop(_)
+            | Notice::BranchBeyondLimits(_)
     );
     let refuses = Header::parse(&text).ok().and_then(|h| h.refuses());
     assert!(
