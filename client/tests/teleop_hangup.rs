@@ -10,11 +10,14 @@
     clippy::indexing_slicing
 )]
 
+mod common;
+
+use common::{Reap, wait_for};
 use std::net::UdpSocket;
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Who the fake controller's session report (`SQ` 3) names as the holder of the arm.
 #[derive(Clone, Copy)]
@@ -94,28 +97,6 @@ fn descendants(pid: u32) -> Vec<u32> {
         .filter_map(|c| c.parse().ok())
         .flat_map(|c| std::iter::once(c).chain(descendants(c)))
         .collect()
-}
-
-/// Waits up to `within` for `done`, polling every 20 ms.
-fn wait_for(within: Duration, mut done: impl FnMut() -> bool) -> bool {
-    let started = Instant::now();
-    while started.elapsed() < within {
-        if done() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    done()
-}
-
-/// Ends `script` and what runs under it if the test fails on the way.
-struct Reap(Child);
-
-impl Drop for Reap {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 /// Runs `armgate teleop` under `script` against a fake controller, ends it with `end` (given

@@ -8,10 +8,13 @@
 //! cargo if missing), as calibrate/tests/measure_sim.rs finds it.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod common;
+
+use common::{Reap, wait_for};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 use armgate_client::{Client, DriveStatus, Mode};
 
@@ -38,16 +41,6 @@ fn sim_binary() -> PathBuf {
     sim
 }
 
-/// A child process killed when dropped (the test may fail on the way).
-struct Reap(Child);
-
-impl Drop for Reap {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 /// armgate-sim for ranger-mk1 from a pose with room to move, on a free port.
 fn start_sim() -> (Reap, String) {
     let robot = repo().join("robots/ranger-mk1.toml");
@@ -71,18 +64,6 @@ fn start_sim() -> (Reap, String) {
         }
     }
     (Reap(child), addr.expect("armgate-sim's address"))
-}
-
-/// Waits up to `within` for `done`, polling every 50 ms.
-fn wait_for(within: Duration, mut done: impl FnMut() -> bool) -> bool {
-    let started = Instant::now();
-    while started.elapsed() < within {
-        if done() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    done()
 }
 
 #[test]
