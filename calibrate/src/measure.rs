@@ -286,6 +286,10 @@ fn visit(client: &mut Client, goal: &[f64], settle: Duration) -> Result<Visit, S
         ..defaults
     };
     if let Err(e) = client.wait_until_joints(goal, &options, |_| {}) {
+        // A stopped motion brakes first: the next move would be refused as busy.
+        client
+            .wait_motion_ended(Duration::from_secs(5))
+            .map_err(|e| e.to_string())?;
         return Ok(Err(Refusal::NotReached(e.to_string())));
     }
     client

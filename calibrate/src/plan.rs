@@ -2,7 +2,8 @@
 //! determined.
 //!
 //! Candidates are drawn uniformly within the joint limits (fixed seed) and kept if the nominal
-//! tool position lies in the robot's workspace. From them, N poses are chosen greedily to
+//! tool position lies in the robot's workspace and the whole arm is clear of the exclusion boxes,
+//! the bounds and itself (the controller refuses a joint move to any other pose). From them, N poses are chosen greedily to
 //! maximise `det(JᵀJ)` of the scaled identification Jacobian — equivalently the observability
 //! index O1 = (σ₁…σ_m)^(1/m) / √N (Borm and Menq) — each step adding the candidate with the
 //! largest `det(I + B M⁻¹ Bᵀ)`, where B is its 3-row block and M the information so far; then
@@ -10,7 +11,7 @@
 
 use armgate_core::config::ValidRobot;
 use armgate_core::kinematics::Chain;
-use armgate_core::motion::Workspace;
+use armgate_core::motion::{Body, Workspace};
 use armgate_core::rng::SplitMix64;
 use nalgebra::DMatrix;
 
@@ -26,7 +27,7 @@ const PRIOR: f64 = 1e-6;
 /// Why no plan could be made.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PlanError {
-    /// Too few random configurations put the tool inside the workspace.
+    /// Too few random configurations put the tool inside the workspace, the arm clear.
     Unreachable {
         /// Configurations found.
         found: usize,
@@ -40,7 +41,8 @@ impl std::fmt::Display for PlanError {
         match self {
             Self::Unreachable { found, wanted } => write!(
                 f,
-                "only {found} of {wanted} random configurations put the tool inside the workspace"
+                "only {found} of {wanted} random configurations put the tool inside the workspace \
+                 and the arm clear of the boxes and itself"
             ),
         }
     }
@@ -49,7 +51,7 @@ impl std::fmt::Display for PlanError {
 impl std::error::Error for PlanError {}
 
 /// `count` random joint configurations within the limits whose nominal tool position the
-/// workspace allows, from generator `seed`.
+/// workspace allows and where the body touches nothing, from generator `seed`.
 pub fn random_poses(
     config: &ValidRobot,
     count: usize,
@@ -57,6 +59,7 @@ pub fn random_poses(
 ) -> Result<Vec<Vec<f64>>, PlanError> {
     let chain = Chain::new(config);
     let workspace = Workspace::new(&config.workspace);
+    let body = Body::new(config);
     let mut rng = SplitMix64::new(seed);
     let mut poses = Vec::with_capacity(count);
     for _ in 0..count.saturating_mul(DRAWS_PER_POSE) {
@@ -67,6 +70,7 @@ pub fn random_poses(
         if chain
             .forward(&q)
             .is_ok_and(|tool| workspace.allows(&tool.translation.vector))
+            && body.present_at(&chain, &q).is_empty()
         {
             poses.push(q.to_vec());
         }
