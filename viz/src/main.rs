@@ -12,8 +12,10 @@ use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Chain;
 use armgate_core::math::Frame;
 use armgate_core::rng::SplitMix64;
+use armgate_viz::body::{self, BodyModel};
 use armgate_viz::urdf;
 use clap::{Parser, Subcommand};
+use serde_json::json;
 
 /// See the arm: URDF export and MCAP recordings for 3-D viewers such as Foxglove.
 #[derive(Debug, Parser)]
@@ -41,7 +43,11 @@ enum Cmd {
         /// limits (CSV), for the independent check in python/tests/test_urdf.py.
         #[arg(long, value_name = "FILE", hide = true)]
         fk_csv: Option<PathBuf>,
-        /// How many random joint vectors --fk-csv holds.
+        /// Also write the body's capsules (core's collision model) placed in the world at
+        /// random joint vectors within the limits (JSON), for the same check.
+        #[arg(long, value_name = "FILE", hide = true)]
+        body_json: Option<PathBuf>,
+        /// How many random joint vectors --fk-csv and --body-json hold.
         #[arg(long, default_value_t = 1000, hide = true)]
         samples: usize,
     },
@@ -60,8 +66,14 @@ fn main() -> ExitCode {
             robot,
             out,
             fk_csv,
+            body_json,
             samples,
-        } => write_urdf(&robot, out.as_deref(), fk_csv.as_deref(), samples),
+        } => write_urdf(
+            &robot,
+            out.as_deref(),
+            [fk_csv.as_deref(), body_json.as_deref()],
+            samples,
+        ),
         Cmd::Record(args) => load(args.robot()).and_then(|robot| record::run(&args, &robot)),
     };
     match result {
@@ -77,10 +89,11 @@ fn load(path: &Path) -> Result<ValidRobot, String> {
     load_file(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// The URDF, and the hidden checks' tables: `[--fk-csv, --body-json]`.
 fn write_urdf(
     robot: &Path,
     out: Option<&Path>,
-    fk_csv: Option<&Path>,
+    [fk_csv, body_json]: [Option<&Path>; 2],
     samples: usize,
 ) -> Result<(), String> {
     let config = load(robot)?;
@@ -91,11 +104,48 @@ fn write_urdf(
             .write_all(text.as_bytes())
             .map_err(|e| e.to_string())?,
     }
-    if let Some(path) = fk_csv {
-        std::fs::write(path, fk_table(&config, samples))
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+    let tables = [
+        fk_csv.map(|path| (path, fk_table(&config, samples))),
+        body_json.map(|path| (path, body_table(&config, samples))),
+    ];
+    for (path, text) in tables.into_iter().flatten() {
+        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())
+}
+
+/// `{"capsules": [{"link", "urdf_link", "radius"}..], "poses": [{"q", "ends": [[a, b]..]}..]}`:
+/// the body's capsules (core's order; `capsule_K` of the URDF is the K-th) and, at random
+/// joint vectors (seed 2), their ends in the world as the control tick places them.
+fn body_table(config: &ValidRobot, samples: usize) -> String {
+    let model = BodyModel::new(config);
+    let chain = Chain::new(config);
+    let capsules: Vec<_> = body::link_capsules(config)
+        .iter()
+        .map(|c| {
+            let urdf_link = match usize::from(c.link) {
+                0 => urdf::BASE.to_owned(),
+                l => urdf::link_name(l - 1),
+            };
+            json!({ "link": c.link, "urdf_link": urdf_link, "radius": c.radius })
+        })
+        .collect();
+    let mut rng = SplitMix64::new(2);
+    let poses: Vec<_> = (0..samples)
+        .filter_map(|_| {
+            let q = chain.random_joints(&mut rng);
+            let ends: Vec<_> = model
+                .placed(&q)?
+                .iter()
+                .map(|c| {
+                    let (a, b) = (c.segment.a, c.segment.b);
+                    json!([[a.x, a.y, a.z], [b.x, b.y, b.z]])
+                })
+                .collect();
+            Some(json!({ "q": &q[..chain.dof()], "ends": ends }))
+        })
+        .collect();
+    json!({ "capsules": capsules, "poses": poses }).to_string()
 }
 
 /// `q1..qn` then, for each link of the chain and the tool, its 4×4 frame in the world (row
