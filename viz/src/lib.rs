@@ -4,6 +4,7 @@
 //! --mcap` records with it. See docs/visualisation.md.
 
 pub mod body;
+pub mod body_scene;
 pub mod foxglove;
 pub mod live;
 pub mod mcap_file;
