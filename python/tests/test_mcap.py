@@ -95,7 +95,8 @@ def recording(mcap_reader, tmp_path_factory: pytest.TempPathFactory) -> dict:
         attachments = list(reader.iter_attachments())
         metadata = list(reader.iter_metadata())
     return {"summary": summary, "messages": messages, "attachments": attachments,
-            "metadata": metadata, "sent": sent, "port": sim.port, "stderr": stderr.decode()}
+            "metadata": metadata, "sent": sent, "port": sim.port, "stderr": stderr.decode(),
+            "path": path}
 
 
 def payloads(recording: dict, topic: str) -> list:
@@ -180,6 +181,28 @@ def test_workspace_and_urdf_are_in_the_file(recording: dict) -> None:
     # ranger-mk1's base column, z from -0.1 to 0.35 m (5.2 cm under the stowed arm, issue 35).
     assert len(cubes) == 1 and cubes[0]["size"] == pytest.approx({"x": 0.4, "y": 0.4, "z": 0.45})
     assert recording["metadata"][0].metadata["robot"] == "ranger-mk1"
+
+
+def test_the_clearance_plot_of_the_run(recording: dict, tmp_path: Path) -> None:
+    """``armgate-viz clearance`` turns the run's /clearance into an SVG: the least gap to the
+    boxes, inside the bounds and between links over the run's time, the margin, and the
+    refused request (ER00) as a marker."""
+    out = tmp_path / "clearance.svg"
+    printed = subprocess.run([str(viz_binary()), "clearance", str(recording["path"]), "--out", str(out)],
+                             check=True, capture_output=True, text=True).stdout
+    assert printed.strip() == str(out)
+    svg = out.read_text()
+    root = ElementTree.fromstring(svg)
+    texts = [t.text.strip() for t in root.iter("{http://www.w3.org/2000/svg}text") if t.text]
+    for text in ("minimum distance at the measured joints", "t (s)", "distance (m)", "to the boxes",
+                 "inside the bounds", "between links", "margin", "ER00"):
+        assert text in texts or any(text in t for t in texts), (text, texts)
+    lines = [p for p in root.iter("{http://www.w3.org/2000/svg}polyline")
+             if len(p.get("points").split()) >= 50]
+    assert len(lines) >= 3, [len(p.get("points").split()) for p in root.iter("{http://www.w3.org/2000/svg}polyline")]
+    # The time axis spans the run: its last tick label is near the run's length.
+    ticks = [float(t) for t in texts if t.replace(".", "", 1).isdigit()]
+    assert RUN_S * 0.7 < max(ticks) < RUN_S * 1.3 + 5, ticks
 
 
 def test_record_reads_a_controller_over_the_protocol(mcap_reader, sim_factory, tmp_path: Path) -> None:

@@ -136,14 +136,13 @@ impl BodyView {
                     }
                 }
                 let name = link_frame(link);
-                let mut e = foxglove::entity(
+                let metadata = [json!({ "key": "capsules", "value": numbers.join(" ") })];
+                foxglove::entity(
                     t,
                     &name,
                     &format!("body_{name}"),
-                    json!({ "cylinders": cylinders, "spheres": spheres }),
-                );
-                e["metadata"] = json!([{ "key": "capsules", "value": numbers.join(" ") }]);
-                e
+                    json!({ "cylinders": cylinders, "spheres": spheres, "metadata": metadata }),
+                )
             })
             .collect();
         if let Some((hit, class)) = shown {

@@ -360,7 +360,8 @@ pub fn workspace(t: f64, bounds: &[f64; 6], boxes: &[[f64; 6]]) -> Value {
 }
 
 /// A `foxglove.SceneEntity` `id` in frame `frame` that lives until replaced, with the shapes
-/// of `shapes` (`{"cubes": [..], "spheres": [..], ..}`; the other kinds empty). An entity in a
+/// of `shapes` (`{"cubes": [..], "spheres": [..], ..}`; the other kinds empty; a `metadata`
+/// there is taken too). An entity in a
 /// link's frame is frame-locked: the viewer moves it with `/tf`.
 pub fn entity(t: f64, frame: &str, id: &str, shapes: Value) -> Value {
     let mut entity = json!({

@@ -5,6 +5,7 @@
 
 pub mod body;
 pub mod body_scene;
+pub mod clearance_plot;
 pub mod foxglove;
 pub mod live;
 pub mod mcap_file;

@@ -1,5 +1,6 @@
-//! `armgate-viz`: the URDF of a robot file, and recordings of a running controller (`armgate
-//! urdf` and `armgate record` run it). See docs/visualisation.md.
+//! `armgate-viz`: the URDF of a robot file, recordings of a running controller, and the plot
+//! of a recording's minimum distances (`armgate urdf` and `armgate record` run it). See
+//! docs/visualisation.md.
 
 mod record;
 
@@ -13,6 +14,7 @@ use armgate_core::kinematics::Chain;
 use armgate_core::math::Frame;
 use armgate_core::rng::SplitMix64;
 use armgate_viz::body::{self, BodyModel};
+use armgate_viz::clearance_plot;
 use armgate_viz::urdf;
 use clap::{Parser, Subcommand};
 use serde_json::json;
@@ -58,6 +60,18 @@ enum Cmd {
         after_help = "Example: armgate record run.mcap --robot robots/ranger-mk1.toml --duration 5"
     )]
     Record(record::RecordArgs),
+    /// Plot the minimum distances of a recording (armgate-sim --mcap, armgate record) over
+    /// time as an SVG: the least gap to the exclusion boxes, inside the bounds and between
+    /// links at every recorded pose (its /clearance channel), the margin, and the warnings
+    /// and errors as markers.
+    #[command(after_help = "Example: armgate-viz clearance run.mcap --out clearance.svg")]
+    Clearance {
+        /// The MCAP recording.
+        recording: PathBuf,
+        /// The SVG to write (default: the recording's name with `.clearance.svg`).
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -75,6 +89,7 @@ fn main() -> ExitCode {
             samples,
         ),
         Cmd::Record(args) => load(args.robot()).and_then(|robot| record::run(&args, &robot)),
+        Cmd::Clearance { recording, out } => plot_clearance(&recording, out),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -83,6 +98,16 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn plot_clearance(recording: &Path, out: Option<PathBuf>) -> Result<(), String> {
+    let run = clearance_plot::read(recording)?;
+    let out = out.unwrap_or_else(|| recording.with_extension("clearance.svg"));
+    let title = format!("recording {}", recording.display());
+    armgate_plot::write_svg(&out, &clearance_plot::figure(&run, &title))
+        .map_err(|e| format!("{}: {e}", out.display()))?;
+    println!("{}", out.display());
+    Ok(())
 }
 
 fn load(path: &Path) -> Result<ValidRobot, String> {
@@ -142,7 +167,8 @@ fn body_table(config: &ValidRobot, samples: usize) -> String {
                     json!([[a.x, a.y, a.z], [b.x, b.y, b.z]])
                 })
                 .collect();
-            Some(json!({ "q": &q[..chain.dof()], "ends": ends }))
+            let q: Vec<f64> = q.iter().take(chain.dof()).copied().collect();
+            Some(json!({ "q": q, "ends": ends }))
         })
         .collect();
     json!({ "capsules": capsules, "poses": poses }).to_string()
