@@ -263,4 +263,57 @@ mod tests {
         );
         assert!(view.update(0.2, &home).unwrap().1.is_none());
     }
+
+    /// At random poses of every robot with a body: the links of the nearest pair (both, for
+    /// two links) carry its class's colour and no other does; a nearest box gets its cube.
+    #[test]
+    fn exactly_the_nearest_pair_is_coloured() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots");
+        let mut kinds = std::collections::HashSet::new();
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let robot = armgate_core::config::load_file(entry.unwrap().path()).unwrap();
+            let chain = armgate_core::kinematics::Chain::new(&robot);
+            let mut view = BodyView::new(&robot);
+            let mut rng = armgate_core::rng::SplitMix64::new(11);
+            for k in 0..100 {
+                let q = chain.random_joints(&mut rng);
+                let (c, scene) = view.update(f64::from(k), &q).unwrap();
+                let Some(scene) = scene else { continue };
+                let gap = c["nearest"].as_f64().unwrap();
+                let colour = rgba(Class::of(gap, c["margin"].as_f64().unwrap()).color());
+                let obstacle = c["obstacle"].as_str().unwrap();
+                let mut pair = vec![link_frame(c["link"].as_u64().unwrap() as u8)];
+                if let Some(l) = obstacle.strip_prefix('L') {
+                    pair.push(link_frame(l.parse().unwrap()));
+                }
+                kinds.insert(obstacle.chars().next().unwrap());
+                let entities = scene["entities"].as_array().unwrap();
+                for e in entities {
+                    let in_pair = e["id"] == "nearest_box"
+                        || pair.iter().any(|p| e["frame_id"] == p.as_str());
+                    let expected = if in_pair {
+                        colour.clone()
+                    } else {
+                        rgba(BODY_COLOR)
+                    };
+                    let shapes = ["cubes", "cylinders", "spheres"]
+                        .iter()
+                        .flat_map(|kind| e[*kind].as_array().unwrap());
+                    for shape in shapes {
+                        assert_eq!(shape["color"], expected, "{obstacle} {e}");
+                    }
+                }
+                let boxed = entities.iter().any(|e| e["id"] == "nearest_box");
+                assert_eq!(boxed, obstacle.starts_with('B'));
+                let coloured = entities
+                    .iter()
+                    .filter(|e| e["id"] != "nearest_box")
+                    .filter(|e| e["spheres"][0]["color"] == colour)
+                    .count();
+                assert_eq!(coloured, pair.len(), "{obstacle}");
+            }
+        }
+        // Random poses of the shipped robots come nearest to boxes, links and the bounds.
+        assert_eq!(kinds, ['B', 'L', 'b'].into_iter().collect());
+    }
 }

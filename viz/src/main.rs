@@ -64,7 +64,11 @@ enum Cmd {
     /// time as an SVG: the least gap to the exclusion boxes, inside the bounds and between
     /// links at every recorded pose (its /clearance channel), the margin, and the warnings
     /// and errors as markers.
-    #[command(after_help = "Example: armgate-viz clearance run.mcap --out clearance.svg")]
+    // The client does not pass `clearance` on: its usage names this tool.
+    #[command(
+        override_usage = "armgate-viz clearance [OPTIONS] <RECORDING>",
+        after_help = "Example: armgate-viz clearance run.mcap --out clearance.svg"
+    )]
     Clearance {
         /// The MCAP recording.
         recording: PathBuf,
