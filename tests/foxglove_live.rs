@@ -1,6 +1,6 @@
 //! `armgate-sim --foxglove ADDR`: a WebSocket client speaking the Foxglove protocol connects,
 //! sees the channels advertised, subscribes, and receives joint states at the tick rate and
-//! the URDF (sent again to each new subscriber).
+//! the URDF and the body's scene (sent again to each new subscriber).
 
 #![allow(
     clippy::unwrap_used,
@@ -112,11 +112,13 @@ fn a_viewer_subscribes_and_receives_joint_states() {
     let schema: Value = serde_json::from_str(joints["schema"].as_str().unwrap()).unwrap();
     assert_eq!(schema["title"], "foxglove.JointStates");
     let description = find("/robot_description");
+    let body = find("/body");
     socket
         .send(Message::text(
             json!({"op": "subscribe", "subscriptions": [
                 {"id": 7, "channelId": joints["id"]},
                 {"id": 8, "channelId": description["id"]},
+                {"id": 9, "channelId": body["id"]},
             ]})
             .to_string(),
         ))
@@ -124,13 +126,15 @@ fn a_viewer_subscribes_and_receives_joint_states() {
 
     let mut times = Vec::new();
     let mut urdf = None;
+    let mut scene = None;
     let deadline = Instant::now() + Duration::from_secs(20);
-    while times.len() < 20 || urdf.is_none() {
+    while times.len() < 20 || urdf.is_none() || scene.is_none() {
         assert!(
             Instant::now() < deadline,
-            "{} joint states, urdf {}",
+            "{} joint states, urdf {}, body {}",
             times.len(),
-            urdf.is_some()
+            urdf.is_some(),
+            scene.is_some()
         );
         let Message::Binary(bytes) = socket.read().unwrap() else {
             continue;
@@ -158,6 +162,19 @@ fn a_viewer_subscribes_and_receives_joint_states() {
             8 => {
                 assert_eq!(payload["format"], "urdf");
                 urdf = Some(payload);
+            }
+            // The body's last scene, sent again to a late subscriber: every link's capsules,
+            // frame-locked, the nearest pair in a colour of its own.
+            9 => {
+                let entities = payload["entities"].as_array().unwrap();
+                assert!(entities.iter().any(|e| e["frame_locked"] == true));
+                let colours: std::collections::HashSet<String> = entities
+                    .iter()
+                    .filter_map(|e| e["spheres"].get(0))
+                    .map(|s| s["color"].to_string())
+                    .collect();
+                assert!(colours.len() >= 2, "{payload}");
+                scene = Some(payload);
             }
             other => panic!("subscription {other}"),
         }

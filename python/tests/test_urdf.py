@@ -1,7 +1,9 @@
 """``armgate urdf`` checked by an independent URDF parser (yourdfpy, from PyPI): for every
 shipped robot file and a calibrated one (Hayati beta, [base], a full tool), the frame of every
 link in the URDF equals armgate's forward kinematics to 1e-9 m / 1e-9 rad at 1,000 random
-joint vectors within the limits.
+joint vectors within the limits; and every link carries the body's capsules (core's collision
+model) as collision geometry, a cylinder and two spheres each, which yourdfpy's FK places where
+armgate's control tick places the capsules.
 
 Skipped without yourdfpy, unless ``ARMGATE_REQUIRE_VIZ=1`` (CI sets it): then it fails.
 """
@@ -9,6 +11,7 @@ Skipped without yourdfpy, unless ``ARMGATE_REQUIRE_VIZ=1`` (CI sets it): then it
 from __future__ import annotations
 
 import csv
+import json
 import math
 import subprocess
 from pathlib import Path
@@ -87,3 +90,73 @@ def test_exclusion_boxes_are_fixed_links(yourdfpy, tmp_path: Path) -> None:
     centre = model.get_transform(frame_to="exclusion_box_1", frame_from="world")
     assert [centre[i][3] for i in range(3)] == pytest.approx([0.3, -0.2, 0.65])
     assert model.joint_map["joint_1"].limit.velocity == pytest.approx(math.pi)
+
+
+def transform_point(m, p) -> list:
+    return [sum(m[i][k] * p[k] for k in range(3)) + m[i][3] for i in range(3)]
+
+
+@pytest.mark.parametrize("robot", ROBOTS, ids=lambda p: p.stem)
+def test_collision_geometry_is_armgates_body(robot: Path, yourdfpy, tmp_path: Path) -> None:
+    """Every capsule of the body (``--body-json``: core's capsules placed by the chain at 20
+    seeded random poses) is in the URDF on its link, as ``capsule_K`` (a cylinder of the
+    capsule's radius, left out for a sphere) and ``capsule_K_a``/``_b`` (spheres at the ends);
+    yourdfpy's FK puts the spheres' centres on armgate's ends and the cylinder's axis between
+    them, to 1e-9 m."""
+    urdf_path = tmp_path / "robot.urdf"
+    body_path = tmp_path / "body.json"
+    subprocess.run(
+        [str(viz_binary()), "urdf", str(robot), "--out", str(urdf_path),
+         "--body-json", str(body_path), "--samples", "20"],
+        check=True,
+    )
+    model = yourdfpy.URDF.load(str(urdf_path), build_collision_scene_graph=False,
+                               load_meshes=False, load_collision_meshes=False)
+    body = json.loads(body_path.read_text())
+    capsules, poses = body["capsules"], body["poses"]
+    assert capsules and len(poses) == 20
+    # Every link that moves and the base carry collision geometry; only the body's.
+    links_with_capsules = {c["urdf_link"] for c in capsules}
+    n = len(model.actuated_joint_names)
+    assert {"base_link"} | {f"link_{k}" for k in range(1, n + 1)} >= links_with_capsules
+    assert f"link_{n}" in links_with_capsules  # the tool's capsule
+    shapes = {}
+    for name, link in model.link_map.items():
+        for c in link.collisions:
+            shapes[c.name] = (name, c)
+    expected_names = set()
+    for k, c in enumerate(capsules, start=1):
+        for suffix in ("_a", "_b"):
+            link, shape = shapes[f"capsule_{k}{suffix}"]
+            assert link == c["urdf_link"]
+            assert shape.geometry.sphere.radius == pytest.approx(c["radius"], abs=1e-12)
+            expected_names.add(f"capsule_{k}{suffix}")
+        if f"capsule_{k}" in shapes:
+            link, shape = shapes[f"capsule_{k}"]
+            assert link == c["urdf_link"]
+            assert shape.geometry.cylinder.radius == pytest.approx(c["radius"], abs=1e-12)
+            expected_names.add(f"capsule_{k}")
+    assert set(shapes) == expected_names
+    worst = 0.0
+    for pose in poses:
+        model.update_cfg(pose["q"])
+        for k, (c, (a, b)) in enumerate(zip(capsules, pose["ends"]), start=1):
+            link = model.get_transform(frame_to=c["urdf_link"], frame_from="world")
+            centre = lambda name: transform_point(  # noqa: E731
+                link, [shapes[name][1].origin[i][3] for i in range(3)])
+            worst = max(worst, math.dist(centre(f"capsule_{k}_a"), a),
+                        math.dist(centre(f"capsule_{k}_b"), b))
+            if f"capsule_{k}" in shapes:
+                cylinder = shapes[f"capsule_{k}"][1]
+                assert cylinder.geometry.cylinder.length == pytest.approx(math.dist(a, b), abs=1e-9)
+                mid = [(a[i] + b[i]) / 2 for i in range(3)]
+                worst = max(worst, math.dist(centre(f"capsule_{k}"), mid))
+                # The cylinder's z axis runs along the capsule's axis.
+                o = cylinder.origin
+                axis = [sum(link[i][j] * o[j][2] for j in range(3)) for i in range(3)]
+                half = [(b[i] - a[i]) / math.dist(a, b) for i in range(3)]
+                assert sum(x * y for x, y in zip(axis, half)) == pytest.approx(1.0, abs=1e-9)
+            else:
+                assert math.dist(a, b) < 1e-6
+    print(f"{robot.stem}: {len(capsules)} capsules, worst {worst:.2e} m")
+    assert worst < 1e-9

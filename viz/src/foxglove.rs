@@ -35,6 +35,12 @@ pub enum Topic {
     PlannedPath,
     /// The workspace bounds and exclusion boxes, once at the start.
     Workspace,
+    /// The arm's body (core's capsules, fixed to the link frames) with the nearest pair
+    /// coloured: at the start and whenever the nearest pair or its colour changes.
+    Body,
+    /// The gaps the controller checks at the measured joints: the nearest and between what,
+    /// and the least to the boxes, the bounds and between links, with the margin.
+    Clearance,
     /// Every request, reply and notice, decoded.
     Log,
     /// Every client datagram, raw.
@@ -45,7 +51,7 @@ pub enum Topic {
 
 impl Topic {
     /// Every channel, in the order they are registered.
-    pub const ALL: [Self; 12] = [
+    pub const ALL: [Self; 14] = [
         Self::RobotDescription,
         Self::JointStates,
         Self::JointCommand,
@@ -55,6 +61,8 @@ impl Topic {
         Self::Goal,
         Self::PlannedPath,
         Self::Workspace,
+        Self::Body,
+        Self::Clearance,
         Self::Log,
         Self::Udp,
         Self::Can,
@@ -72,6 +80,8 @@ impl Topic {
             Self::Goal => "/goal",
             Self::PlannedPath => "/planned_path",
             Self::Workspace => "/workspace",
+            Self::Body => "/body",
+            Self::Clearance => "/clearance",
             Self::Log => "/log",
             Self::Udp => "/udp",
             Self::Can => "/can",
@@ -86,7 +96,8 @@ impl Topic {
             Self::Transforms => "foxglove.FrameTransforms",
             Self::ToolPose | Self::Setpoint | Self::Goal => "foxglove.PoseInFrame",
             Self::PlannedPath => "foxglove.PosesInFrame",
-            Self::Workspace => "foxglove.SceneUpdate",
+            Self::Workspace | Self::Body => "foxglove.SceneUpdate",
+            Self::Clearance => "armgate.Clearance",
             Self::Log => "foxglove.Log",
             Self::Udp => "armgate.Datagram",
             Self::Can => "armgate.CanFrame",
@@ -131,7 +142,17 @@ impl Topic {
                     &format!(r#"{{"type":"array","items":{}}}"#, pose_schema()),
                 ),
             ]),
-            Self::Workspace => SCENE_UPDATE.to_owned(),
+            Self::Workspace | Self::Body => SCENE_UPDATE.to_owned(),
+            Self::Clearance => object(&[
+                ("timestamp", TIME),
+                ("margin", NUMBER),
+                ("nearest", NUMBER),
+                ("link", r#"{"type":["integer","null"]}"#),
+                ("obstacle", r#"{"type":["string","null"]}"#),
+                ("boxes", NUMBER),
+                ("bounds", NUMBER),
+                ("links", NUMBER),
+            ]),
             Self::Log => object(&[
                 ("timestamp", TIME),
                 ("level", r#"{"type":"integer"}"#),
@@ -163,10 +184,12 @@ impl Topic {
 
 const TIME: &str =
     r#"{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}}"#;
+/// A distance (m); null where nothing of the kind is checked.
+const NUMBER: &str = r#"{"type":["number","null"]}"#;
 const VECTOR3: &str = r#"{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}}"#;
 const QUATERNION: &str = r#"{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}"#;
-/// The parts of `foxglove.SceneUpdate` used: entities of cubes (the exclusion boxes) and lines
-/// (the workspace's edges).
+/// The parts of `foxglove.SceneUpdate` used: entities of cubes (the exclusion boxes), lines
+/// (the workspace's edges), cylinders and spheres (the body's capsules).
 const SCENE_UPDATE: &str = r#"{"type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
 
 fn pose_schema() -> String {
@@ -217,7 +240,8 @@ fn parts(frame: &Frame) -> (Value, Value) {
     )
 }
 
-fn pose(frame: &Frame) -> Value {
+/// A `foxglove.Pose` of a frame.
+pub fn pose(frame: &Frame) -> Value {
     let (position, orientation) = parts(frame);
     json!({ "position": position, "orientation": orientation })
 }
@@ -326,21 +350,30 @@ pub fn workspace(t: f64, bounds: &[f64; 6], boxes: &[[f64; 6]]) -> Value {
             })
         })
         .collect();
-    let entity = |id: &str, cubes: Vec<Value>, lines: Vec<Value>| {
-        json!({
-            "timestamp": time(t), "frame_id": WORLD, "id": id,
-            "lifetime": { "sec": 0, "nsec": 0 }, "frame_locked": false, "metadata": [],
-            "arrows": [], "cubes": cubes, "spheres": [], "cylinders": [], "lines": lines,
-            "triangles": [], "texts": [], "models": [],
-        })
-    };
     json!({
         "deletions": [],
         "entities": [
-            entity("workspace", Vec::new(), vec![line]),
-            entity("exclusion_boxes", cubes, Vec::new()),
+            entity(t, WORLD, "workspace", json!({ "lines": [line] })),
+            entity(t, WORLD, "exclusion_boxes", json!({ "cubes": cubes })),
         ],
     })
+}
+
+/// A `foxglove.SceneEntity` `id` in frame `frame` that lives until replaced, with the shapes
+/// of `shapes` (`{"cubes": [..], "spheres": [..], ..}`; the other kinds empty; a `metadata`
+/// there is taken too). An entity in a
+/// link's frame is frame-locked: the viewer moves it with `/tf`.
+pub fn entity(t: f64, frame: &str, id: &str, shapes: Value) -> Value {
+    let mut entity = json!({
+        "timestamp": time(t), "frame_id": frame, "id": id,
+        "lifetime": { "sec": 0, "nsec": 0 }, "frame_locked": frame != WORLD, "metadata": [],
+        "arrows": [], "cubes": [], "spheres": [], "cylinders": [], "lines": [],
+        "triangles": [], "texts": [], "models": [],
+    });
+    if let (Some(entity), Value::Object(shapes)) = (entity.as_object_mut(), shapes) {
+        entity.extend(shapes);
+    }
+    entity
 }
 
 #[cfg(test)]

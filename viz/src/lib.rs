@@ -3,6 +3,9 @@
 //! loop by a recorder thread, and served live over the Foxglove WebSocket protocol. `armgate urdf` runs this crate's `armgate-viz` tool; `armgate-sim
 //! --mcap` records with it. See docs/visualisation.md.
 
+pub mod body;
+pub mod body_scene;
+pub mod clearance_plot;
 pub mod foxglove;
 pub mod live;
 pub mod mcap_file;

@@ -5,8 +5,8 @@
 //!
 //! One thread accepts connections; each viewer has a thread and a bounded queue of its own, so
 //! a slow viewer loses messages (counted) but never slows the recorder, let alone the control
-//! loop. The URDF and the workspace are sent again to every new subscriber (they are sent once
-//! at the start, before a viewer may be there).
+//! loop. The URDF, the workspace and the body's last scene are sent again to every new
+//! subscriber (they are sent at the start, before a viewer may be there, or rarely).
 
 use std::collections::HashMap;
 use std::io;
@@ -42,9 +42,13 @@ pub fn channel_id(topic: Topic) -> u32 {
         .map_or(0, |i| u32::try_from(i + 1).unwrap_or(0))
 }
 
-/// Topics whose one message is sent again to each new subscriber.
+/// Topics whose last message is sent again to each new subscriber (each holds its whole
+/// picture: the URDF, the workspace, the body).
 fn latched(topic: Topic) -> bool {
-    matches!(topic, Topic::RobotDescription | Topic::Workspace)
+    matches!(
+        topic,
+        Topic::RobotDescription | Topic::Workspace | Topic::Body
+    )
 }
 
 /// One connected viewer, as the sink sees it.

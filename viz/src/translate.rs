@@ -15,6 +15,7 @@ use armgate_protocol::client::{Command, MESSAGE_LEN, Message as Wire, Request, S
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{Value, json};
 
+use crate::body_scene::BodyView;
 use crate::foxglove::{self, Level, Topic};
 use crate::urdf;
 
@@ -120,6 +121,8 @@ pub struct Translator {
     joint_goal: [f64; MAX_JOINTS],
     /// The last measured joints and their tool pose.
     last: Option<(Joints, Frame)>,
+    /// The body's capsules and what `/body` shows.
+    body: BodyView,
 }
 
 impl Translator {
@@ -133,6 +136,7 @@ impl Translator {
             cartesian_goal: None,
             joint_goal: [0.0; MAX_JOINTS],
             last: None,
+            body: BodyView::new(robot),
         }
     }
 
@@ -144,7 +148,8 @@ impl Translator {
     /// What a viewer needs before the first tick: the URDF and the workspace (at time `t`).
     pub fn preamble(&self, t: f64) -> Vec<Message> {
         let workspace = &self.robot.workspace;
-        vec![
+        let body = self.body.preamble(t);
+        let mut out = vec![
             Message::new(
                 Topic::RobotDescription,
                 t,
@@ -155,7 +160,9 @@ impl Translator {
                 t,
                 &foxglove::workspace(t, &workspace.bounds, &workspace.boxes),
             ),
-        ]
+        ];
+        out.extend(body.map(|body| Message::new(Topic::Body, t, &body)));
+        out
     }
 
     /// The messages of one event.
@@ -250,6 +257,10 @@ impl Translator {
                 &foxglove::frame_transforms(t, &tree),
             ));
             self.last = Some((*measured, tool));
+        }
+        if let Some((clearance, scene)) = self.body.update(t, measured) {
+            out.push(Message::new(Topic::Clearance, t, &clearance));
+            out.extend(scene.map(|scene| Message::new(Topic::Body, t, &scene)));
         }
         if let Some(setpoint) = setpoint {
             out.push(Message::new(
@@ -493,7 +504,12 @@ mod tests {
         };
         assert_eq!(
             topics(&translator.translate(&joints)),
-            [Topic::JointStates, Topic::Transforms]
+            [
+                Topic::JointStates,
+                Topic::Transforms,
+                Topic::Clearance,
+                Topic::Body
+            ]
         );
         let goal = [0.0, 0.3, 0.8, 0.0, 1.5708, 0.0, 3.0];
         let logged = translator.translate(&request(Command::GoalRpy, goal));

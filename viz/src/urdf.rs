@@ -17,6 +17,8 @@ use armgate_core::config::{JointType, ValidRobot};
 use armgate_core::math::Frame;
 use nalgebra::{Rotation3, Translation3, Vector3};
 
+use crate::body::{LinkCapsule, link_capsules};
+
 /// The URDF name of joint `i` (counting from 0): `joint_1`.., as [`crate::scene`]'s joint
 /// states name them.
 pub fn joint_name(i: usize) -> String {
@@ -97,6 +99,8 @@ const MATERIALS: [(&str, [f64; 4]); 3] = [
 /// The URDF document of `robot`.
 pub fn urdf(robot: &ValidRobot) -> String {
     let radius = link_radius(robot);
+    let capsules = link_capsules(robot);
+    let collisions = |link: usize| collisions(&capsules, link);
     let mut out = String::new();
     let _ = writeln!(out, r#"<?xml version="1.0"?>"#);
     let _ = writeln!(
@@ -120,8 +124,13 @@ pub fn urdf(robot: &ValidRobot) -> String {
             |f| f.translation.vector,
         )
     };
-    link(&mut out, WORLD, &[]);
-    link(&mut out, BASE, &segments(next_origin(0), radius));
+    link(&mut out, WORLD, &[], &[]);
+    link(
+        &mut out,
+        BASE,
+        &segments(next_origin(0), radius),
+        &collisions(0),
+    );
     fixed(&mut out, "world_to_base", WORLD, BASE, &base_origin(robot));
     for i in 0..n {
         let parent = if i == 0 {
@@ -134,7 +143,7 @@ pub fn urdf(robot: &ValidRobot) -> String {
         };
         let mut shapes = vec![housing(joint.kind, radius)];
         shapes.extend(segments(next_origin(i + 1), radius));
-        link(&mut out, &link_name(i), &shapes);
+        link(&mut out, &link_name(i), &shapes, &collisions(i + 1));
         let kind = match joint.kind {
             JointType::Revolute => "revolute",
             JointType::Prismatic => "prismatic",
@@ -156,7 +165,7 @@ pub fn urdf(robot: &ValidRobot) -> String {
             joint.max_rate,
         );
     }
-    link(&mut out, TOOL, &[]);
+    link(&mut out, TOOL, &[], &[]);
     let last = if n == 0 {
         BASE.to_owned()
     } else {
@@ -172,7 +181,7 @@ pub fn urdf(robot: &ValidRobot) -> String {
             geometry: format!(r#"<box size="{} {} {}"/>"#, size.x, size.y, size.z),
             material: "armgate_exclusion",
         };
-        link(&mut out, &name, &[shape]);
+        link(&mut out, &name, &[shape], &[]);
         let centre = Frame::translation(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1));
         fixed(&mut out, &format!("{name}_joint"), WORLD, &name, &centre);
     }
@@ -187,8 +196,15 @@ struct Shape {
     material: &'static str,
 }
 
-fn link(out: &mut String, name: &str, shapes: &[Shape]) {
-    if shapes.is_empty() {
+/// One `<collision>` of a link: a part of one of the body's capsules.
+struct Collision {
+    name: String,
+    origin: Frame,
+    geometry: String,
+}
+
+fn link(out: &mut String, name: &str, shapes: &[Shape], collisions: &[Collision]) {
+    if shapes.is_empty() && collisions.is_empty() {
         let _ = writeln!(out, r#"  <link name="{name}"/>"#);
         return;
     }
@@ -200,6 +216,15 @@ fn link(out: &mut String, name: &str, shapes: &[Shape]) {
             origin(&s.origin),
             s.geometry,
             s.material
+        );
+    }
+    for c in collisions {
+        let _ = writeln!(
+            out,
+            r#"    <collision name="{}">{}<geometry>{}</geometry></collision>"#,
+            c.name,
+            origin(&c.origin),
+            c.geometry
         );
     }
     let _ = writeln!(out, "  </link>");
@@ -255,6 +280,17 @@ fn segments(target: Vector3<f64>, radius: f64) -> Vec<Shape> {
 
 /// A cylinder between two points (none if they nearly coincide).
 fn cylinder(from: Vector3<f64>, to: Vector3<f64>, radius: f64) -> Option<Shape> {
+    let (origin, length) = along(from, to)?;
+    Some(Shape {
+        origin,
+        geometry: format!(r#"<cylinder radius="{radius}" length="{length}"/>"#),
+        material: "armgate_link",
+    })
+}
+
+/// The frame at the middle of two points whose z axis points from one to the other, and
+/// their distance (none if they nearly coincide): where a URDF cylinder between them sits.
+pub fn along(from: Vector3<f64>, to: Vector3<f64>) -> Option<(Frame, f64)> {
     let axis = to - from;
     let length = axis.norm();
     if length < 1e-6 {
@@ -262,11 +298,39 @@ fn cylinder(from: Vector3<f64>, to: Vector3<f64>, radius: f64) -> Option<Shape> 
     }
     let rotation = Rotation3::rotation_between(&Vector3::z(), &axis)
         .unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
-    Some(Shape {
-        origin: Frame::from_parts((0.5 * (from + to)).into(), rotation),
-        geometry: format!(r#"<cylinder radius="{radius}" length="{length}"/>"#),
-        material: "armgate_link",
-    })
+    Some((
+        Frame::from_parts((0.5 * (from + to)).into(), rotation),
+        length,
+    ))
+}
+
+/// The collision geometry of link `link` (0 = base): each of the body's capsules on it
+/// (`capsule_K`, K counting all the body's capsules from 1 in core's order) as URDF's core
+/// spec can say it, a cylinder between the axis' ends (`capsule_K`, left out for a sphere)
+/// and a sphere at each end (`capsule_K_a`, `capsule_K_b`).
+fn collisions(capsules: &[LinkCapsule], link: usize) -> Vec<Collision> {
+    let mut out = Vec::new();
+    for (k, c) in capsules.iter().enumerate() {
+        if usize::from(c.link) != link {
+            continue;
+        }
+        let (name, r) = (format!("capsule_{}", k + 1), c.radius);
+        if let Some((origin, length)) = along(c.a, c.b) {
+            out.push(Collision {
+                name: name.clone(),
+                origin,
+                geometry: format!(r#"<cylinder radius="{r}" length="{length}"/>"#),
+            });
+        }
+        for (end, point) in [("a", c.a), ("b", c.b)] {
+            out.push(Collision {
+                name: format!("{name}_{end}"),
+                origin: Frame::translation(point.x, point.y, point.z),
+                geometry: format!(r#"<sphere radius="{r}"/>"#),
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]
