@@ -20,7 +20,7 @@ from typing import (
 )
 
 from . import wire
-from .branch import parse_branch
+from .branch import PRESENT_INDEX, parse_branch
 from .signing import IDENTITY_INDEX, RESERVE_SECONDS, KeyLike, Signer
 from .streaming import Streaming
 from .errors import (
@@ -395,6 +395,12 @@ class Arm(Waiting, Streaming):
                 q += list(upper.values[: joints - 6])
             solutions.append((reply.index, q))
         return solutions
+
+    def get_configuration(self) -> Optional[int]:
+        """The configuration branch of the present joints (``SQ`` index 5; bits as
+        :meth:`ik_solutions` gives them), None on a robot without a closed form."""
+        value = self.request("SQ", index=PRESENT_INDEX).values[0]
+        return None if value < 0 else int(value)
 
     def move_j_to_pose(
         self,

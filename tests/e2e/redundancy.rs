@@ -136,7 +136,8 @@ fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
 fn ik_names_and_ik_move_takes_configurations_on_redundant_and_prismatic_arms() {
     for (name, start, keep) in [
         ("iiwa14", vec![0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1], vec![2]),
-        ("hybrid", vec![0.1, -0.2, 0.3, 0.4, -0.9, 0.2], vec![]),
+        // Its pretend joints start at home whatever --start says.
+        ("hybrid", vec![0.0; 6], vec![]),
     ] {
         let start_arg: Vec<String> = start.iter().map(f64::to_string).collect();
         let sim = Sim::start_with(name, &["--start", &start_arg.join(",")]);
