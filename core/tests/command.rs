@@ -421,10 +421,8 @@ fn list_choose_and_report(
 ) -> Vec<u8> {
     let sq = rig.request("SQ", [0.0; 7], 5);
     assert_eq!((&sq[..2], sq[30]), (&b"QS"[..], 5));
-    // The configuration as arms name it; the solver's roots on a prismatic base.
-    let branch = chain
-        .configuration(present)
-        .unwrap_or_else(|| chain.branch_of(present).unwrap().bits());
+    // The configuration as arms name it.
+    let branch = chain.configuration(present).unwrap();
     assert_eq!(floats(&sq)[0], f32::from(branch));
 
     let pose = chain.forward(target_q).unwrap();
@@ -442,7 +440,9 @@ fn list_choose_and_report(
         let q = floats(&sk);
         assert!(!branches.contains(&sk[30]));
         branches.push(sk[30]);
+        // f6 is the count: joints 1–6 (7.. are bank 2's).
         if q.iter()
+            .take(6)
             .zip(target_q)
             .all(|(a, b)| (f64::from(*a) - b).abs() < 1e-4)
         {
@@ -460,8 +460,11 @@ fn list_choose_and_report(
     rig.request("CM", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
     rig.tick();
     assert!(rig.text("KG", values, 9).starts_with("ER24"));
-    // A branch without a solution within the limits is refused as such.
-    for other in (0..8).filter(|b| !branches.contains(b)) {
+    // A branch without a solution within the limits is refused as such (a 7–8 joint arm's
+    // `KG` without a `KR` choice tries other θ3, θ5: it may find one).
+    let flags = chain.configuration_flags();
+    let redundant = !chain.redundancy_parameters().is_empty();
+    for other in (0..8).filter(|b| !redundant && !branches.contains(b) && b & !flags == 0) {
         assert_eq!(
             rig.text("KG", values, other),
             "ER44 Cmd KG branch past limits"
@@ -469,14 +472,14 @@ fn list_choose_and_report(
     }
     let gk = rig.request("KG", values, target_branch);
     assert_eq!((&gk[..2], gk[30]), (&b"GK"[..], target_branch));
-    for (a, b) in floats(&gk).iter().zip(target_q) {
+    for (a, b) in floats(&gk).iter().take(6).zip(target_q) {
         assert!((f64::from(*a) - b).abs() < 1e-4);
     }
     for _ in 0..1000 {
         rig.tick();
     }
     let jp = floats(&rig.request("jP", [0.0; 7], 0));
-    for (a, b) in jp.iter().zip(target_q) {
+    for (a, b) in jp.iter().take(6).zip(target_q) {
         assert!((f64::from(*a) - b).abs() < 1e-4, "{jp:?}");
     }
     let sq = rig.request("SQ", [0.0; 7], 5);
@@ -516,15 +519,41 @@ fn closed_form_requests_list_choose_and_report_branches() {
     let reached = iiwa_chain.forward(&q).unwrap();
     assert!((reached.translation.vector - t).norm() < 1e-5, "{q:?}");
     assert!(rig.text("KS", values, 0x80).starts_with("ER24"));
-    let branch = iiwa_chain.branch_of(&present).unwrap();
+    let branch = iiwa_chain.configuration(&present).unwrap();
     assert_eq!(
         floats(&iiwa.request("SQ", [0.0; 7], 5))[0],
-        f32::from(branch.bits())
+        f32::from(branch)
     );
 }
 
-/// hybrid (two slides, then four revolute joints): the same requests, on its closed form; no
-/// branch sets the wrist bit (docs/kinematics.md), so `KG` on it is refused as a branch past
+/// Every other closed-form robot names its configurations (issue 37): `SQ` 5, `KS`, `KG` by
+/// name, `ER44` for a configuration of the pose outside the limits; on a 7–8 joint arm for
+/// the present θ3 (and θ5).
+#[test]
+fn closed_form_requests_name_configurations_on_every_robot() {
+    for (name, present) in [
+        ("puma560", vec![0.2, -0.7, 2.0, 0.3, 0.6, 0.1]),
+        ("ur5", vec![0.2, -0.7, 2.0, 0.3, 0.6, 0.1]),
+        ("iiwa14", vec![0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1]),
+        ("ranger-mk2", vec![0.1, 0.5, 0.3, 1.0, 0.2, 0.8, 0.1, 0.2]),
+    ] {
+        let config = common::robot(name);
+        let chain = Chain::new(&config);
+        let mut rig = Rig::new(&config, &present);
+        let target_q: Vec<f64> = present.iter().map(|q| q + 0.1).collect();
+        // The redundancy values stay: the target's are the present ones.
+        let mut target_q = target_q;
+        for &p in chain.redundancy_parameters() {
+            target_q[p] = present[p];
+        }
+        let branches = list_choose_and_report(&mut rig, &chain, &present, &target_q);
+        assert!(branches.len() >= 2, "{name}: {branches:?}");
+    }
+}
+
+/// hybrid (two slides, then four revolute joints): the same requests, on its closed form; it
+/// has no wrist of three axes, so no configuration sets the wrist bit (docs/kinematics.md)
+/// and `KG` with it is refused as a bad index (no such branch on this robot), not as one past
 /// the limits.
 #[test]
 fn closed_form_requests_on_a_prismatic_base() {
@@ -542,7 +571,7 @@ fn closed_form_requests_on_a_prismatic_base() {
     let values = [t.x, t.y, t.z, r, p, y, 0.0].map(|v| v as f32);
     assert!(
         rig.text("KG", values, 4)
-            .starts_with("ER44 Cmd KG branch past limits")
+            .starts_with("ER24 Cmd KG bad index")
     );
 }
 
@@ -567,7 +596,7 @@ fn kg_to_the_pose_the_arm_is_at_does_not_move_it() {
         "{far:?}"
     );
     rig.request("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
-    for index in [8, chain.branch_of(&home).unwrap().bits()] {
+    for index in [8, chain.configuration(&home).unwrap()] {
         let reply = floats(&rig.request("KG", printed, index));
         assert!(reply[..6].iter().all(|q| q.abs() < 1e-9), "{reply:?}");
         for _ in 0..50 {

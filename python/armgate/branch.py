@@ -1,11 +1,16 @@
 """IK configuration branches by name (docs/kinematics.md, "Named configurations").
 
 A branch is three bits: 1 shoulder right (else left), 2 elbow down (else up), 4 wrist flip (else
-no flip), as ``KS``, ``KG`` and ``SQ`` 5 carry them. ``NAMES`` is the Rust protocol's
+no flip), as ``KS``, ``KG`` and ``SQ`` 5 carry them, taken from the geometry on every robot with a
+closed form; on a 7–8 joint arm a configuration is its bits with the redundancy values (θ3, θ5),
+and on hybrid (a prismatic base) the wrist bit does not apply (``KG`` with it: ``BadIndex``). ``NAMES`` is the Rust protocol's
 ``branch::NAMES``; python/tests/test_grammar.py checks it against protocol/grammar.json.
 """
 
 from typing import List, Tuple, Union
+
+#: ``SQ`` index of the present configuration (the Rust protocol's ``branch::BRANCH_INDEX``).
+PRESENT_INDEX = 5
 
 #: Each bit with its (name, short letter) when clear and when set.
 NAMES: List[Tuple[int, Tuple[Tuple[str, str], Tuple[str, str]]]] = [

@@ -20,8 +20,8 @@ from typing import (
 )
 
 from . import wire
-from .branch import parse_branch
-from .signing import IDENTITY_INDEX, KeyLike, Signer
+from .branch import PRESENT_INDEX, parse_branch
+from .signing import IDENTITY_INDEX, RESERVE_SECONDS, KeyLike, Signer
 from .streaming import Streaming
 from .errors import (
     ArmError,
@@ -93,7 +93,9 @@ class Arm(Waiting, Streaming):
 
     ``key``: sign every request and accept only answers signed with this key (32 bytes, a string
     of 64 hex digits, or the path of a key file: 64 hex digits on one line, readable by its
-    owner only), on link ``link_id`` (1..255; clients that run at the same time need their
+    owner only); with a key an unanswered request is re-sent for at least 2 s
+    (:data:`~armgate.signing.RESERVE_AHEAD`) whatever ``timeout`` and ``retries``, as long as a
+    controller that has just restarted drops signed requests; on link ``link_id`` (1..255; clients that run at the same time need their
     own; default: a free one the controller sets aside, :attr:`link_id`), for the controller
     ``controller_id`` (default: the id the controller names in its first signed answer,
     :attr:`controller_id`). See docs/safety.md, "Signing".
@@ -394,6 +396,12 @@ class Arm(Waiting, Streaming):
             solutions.append((reply.index, q))
         return solutions
 
+    def get_configuration(self) -> Optional[int]:
+        """The configuration branch of the present joints (``SQ`` index 5; bits as
+        :meth:`ik_solutions` gives them), None on a robot without a closed form."""
+        value = self.request("SQ", index=PRESENT_INDEX).values[0]
+        return None if value < 0 else int(value)
+
     def move_j_to_pose(
         self,
         pose: PoseLike,
@@ -581,9 +589,23 @@ class Arm(Waiting, Streaming):
         # Whatever arrived before this request cannot be its reply.
         self._drain()
         attempts = self.retries + 1
+        # A controller that has just restarted drops signed requests other than stops for up
+        # to RESERVE_AHEAD (docs/safety.md): with a key, resends go on for at least that long,
+        # as the Rust client's do.
+        window = RESERVE_SECONDS if self._signer is not None else 0.0
+        extra = math.ceil(window / max(self.timeout, 1e-6))
+        started = _time.monotonic()
         refused = False
         unverified = self.unverified
-        for attempt in range(attempts):
+        sent = 0
+        # When the last send left: the resends end only after one sent `window` after the first.
+        last_sent = 0.0
+        for attempt in range(attempts + extra + 1):
+            answered = self.unverified > unverified
+            if attempt >= attempts and (refused or answered or last_sent >= window):
+                break
+            sent += 1
+            last_sent = _time.monotonic() - started
             outgoing = datagram
             if self._signer is not None:
                 # Each attempt signed anew: the controller serves a timestamp once.
@@ -606,7 +628,7 @@ class Arm(Waiting, Streaming):
             )
         if self.unverified > unverified:
             raise SignatureMismatch(chars, self.unverified - unverified)
-        raise ReplyTimeout(chars, attempts, self.timeout, signed=self._signer is not None)
+        raise ReplyTimeout(chars, sent, self.timeout, signed=self._signer is not None)
 
     def _verified(self, datagram: bytes) -> Optional[bytes]:
         """The datagram as it is without a key; with one, its message if signed with the key

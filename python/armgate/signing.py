@@ -28,6 +28,16 @@ CONTROLLER_LINK = 0
 EPOCH_UNIX = 1_420_070_400
 """2015-01-01 00:00:00 UTC, the timestamps' epoch."""
 TIMESTAMP_MAX = (1 << 48) - 1
+TIMESTAMP_UNIT_US = 10
+"""The timestamps' step (us)."""
+RESERVE_AHEAD = 200_000
+"""How far ahead of a served timestamp (in timestamp steps: 2 s) the controller keeps its replay
+reservation: after a restart it drops signed requests other than stops for up to this long, so a
+client with a key resends for at least this long (docs/safety.md). Both figures are the Rust
+protocol's (``signed::RESERVE_AHEAD``, ``TIMESTAMP_UNIT_US``); python/tests/test_grammar.py
+checks them against protocol/grammar.json."""
+RESERVE_SECONDS = RESERVE_AHEAD * TIMESTAMP_UNIT_US / 1e6
+""":data:`RESERVE_AHEAD` in seconds."""
 
 ANY_CONTROLLER = 0
 """The controller id of a request for any controller: only ``SQ`` index 6 is served so."""
@@ -169,7 +179,7 @@ class Signer:
     def sign(self, message: bytes) -> Tuple[bytes, int]:
         """The signed datagram and its timestamp (for any controller while the id is
         unknown)."""
-        now = (time.time_ns() // 1000 - EPOCH_UNIX * 1_000_000) // 10
+        now = (time.time_ns() // 1000 - EPOCH_UNIX * 1_000_000) // TIMESTAMP_UNIT_US
         self.last = max(now, self.last + 1)
         controller = self.controller_id or ANY_CONTROLLER
         return sign(self._key, message, self.link_id, self.last, controller), self.last

@@ -66,9 +66,11 @@ def free_port() -> int:
 class Sim:
     """A running ``armgate-sim``."""
 
-    def __init__(self, robot: str, extra: List[str], ready: bool = True) -> None:
+    def __init__(
+        self, robot: str, extra: List[str], ready: bool = True, port: Optional[int] = None
+    ) -> None:
         self.robot = REPO / "robots" / f"{robot}.toml"
-        self.port = free_port()
+        self.port = port or free_port()
         if "--key" in extra and "--state" not in extra:
             # A test's replay state is its own, never the user's default location.
             self._state = Path(tempfile.mkdtemp(prefix="armgate-state-"))
@@ -82,7 +84,28 @@ class Sim:
         if ready:
             self.wait_ready()
         else:
-            time.sleep(1.0)
+            self.wait_listening()
+
+    def wait_listening(self) -> None:
+        """Until the simulator's port is bound, sending it nothing it would serve (a restart
+        test must not spend the controller's replay reservation): one byte, which a bound port
+        drops or refuses in a text and an unbound one answers with ICMP port unreachable."""
+        deadline = time.monotonic() + 20
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.connect(("127.0.0.1", self.port))
+            probe.settimeout(0.05)
+            while time.monotonic() < deadline:
+                if self.process.poll() is not None:
+                    raise RuntimeError(f"armgate-sim exited: {self.process.stderr.read()!r}")
+                try:
+                    probe.send(b"\0")
+                    probe.recv(64)
+                    return
+                except socket.timeout:
+                    return
+                except ConnectionRefusedError:
+                    time.sleep(0.02)
+        raise RuntimeError("armgate-sim did not listen within 20 s")
 
     def wait_ready(self) -> None:
         deadline = time.monotonic() + 20
@@ -145,8 +168,10 @@ class Sim:
 def sim_factory() -> Iterator[Callable[..., Sim]]:
     started: List[Sim] = []
 
-    def start(robot: str = "ranger-mk1", *extra: str) -> Sim:
-        sim = Sim(robot, list(extra))
+    def start(
+        robot: str = "ranger-mk1", *extra: str, ready: bool = True, port: Optional[int] = None
+    ) -> Sim:
+        sim = Sim(robot, list(extra), ready=ready, port=port)
         started.append(sim)
         return sim
 

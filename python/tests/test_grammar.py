@@ -72,3 +72,12 @@ def test_branch_names_are_the_protocols() -> None:
             assert "a branch is its three names" in str(e)
         else:
             raise AssertionError(bad)
+
+
+def test_the_signing_figures_are_the_protocols() -> None:
+    from armgate import signing
+
+    figures = TABLE["signing"]
+    assert signing.TIMESTAMP_UNIT_US == figures["timestamp_unit_us"]
+    assert signing.RESERVE_AHEAD == figures["reserve_ahead"]
+    assert signing.RESERVE_SECONDS == 2.0

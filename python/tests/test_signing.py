@@ -6,12 +6,14 @@ from __future__ import annotations
 import hashlib
 import hmac
 import os
+import time
 from pathlib import Path
 
 import pytest
 
 import armgate
 from armgate import signing, wire
+from conftest import free_port
 
 TEST_KEY = bytes(range(32))
 
@@ -122,15 +124,19 @@ def test_a_signed_client_commands_a_keyed_controller_and_others_get_silence(
     other.write_text(os.urandom(32).hex())
     other.chmod(0o600)
     with armgate.Arm("127.0.0.1", sim.port, timeout=0.1, retries=0, joints=6, key=other) as wrong:
-        with pytest.raises(armgate.ReplyTimeout, match="has it another key"):
+        with pytest.raises(armgate.ReplyTimeout, match="has it another key") as silence:
             wrong.get_tcp_pose()
+    # With a key an unanswered request is re-sent for 2 s (a restart's reservation): 21 sends
+    # 0.1 s apart, each a forgery here.
+    forged = silence.value.attempts
+    assert forged > signing.RESERVE_SECONDS / 0.1, forged
     with armgate.Arm("127.0.0.1", sim.port, key=key_file, link_id=9) as arm:
         counts = arm.request("SQ", index=4).values
         assert arm.controller_id is not None
     # Policy 1 (required), an unsigned and a forged (other key) datagram dropped.
     assert counts[0] == 1.0
     assert counts[3] == 1.0
-    assert counts[5] == 1.0
+    assert counts[5] == forged
 
 
 def test_a_signed_client_says_when_the_controller_answers_unsigned(mk1, key_file: Path) -> None:  # type: ignore[no-untyped-def]
@@ -151,3 +157,30 @@ def test_two_arms_with_default_options_sign_on_distinct_links(sim_factory, key_f
             b.get_tcp_pose()
         # Nothing dropped as replayed (SQ index 4, f6).
         assert a.request("SQ", index=4).values[6] == 0.0
+
+
+def test_right_after_a_restart_the_client_resends_until_the_reservation_passes(
+    sim_factory, key_file: Path, tmp_path: Path  # type: ignore[no-untyped-def]
+) -> None:
+    """docs/safety.md, "A restart refuses signed requests for up to 2 s": the same Arm, with the
+    default timeout and retries (4 sends 0.2 s apart, less than the 2 s), is served by the
+    simulator restarted mid-session with its replay state, as the Rust client is
+    (tests/e2e_signing.rs, right_after_a_restart_the_client_resends_until_the_reservation_passes_and_is_served)."""
+    port = free_port()
+    args = ["--key", str(key_file), "--state", str(tmp_path / "replay"),
+            "--controller-id", "5eed0003"]
+    sim = sim_factory("ranger-mk1", *args, port=port)
+    with armgate.Arm("127.0.0.1", port, key=key_file, link_id=1, joints=6) as arm:
+        before = arm.get_tcp_pose()
+        sim.stop()
+        sim_factory("ranger-mk1", *args, port=port, ready=False)
+        # Its first sends are dropped (not newer than the reservation kept before the
+        # restart); it resends, signed anew, until they are newer.
+        started = time.monotonic()
+        after = arm.get_tcp_pose()
+        waited = time.monotonic() - started
+        counts = arm.request("SQ", index=4).values
+    assert counts[6] >= 1.0, f"refused first: {counts}"
+    assert waited > (armgate.DEFAULT_RETRIES + 1) * armgate.DEFAULT_TIMEOUT, waited
+    assert waited < signing.RESERVE_SECONDS + 1.0, waited
+    assert after.xyz == pytest.approx(before.xyz, abs=1e-6)

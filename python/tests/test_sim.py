@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from typing import List
 
 import pytest
 
@@ -223,6 +224,45 @@ def test_a_chosen_theta3_lists_and_moves_on_a_seven_joint_arm(sim_factory) -> No
         assert abs(target[2] + 0.2) < 1e-5
         assert abs(arm.get_joints()[2] + 0.2) < 1e-3
         assert math.dist(arm.get_tcp_pose().xyz, pose.xyz) < 1e-3
+
+
+@pytest.mark.parametrize(
+    "robot,start",
+    [
+        ("iiwa14", [0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1]),
+        ("ranger-mk2", [0.1, 0.5, 0.3, 1.0, 0.2, 0.8, 0.1, 0.2]),
+        # Its pretend joints start at home whatever --start says, and home is singular: moved.
+        ("hybrid", [0.0, 0.0, 0.0, 0.2, -0.3, 0.1]),
+    ],
+)
+def test_configurations_are_named_and_taken_by_name_on_every_robot(  # type: ignore[no-untyped-def]
+    sim_factory, robot: str, start: List[float]
+) -> None:
+    """Issue 37: each solution of a pose has a configuration of its own (on a 7–8 joint arm for
+    the present θ3, θ5), the present one among them; a move by its short name takes it; hybrid
+    has no wrist bit."""
+    sim = sim_factory(robot, "--start", ",".join(map(str, start)))
+    with armgate.Arm("127.0.0.1", port=sim.port) as arm:
+        assert arm.set_mode(armgate.Mode.JOINT) == armgate.Mode.JOINT
+        if math.dist(arm.get_joints(), start) > 1e-3:
+            arm.move_j(start)
+        q = arm.get_joints()
+        pose = arm.get_tcp_pose()
+        solutions = arm.ik_solutions(pose)
+        assert solutions is not None and len(solutions) >= 2
+        branches = [b for b, _ in solutions]
+        assert len(set(branches)) == len(branches), solutions
+        present = arm.get_configuration()
+        assert [b for b, s in solutions if math.dist(s, q) < 1e-3] == [present], solutions
+        if robot == "hybrid":
+            assert all(b & 4 == 0 for b in branches)
+            with pytest.raises(armgate.BadIndex):
+                arm.move_j_to_pose(pose, branch=armgate.branch.short_name(present | 4))
+        # The present configuration by name: the arm is there already.
+        short = armgate.branch.short_name(present)
+        target, branch = arm.move_j_to_pose(pose, branch=short, wait=False)
+        assert branch == present
+        assert math.dist(target, q[:6]) < 1e-3
 
 
 def test_joint_via_points_are_passed_in_order(mk1) -> None:  # type: ignore[no-untyped-def]

@@ -128,3 +128,95 @@ fn ik_marks_the_present_branch_and_the_one_ik_move_takes() {
     );
     let _ = sim.ok("ST", [0.0; 7], 0);
 }
+
+/// Issue 37 on the robots whose configurations came last: `armgate ik` names every solution
+/// (on a 7–8 joint arm with the θ3 it keeps), marks the one `ik-move` takes, and `ik-move
+/// --branch NAME` moves to each name it printed; hybrid has no wrist flag.
+#[test]
+fn ik_names_and_ik_move_takes_configurations_on_redundant_and_prismatic_arms() {
+    for (name, start, keep) in [
+        ("iiwa14", vec![0.1, 0.5, 0.3, -1.0, 0.2, 0.8, 0.1], vec![2]),
+        // Its pretend joints start at home whatever --start says.
+        ("hybrid", vec![0.0; 6], vec![]),
+    ] {
+        let start_arg: Vec<String> = start.iter().map(f64::to_string).collect();
+        let sim = Sim::start_with(name, &["--start", &start_arg.join(",")]);
+        if !knows_status(&sim) {
+            return;
+        }
+        // The joints are the start's once the drives report them.
+        wait_drives(&sim, 2.0);
+        let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../robots/{name}.toml"));
+        let chain = Chain::new(&armgate_core::config::load_file(&file).unwrap());
+        let mut target: Vec<f64> = start.iter().map(|q| q + 0.1).collect();
+        for &p in &keep {
+            target[p] = start[p];
+        }
+        let pose = chain.forward(&target).unwrap();
+        let t = pose.translation.vector;
+        let [r, p, y] = math::rpy(&pose.rotation);
+        let words: Vec<String> = [t.x, t.y, t.z, r, p, y]
+            .iter()
+            .map(|v| format!("{v:.9}"))
+            .collect();
+        let words: Vec<&str> = words.iter().map(String::as_str).collect();
+        let (result, out) = armgate(&sim, &[&["ik"][..], &words].concat());
+        result.unwrap();
+        if keep.is_empty() {
+            assert!(!out.contains("θ3"), "{name}: {out}");
+        } else {
+            assert!(out.contains("for θ3 = 0.300 (present)"), "{name}: {out}");
+        }
+        let listed: Vec<&str> = out.lines().filter(|l| l.contains("branch ")).collect();
+        assert!(listed.len() >= 2, "{name}: {out}");
+        if name == "hybrid" {
+            assert!(!out.contains("wrist-flip"), "{out}");
+        }
+        let marked: Vec<&&str> = listed
+            .iter()
+            .filter(|l| l.contains("ik-move's choice"))
+            .collect();
+        assert_eq!(marked.len(), 1, "{name}: {out}");
+        // The present configuration: the start's.
+        let present = chain.configuration(&start).unwrap();
+        assert_eq!(
+            sim.ok("SQ", [0.0; 7], 5)[0],
+            f32::from(present),
+            "{name}: {out}"
+        );
+        let _ = sim.ok("CM", [1.0, 0., 0., 0., 0., 0., 0.], 0);
+        let chosen = marked[0].split_whitespace().nth(1).unwrap();
+        let (result, moved) = armgate(&sim, &[&["ik-move", "--no-wait"][..], &words].concat());
+        result.unwrap();
+        assert!(
+            moved.contains(&format!("(branch {chosen} ")),
+            "{name}: {out}\n{moved}"
+        );
+        // Every name printed, by its short form, moves to that configuration, or is refused
+        // because the way there runs one link into another (ER25 "L6 hits L4").
+        let mut moved = 0;
+        for line in &listed {
+            let _ = sim.ok("ST", [0.0; 7], 0);
+            assert!(poll_status(&sim, Duration::from_secs(3), |s| s[4] == 0.0));
+            let number = line.split_whitespace().nth(1).unwrap();
+            let short = line.split_whitespace().nth(3).unwrap();
+            let short = short.trim_matches(['(', ')']);
+            let (result, again) = armgate(
+                &sim,
+                &[&["ik-move", "--no-wait", "--branch", short][..], &words].concat(),
+            );
+            match result {
+                Ok(()) => {
+                    assert!(
+                        again.contains(&format!("(branch {number} ")),
+                        "{name} {short}: {again}"
+                    );
+                    moved += 1;
+                }
+                Err(e) => assert!(e.to_string().contains(" hits "), "{name} {short}: {e}"),
+            }
+        }
+        assert!(moved >= 2, "{name}: {moved} of {out}");
+        let _ = sim.ok("ST", [0.0; 7], 0);
+    }
+}

@@ -9,7 +9,7 @@ use clap::Args;
 use super::CliError;
 use super::options::{PoseArgs, WaitArgs, parse_seconds};
 use super::output::{fmt_values, follow, joint_progress, start};
-use crate::{Client, Redundancy};
+use crate::{Client, IkSolution, Redundancy};
 
 /// `armgate ik` arguments.
 #[derive(Debug, Args)]
@@ -85,8 +85,9 @@ pub(super) fn ik(
     };
     writeln!(
         out,
-        "{} solutions (branch: number = 1 shoulder right + 2 elbow down + 4 wrist flip)",
-        solutions.len()
+        "{} solutions{} (branch: number = 1 shoulder right + 2 elbow down + 4 wrist flip)",
+        solutions.len(),
+        redundancy_values(&solutions, joints, redundancy)
     )?;
     // The arm's own branch, and the solution nearest its joints: what ik-move without
     // --branch moves to (best effort: a controller without the reports marks none).
@@ -172,13 +173,34 @@ fn parse_branch(s: &str) -> Result<u8, String> {
     }
 }
 
-/// The Euclidean distance between two joint vectors (their common joints).
+/// How far apart two joint vectors are as the controller measures it when it picks the
+/// solution nearest the present joints (`KG` without a branch): `1 − cos Δ` summed over their
+/// common joints (a slide, in metres, counts `Δ²/2` there: the same to second order).
 fn distance(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        .sqrt()
+    a.iter().zip(b).map(|(x, y)| 1.0 - (x - y).cos()).sum()
+}
+
+/// On a 7–8 joint arm, the redundancy values the solutions share, which name each solution
+/// together with its branch: ` for θ3 = 0.300 (present)`, `… (chosen)`; empty otherwise.
+fn redundancy_values(solutions: &[IkSolution], joints: usize, args: &RedundancyArgs) -> String {
+    let Some(first) = solutions.first().filter(|_| joints > 6) else {
+        return String::new();
+    };
+    let parameters: &[(usize, &str, Option<f64>)] =
+        &[(2, "θ3", args.theta3), (4, "θ5", args.theta5)];
+    let named: Vec<String> = parameters
+        .iter()
+        .take(if joints > 7 { 2 } else { 1 })
+        .filter_map(|(i, name, chosen)| {
+            let how = if chosen.is_some() {
+                "chosen"
+            } else {
+                "present"
+            };
+            first.q.get(*i).map(|v| format!("{name} = {v:.3} ({how})"))
+        })
+        .collect();
+    format!(" for {}", named.join(", "))
 }
 
 /// `armgate ik-move`: KG, then wait until the joints are there.

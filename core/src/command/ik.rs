@@ -87,7 +87,7 @@ pub(super) fn reference(
 }
 
 /// The branch bits of solution `s` on the wire: its configuration (shoulder, elbow, wrist as
-/// arms name them) on a six-revolute-joint family, its solver's roots on the others.
+/// arms name them, from the geometry; every closed-form family has one).
 fn bits(chain: &Chain, s: &BranchSolution) -> u8 {
     chain.configuration(&s.q).unwrap_or(s.branch.bits())
 }
@@ -117,6 +117,9 @@ pub(super) fn goal(
         }
         return Ok(Goal::Search(target));
     }
+    if branch.is_some_and(|b| b & !chain.configuration_flags() != 0) {
+        return Err(IkRequestError::BadIndex);
+    }
     if !chosen && let Some((q, bits)) = already_there(chain, &target, reference, branch) {
         return Ok(Goal::Found(q, bits));
     }
@@ -127,7 +130,7 @@ pub(super) fn goal(
             .ok_or(OUT_OF_REACH);
     };
     // The solver's root branches tried for the one in the configuration asked for: one root
-    // gives each configuration of a pose (itself on the families named by their roots).
+    // gives each configuration of a pose.
     let on_branch = (0..NEAREST_BRANCH)
         .find_map(|root| solve(Branch::from_bits(root)).filter(|s| bits(chain, s) == wanted));
     match on_branch {
@@ -178,12 +181,9 @@ fn already_there(
     branch.is_none_or(|b| b == on).then_some((*present, on))
 }
 
-/// The branch bits of the present joints: their configuration, or (on a family named by its
-/// roots) the root branch that reproduces them.
+/// The branch bits of the present joints: their configuration.
 fn present_bits(chain: &Chain, present: &Joints) -> Option<u8> {
-    chain
-        .configuration(present)
-        .or_else(|| chain.branch_of(present).map(Branch::bits))
+    chain.configuration(present)
 }
 
 /// `SK`: the `k`-th solution of the pose in f0..f5 (joints in f0..f5, the count in f6, the

@@ -1,21 +1,24 @@
 //! The configuration branch of a closed-form IK solution on the wire (`KG`, `KS`, `SQ` 5).
 //!
-//! Three bits: [`SHOULDER`], [`ELBOW`], [`WRIST`], 0..=7. On a six-revolute-joint arm (axes
-//! 2 and 3 parallel: ranger-mk1, puma560, ur5) they are the configuration as arms name it,
-//! taken from the geometry of the joints (docs/kinematics.md): set for shoulder right, elbow
-//! down, wrist flipped ([`NAMES`]). On a 7–8 joint arm and a prismatic base they are the
-//! solver's roots, each set when that joint takes the second of its two. `KG` with
+//! Three bits: [`SHOULDER`], [`ELBOW`], [`WRIST`], 0..=7: the configuration as arms name it,
+//! taken from the geometry of the joints on every closed-form robot (docs/kinematics.md,
+//! "Named configurations", says what each means per robot): set for shoulder right, elbow
+//! down, wrist flipped ([`NAMES`]). On a 7–8 joint arm they name a solution together with
+//! its redundancy values (θ3, θ5: `KR`); on a prismatic base (hybrid) the wrist bit does not
+//! apply (no wrist of three axes) and a `KG` with it is refused. `KG` with
 //! [`NEAREST_BRANCH`] moves to the solution nearest the present joints, on whatever branch
 //! that is.
 
 /// Shoulder bit: the upper arm right of the base axis seen towards the wrist centre (axis 1
-/// up); on a 7–8 joint arm the second root of θ1/θ2.
+/// up); on a 7–8 joint arm the wrist centre behind the plane of axes 1 and 2 (KUKA's A2 < 0
+/// where the elbow is straight); on hybrid θ4 + θ5 > 0.
 pub const SHOULDER: u8 = 1;
 /// Elbow bit: the elbow below the line from the shoulder to the wrist centre; on a 7–8 joint
-/// arm the second root of θ4.
+/// arm the elbow bent negatively about axis 4 (KUKA's A4 < 0); on hybrid the link from axis
+/// 4 to axis 5 short of the vertical.
 pub const ELBOW: u8 = 2;
 /// Wrist bit: the wrist's middle joint turned negative (its axis against the cross product of
-/// the other two wrist axes); on a 7–8 joint arm the second root of the wrist.
+/// the other two wrist axes; KUKA's A6 < 0 on the iiwa); never on hybrid.
 pub const WRIST: u8 = 4;
 /// Each bit's two names, clear then set, with their one-letter short forms: what `armgate
 /// ik` prints and `--branch` reads (`shoulder-left,elbow-up,wrist-noflip` or `lun`).

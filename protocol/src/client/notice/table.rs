@@ -124,7 +124,14 @@ fn table() -> String {
         })
         .collect();
     out.push_str(&rows.join(",\n"));
-    let _ = writeln!(out, "\n  ]\n}}");
+    // The signing figures a client's resends follow (`signed::RESERVE_AHEAD` in
+    // `TIMESTAMP_UNIT_US` steps), for Python's `armgate.signing`.
+    let _ = writeln!(
+        out,
+        "\n  ],\n  \"signing\": {{\"timestamp_unit_us\": {}, \"reserve_ahead\": {}}}\n}}",
+        crate::client::signed::TIMESTAMP_UNIT_US,
+        crate::client::signed::RESERVE_AHEAD
+    );
     out
 }
 
