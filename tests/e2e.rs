@@ -1872,3 +1872,19 @@ fn a_long_joint_1_move_whose_outer_arc_crosses_a_box_is_refused() {
     );
     assert_eq!(status(&sim)[4], 0.0, "nothing moves");
 }
+
+/// `--start` puts every joint there, the undriven ones too (hybrid's joints have no drive:
+/// their measurement mirrors the command, which started at home whatever `--start` said).
+#[test]
+fn the_start_pose_holds_for_joints_without_a_drive() {
+    let sim = Sim::start_with("hybrid", &["--start", "0.5,0.3,0.2,0.4,0.1,0.3"]);
+    let jp = sim.ok("jP", [0.0; 7], 0);
+    let want = [0.5f32, 0.3, 0.2, 0.4, 0.1, 0.3];
+    for (k, (got, want)) in jp.iter().zip(want).enumerate() {
+        assert!(
+            (got - want).abs() < 1e-6,
+            "joint {}: {got} not {want}",
+            k + 1
+        );
+    }
+}

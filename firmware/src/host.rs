@@ -88,8 +88,14 @@ pub fn main() {
             std::process::exit(1);
         }
     };
+    // The simulated Whistles' encoders and the undriven joints at the start pose.
+    let started = || {
+        let mut drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
+        drives.manager_mut().place_undriven(&start);
+        drives
+    };
     if let Ok(replay) = std::env::var("ARMGATE_REPLAY") {
-        let drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
+        let drives = started();
         match replay_exchange(robot, drives, &replay) {
             Ok(()) => std::process::exit(0),
             Err(e) => {
@@ -117,7 +123,7 @@ pub fn main() {
         }
     };
     device.set_hardware_address(net::mac_address(HOST_UID));
-    let drives = drives::new(robot, drives::bus::simulated_at(robot, &start));
+    let drives = started();
     let (stack, runner) = net::stack(device, HOST_UID);
     let signing_note = match (&signing.0.key, &signing.1) {
         (Some(key), Some(store)) => format!(

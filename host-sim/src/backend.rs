@@ -79,8 +79,9 @@ impl Backend {
                 )
             }
         };
-        let drives = CanDrives::started(config, &DriveSettings::default(), bus)
+        let mut drives = CanDrives::started(config, &DriveSettings::default(), bus)
             .map_err(|e| format!("drives: {e} (try --can off)"))?;
+        drives.manager_mut().place_undriven(start);
         Ok(Self::Can(Box::new(drives)))
     }
 

@@ -193,6 +193,19 @@ impl DriveManager {
         Ok(())
     }
 
+    /// Puts the joints without a drive at `q`'s values (the rest of `q` is ignored): a
+    /// simulation's start pose, which the simulated Whistles take for the driven joints; on a
+    /// real arm those joints start at home.
+    pub fn place_undriven(&mut self, q: &[f64]) {
+        for (joint, &value) in self.joints.iter_mut().zip(q) {
+            if let Joint::Pretend { position } = joint
+                && value.is_finite()
+            {
+                *position = value;
+            }
+        }
+    }
+
     /// Stops the drives (the client's `OF`): they finish the motion already queued, come to
     /// rest on the last commanded position and hold it under servo.
     pub fn stop(&mut self) -> Result<(), LifecycleError> {
