@@ -24,7 +24,7 @@ use heapless::Deque;
 
 use super::link::{Datagram, Peer};
 use super::tick::REQUESTS_PER_TICK;
-use crate::command::Class;
+use crate::command::{Class, Slice};
 
 /// Planning requests handled per tick at most.
 pub const PLANNING_PER_TICK: usize = 1;
@@ -33,6 +33,17 @@ pub const PLANNING_PER_TICK: usize = 1;
 /// Cortex-M7 instructions (qemu-bench, "KG slice"), less than one planning request of a line
 /// may take.
 pub const SEARCH_SLICE: u16 = 120;
+
+/// Points of a `BG`'s or `VE`'s line check per tick at most (tracking solves, each point
+/// checked for the whole arm): see docs/kinematics.md for what a slice costs (qemu-bench,
+/// "line check slice").
+pub const LINE_SLICE: u16 = 2;
+
+/// The work of a planning request a tick.
+pub(super) const SLICE: Slice = Slice {
+    steps: SEARCH_SLICE,
+    points: LINE_SLICE,
+};
 
 /// What a request costs, as the budget sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

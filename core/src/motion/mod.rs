@@ -36,7 +36,7 @@ mod workspace;
 
 pub use body::{Body, CHECKS_PER_SECOND};
 pub use cartesian_generator::CartesianGenerator;
-pub use controller::{Controller, Mode, StepOutput};
+pub use controller::{CartesianPlan, Controller, Mode, StepOutput};
 pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
