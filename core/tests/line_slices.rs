@@ -1,5 +1,5 @@
 //! The line check of `BG` and `VE` (each point of a line checked for the whole arm, issue 35)
-//! runs in slices of at most `LINE_SLICE` points, one a tick in the cycle's planning slot, as
+//! runs in slices of at most `LINE_SLICE` work (a few points), one a tick in the cycle's planning slot, as
 //! `KG`'s search does: the request is answered when the check ends, with the answer the whole
 //! check gives at once (on every robot, over many seeded lines and sequences); other clients
 //! are served meanwhile, the checking client's next requests wait behind it, and a stop from
@@ -29,7 +29,7 @@ const CARTESIAN: [f32; 7] = [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
 const NONE: [f32; 7] = [0.0; 7];
 /// Lines (and sequences) per robot.
 const LINES: usize = 24;
-/// Ticks a check may take at most: every solve of the budget at `LINE_SLICE` a tick, and more.
+/// Ticks a check may take at most: every solve of the budget, one a tick, and more.
 const MAX_TICKS: usize = 2_000;
 
 fn a() -> SocketAddr {
@@ -142,7 +142,7 @@ fn nearby(from: &math::Frame, rng: &mut SplitMix64) -> [f32; 7] {
 /// Over seeded lines (`GT`, `BG`) and two-leg sequences (`VP` 0, `VP` 1, `VE`) on every
 /// robot, from random configurations: the cycle's answer, after the check ran a slice a tick,
 /// is the whole check's answer at once, byte for byte (the planned duration included); a
-/// check of more than `LINE_SLICE` points takes more than one tick.
+/// check of more than `LINE_SLICE` work takes more than one tick.
 #[test]
 fn sliced_checks_answer_as_the_whole_check_on_every_robot() {
     let (mut accepted, mut refused, mut sliced) = (0, 0, 0);
@@ -246,8 +246,7 @@ fn another_client_is_served_while_a_line_is_checked() {
             break to_a.get(1).map(|(_, r)| *r);
         }
     };
-    let points = usize::from(LINE_SLICE);
-    println!("BG answered after {ticks} ticks ({points} points a tick)");
+    println!("BG answered after {ticks} ticks (line work {LINE_SLICE} a tick)");
     assert!(ticks > 2, "the check took {ticks} ticks");
     let jp = answer.unwrap_or_else(|| {
         rig.tick(&mut link);

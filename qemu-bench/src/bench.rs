@@ -19,7 +19,7 @@
 //! straight line to the goal by tracking IK before starting) is measured on the first
 //! [`LINE_CHECKS`] configurations, each with a goal 2–60 cm and up to 1 rad away (drawn from a
 //! generator of its own, distributed as in `core/examples/reach_bench.rs`); and the same checks
-//! in slices of `LINE_SLICE` points as the cycle runs them (`Controller::plan_cartesian`, then
+//! in slices of `LINE_SLICE` work as the cycle runs them (`Controller::plan_cartesian`, then
 //! `continue_plan` a slice a tick): the row gives the instructions per slice, the first with
 //! the check's start, and the number of slices.
 //!
@@ -77,7 +77,7 @@ struct Results {
     solutions: u64,
     line_check: Timing,
     lines_refused: u32,
-    /// The same checks in slices of `LINE_SLICE` points, as the cycle runs them: one window a
+    /// The same checks in slices of `LINE_SLICE` work, as the cycle runs them: one window a
     /// slice, the first with the check's start (what the tick handling a `BG` runs).
     line_slice: Timing,
     joint_path: Timing,
@@ -306,10 +306,10 @@ fn check_line(
         results.errors += 1;
         return;
     }
-    let points = usize::from(LINE_SLICE);
+    let work = usize::from(LINE_SLICE);
     let (ticks, plan) = measure(|| {
         let mut plan = black_box(&ctrl).plan_cartesian(black_box(goal), 0.0).ok()?;
-        let answer = black_box(&mut ctrl).continue_plan(&mut plan, points);
+        let answer = black_box(&mut ctrl).continue_plan(&mut plan, work);
         Some((plan, answer))
     });
     results.line_slice.add(ticks);
@@ -323,7 +323,7 @@ fn check_line(
         if answer.is_some() {
             break;
         }
-        let (ticks, next) = measure(|| black_box(&mut ctrl).continue_plan(&mut plan, points));
+        let (ticks, next) = measure(|| black_box(&mut ctrl).continue_plan(&mut plan, work));
         results.line_slice.add(ticks);
         answer = next;
     }

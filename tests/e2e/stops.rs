@@ -261,7 +261,10 @@ fn a_sequence_still_being_checked_answers_another_client_and_its_st_cancels_it()
     sim.socket.send(&datagram("VE", [0.0; 7], 0)).unwrap();
     let b = second_client(&sim);
     let read = ask(&b, "SQ", [0.0; 7], 0);
-    assert!(matches!(read, Answer::Reply(c, ..) if &c == b"QS"), "{read:?}");
+    assert!(
+        matches!(read, Answer::Reply(c, ..) if &c == b"QS"),
+        "{read:?}"
+    );
     assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
     match sim.receive_reply() {
         Answer::Text(t) => assert_eq!(t, "ER42 Cmd VE cancelled by ST"),

@@ -18,6 +18,10 @@
 //! tick's planning slot, and the `KG` is answered when it ends; meanwhile the other planning
 //! requests wait, and so does everything from its client, as behind a waiting request. A stop
 //! cancels it as it cancels the requests waiting.
+//!
+//! `BG`'s and `VE`'s line check (every point of a line checked for the whole arm's body) runs
+//! the same way, in slices of [`LINE_SLICE`] work (a few points): the one mechanism is the handler's work in
+//! slices (`command/handler/planning.rs`, [`Slice`]) in this planning slot.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;
@@ -34,15 +38,17 @@ pub const PLANNING_PER_TICK: usize = 1;
 /// may take.
 pub const SEARCH_SLICE: u16 = 120;
 
-/// Points of a `BG`'s or `VE`'s line check per tick at most (tracking solves, each point
-/// checked for the whole arm): see docs/kinematics.md for what a slice costs (qemu-bench,
-/// "line check slice").
-pub const LINE_SLICE: u16 = 2;
+/// The work of a `BG`'s or `VE`'s line check per tick: a point of a line (its solve, the whole
+/// arm's check there) counts `motion::POINT_WORK` = 2, and each Newton iteration of its solve 1
+/// more; a point is begun while any is left. Five points that the closed form solves, two that
+/// need a few Newton steps; about 50,000 Cortex-M7 instructions a slice on average (qemu-bench,
+/// "line check slice"; docs/kinematics.md).
+pub const LINE_SLICE: u16 = 10;
 
 /// The work of a planning request a tick.
 pub(super) const SLICE: Slice = Slice {
     steps: SEARCH_SLICE,
-    points: LINE_SLICE,
+    line_work: LINE_SLICE,
 };
 
 /// What a request costs, as the budget sees it.

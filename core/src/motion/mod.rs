@@ -42,7 +42,7 @@ pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
 pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
 pub use reach::{
-    CHECK_ITERATIONS, LINE_SAMPLES, MAX_JOINT_STEP, SOLVES_PER_LINE, check_iterations,
+    CHECK_ITERATIONS, LINE_SAMPLES, MAX_JOINT_STEP, POINT_WORK, SOLVES_PER_LINE, check_iterations,
 };
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};

@@ -15,12 +15,13 @@
 //! check follows that swing as the tick would; a joint that still moves that much in the
 //! shortest step jumps, and refuses the line.
 //!
-//! The check runs while a request is answered, inside a tick on the firmware, so its work is
-//! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
-//! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
-//! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. What a check costs on the Cortex-M7 (`qemu-bench/run.sh`, row "Cartesian line
-//! check") is in docs/kinematics.md; the worst measured stays within one period at 480 MHz.
+//! The check runs inside the ticks on the firmware, a few points a tick ([`LineCheck`], in
+//! slices: the request is answered when it ends), and its whole work is bounded: at most
+//! [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and per request (a VE
+//! checks all its legs within it) an IK iteration budget proportional to the control period
+//! ([`check_iterations`]). A check that runs out gives the move the benefit of the doubt. What
+//! a check and a slice cost on the Cortex-M7 (`qemu-bench/run.sh`, rows "Cartesian line check"
+//! and "line check slice") is in docs/kinematics.md.
 //!
 //! The check also measures how long each step needs at the joints' rate limits, and the line
 //! is planned to last long enough for its peak speed to need at most [`RATE_SHARE`] of any
@@ -48,7 +49,7 @@ use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints, SeedAngles};
 use crate::math::Frame;
-pub use line::LineCheck;
+pub use line::{LineCheck, POINT_WORK};
 
 /// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
 pub const LINE_SAMPLES: usize = 16;

@@ -19,16 +19,16 @@ use crate::motion::CartesianPlan;
 pub struct Slice {
     /// Newton steps of a `KG`'s global search.
     pub steps: u16,
-    /// Tracking solves (each a point of a line, checked for the whole arm) of a `BG`'s or
-    /// `VE`'s line check.
-    pub points: u16,
+    /// Work of a `BG`'s or `VE`'s line check: each point of a line (its solve and the whole
+    /// arm's check there) `motion::POINT_WORK`, and one per Newton iteration of its solve.
+    pub line_work: u16,
 }
 
 impl Slice {
     /// All of the work at once (more than any request's budget).
     pub const WHOLE: Self = Self {
         steps: u16::MAX,
-        points: u16::MAX,
+        line_work: u16::MAX,
     };
 }
 
@@ -117,7 +117,7 @@ impl CommandHandler {
                 Slow::Lines(_, plan) => {
                     let result = self
                         .controller
-                        .continue_plan(plan, usize::from(slice.points))?;
+                        .continue_plan(plan, usize::from(slice.line_work))?;
                     self.lines_checked(cmd, result)
                 }
             }

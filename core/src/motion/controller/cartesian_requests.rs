@@ -80,14 +80,14 @@ impl Controller {
         }
     }
 
-    /// Checks `plan` on for at most `points` tracking solves (a slice of the check, a few
-    /// points of its lines); once the check has ended, starts the motion if it passed and
+    /// Checks `plan` on while `work` lasts (a slice of the check, a few points of its lines:
+    /// each point [`POINT_WORK`](crate::motion::POINT_WORK) and one per Newton iteration of its solve); once the check has ended, starts the motion if it passed and
     /// the arm may still start it (the check may have taken ticks) and returns its planned
     /// duration (s; a sequence's first leg's), or why not. `None` while the check goes on.
     pub fn continue_plan(
         &mut self,
         plan: &mut CartesianPlan,
-        mut points: usize,
+        mut work: usize,
     ) -> Option<Result<f64, Refusal>> {
         if let Some(mut reach) = self.reach() {
             reach.iterations_left = plan.iterations_left;
@@ -96,7 +96,7 @@ impl Controller {
                 let Some(line) = plan.line.as_mut() else {
                     break;
                 };
-                let checked = reach.continue_line(line, &mut points);
+                let checked = reach.continue_line(line, &mut work);
                 plan.iterations_left = reach.iterations_left;
                 let checked = match checked? {
                     Ok(checked) => checked,

@@ -1,5 +1,5 @@
 //! A line's check in slices: [`LineCheck`] carries the check of [`Reach`] from one point of
-//! the line to the next, so that the cycle runs a few points a tick (the tick that handles a
+//! the line to the next, so that the cycle runs a bounded work of it a tick (the tick that handles a
 //! `BG` stays within its budget) and answers the request when the check ends. Run to its end
 //! in one call it gives the same answer.
 
@@ -15,6 +15,11 @@ use crate::kinematics::{Joints, SeedAngles};
 use crate::math::{self, Frame, Rotation3, Vector3};
 use crate::motion::Refusal;
 use crate::motion::body::PRESENT;
+
+/// The work of one point of a line's check besides its solve's Newton iterations (each 1): its
+/// closed-form solve or Newton's start, and the whole arm's check there, about two Newton
+/// iterations' worth on the Cortex-M7 (`cycle::budget::LINE_SLICE` counts in these units).
+pub const POINT_WORK: usize = 2;
 
 /// A line's check in progress: what the check carries from one point to the next, so that it
 /// runs in slices of a few points, one slice a tick ([`Reach::continue_line`]). Fixed size.
@@ -158,23 +163,29 @@ impl Reach<'_> {
         })
     }
 
-    /// Runs `check` on for at most `points` tracking solves (each taken from `points`); its
+    /// Runs `check` on while `work` lasts (each point takes [`POINT_WORK`] and one more per
+    /// Newton iteration its solve took, from `work`; a point is begun while any is left); its
     /// answer once it has ended, `None` while it goes on.
     pub(in crate::motion) fn continue_line(
         &mut self,
         check: &mut LineCheck,
-        points: &mut usize,
+        work: &mut usize,
     ) -> Option<Result<Checked, Refusal>> {
         for _ in 0..SOLVES_PER_LINE {
             if check.ended(self.iterations_left) {
                 return Some(check.outcome());
             }
-            if *points == 0 {
+            if *work == 0 {
                 return None;
             }
-            *points -= 1;
-            check.solves += 1;
-            if let Err(refusal) = self.next_point(check) {
+            check.solves = check.solves.saturating_add(1);
+            let before = self.iterations_left;
+            let point = self.next_point(check);
+            let iterations = before.saturating_sub(self.iterations_left);
+            let spent =
+                POINT_WORK.saturating_add(usize::try_from(iterations).unwrap_or(usize::MAX));
+            *work = work.saturating_sub(spent);
+            if let Err(refusal) = point {
                 return Some(Err(refusal));
             }
         }
