@@ -14,6 +14,7 @@
 mod common;
 
 use std::collections::VecDeque;
+use std::f64::consts::FRAC_PI_2;
 use std::net::SocketAddr;
 
 use armgate_core::config::ValidRobot;
@@ -199,7 +200,7 @@ fn sliced_checks_answer_as_the_whole_check_on_every_robot() {
 /// ranger-mk1 from a well-conditioned start, with a goal 25 cm away: a check of many points.
 fn long_line() -> Rig {
     let config = common::robot("ranger-mk1");
-    let q = Joints::from_slice(&[1.5708, 0.8, 0.5, 0.5, 1.5, 0.5]).unwrap();
+    let q = Joints::from_slice(&[FRAC_PI_2, 0.8, 0.5, 0.5, 1.5, 0.5]).unwrap();
     let start = Chain::new(&config).forward(&q).unwrap();
     let mut rig = Rig::new(&config, q);
     let p = start.translation.vector;
