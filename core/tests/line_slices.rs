@@ -1,7 +1,7 @@
 //! The line check of `BG` and `VE` (each point of a line checked for the whole arm, issue 35)
-//! runs in slices of at most `LINE_SLICE` work (a few points), one a tick in the cycle's planning slot, as
-//! `KG`'s search does: the request is answered when the check ends, with the answer the whole
-//! check gives at once (on every robot, over many seeded lines and sequences); other clients
+//! runs in slices of at most `LINE_SLICE` work (a few points), one a tick in the cycle's
+//! planning slot, as `KG`'s search does: the request is answered when the check ends, with the
+//! answer the whole check gives at once (on every robot, over many seeded lines and sequences); other clients
 //! are served meanwhile, the checking client's next requests wait behind it, and a stop from
 //! anyone cancels it (`ER42`).
 #![allow(

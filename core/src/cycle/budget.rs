@@ -20,8 +20,8 @@
 //! cancels it as it cancels the requests waiting.
 //!
 //! `BG`'s and `VE`'s line check (every point of a line checked for the whole arm's body) runs
-//! the same way, in slices of [`LINE_SLICE`] work (a few points): the one mechanism is the handler's work in
-//! slices (`command/handler/planning.rs`, [`Slice`]) in this planning slot.
+//! the same way, in slices of [`LINE_SLICE`] work (a few points): the one mechanism is the
+//! handler's work in slices (`command/handler/planning.rs`, [`Slice`]) in this planning slot.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;

@@ -81,9 +81,10 @@ impl Controller {
     }
 
     /// Checks `plan` on while `work` lasts (a slice of the check, a few points of its lines:
-    /// each point [`POINT_WORK`](crate::motion::POINT_WORK) and one per Newton iteration of its solve); once the check has ended, starts the motion if it passed and
-    /// the arm may still start it (the check may have taken ticks) and returns its planned
-    /// duration (s; a sequence's first leg's), or why not. `None` while the check goes on.
+    /// each point [`POINT_WORK`](crate::motion::POINT_WORK) and one per Newton iteration of its
+    /// solve); once the check has ended, starts the motion if it passed and the arm may still
+    /// start it (the check may have taken ticks) and returns its planned duration (s; a
+    /// sequence's first leg's), or why not. `None` while the check goes on.
     pub fn continue_plan(
         &mut self,
         plan: &mut CartesianPlan,

@@ -1,7 +1,7 @@
 //! A line's check in slices: [`LineCheck`] carries the check of [`Reach`] from one point of
-//! the line to the next, so that the cycle runs a bounded work of it a tick (the tick that handles a
-//! `BG` stays within its budget) and answers the request when the check ends. Run to its end
-//! in one call it gives the same answer.
+//! the line to the next, so that the cycle runs a bounded work of it a tick (the tick that
+//! handles a `BG` stays within its budget) and answers the request when the check ends. Run to
+//! its end in one call it gives the same answer.
 
 use armgate_protocol::client::{Hit, PathPoint};
 use heapless::Vec;
