@@ -18,7 +18,10 @@
 //! The up-front check of a Cartesian move (`Controller::move_cartesian`, which follows the
 //! straight line to the goal by tracking IK before starting) is measured on the first
 //! [`LINE_CHECKS`] configurations, each with a goal 2–60 cm and up to 1 rad away (drawn from a
-//! generator of its own, distributed as in `core/examples/reach_bench.rs`).
+//! generator of its own, distributed as in `core/examples/reach_bench.rs`); and the same checks
+//! in slices of `LINE_SLICE` work as the cycle runs them (`Controller::plan_cartesian`, then
+//! `continue_plan` a slice a tick): the row gives the instructions per slice, the first with
+//! the check's start, and the number of slices.
 //!
 //! The up-front check of a joint move (`Controller::move_joints`: the tool's way, in pieces
 //! halved until the arm cannot stray past a box or a bound unseen, `motion/joint_path.rs`) is
@@ -34,7 +37,7 @@
 use core::hint::black_box;
 
 use armgate_core::config::{RobotConfig, ValidRobot};
-use armgate_core::cycle::SEARCH_SLICE;
+use armgate_core::cycle::{LINE_SLICE, SEARCH_SLICE};
 use armgate_core::kinematics::{Chain, Family, Joints, Solutions};
 use armgate_core::math::{self, Frame, Rotation3, Twist, Vector3};
 use armgate_core::motion::{Body, Controller, Mode};
@@ -55,6 +58,8 @@ const PERTURBATION: f64 = 0.1;
 const SUCCESS_TOLERANCE: f64 = 1e-5;
 /// Cartesian move checks per robot.
 const LINE_CHECKS: u32 = 50;
+/// Slices of a line's check at most (each spends at least one of its 64 tracking solves).
+const MAX_LINE_SLICES: u32 = 100;
 /// Seed of the move goals.
 const LINE_SEED: u64 = 0x5EED_0016;
 
@@ -72,6 +77,9 @@ struct Results {
     solutions: u64,
     line_check: Timing,
     lines_refused: u32,
+    /// The same checks in slices of `LINE_SLICE` work, as the cycle runs them: one window a
+    /// slice, the first with the check's start (what the tick handling a `BG` runs).
+    line_slice: Timing,
     joint_path: Timing,
     joint_path_worst: Timing,
     worst_refused: bool,
@@ -293,6 +301,34 @@ fn check_line(
     let (ticks, verdict) = measure(|| black_box(&mut ctrl).move_cartesian(black_box(goal), 0.0));
     results.line_check.add(ticks);
     results.lines_refused += u32::from(verdict.is_err());
+    let mut ctrl = Controller::new(config);
+    if ctrl.step(0.0, q).is_err() || ctrl.set_mode(Mode::Cartesian).is_err() {
+        results.errors += 1;
+        return;
+    }
+    let work = usize::from(LINE_SLICE);
+    let (ticks, plan) = measure(|| {
+        let mut plan = black_box(&ctrl).plan_cartesian(black_box(goal), 0.0).ok()?;
+        let answer = black_box(&mut ctrl).continue_plan(&mut plan, work);
+        Some((plan, answer))
+    });
+    results.line_slice.add(ticks);
+    let Some((mut plan, mut answer)) = plan else {
+        // Refused at once, as the one call was.
+        results.errors += u32::from(verdict.is_ok());
+        return;
+    };
+    // Each slice spends at least one point of the check's bounded number.
+    for _ in 0..MAX_LINE_SLICES {
+        if answer.is_some() {
+            break;
+        }
+        let (ticks, next) = measure(|| black_box(&mut ctrl).continue_plan(&mut plan, work));
+        results.line_slice.add(ticks);
+        answer = next;
+    }
+    // The slices answer as the one call did.
+    results.errors += u32::from(answer.map(|a| a.is_ok()) != Some(verdict.is_ok()));
 }
 
 /// One up-front check of a joint move from `q` to `goal`, timed into `timing`; whether it
@@ -412,6 +448,15 @@ fn print_rows(name: &str, results: &Results, counter: &Counter) {
         mean,
         max,
         100.0 * f64::from(results.lines_refused) / f64::from(results.line_check.calls.max(1))
+    );
+    let (mean, max) = results.line_slice.instructions(counter);
+    hprintln!(
+        "| {:<18} | {:<18} | {:>9.0} ({:>9.0}) | {:>15} |         - |",
+        name,
+        "line check slice",
+        mean,
+        max,
+        results.line_slice.calls
     );
     let (mean, max) = results.joint_path.instructions(counter);
     hprintln!(

@@ -63,6 +63,8 @@ const MIN_DURATION: f64 = 4.0;
 /// Upper bound on the ticks of the move (78 s at ranger-mk1's period: from its home pose the
 /// line check now plans the move for about 57 s, as slow as joint 1 needs it, issue 33).
 const MAX_TICKS: u32 = 4_000;
+/// Ticks a planning request's answer may take (its work in slices).
+const MAX_PLANNING_TICKS: u32 = 1_000;
 /// Ticks measured after the move, the arm holding in Cartesian mode.
 const HOLD_TICKS: u32 = 50;
 /// PS requests measured after the move.
@@ -176,13 +178,14 @@ impl Session {
     }
 
     /// One tick that carries a request, in a measurement window (the bus advanced before it);
-    /// the reply must start with `expect`.
+    /// the reply must start with `expect`. A planning request answered ticks later (its work
+    /// in slices) gives the ticks that carried it and the later ones until the answer.
     fn request(
         &mut self,
         command: Command,
         values: [f32; VALUES],
         expect: &[u8; 2],
-    ) -> Result<u32, &'static str> {
+    ) -> Result<(u32, Timing), &'static str> {
         let datagram = Request {
             command,
             values,
@@ -192,15 +195,25 @@ impl Session {
         self.exchange(&datagram, expect)
     }
 
-    /// One tick that carries `datagram`, in a measurement window; the reply must start with
-    /// `expect`.
-    fn exchange(&mut self, datagram: &[u8], expect: &[u8; 2]) -> Result<u32, &'static str> {
+    /// The tick that carries `datagram` and those after it until its answer, each in a
+    /// measurement window; the reply must start with `expect`.
+    fn exchange(
+        &mut self,
+        datagram: &[u8],
+        expect: &[u8; 2],
+    ) -> Result<(u32, Timing), &'static str> {
         self.advance_bus()?;
         self.link.waiting = Some(Datagram::new(datagram, ()));
         self.link.answer = None;
-        let (ticks, ()) = measure(|| self.tick());
+        let (first, ()) = measure(|| self.tick());
+        let mut later = Timing::default();
+        while self.link.answer.is_none() && later.calls < MAX_PLANNING_TICKS {
+            self.advance_bus()?;
+            let (ticks, ()) = measure(|| self.tick());
+            later.add(ticks);
+        }
         match self.link.answer {
-            Some(reply) if reply.payload().starts_with(expect) => Ok(ticks),
+            Some(reply) if reply.payload().starts_with(expect) => Ok((first, later)),
             answer => {
                 // What it was answered instead, for the reader of the failure.
                 let payload = answer.as_ref().map_or(&[][..], |reply| reply.payload());
@@ -212,8 +225,9 @@ impl Session {
         }
     }
 
-    /// CM 2, GT, BG: starts the move. Returns the ticks that carried the three requests.
-    fn start_move(&mut self) -> Result<[u32; 3], &'static str> {
+    /// CM 2, GT, BG: starts the move. Returns the ticks that carried the three requests, and
+    /// those of the BG's line check after its first (answered when the check ends).
+    fn start_move(&mut self) -> Result<([u32; 3], Timing), &'static str> {
         let (_, start) = self
             .cycle
             .handler()
@@ -232,14 +246,14 @@ impl Session {
             MIN_DURATION,
         ]
         .map(|v| v as f32);
-        let mode = self.request(
+        let (mode, _) = self.request(
             Command::ChangeMode,
             [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             b"MC",
         )?;
-        let store = self.request(Command::GoalRpy, goal, b"TG")?;
-        let begin = self.request(Command::Begin, [0.0; VALUES], b"GB")?;
-        Ok([mode, store, begin])
+        let (store, _) = self.request(Command::GoalRpy, goal, b"TG")?;
+        let (begin, check) = self.request(Command::Begin, [0.0; VALUES], b"GB")?;
+        Ok(([mode, store, begin], check))
     }
 
     fn moving(&self) -> bool {
@@ -266,6 +280,8 @@ struct Whole {
     holding: Timing,
     /// The ticks that carried CM 2, GT, BG.
     requests: [u32; 3],
+    /// The ticks after the BG's until its answer: its line check, a slice a tick.
+    check: Timing,
     /// Ticks that carried a PS, after the move.
     pose: Timing,
     /// Ticks that carried a TW, streaming after the move.
@@ -446,9 +462,14 @@ fn measure_robot(
     );
     row("tick with request GT", &once(whole.requests[1]), "one tick");
     row(
-        "tick with request BG (plans the move)",
+        "tick with request BG (its line check's 1st slice)",
         &once(whole.requests[2]),
         "one tick",
+    );
+    row(
+        "ticks of the BG's line check after its 1st",
+        &whole.check,
+        "window per tick",
     );
     row(
         "tick with request PS, holding",
@@ -501,7 +522,7 @@ fn measure_robot(
 /// The whole tick, one window per tick, during the move and then holding; the requests.
 fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'static str> {
     let mut session = Session::new(config, start)?;
-    let requests = session.start_move()?;
+    let (requests, check) = session.start_move()?;
     let mut moving = Timing::default();
     let mut bus_moving = Timing::default();
     while session.moving() && moving.calls < MAX_TICKS {
@@ -519,7 +540,7 @@ fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'st
     }
     let mut pose = Timing::default();
     for _ in 0..POSE_REQUESTS {
-        pose.add(session.request(Command::Pose, [0.0; VALUES], b"SP")?);
+        pose.add(session.request(Command::Pose, [0.0; VALUES], b"SP")?.0);
     }
     let twist = twist::streaming_ticks(&mut session)?;
     Ok(Whole {
@@ -528,6 +549,7 @@ fn whole_ticks(config: &ValidRobot, start: Option<&[f64]>) -> Result<Whole, &'st
         bus_moving,
         holding,
         requests,
+        check,
         pose,
         twist,
     })

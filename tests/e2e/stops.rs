@@ -240,3 +240,38 @@ fn st_in_a_diagonal_cartesian_line_at_cruise_brakes_within_each_axis_limit() {
     // The log's nine decimals carry 2e-9 m of rounding into each second difference.
     assert!(peak.iter().all(|p| *p <= 1.0 + 2e-3), "{peak:?}");
 }
+
+/// A `VE`'s legs are checked a few points a tick (the line check in slices, as `KG`'s search):
+/// while 20 legs are checked, another client's `SQ` is answered and its `ST` cancels the check
+/// (`ER42 Cmd VE cancelled by ST`); the arm never moves.
+#[test]
+fn a_sequence_still_being_checked_answers_another_client_and_its_st_cancels_it() {
+    let Some(sim) = ready() else {
+        return;
+    };
+    sim.ok("CM", [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let start = sim.ok("PS", [0.0; 7], 0);
+    // Via points 5 cm apart, to and fro: 20 legs of 16 points or more each.
+    for slot in 0..20u8 {
+        let mut via = start;
+        via[0] += if slot % 2 == 0 { 0.05 } else { 0.0 };
+        via[6] = 0.0;
+        sim.ok("VP", via, slot);
+    }
+    sim.socket.send(&datagram("VE", [0.0; 7], 0)).unwrap();
+    let b = second_client(&sim);
+    let read = ask(&b, "SQ", [0.0; 7], 0);
+    assert!(
+        matches!(read, Answer::Reply(c, ..) if &c == b"QS"),
+        "{read:?}"
+    );
+    assert!(matches!(ask(&b, "ST", [0.0; 7], 0), Answer::Reply(c, ..) if &c == b"TS"));
+    match sim.receive_reply() {
+        Answer::Text(t) => assert_eq!(t, "ER42 Cmd VE cancelled by ST"),
+        other => panic!("VE answered {other:?}"),
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let end = sim.ok("PS", [0.0; 7], 0);
+    assert!(moved(&start, &end) < 1e-5, "the arm moved");
+    assert_eq!(status(&sim)[4], 0.0, "holding");
+}

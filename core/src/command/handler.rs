@@ -2,13 +2,15 @@
 //!
 //! The requests' handling, one concern a file: `handler/cartesian.rs` (Cartesian goals, moves,
 //! via points, the twist stream), `handler/joint.rs` (the joint ones), `handler/ik_requests.rs`
-//! (`KG`, `KR`, `KS`), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`,
+//! (`KG`, `KR`, `KS`), `handler/planning.rs` (the requests whose work runs in slices across
+//! ticks: `KG`'s search, `BG`'s and `VE`'s line check), `handler/reads.rs` (`PS`, `jP`, `TM`, `SQ`), `handler/power.rs` (`ON`,
 //! `OF`, `RC`); `handler/replies.rs` makes the replies and refusal texts.
 
 mod cartesian;
 mod handover;
 mod ik_requests;
 mod joint;
+mod planning;
 mod power;
 mod reads;
 mod replies;
@@ -32,7 +34,8 @@ use crate::kinematics::{Joints, KinematicsError};
 use crate::math::Frame;
 use crate::motion::{Controller, Mode, Refusal, StepOutput, StopCause};
 use handover::Cleared;
-use ik_requests::GoalSearch;
+use planning::Planning;
+pub use planning::Slice;
 use replies::{operational, refusal_notice, values_reply};
 
 /// Owns the [`Controller`] and the client-facing state: the stored Cartesian and joint goals,
@@ -78,8 +81,8 @@ pub struct CommandHandler {
     power_off_at: Option<f64>,
     /// The longest a stop from full speed may take (s), with a margin: the bound on `OF`'s wait.
     stop_within: f64,
-    /// A `KG`'s global search in progress (a chain without a closed form).
-    search: Option<GoalSearch>,
+    /// A planning request whose work runs in slices across ticks (`handler/planning.rs`).
+    planning: Option<Planning>,
 }
 
 impl CommandHandler {
@@ -105,7 +108,7 @@ impl CommandHandler {
             stopped_by: None,
             power_off_at: None,
             stop_within: stop_time_bound(config),
-            search: None,
+            planning: None,
         }
     }
 
@@ -214,8 +217,9 @@ impl CommandHandler {
         self.handle_at_once(datagram, ANONYMOUS, drives)
     }
 
-    /// [`handle_from`](Self::handle_from), with a `KG`'s global search run to its end at once
-    /// (callers outside the cycle's ticks: tests, protocol checks between ticks).
+    /// [`handle_from`](Self::handle_from), with the work of a planning request (a `KG`'s
+    /// global search, a `BG`'s line check) run to its end at once (callers outside the cycle's
+    /// ticks: tests, protocol checks between ticks).
     pub fn handle_at_once(
         &mut self,
         datagram: &[u8],
@@ -223,10 +227,10 @@ impl CommandHandler {
         drives: &mut (impl Drives + ?Sized),
     ) -> [u8; MESSAGE_LEN] {
         let reply = self.handle_from(datagram, client, drives);
-        if !self.search_started() {
+        if !self.planning_started() {
             return reply;
         }
-        self.continue_search(u16::MAX, datagram, drives)
+        self.continue_planning(Slice::WHOLE, datagram, drives)
             .unwrap_or(reply)
     }
 
@@ -260,8 +264,8 @@ impl CommandHandler {
         if self.controller.stop_cause().0 != cause {
             self.stopped_by = Some(client);
         }
-        if self.search.as_ref().is_some_and(GoalSearch::is_fresh) {
-            // Not the answer: that comes when the search ends, and is recorded then.
+        if self.planning.as_ref().is_some_and(Planning::is_fresh) {
+            // Not the answer: that comes when the work ends, and is recorded then.
             return reply;
         }
         self.session

@@ -17,7 +17,7 @@ mod status;
 
 pub use allow::{Network, NetworkError};
 pub use drives::Drives;
-pub use handler::CommandHandler;
+pub use handler::{CommandHandler, Slice};
 pub use relay::{NOTICE_CAPACITY, NOTICE_INTERVAL, NoticeRelay};
 pub use session::{CLIENTS, Class, Session};
 pub use status::Status;

@@ -18,13 +18,17 @@
 //! tick's planning slot, and the `KG` is answered when it ends; meanwhile the other planning
 //! requests wait, and so does everything from its client, as behind a waiting request. A stop
 //! cancels it as it cancels the requests waiting.
+//!
+//! `BG`'s and `VE`'s line check (every point of a line checked for the whole arm's body) runs
+//! the same way, in slices of [`LINE_SLICE`] work (a few points): the one mechanism is the
+//! handler's work in slices (`command/handler/planning.rs`, [`Slice`]) in this planning slot.
 
 use armgate_protocol::client::{Command, Message, Request};
 use heapless::Deque;
 
 use super::link::{Datagram, Peer};
 use super::tick::REQUESTS_PER_TICK;
-use crate::command::Class;
+use crate::command::{Class, Slice};
 
 /// Planning requests handled per tick at most.
 pub const PLANNING_PER_TICK: usize = 1;
@@ -33,6 +37,19 @@ pub const PLANNING_PER_TICK: usize = 1;
 /// Cortex-M7 instructions (qemu-bench, "KG slice"), less than one planning request of a line
 /// may take.
 pub const SEARCH_SLICE: u16 = 120;
+
+/// The work of a `BG`'s or `VE`'s line check per tick: a point of a line (its solve, the whole
+/// arm's check there) counts `motion::POINT_WORK` = 2, and each Newton iteration of its solve 1
+/// more; a point is begun while any is left. Five points that the closed form solves, two that
+/// need a few Newton steps; about 50,000 Cortex-M7 instructions a slice on average (qemu-bench,
+/// "line check slice"; docs/kinematics.md).
+pub const LINE_SLICE: u16 = 10;
+
+/// The work of a planning request a tick.
+pub(super) const SLICE: Slice = Slice {
+    steps: SEARCH_SLICE,
+    line_work: LINE_SLICE,
+};
 
 /// What a request costs, as the budget sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -54,7 +54,7 @@ mod signing;
 mod state_file;
 mod tick;
 
-pub use budget::{PLANNING_PER_TICK, SEARCH_SLICE};
+pub use budget::{LINE_SLICE, PLANNING_PER_TICK, SEARCH_SLICE};
 pub use can_drives::CanDrives;
 pub use counters::CycleCounters;
 pub use flash_log::{FlashLog, FlashSectors, RECORD_LEN};

@@ -1,8 +1,6 @@
 //! [`Cycle`]: one control tick, the same in every shell (the policy is in the module docs).
 
-use super::budget::{
-    PLANNING_PER_TICK, Pending, SEARCH_SLICE, Waiting, Work, cancel_motion, waits,
-};
+use super::budget::{PLANNING_PER_TICK, Pending, SLICE, Waiting, Work, cancel_motion, waits};
 use super::counters::bump;
 use super::links::{Links, identity, link_of};
 use super::replay::{ReplayStore, Unkept};
@@ -55,8 +53,9 @@ pub struct Cycle<D, P, S = Unkept> {
     counters: CycleCounters,
     /// Requests the work budget left for a later tick.
     waiting: Waiting<P>,
-    /// The `KG` whose global search runs, one slice a tick: answered when it ends.
-    searching: Option<Pending<P>>,
+    /// The planning request whose work runs, one slice a tick (a `KG`'s search, a `BG`'s line
+    /// check): answered when it ends.
+    planning: Option<Pending<P>>,
     /// The signature checks every datagram passes first.
     gate: Gate,
     /// Where the replay reservation is kept.
@@ -79,7 +78,7 @@ impl<D: DriveSide, P: Peer> Cycle<D, P> {
             previous: None,
             counters: CycleCounters::default(),
             waiting: Waiting::new(),
-            searching: None,
+            planning: None,
             gate: Gate::new(Signing::default(), 0),
             store: Unkept,
             links: Links::new(),
@@ -110,7 +109,7 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             previous: self.previous,
             counters: self.counters,
             waiting: self.waiting,
-            searching: self.searching,
+            planning: self.planning,
             gate: self.gate,
             store,
             links: self.links,
@@ -241,8 +240,8 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
         self.gate.report()
     }
 
-    /// Answers one request from `peer` between ticks (protocol tests), a `KG`'s global search
-    /// run to its end at once. [`tick`](Self::tick) answers the requests its link delivers.
+    /// Answers one request from `peer` between ticks (protocol tests), the work of a planning
+    /// request (a `KG`'s search, a `BG`'s line check) run to its end at once. [`tick`](Self::tick) answers the requests its link delivers.
     // Out of line: request handling (parsing, planning moves and sequences, replies) is rare
     // and large; inlined, it would sit in the tick's code and stack frame.
     #[inline(never)]
@@ -264,9 +263,9 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
     fn handle_requests(&mut self, link: &mut impl Link<P>, now: f64) {
         let drops = self.counters.send_dropped.saturating_add(link.dropped());
         self.handler.set_send_drops(drops);
-        // The work budget (module `budget`): requests waiting from earlier ticks first; a
-        // `KG` search takes the tick's planning slot.
-        let mut planned = usize::from(self.searching.is_some());
+        // The work budget (module `budget`): requests waiting from earlier ticks first; work
+        // in slices (a `KG`'s search, a `BG`'s line check) takes the tick's planning slot.
+        let mut planned = usize::from(self.planning.is_some());
         let mut later = Waiting::new();
         for _ in 0..REQUESTS_PER_TICK {
             let request = match self.waiting.pop_front() {
@@ -308,10 +307,10 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
             let plans = matches!(work, Work::Plans(_));
             // A stop waits for nothing, not even its own client's requests: it cancels them.
             let peer = request.datagram.peer;
-            let behind_search = self
-                .searching
+            let behind_planning = self
+                .planning
                 .is_some_and(|s| s.datagram.peer.address() == peer.address());
-            let queued = work != Work::Stops && (behind_search || waits(&later, peer));
+            let queued = work != Work::Stops && (behind_planning || waits(&later, peer));
             if queued || (plans && planned >= PLANNING_PER_TICK) {
                 // Room: at most one a pass.
                 let _ = later.push_back(request);
@@ -325,18 +324,18 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                 .link
                 .map_or(request.datagram.peer.address(), identity);
             let reply = self.answer_from(request.datagram.payload(), client);
-            if self.handler.search_started() {
-                self.searching = Some(request);
+            if self.handler.planning_started() {
+                self.planning = Some(request);
             } else {
                 self.reply(link, &reply, &request);
             }
         }
-        if let Some(request) = self.searching
+        if let Some(request) = self.planning
             && let Some(reply) =
                 self.handler
-                    .continue_search(SEARCH_SLICE, request.datagram.payload(), &self.drives)
+                    .continue_planning(SLICE, request.datagram.payload(), &self.drives)
         {
-            self.searching = None;
+            self.planning = None;
             self.reply(link, &reply, &request);
         }
         // What waited before stays ahead of what the link still holds. (Together never more
@@ -356,8 +355,8 @@ impl<D: DriveSide, P: Peer, S: ReplayStore> Cycle<D, P, S> {
                 let _ = cancelled.push_back(request);
             });
         }
-        if let Some(request) = self.searching.take() {
-            self.handler.cancel_search();
+        if let Some(request) = self.planning.take() {
+            self.handler.cancel_planning();
             self.cancel(link, &request);
         }
         while let Some(request) = cancelled.pop_front() {

@@ -49,6 +49,7 @@ const JOINT_TOLERANCES: Tolerances = Tolerances {
 
 /// The control mode: a rule of the wire (`CM`), defined once in the protocol crate.
 pub use armgate_protocol::client::Mode;
+pub use cartesian_requests::CartesianPlan;
 
 /// What one tick produced.
 #[derive(Clone, Copy, Debug, PartialEq)]

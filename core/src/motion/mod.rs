@@ -36,13 +36,13 @@ mod workspace;
 
 pub use body::{Body, CHECKS_PER_SECOND};
 pub use cartesian_generator::CartesianGenerator;
-pub use controller::{Controller, Mode, StepOutput};
+pub use controller::{CartesianPlan, Controller, Mode, StepOutput};
 pub use events::Events;
 pub use joint_generator::JointGenerator;
 pub use joint_limiter::{JointLimiter, Limited};
 pub use profile::{DoubleS, JerkLimits, NEWTON_ITERATIONS, ProfileError, RandomCase};
 pub use reach::{
-    CHECK_ITERATIONS, LINE_SAMPLES, MAX_JOINT_STEP, SOLVES_PER_LINE, check_iterations,
+    CHECK_ITERATIONS, LINE_SAMPLES, MAX_JOINT_STEP, POINT_WORK, SOLVES_PER_LINE, check_iterations,
 };
 pub use refusal::Refusal;
 pub use sequence::{Sequence, SequenceStep, Tolerances, VIA_SLOTS, ViaPoint};

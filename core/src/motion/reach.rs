@@ -15,12 +15,13 @@
 //! check follows that swing as the tick would; a joint that still moves that much in the
 //! shortest step jumps, and refuses the line.
 //!
-//! The check runs while a request is answered, inside a tick on the firmware, so its work is
-//! bounded: at most [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and
-//! per request (a VE checks all its legs within it) an IK iteration budget proportional to the
-//! control period ([`check_iterations`]). A check that runs out gives the move the benefit of
-//! the doubt. What a check costs on the Cortex-M7 (`qemu-bench/run.sh`, row "Cartesian line
-//! check") is in docs/kinematics.md; the worst measured stays within one period at 480 MHz.
+//! The check runs inside the ticks on the firmware, a few points a tick ([`LineCheck`], in
+//! slices: the request is answered when it ends), and its whole work is bounded: at most
+//! [`SOLVES_PER_LINE`] tracking solves of at most 10 iterations per line, and per request (a VE
+//! checks all its legs within it) an IK iteration budget proportional to the control period
+//! ([`check_iterations`]). A check that runs out gives the move the benefit of the doubt. What
+//! a check and a slice cost on the Cortex-M7 (`qemu-bench/run.sh`, rows "Cartesian line check"
+//! and "line check slice") is in docs/kinematics.md.
 //!
 //! The check also measures how long each step needs at the joints' rate limits, and the line
 //! is planned to last long enough for its peak speed to need at most [`RATE_SHARE`] of any
@@ -37,6 +38,8 @@
 //! What remains unchecked (between samples, joint rates near singularities) is still caught
 //! by the tick: the motion slows down or stops with `WN22`.
 
+mod line;
+
 use armgate_protocol::client::{JointBound, PathPoint};
 
 use super::Refusal;
@@ -45,7 +48,8 @@ use super::workspace::Workspace;
 use crate::MAX_JOINTS;
 use crate::config::IkConfig;
 use crate::kinematics::{Chain, Joints, SeedAngles};
-use crate::math::{self, Frame, Rotation3};
+use crate::math::Frame;
+pub use line::{LineCheck, POINT_WORK};
 
 /// Points checked along a line, evenly spaced by fraction of the way; the last is the goal.
 pub const LINE_SAMPLES: usize = 16;
@@ -68,6 +72,8 @@ pub fn check_iterations(period: f64) -> u32 {
     // Cannot panic: the bounds are constants in order.
     proportional.clamp(MIN_CHECK_ITERATIONS, CHECK_ITERATIONS)
 }
+/// The step of a line followed at full stride, as a fraction of the way.
+const FULL_STEP: f64 = 1.0 / LINE_SAMPLES as f64;
 /// The smallest step tried, as a fraction of the way.
 const MIN_STEP: f64 = 1.0 / (8 * LINE_SAMPLES) as f64;
 /// The smallest step tried where a joint moves more than [`MAX_JOINT_STEP`]: a swing near a
@@ -107,152 +113,6 @@ pub(super) struct Reach<'a> {
 pub const MAX_JOINT_STEP: f64 = 0.25;
 
 impl Reach<'_> {
-    /// Follows the straight line from `start`, where the arm is commanded to joints `seed`, to
-    /// `goal`, planned to last at least `min_duration` (s); returns the joints at the goal and
-    /// the duration to plan the line for ([`planned_duration`]: longer than `min_duration`
-    /// where the joints need the line slower than the Cartesian limits, so that the tick
-    /// follows the line without losing it, issue 33). (If the budget runs out the move gets the
-    /// benefit of the doubt, and the joints reached so far are returned.)
-    ///
-    /// Between two samples no joint may move more than [`MAX_JOINT_STEP`] (at the shortest
-    /// step) or need more than `ik.line_slowdown` times its rate limit at the line's cruise
-    /// speed: a line on which the IK solution jumps to another branch, or swings a joint
-    /// through a near-singularity, is refused with the joint and where, rather than started
-    /// and aborted halfway.
-    pub fn line(
-        &mut self,
-        start: &Frame,
-        goal: &Frame,
-        seed: &Joints,
-        min_duration: f64,
-    ) -> Result<Checked, Refusal> {
-        let (from, to) = (&start.translation.vector, &goal.translation.vector);
-        if let Some(entry) = self.workspace.first_box_crossing(from, to) {
-            return match PathPoint::at(entry) {
-                PathPoint::Along(percent) => Err(Refusal::CrossesBox(percent)),
-                PathPoint::Goal => Err(Refusal::OutsideWorkspace),
-            };
-        }
-        // The generator's turn: the rotation vector of R_goal · R_startᵀ (as math::diff).
-        let turn = math::rotation_vector(&start.rotation.rotation_to(&goal.rotation));
-        let point = |s: f64| {
-            if s >= 1.0 {
-                return *goal;
-            }
-            Frame::from_parts(
-                (from + (to - from) * s).into(),
-                Rotation3::new(turn * s) * start.rotation,
-            )
-        };
-        // The time the whole line takes at cruise speed (s): the slowest component.
-        let delta: [f64; 6] = math::diff(start, goal).into();
-        let min_duration = min_duration.max(0.0);
-        let cruise = delta
-            .iter()
-            .zip(self.speed.iter())
-            .map(|(d, v)| libm::fabs(*d) / v)
-            .fold(0.0, f64::max);
-        let duration = cruise.max(min_duration);
-        let shape = Shape::of(&delta, self.speed, self.acceleration);
-        let (mut needs, mut accelerates) = (0.0_f64, 0.0_f64);
-        // The joints' rates of change along the line (per fraction of the way) at the last
-        // step, none before the first.
-        let mut slope = None;
-        let full_step = 1.0 / LINE_SAMPLES as f64;
-        // Where a joint's rate along the line falls by more than half from the first step to
-        // the second (as `√s` does, from a singularity), the line is followed again from its
-        // start after a probe of the shortest step: the tick starts from rest, in short steps,
-        // and from an exact singularity (hybrid's home) a sixteenth of the way hid a joint the
-        // tick cannot move fast enough there (issue 33). Probing every line cost ranger-mk1's
-        // BG tick 12,000 instructions, following it up from the probe's step 80,000.
-        let (mut done, mut step) = (0.0, full_step);
-        let (mut probing, mut probed, mut followed) = (false, false, 0_u8);
-        // The last point reached and the step being tried: the two swap roles, never copied
-        // (on the Cortex-M7 each copy of a point costs a few hundred instructions).
-        let reached = Reached {
-            q: *seed,
-            pose: *start,
-            angles: SeedAngles::default(),
-        };
-        let mut points = [reached; 2];
-        let mut last = 0;
-        let mut too_fast = None;
-        // What the arm already touches at the start does not count (it may move out).
-        let present = self.body.present_at(self.chain, seed);
-        for _ in 0..SOLVES_PER_LINE {
-            if done >= 1.0 || self.iterations_left == 0 {
-                break;
-            }
-            let next = (done + step).min(1.0);
-            let at = PathPoint::at(next);
-            let [first, second] = &mut points;
-            let (here, tried) = if last == 0 {
-                (&*first, second)
-            } else {
-                (&*second, first)
-            };
-            tried.pose = point(next);
-            match self.solve(here, tried, at) {
-                Ok(()) => {}
-                Err(refusal) if step <= MIN_STEP => return Err(refusal),
-                Err(_) => {
-                    step *= 0.5;
-                    continue;
-                }
-            };
-            match fault(
-                &here.q,
-                &tried.q,
-                self.max_rate,
-                (next - done) * duration,
-                self.ik.line_slowdown,
-            ) {
-                // From afar the nearest solution may lie on another branch: retried shorter,
-                // as the tick would follow the line.
-                Some(Fault::Jump(_)) if step > MIN_JUMP_STEP => {
-                    step *= 0.5;
-                    continue;
-                }
-                Some(Fault::Jump(joint)) => return Err(Refusal::TooFast(joint, at)),
-                // A line that also fails for another reason further along (a joint limit,
-                // out of reach) is refused for that: it says more.
-                Some(Fault::Rate(joint)) => {
-                    too_fast.get_or_insert(Refusal::TooFast(joint, at));
-                }
-                None => {}
-            }
-            // The whole arm at each point of the line (between points the tick's check
-            // stands guard: it stops the motion before a link arrives).
-            if let Some(hit) = self.body.new_hit(self.chain, &tried.q, &present) {
-                return Err(Refusal::Hits(hit, at));
-            }
-            let limits = (self.max_rate, self.max_acceleration);
-            let (rate, acceleration, slowed) =
-                shape.needs(&mut slope, (&here.q, &tried.q), next - done, limits);
-            needs = needs.max(rate);
-            if probing {
-                // The probe passed: the line is followed from its start in sixteenths.
-                (probing, step, slope) = (false, full_step, None);
-                continue;
-            }
-            accelerates = accelerates.max(acceleration);
-            (done, last) = (next, 1 - last);
-            step = (step * 2.0).min(full_step);
-            followed = followed.saturating_add(1);
-            if followed == 2 && slowed && !probed {
-                (probing, probed, done, step, last) = (true, true, 0.0, MIN_JUMP_STEP, 0);
-                (points, slope) = ([reached; 2], None);
-            }
-        }
-        let q = points.get(last).map_or(*seed, |reached| reached.q);
-        let checked = Checked {
-            q,
-            duration: planned_duration(min_duration, cruise, needs)
-                .max(math::sqrt(accelerates / RATE_SHARE)),
-        };
-        too_fast.map_or(Ok(checked), Err)
-    }
-
     /// The tick's IK settings with at most [`CHECK_SOLVE_ITERATIONS`] per solve: a step of a
     /// sixteenth of the line converges in a few, and a failing one costs less.
     fn solve_config(&self) -> IkConfig {
@@ -297,7 +157,7 @@ pub(super) struct Checked {
 
 /// A point of the line: the joints there, their pose (which spares the next solve the FK), and
 /// their angles if a closed-form solve gave them (which spares it their `sincos`).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Reached {
     q: Joints,
     pose: Frame,
@@ -331,7 +191,7 @@ fn fault(q: &Joints, next: &Joints, max_rate: &Joints, time: f64, slowdown: f64)
 /// How sharply a line's profile moves along the way (fractions of it per second squared) when
 /// stretched to last `D` s: no more than `acceleration / D²` (a trapezoid stretched in time),
 /// and no faster than `2 / D` (a triangle's peak).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Shape {
     acceleration: f64,
 }

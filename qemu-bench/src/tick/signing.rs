@@ -110,7 +110,7 @@ pub(super) fn costs(config: &ValidRobot, start: Option<&[f64]>) -> Result<Costs,
             link: 1,
             timestamp: u64::from(k) + 1,
         };
-        pose_ticks.add(session.exchange(&signature.emit(&pose, &key), b"SP")?);
+        pose_ticks.add(session.exchange(&signature.emit(&pose, &key), b"SP")?.0);
         if session.link.answer.map(|a| a.payload().len()) != Some(SIGNED_LEN) {
             return Err("the answer to a signed PS was not signed");
         }

@@ -29,7 +29,7 @@ pub(super) fn streaming_ticks(session: &mut Session) -> Result<Timing, &'static 
         } else {
             -1.0
         };
-        timing.add(session.request(Command::Twist, TWIST.map(|v| v * sign), b"WT")?);
+        timing.add(session.request(Command::Twist, TWIST.map(|v| v * sign), b"WT")?.0);
     }
     Ok(timing)
 }

@@ -7,6 +7,7 @@ use armgate_protocol::client::{
 };
 
 use super::CommandHandler;
+use super::planning::Slow;
 use super::replies::{non_negative, planned_reply, refusal_notice, values_reply};
 use crate::command::banks::BANK_2;
 use crate::command::drives::Drives;
@@ -15,7 +16,8 @@ use crate::motion::Refusal;
 
 impl CommandHandler {
     /// `BG`: the move to the stored goal; the reply's f6 is its planned duration (s), so that a
-    /// client can size its wait.
+    /// client can size its wait. The line to the goal is checked in slices across ticks: the
+    /// answer comes when the check ends ([`lines_checked`](Self::lines_checked)).
     pub(super) fn begin(
         &mut self,
         req: &Request,
@@ -26,11 +28,37 @@ impl CommandHandler {
             .goal
             .ok_or_else(|| self.missing(cmd, Rejection::NoGoal))?;
         self.ready_to_move(cmd, drives)?;
-        let planned = self
+        let plan = self
             .controller
-            .move_cartesian(goal, duration)
+            .plan_cartesian(goal, duration)
             .map_err(|r| refusal_notice(cmd, r))?;
-        Ok(planned_reply(cmd, planned))
+        self.start_planning(Slow::Lines(cmd, plan));
+        // Neither sent nor recorded: the answer comes when the check ends.
+        Ok(Reply::null(cmd))
+    }
+
+    /// The answer of a `BG` or `VE` whose lines' check ended: the motion started (`result`:
+    /// its planned duration, s), or why not.
+    pub(super) fn lines_checked(
+        &self,
+        cmd: Command,
+        result: Result<f64, Refusal>,
+    ) -> Result<Reply, Notice> {
+        match result {
+            Ok(_) if cmd == Command::ViaExecute => Ok(Reply::null(cmd)),
+            Ok(planned) => Ok(planned_reply(cmd, planned)),
+            Err(refusal) => Err(self.start_refused(cmd, refusal)),
+        }
+    }
+
+    /// The refusal of a motion start: a sequence without via point 0 is missing one.
+    fn start_refused(&self, cmd: Command, refusal: Refusal) -> Notice {
+        match refusal {
+            Refusal::NoGoal if matches!(cmd, Command::ViaExecute | Command::JointExecute) => {
+                self.missing(cmd, Rejection::NoViaPoint)
+            }
+            other => refusal_notice(cmd, other),
+        }
     }
 
     /// `GL`: a goal as position and quaternion.
@@ -92,7 +120,8 @@ impl CommandHandler {
         ))
     }
 
-    /// `VE` and `jE`: runs the via points of the request's kind.
+    /// `VE` and `jE`: runs the via points of the request's kind. `VE`'s legs are checked in
+    /// slices across ticks, as `BG`'s line.
     pub(super) fn run_sequence(
         &mut self,
         req: &Request,
@@ -101,14 +130,14 @@ impl CommandHandler {
         let cmd = req.command;
         self.ready_to_move(cmd, drives)?;
         if cmd == Command::ViaExecute {
-            self.controller.start_cartesian_sequence()
-        } else {
-            self.controller.start_joint_sequence()
+            let plan = self.controller.plan_cartesian_sequence();
+            let plan = plan.map_err(|r| self.start_refused(cmd, r))?;
+            self.start_planning(Slow::Lines(cmd, plan));
+            return Ok(Reply::null(cmd));
         }
-        .map_err(|r| match r {
-            Refusal::NoGoal => self.missing(cmd, Rejection::NoViaPoint),
-            other => refusal_notice(cmd, other),
-        })?;
+        self.controller
+            .start_joint_sequence()
+            .map_err(|r| self.start_refused(cmd, r))?;
         Ok(Reply::null(cmd))
     }
 

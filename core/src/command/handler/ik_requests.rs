@@ -3,39 +3,20 @@
 //! moves).
 //!
 //! On a chain without a closed form `KG`'s goal is found by a global search that may take
-//! tens of thousands of Newton steps: it runs in slices, one a tick ([`GoalSearch`]), and the
-//! `KG` is answered when it ends (by the cycle; direct callers of the handler finish it at
-//! once).
+//! tens of thousands of Newton steps: it runs in slices, one a tick (`handler/planning.rs`),
+//! and the `KG` is answered when it ends.
 
 use armgate_protocol::client::branch::NEAREST_BRANCH;
 use armgate_protocol::client::redundancy::Redundancy;
-use armgate_protocol::client::{Command, MESSAGE_LEN, Notice, Rejection, Reply, Request, VALUES};
-use core::net::SocketAddr;
+use armgate_protocol::client::{Command, Notice, Reply, Request, VALUES};
 
 use super::CommandHandler;
+use super::planning::Slow;
 use super::replies::{ik_notice, no_measurement, non_negative, refusal_notice, values_reply};
 use crate::command::drives::Drives;
 use crate::command::ik::{Goal, OUT_OF_REACH};
 use crate::command::{ik, redundancy};
-use crate::kinematics::{GlobalSearch, IkResult, Joints};
-
-/// A `KG` whose global search runs in slices across ticks.
-#[derive(Clone, Debug)]
-pub(super) struct GoalSearch {
-    search: GlobalSearch,
-    /// The move's duration (s).
-    duration: f64,
-    client: SocketAddr,
-    /// The request that started it is still being answered (its reply is not the answer).
-    fresh: bool,
-}
-
-impl GoalSearch {
-    /// The request that started it is still being answered.
-    pub(super) fn is_fresh(&self) -> bool {
-        self.fresh
-    }
-}
+use crate::kinematics::{IkResult, Joints};
 
 impl CommandHandler {
     /// `KG`: the joint move to the IK solution of a pose on a branch (with the client's `KR`
@@ -64,12 +45,7 @@ impl CommandHandler {
                 let search = chain
                     .global_search(&target, &reference, ik, 0)
                     .map_err(|_| ik_notice(cmd, OUT_OF_REACH))?;
-                self.search = Some(GoalSearch {
-                    search,
-                    duration,
-                    client: self.client,
-                    fresh: true,
-                });
+                self.start_planning(Slow::Search(search, duration));
                 // Neither sent nor recorded: the answer comes when the search ends.
                 Ok(values_reply(cmd, &[0.0; VALUES], NEAREST_BRANCH))
             }
@@ -95,54 +71,14 @@ impl CommandHandler {
         Ok(values_reply(cmd, &values, branch))
     }
 
-    /// True once, just after a `KG` started a global search: its answer comes from
-    /// [`continue_search`](Self::continue_search), not from the request's own reply.
-    pub fn search_started(&mut self) -> bool {
-        self.search
-            .as_mut()
-            .is_some_and(|s| core::mem::replace(&mut s.fresh, false))
-    }
-
-    /// Runs the `KG` search on for at most `slice` Newton steps; once it has ended, starts the
-    /// move (if the arm may still move for its client) and returns the answer to `datagram`,
-    /// the `KG` that started it.
-    pub fn continue_search(
-        &mut self,
-        slice: u16,
-        datagram: &[u8],
-        drives: &(impl Drives + ?Sized),
-    ) -> Option<[u8; MESSAGE_LEN]> {
-        let pending = self.search.as_mut()?;
-        let result = self
-            .controller
-            .chain()
-            .continue_search(&mut pending.search, slice)?;
-        let GoalSearch {
-            duration, client, ..
-        } = self.search.take()?;
+    /// The answer of a `KG` whose global search ended with `result`: the joint move to the
+    /// solution found (lasting at least `duration`, s), or out of reach.
+    pub(super) fn goal_found(&mut self, result: IkResult, duration: f64) -> Result<Reply, Notice> {
         let cmd = Command::IkGoal;
-        self.client = client;
-        let answer = match result {
-            // Another client took control meanwhile (the arm at rest): not its goal to run.
-            _ if self.session.holder() != Some(client) => {
-                Err(Notice::Rejected(cmd, Rejection::HolderChanged))
-            }
-            IkResult::Converged(s) => self
-                .ready_to_move(cmd, drives)
-                .and_then(|()| self.move_to_goal(cmd, &s.q, duration, NEAREST_BRANCH)),
+        match result {
+            IkResult::Converged(s) => self.move_to_goal(cmd, &s.q, duration, NEAREST_BRANCH),
             IkResult::NotConverged(_) => Err(ik_notice(cmd, OUT_OF_REACH)),
-        };
-        let reply = answer
-            .map(|r| r.to_bytes())
-            .unwrap_or_else(|notice| self.refuse(notice));
-        self.session
-            .answered(client, cmd, datagram, &reply, self.now);
-        Some(reply)
-    }
-
-    /// Drops the `KG` search (a stop cancelled it).
-    pub fn cancel_search(&mut self) {
-        self.search = None;
+        }
     }
 
     /// `KR`: the values of the redundancy parameters for this client's next `KG` (and its
