@@ -24,7 +24,7 @@
 
 use std::io::{self, ErrorKind};
 use std::os::fd::AsFd;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 use armgate_core::drives::{BusState, CanBus, TxError};
 use armgate_protocol::can::{CanFrame, exact_bits_on_wire};
@@ -169,6 +169,9 @@ impl SocketCan {
         // Bus-off and restart reports arrive as error frames.
         socket.set_error_filter(libc::CAN_ERR_BUSOFF | libc::CAN_ERR_RESTARTED)?;
         socket2::SockRef::from(&socket).set_recv_buffer_size(RECEIVE_BUFFER)?;
+        // Each frame carries the time the kernel received it (`SO_TIMESTAMPNS`), for a reader
+        // that was not scheduled when it came (the Whistle simulator).
+        socket.set_recv_timestamp(true)?;
         Ok(Self {
             socket,
             tally: Tally::default(),
@@ -186,6 +189,31 @@ impl SocketCan {
             Ok(_) | Err(Errno::EINTR) => Ok(()),
             Err(e) => Err(e.into()),
         }
+    }
+
+    /// The next frame for the drive manager and when the kernel received it (the wall
+    /// clock's time; `None` if the kernel gave none): [`CanBus::try_receive`] with the frame's
+    /// arrival, which a reader that was not scheduled for a while needs to put it at its time.
+    pub fn try_receive_stamped(&mut self) -> Option<(CanFrame, Option<SystemTime>)> {
+        for _ in 0..MAX_SKIPPED {
+            match self.socket.read_frame_with_timestamps() {
+                Ok((frame, stamps)) => {
+                    if let Some(frame) = self.tally.take(classify(&frame)) {
+                        return Some((frame, stamps.socket));
+                    }
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return None,
+                Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
+                    self.tally.went_bus_off();
+                    return None;
+                }
+                Err(_) => {
+                    self.tally.counters.socket_errors += 1;
+                    return None;
+                }
+            }
+        }
+        None
     }
 
     /// What was ignored or failed so far.
@@ -227,25 +255,7 @@ impl CanBus for SocketCan {
     }
 
     fn try_receive(&mut self) -> Option<CanFrame> {
-        for _ in 0..MAX_SKIPPED {
-            match self.socket.read_frame() {
-                Ok(frame) => {
-                    if let Some(frame) = self.tally.take(classify(&frame)) {
-                        return Some(frame);
-                    }
-                }
-                Err(e) if e.kind() == ErrorKind::WouldBlock => return None,
-                Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
-                    self.tally.went_bus_off();
-                    return None;
-                }
-                Err(_) => {
-                    self.tally.counters.socket_errors += 1;
-                    return None;
-                }
-            }
-        }
-        None
+        self.try_receive_stamped().map(|(frame, _)| frame)
     }
 
     fn state(&self) -> BusState {
