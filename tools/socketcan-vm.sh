@@ -29,8 +29,20 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 # -- inside the VM -------------------------------------------------------------------------------
 if [[ "${1:-}" == "--inside" ]]; then
     out=$2 bin=$3 e2e=$4 e2e_tests=$5
-    export TMPDIR=$out/tmp
-    mkdir -p "$TMPDIR"
+    # Also kept in a file, which the host prints if the guest's console output did not come.
+    exec > >(tee "$out/vm.txt") 2>&1
+    # The binaries (without debug info), the tests' files and the capture in the guest's memory,
+    # not read or written over 9p from the host's file system during the tests: a process
+    # waiting for the host leaves the guest idle, and an idle guest's clock jumps ahead (-icount
+    # sleep=off, below), which the processes still running would see as a stall.
+    mem=$(mktemp -d)
+    mount -t tmpfs -o size=600m tmpfs "$mem"
+    for file in "$bin/armgate-sim" "$bin/armgate" "$e2e"; do
+        strip --strip-debug -o "$mem/${file##*/}" "$file"
+        mount --bind "$mem/${file##*/}" "$file"
+    done
+    export TMPDIR=$mem/tmp
+    mkdir "$TMPDIR"
     sim=$bin/armgate-sim client=$bin/armgate
     robot=robots/ranger-mk1.toml
     echo "kernel: $(uname -r)"
@@ -60,9 +72,9 @@ if [[ "${1:-}" == "--inside" ]]; then
     controller_on() { # IFACE LOG [ARGS...]
         "$sim" --can "socketcan:$1" --robot "$robot" --quiet "${@:3}" 2>"$out/$2" &
         controller=$!
-        for _ in 1 2 3 4 5 6 7 8 9 10; do # until it answers
+        for _ in $(seq 50); do # until it answers
             "$client" --timeout 1s status >/dev/null 2>&1 && return
-            sleep 1
+            sleep 0.2
         done
         echo "socketcan-vm: armgate-sim on $1 never answered"
         exit 1
@@ -79,7 +91,7 @@ if [[ "${1:-}" == "--inside" ]]; then
     ip -d link show can0 | sed -n '1p; /bitrate/p'
     whistles_on can1 enobufs-whistles.txt
     controller_on can0 enobufs-sim.txt
-    sleep 3
+    sleep 1
     state=$(drives)
     stop "$controller"
     stop "$whistles"
@@ -97,12 +109,12 @@ if [[ "${1:-}" == "--inside" ]]; then
     fi
 
     # 2. The recipe in full (txqueuelen 1000) and the end-to-end tests over the bus: each test
-    # starts armgate-sim on can0 and the Whistle simulator on can1 (ARMGATE_E2E_CAN), both
-    # writing at the robot file's bit rate (--pace-can: QEMU's bus has none), one test at a time,
-    # can0 captured meanwhile (its first 6000 frames: every kind of frame, decoded quickly).
+    # starts armgate-sim on can0 and the Whistle simulator on can1 (ARMGATE_E2E_CAN), one test
+    # at a time, can0 captured meanwhile (its first 6000 frames: every kind of frame, decoded
+    # quickly).
     setup can0
     ip -d link show can0 | sed -n '1p; /bitrate/p'
-    dumpcap -q -i can0 -c 6000 -w "$out/can0.pcapng" 2>"$out/dumpcap.txt" &
+    dumpcap -q -i can0 -c 6000 -w "$mem/can0.pcapng" 2>"$out/dumpcap.txt" &
     dumpcap=$!
     for _ in $(seq 50); do # until it captures
         grep -q "Capturing on" "$out/dumpcap.txt" 2>/dev/null && break
@@ -111,11 +123,13 @@ if [[ "${1:-}" == "--inside" ]]; then
     e2e_started=$SECONDS
     e2e_status=0
     # shellcheck disable=SC2086 # the test names, one word each
-    ARMGATE_E2E_CAN=can0,can1 "$e2e" --test-threads 1 --exact $e2e_tests >"$out/e2e.txt" 2>&1 ||
+    ARMGATE_E2E_CAN=can0,can1 "$e2e" --test-threads 1 --exact $e2e_tests >"$mem/e2e.txt" 2>&1 ||
         e2e_status=$?
     stop "$dumpcap"
+    cp "$mem/can0.pcapng" "$mem/e2e.txt" "$out/"
     echo "the end-to-end tests over can0/can1, $((SECONDS - e2e_started)) s of the guest's time:"
     grep -E '^test |^test result' "$out/e2e.txt" | sed 's/^/    /' || true
+    echo "receive overruns of the emulated controllers: can0 $(cat /sys/class/net/can0/statistics/rx_over_errors), can1 $(cat /sys/class/net/can1/statistics/rx_over_errors)"
     if [[ $e2e_status -ne 0 ]]; then
         # What failed, with the Whistle simulators' exit summaries.
         sed -n '/^failures:$/,$p' "$out/e2e.txt" | sed 's/^/    /'
@@ -198,7 +212,14 @@ PATH=$venv/bin:$PATH timeout 600 nice -n -19 vng -r "$kernel" --disable-kvm --cp
     --append "tsc=reliable clocksource=tsc" \
     --rwdir "$out" \
     --qemu-opts="-icount shift=0,sleep=off -object can-bus,id=canbus0 -device kvaser_pci,canbus=canbus0 -device kvaser_pci,canbus=canbus0" \
-    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" "$e2e" "$e2e_tests" </dev/null || vm_status=$?
+    -- bash "$PWD/tools/socketcan-vm.sh" --inside "$out" "$target/debug" "$e2e" "$e2e_tests" </dev/null 2>&1 |
+    while IFS= read -r line; do # each line with the host's seconds since the boot began
+        printf '[%3d s] %s\n' $((SECONDS - started)) "$line"
+    done | tee "$out/console.txt" || vm_status=$?
+if [[ ! -s "$out/console.txt" && -f "$out/vm.txt" ]]; then
+    echo "socketcan-vm: (the VM's output, from $out/vm.txt)"
+    cat "$out/vm.txt"
+fi
 echo "socketcan-vm: the VM ran $((SECONDS - started)) s (exit code $vm_status)"
 if [[ ! -f "$out/passed" ]]; then
     echo "socketcan-vm: the tests in the VM failed (above)"

@@ -32,7 +32,7 @@ use armgate_core::kinematics::Joints;
 use armgate_core::sim::{Stalled, VirtualBus};
 use armgate_protocol::can::CanFrame;
 
-use crate::socketcan::{self, Pacer, SocketCan};
+use armgate_socketcan::{self as socketcan, Pacer, SocketCan};
 
 /// How long the loop waits for a frame: it runs the drives at least this often, so their
 /// answers leave within this of when the drive sent them (the controller reads them at its next

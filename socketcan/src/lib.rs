@@ -1,6 +1,8 @@
 //! Linux SocketCAN as the drive manager's [`CanBus`], through the `socketcan` crate: a raw CAN
 //! socket on an interface such as `can0` (for example a PCAN-USB adapter through the kernel's
-//! `peak_usb` driver) or `vcan0`.
+//! `peak_usb` driver) or `vcan0`. One adapter for the shells that run on Linux: `armgate-sim
+//! --can socketcan:IFACE` and its Whistle simulator (`--whistles`), and the firmware's Linux
+//! build with `ARMGATE_CAN=socketcan:IFACE` (its FDCAN seam).
 //!
 //! What it does with what the kernel hands over ([`classify`]):
 //!
@@ -266,6 +268,53 @@ impl CanBus for SocketCan {
     /// the README), the next frame finds out.
     fn recover(&mut self) {
         self.tally.bus_off = false;
+    }
+}
+
+/// The drive manager's bus in a shell on Linux, chosen at run time: simulated drives (`V`, the
+/// shell's `VirtualBus`) or a SocketCAN interface (armgate-sim's `--can`, the firmware's
+/// `ARMGATE_CAN`).
+pub enum LinuxBus<V> {
+    /// Simulated Whistles; their time advances with the control loop ([`CanBus::advance_to`]).
+    Simulated(V),
+    /// A real interface (or vcan): the drives keep their own time.
+    SocketCan(SocketCan),
+}
+
+impl<V: CanBus> CanBus for LinuxBus<V> {
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
+        match self {
+            Self::Simulated(bus) => bus.try_transmit(frame),
+            Self::SocketCan(bus) => bus.try_transmit(frame),
+        }
+    }
+
+    fn try_receive(&mut self) -> Option<CanFrame> {
+        match self {
+            Self::Simulated(bus) => bus.try_receive(),
+            Self::SocketCan(bus) => bus.try_receive(),
+        }
+    }
+
+    fn state(&self) -> BusState {
+        match self {
+            Self::Simulated(bus) => bus.state(),
+            Self::SocketCan(bus) => bus.state(),
+        }
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        match self {
+            Self::Simulated(bus) => bus.advance_to(now),
+            Self::SocketCan(bus) => bus.advance_to(now),
+        }
+    }
+
+    fn recover(&mut self) {
+        match self {
+            Self::Simulated(bus) => bus.recover(),
+            Self::SocketCan(bus) => bus.recover(),
+        }
     }
 }
 
