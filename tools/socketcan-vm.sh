@@ -12,6 +12,7 @@
 #   2. ENOBUFS: armgate-sim on can0 at the default txqueuelen of 10, the Whistle simulator
 #      (`armgate-sim --whistles`) on can1: frames refused by the full queue are counted and the
 #      drives fault, as the README says;
+#      then the README's desk setup on vcan0 (`ON`, then `emcy 103` on the simulator's stdin);
 #   3. the recipe in full (txqueuelen 1000) and five end-to-end tests (tests/e2e.rs with
 #      ARMGATE_E2E_CAN=can0,can1: each test starts armgate-sim on can0 and the Whistle
 #      simulator on can1), can0 captured with dumpcap meanwhile; the tests must pass, among them
