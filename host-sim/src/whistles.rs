@@ -194,21 +194,27 @@ impl Whistles {
     }
 }
 
-/// The frames `socket` holds, each with its arrival on the loop's clock (s): `now` less the
-/// age of the kernel's timestamp, never before the previous frame's arrival (`after`) nor
-/// after `now`.
+/// The frames `socket` holds, each with its [`arrival`] on the loop's clock (s), the first
+/// not before `after` (the previous frame's).
 fn read(socket: &mut SocketCan, now: f64, after: f64) -> Vec<(CanFrame, f64)> {
     let wall = SystemTime::now();
     let mut frames = Vec::new();
     let mut previous = after;
     while let Some((frame, stamp)) = socket.try_receive_stamped() {
-        let age = stamp
-            .and_then(|s| wall.duration_since(s).ok())
-            .map_or(0.0, |age| age.as_secs_f64());
-        previous = (now - age).clamp(previous, now);
+        previous = arrival(now, wall, stamp, previous);
         frames.push((frame, previous));
     }
     frames
+}
+
+/// When a frame arrived on the loop's clock (s): `now` (read from it at `wall` on the wall
+/// clock) less the age of the kernel's timestamp `stamp`; `now` without a timestamp or with one
+/// ahead of `wall`; never before `previous` (frames arrive in order) nor after `now`.
+fn arrival(now: f64, wall: SystemTime, stamp: Option<SystemTime>, previous: f64) -> f64 {
+    let age = stamp
+        .and_then(|s| wall.duration_since(s).ok())
+        .map_or(0.0, |age| age.as_secs_f64());
+    (now - age).max(previous).min(now)
 }
 
 /// Serves the simulated Whistles of `config`, with their encoders at `start`, on interface
@@ -446,6 +452,22 @@ mod tests {
             assert_eq!(drives.status(), DriveStatus::Running);
         }
         drives.fault()
+    }
+
+    #[test]
+    fn a_frame_arrives_at_its_kernel_timestamp_on_the_loop_clock_in_order_never_ahead() {
+        let wall = SystemTime::UNIX_EPOCH + Duration::from_secs(1_000);
+        let ago = |ms| Some(wall - Duration::from_millis(ms));
+        // Read at 10 s on the loop's clock: received 30 ms before, at 9.97 s.
+        assert!((arrival(10.0, wall, ago(30), 0.0) - 9.97).abs() < 1e-9);
+        // Not before the previous frame (the wall clock stepped back, or out of order).
+        assert!((arrival(10.0, wall, ago(30), 9.99) - 9.99).abs() < 1e-12);
+        // No timestamp, or one from the future: when read.
+        assert!((arrival(10.0, wall, None, 0.0) - 10.0).abs() < 1e-12);
+        let ahead = Some(wall + Duration::from_millis(5));
+        assert!((arrival(10.0, wall, ahead, 0.0) - 10.0).abs() < 1e-12);
+        // Received before the loop's clock began (0 s): at its start.
+        assert!(arrival(0.01, wall, ago(50), 0.0).abs() < 1e-12);
     }
 
     #[test]
