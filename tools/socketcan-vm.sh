@@ -210,12 +210,13 @@ cargo build -q -p armgate-client
 e2e=$(cargo test -q -p armgate-sim --test e2e --no-run --message-format=json-render-diagnostics |
     sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | grep "/deps/e2e-" | tail -n 1)
 # armgate-sim itself with armgate-core optimised, in its usual place (target/debug, where the
-# tests start it): the simulated Whistles run against the wall clock, and unoptimised they fell
-# seconds behind under TCG (a loop turn of up to 1.8 s, against 0.1 to 0.3 s optimised) and the
-# drives timed out. Not in everyone's dev builds: it triples core's compile time. The next
-# plain `cargo build` puts the unoptimised one back without building anything.
+# tests start it): the simulated Whistles keep time with the guest's clock, and unoptimised
+# they fell behind it under TCG (a loop turn of up to 1.8 s, against 0.1 to 0.3 s optimised);
+# optimised, the guest also has fewer instructions to run, which is the step's wall time. Not
+# in everyone's dev builds: it triples core's compile time. The next plain `cargo build` puts
+# the unoptimised one back without building anything.
 cargo build -q --config 'profile.dev.package.armgate-core.opt-level=2' -p armgate-sim
-# A small representative set (about a minute in the VM): start-up and a Cartesian session on
+# A small representative set (17 to 26 s of the guest's time, 30 to 85 s of the host's): start-up and a Cartesian session on
 # the interpreter schedule, the PDO schedule's session, ST at cruise, a drive's emergency, and
 # the Whistle simulator killed mid-move.
 e2e_tests="a_full_session_over_udp the_pdo_schedule_runs_a_session
@@ -227,7 +228,7 @@ built=$SECONDS
 out=$target/socketcan-vm
 rm -rf "$out"
 mkdir -p "$out/bin"
-# The executables without their debug info (a third of their size), copied into the guest's
+# The executables without their debug info (a fifth of their size), copied into the guest's
 # memory there.
 for file in "$target/debug/armgate-sim" "$target/debug/armgate" "$e2e"; do
     strip --strip-debug -o "$out/bin/${file##*/}" "$file"
