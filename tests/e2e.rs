@@ -4,9 +4,10 @@
 //! build of the firmware (tools/firmware-e2e.sh does it) — the firmware's own tasks on Linux,
 //! reached over a TAP device inside a network namespace. The same session runs against both.
 //! Every reply is checked to the byte where it is fixed (characters, payload, index) against
-//! docs/protocol.md. With `ARMGATE_E2E_CAN=can0,can1` each test's `armgate-sim` drives its
-//! Whistles over a real CAN stack: `--can socketcan:can0`, with `armgate-sim --whistles` on
-//! can1 of the same bus (or both on one vcan: `vcan0,vcan0`; docs/drives.md, "SocketCAN").
+//! docs/protocol.md. With `ARMGATE_E2E_CAN=can0,can1` each test's `armgate-sim` (or firmware:
+//! `ARMGATE_CAN`) drives its Whistles over a real CAN stack: `--can socketcan:can0`, with
+//! `armgate-sim --whistles` on can1 of the same bus (or both on one vcan: `vcan0,vcan0`;
+//! docs/drives.md, "SocketCAN").
 #![allow(
     missing_docs,
     clippy::unwrap_used,
@@ -81,7 +82,6 @@ fn start_whistles(iface: &str, file: &std::path::Path, extra: &[&str]) -> Child 
     let mut child = Command::new(env!("CARGO_BIN_EXE_armgate-sim"))
         .args([
             "--whistles",
-            "--pace-can",
             "--can",
             &format!("socketcan:{iface}"),
             "--robot",
@@ -169,6 +169,10 @@ impl Sim {
                 // build only); the rest of its settings are the build's.
                 let mut command = Command::new(firmware);
                 command.env("ARMGATE_ROBOT_FILE", &file);
+                if let Some((iface, _)) = &can {
+                    // Its FDCAN seam as the SocketCAN interface (its Linux build).
+                    command.env("ARMGATE_CAN", format!("socketcan:{iface}"));
+                }
                 if extra.contains(&"--key") && !extra.contains(&"--state") {
                     command.env("ARMGATE_STATE_FILE", dir.join("replay-state"));
                 }
@@ -195,11 +199,9 @@ impl Sim {
                 };
                 let mut command = Command::new(env!("CARGO_BIN_EXE_armgate-sim"));
                 if let Some((iface, _)) = &can {
-                    // vcan and QEMU's bus have no bit timing: frames paced as a real bus would.
-                    command
-                        .arg("--can")
-                        .arg(format!("socketcan:{iface}"))
-                        .arg("--pace-can");
+                    // Unpaced: the Whistle simulator puts each frame on its bit-timed bus at its
+                    // arrival, and neither vcan nor QEMU's bus on one vCPU loses a burst.
+                    command.arg("--can").arg(format!("socketcan:{iface}"));
                 }
                 // A test's replay state is its own (never the user's default location).
                 if extra.contains(&"--key") && !extra.contains(&"--state") {

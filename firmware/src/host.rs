@@ -4,7 +4,10 @@
 //! * Ethernet MAC and PHY → a TAP device (`embassy-net-tuntap`), named by `ARMGATE_TAP`
 //!   (default `tap0`), which must exist (tools/firmware-e2e.sh creates it inside a
 //!   network namespace);
-//! * FDCAN1 → the simulated bus of simulated Whistles (as the `sim-drives` build);
+//! * FDCAN1 → the simulated bus of simulated Whistles (as the `sim-drives` build), or with
+//!   `ARMGATE_CAN=socketcan:IFACE` a SocketCAN interface (`ARMGATE_PACE_CAN=1`: writes held
+//!   to the robot file's bit rate, for a bus without bit timing), e.g. to
+//!   `armgate-sim --whistles` on the other side (docs/drives.md, "SocketCAN");
 //! * the independent watchdog → [`Watchdog`], which does nothing;
 //! * clocks → embassy-time's std driver; the chip's unique id → a fixed one ([`HOST_UID`]);
 //! * the robot embedded in flash → the same, unless `ARMGATE_ROBOT_FILE` names a robot file to
@@ -23,6 +26,7 @@ use armgate_core::cycle::{Cycle, Signing, StateFile};
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::sim::replay::{self, Replay};
 use armgate_protocol::client::signed::read_key_file;
+use armgate_socketcan::LinuxBus;
 use embassy_executor::{Executor, SpawnError, SpawnToken, Spawner};
 use embassy_net_tuntap::TunTapDevice;
 use static_cell::StaticCell;
@@ -123,7 +127,16 @@ pub fn main() {
         }
     };
     device.set_hardware_address(net::mac_address(HOST_UID));
-    let drives = started();
+    let bus = match can_bus(robot, &start) {
+        Ok(bus) => bus,
+        Err(e) => {
+            eprintln!("armgate-firmware: ARMGATE_CAN: {e}");
+            std::process::exit(1);
+        }
+    };
+    let bus_text = drives::bus::describe(&bus);
+    let mut drives = drives::new(robot, bus);
+    drives.manager_mut().place_undriven(&start);
     let (stack, runner) = net::stack(device, HOST_UID);
     let signing_note = match (&signing.0.key, &signing.1) {
         (Some(key), Some(store)) => format!(
@@ -140,7 +153,7 @@ pub fn main() {
         robot.dof(),
         robot.control_period * 1e3,
         config::embedded_len(),
-        drives::describe(),
+        bus_text,
         settings::ADDRESS,
         settings::PORT
     );
@@ -157,6 +170,21 @@ pub fn main() {
     })
 }
 
+/// The FDCAN seam on Linux: `ARMGATE_CAN` = `sim` (the default: simulated Whistles with their
+/// encoders at `start`) or `socketcan:IFACE`, paced with `ARMGATE_PACE_CAN=1`.
+fn can_bus(robot: &ValidRobot, start: &[f64]) -> Result<drives::bus::Bus, String> {
+    match std::env::var("ARMGATE_CAN").as_deref() {
+        Err(_) | Ok("sim") => Ok(drives::bus::simulated_at(robot, start)),
+        Ok(choice) => match choice.strip_prefix("socketcan:") {
+            Some(iface) if !iface.is_empty() => {
+                let paced = std::env::var("ARMGATE_PACE_CAN").is_ok_and(|v| v == "1");
+                drives::bus::socketcan(robot, iface, paced)
+            }
+            _ => Err(format!("`{choice}`: expected sim or socketcan:IFACE")),
+        },
+    }
+}
+
 /// `ARMGATE_REPLAY="FILE TICKS"`: the cycle as the control task builds it, on the recorded
 /// exchange, its transcript on stdout (what `armgate-sim --replay` must match).
 fn replay_exchange(
@@ -171,8 +199,9 @@ fn replay_exchange(
     let text = std::fs::read_to_string(file).map_err(|e| format!("{file}: {e}"))?;
     let recording = Replay::parse(&text).map_err(|e| format!("{file}: {e}"))?;
     let mut cycle: Cycle<drives::BoardDrives, ()> = Cycle::new(robot, drives);
-    let transcript = recording.run(&mut cycle, ticks, |drives| {
-        replay::can_drives(drives.manager(), drives.bus())
+    let transcript = recording.run(&mut cycle, ticks, |drives| match drives.bus() {
+        LinuxBus::Simulated(bus) => replay::can_drives(drives.manager(), bus),
+        LinuxBus::SocketCan(_) => "SocketCAN".into(),
     });
     print!("{transcript}");
     Ok(())

@@ -14,7 +14,7 @@ use armgate_core::sim::{ArmModel, SimulatedDrives};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::{DriveStatus, Text};
 
-use crate::socketcan::{self, Pacer, SocketCan};
+use armgate_socketcan::{self as socketcan, LinuxBus, Pacer, SocketCan};
 
 /// The `--can` choice.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -50,13 +50,9 @@ pub enum Backend {
     Can(Box<CanDrives<Bus>>),
 }
 
-/// The bus under the drive manager.
-pub enum Bus {
-    /// Simulated Whistles; time advances with the control loop.
-    Virtual(Box<VirtualBus>),
-    /// A real interface.
-    Socket(SocketCan),
-}
+/// The bus under the drive manager: simulated Whistles (their time advances with the control
+/// loop) or a real interface, every frame that crosses it captured (`--pcap`, `--mcap`).
+pub struct Bus(pub LinuxBus<&'static mut VirtualBus>);
 
 impl Backend {
     /// Opens the drives chosen with `--can`, with the joints at `start` (SocketCAN writes held
@@ -71,15 +67,18 @@ impl Backend {
     ) -> Result<Self, String> {
         let bus = match choice {
             CanChoice::Off => return Ok(Self::Direct(Box::new(SimulatedDrives::new(arm())))),
-            CanChoice::Sim => Bus::Virtual(Box::new(VirtualBus::for_robot_at(config, start))),
+            // The process's one simulated bus, for as long as it runs.
+            CanChoice::Sim => {
+                LinuxBus::Simulated(Box::leak(Box::new(VirtualBus::for_robot_at(config, start))))
+            }
             CanChoice::SocketCan(iface) => {
                 let pacer = paced.then(|| Pacer::new(config.drives.can_bitrate));
-                Bus::Socket(
+                LinuxBus::SocketCan(
                     SocketCan::open(iface, pacer).map_err(|e| socketcan::explain(iface, &e))?,
                 )
             }
         };
-        let mut drives = CanDrives::started(config, &DriveSettings::default(), bus)
+        let mut drives = CanDrives::started(config, &DriveSettings::default(), Bus(bus))
             .map_err(|e| format!("drives: {e} (try --can off)"))?;
         drives.manager_mut().place_undriven(start);
         Ok(Self::Can(Box::new(drives)))
@@ -89,9 +88,9 @@ impl Backend {
     pub fn describe(&self) -> &'static str {
         match self {
             Self::Direct(_) => "simulated arm, no bus",
-            Self::Can(drives) => match drives.bus() {
-                Bus::Virtual(_) => "simulated Whistles on a virtual CAN bus",
-                Bus::Socket(_) => "SocketCAN",
+            Self::Can(drives) => match drives.bus().0 {
+                LinuxBus::Simulated(_) => "simulated Whistles on a virtual CAN bus",
+                LinuxBus::SocketCan(_) => "SocketCAN",
             },
         }
     }
@@ -101,7 +100,7 @@ impl Backend {
         let Self::Can(drives) = self else {
             return None;
         };
-        let Bus::Socket(socket) = drives.bus() else {
+        let LinuxBus::SocketCan(socket) = &drives.bus().0 else {
             return None;
         };
         let c = socket.counters();
@@ -186,10 +185,7 @@ impl DriveSide for Backend {
 
 impl CanBus for Bus {
     fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
-        let sent = match self {
-            Self::Virtual(bus) => bus.try_transmit(frame),
-            Self::Socket(bus) => bus.try_transmit(frame),
-        };
+        let sent = self.0.try_transmit(frame);
         if sent.is_ok() {
             crate::pcap::can(frame);
             crate::record::can(frame);
@@ -198,35 +194,22 @@ impl CanBus for Bus {
     }
 
     fn try_receive(&mut self) -> Option<CanFrame> {
-        let frame = match self {
-            Self::Virtual(bus) => bus.try_receive(),
-            Self::Socket(bus) => bus.try_receive(),
-        };
-        frame.inspect(|frame| {
+        self.0.try_receive().inspect(|frame| {
             crate::pcap::can(frame);
             crate::record::can(frame);
         })
     }
 
     fn state(&self) -> BusState {
-        match self {
-            Self::Virtual(bus) => bus.state(),
-            Self::Socket(bus) => bus.state(),
-        }
+        self.0.state()
     }
 
     fn advance_to(&mut self, now: f64) -> bool {
-        match self {
-            Self::Virtual(bus) => bus.advance_to(now),
-            Self::Socket(bus) => bus.advance_to(now),
-        }
+        self.0.advance_to(now)
     }
 
     fn recover(&mut self) {
-        match self {
-            Self::Virtual(bus) => bus.recover(),
-            Self::Socket(bus) => bus.recover(),
-        }
+        self.0.recover();
     }
 }
 

@@ -9,7 +9,6 @@ mod log;
 mod pcap;
 mod record;
 mod robots;
-mod socketcan;
 mod status;
 mod udp;
 mod whistles;
@@ -445,9 +444,9 @@ fn replay_exchange(config: &ValidRobot, drives: Backend, replay: &[String]) -> R
     let recording = Replay::parse(&text).map_err(|e| format!("{file}: {e}"))?;
     let mut cycle: Cycle<Backend, ()> = Cycle::new(config, drives);
     let transcript = recording.run(&mut cycle, ticks, |drives| match drives {
-        Backend::Can(can) => match can.bus() {
-            backend::Bus::Virtual(bus) => replay::can_drives(can.manager(), bus),
-            backend::Bus::Socket(_) => "SocketCAN".into(),
+        Backend::Can(can) => match &can.bus().0 {
+            armgate_socketcan::LinuxBus::Simulated(bus) => replay::can_drives(can.manager(), bus),
+            armgate_socketcan::LinuxBus::SocketCan(_) => "SocketCAN".into(),
         },
         Backend::Direct(_) => "simulated arm".into(),
     });

@@ -24,7 +24,7 @@ use std::io::BufRead;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 use armgate_core::config::ValidRobot;
 use armgate_core::drives::{BusState, CanBus, DriveEmergency};
@@ -32,11 +32,13 @@ use armgate_core::kinematics::Joints;
 use armgate_core::sim::{Stalled, VirtualBus};
 use armgate_protocol::can::CanFrame;
 
-use crate::socketcan::{self, Pacer, SocketCan};
+use armgate_socketcan::{self as socketcan, Pacer, SocketCan};
 
 /// How long the loop waits for a frame: it runs the drives at least this often, so their
-/// answers (250 µs after a command) leave about on time, and a frame read wakes it at once.
-const WAIT: Duration = Duration::from_micros(200);
+/// answers leave within this of when the drive sent them (the controller reads them at its next
+/// tick, a period later); a frame read wakes it at once and is put on the bus at its arrival
+/// whenever it is read. Longer waits cost an emulated machine less (each wake-up is work).
+const WAIT: Duration = Duration::from_millis(1);
 
 /// A turn of the loop later than this after the previous one is counted (s): the drives'
 /// answers are held up, and with 5 ms a PT stream underflows (docs/drives.md).
@@ -108,13 +110,17 @@ struct Counters {
     dropped_in: u64,
     /// Frames of the drives the interface refused (queue full, bus-off).
     dropped_out: u64,
+    /// Frames read more than [`LATE`] after they arrived, and the longest wait (s): how far
+    /// behind the loop was, made up by putting each frame at its arrival.
+    read_late: u64,
+    worst_wait: f64,
 }
 
 /// The simulated Whistles behind an interface: the virtual bus, the frames read and waiting
-/// for room on it, and what crossed.
+/// for room on it (with their arrival, s), and what crossed.
 pub struct Whistles {
     bus: VirtualBus,
-    backlog: VecDeque<CanFrame>,
+    backlog: VecDeque<(CanFrame, f64)>,
     counters: Counters,
 }
 
@@ -128,31 +134,47 @@ impl Whistles {
         }
     }
 
-    /// Runs the drives up to `now` (s), then queues the frames `iface` has for them and writes
-    /// theirs to it.
-    pub fn step(&mut self, now: f64, iface: &mut impl CanBus) -> Result<(), Stalled> {
-        self.bus.advance(now)?;
-        while let Some(frame) = iface.try_receive() {
+    /// Runs the drives up to `now` (s) with the frames `received` since the last step, each
+    /// queued on the virtual bus at its arrival (s, at most `now`), and writes the drives'
+    /// frames to `iface`.
+    ///
+    /// A frame goes on the virtual bus at the time it arrived, not when the loop got to read
+    /// it: a drive of the bus has it then. Queued when read, a point that arrived while this
+    /// process was not scheduled (tens of milliseconds in an emulated machine) reached the
+    /// drives after they had run past the time they needed it, and their PT buffers underflowed
+    /// (`ER33`) although the controller had sent every point in time.
+    pub fn step(
+        &mut self,
+        now: f64,
+        received: impl IntoIterator<Item = (CanFrame, f64)>,
+        iface: &mut impl CanBus,
+    ) -> Result<(), Stalled> {
+        for (frame, arrived) in received {
             self.counters.received += 1;
+            let wait = now - arrived;
+            self.counters.worst_wait = self.counters.worst_wait.max(wait);
+            if wait > LATE {
+                self.counters.read_late += 1;
+            }
             if self.backlog.len() < BACKLOG {
-                self.backlog.push_back(frame);
+                self.backlog.push_back((frame, arrived));
             } else {
                 self.counters.dropped_in += 1;
             }
         }
-        // In order, as many as the virtual bus's controller queue takes; the rest wait.
-        while let Some(frame) = self.backlog.front() {
-            if self.bus.try_transmit(frame).is_err() {
+        // In order, each at its arrival, as many as the virtual bus's controller queue takes;
+        // the rest wait. The drives' answers meanwhile are written as they come (the virtual
+        // bus holds a few cycles of them).
+        while let Some(&(frame, arrived)) = self.backlog.front() {
+            self.bus.advance(arrived.min(now))?;
+            self.write(iface);
+            if self.bus.try_transmit(&frame).is_err() {
                 break;
             }
             self.backlog.pop_front();
         }
-        while let Some(frame) = self.bus.try_receive() {
-            match iface.try_transmit(&frame) {
-                Ok(()) => self.counters.sent += 1,
-                Err(_) => self.counters.dropped_out += 1,
-            }
-        }
+        self.bus.advance(now)?;
+        self.write(iface);
         // A bus-off is the kernel's to restart (`restart-ms`); the drives have no client to
         // wait for, so they try again at once.
         if iface.state() == BusState::BusOff {
@@ -160,6 +182,39 @@ impl Whistles {
         }
         Ok(())
     }
+
+    /// Writes the frames the drives put on the virtual bus to `iface`.
+    fn write(&mut self, iface: &mut impl CanBus) {
+        while let Some(frame) = self.bus.try_receive() {
+            match iface.try_transmit(&frame) {
+                Ok(()) => self.counters.sent += 1,
+                Err(_) => self.counters.dropped_out += 1,
+            }
+        }
+    }
+}
+
+/// The frames `socket` holds, each with its [`arrival`] on the loop's clock (s), the first
+/// not before `after` (the previous frame's).
+fn read(socket: &mut SocketCan, now: f64, after: f64) -> Vec<(CanFrame, f64)> {
+    let wall = SystemTime::now();
+    let mut frames = Vec::new();
+    let mut previous = after;
+    while let Some((frame, stamp)) = socket.try_receive_stamped() {
+        previous = arrival(now, wall, stamp, previous);
+        frames.push((frame, previous));
+    }
+    frames
+}
+
+/// When a frame arrived on the loop's clock (s): `now` (read from it at `wall` on the wall
+/// clock) less the age of the kernel's timestamp `stamp`; `now` without a timestamp or with one
+/// ahead of `wall`; never before `previous` (frames arrive in order) nor after `now`.
+fn arrival(now: f64, wall: SystemTime, stamp: Option<SystemTime>, previous: f64) -> f64 {
+    let age = stamp
+        .and_then(|s| wall.duration_since(s).ok())
+        .map_or(0.0, |age| age.as_secs_f64());
+    (now - age).max(previous).min(now)
 }
 
 /// Serves the simulated Whistles of `config`, with their encoders at `start`, on interface
@@ -188,6 +243,7 @@ pub fn serve(
     );
     let epoch = Instant::now();
     let (mut last, mut worst_gap, mut late) = (0.0f64, 0.0f64, 0u64);
+    let mut arrived = 0.0f64;
     while running.load(Ordering::SeqCst) {
         socket
             .wait_readable(WAIT)
@@ -206,21 +262,38 @@ pub fn serve(
                 eprintln!("armgate-sim: no drive with node id {}", fault.node());
             }
         }
+        let frames = read(&mut socket, now, arrived);
+        arrived = frames.last().map_or(arrived, |&(_, at)| at);
         whistles
-            .step(now, &mut socket)
+            .step(now, frames, &mut socket)
             .map_err(|_| "the simulated drives stalled".to_owned())?;
     }
     let (counters, c) = (whistles.counters, socket.counters());
+    let stats = whistles.bus.stats();
     eprintln!(
-        "armgate-sim: Whistles stopped; {} frames received, {} sent, {} dropped inbound (backlog full), {} refused by the interface; SocketCAN: {} bus-offs, {} frames refused by a full transmit queue; {late} turns of the loop came over {:.0} ms late, the worst {:.1} ms",
+        "armgate-sim: Whistles stopped; {} frames received, {} sent, {} dropped inbound (backlog full), {} refused by the interface, {} answers lost (virtual bus inbox full); SocketCAN: {} bus-offs, {} frames refused by a full transmit queue; {late} turns of the loop came over {:.0} ms late, the worst {:.1} ms; {} frames read over {:.0} ms after they arrived, the worst {:.1} ms (each put on the bus at its arrival); drives: {} PT underflows, {} commands lost (interpreter busy)",
         counters.received,
         counters.sent,
         counters.dropped_in,
         counters.dropped_out,
+        stats.inbox_overruns,
         c.bus_offs,
         c.queue_full,
         LATE * 1e3,
         worst_gap * 1e3,
+        counters.read_late,
+        LATE * 1e3,
+        counters.worst_wait * 1e3,
+        whistles
+            .bus
+            .drives()
+            .map(|d| d.stats().underflows)
+            .sum::<u32>(),
+        whistles
+            .bus
+            .drives()
+            .map(|d| d.stats().commands_lost)
+            .sum::<u32>(),
     );
     Ok(())
 }
@@ -252,31 +325,39 @@ fn read_faults() -> Receiver<Fault> {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
-    use std::cell::RefCell;
+    use std::cell::{Cell, RefCell};
     use std::rc::Rc;
 
     use armgate_core::command::Drives;
     use armgate_core::cycle::{CanDrives, DriveSide};
     use armgate_core::drives::{DriveSettings, TxError};
-    use armgate_protocol::client::DriveStatus;
+    use armgate_protocol::client::{DriveStatus, Text};
 
     use super::*;
 
     /// One end of a bus without timing between two processes, as QEMU's: what one end sends,
-    /// the other receives at once, in order.
+    /// the other receives at once, in order, stamped with the time on `clock` it was sent.
     struct End {
-        out: Rc<RefCell<VecDeque<CanFrame>>>,
-        inbox: Rc<RefCell<VecDeque<CanFrame>>>,
+        out: Rc<RefCell<VecDeque<(CanFrame, f64)>>>,
+        inbox: Rc<RefCell<VecDeque<(CanFrame, f64)>>>,
+        clock: Rc<Cell<f64>>,
+    }
+
+    impl End {
+        /// Every frame waiting, with when it was sent.
+        fn stamped(&self) -> Vec<(CanFrame, f64)> {
+            self.inbox.borrow_mut().drain(..).collect()
+        }
     }
 
     impl CanBus for End {
         fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
-            self.out.borrow_mut().push_back(*frame);
+            self.out.borrow_mut().push_back((*frame, self.clock.get()));
             Ok(())
         }
 
         fn try_receive(&mut self) -> Option<CanFrame> {
-            self.inbox.borrow_mut().pop_front()
+            self.inbox.borrow_mut().pop_front().map(|(frame, _)| frame)
         }
 
         fn state(&self) -> BusState {
@@ -284,14 +365,19 @@ mod tests {
         }
     }
 
-    fn wire() -> (End, End) {
+    fn wire(clock: &Rc<Cell<f64>>) -> (End, End) {
         let (a, b) = (Rc::default(), Rc::default());
         (
             End {
                 out: Rc::clone(&a),
                 inbox: Rc::clone(&b),
+                clock: Rc::clone(clock),
             },
-            End { out: b, inbox: a },
+            End {
+                out: b,
+                inbox: a,
+                clock: Rc::clone(clock),
+            },
         )
     }
 
@@ -302,7 +388,7 @@ mod tests {
 
     #[test]
     fn the_drive_manager_starts_and_holds_the_whistles_across_an_untimed_bus() {
-        holds(&ranger());
+        assert_eq!(holds(&ranger(), 5e-4, true), None);
         // The PDO schedule at its fastest period for ranger-mk1 (12 samples, 4.32 ms).
         let pdo = ranger()
             .edit(|config| {
@@ -310,32 +396,78 @@ mod tests {
                 config.control_period = 12.0 * armgate_core::config::SAMPLE_TIME;
             })
             .unwrap();
-        holds(&pdo);
+        assert_eq!(holds(&pdo, 5e-4, true), None);
     }
 
-    /// The drive manager of `config` and its Whistles across [`wire`]: started, running, no
-    /// fault after 3 s.
-    fn holds(config: &ValidRobot) {
+    #[test]
+    fn frames_read_late_are_put_on_the_bus_at_their_arrival_and_the_stream_holds() {
+        // The Whistles' loop runs only every 25 ms, longer than ranger-mk1's period (19.44 ms):
+        // each PT point waits in the socket past the segment boundary that needs it.
+        assert_eq!(holds(&ranger(), 25e-3, true), None);
+        // Put on the bus when read instead, the drives see points and queries bunched up to
+        // 25 ms late, and the stream breaks (ER33 underflow, or ER34: the read index answered
+        // late shows the drive behind its points).
+        let fault = holds(&ranger(), 25e-3, false).unwrap();
+        assert!(
+            ["ER33", "ER34"]
+                .iter()
+                .any(|code| fault.as_str().starts_with(code)),
+            "{fault}"
+        );
+    }
+
+    /// The drive manager of `config` and its Whistles across [`wire`], the Whistles' loop
+    /// turning every `every` s, each frame put on their bus at its sending (`stamped`) or when
+    /// the loop reads it: the drive manager's fault after 3 s (started, running), if any.
+    fn holds(config: &ValidRobot, every: f64, stamped: bool) -> Option<Text> {
         let config = config.clone();
         let start = config.home();
-        let (controller, mut iface) = wire();
+        let clock = Rc::new(Cell::new(0.0));
+        let (controller, mut iface) = wire(&clock);
         let mut drives =
             CanDrives::started(&config, &DriveSettings::default(), controller).unwrap();
         let mut whistles = Whistles::new(&config, &start);
         let period = config.control_period;
-        // The Whistles' loop every 0.5 ms, the controller's tick every period, for 3 s.
-        let mut next_tick = 0.0;
+        // The controller's tick every period and the Whistles' loop every `every`, for 3 s,
+        // on a 0.5 ms grid.
+        let (mut next_tick, mut next_turn) = (0.0, 0.0);
         for k in 0..6000 {
             let now = f64::from(k) * 5e-4;
-            whistles.step(now, &mut iface).unwrap();
+            clock.set(now);
+            if now >= next_turn {
+                let frames = iface
+                    .stamped()
+                    .into_iter()
+                    .map(|(frame, sent)| (frame, if stamped { sent } else { now }));
+                whistles.step(now, frames, &mut iface).unwrap();
+                next_turn += every;
+            }
             if now >= next_tick {
                 drives.receive(now);
                 drives.transmit(now, period, None);
                 next_tick += period;
             }
         }
-        assert_eq!(drives.fault(), None, "{:?}", whistles.counters);
-        assert_eq!(drives.status(), DriveStatus::Running);
+        if drives.fault().is_none() {
+            assert_eq!(drives.status(), DriveStatus::Running);
+        }
+        drives.fault()
+    }
+
+    #[test]
+    fn a_frame_arrives_at_its_kernel_timestamp_on_the_loop_clock_in_order_never_ahead() {
+        let wall = SystemTime::UNIX_EPOCH + Duration::from_secs(1_000);
+        let ago = |ms| Some(wall - Duration::from_millis(ms));
+        // Read at 10 s on the loop's clock: received 30 ms before, at 9.97 s.
+        assert!((arrival(10.0, wall, ago(30), 0.0) - 9.97).abs() < 1e-9);
+        // Not before the previous frame (the wall clock stepped back, or out of order).
+        assert!((arrival(10.0, wall, ago(30), 9.99) - 9.99).abs() < 1e-12);
+        // No timestamp, or one from the future: when read.
+        assert!((arrival(10.0, wall, None, 0.0) - 10.0).abs() < 1e-12);
+        let ahead = Some(wall + Duration::from_millis(5));
+        assert!((arrival(10.0, wall, ahead, 0.0) - 10.0).abs() < 1e-12);
+        // Received before the loop's clock began (0 s): at its start.
+        assert!(arrival(0.01, wall, ago(50), 0.0).abs() < 1e-12);
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! Linux SocketCAN as the drive manager's [`CanBus`], through the `socketcan` crate: a raw CAN
 //! socket on an interface such as `can0` (for example a PCAN-USB adapter through the kernel's
-//! `peak_usb` driver) or `vcan0`.
+//! `peak_usb` driver) or `vcan0`. One adapter for the shells that run on Linux: `armgate-sim
+//! --can socketcan:IFACE` and its Whistle simulator (`--whistles`), and the firmware's Linux
+//! build with `ARMGATE_CAN=socketcan:IFACE` (its FDCAN seam).
 //!
 //! What it does with what the kernel hands over ([`classify`]):
 //!
@@ -24,7 +26,7 @@
 
 use std::io::{self, ErrorKind};
 use std::os::fd::AsFd;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 use armgate_core::drives::{BusState, CanBus, TxError};
 use armgate_protocol::can::{CanFrame, exact_bits_on_wire};
@@ -169,6 +171,9 @@ impl SocketCan {
         // Bus-off and restart reports arrive as error frames.
         socket.set_error_filter(libc::CAN_ERR_BUSOFF | libc::CAN_ERR_RESTARTED)?;
         socket2::SockRef::from(&socket).set_recv_buffer_size(RECEIVE_BUFFER)?;
+        // Each frame carries the time the kernel received it (`SO_TIMESTAMPNS`), for a reader
+        // that was not scheduled when it came (the Whistle simulator).
+        socket.set_recv_timestamp(true)?;
         Ok(Self {
             socket,
             tally: Tally::default(),
@@ -186,6 +191,31 @@ impl SocketCan {
             Ok(_) | Err(Errno::EINTR) => Ok(()),
             Err(e) => Err(e.into()),
         }
+    }
+
+    /// The next frame for the drive manager and when the kernel received it (the wall
+    /// clock's time; `None` if the kernel gave none): [`CanBus::try_receive`] with the frame's
+    /// arrival, which a reader that was not scheduled for a while needs to put it at its time.
+    pub fn try_receive_stamped(&mut self) -> Option<(CanFrame, Option<SystemTime>)> {
+        for _ in 0..MAX_SKIPPED {
+            match self.socket.read_frame_with_timestamps() {
+                Ok((frame, stamps)) => {
+                    if let Some(frame) = self.tally.take(classify(&frame)) {
+                        return Some((frame, stamps.socket));
+                    }
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => return None,
+                Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
+                    self.tally.went_bus_off();
+                    return None;
+                }
+                Err(_) => {
+                    self.tally.counters.socket_errors += 1;
+                    return None;
+                }
+            }
+        }
+        None
     }
 
     /// What was ignored or failed so far.
@@ -227,25 +257,7 @@ impl CanBus for SocketCan {
     }
 
     fn try_receive(&mut self) -> Option<CanFrame> {
-        for _ in 0..MAX_SKIPPED {
-            match self.socket.read_frame() {
-                Ok(frame) => {
-                    if let Some(frame) = self.tally.take(classify(&frame)) {
-                        return Some(frame);
-                    }
-                }
-                Err(e) if e.kind() == ErrorKind::WouldBlock => return None,
-                Err(e) if e.raw_os_error() == Some(libc::ENETDOWN) => {
-                    self.tally.went_bus_off();
-                    return None;
-                }
-                Err(_) => {
-                    self.tally.counters.socket_errors += 1;
-                    return None;
-                }
-            }
-        }
-        None
+        self.try_receive_stamped().map(|(frame, _)| frame)
     }
 
     fn state(&self) -> BusState {
@@ -256,6 +268,53 @@ impl CanBus for SocketCan {
     /// the README), the next frame finds out.
     fn recover(&mut self) {
         self.tally.bus_off = false;
+    }
+}
+
+/// The drive manager's bus in a shell on Linux, chosen at run time: simulated drives (`V`, the
+/// shell's `VirtualBus`) or a SocketCAN interface (armgate-sim's `--can`, the firmware's
+/// `ARMGATE_CAN`).
+pub enum LinuxBus<V> {
+    /// Simulated Whistles; their time advances with the control loop ([`CanBus::advance_to`]).
+    Simulated(V),
+    /// A real interface (or vcan): the drives keep their own time.
+    SocketCan(SocketCan),
+}
+
+impl<V: CanBus> CanBus for LinuxBus<V> {
+    fn try_transmit(&mut self, frame: &CanFrame) -> Result<(), TxError> {
+        match self {
+            Self::Simulated(bus) => bus.try_transmit(frame),
+            Self::SocketCan(bus) => bus.try_transmit(frame),
+        }
+    }
+
+    fn try_receive(&mut self) -> Option<CanFrame> {
+        match self {
+            Self::Simulated(bus) => bus.try_receive(),
+            Self::SocketCan(bus) => bus.try_receive(),
+        }
+    }
+
+    fn state(&self) -> BusState {
+        match self {
+            Self::Simulated(bus) => bus.state(),
+            Self::SocketCan(bus) => bus.state(),
+        }
+    }
+
+    fn advance_to(&mut self, now: f64) -> bool {
+        match self {
+            Self::Simulated(bus) => bus.advance_to(now),
+            Self::SocketCan(bus) => bus.advance_to(now),
+        }
+    }
+
+    fn recover(&mut self) {
+        match self {
+            Self::Simulated(bus) => bus.recover(),
+            Self::SocketCan(bus) => bus.recover(),
+        }
     }
 }
 
