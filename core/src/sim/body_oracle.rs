@@ -2,16 +2,18 @@
 //! hold every commanded pose to, motion and braking alike (issue 35): no link enters an
 //! exclusion box or another link, and the tool's capsules do not leave the bounds.
 //!
-//! It measures each pose afresh with core's own distances (the body model of
-//! [`Envelope`], placed by the robot file's DH product [`frames_at`], not by the chain the
-//! controller checks with), against the surfaces themselves: a gap of zero or less is
-//! contact, whatever margin the file keeps. Contact present where the watch began or at the pose
+//! It measures each pose afresh with core's own distances (the body model of [`Envelope`],
+//! placed by the chain's link frames, which the kinematics tests hold to the robot file's DH
+//! product), against the surfaces themselves: a gap of zero or less is contact, whatever
+//! margin the file keeps, and every gap counts, not just those of new hits. Contact present where the watch began or at the pose
 //! before (an arm started in a box may leave it) is not an entry; only a new one is.
 
 use heapless::Vec;
 
-use crate::config::{Envelope, MAX_CAPSULES, RobotConfig, frames_at};
+use crate::config::{MAX_CAPSULES, ValidRobot};
 use crate::geometry::Capsule;
+use crate::kinematics::{Chain, Joints};
+use crate::motion::Body;
 use armgate_protocol::client::Hit;
 
 /// Most contacts remembered from one pose to the next.
@@ -29,9 +31,10 @@ pub struct Entry {
 /// Watches one arm's commanded poses ([`check`](Self::check) each).
 #[derive(Clone, Debug)]
 pub struct BodyOracle {
-    config: RobotConfig,
-    envelope: Envelope,
-    /// The contacts of the last pose checked.
+    chain: Chain,
+    body: Body,
+    /// The last pose checked, and its contacts.
+    last: Option<Joints>,
     contacts: Vec<Hit, CONTACTS>,
     /// The least gap seen and to what.
     nearest: Option<(f64, Hit)>,
@@ -39,10 +42,11 @@ pub struct BodyOracle {
 
 impl BodyOracle {
     /// Watches `config`'s arm from pose `start` (its contacts are not entries).
-    pub fn new(config: &RobotConfig, start: &[f64]) -> Self {
+    pub fn new(config: &ValidRobot, start: &[f64]) -> Self {
         let mut oracle = Self {
-            config: config.clone(),
-            envelope: Envelope::new(config),
+            chain: Chain::new(config),
+            body: Body::new(config),
+            last: None,
             contacts: Vec::new(),
             nearest: None,
         };
@@ -52,14 +56,26 @@ impl BodyOracle {
     }
 
     /// Measures pose `q`: the first contact that was not present at the last pose checked,
-    /// if any. Every gap counts towards [`nearest`](Self::nearest).
+    /// if any. Every gap counts towards [`nearest`](Self::nearest). A pose the chain cannot
+    /// place (not one value per joint) is not measured: the callers check that commands are
+    /// finite and within the joint limits.
     pub fn check(&mut self, q: &[f64]) -> Result<(), Entry> {
+        // A held pose: measured already, nothing new.
+        if self.nearest.is_some() && self.last.is_some_and(|last| &last[..] == q) {
+            return Ok(());
+        }
+        self.last = Joints::from_slice(q);
         let mut placed = [Capsule::default(); MAX_CAPSULES];
-        self.envelope
-            .place(&frames_at(&self.config, q), &mut placed);
+        let Some(q) = self.last.as_ref() else {
+            return Ok(());
+        };
+        if !self.body.place(&self.chain, q, &mut placed) {
+            return Ok(());
+        }
         let (last, mut now) = (&self.contacts, Vec::<Hit, CONTACTS>::new());
         let (mut entry, mut nearest) = (None, self.nearest);
-        self.envelope
+        self.body
+            .envelope()
             .gaps(&placed, None, f64::INFINITY, &mut |hit, gap, _| {
                 if nearest.is_none_or(|(least, _)| gap < least) {
                     nearest = Some((gap, hit));
