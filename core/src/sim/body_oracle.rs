@@ -110,6 +110,7 @@ mod tests {
     use crate::config::parse_toml;
 
     #[test]
+    #[allow(clippy::approx_constant)]
     fn a_link_entering_the_column_is_an_entry_and_one_leaving_it_is_not() {
         let text = include_str!("../../../robots/ranger-mk1.toml");
         let config = parse_toml(text).unwrap();
