@@ -147,7 +147,7 @@ impl Run {
         if let Err(entry) = self.body.check(&q) {
             ENTRIES.fetch_add(1, Ordering::Relaxed);
             eprintln!(
-                "{}: t {:.3} s: {} entered (gap {:.5} m) at {:?} {:?} {:?}",
+                "{}: t {:.3} s: {} entered (gap {:.5} m) at q {:?}, {:?}, collision event {:?}",
                 CASE.lock().unwrap(),
                 self.now,
                 entry.hit,
@@ -348,7 +348,7 @@ fn with_box(config: &ValidRobot, bx: [f64; 6], start: &Joints) -> Option<ValidRo
 
 /// The figures of a boundary case whose box the arm's body meets at home or at the start,
 /// however narrow.
-fn box_at_home() -> Figures {
+fn box_meets_arm() -> Figures {
     Figures {
         note: "box meets the arm".to_string(),
         ..refused()
@@ -386,7 +386,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 // Across the tool's way, 3/4 of the straight distance ahead.
                 let bx = box_ahead(&p0, &dir, 0.75 * (p1 - p0).norm() - 0.01);
                 let Some(config) = with_box(config, bx, &q0) else {
-                    return Some(box_at_home());
+                    return Some(box_meets_arm());
                 };
                 config
             } else {
@@ -424,7 +424,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 let ahead = 0.75 * (goal.translation.vector - origin).norm();
                 let Some(config) = with_box(config, box_ahead(&origin, &dir, ahead), &q_start)
                 else {
-                    return Some(box_at_home());
+                    return Some(box_meets_arm());
                 };
                 config
             } else {
@@ -522,7 +522,7 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 let p_start = probe.pose(&q_start);
                 let way = (p1 - p_start).normalize();
                 let Some(config) = with_box(config, box_ahead(&p1, &way, 0.02), &q_start) else {
-                    return Some(box_at_home());
+                    return Some(box_meets_arm());
                 };
                 config
             } else {
