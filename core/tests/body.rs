@@ -17,7 +17,7 @@ use armgate_core::geometry::Capsule;
 use armgate_core::kinematics::{Chain, Joints};
 use armgate_core::motion::{Body, Controller, Mode, Refusal};
 use armgate_core::rng::SplitMix64;
-use armgate_core::sim::IdealArm;
+use armgate_core::sim::{BodyOracle, IdealArm};
 use armgate_protocol::client::{Hit, Hold, Obstacle, PathPoint};
 
 /// ranger-mk1 in front of the base.
@@ -273,4 +273,55 @@ fn a_cartesian_line_that_swings_the_elbow_into_a_box_is_refused() {
         "{refusal}"
     );
     assert!(!ctrl.is_moving());
+}
+
+/// A collision stop brakes in joint space, where the tick's look-ahead ends it. hybrid's
+/// unchecked line (`ik.check_lines = false`, as stop_bench's `WN22` case runs it) 0.6 m up
+/// from stop_bench's start heads for a singularity, folding link 6 onto link 4: the tick saw the
+/// stop's end in contact with 20 mm left, but braking along the path the joints slowed down
+/// less than the path (0.41 of their 0.5 rad/s² instead of all of it) and the stop ended 4.5 mm
+/// into link 4. Every commanded pose is held to the whole-arm oracle.
+#[test]
+fn a_collision_stop_on_an_unchecked_line_ends_before_contact() {
+    let config = common::robot("hybrid")
+        .edit(|c| c.ik.check_lines = false)
+        .unwrap();
+    let chain = Chain::new(&config);
+    // stop_bench's start: mid-range, nudged.
+    let mut q0 = chain.mid_range();
+    for (i, q) in q0.iter_mut().enumerate() {
+        let nudge = 0.12 * (chain.max()[i] - chain.min()[i]).min(2.0);
+        *q += nudge * if i % 2 == 0 { 0.5 } else { -0.5 };
+    }
+    let (mut ctrl, mut arm) = (Controller::new(&config), IdealArm::new(q0));
+    let mut oracle = BodyOracle::new(&config, &q0);
+    ctrl.step(0.0, &arm.measured()).unwrap();
+    ctrl.set_mode(Mode::Cartesian).unwrap();
+    let mut goal = ctrl.cartesian_setpoint();
+    goal.translation.vector.z += 0.6;
+    ctrl.move_cartesian(goal, 0.0).unwrap();
+    let mut collision = None;
+    for k in 1..2000 {
+        let out = ctrl
+            .step(f64::from(k) * config.control_period, &arm.measured())
+            .unwrap();
+        arm.step(out.command.as_ref());
+        collision = collision.or(out.events.collision);
+        if let Some(q) = out.command {
+            oracle
+                .check(&q)
+                .unwrap_or_else(|e| panic!("tick {k}: {} at gap {} m", e.hit, e.gap));
+        }
+        if !ctrl.is_moving() {
+            break;
+        }
+    }
+    let folding = Hit {
+        link: 6,
+        obstacle: Obstacle::Link(4),
+    };
+    assert_eq!(collision, Some(folding));
+    let (gap, nearest) = oracle.nearest().unwrap();
+    assert_eq!(nearest, folding);
+    assert!(gap > 0.0, "{gap}");
 }

@@ -39,8 +39,10 @@
 //! and for every tick: every joint command is finite and within the joint limits, its
 //! acceleration (against the two commands before it) within `max_acceleration` (+1e-9
 //! relative) — a following-error stop (cause 9, `ER43`, which an injected position report can
-//! cause) included — and every unsolicited notice is one of `WN12`, `WN13`, `ER21`, `WN22`,
-//! `WN27`, `ER41`, `ER43` or a drive fault `ER3x`.
+//! cause) included —, no link of the arm at the command comes into contact with the base
+//! column, the bounds (the tool's capsule) or another link (`BodyOracle`, issue 35: the arm
+//! starts clear at home), and every unsolicited notice is one of `WN12`, `WN13`, `ER21`,
+//! `WN22`, `WN27`, `ER41`, `ER43` or a drive fault `ER3x`.
 #![no_main]
 
 use std::collections::VecDeque;
@@ -52,7 +54,7 @@ use armgate_core::cycle::{
 };
 use armgate_core::drives::{BusState, CanBus, DriveSettings, TxError};
 use armgate_core::kinematics::Joints;
-use armgate_core::sim::VirtualBus;
+use armgate_core::sim::{BodyOracle, VirtualBus};
 use armgate_protocol::can::CanFrame;
 use armgate_protocol::client::signed::{
     CONTROLLER_LINK, SIGNED_LEN, Signature, Signed, SigningKey,
@@ -116,6 +118,8 @@ struct Client {
     key: SigningKey,
     /// Per link id, the last timestamp served (the model of the controller's replay table).
     last: [Option<u64>; 8],
+    /// Every command's pose against the column, the bounds and the other links.
+    body: BodyOracle,
 }
 
 impl Default for Client {
@@ -126,6 +130,7 @@ impl Default for Client {
             unanswered: VecDeque::new(),
             key: SigningKey::new(&KEY),
             last: [None; 8],
+            body: body_at_home().clone(),
         }
     }
 }
@@ -210,6 +215,12 @@ fn robot() -> &'static ValidRobot {
     ROBOT_CONFIG.get_or_init(|| load_file(ROBOT).unwrap_or_else(|e| panic!("{ROBOT}: {e}")))
 }
 
+/// The arm's body from home, where every input starts (the robot file's check: clear).
+fn body_at_home() -> &'static BodyOracle {
+    static BODY: OnceLock<BodyOracle> = OnceLock::new();
+    BODY.get_or_init(|| BodyOracle::new(robot(), &robot().home()))
+}
+
 fn start() -> &'static FuzzCycle {
     static START: OnceLock<FuzzCycle> = OnceLock::new();
     START.get_or_init(|| {
@@ -267,6 +278,12 @@ fn tick(cycle: &mut FuzzCycle, client: &mut Client) {
                     outcome.time
                 );
             }
+        }
+        if let Err(entry) = client.body.check(cmd) {
+            panic!(
+                "t {}: {} entered (gap {} m) at {cmd:?}",
+                outcome.time, entry.hit, entry.gap
+            );
         }
         client.commands.push(*cmd);
         if client.commands.len() > 2 {

@@ -1,7 +1,8 @@
 //! What stop_bench measures of a run: the peaks over the limits, the time and distance to rest,
-//! the deviation from the path.
+//! the deviation from the path, the arm's least clearance.
 
 use armgate_core::math::{self, Vector3};
+use armgate_protocol::client::{Hit, Obstacle};
 
 use crate::Run;
 
@@ -13,7 +14,18 @@ pub struct Figures {
     pub time: f64,
     pub distance: f64,
     pub deviation: Option<f64>,
+    /// The least gap of any link over the run's ticks (m) and to what.
+    pub clearance: Option<(f64, Hit)>,
     pub note: String,
+}
+
+/// `L3/B1`, `L5/L2`, `L6/out`: a gap's link and obstacle.
+pub fn between(hit: &Hit) -> String {
+    match hit.obstacle {
+        Obstacle::Box(b) => format!("L{}/B{b}", hit.link),
+        Obstacle::Link(l) => format!("L{}/L{l}", hit.link),
+        Obstacle::Bounds => format!("L{}/out", hit.link),
+    }
 }
 
 /// The figures of `run` from tick `from` on; `line`: the straight path (its origin and
@@ -79,8 +91,21 @@ pub fn measure(
         time: (rest.saturating_sub(from)) as f64 * dt,
         distance,
         deviation: line.map(|_| deviation),
-        note: if inside { "entered box" } else { "" }.to_string(),
+        clearance: run.body.nearest(),
+        note: entered(run, inside),
     }
+}
+
+/// The note on what was entered: the tool point the box across the way, a link a contact.
+fn entered(run: &Run, tool_in_box: bool) -> String {
+    let mut note = Vec::new();
+    if tool_in_box {
+        note.push("entered box".to_string());
+    }
+    if let Some(entry) = &run.entered {
+        note.push(format!("entered {}", entry.hit));
+    }
+    note.join(", ")
 }
 
 /// The peak change of a Cartesian axis's set-point velocity over a period, from tick `from` on,
@@ -113,6 +138,7 @@ pub fn refused() -> Figures {
         time: 0.0,
         distance: 0.0,
         deviation: None,
+        clearance: None,
         note: "refused".to_string(),
     }
 }

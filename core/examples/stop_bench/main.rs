@@ -27,17 +27,28 @@
 //! Following error (cause 9): at the same point as `ST`, the arm is held where it is (a blocked
 //! drive; streams keep sending) until the controller finds a joint too far behind its command
 //! and stops; figures from that tick, with the joint and its lag in the note.
+//!
+//! The whole arm (issue 35): every commanded pose of every run, motion and braking (and the
+//! probes that find a line's direction), is measured by [`BodyOracle`]: every link capsule
+//! against the exclusion boxes and the other links it is checked against, the tool's against
+//! the bounds. "clear mm" is the least gap over the run's ticks and to what (`L3/B1`: link 3
+//! to box 1, `L5/L2`: to link 2, `L6/out`: the bounds' faces); after the table, the least per
+//! robot. A link that comes into contact it was not in at the tick before (gap ≤ 0) is named
+//! in the note (`entered L3 hits B1`) and on stderr, and the bench exits non-zero.
 #![allow(missing_docs, clippy::unwrap_used, clippy::indexing_slicing)]
 
 mod figures;
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use armgate_core::config::{ValidRobot, load_file};
 use armgate_core::kinematics::Joints;
 use armgate_core::math::{Frame, Twist, Vector3};
 use armgate_core::motion::{Controller, Mode, StopCause};
-use armgate_core::sim::IdealArm;
+use armgate_core::sim::{BodyOracle, Entry, IdealArm};
 use armgate_protocol::client::TwistFrame;
-use figures::{Figures, measure, refused};
+use figures::{Figures, between, measure, refused};
 
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Motion {
@@ -79,6 +90,10 @@ const CAUSES: [Cause; 7] = [
 ];
 /// Ticks after the cause at most (rest is normally reached much earlier).
 const MAX_TICKS: usize = 20_000;
+/// Contacts entered over every run (probes included): any makes the bench fail.
+static ENTRIES: AtomicUsize = AtomicUsize::new(0);
+/// The case under way, for the stderr line of a contact entered.
+static CASE: Mutex<String> = Mutex::new(String::new());
 
 struct Run {
     config: ValidRobot,
@@ -96,6 +111,10 @@ struct Run {
     /// The index in `commands` of the first tick that raised `ER43`, with its text's joint
     /// and lag.
     following_error: Option<(usize, String)>,
+    /// Every commanded pose, measured against the boxes, the bounds and the other links.
+    body: BodyOracle,
+    /// The first contact a commanded pose entered.
+    entered: Option<Entry>,
 }
 
 impl Run {
@@ -110,6 +129,8 @@ impl Run {
             ik_divergence: None,
             held: false,
             following_error: None,
+            body: BodyOracle::new(config, q0),
+            entered: None,
         };
         run.tick();
         run
@@ -121,8 +142,22 @@ impl Run {
         if !self.held {
             self.arm.step(out.command.as_ref());
         }
-        self.commands
-            .push(out.command.unwrap_or(self.arm.measured()));
+        let q = out.command.unwrap_or(self.arm.measured());
+        self.commands.push(q);
+        if let Err(entry) = self.body.check(&q) {
+            ENTRIES.fetch_add(1, Ordering::Relaxed);
+            eprintln!(
+                "{}: t {:.3} s: {} entered (gap {:.5} m) at q {:?}, {:?}, collision event {:?}",
+                CASE.lock().unwrap(),
+                self.now,
+                entry.hit,
+                entry.gap,
+                &q[..],
+                self.ctrl.motion(),
+                out.events.collision,
+            );
+            self.entered.get_or_insert(entry);
+        }
         self.setpoints.push(out.setpoint);
         if out.events.ik_divergence && self.ik_divergence.is_none() {
             self.ik_divergence = Some(self.commands.len() - 1);
@@ -150,6 +185,7 @@ impl Run {
         let Some((from, note)) = &self.following_error else {
             return Figures {
                 note: "no following error".to_string(),
+                clearance: self.body.nearest(),
                 ..refused()
             };
         };
@@ -280,14 +316,43 @@ fn box_ahead(p: &Vector3<f64>, dir: &Vector3<f64>, ahead: f64) -> [f64; 6] {
     ]
 }
 
-fn with_box(config: &ValidRobot, bx: [f64; 6]) -> ValidRobot {
-    config
-        .clone()
-        .edit(|c| {
-            c.workspace.boxes.clear();
-            c.workspace.boxes.push(bx).unwrap();
-        })
-        .unwrap()
+/// The robot with `bx` for its only box; where the arm's body meets it at home (the robot
+/// file's check refuses it) or at `start`, the box narrowed across the way to a half and a
+/// quarter; none if those meet it too.
+fn with_box(config: &ValidRobot, bx: [f64; 6], start: &Joints) -> Option<ValidRobot> {
+    [1.0, 0.5, 0.25].into_iter().find_map(|scale| {
+        let mut narrowed = bx;
+        for axis in 0..3 {
+            let (lo, hi) = (bx[2 * axis], bx[2 * axis + 1]);
+            // Only the sides across the way (40 cm), not its 2 cm depth.
+            if hi - lo > 0.1 {
+                let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo) * scale);
+                narrowed[2 * axis] = mid - half;
+                narrowed[2 * axis + 1] = mid + half;
+            }
+        }
+        config
+            .clone()
+            .edit(|c| {
+                c.workspace.boxes.clear();
+                c.workspace.boxes.push(narrowed).unwrap();
+            })
+            .ok()
+            .filter(|boxed| {
+                let mut body = BodyOracle::new(boxed, start);
+                let _ = body.check(start);
+                body.nearest().is_none_or(|(gap, _)| gap > 0.0)
+            })
+    })
+}
+
+/// The figures of a boundary case whose box the arm's body meets at home or at the start,
+/// however narrow.
+fn box_meets_arm() -> Figures {
+    Figures {
+        note: "box meets the arm".to_string(),
+        ..refused()
+    }
 }
 
 fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures> {
@@ -319,7 +384,11 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 let p1 = probe.pose(&goal);
                 let dir = (p1 - p0).normalize();
                 // Across the tool's way, 3/4 of the straight distance ahead.
-                with_box(config, box_ahead(&p0, &dir, 0.75 * (p1 - p0).norm() - 0.01))
+                let bx = box_ahead(&p0, &dir, 0.75 * (p1 - p0).norm() - 0.01);
+                let Some(config) = with_box(config, bx, &q0) else {
+                    return Some(box_meets_arm());
+                };
+                config
             } else {
                 config.clone()
             };
@@ -350,19 +419,17 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 line_goal(&mut run, length)?
             };
             let origin = run.ctrl.cartesian_setpoint().translation.vector;
+            let q_start = *run.commands.last().unwrap_or(&q0);
             let config = if cause == Cause::Boundary {
-                with_box(
-                    config,
-                    box_ahead(
-                        &origin,
-                        &dir,
-                        0.75 * (goal.translation.vector - origin).norm(),
-                    ),
-                )
+                let ahead = 0.75 * (goal.translation.vector - origin).norm();
+                let Some(config) = with_box(config, box_ahead(&origin, &dir, ahead), &q_start)
+                else {
+                    return Some(box_meets_arm());
+                };
+                config
             } else {
                 config.clone()
             };
-            let q_start = *run.commands.last().unwrap_or(&q0);
             let mut run = Run::new(&config, &q_start);
             run.ctrl.set_mode(Mode::Cartesian).unwrap();
             let c = &config.config().cartesian;
@@ -454,7 +521,10 @@ fn run_case(config: &ValidRobot, motion: Motion, cause: Cause) -> Option<Figures
                 let p1 = probe.pose(probe.commands.last().unwrap());
                 let p_start = probe.pose(&q_start);
                 let way = (p1 - p_start).normalize();
-                with_box(config, box_ahead(&p1, &way, 0.02))
+                let Some(config) = with_box(config, box_ahead(&p1, &way, 0.02), &q_start) else {
+                    return Some(box_meets_arm());
+                };
+                config
             } else {
                 config.clone()
             };
@@ -547,15 +617,19 @@ fn main() {
         .collect();
     files.sort();
     println!(
-        "| robot | motion | cause | accel/max | jerk/max | cart acc/max | stop s | dist mm | dev mm | note |"
+        "| robot | motion | cause | accel/max | jerk/max | cart acc/max | stop s | dist mm | dev mm | clear mm | note |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let (mut worst, mut worst_cartesian) = (0.0f64, 0.0f64);
+    // Per robot: the least clearance, to what, in which case.
+    let mut least: Vec<(String, f64, String)> = Vec::new();
     for path in files {
         let config = load_file(&path).unwrap();
         let name = config.config().name.clone();
+        let mut robot_least: Option<(f64, String)> = None;
         for motion in MOTIONS {
             for cause in CAUSES {
+                *CASE.lock().unwrap() = format!("{name} {motion:?} {cause:?}");
                 let Some(f) = run_case(&config, motion, cause) else {
                     continue;
                 };
@@ -567,8 +641,16 @@ fn main() {
                 let opt = |v: Option<f64>, scale: f64| {
                     v.map_or("-".to_string(), |v| format!("{:.3}", v * scale))
                 };
+                let clear = f.clearance.map_or("-".to_string(), |(gap, hit)| {
+                    format!("{:.2} {}", gap * 1e3, between(&hit))
+                });
+                if let Some((gap, hit)) = f.clearance
+                    && robot_least.as_ref().is_none_or(|(g, _)| gap < *g)
+                {
+                    robot_least = Some((gap, format!("{}, {motion:?} {cause:?}", between(&hit))));
+                }
                 println!(
-                    "| {name} | {motion:?} | {cause:?} | {:.2} | {} | {} | {:.2} | {:.1} | {} | {} |",
+                    "| {name} | {motion:?} | {cause:?} | {:.2} | {} | {} | {:.2} | {:.1} | {} | {clear} | {} |",
                     f.accel,
                     opt(f.jerk, 1.0),
                     opt(f.cartesian, 1.0),
@@ -579,9 +661,25 @@ fn main() {
                 );
             }
         }
+        if let Some((gap, what)) = robot_least {
+            least.push((name.to_string(), gap, what));
+        }
     }
     println!("\nworst accel/max over every case: {worst:.2}");
     println!(
         "worst Cartesian axis acc/max of a stop along a Cartesian path (ST, OF, boundary, following error): {worst_cartesian:.2}"
     );
+    let list: Vec<String> = least
+        .iter()
+        .map(|(name, gap, what)| format!("{name} {:.2} ({what})", gap * 1e3))
+        .collect();
+    println!(
+        "least clearance of any link over every tick of every case (mm): {}",
+        list.join("; ")
+    );
+    let entries = ENTRIES.load(Ordering::Relaxed);
+    println!("links that entered a box, the bounds or another link: {entries}");
+    if entries > 0 {
+        std::process::exit(1);
+    }
 }

@@ -260,6 +260,11 @@ impl Controller {
         {
             events.collision = Some(hit);
             self.stop(StopCause::Workspace);
+            // In joint space, whatever the motion: the check looked ahead along the joints'
+            // velocity, where that stop ends. Along a Cartesian path near a singularity the
+            // joints slow down less than the path and went on further: hybrid's unchecked line
+            // in stop_bench ended 4.5 mm into its own link 4 (issue 35's oracle).
+            self.supervisor.leave_path();
         }
         if stream_finished {
             // The generators take over where the stream came to rest.

@@ -10,8 +10,11 @@
 //!   group id).
 //! * [`VirtualBus`]: a CAN bus with simulated Whistles on it, bit-timed with arbitration, with
 //!   random frame loss and drive clock errors to inject.
+//! * [`BodyOracle`]: the whole-arm invariant the stop bench, the fuzz target and the stop tests
+//!   hold every commanded pose to (no link enters a box or another link).
 
 mod arm;
+mod body_oracle;
 mod bus;
 mod drives;
 #[cfg(feature = "std")]
@@ -19,6 +22,7 @@ pub mod replay;
 pub mod whistle;
 
 pub use arm::{IdealArm, RateLimitedArm};
+pub use body_oracle::{BodyOracle, Entry};
 pub use bus::{BusStats, Stalled, VirtualBus};
 pub use drives::{ArmModel, SimulatedDrives};
 pub use whistle::{SimWhistle, WhistleConfig, WhistleFaults, WhistleStats};
