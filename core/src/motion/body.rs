@@ -199,12 +199,19 @@ impl Body {
     /// and `path_rate` (a Cartesian path's stop also keeps its Cartesian limits: the fall a
     /// tick they allow, [`budget`]; infinite for none) allow, so the stop takes
     /// `T = period / rate` and ends near `q + v (T/2 + period)` (along a path to first order).
+    /// `end`: where a motion running along a straight joint line from `q` ends (its goal;
+    /// `q` holding). A stop along it brakes on that line and never passes its end, so the
+    /// estimate is kept between `q` and `end`, on the way the move's check accepted: unbounded,
+    /// it passed the goal by up to `v · period` and more (the estimate overshoots the plan's
+    /// own deceleration), off the checked way, and a move the check accepted was stopped
+    /// `ER21` near its end (issue 35). Streams and bending ways give none.
     pub fn check_tick(
         &mut self,
         chain: &Chain,
         q: &Joints,
         velocity: &Joints,
         path_rate: f64,
+        end: Option<&Joints>,
     ) -> Option<Hit> {
         if self.envelope.is_empty() {
             return None;
@@ -214,6 +221,11 @@ impl Body {
         let mut rest = *q;
         for (r, v) in rest.iter_mut().zip(velocity.iter()) {
             *r += v * ahead;
+        }
+        if let Some(end) = end {
+            for ((r, q), e) in rest.iter_mut().zip(q.iter()).zip(end.iter()) {
+                *r = r.clamp(q.min(*e), q.max(*e));
+            }
         }
         let mut now: Vec<Hit, PRESENT> = Vec::new();
         let mut new = None;
