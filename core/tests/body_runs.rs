@@ -9,11 +9,14 @@
 
 mod common;
 
-use armgate_core::config::ValidRobot;
-use armgate_core::motion::Mode;
+use armgate_core::config::{MAX_CAPSULES, Placed, ValidRobot, frames_at};
+use armgate_core::geometry::Capsule;
+use armgate_core::kinematics::Chain;
+use armgate_core::motion::{Body, Mode};
+use armgate_core::rng::SplitMix64;
 use common::arm_rig::ArmRig;
 
-/// ranger-mk1 with the measuring tests' fast joints: 3 rad/s, 6 rad/s².
+/// `config` with the measuring tests' fast joints: 3 rad/s, 6 rad/s².
 fn fast(config: ValidRobot) -> ValidRobot {
     config
         .edit(|c| {
@@ -34,6 +37,11 @@ fn run(config: &ValidRobot, from: &[f64], to: &[f64]) -> Option<(usize, String)>
     rig.ctrl
         .move_joints(to, 0.0)
         .unwrap_or_else(|r| panic!("refused: {r}"));
+    run_to_end(&mut rig)
+}
+
+/// Steps `rig` until its motion ends; the tick on which a collision stopped it, and where.
+fn run_to_end(rig: &mut ArmRig) -> Option<(usize, String)> {
     for k in 0..20_000 {
         let out = rig.tick();
         if let Some(hit) = out.events.collision {
@@ -91,5 +99,120 @@ fn the_measuring_runs_accepted_moves_reach_their_goals() {
     ];
     for (from, to) in moves {
         assert_eq!(run(&config, &from, &to), None, "{from:?} -> {to:?}");
+    }
+}
+
+/// True if no capsule of `config`'s body is within the margin of anything at `q`.
+fn clear(config: &ValidRobot, body: &Body, q: &[f64]) -> bool {
+    let mut placed: Placed = [Capsule::default(); MAX_CAPSULES];
+    body.envelope().place(&frames_at(config, q), &mut placed);
+    body.envelope().first_hit(&placed).is_none()
+}
+
+/// Random joint moves between clear poses of ranger-mk1, ur5 and puma560, all at 3 rad/s and
+/// 6 rad/s² (ur5's file: π/2 rad/s): every move the controller accepts runs to its goal with no `ER21`.
+/// Half the goals are anywhere within the limits, half near the start; some are refused, so
+/// the moves accepted are not only the easy ones.
+#[test]
+fn every_accepted_joint_move_of_a_fast_arm_runs_to_its_goal() {
+    let mut rng = SplitMix64::new(3521);
+    for config in [
+        fast(common::robot("ranger-mk1")),
+        fast(common::robot("ur5")),
+        // A table in front of puma560, below the shoulder: its file has no boxes.
+        fast(common::robot("puma560"))
+            .edit(|c| {
+                c.workspace
+                    .boxes
+                    .push([0.25, 0.8, -0.8, 0.8, -0.6, -0.25])
+                    .unwrap()
+            })
+            .unwrap(),
+    ] {
+        let (chain, body) = (Chain::new(&config), Body::new(&config));
+        let (mut accepted, mut refused) = (0, 0);
+        while accepted < 20 {
+            let from = chain.random_joints(&mut rng);
+            if !clear(&config, &body, &from) {
+                continue;
+            }
+            let mut to = chain.random_joints(&mut rng);
+            if accepted % 2 == 0 {
+                for ((t, f), (lo, hi)) in to
+                    .iter_mut()
+                    .zip(from.iter())
+                    .zip(chain.min().iter().zip(chain.max()))
+                {
+                    *t = (f + rng.uniform(-0.8, 0.8)).clamp(*lo, *hi);
+                }
+            }
+            let mut rig = ArmRig::new(&config, &from);
+            rig.ctrl.set_mode(Mode::Joint).unwrap();
+            if rig.ctrl.move_joints(&to, 0.0).is_err() {
+                refused += 1;
+                continue;
+            }
+            accepted += 1;
+            assert_eq!(
+                run_to_end(&mut rig),
+                None,
+                "{}: {from:?} -> {to:?}",
+                config.name
+            );
+            assert_eq!(rig.ctrl.command().unwrap(), to, "{}", config.name);
+        }
+        eprintln!("{}: {accepted} accepted, {refused} refused", config.name);
+        assert!(refused > 0, "{}: none refused", config.name);
+    }
+}
+
+/// Random Cartesian lines (`BG`) of 5 to 40 cm from clear poses of the same fast robots, their
+/// lines at 0.5 m/s and 1 m/s² (ur5's file: 0.25 m/s): every line the controller accepts runs
+/// to its goal with no `ER21`. (A longer run, 60 lines each, found none either.)
+#[test]
+fn every_accepted_cartesian_line_of_a_fast_arm_runs_to_its_goal() {
+    let mut rng = SplitMix64::new(3522);
+    for config in [
+        fast(common::robot("ranger-mk1")),
+        fast(common::robot("ur5")),
+    ] {
+        let config = config
+            .edit(|c| {
+                c.cartesian.max_velocity = [0.5, 0.5, 0.5, 1.0, 1.0, 1.0];
+                c.cartesian.max_acceleration = [1.0, 1.0, 1.0, 2.0, 2.0, 2.0];
+            })
+            .unwrap();
+        let (chain, body) = (Chain::new(&config), Body::new(&config));
+        let (mut accepted, mut refused) = (0, 0);
+        while accepted < 8 {
+            let from = chain.random_joints(&mut rng);
+            if !clear(&config, &body, &from) {
+                continue;
+            }
+            let mut to = chain.forward(&from).unwrap();
+            let length = rng.uniform(0.05, 0.4);
+            let direction = armgate_core::math::Vector3::new(
+                rng.uniform(-1.0, 1.0),
+                rng.uniform(-1.0, 1.0),
+                rng.uniform(-1.0, 1.0),
+            )
+            .normalize();
+            to.translation.vector += direction * length;
+            let mut rig = ArmRig::new(&config, &from);
+            rig.ctrl.set_mode(Mode::Cartesian).unwrap();
+            if rig.ctrl.move_cartesian(to, 0.0).is_err() {
+                refused += 1;
+                continue;
+            }
+            accepted += 1;
+            assert_eq!(
+                run_to_end(&mut rig),
+                None,
+                "{}: {from:?} -> {to:?}",
+                config.name
+            );
+        }
+        eprintln!("{}: {accepted} accepted, {refused} refused", config.name);
+        assert!(refused > 0, "{}: none refused", config.name);
     }
 }
