@@ -224,7 +224,8 @@ impl Body {
         }
         if let Some(end) = end {
             for ((r, q), e) in rest.iter_mut().zip(q.iter()).zip(end.iter()) {
-                *r = r.clamp(q.min(*e), q.max(*e));
+                // Not `clamp`: it panics on NaN, and brings float formatting to the board.
+                *r = r.max(q.min(*e)).min(q.max(*e));
             }
         }
         let mut now: Vec<Hit, PRESENT> = Vec::new();
