@@ -11,9 +11,10 @@ mod common;
 
 use armgate_core::config::{MAX_CAPSULES, Placed, ValidRobot, frames_at};
 use armgate_core::geometry::Capsule;
-use armgate_core::kinematics::Chain;
-use armgate_core::motion::{Body, Mode};
+use armgate_core::kinematics::{Chain, Joints};
+use armgate_core::motion::{Body, Mode, Refusal};
 use armgate_core::rng::SplitMix64;
+use armgate_protocol::client::{Hit, Obstacle};
 use common::arm_rig::ArmRig;
 
 /// `config` with the measuring tests' fast joints: 3 rad/s, 6 rad/s².
@@ -215,4 +216,62 @@ fn every_accepted_cartesian_line_of_a_fast_arm_runs_to_its_goal() {
         eprintln!("{}: {accepted} accepted, {refused} refused", config.name);
         assert!(refused > 0, "{}: none refused", config.name);
     }
+}
+
+/// ur5 at rest with its forearm 0.9 mm from its base (within `CONTACT`, 1 mm, of the margin, 0,
+/// but not a hit): a move that folds the forearm through the base is refused. Before, the
+/// check let what was that near at the start pass for the whole way, and the tick's check
+/// (which counts it as new once within the margin) stopped the accepted move `L3 hits L0`
+/// four ticks in. Moves away from it are still accepted.
+///
+#[test]
+fn a_link_just_clear_of_another_is_not_let_through_it() {
+    let config = fast(common::robot("ur5"));
+    let (chain, body) = (Chain::new(&config), Body::new(&config));
+    let from = Joints::from_slice(&[
+        -2.8808447739392786,
+        5.164879177452281,
+        -3.3230441033524754,
+        5.9012290221316395,
+        4.3486558286746675,
+        -4.0636339021382994,
+    ])
+    .unwrap();
+    let through = Joints::from_slice(&[
+        5.404175052340941,
+        2.5725463023291866,
+        2.7172765792778915,
+        5.924293650489592,
+        -5.658088905551795,
+        4.510729007123992,
+    ])
+    .unwrap();
+    let (gap, nearest) = {
+        let mut placed: Placed = [Capsule::default(); MAX_CAPSULES];
+        body.envelope()
+            .place(&frames_at(&config, &from), &mut placed);
+        body.envelope().nearest(&placed)
+    };
+    let forearm_on_base = Hit {
+        link: 3,
+        obstacle: Obstacle::Link(0),
+    };
+    assert_eq!(nearest, Some(forearm_on_base));
+    assert!(gap > 0.0 && gap < 0.001, "{gap}");
+    let refusal = body.check_path(&chain, &from, &through).unwrap_err();
+    assert!(
+        matches!(
+            refusal,
+            Refusal::Hits(hit, _) if hit == forearm_on_base
+        ) || matches!(refusal, Refusal::NearEdge(_)),
+        "{refusal}"
+    );
+    // Back the way it came: away from the base.
+    let mut away = from;
+    for (a, t) in away.iter_mut().zip(through.iter()) {
+        *a -= 0.05 * (t - *a);
+    }
+    body.check_path(&chain, &from, &away)
+        .unwrap_or_else(|r| panic!("{r}"));
+    assert_eq!(run(&config, &from, &away), None);
 }
