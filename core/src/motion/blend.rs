@@ -147,6 +147,12 @@ impl<L: Leg> LegChain<L> {
         }
     }
 
+    /// True while the running leg alone makes the set-point: no leg finishing under it, none
+    /// queued to blend into.
+    pub fn is_alone(&self) -> bool {
+        self.tail.is_none() && self.next.is_none()
+    }
+
     /// True if the whole chain has ended by time `t` (the tail always ends before the leg).
     pub fn ended_at(&self, t: f64) -> bool {
         self.next.is_none() && t >= self.leg.duration()

@@ -97,7 +97,8 @@ impl Body {
 
     /// Refuses the joint move from `from` to `to` if a capsule would come within the margin
     /// (and [`CONTACT`]) of a box, the bounds or another capsule on the way, naming the link,
-    /// the obstacle and where (percent of the way). What is that near at `from` does not count.
+    /// the obstacle and where (percent of the way). What is that near at `from` does not count
+    /// if it is a hit there (within the margin); if not, it must not become one.
     ///
     /// Conservative advancement: at each checked pose every gap is measured, and the way is
     /// clear as far as the nearest gap can close at its sweep bound (a joint step Δq moves a
@@ -114,17 +115,21 @@ impl Body {
         if !self.place(chain, from, &mut placed) {
             return Ok(());
         }
-        // What is within contact at the start does not count.
-        let mut start: Vec<Hit, PRESENT> = Vec::new();
+        // What is within contact at the start: a hit there (within the margin, what the
+        // tick's check finds present) does not count, so the arm can be driven out; what is
+        // only within `CONTACT` of the margin must not come within the margin (a hit for the
+        // tick's check too), else a link 0.9 mm from another was let through it and the tick
+        // stopped the move it had accepted (ur5, `L3 hits L0`, issue 35).
+        let mut start: Vec<(Hit, bool), PRESENT> = Vec::new();
+        let margin = self.envelope.margin();
         self.envelope
-            .gaps(&placed, None, CONTACT, &mut |hit, _, _| {
-                start.push(hit).is_ok()
+            .gaps(&placed, None, CONTACT, &mut |hit, gap, _| {
+                start.push((hit, gap <= margin)).is_ok()
             });
         let mut step = *to;
         for (s, f) in step.iter_mut().zip(from.iter()) {
             *s -= f;
         }
-        let margin = self.envelope.margin();
         let mut done = 0.0;
         for _ in 0..self.max_checks {
             let mut q = *from;
@@ -140,12 +145,14 @@ impl Body {
                 Some(&step),
                 f64::INFINITY,
                 &mut |hit, gap, rate| {
-                    if start.contains(&hit) {
-                        return true;
-                    }
+                    let contact = match start.iter().find(|(h, _)| *h == hit) {
+                        Some((_, true)) => return true,
+                        Some((_, false)) => 0.0,
+                        None => CONTACT,
+                    };
                     let room = gap - margin;
                     // Not clear (NaN included): a hit here.
-                    if room.is_nan() || room <= CONTACT {
+                    if room.is_nan() || room <= contact {
                         hit_here = Some(hit);
                         return false;
                     }
@@ -199,12 +206,19 @@ impl Body {
     /// and `path_rate` (a Cartesian path's stop also keeps its Cartesian limits: the fall a
     /// tick they allow, [`budget`]; infinite for none) allow, so the stop takes
     /// `T = period / rate` and ends near `q + v (T/2 + period)` (along a path to first order).
+    /// `end`: where a motion running along a straight joint line from `q` ends (its goal;
+    /// `q` holding). A stop along it brakes on that line and never passes its end, so the
+    /// estimate is kept between `q` and `end`, on the way the move's check accepted: unbounded,
+    /// it passed the goal by up to `v · period` and more (the estimate overshoots the plan's
+    /// own deceleration), off the checked way, and a move the check accepted was stopped
+    /// `ER21` near its end (issue 35). Streams and bending ways give none.
     pub fn check_tick(
         &mut self,
         chain: &Chain,
         q: &Joints,
         velocity: &Joints,
         path_rate: f64,
+        end: Option<&Joints>,
     ) -> Option<Hit> {
         if self.envelope.is_empty() {
             return None;
@@ -214,6 +228,12 @@ impl Body {
         let mut rest = *q;
         for (r, v) in rest.iter_mut().zip(velocity.iter()) {
             *r += v * ahead;
+        }
+        if let Some(end) = end {
+            for ((r, q), e) in rest.iter_mut().zip(q.iter()).zip(end.iter()) {
+                // Not `clamp`: it panics on NaN, and brings float formatting to the board.
+                *r = r.max(q.min(*e)).min(q.max(*e));
+            }
         }
         let mut now: Vec<Hit, PRESENT> = Vec::new();
         let mut new = None;

@@ -252,10 +252,26 @@ impl Controller {
         } else {
             f64::INFINITY
         };
+        // A joint move's stop ends on its straight way, short of its goal (not so for a
+        // stream's or a mode change's stop in joint space).
+        let in_joint_space = self
+            .supervisor
+            .stopping()
+            .is_some_and(|s| s.along != Along::Path);
+        let end = (self.mode == Mode::Joint
+            && !self.stream.is_active()
+            && !stream_finished
+            && !in_joint_space)
+            .then(|| self.joint_generator.straight_end())
+            .flatten();
         if let Some(q) = &command
-            && let Some(hit) =
-                self.body
-                    .check_tick(&self.chain, q, self.supervisor.velocity(), path_rate)
+            && let Some(hit) = self.body.check_tick(
+                &self.chain,
+                q,
+                self.supervisor.velocity(),
+                path_rate,
+                end.as_ref(),
+            )
             && !self.supervisor.is_stopping()
         {
             events.collision = Some(hit);

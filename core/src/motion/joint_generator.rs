@@ -230,6 +230,16 @@ impl JointGenerator {
         (self.setpoint, false)
     }
 
+    /// Where the motion ends if it runs along one straight line from the set-point: a single
+    /// leg's goal, or the set-point itself while holding; `None` while two legs blend (or
+    /// one is queued to), whose way bends. A stop along the motion's path never passes it.
+    pub fn straight_end(&self) -> Option<Joints> {
+        match &self.motion {
+            None => Some(self.setpoint),
+            Some(chain) => chain.is_alone().then_some(chain.leg().goal),
+        }
+    }
+
     /// True while a move is in progress.
     pub fn is_moving(&self) -> bool {
         self.motion.is_some()
