@@ -49,6 +49,9 @@ pub struct Body {
     max_checks: u16,
     /// The hits of the last tick's poses: a stop is for new ones.
     present: Vec<Hit, PRESENT>,
+    /// The last tick's command and its nearest gap beyond the margin (m): where a stream's
+    /// next tick starts, measured once ([`clearance_at`](Self::clearance_at)).
+    clearance: Option<(Joints, f64)>,
 }
 
 impl Body {
@@ -61,6 +64,7 @@ impl Body {
             // Saturating cast: at least one check.
             max_checks: ((config.control_period * CHECKS_PER_SECOND) as u16).max(1),
             present: Vec::new(),
+            clearance: None,
         }
     }
 
@@ -220,23 +224,77 @@ impl Body {
         let mut placed = [Capsule::default(); MAX_CAPSULES];
         // At rest (no velocity) the stop ends where the arm is: one pose to check.
         let poses = if rest == *q { 1 } else { 2 };
-        for pose in [q, &rest].into_iter().take(poses) {
+        let margin = self.envelope.margin();
+        // The command's nearest gap beyond the margin, measured by its check anyway.
+        let mut nearest = f64::INFINITY;
+        for (k, pose) in [q, &rest].into_iter().take(poses).enumerate() {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
             let present = &self.present;
-            self.envelope.hits(&placed, &mut |hit, _| {
-                if !present.contains(&hit) && new.is_none() {
-                    new = Some(hit);
-                }
-                if !now.contains(&hit) {
-                    // Full: the rest are remembered next tick.
-                    let _ = now.push(hit);
-                }
-                true
-            });
+            let within = if k == 0 { f64::INFINITY } else { 0.0 };
+            self.envelope
+                .gaps(&placed, None, within, &mut |hit, gap, _| {
+                    if gap > margin {
+                        nearest = nearest.min(gap);
+                        return true;
+                    }
+                    if !present.contains(&hit) && new.is_none() {
+                        new = Some(hit);
+                    }
+                    if !now.contains(&hit) {
+                        // Full: the rest are remembered next tick.
+                        let _ = now.push(hit);
+                    }
+                    true
+                });
+            if k == 0 {
+                self.clearance = Some((*q, nearest));
+            }
         }
         self.present = now;
         new
+    }
+
+    /// The nearest gap beyond the margin (m, infinite for none) at `q`, if `q` is the command
+    /// the last tick checked: a stream's tick starts from there.
+    pub fn clearance_at(&self, q: &Joints) -> Option<f64> {
+        self.clearance
+            .filter(|(checked, _)| checked == q)
+            .map(|(_, gap)| gap)
+    }
+
+    /// A stream's look ahead: at `rest` (where a stop begun after its tick would end), the
+    /// first thing a link would come within [`CONTACT`] of the margin of that it is not that
+    /// near at `q` (the stream holds before it), and the nearest gap beyond the margin (m,
+    /// infinite for none; the stream slows by it). One placement of `rest`; `q` is placed
+    /// only if `rest` has anything that near.
+    pub fn ahead(&self, chain: &Chain, q: &Joints, rest: &Joints) -> (Option<Hit>, f64) {
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if self.envelope.is_empty() || !self.place(chain, rest, &mut placed) {
+            return (None, f64::INFINITY);
+        }
+        let margin = self.envelope.margin();
+        let (mut near, mut nearest): (Vec<Hit, PRESENT>, _) = (Vec::new(), f64::INFINITY);
+        self.envelope
+            .gaps(&placed, None, f64::INFINITY, &mut |hit, gap, _| {
+                if gap > margin {
+                    nearest = nearest.min(gap);
+                }
+                if gap <= margin + CONTACT {
+                    // Full: the first ones are named.
+                    let _ = near.push(hit);
+                }
+                true
+            });
+        if near.is_empty() || !self.place(chain, q, &mut placed) {
+            return (near.first().copied(), nearest);
+        }
+        let mut now: Vec<Hit, PRESENT> = Vec::new();
+        self.envelope
+            .gaps(&placed, None, CONTACT, &mut |hit, _, _| {
+                now.push(hit).is_ok()
+            });
+        (near.into_iter().find(|h| !now.contains(h)), nearest)
     }
 }
