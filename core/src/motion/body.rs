@@ -168,6 +168,17 @@ impl Body {
         Err(Refusal::NearEdge(PathPoint::at(done)))
     }
 
+    /// The smallest gap at pose `q` (m) and what it is between (`SQ` index 7); none for an
+    /// empty body.
+    pub fn nearest_at(&self, chain: &Chain, q: &Joints) -> Option<(f64, Hit)> {
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if !self.place(chain, q, &mut placed) {
+            return None;
+        }
+        let (gap, hit) = self.envelope.nearest(&placed);
+        hit.map(|hit| (gap, hit))
+    }
+
     /// The hits at pose `q` (up to [`PRESENT`]): what a motion from there may leave.
     pub fn present_at(&self, chain: &Chain, q: &Joints) -> Vec<Hit, PRESENT> {
         let mut present = Vec::new();
