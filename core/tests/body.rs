@@ -232,7 +232,9 @@ fn a_stream_towards_the_column_slows_and_holds_before_any_link_reaches_it() {
     }
     let (closest, slowest) = near.last().unwrap();
     let slowing = trace.iter().rev().find(|(_, s)| *s >= full).unwrap().0;
-    eprintln!("held at tick {held}, {closest} m from the box at {slowest} rad/s; slowing from {slowing} m");
+    eprintln!(
+        "held at tick {held}, {closest} m from the box at {slowest} rad/s; slowing from {slowing} m"
+    );
     assert!(*slowest < 0.5 * full, "{closest} m at {slowest} rad/s");
     // The gentle stop's distance: about ten times the 2 mm a full-deceleration stop needs.
     assert!((0.005..0.05).contains(&slowing), "{slowing}");
