@@ -214,12 +214,14 @@ impl Body {
     /// and `path_rate` (a Cartesian path's stop also keeps its Cartesian limits: the fall a
     /// tick they allow, [`budget`]; infinite for none) allow, so the stop takes
     /// `T = period / rate` and ends near `q + v (T/2 + period)` (along a path to first order).
+    /// With `measure` (a stream runs: it slows by the gap) the command's nearest gap is kept
+    /// for [`clearance_at`](Self::clearance_at).
     pub fn check_tick(
         &mut self,
         chain: &Chain,
         q: &Joints,
-        velocity: &Joints,
-        path_rate: f64,
+        (velocity, path_rate): (&Joints, f64),
+        measure: bool,
     ) -> Option<Hit> {
         if self.envelope.is_empty() {
             return None;
@@ -238,12 +240,17 @@ impl Body {
         let margin = self.envelope.margin();
         // The command's nearest gap beyond the margin, measured by its check anyway.
         let mut nearest = f64::INFINITY;
+        self.clearance = None;
         for (k, pose) in [q, &rest].into_iter().take(poses).enumerate() {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
             let present = &self.present;
-            let within = if k == 0 { f64::INFINITY } else { 0.0 };
+            let within = if k == 0 && measure {
+                f64::INFINITY
+            } else {
+                0.0
+            };
             self.envelope
                 .gaps(&placed, None, within, &mut |hit, gap, _| {
                     if gap > margin {
@@ -259,7 +266,7 @@ impl Body {
                     }
                     true
                 });
-            if k == 0 {
+            if k == 0 && measure {
                 self.clearance = Some((*q, nearest));
             }
         }

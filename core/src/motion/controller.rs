@@ -252,9 +252,12 @@ impl Controller {
             f64::INFINITY
         };
         if let Some(q) = &command
-            && let Some(hit) =
-                self.body
-                    .check_tick(&self.chain, q, self.supervisor.velocity(), path_rate)
+            && let Some(hit) = self.body.check_tick(
+                &self.chain,
+                q,
+                (self.supervisor.velocity(), path_rate),
+                self.stream.is_active(),
+            )
             && !self.supervisor.is_stopping()
         {
             events.collision = Some(hit);
