@@ -9,6 +9,9 @@
 //!   `ER25 Cmd jB L3 hits B1 at 40%`.
 //! * **Every tick** ([`Body::check_tick`]) the commanded pose and the pose where a stop begun
 //!   now would end are checked; a new hit stops the motion (`ER21 L3 hits B1`).
+//! * **Streams** look ahead ([`Body::ahead`]) and slow by the nearest gap, the tick's own
+//!   check's ([`Body::clearance_at`]); they hold within [`CONTACT`] of the margin
+//!   (`WN13 Held: L3 hits B1`). `SQ` 7 reports the nearest gap ([`Body::nearest_at`]).
 //!
 //! Hits present where a motion starts (the arm already in contact) do not count, so the arm can
 //! always be driven out; only new ones do.
@@ -214,8 +217,8 @@ impl Body {
     /// and `path_rate` (a Cartesian path's stop also keeps its Cartesian limits: the fall a
     /// tick they allow, [`budget`]; infinite for none) allow, so the stop takes
     /// `T = period / rate` and ends near `q + v (T/2 + period)` (along a path to first order).
-    /// With `measure` (a stream runs: it slows by the gap) the command's nearest gap is kept
-    /// for [`clearance_at`](Self::clearance_at).
+    /// With `measure` (a stream runs: it slows by the gap) the command's nearest gap beyond
+    /// the margin is kept for [`clearance_at`](Self::clearance_at).
     pub fn check_tick(
         &mut self,
         chain: &Chain,
@@ -237,37 +240,26 @@ impl Body {
         let mut placed = [Capsule::default(); MAX_CAPSULES];
         // At rest (no velocity) the stop ends where the arm is: one pose to check.
         let poses = if rest == *q { 1 } else { 2 };
-        let margin = self.envelope.margin();
-        // The command's nearest gap beyond the margin, measured by its check anyway.
-        let mut nearest = f64::INFINITY;
         self.clearance = None;
         for (k, pose) in [q, &rest].into_iter().take(poses).enumerate() {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
             let present = &self.present;
-            let within = if k == 0 && measure {
-                f64::INFINITY
-            } else {
-                0.0
-            };
-            self.envelope
-                .gaps(&placed, None, within, &mut |hit, gap, _| {
-                    if gap > margin {
-                        nearest = nearest.min(gap);
-                        return true;
-                    }
-                    if !present.contains(&hit) && new.is_none() {
-                        new = Some(hit);
-                    }
-                    if !now.contains(&hit) {
-                        // Full: the rest are remembered next tick.
-                        let _ = now.push(hit);
-                    }
-                    true
-                });
+            // Every hit is visited, so what is not is beyond the margin: its nearest is the
+            // command's gap, measured by the check anyway.
+            let beyond = self.envelope.gaps(&placed, None, 0.0, &mut |hit, _, _| {
+                if !present.contains(&hit) && new.is_none() {
+                    new = Some(hit);
+                }
+                if !now.contains(&hit) {
+                    // Full: the rest are remembered next tick.
+                    let _ = now.push(hit);
+                }
+                true
+            });
             if k == 0 && measure {
-                self.clearance = Some((*q, nearest));
+                self.clearance = Some((*q, beyond));
             }
         }
         self.present = now;
@@ -294,17 +286,18 @@ impl Body {
         }
         let margin = self.envelope.margin();
         let (mut near, mut nearest): (Vec<Hit, PRESENT>, _) = (Vec::new(), f64::INFINITY);
-        self.envelope
-            .gaps(&placed, None, f64::INFINITY, &mut |hit, gap, _| {
+        // Those within contact are visited; the rest's nearest comes back.
+        let beyond = self
+            .envelope
+            .gaps(&placed, None, CONTACT, &mut |hit, gap, _| {
                 if gap > margin {
                     nearest = nearest.min(gap);
                 }
-                if gap <= margin + CONTACT {
-                    // Full: the first ones are named.
-                    let _ = near.push(hit);
-                }
+                // Full: the first ones are named.
+                let _ = near.push(hit);
                 true
             });
+        let nearest = nearest.min(beyond);
         if near.is_empty() || !self.place(chain, q, &mut placed) {
             return (near.first().copied(), nearest);
         }
