@@ -46,48 +46,63 @@ fn nearest(socket: &UdpSocket) -> [f32; 7] {
     }
 }
 
-/// A jog down towards the column's edge at 2 cm/s, sent every 10 ms: the tool's speed
-/// (from `PS`) falls over the last centimetre, the arm comes to rest short of the column and
-/// stays there while the same twist keeps coming; one `WN13 Held: L6 hits B1` names the tool's
-/// link and the box; `SQ` 7 then names the same pair, about a millimetre apart.
+/// A jog down towards the column's edge at 2 cm/s, sent every 10 ms: the tool's speed (read
+/// by a second client's `PS` every 20 ms, so the stream's own sends stay on time) falls over the
+/// last centimetre, the arm comes to rest short of the column and stays there while the same
+/// twist keeps coming; one `WN13 Held: L6 hits B1` names the tool's link and the box; `SQ` 7
+/// then names the same pair, about a millimetre apart.
 #[test]
 fn a_twist_stream_towards_the_column_slows_and_holds_before_contact() {
     let Some(sim) = ready() else {
         return;
     };
     sim.ok("CM", [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0);
+    let reader = second_client(&sim);
+    let done = std::sync::atomic::AtomicBool::new(false);
+    // Ends the poll when the stream's loop ends, also by a failed assertion.
+    struct Done<'a>(&'a std::sync::atomic::AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    }
+    let started = Instant::now();
     let mut notices = Vec::new();
     // (seconds, z) of the tool.
-    let mut trace: Vec<(f32, f32)> = Vec::new();
-    let started = Instant::now();
-    while started.elapsed() < Duration::from_secs(12) {
-        exchange(&sim, "TW", DOWN, &mut notices);
-        let ps = exchange(&sim, "PS", [0.0; 7], &mut notices);
-        trace.push((started.elapsed().as_secs_f32(), ps[2]));
-        if notices.iter().any(|n| n.starts_with("WN13")) && trace.len() > 1 {
-            // Held: go on sending for a second, at rest.
-            let held = trace.len();
-            let until = Instant::now() + Duration::from_secs(1);
-            while Instant::now() < until {
-                exchange(&sim, "TW", DOWN, &mut notices);
-                let ps = exchange(&sim, "PS", [0.0; 7], &mut notices);
-                trace.push((started.elapsed().as_secs_f32(), ps[2]));
-                std::thread::sleep(Duration::from_millis(10));
+    let trace: Vec<(f32, f32)> = std::thread::scope(|scope| {
+        let poll = scope.spawn(|| {
+            let mut trace = Vec::new();
+            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                if let Answer::Reply(_, ps, _) = ask(&reader, "PS", [0.0; 7], 0) {
+                    trace.push((started.elapsed().as_secs_f32(), ps[2]));
+                }
+                std::thread::sleep(Duration::from_millis(20));
             }
-            let rest = &trace[held + 20..];
-            let (first, last) = (rest[0].1, rest[rest.len() - 1].1);
-            assert!((first - last).abs() < 1e-5, "moved on while held: {rest:?}");
-            break;
+            trace
+        });
+        let stop_polling = Done(&done);
+        let mut held_at = None;
+        while started.elapsed() < Duration::from_secs(12) {
+            exchange(&sim, "TW", DOWN, &mut notices);
+            if notices.iter().any(|n| n.starts_with("WN13")) {
+                held_at.get_or_insert(Instant::now());
+            }
+            // Held: go on sending for a second.
+            if held_at.is_some_and(|t| t.elapsed() > Duration::from_secs(1)) {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
         }
-        std::thread::sleep(Duration::from_millis(10));
-    }
+        drop(stop_polling);
+        poll.join().unwrap()
+    });
     let held: Vec<_> = notices.iter().filter(|n| n.starts_with("WN13")).collect();
     assert_eq!(held, ["WN13 Held: L6 hits B1"], "{notices:?}");
     assert!(
         !notices.iter().any(|n| n.starts_with("ER21")),
         "no stop: {notices:?}"
     );
-    // Speeds over 0.2 s windows, from the start of the stream to the hold.
+    // Speeds over 0.2 s windows, from the start of the stream to the end.
     let speeds: Vec<(f32, f32)> = trace
         .windows(2)
         .scan(None::<(f32, f32)>, |window, pair| {
@@ -101,10 +116,16 @@ fn a_twist_stream_towards_the_column_slows_and_holds_before_contact() {
         })
         .flatten()
         .collect();
-    let peak = speeds.iter().map(|(_, v)| *v).fold(0.0, f32::max);
     eprintln!("tool z and speed over 0.2 s windows: {speeds:?}");
+    let peak = speeds.iter().map(|(_, v)| *v).fold(0.0, f32::max);
     assert!(peak > 0.015, "never near 2 cm/s: {speeds:?}");
-    let last_z = trace[trace.len() - 1].1;
+    // At rest for the last half second while the twist kept coming.
+    let (end_t, end_z) = trace[trace.len() - 1];
+    let resting = trace.iter().filter(|(t, _)| end_t - t < 0.5);
+    assert!(
+        resting.clone().count() > 5 && resting.clone().all(|(_, z)| (z - end_z).abs() < 1e-5),
+        "moved on while held: {trace:?}"
+    );
     // The last windows before rest: slower and slower, well below the peak.
     let moving: Vec<_> = speeds.iter().filter(|(_, v)| *v > 1e-4).collect();
     let tail = &moving[moving.len().saturating_sub(3)..];
@@ -114,7 +135,7 @@ fn a_twist_stream_towards_the_column_slows_and_holds_before_contact() {
     assert_eq!(report[1..5], [6.0, 0.0, 1.0, 0.0], "{report:?}");
     assert!(
         report[0] > 0.0 && report[0] < 0.003,
-        "held {} mm from the box at z {last_z}",
+        "held {} mm from the box at z {end_z}",
         report[0] * 1e3
     );
 }
