@@ -25,6 +25,8 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+#[path = "e2e/body.rs"]
+mod body;
 #[path = "e2e/redundancy.rs"]
 mod redundancy;
 #[path = "e2e/sessions.rs"]
@@ -397,7 +399,7 @@ impl Sim {
 }
 
 fn is_unsolicited(text: &str) -> bool {
-    ["ER21", "WN12", "WN22", "WN27", "ER3", "ER41"]
+    ["ER21", "WN12", "WN13", "WN22", "WN27", "ER3", "ER41"]
         .iter()
         .any(|p| text.starts_with(p))
 }

@@ -3,7 +3,8 @@
 //!
 //! Index 0 answers the numbers in f0..f6, index 1 the robot's name as ASCII in bytes 2..30,
 //! NUL-padded ([`Client::status`]), index 2 why the arm last stopped or is held
-//! ([`Client::stop_cause`]). A controller older than the request answers
+//! ([`Client::stop_cause`]), index 7 the body's nearest gap and its pair ([`Client::nearest`],
+//! [`nearest_text`]). A controller older than the request answers
 //! `ER00 Cmd SQ not understood`, which becomes [`ClientError::TooOld`]; one without index 2
 //! (`ER24`) reports no cause.
 
@@ -13,8 +14,9 @@ pub use armgate_protocol::client::Holder;
 use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{SIGNING_INDEX, SigningReport};
 use armgate_protocol::client::{
-    CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, Reply, RobotName,
-    SESSION_INDEX, STATUS_INDEX, SessionReport, StatusReport, VALUES,
+    CAUSE_INDEX, CauseReport, Command, MESSAGE_LEN, Message, NAME_INDEX, NEAREST_INDEX,
+    NearestReport, Obstacle, Reply, RobotName, SESSION_INDEX, STATUS_INDEX, SessionReport,
+    StatusReport, VALUES,
 };
 pub use armgate_protocol::client::{DriveStatus, Motion, StopCause};
 
@@ -189,6 +191,25 @@ impl fmt::Display for Status {
     }
 }
 
+/// `SQ` 7's report as `armgate status` shows it: `99.7 mm, link 6 to box 1 (margin 0.0 mm)`,
+/// `link 5 to link 2`, `link 6 to the bounds`; `none (no body)`.
+pub fn nearest_text(report: &NearestReport) -> String {
+    let Some((gap, hit)) = report.nearest else {
+        return "none (no body)".to_owned();
+    };
+    let what = match hit.obstacle {
+        Obstacle::Box(b) => format!("box {b}"),
+        Obstacle::Link(l) => format!("link {l}"),
+        Obstacle::Bounds => "the bounds".to_owned(),
+    };
+    format!(
+        "{:.1} mm, link {} to {what} (margin {:.1} mm)",
+        gap * 1e3,
+        hit.link,
+        report.margin * 1e3
+    )
+}
+
 impl Client {
     /// `SQ`: the controller's status (two requests). A controller that does not know the
     /// request is [`ClientError::TooOld`].
@@ -222,6 +243,22 @@ impl Client {
                 index: SESSION_INDEX,
             })
             .ok()),
+            Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// `SQ` index 7: the smallest gap between the arm's body and what it is checked against
+    /// at the measured pose, and the pair; `None` from a controller without it.
+    pub fn nearest(&mut self) -> Result<Option<NearestReport>, ClientError> {
+        match self.status_part(NEAREST_INDEX) {
+            Ok(reply) => NearestReport::from_reply(&Reply {
+                command: Command::Status,
+                values: reply.values,
+                index: NEAREST_INDEX,
+            })
+            .map(Some)
+            .map_err(|e| ClientError::InvalidArgument(format!("a malformed SQ 7 reply: {e}"))),
             Err(ClientError::Rejected(text)) if matching::code(&text) == Some(24) => Ok(None),
             Err(e) => Err(e),
         }
@@ -339,6 +376,26 @@ pub(crate) mod tests {
             shown.contains("holder     192.168.1.2:40001\nclients    3 known\nwatchdog   500 ms\n"),
             "{shown}"
         );
+    }
+
+    #[test]
+    fn the_nearest_gap_is_decoded_and_shown() {
+        let fake = FakeController::spawn(|d| {
+            vec![status_reply(d, [0.0125, 5.0, 1.0, 2.0, 0.01, 0.0, 0.0], "")]
+        });
+        let report = client(&fake).nearest().unwrap().unwrap();
+        assert_eq!(
+            nearest_text(&report),
+            "12.5 mm, link 5 to link 2 (margin 10.0 mm)"
+        );
+        assert_eq!(fake.received()[0][30], NEAREST_INDEX);
+        let none = NearestReport {
+            nearest: None,
+            margin: 0.0,
+        };
+        assert_eq!(nearest_text(&none), "none (no body)");
+        let old = FakeController::spawn(|_| vec![text("ER24 Cmd SQ bad index")]);
+        assert_eq!(client(&old).nearest().unwrap(), None);
     }
 
     #[test]

@@ -104,6 +104,7 @@ fn every_status_index_is_named() {
         armgate_protocol::client::signed::SIGNING_INDEX,
         armgate_protocol::client::branch::BRANCH_INDEX,
         armgate_protocol::client::signed::IDENTITY_INDEX,
+        armgate_protocol::client::NEAREST_INDEX,
     ];
     for index in indices {
         assert!(

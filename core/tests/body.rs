@@ -38,6 +38,13 @@ fn hits(envelope: &Envelope, config: &ValidRobot, q: &[f64]) -> Vec<Hit> {
     all
 }
 
+/// The nearest gap of the body at `q` (m).
+fn gap(envelope: &Envelope, config: &ValidRobot, q: &[f64]) -> f64 {
+    let mut placed: Placed = [Capsule::default(); MAX_CAPSULES];
+    envelope.place(&frames_at(config, q), &mut placed);
+    envelope.nearest(&placed).0
+}
+
 fn joint_mode(config: &ValidRobot, q0: &[f64]) -> (Controller, IdealArm) {
     let mut ctrl = Controller::new(config);
     let arm = IdealArm::new(Joints::from_slice(q0).unwrap());
@@ -142,11 +149,13 @@ fn accepted_joint_moves_never_touch_anything_on_the_way() {
     assert!(refused_anywhere > 0);
 }
 
-/// A joint-rate stream along the repro's way: the stream's own look-ahead holds it before a
-/// link would come to rest in the column (`WN13`, the cause in force the workspace), no stop is
-/// needed, and no measured pose ever has a link in the column.
+/// A joint-rate stream along the repro's way: as the body nears the column the stream slows
+/// down (no faster than a stop still ends within the gap, `clearance_scale`), then its look
+/// ahead holds it before a link would come to rest in the column, naming the link and the box
+/// (`WN13 Held: L6 hits B1`, the cause in force the workspace), one hold for as long as the
+/// same command is sent; no stop is needed, and no measured pose ever has a link in the column.
 #[test]
-fn a_stream_towards_the_column_holds_before_any_link_reaches_it() {
+fn a_stream_towards_the_column_slows_and_holds_before_any_link_reaches_it() {
     let config = common::robot("ranger-mk1");
     let envelope = Envelope::new(&config);
     let (mut ctrl, mut arm) = joint_mode(&config, &MK1_READY);
@@ -158,7 +167,10 @@ fn a_stream_towards_the_column_holds_before_any_link_reaches_it() {
     let longest = step.iter().fold(0.0f64, |m, s| m.max(s.abs()));
     let rates: Vec<f64> = step.iter().map(|s| s / longest * 0.07).collect();
     let period = config.control_period;
-    let mut held = None;
+    let (mut held, mut holds) = (None, Vec::new());
+    // (gap, joint speed) of every tick while moving.
+    let mut trace = Vec::new();
+    let mut last = arm.measured();
     for k in 1..4000 {
         ctrl.stream_joint_rates(&rates).unwrap();
         let out = ctrl.step(f64::from(k) * period, &arm.measured()).unwrap();
@@ -169,8 +181,26 @@ fn a_stream_towards_the_column_holds_before_any_link_reaches_it() {
             "tick {k}: {measured:?}"
         );
         assert_eq!(out.events.collision, None, "tick {k}");
-        if out.events.hold == Some(Hold::Workspace) {
+        let speed = measured
+            .iter()
+            .zip(last.iter())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+            / period;
+        last = measured;
+        if held.is_none() {
+            trace.push((gap(&envelope, &config, &measured), speed));
+        }
+        if let Some(Hold::Contact(hit)) = out.events.hold {
             held.get_or_insert(k);
+            if holds.last() != Some(&hit) {
+                holds.push(hit);
+            }
+        } else {
+            assert!(
+                held.is_none(),
+                "tick {k}: the hold ended under the same command"
+            );
         }
         if held.is_some_and(|h| k > h + 200) {
             break;
@@ -179,9 +209,35 @@ fn a_stream_towards_the_column_holds_before_any_link_reaches_it() {
     let held = held.expect("the stream never held");
     assert!(held > 10, "held at once: {held}");
     assert_eq!(
+        holds,
+        [Hit {
+            link: 6,
+            obstacle: Obstacle::Box(1)
+        }]
+    );
+    assert_eq!(
         ctrl.stop_cause().0,
         Some(armgate_core::motion::StopCause::Workspace)
     );
+    // At full speed while far, slower and slower over the last 5 cm before the hold.
+    let full = 0.07 * 0.999;
+    assert!(
+        trace.iter().any(|(g, s)| *g > 0.2 && *s > full),
+        "{trace:?}"
+    );
+    let near: Vec<_> = trace.iter().filter(|(g, _)| *g < 0.05).collect();
+    assert!(near.len() > 5, "{near:?}");
+    for pair in near.windows(2) {
+        assert!(pair[1].1 <= pair[0].1 + 1e-9, "{pair:?}");
+    }
+    let (closest, slowest) = near.last().unwrap();
+    let slowing = trace.iter().rev().find(|(_, s)| *s >= full).unwrap().0;
+    eprintln!(
+        "held at tick {held}, {closest} m from the box at {slowest} rad/s; slowing from {slowing} m"
+    );
+    assert!(*slowest < 0.5 * full, "{closest} m at {slowest} rad/s");
+    // The gentle stop's distance: about ten times the 2 mm a full-deceleration stop needs.
+    assert!((0.005..0.05).contains(&slowing), "{slowing}");
 }
 
 /// ur5's wrist links lie close by design: wrist 3's sphere (link 6) stays 1.2 cm from wrist

@@ -62,6 +62,43 @@ fn every_shipped_robot_has_a_body_and_starts_clear() {
     }
 }
 
+/// `gaps` returns the nearest gap of what it did not visit: at home (nothing within the
+/// margin) every robot's nearest gap; with everything within 5 cm visited, the nearest beyond.
+#[test]
+fn gaps_return_the_nearest_of_what_they_did_not_visit() {
+    for (name, robot) in all_robots() {
+        let (envelope, placed) = placed(&robot, &robot.home());
+        let (gap, _) = envelope.nearest(&placed);
+        let mut visited = 0;
+        let beyond = envelope.gaps(&placed, None, 0.0, &mut |_, _, _| {
+            visited += 1;
+            true
+        });
+        assert_eq!((beyond, visited), (gap, 0), "{name}");
+        let (mut all, mut near) = (Vec::new(), Vec::new());
+        envelope.gaps(&placed, None, f64::INFINITY, &mut |_, g, _| {
+            all.push(g);
+            true
+        });
+        let beyond = envelope.gaps(&placed, None, 0.05, &mut |_, g, _| {
+            near.push(g);
+            true
+        });
+        let margin = envelope.margin();
+        let expected = all
+            .iter()
+            .copied()
+            .filter(|g| *g > margin + 0.05)
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(beyond, expected, "{name}");
+        assert!(near.iter().all(|g| *g <= margin + 0.05), "{name}");
+        assert_eq!(
+            near.len() + all.iter().filter(|g| **g > margin + 0.05).count(),
+            all.len()
+        );
+    }
+}
+
 #[test]
 fn a_home_pose_in_collision_is_refused_naming_the_link_and_obstacle() {
     // ranger-mk1's stowed forearm lies 5.2 cm above the column: a 6 cm forearm reaches in.

@@ -109,11 +109,12 @@ pub fn check_notice(bytes: &[u8; MESSAGE_LEN]) {
         Notice::ViaPointMissed,
         Notice::Held(Hold::Workspace),
     ];
-    // A stream held at a joint limit names the joint and the limit; stops name their time, their
+    // A stream held at a joint limit names the joint and the limit, one held before a link's
+    // contact the link and the obstacle; stops name their time, their
     // joint and its lag, or (for the arm's body) the link and the obstacle.
     let named = matches!(
         notice,
-        Notice::Held(Hold::JointLimit(_))
+        Notice::Held(Hold::JointLimit(_) | Hold::Contact(_))
             | Notice::ClientSilent(_)
             | Notice::FollowingError(_)
             | Notice::Collision(_)

@@ -56,7 +56,7 @@ from .errors import (
 )
 from .pose import Pose
 from .signing import Signer
-from .status import DriveState, Holder, Mode, Motion, Status, StopCause
+from .status import DriveState, Holder, Mode, Motion, Nearest, Status, StopCause
 from .streaming import VelocityStream
 from .waiting import WaitOptions
 
@@ -95,6 +95,7 @@ __all__ = [
     "LinkShared",
     "Mode",
     "Motion",
+    "Nearest",
     "NotUnderstood",
     "OutsideWorkspace",
     "Pose",

@@ -35,7 +35,7 @@ from .errors import (
     SignatureMismatch,
 )
 from .pose import Pose, PoseLike, as_pose
-from .status import Holder, Mode, Status, StopCause, address_of
+from .status import Holder, Mode, Nearest, Status, StopCause, address_of
 from .waiting import Waiting, WaitOptions
 
 DEFAULT_PORT = 7031
@@ -207,6 +207,16 @@ class Arm(Waiting, Streaming):
         joint-limit hold or a following error; ``(None, None)`` for none (or from a controller without index 2)."""
         cause, joint, _ = self._stop_report()
         return cause, joint
+
+    def get_nearest(self) -> Optional[Nearest]:
+        """``SQ`` index 7: the smallest gap between the arm's body (its links' capsules) and the
+        exclusion boxes, the workspace bounds and its other links at the measured pose, with
+        the pair; None when there is nothing to measure, or from a controller without it."""
+        try:
+            values = self.request("SQ", index=7).values
+        except (BadIndex, NotUnderstood):
+            return None
+        return Nearest.from_values(values)
 
     def _stop_report(self) -> Tuple[Optional[StopCause], Optional[int], Optional[str]]:
         """``SQ`` index 2: the cause, the joint (1-based) and the address of the client that

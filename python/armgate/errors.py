@@ -297,7 +297,9 @@ class JointLimitWarning(ControllerWarning):
 
 class HeldAtWorkspaceEdge(ControllerWarning):
     """``WN13 Held at workspace edge.``: a velocity stream holds the tool at the workspace's
-    edge or before an exclusion box."""
+    edge or before an exclusion box; ``WN13 Held: L6 hits B1``: it holds the arm before link 6
+    would touch box 1 (``L5 hits L2``: link 2; ``L6 out``: the bounds), after slowing as the
+    gap shrank (:meth:`~armgate.Arm.get_nearest` tells the gap)."""
 
 
 class LinkShared(ControllerWarning):

@@ -164,3 +164,53 @@ class Status:
             uptime=float(f[6]),
             name=name.split(b"\0", 1)[0].decode("ascii", "replace"),
         )
+
+
+OBSTACLE_KINDS = [(0, "box", "B"), (1, "link", "L"), (2, "bounds", "out")]
+"""``SQ`` index 7's f2: the kind of obstacle, its name and the short form the texts use
+(``L6 hits B1``, ``L5 hits L2``, ``L6 out``); ``protocol/grammar.json`` lists the same
+(``obstacles``, checked by ``test_grammar.py``)."""
+
+
+@dataclass(frozen=True)
+class Nearest:
+    """The smallest gap between the arm's body and what it is kept from, at the measured pose,
+    and the pair (``SQ`` index 7)."""
+
+    gap: float
+    """The gap (m) between the capsules' surfaces, or to a box or the bounds' faces; 0 or
+    less: touching or overlapping."""
+    link: int
+    """The link (0 the base; the last carries the tool)."""
+    obstacle: str
+    """``"box"``, ``"link"`` (another link of the arm) or ``"bounds"`` (the workspace's)."""
+    number: int
+    """The box's number (from 1, in the robot file's order) or the other link's; 0 for the
+    bounds."""
+    margin: float
+    """The robot file's ``collision.margin`` (m)."""
+
+    @property
+    def pair(self) -> str:
+        """The pair as the texts name it: ``"L6 B1"``, ``"L5 L2"``, ``"L6 out"``."""
+        short = next(s for _, name, s in OBSTACLE_KINDS if name == self.obstacle)
+        return f"L{self.link} {short}" if self.obstacle == "bounds" else f"L{self.link} {short}{self.number}"
+
+    @classmethod
+    def from_values(cls, values: Sequence[float]) -> Optional["Nearest"]:
+        """The report from the index-7 reply's values; None when there is nothing to measure
+        (f1 = -1: no body, or no measurement yet)."""
+        f = list(values)
+        if f[1] < 0:
+            return None
+        kind = int(round(f[2]))
+        names = {k: name for k, name, _ in OBSTACLE_KINDS}
+        if kind not in names:
+            raise ValueError(f"SQ 7: obstacle kind {f[2]} is none of {sorted(names)}")
+        return cls(
+            gap=float(f[0]),
+            link=int(round(f[1])),
+            obstacle=names[kind],
+            number=int(round(f[3])),
+            margin=float(f[4]),
+        )

@@ -81,3 +81,16 @@ def test_the_signing_figures_are_the_protocols() -> None:
     assert signing.TIMESTAMP_UNIT_US == figures["timestamp_unit_us"]
     assert signing.RESERVE_AHEAD == figures["reserve_ahead"]
     assert signing.RESERVE_SECONDS == 2.0
+
+
+def test_obstacle_kinds_are_the_protocols() -> None:
+    from armgate.status import OBSTACLE_KINDS, Nearest
+
+    table = [(row["kind"], row["name"], row["short"]) for row in TABLE["obstacles"]]
+    assert OBSTACLE_KINDS == table
+    near = Nearest.from_values([0.0125, 5.0, 1.0, 2.0, 0.01, 0.0, 0.0])
+    assert near == Nearest(gap=0.0125, link=5, obstacle="link", number=2, margin=0.01)
+    assert near.pair == "L5 L2"
+    assert Nearest.from_values([0.1, 6.0, 0.0, 1.0, 0.0, 0.0, 0.0]).pair == "L6 B1"
+    assert Nearest.from_values([0.1, 6.0, 2.0, 0.0, 0.0, 0.0, 0.0]).pair == "L6 out"
+    assert Nearest.from_values([0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0]) is None

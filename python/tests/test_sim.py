@@ -85,6 +85,18 @@ def test_recalibrate_then_a_cartesian_move_arrives(mk1) -> None:  # type: ignore
         assert back is not None and back.distance(start) <= 0.001
 
 
+def test_the_nearest_gap_names_the_pair(mk1) -> None:  # type: ignore[no-untyped-def]
+    """``SQ`` 7 at the comfortable pose: the forearm (link 3) 33.8 cm from the column (box 1),
+    as the core's capsules place it; the margin is the robot file's (0)."""
+    with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
+        arm.recalibrate(COMFORTABLE)
+        near = arm.get_nearest()
+        assert near is not None
+        assert (near.link, near.obstacle, near.number, near.pair) == (3, "box", 1, "L3 B1")
+        assert near.gap == pytest.approx(0.3378, abs=1e-3)
+        assert near.margin == 0.0
+
+
 def test_streamed_twist_and_joint_rates_move_the_arm(mk1) -> None:  # type: ignore[no-untyped-def]
     with armgate.Arm("127.0.0.1", port=mk1.port) as arm:
         arm.recalibrate(COMFORTABLE)

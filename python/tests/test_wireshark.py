@@ -247,6 +247,10 @@ def crafted(tmp_path_factory: pytest.TempPathFactory) -> dict:
                                        (1_767_225_600 - 1_420_070_400) * 100_000)),
         _udp(40000, 7031, armgate.wire.encode("PS") + b"\x01\x02\x03"),
         _udp(7031, 40000, wire_reply("QS", [1, 12, 0, 1, 2, 3, 4], 4)),
+        # 20: the nearest gap (QS index 7): link 6, 12.5 mm from box 1; 21: a stream held
+        # before that contact.
+        _udp(7031, 40000, wire_reply("QS", [0.0125, 6, 0, 1, 0, 0, 0], 7)),
+        _udp(7031, 40000, b"WN13 Held: L6 hits B1".ljust(31, b"\0")),
     ]
     path = tmp_path_factory.mktemp("crafted") / "crafted.pcapng"
     path.write_bytes(_pcapng(packets))
@@ -265,6 +269,15 @@ def test_the_status_reply_is_decoded(tshark: str, crafted: dict) -> None:
     assert rows[1][0] == "QS" and rows[1][5] == "ranger-mk2"
     text = fields(tshark, crafted, "frame.number == 3", "armgate.severity", "armgate.code")
     assert text == [["warning", "27"]]
+
+
+def test_the_nearest_gap_and_a_held_stream_are_decoded(tshark: str, crafted: dict) -> None:
+    rows = fields(tshark, crafted, "frame.number >= 20", "armgate.nearest.link",
+                  "armgate.nearest.kind", "armgate.nearest.number", "armgate.code",
+                  "armgate.reason", "_ws.col.Info")
+    assert rows[0][:3] == ["6", "0", "1"]
+    assert "nearest=12.5 mm L6 B1" in rows[0][5]
+    assert rows[1][3:5] == ["13", "Held: L6 hits B1"]
 
 
 def test_emergencies_and_other_frames_are_decoded(tshark: str, crafted: dict) -> None:

@@ -210,7 +210,7 @@ fn measure_robot(config: &ValidRobot) -> Results {
             *v *= velocities.uniform(-1.0, 1.0);
         }
         let (ticks, _) = measure(|| {
-            black_box(&mut body).check_tick(&chain, black_box(&q), &v, f64::INFINITY, None)
+            black_box(&mut body).check_tick(&chain, black_box(&q), (&v, f64::INFINITY), None, false)
         });
         results.body_tick.add(ticks);
 

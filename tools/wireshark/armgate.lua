@@ -62,6 +62,7 @@ local text_codes = {
     [10] = "arm did not stop",
     [11] = "arm did not start",
     [12] = "joint limit (set-point clamped)",
+    [13] = "stream held (workspace edge, or before a link's contact)",
     [20] = "command rejected",
     [21] = "workspace limit",
     [22] = "inverse kinematics divergence",
@@ -132,6 +133,11 @@ local f = {
     status_refusals = ProtoField.float("armgate.status.refusals", "Refusals since start"),
     status_uptime = ProtoField.float("armgate.status.uptime", "Seconds since start"),
     status_name = ProtoField.string("armgate.status.name", "Robot name"),
+    nearest_gap = ProtoField.float("armgate.nearest.gap", "Nearest gap (m)"),
+    nearest_link = ProtoField.float("armgate.nearest.link", "Link (-1: nothing measured)"),
+    nearest_kind = ProtoField.float("armgate.nearest.kind", "Obstacle kind"),
+    nearest_number = ProtoField.float("armgate.nearest.number", "Obstacle number"),
+    nearest_margin = ProtoField.float("armgate.nearest.margin", "Margin (m)"),
     signing_policy = ProtoField.float("armgate.signing.policy", "Signing policy"),
     signing_signed = ProtoField.float("armgate.signing.signed", "Signed datagrams served"),
     signing_unsigned = ProtoField.float("armgate.signing.unsigned", "Unsigned datagrams served"),
@@ -285,9 +291,32 @@ local function dissect_signature(tree, tvb)
     return string.format(" [signed link=%d t=%s]", link, tostring(timestamp))
 end
 
+-- QS index 7: the body's nearest gap and its pair; the kinds as protocol/grammar.json's
+-- "obstacles" (name, short form of the texts).
+local obstacle_kinds = { [0] = { "box", "B" }, [1] = { "link", "L" }, [2] = { "bounds", "out" } }
+
+local function dissect_nearest(tree, tvb)
+    local fields = { f.nearest_gap, f.nearest_link, f.nearest_kind, f.nearest_number, f.nearest_margin }
+    local v = {}
+    for k, field in ipairs(fields) do
+        local range = tvb(2 + 4 * (k - 1), 4)
+        v[k] = range:le_float()
+        local item = tree:add_le(field, range)
+        local kind = obstacle_kinds[math.floor(v[k] + 0.5)]
+        if k == 3 and kind then item:append_text(" (" .. kind[1] .. ")") end
+    end
+    if v[2] < 0 then return " nearest=none" end
+    local kind = obstacle_kinds[math.floor(v[3] + 0.5)] or { "?", "?" }
+    local what = kind[2] == "out" and "out" or string.format("%s%d", kind[2], math.floor(v[4] + 0.5))
+    return string.format(" nearest=%.1f mm L%d %s", v[1] * 1000, math.floor(v[2] + 0.5), what)
+end
+
 local function dissect_status(tree, tvb, index)
     if index == 4 then
         return dissect_signing(tree, tvb)
+    end
+    if index == 7 then
+        return dissect_nearest(tree, tvb)
     end
     if index == 1 then
         local name = tvb(2, 28):stringz()

@@ -6,12 +6,16 @@ use super::{Cli, CliError, joint_count};
 use crate::{Client, NO_READING, Pose};
 
 /// `armgate status`: the state (SQ 0), the stop cause and who set it (SQ 2), the holder, the
-/// clients and the watchdog (SQ 3) and, with --key, the signing counters.
+/// clients and the watchdog (SQ 3), the body's nearest gap (SQ 7) and, with --key, the
+/// signing counters.
 pub(super) fn status(cli: &Cli, client: &mut Client, out: &mut impl Write) -> Result<(), CliError> {
     let mut status = client.status()?;
     status.cause = client.stop_cause()?;
     status.session = client.session()?;
     writeln!(out, "{status}")?;
+    if let Some(nearest) = client.nearest()? {
+        writeln!(out, "nearest    {}", crate::status::nearest_text(&nearest))?;
+    }
     if cli.controller.key.is_some() {
         let s = client.signing_report()?;
         writeln!(
@@ -98,11 +102,12 @@ mod tests {
     #[test]
     fn status_prints_the_state() {
         let fake = FakeController::spawn(|d| {
-            vec![status_reply(
-                d,
-                [1.0, 4.0, 33.0, 8.0, 0.0, 5.0, 9.5],
-                "ranger-mk2",
-            )]
+            let values = if d[30] == armgate_protocol::client::NEAREST_INDEX {
+                [0.0125, 5.0, 1.0, 2.0, 0.0, 0.0, 0.0]
+            } else {
+                [1.0, 4.0, 33.0, 8.0, 0.0, 5.0, 9.5]
+            };
+            vec![status_reply(d, values, "ranger-mk2")]
         });
         let (result, out) = run_with(&fake, &["status"]);
         result.unwrap();
@@ -111,6 +116,7 @@ mod tests {
             "mode       joint (1)",
             "drives     faulted (ER33)",
             "refused    5 requests",
+            "nearest    12.5 mm, link 5 to link 2 (margin 0.0 mm)",
         ] {
             assert!(out.contains(line), "{line}: {out}");
         }

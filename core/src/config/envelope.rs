@@ -295,7 +295,9 @@ impl Envelope {
     /// Calls `visit(hit, gap, rate)` for everything the placed capsules are checked against
     /// whose gap (m) is within `within` of the margin, until `visit` returns false: each
     /// capsule against the boxes (and the tool's against the bounds' faces), and each pair.
-    /// `rate`: how far the gap can close when the joints step by `step` (0 without one). Out
+    /// `rate`: how far the gap can close when the joints step by `step` (0 without one).
+    /// Returns the smallest gap of those not visited (infinite for none), up to where `visit`
+    /// stopped: a stream's nearest gap beyond the margin, without a call for every gap. Out
     /// of line on the microcontroller: one copy for its callers.
     #[cfg_attr(target_os = "none", inline(never))]
     pub fn gaps(
@@ -304,14 +306,19 @@ impl Envelope {
         step: Option<&[f64]>,
         within: f64,
         visit: &mut dyn FnMut(Hit, f64, f64) -> bool,
-    ) {
+    ) -> f64 {
         let near = self.margin + within;
+        let mut beyond = f64::INFINITY;
         let rate = |i: usize, inner: u8| step.map_or(0.0, |s| self.sweep(i, s, inner));
         for (i, (c, p)) in self.capsules.iter().zip(placed).enumerate() {
             if c.link == self.tool {
                 let gap = p.clearance_in(&self.bounds);
-                if gap <= near && !visit(hit(c.link, Obstacle::Bounds), gap, rate(i, 0)) {
-                    return;
+                if gap <= near {
+                    if !visit(hit(c.link, Obstacle::Bounds), gap, rate(i, 0)) {
+                        return beyond;
+                    }
+                } else {
+                    beyond = beyond.min(gap);
                 }
             }
             for (k, bx) in self.boxes.iter().enumerate() {
@@ -320,8 +327,12 @@ impl Envelope {
                 }
                 let gap = p.gap_to_box(bx);
                 let obstacle = Obstacle::Box((k as u8).saturating_add(1));
-                if gap <= near && !visit(hit(c.link, obstacle), gap, rate(i, 0)) {
-                    return;
+                if gap <= near {
+                    if !visit(hit(c.link, obstacle), gap, rate(i, 0)) {
+                        return beyond;
+                    }
+                } else {
+                    beyond = beyond.min(gap);
                 }
             }
         }
@@ -338,10 +349,15 @@ impl Envelope {
             // moves against the inner one's frame.
             let (outer, inner) = if a.link > b.link { (i, b) } else { (j, a) };
             let name = hit(a.link.max(b.link), Obstacle::Link(inner.link));
-            if gap <= near && !visit(name, gap, rate(outer, inner.link)) {
-                return;
+            if gap <= near {
+                if !visit(name, gap, rate(outer, inner.link)) {
+                    return beyond;
+                }
+            } else {
+                beyond = beyond.min(gap);
             }
         }
+        beyond
     }
 
     /// Calls `visit` with every hit of the placed capsules and the gap it was found at, until

@@ -9,6 +9,9 @@
 //!   `ER25 Cmd jB L3 hits B1 at 40%`.
 //! * **Every tick** ([`Body::check_tick`]) the commanded pose and the pose where a stop begun
 //!   now would end are checked; a new hit stops the motion (`ER21 L3 hits B1`).
+//! * **Streams** look ahead ([`Body::ahead`]) and slow by the nearest gap, the tick's own
+//!   check's ([`Body::clearance_at`]); they hold within [`CONTACT`] of the margin
+//!   (`WN13 Held: L3 hits B1`). `SQ` 7 reports the nearest gap ([`Body::nearest_at`]).
 //!
 //! Hits present where a motion starts (the arm already in contact) do not count, so the arm can
 //! always be driven out; only new ones do.
@@ -49,6 +52,9 @@ pub struct Body {
     max_checks: u16,
     /// The hits of the last tick's poses: a stop is for new ones.
     present: Vec<Hit, PRESENT>,
+    /// The last tick's command and its nearest gap beyond the margin (m): where a stream's
+    /// next tick starts, measured once ([`clearance_at`](Self::clearance_at)).
+    clearance: Option<(Joints, f64)>,
 }
 
 impl Body {
@@ -61,6 +67,7 @@ impl Body {
             // Saturating cast: at least one check.
             max_checks: ((config.control_period * CHECKS_PER_SECOND) as u16).max(1),
             present: Vec::new(),
+            clearance: None,
         }
     }
 
@@ -171,6 +178,17 @@ impl Body {
         Err(Refusal::NearEdge(PathPoint::at(done)))
     }
 
+    /// The smallest gap at pose `q` (m) and what it is between (`SQ` index 7); none for an
+    /// empty body.
+    pub fn nearest_at(&self, chain: &Chain, q: &Joints) -> Option<(f64, Hit)> {
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if !self.place(chain, q, &mut placed) {
+            return None;
+        }
+        let (gap, hit) = self.envelope.nearest(&placed);
+        hit.map(|hit| (gap, hit))
+    }
+
     /// The hits at pose `q` (up to [`PRESENT`]): what a motion from there may leave.
     pub fn present_at(&self, chain: &Chain, q: &Joints) -> Vec<Hit, PRESENT> {
         let mut present = Vec::new();
@@ -212,13 +230,15 @@ impl Body {
     /// it passed the goal by up to `v · period` and more (the estimate overshoots the plan's
     /// own deceleration), off the checked way, and a move the check accepted was stopped
     /// `ER21` near its end (issue 35). Streams and bending ways give none.
+    /// With `measure` (a stream runs: it slows by the gap) the command's nearest gap beyond
+    /// the margin is kept for [`clearance_at`](Self::clearance_at).
     pub fn check_tick(
         &mut self,
         chain: &Chain,
         q: &Joints,
-        velocity: &Joints,
-        path_rate: f64,
+        (velocity, path_rate): (&Joints, f64),
         end: Option<&Joints>,
+        measure: bool,
     ) -> Option<Hit> {
         if self.envelope.is_empty() {
             return None;
@@ -240,12 +260,15 @@ impl Body {
         let mut placed = [Capsule::default(); MAX_CAPSULES];
         // At rest (no velocity) the stop ends where the arm is: one pose to check.
         let poses = if rest == *q { 1 } else { 2 };
-        for pose in [q, &rest].into_iter().take(poses) {
+        self.clearance = None;
+        for (k, pose) in [q, &rest].into_iter().take(poses).enumerate() {
             if !self.place(chain, pose, &mut placed) {
                 continue;
             }
             let present = &self.present;
-            self.envelope.hits(&placed, &mut |hit, _| {
+            // Every hit is visited, so what is not is beyond the margin: its nearest is the
+            // command's gap, measured by the check anyway.
+            let beyond = self.envelope.gaps(&placed, None, 0.0, &mut |hit, _, _| {
                 if !present.contains(&hit) && new.is_none() {
                     new = Some(hit);
                 }
@@ -255,8 +278,54 @@ impl Body {
                 }
                 true
             });
+            if k == 0 && measure {
+                self.clearance = Some((*q, beyond));
+            }
         }
         self.present = now;
         new
+    }
+
+    /// The nearest gap beyond the margin (m, infinite for none) at `q`, if `q` is the command
+    /// the last tick checked: a stream's tick starts from there.
+    pub fn clearance_at(&self, q: &Joints) -> Option<f64> {
+        self.clearance
+            .filter(|(checked, _)| checked == q)
+            .map(|(_, gap)| gap)
+    }
+
+    /// A stream's look ahead: at `rest` (where a stop begun after its tick would end), the
+    /// first thing a link would come within [`CONTACT`] of the margin of that it is not that
+    /// near at `q` (the stream holds before it), and the nearest gap beyond the margin (m,
+    /// infinite for none; the stream slows by it). One placement of `rest`; `q` is placed
+    /// only if `rest` has anything that near.
+    pub fn ahead(&self, chain: &Chain, q: &Joints, rest: &Joints) -> (Option<Hit>, f64) {
+        let mut placed = [Capsule::default(); MAX_CAPSULES];
+        if self.envelope.is_empty() || !self.place(chain, rest, &mut placed) {
+            return (None, f64::INFINITY);
+        }
+        let margin = self.envelope.margin();
+        let (mut near, mut nearest): (Vec<Hit, PRESENT>, _) = (Vec::new(), f64::INFINITY);
+        // Those within contact are visited; the rest's nearest comes back.
+        let beyond = self
+            .envelope
+            .gaps(&placed, None, CONTACT, &mut |hit, gap, _| {
+                if gap > margin {
+                    nearest = nearest.min(gap);
+                }
+                // Full: the first ones are named.
+                let _ = near.push(hit);
+                true
+            });
+        let nearest = nearest.min(beyond);
+        if near.is_empty() || !self.place(chain, q, &mut placed) {
+            return (near.first().copied(), nearest);
+        }
+        let mut now: Vec<Hit, PRESENT> = Vec::new();
+        self.envelope
+            .gaps(&placed, None, CONTACT, &mut |hit, _, _| {
+                now.push(hit).is_ok()
+            });
+        (near.into_iter().find(|h| !now.contains(h)), nearest)
     }
 }

@@ -268,9 +268,9 @@ impl Controller {
             && let Some(hit) = self.body.check_tick(
                 &self.chain,
                 q,
-                self.supervisor.velocity(),
-                path_rate,
+                (self.supervisor.velocity(), path_rate),
                 end.as_ref(),
+                self.stream.is_active(),
             )
             && !self.supervisor.is_stopping()
         {

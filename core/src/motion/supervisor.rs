@@ -200,7 +200,7 @@ impl Supervisor {
             Some(Hold::JointLimit(bound)) => {
                 (Some(StopCause::JointLimit), bound.joint.checked_sub(1))
             }
-            Some(Hold::Workspace) => (Some(StopCause::Workspace), None),
+            Some(Hold::Workspace | Hold::Contact(_)) => (Some(StopCause::Workspace), None),
             None => (None, None),
         };
         self.holding = hold.is_some();

@@ -26,8 +26,8 @@
 //!   reasons ([`Rejection`], [`WorkspaceReason`], [`JointBound`], [`Hit`]), written and read back
 //!   ([`Notice::parse`], [`NoticeError`]); [`Header`]: the parts every text shares, any
 //!   controller's (code, named command, detail; [`DRIVE_FAULT_CODES`]).
-//! * [`StatusReport`], [`RobotName`], [`CauseReport`] and [`SessionReport`]: the replies to the
-//!   status request `SQ` (indices 0, 1, 2, 3).
+//! * [`StatusReport`], [`RobotName`], [`CauseReport`], [`SessionReport`] and
+//!   [`NearestReport`]: the replies to the status request `SQ` (indices 0, 1, 2, 3, 7).
 //! * [`Error`]: why a datagram is not a request (or reply).
 //! * [`branch`] and [`redundancy`]: the configuration of a closed-form IK solution (`KG`,
 //!   `KS`, `KR`).
@@ -46,6 +46,7 @@ mod header;
 mod hit;
 mod message;
 mod mode;
+mod nearest;
 mod notice;
 mod orientation;
 mod reason;
@@ -70,6 +71,7 @@ pub use header::{DRIVE_FAULT_CODES, Header, NoticeError};
 pub use hit::{Hit, Obstacle};
 pub use message::{MESSAGE_LEN, MIN_LEN, Message, VALUES};
 pub use mode::Mode;
+pub use nearest::{NEAREST_INDEX, NearestReport, OBSTACLE_KINDS};
 pub use notice::Notice;
 pub use orientation::{Quaternion, rpy};
 pub use reason::{

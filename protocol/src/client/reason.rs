@@ -430,4 +430,7 @@ pub enum Hold {
     JointLimit(JointBound),
     /// `WN13 Held at workspace edge.`: the tool would leave the workspace or enter a box.
     Workspace,
+    /// `WN13 Held: L3 hits B1`: a link would come to rest within the margin of a box, another
+    /// link or the bounds (issue 35); the link and what it would hit are named.
+    Contact(Hit),
 }

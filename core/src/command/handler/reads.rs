@@ -1,10 +1,12 @@
 //! The requests that only read: the measured pose (`PS`) and joints (`jP`), the drives'
-//! temperatures (`TM`) and the status reports of `SQ` that are seven floats.
+//! temperatures (`TM`) and the status reports of `SQ` that are seven floats (among them the
+//! body's nearest gap, index 7).
 
 use armgate_protocol::client::branch::BRANCH_INDEX;
 use armgate_protocol::client::signed::{IDENTITY_INDEX, SIGNING_INDEX};
 use armgate_protocol::client::{
-    CAUSE_INDEX, CauseReport, NO_JOINT_TEMPERATURE, Notice, Reply, Request, STATUS_INDEX,
+    CAUSE_INDEX, CauseReport, NEAREST_INDEX, NO_JOINT_TEMPERATURE, NearestReport, Notice, Reply,
+    Request, STATUS_INDEX,
 };
 
 use core::net::SocketAddr;
@@ -75,6 +77,15 @@ impl CommandHandler {
                     self.controller.chain(),
                     present.as_ref(),
                 ))
+            }
+            NEAREST_INDEX => {
+                let (body, chain) = (self.controller.body(), self.controller.chain());
+                let nearest = self.controller.measured().and_then(|(q, _)| {
+                    let (gap, hit) = body.nearest_at(chain, &q)?;
+                    Some((gap as f32, hit))
+                });
+                let margin = body.envelope().margin() as f32;
+                Ok(NearestReport { nearest, margin }.to_reply())
             }
             _ => Err(Notice::BadIndex(req.command)),
         }

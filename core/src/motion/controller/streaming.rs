@@ -29,8 +29,11 @@ impl Controller {
                 let bound = JointBound::new(i, upper, limit, PathPoint::Goal);
                 Some(Hold::JointLimit(bound))
             }
-            None if step.workspace_limit => Some(Hold::Workspace),
-            None => None,
+            None => match step.contact {
+                Some(hit) => Some(Hold::Contact(hit)),
+                None if step.workspace_limit => Some(Hold::Workspace),
+                None => None,
+            },
         };
         self.supervisor.hold(events.hold);
         step

@@ -24,10 +24,16 @@
 //!    the point where the arm could stop, it ramps to rest instead; a next set-point outside it
 //!    is not commanded at all (the arm holds). An arm already outside moves freely, so that it
 //!    can be driven out. The same for the whole arm ([`Body`]): a link that would come to rest
-//!    in a box or another link it does not touch now ramps the stream to rest (`WN13`).
+//!    in a box or another link it does not touch now ramps the stream to rest and holds it
+//!    there until the command changes (`WN13 Held: L3 hits B1`, told once);
+//! 5. **clearance**: before that, the speed falls as the body nears an obstacle: no faster
+//!    than a gentle stop still ends within the gap less the margin, zero at the margin
+//!    ([`clearance`]; the cap found in one tick holds for the next); within
+//!    [`CONTACT`](super::body::CONTACT) of the margin where it would stop, the stream holds.
 //!
 //! The set-point is `q + v·T`. Each loop runs over the joints; no iteration is unbounded.
 
+mod clearance;
 mod damping;
 mod joint_margin;
 mod null_space;
@@ -35,11 +41,12 @@ mod pseudo_inverse;
 mod ramp;
 mod reference;
 
+use clearance::speed_cap;
 pub use damping::{MAX_DAMPING, SINGULAR_THRESHOLD};
 use damping::{SingularDirection, singularity_damping};
 pub use joint_margin::MARGIN_SHARE;
 
-use armgate_protocol::client::TwistFrame;
+use armgate_protocol::client::{Hit, TwistFrame};
 
 use super::body::Body;
 use super::joint_stop::StopLimits;
@@ -90,6 +97,8 @@ pub struct StreamStep {
     /// A joint held at the margin before its limit: its index, and whether the limit is its
     /// maximum.
     pub held_joint: Option<(usize, bool)>,
+    /// Held before a link's contact: the link and what it would hit.
+    pub contact: Option<Hit>,
 }
 
 /// The state of a velocity stream: the latest command, its age and the joint velocity.
@@ -120,6 +129,12 @@ pub struct VelocityStream {
     reference: PathReference,
     /// The last tick's damping (0 away from singularities).
     damping: f64,
+    /// The largest share of a joint's speed limit ([`speed_share`](Self::speed_share)) the
+    /// next tick may ask for, near an obstacle ([`clearance`]); infinite away from any.
+    clearance_cap: f64,
+    /// Held before a link's contact: at rest until a different command arrives, so that the
+    /// hold is told once.
+    contact: Option<Hit>,
 }
 
 impl VelocityStream {
@@ -143,12 +158,17 @@ impl VelocityStream {
             singular: SingularDirection::default(),
             reference: PathReference::default(),
             damping: 0.0,
+            clearance_cap: f64::INFINITY,
+            contact: None,
         }
     }
 
     /// Takes a new command (valid for [`TIMEOUT_PERIODS`] ticks from the next one). The caller
     /// has checked its numbers and, for joint rates, their count.
     pub fn command(&mut self, command: StreamCommand) {
+        if self.command != Some(command) {
+            self.contact = None;
+        }
         self.command = Some(command);
         self.age = 0;
     }
@@ -161,6 +181,8 @@ impl VelocityStream {
     /// Ends the stream at once (mode change, drives not taking commands).
     pub fn halt(&mut self) {
         self.command = None;
+        self.contact = None;
+        self.clearance_cap = f64::INFINITY;
         self.velocity.iter_mut().for_each(|v| *v = 0.0);
         self.acceleration.iter_mut().for_each(|a| *a = 0.0);
     }
@@ -253,25 +275,36 @@ impl VelocityStream {
                 scaled(&rates, brake)
             }
         };
+        // Near an obstacle no faster than a stop still fits in the room left; held before a
+        // contact, at rest until the command changes.
+        let target = match self.contact {
+            Some(_) => Joints::zeros(q.len()),
+            None => scaled(
+                &target,
+                1.0 / (self.speed_share(&target) / self.clearance_cap).max(1.0),
+            ),
+        };
         let mut velocity = self.ramp(&target);
         // Checked only from inside: an arm already outside (after a recalibration, at start-up)
         // may be driven out, as joint moves may.
         let allowed = |q: &Joints| workspace.allows(&tool_pose(chain, q).translation.vector);
         let mut workspace_limit = false;
         let mut inside_now = None;
-        let rest = self.resting_point(q, &velocity);
+        let (rest, steady, braking) = self.resting_point(q, &velocity);
         // The whole arm too: a link that would come to rest in contact with something it
         // does not touch now holds the stream before it (issue 35), as the tool point does;
-        // seen from the next set-point, as the tick's own check of the body sees it.
-        let body_blocked = || {
-            let rest = advance(&rest, &velocity, self.period);
-            body.new_hit(chain, &rest, &[]).is_some()
-                && body
-                    .new_hit(chain, &rest, &body.present_at(chain, q))
-                    .is_some()
-        };
-        if (!allowed(&rest) && *inside_now.get_or_insert(allowed(q))) || body_blocked() {
-            workspace_limit = true;
+        // seen from the next set-point, as the tick's own check of the body sees it. The same
+        // look ahead sets the next tick's speed cap.
+        let (contact, gap_ahead) = body.ahead(chain, q, &advance(&rest, &velocity, self.period));
+        self.contact = self.contact.or(contact);
+        self.clearance_cap = body.clearance_at(q).map_or(f64::INFINITY, |gap| {
+            let room = gap - body.envelope().margin();
+            let times = (steady + self.period, braking);
+            speed_cap(room, gap - gap_ahead, times, self.speed_share(&velocity))
+        });
+        let tool_blocked = !allowed(&rest) && *inside_now.get_or_insert(allowed(q));
+        if tool_blocked || self.contact.is_some() {
+            workspace_limit = tool_blocked;
             velocity = self.ramp(&Joints::zeros(q.len()));
         }
         let mut next = advance(q, &velocity, self.period);
@@ -299,6 +332,7 @@ impl VelocityStream {
             finished: !self.is_active(),
             workspace_limit,
             held_joint,
+            contact: self.contact,
         }
     }
 
@@ -360,17 +394,21 @@ impl VelocityStream {
             &pull,
         )
         .unwrap_or_else(|| Joints::zeros(q.len()));
-        let over = rates
-            .iter()
-            .zip(self.max_speed.iter())
-            .map(|(r, max)| libm::fabs(*r) / max)
-            .fold(1.0, f64::max);
+        let over = self.speed_share(&rates).max(1.0);
         // A non-finite ratio means rates that are not numbers: no motion.
         if over.is_finite() {
             scaled(&rates, 1.0 / over)
         } else {
             Joints::zeros(q.len())
         }
+    }
+
+    /// The largest share of its speed limit a joint of `v` moves at.
+    fn speed_share(&self, v: &Joints) -> f64 {
+        v.iter()
+            .zip(self.max_speed.iter())
+            .map(|(v, max)| libm::fabs(*v) / max)
+            .fold(0.0, f64::max)
     }
 
     /// The braking speed of joint `i` at `q` moving at `rate`.
@@ -398,8 +436,9 @@ impl VelocityStream {
     /// Where the arm would come to rest if it braked from `velocity` after this tick: about
     /// `q + v·(T + t_stop/2)`. With jerk limits the acceleration must first ramp out and the
     /// brake ramps in and out: `v` grows by the step's acceleration over the longest ramp to
-    /// full acceleration, and the time by two such ramps.
-    fn resting_point(&self, q: &Joints, velocity: &Joints) -> Joints {
+    /// full acceleration, and the time by two such ramps. With the time it moves on at speed
+    /// (`T` and the ramps) and `t_stop/2`, for the clearance cap.
+    fn resting_point(&self, q: &Joints, velocity: &Joints) -> (Joints, f64, f64) {
         let a_max = &self.limits.a_max;
         let ramp = self.limits.j_max.map_or(0.0, |j_max| {
             let ramps = a_max.iter().zip(j_max.iter()).map(|(a, j)| a / j);
@@ -416,7 +455,8 @@ impl VelocityStream {
             .zip(a_max.iter())
             .map(|(v, a)| libm::fabs(*v) / a)
             .fold(0.0, f64::max);
-        advance(q, &v, self.period + 0.5 * stop_time + 2.0 * ramp)
+        let (steady, braking) = (self.period + 2.0 * ramp, 0.5 * stop_time);
+        (advance(q, &v, steady + braking), steady, braking)
     }
 }
 

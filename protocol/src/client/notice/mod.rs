@@ -65,7 +65,8 @@ pub enum Notice {
     /// a stream) waited for a later tick (the per-tick work budget, or behind its client's
     /// planning request) and was cancelled by a stop that arrived after it.
     Cancelled(Command),
-    /// `WN12 jN at limit L` / `WN13 Held at workspace edge.`: a stream holds the arm there.
+    /// `WN12 jN at limit L` / `WN13 Held at workspace edge.` / `WN13 Held: L3 hits B1`: a
+    /// stream holds the arm there.
     Held(Hold),
     /// `WN14 link 7 shared`: signed datagrams from two sources interleave on
     /// this link id; the older timestamps of each are dropped as replays (docs/protocol.md,
@@ -114,7 +115,7 @@ impl Notice {
             Self::FollowingError(_) => 43,
             Self::BranchBeyondLimits(_) => 44,
             Self::Held(Hold::JointLimit(_)) => 12,
-            Self::Held(Hold::Workspace) => 13,
+            Self::Held(Hold::Workspace | Hold::Contact(_)) => 13,
             Self::LinkShared(_) => 14,
         }
     }
@@ -179,6 +180,7 @@ const CANCELLED: &str = "cancelled by ST";
 const BRANCH_BEYOND_LIMITS: &str = "branch past limits";
 const AT_LIMIT: &str = " at limit ";
 const LINK_SHARED: (&str, &str) = ("link ", " shared");
+const HELD: &str = "Held: ";
 
 /// The text after the code.
 struct Body(Notice);
@@ -214,6 +216,7 @@ impl fmt::Display for Body {
             Notice::Held(Hold::JointLimit(bound)) => {
                 write!(f, "j{}{AT_LIMIT}{}", bound.joint, Milli(bound.limit_milli))
             }
+            Notice::Held(Hold::Contact(hit)) => write!(f, "{HELD}{hit}"),
             Notice::LinkShared(link) => write!(f, "{}{link}{}", LINK_SHARED.0, LINK_SHARED.1),
             fixed => f.write_str(phrase(&PHRASES, &fixed).unwrap_or_default()),
         }
@@ -406,6 +409,13 @@ mod tests {
             (
                 Notice::Held(Hold::Workspace),
                 "WN13 Held at workspace edge.",
+            ),
+            (
+                Notice::Held(Hold::Contact(Hit {
+                    link: 3,
+                    obstacle: crate::client::Obstacle::Box(1),
+                })),
+                "WN13 Held: L3 hits B1",
             ),
         ];
         for (notice, expected) in cases {

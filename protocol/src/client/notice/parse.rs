@@ -74,8 +74,12 @@ impl Notice {
                 .and_then(decimal)
                 .map(Self::LinkShared),
             (Severity::Error, 21) => super::super::Hit::parse(body).map(Self::Collision),
+            (Severity::Warning, 13) => body
+                .strip_prefix(HELD)
+                .and_then(super::super::Hit::parse)
+                .map(|hit| Self::Held(Hold::Contact(hit))),
             // The fixed phrases, matched above.
-            (Severity::Warning, 13 | 22 | 27) => None,
+            (Severity::Warning, 22 | 27) => None,
             _ => return Err(NoticeError::UnknownCode),
         };
         parsed.ok_or(NoticeError::UnknownForm)

@@ -64,6 +64,9 @@ pub(super) fn samples() -> impl Iterator<Item = Notice> {
         Notice::Cancelled(IkGoal),
         Notice::Held(Hold::JointLimit(bound(5, true, 2.967, PathPoint::Goal))),
         Notice::Held(Hold::Workspace),
+        Notice::Held(Hold::Contact(hit(3, Obstacle::Box(1)))),
+        Notice::Held(Hold::Contact(hit(5, Obstacle::Link(2)))),
+        Notice::Held(Hold::Contact(hit(6, Obstacle::Bounds))),
         Notice::LinkShared(255),
         Notice::FollowingError(Lag::new(2, 4.4)),
         Notice::BranchBeyondLimits(IkGoal),
@@ -100,12 +103,13 @@ fn variant_number(notice: Notice) -> usize {
         Notice::FollowingError(_) => 19,
         Notice::BranchBeyondLimits(_) => 20,
         Notice::Collision(_) => 21,
+        Notice::Held(Hold::Contact(_)) => 22,
     }
 }
 
 #[test]
 fn every_variant_is_sampled() {
-    let mut seen = [false; 22];
+    let mut seen = [false; 23];
     for notice in samples() {
         seen[variant_number(notice)] = true;
     }

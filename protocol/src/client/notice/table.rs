@@ -1,6 +1,7 @@
 //! The grammar as one table for the clients in other languages (python/armgate/errors.py):
 //! every code with its severity, the notices it carries and whether it ends a motion, and a
-//! text of every form with the parts a client reads back (command, detail).
+//! text of every form with the parts a client reads back (command, detail); the names of
+//! the IK branch bits and of the obstacle kinds of `SQ` index 7.
 //!
 //! Committed as `protocol/grammar.json`. This test fails when the file is stale
 //! (`ARMGATE_BLESS=1 cargo test -p armgate-protocol grammar_table` rewrites it); Python's
@@ -120,6 +121,19 @@ fn table() -> String {
                 "    {{\"bit\": {bit}, \"clear\": [{}, \"{c}\"], \"set\": [{}, \"{s}\"]}}",
                 string(clear),
                 string(set)
+            )
+        })
+        .collect();
+    out.push_str(&rows.join(",\n"));
+    // The kinds of obstacle of `SQ` 7's f2 (`OBSTACLE_KINDS`), for Python's `Nearest`.
+    out.push_str("\n  ],\n  \"obstacles\": [\n");
+    let rows: Vec<String> = crate::client::OBSTACLE_KINDS
+        .iter()
+        .map(|(kind, name, short)| {
+            std::format!(
+                "    {{\"kind\": {kind}, \"name\": {}, \"short\": {}}}",
+                string(name),
+                string(short)
             )
         })
         .collect();
