@@ -51,15 +51,33 @@ impl std::fmt::Display for PlanError {
 impl std::error::Error for PlanError {}
 
 /// `count` random joint configurations within the limits whose nominal tool position the
-/// workspace allows and where the body touches nothing, from generator `seed`.
+/// workspace allows, from generator `seed` (simulated measurements, checks).
 pub fn random_poses(
     config: &ValidRobot,
     count: usize,
     seed: u64,
 ) -> Result<Vec<Vec<f64>>, PlanError> {
+    draw_poses(config, count, seed, None)
+}
+
+/// The same, keeping only those where the whole arm is clear of the exclusion boxes, the bounds
+/// and itself: the poses a measuring run can be sent to.
+pub fn reachable_poses(
+    config: &ValidRobot,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<Vec<f64>>, PlanError> {
+    draw_poses(config, count, seed, Some(&Body::new(config)))
+}
+
+fn draw_poses(
+    config: &ValidRobot,
+    count: usize,
+    seed: u64,
+    body: Option<&Body>,
+) -> Result<Vec<Vec<f64>>, PlanError> {
     let chain = Chain::new(config);
     let workspace = Workspace::new(&config.workspace);
-    let body = Body::new(config);
     let mut rng = SplitMix64::new(seed);
     let mut poses = Vec::with_capacity(count);
     for _ in 0..count.saturating_mul(DRAWS_PER_POSE) {
@@ -70,7 +88,7 @@ pub fn random_poses(
         if chain
             .forward(&q)
             .is_ok_and(|tool| workspace.allows(&tool.translation.vector))
-            && body.present_at(&chain, &q).is_empty()
+            && body.is_none_or(|body| body.present_at(&chain, &q).is_empty())
         {
             poses.push(q.to_vec());
         }
@@ -105,7 +123,7 @@ pub fn plan(
     candidates: usize,
     seed: u64,
 ) -> Result<Plan, PlanError> {
-    let pool = random_poses(config, candidates.max(count), seed)?;
+    let pool = reachable_poses(config, candidates.max(count), seed)?;
     let geometry = Geometry::new(config);
     let all = identify::analyse(&geometry, &geometry.candidates(set, measured_in), &pool);
     let params = &all.identified;
