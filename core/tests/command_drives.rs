@@ -115,7 +115,7 @@ fn sq_reports_booting_drives_in_literal_bytes() {
     assert_eq!(rig.request("SQ", [0.0; 7], 1), name);
     let mut bad = [0u8; 31];
     bad[..21].copy_from_slice(b"ER24 Cmd SQ bad index");
-    assert_eq!(rig.request("SQ", [0.0; 7], 7), bad);
+    assert_eq!(rig.request("SQ", [0.0; 7], 8), bad);
     // The refusal counted, and the snapshot a shell reads agrees with the wire.
     let status = rig.handler.status(&rig.drives);
     assert_eq!(
