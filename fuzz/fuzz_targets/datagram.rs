@@ -336,8 +336,11 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     // Answer what still waits: the cycle handles at least one request a tick (more wait for
-    // its planning budget), so one tick per request left, plus one, is enough.
-    for _ in 0..client.waiting.len() + client.unanswered.len() + 1 {
+    // its planning budget), and a planning request's work runs in slices, one a tick (a `KG`'s
+    // search, a line's check: `cycle::budget`), so each request left is given a few hundred
+    // ticks; the loop ends as soon as nothing waits.
+    const TICKS_PER_REQUEST: usize = 400;
+    for _ in 0..(client.waiting.len() + client.unanswered.len() + 1) * TICKS_PER_REQUEST {
         if client.waiting.is_empty() && client.unanswered.is_empty() {
             break;
         }
