@@ -326,6 +326,8 @@ impl Body {
             .gaps(&placed, None, CONTACT, &mut |hit, _, _| {
                 now.push(hit).is_ok()
             });
-        (near.into_iter().find(|h| !now.contains(h)), nearest)
+        // By reference: heapless's `IntoIter` drops what it did not yield through a slice
+        // index, a panic path panic-check found.
+        (near.iter().find(|h| !now.contains(h)).copied(), nearest)
     }
 }
