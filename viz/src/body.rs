@@ -132,19 +132,9 @@ impl BodyModel {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
     use super::*;
-    use armgate_core::config::load_file;
+    use crate::test_robots::robots;
     use armgate_core::math::Frame;
     use armgate_core::rng::SplitMix64;
-
-    fn robots() -> Vec<ValidRobot> {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots");
-        let mut files: Vec<_> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .collect();
-        files.sort();
-        files.iter().map(|p| load_file(p).unwrap()).collect()
-    }
 
     /// The link-frame capsules, carried by the link frames of any pose, are where the tick
     /// places them.

@@ -12,3 +12,6 @@ pub mod mcap_file;
 pub mod recorder;
 pub mod translate;
 pub mod urdf;
+
+#[cfg(test)]
+mod test_robots;

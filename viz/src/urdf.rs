@@ -337,19 +337,9 @@ fn collisions(capsules: &[LinkCapsule], link: usize) -> Vec<Collision> {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
     use super::*;
-    use armgate_core::config::load_file;
+    use crate::test_robots::robots;
     use armgate_core::kinematics::Chain;
     use armgate_core::rng::SplitMix64;
-
-    fn robots() -> Vec<ValidRobot> {
-        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots");
-        let mut files: Vec<_> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .collect();
-        files.sort();
-        files.iter().map(|p| load_file(p).unwrap()).collect()
-    }
 
     #[test]
     fn rpy_round_trips_including_gimbal_lock() {
