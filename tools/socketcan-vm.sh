@@ -17,7 +17,10 @@
 #      ARMGATE_E2E_CAN=can0,can1: each test starts armgate-sim on can0 and the Whistle
 #      simulator on can1), can0 captured with dumpcap meanwhile; the tests must pass, among them
 #      a drive's emergency (ER32) and the Whistle simulator killed mid-move (ER30);
-#   4. `ip -s -d link` of both interfaces (frames counted by the kernel) and the receive overruns
+#   4. the firmware's own tasks (its Linux build, tools/firmware-e2e.sh's TAP addresses, its
+#      FDCAN seam as can0: ARMGATE_CAN=socketcan:can0) in `a_full_session_over_udp` against the
+#      Whistle simulator on can1; it must pass;
+#   5. `ip -s -d link` of both interfaces (frames counted by the kernel) and the receive overruns
 #      of the emulated controllers.
 # Back on the host, the capture is decoded frame by frame by Wireshark's CANopen dissector and by
 # tools/wireshark/armgate.lua: every frame must be decoded by both.
@@ -38,7 +41,7 @@ if [[ "${1:-}" == "--inside" ]]; then
     # sleep=off, below), which the processes still running would see as a stall.
     mem=$(mktemp -d)
     mount -t tmpfs -o size=600m tmpfs "$mem"
-    for file in "$bin/armgate-sim" "$bin/armgate" "$e2e"; do # stripped on the host
+    for file in "$bin/armgate-sim" "$bin/armgate" "$bin/armgate-firmware" "$e2e"; do # stripped on the host
         cp "$out/bin/${file##*/}" "$mem/"
         mount --bind "$mem/${file##*/}" "$file"
     done
@@ -173,7 +176,28 @@ if [[ "${1:-}" == "--inside" ]]; then
         exit 1
     fi
 
-    # 3. The kernel's counters, and the frames the emulated controllers lost (receive overruns:
+    # 3. The firmware's own tasks over can0 (its FDCAN seam as SocketCAN, its Ethernet as a TAP
+    # device with tools/firmware-e2e.sh's addresses, in the guest's own network namespace, where
+    # the CAN interfaces are), the Whistle simulator on can1: one session, asserted.
+    modprobe tun
+    ip tuntap add dev tap0 mode tap
+    ip addr add 192.168.1.1/24 dev tap0
+    ip addr add 192.168.1.2/24 dev tap0
+    ip link set tap0 up
+    firmware_started=$SECONDS
+    firmware_status=0
+    ARMGATE_E2E_FIRMWARE=$bin/armgate-firmware ARMGATE_E2E_CAN=can0,can1 "$e2e" --test-threads 1 \
+        --exact a_full_session_over_udp >"$mem/e2e-firmware.txt" 2>&1 || firmware_status=$?
+    cp "$mem/e2e-firmware.txt" "$out/"
+    echo "the firmware's tasks over can0/can1 (ARMGATE_CAN=socketcan:can0), $((SECONDS - firmware_started)) s of the guest's time:"
+    grep -E '^test |^test result' "$out/e2e-firmware.txt" | sed 's/^/    /' || true
+    if [[ $firmware_status -ne 0 ]]; then
+        sed -n '/^failures:$/,$p' "$out/e2e-firmware.txt" | sed 's/^/    /'
+        echo "socketcan-vm: the firmware's session failed over SocketCAN in the VM (exit code $firmware_status)"
+        exit 1
+    fi
+
+    # 4. The kernel's counters, and the frames the emulated controllers lost (receive overruns:
     # with one vCPU the receiving interrupt runs before the next frame is written, see the
     # `vng` call below).
     ip -s -d link show can0
@@ -209,13 +233,13 @@ fi
 cargo build -q -p armgate-client
 e2e=$(cargo test -q -p armgate-sim --test e2e --no-run --message-format=json-render-diagnostics |
     sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | grep "/deps/e2e-" | tail -n 1)
-# armgate-sim itself with armgate-core optimised, in its usual place (target/debug, where the
-# tests start it): the simulated Whistles keep time with the guest's clock, and unoptimised
+# armgate-sim itself and the firmware's Linux build with armgate-core optimised, in their usual
+# place (target/debug, where the tests start them): the simulated Whistles keep time with the guest's clock, and unoptimised
 # they fell behind it under TCG (a loop turn of up to 1.8 s, against 0.1 to 0.3 s optimised);
 # optimised, the guest also has fewer instructions to run, which is the step's wall time. Not
 # in everyone's dev builds: it triples core's compile time. The next plain `cargo build` puts
 # the unoptimised one back without building anything.
-cargo build -q --config 'profile.dev.package.armgate-core.opt-level=2' -p armgate-sim
+cargo build -q --config 'profile.dev.package.armgate-core.opt-level=2' -p armgate-sim -p armgate-firmware
 # A small representative set (17 to 26 s of the guest's time, 30 to 85 s of the host's): start-up and a Cartesian session on
 # the interpreter schedule, the PDO schedule's session, ST at cruise, a drive's emergency, and
 # the Whistle simulator killed mid-move.
@@ -230,7 +254,7 @@ rm -rf "$out"
 mkdir -p "$out/bin"
 # The executables without their debug info (a fifth of their size), copied into the guest's
 # memory there.
-for file in "$target/debug/armgate-sim" "$target/debug/armgate" "$e2e"; do
+for file in "$target/debug/armgate-sim" "$target/debug/armgate" "$target/debug/armgate-firmware" "$e2e"; do
     strip --strip-debug -o "$out/bin/${file##*/}" "$file"
 done
 started=$SECONDS
